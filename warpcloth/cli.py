@@ -1,0 +1,54 @@
+"""Command line: ``warpcloth run SCENE [--out DIR] [--set key=value ...] [--device cpu|cuda]``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .analysis import first_period
+from .errors import DivergenceError, SceneError
+from .runner import simulate
+from .scene import bundled_scenes, load_scene
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``warpcloth`` command; returns the exit status."""
+    parser = argparse.ArgumentParser(prog="warpcloth", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    run_p = sub.add_parser("run", help="simulate a scene and write a run directory")
+    run_p.add_argument("scene", help=f"scene file, or a bundled scene: {', '.join(bundled_scenes())}")
+    run_p.add_argument("--out", help="run directory (default: runs/<scene name>)")
+    run_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a scene field by dotted name, e.g. integrator.dt_s=1e-7")
+    run_p.add_argument("--device", default=None, help="cpu or cuda (default: Warp's preferred device)")
+    run_p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = parser.parse_args(argv)
+
+    try:
+        scene = load_scene(args.scene, args.overrides)
+    except SceneError as exc:
+        print(f"warpcloth: error in scene: {exc}", file=sys.stderr)
+        return 2
+    out = Path(args.out or Path("runs") / Path(args.scene).stem)
+    try:
+        result = simulate(scene, device=args.device, out=out, progress=not args.no_progress)
+    except DivergenceError as exc:
+        print(f"warpcloth: {exc}\nRecorded up to the divergence: {out}", file=sys.stderr)
+        return 3
+    laser = result.probe("laser_x", 0)
+    tip = result.probe("tip_x", 0)
+    print(f"wrote {out}/ (probes.csv, frames.npy, frame_times.npy, scene.toml, meta.json)")
+    print(f"{result.strip_steps:.3g} strip-steps in {result.wall_time_s:.2f} s "
+          f"({result.strip_steps / result.wall_time_s:.3g} strip-steps/s)")
+    period = first_period(result.t, laser if np.isfinite(laser).sum() > 3 else tip, level=0.0)
+    print(f"final tip ({tip[-1] * 1e3:.2f}, {result.probe('tip_y', 0)[-1] * 1e3:.2f}) mm; "
+          f"first period about x = 0: {period:.4f} s")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

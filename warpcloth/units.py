@@ -1,0 +1,31 @@
+"""KES ↔ SI conversion: the one place where Kawabata units meet SI.
+
+Everything inside warpcloth is SI (m, kg, s, N). Materials are entered in the units
+of the Kawabata Evaluation System (KES-FB) instruments and converted here, once.
+"""
+
+from __future__ import annotations
+
+GF_TO_N = 9.80665e-3
+"""One gram-force in newtons."""
+
+TENSILE_GF_PER_CM = GF_TO_N / 1e-2
+"""Tensile force per width: gf/cm → N/m (× 0.980665)."""
+
+MOMENT_GF_CM_PER_CM = GF_TO_N
+"""Bending moment per width (M, 2HB, D1): gf·cm/cm → N·m/m = N (× 9.80665e-3)."""
+
+RIGIDITY_GF_CM2_PER_CM = GF_TO_N * 1e-2
+"""Bending rigidity per width (B, D): gf·cm²/cm → N·m²/m = N·m (× 9.80665e-5)."""
+
+CURVATURE_PER_CM = 100.0
+"""Curvature: 1/cm → 1/m."""
+
+LENGTH_CM = 1e-2
+"""Length (hysteresis steepness α): cm → m."""
+
+AREAL_DENSITY_G_PER_CM2 = 10.0
+"""Mass per area: g/cm² → kg/m²."""
+
+LENGTH_MM = 1e-3
+"""Scene lengths: mm → m."""
