@@ -101,14 +101,16 @@ def simulate(
     progress: bool = False,
     on_divergence: str = "raise",
     keep_frames: bool = True,
-    state: State | None = None,
+    initial_positions: np.ndarray | None = None,
+    initial_velocities: np.ndarray | None = None,
 ) -> RunResult:
     """Run one batch of strips (one scene per strip) and return what it recorded.
 
     ``out`` streams the run directory (see warpcloth.output) as the run proceeds.
     ``on_divergence="raise"`` stops at the first diverged strip with a DivergenceError
     (its ``result`` holds what was recorded); ``"record"`` lets the other strips go on.
-    ``state`` supplies a prepared initial state (e.g. a mode shape) for the batch.
+    ``initial_positions`` / ``initial_velocities`` (``[node, variant, xy]``, m and m/s)
+    replace the straight hanging start, e.g. with a mode shape; hinges start fresh there.
     """
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
     if on_divergence not in ("raise", "record"):
@@ -116,7 +118,9 @@ def simulate(
     model = Model(scenes, device)
     control = Control(model)
     solver = Solver(model, control)
-    state = state or State(model)
+    state = State(model)
+    if initial_positions is not None:
+        state.set_positions(initial_positions, initial_velocities)
     schedule = Schedule.for_scene(scenes[0], control.release_step)
     n_kept, frame_samples = len(schedule.kept), schedule.frame_samples
     b, n, nq = model.n_strips, model.n_nodes, len(PROBE_FIELDS)

@@ -1,0 +1,95 @@
+"""Small-amplitude periods against closed-form references (MODEL.md, 'Validation')."""
+
+import math
+
+import numpy as np
+import pytest
+from conftest import overrides
+
+import warpcloth as wc
+from warpcloth.material import to_si
+from warpcloth.model import rest_positions
+
+
+def bessel_j0(x):
+    """J0 by its power series (converges fast for the x ≤ 2.405 used here)."""
+    x = np.asarray(x, dtype=float)
+    term = np.ones_like(x)
+    total = term.copy()
+    for k in range(1, 40):
+        term = -term * (x / 2) ** 2 / k**2
+        total += term
+    return total
+
+
+def mode_start(scene, shape, amplitude):
+    """Straight strip displaced sideways by amplitude·shape(s) below the clamp edge."""
+    x = rest_positions(scene)
+    s_free = np.maximum(0.0, -x[:, 1] - scene.strip.clamp_length_mm * 1e-3)
+    x[:, 0] = amplitude * shape(s_free)
+    return x[:, None, :]
+
+
+def measured_period(scene, shape, amplitude):
+    result = wc.simulate(scene, initial_positions=mode_start(scene, shape, amplitude))
+    return wc.first_period(result.t, result.probe("tip_x", 0), level=0.0)
+
+
+def test_heavy_chain_first_period():
+    # D = D1 = 0: a hanging chain, ω₁ = (2.4048/2) √(g/L) (first zero of J0).
+    # Started in the continuum mode shape J0(2.4048 √(z/L)), z from the free end, with a
+    # 1 mm tip amplitude (1 % of L: the nonlinear period shift is O(amplitude²) ~ 1e-4).
+    # The 1 % tolerance is the issue's; the discrete 40-segment chain's own error is
+    # O(h/L) (the half mass at the free end), measured 0.29 %.
+    scene = wc.load_scene("damped_swing", overrides(
+        strip__spacing_mm=2.5, material__bending_rigidity_gf_cm2_per_cm=0.0,
+        material__hysteresis_d1_gf_cm_per_cm=0.0, damping__gamma_per_s=0.0, release__enabled=False,
+        run__duration_s=0.75, integrator__dt_s=1e-5))
+    length = scene.strip.free_length_mm * 1e-3
+    z0 = 2.404825557695773
+
+    def shape(s):
+        return bessel_j0(z0 * np.sqrt((length - s) / length)) * (s > 0)
+
+    period = measured_period(scene, shape, 1e-3)
+    exact = 2 * math.pi / (z0 / 2 * math.sqrt(scene.run.gravity_m_per_s2 / length))
+    print(f"heavy chain: period {period:.5f} s vs {exact:.5f} s ({period / exact - 1:+.3%})")
+    assert period == pytest.approx(exact, rel=0.01)
+
+
+def beam_period_error(spacing_mm: float) -> float:
+    """Relative error of the first beam period at a given spacing."""
+    scene = wc.load_scene("damped_swing", overrides(
+        strip__spacing_mm=spacing_mm, run__gravity_m_per_s2=0.0, material__hysteresis_d1_gf_cm_per_cm=0.0,
+        damping__gamma_per_s=0.0, release__enabled=False, run__duration_s=3.4,
+        integrator__dt_s=4e-6 * spacing_mm))
+    length = scene.strip.free_length_mm * 1e-3
+    bl = 1.8750862
+    sigma = (math.sinh(bl) - math.sin(bl)) / (math.cosh(bl) + math.cos(bl))
+
+    def shape(s):
+        b = bl * s / length
+        return (np.cosh(b) - np.cos(b) - sigma * (np.sinh(b) - np.sin(b))) / 2.0
+
+    material = to_si(scene.material)
+    omega = bl**2 * math.sqrt(material.bending_rigidity / (material.density * length**4))
+    period = measured_period(scene, shape, 1e-3)
+    exact = 2 * math.pi / omega
+    print(f"beam h = {spacing_mm} mm: period {period:.5f} s vs {exact:.5f} s ({period / exact - 1:+.3%})")
+    return period / exact - 1
+
+
+def test_clamped_free_beam_first_period():
+    # No gravity, D1 = 0: the clamped-free beam, ω₁ = 1.8751² √(D W / (ρ_A W L⁴)),
+    # started in its first mode shape with a 1 mm tip amplitude.
+    # The clamp of MODEL.md is built in only to first order: the clamp-edge hinge sees the
+    # clamped node above it (a one-sided slope condition), so the strip acts as if its
+    # root were h/2 inside the clamp, period × (1 + h/2L)². Measured +5.4 % at h = 5 mm,
+    # +2.6 % at 2.5 mm, +1.3 % at 1.25 mm. The issue's 2 % holds from h = 1.25 mm, and
+    # the error halves with h (first order), which is what the root model predicts.
+    coarse = beam_period_error(2.5)
+    fine = beam_period_error(1.25)
+    assert abs(fine) < 0.02
+    assert 1.7 < coarse / fine < 2.3
+    # The effective-length explanation itself, to 0.2 %: (1 + h/2L)² − 1 at h = 1.25 mm.
+    assert fine == pytest.approx((1 + 1.25 / 200) ** 2 - 1, abs=0.002)
