@@ -158,12 +158,10 @@ def build_kernels(scalar: Any) -> KernelSet:
             return curvature
         limit = m0 * (one - margin)
         h = wp.clamp(offset, -limit, limit)
-        u = zero
+        # c = K - u with u = h₊⁻¹(H) or h₋⁻¹(H) (MODEL.md)
         if branch > zero:
-            u = -k0 - wp.log((m0 - h) / d1) / alpha
-        else:
-            u = k0 + wp.log((h + m0) / d1) / alpha
-        return curvature - u
+            return curvature + k0 + wp.log((m0 - h) / d1) / alpha
+        return curvature - k0 - wp.log((h + m0) / d1) / alpha
 
     @wp.func
     def follow_hysteresis(
@@ -192,7 +190,7 @@ def build_kernels(scalar: Any) -> KernelSet:
         n = control.n_segments[s]
         if n == 0:
             return zero, zero
-        lo = int(0)
+        lo = 0
         hi = n - 1
         while lo < hi:
             mid = (lo + hi + 1) // 2

@@ -18,14 +18,15 @@ DEFAULT = to_si(MaterialSection())
 
 def branches(m: MaterialSI, k):
     """Eq. 3a (rising) and 3b (falling) of the loop centred on K = 0."""
-    up = m.bending_rigidity * k + m.hysteresis_m0 - m.hysteresis_d1 * np.exp(-m.hysteresis_alpha * (m.hysteresis_k0 + k))
-    down = m.bending_rigidity * k - m.hysteresis_m0 + m.hysteresis_d1 * np.exp(-m.hysteresis_alpha * (m.hysteresis_k0 - k))
+    a, k0, d1 = m.hysteresis_alpha, m.hysteresis_k0, m.hysteresis_d1
+    up = m.bending_rigidity * k + m.hysteresis_m0 - d1 * np.exp(-a * (k0 + k))
+    down = m.bending_rigidity * k - m.hysteresis_m0 + d1 * np.exp(-a * (k0 - k))
     return up, down
 
 
 def ramp(*points, n=4000):
     """Piecewise-linear curvature path through the points, n samples per leg."""
-    legs = [np.linspace(a, b, n, endpoint=False) for a, b in zip(points[:-1], points[1:])]
+    legs = [np.linspace(a, b, n, endpoint=False) for a, b in zip(points[:-1], points[1:], strict=True)]
     return np.concatenate(legs + [np.array([points[-1]])])
 
 

@@ -185,7 +185,7 @@ def _collect(solver: Solver, state: State, schedule: Schedule, i: int, j: int, p
     """Copy a finished chunk out, drop samples after a divergence, stream it to disk."""
     status = state.struct.status.numpy()
     known = {d["strip"] for d in diverged}
-    new_reports = [solver.divergence_report(state, s) for s in np.nonzero(status)[0] if s not in known]
+    new_reports = [solver.divergence_report(state, int(s)) for s in np.nonzero(status)[0] if s not in known]
     diverged.extend(new_reports)
     steps = schedule.steps[i:j]
     valid = np.ones((j - i, probes_all.shape[2]), dtype=bool)

@@ -1,0 +1,84 @@
+"""The command line and the run directory it writes; the packaging of kernels/scenes."""
+
+import csv
+import json
+import subprocess
+import sys
+import zipfile
+
+import numpy as np
+import pytest
+from warpcloth.kernels import PROBE_FIELDS
+
+import warpcloth as wc
+
+
+def warpcloth_cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True,
+                          cwd=cwd, timeout=300)
+
+
+def test_run_writes_a_complete_run_directory(tmp_path):
+    out = tmp_path / "swing"
+    done = warpcloth_cli("run", "damped_swing", "--out", str(out), "--set", "run.duration_s=0.5",
+                         "--set", "release.settle_time_s=0.2", "--no-progress", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "first period" in done.stdout
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["complete"] and meta["diverged"] == [] and meta["n_variants"] == 1
+    with open(out / "probes.csv") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["t", "variant", *PROBE_FIELDS]
+    t = np.array([float(r[0]) for r in rows[1:]])
+    assert len(t) == 301 and t[0] == 0.0 and t[-1] == pytest.approx(0.5)
+    frames = np.load(out / "frames.npy")
+    times = np.load(out / "frame_times.npy")
+    assert frames.shape == (31, 1, 25, 2) and times.shape == (31,)
+    # the file agrees with the API on the same scene
+    scene = wc.load_scene(out / "scene.toml")
+    assert scene.run.duration_s == 0.5 and scene.release.settle_time_s == 0.2
+    api = wc.simulate(scene)
+    np.testing.assert_array_equal(frames, api.frames)
+    tip = np.array([float(r[2]) for r in rows[1:]])
+    np.testing.assert_array_equal(tip, api.probe("tip_x", 0))
+
+
+def test_bad_scene_is_a_clear_error_before_running(tmp_path):
+    done = warpcloth_cli("run", "damped_swing", "--set", "strip.spacing_mm=-1", "--out", str(tmp_path / "x"),
+                         cwd=tmp_path)
+    assert done.returncode == 2
+    assert "strip.spacing_mm: must be > 0, got -1" in done.stderr
+    assert not (tmp_path / "x").exists()
+
+
+def test_divergence_is_reported_and_the_record_kept(tmp_path):
+    out = tmp_path / "fwd"
+    done = warpcloth_cli("run", "damped_swing", "--out", str(out), "--no-progress",
+                         "--set", "integrator.scheme=forward", "--set", "integrator.dt_s=2e-5",
+                         "--set", "release.enabled=false", "--set", "damping.gamma_per_s=0", cwd=tmp_path)
+    assert done.returncode == 3
+    assert "strip 0 diverged at t =" in done.stderr and "tensile strain" in done.stderr
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["diverged"][0]["quantity"] == "tensile strain"
+    body = (out / "probes.csv").read_text().splitlines()[1:]
+    assert body and "nan" not in "\n".join(body).lower()  # rows stop at the divergence
+
+
+def test_wheel_maps_kernels_and_scenes_into_the_warpcloth_namespace(tmp_path):
+    # kernels/ must not install as a top-level "kernels" (a different PyPI package).
+    root = wc.__file__.rsplit("/warpcloth/", 1)[0]
+    done = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(tmp_path), root],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    (wheel,) = tmp_path.glob("warpcloth-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    assert "warpcloth/kernels/strip.py" in names
+    assert "warpcloth/scenes/damped_swing.toml" in names and "warpcloth/scenes/impulsive_rotation.toml" in names
+    assert not any(n.startswith("kernels/") or n.startswith("scenes/") for n in names)
+
+
+def test_progress_bar_shows_simulated_time_rate_and_eta(capsys):
+    scene = wc.load_scene("impulsive_rotation", ["run.duration_s=0.05"])
+    wc.simulate(scene, progress=True)
+    err = capsys.readouterr().err
+    assert "0.050/0.050 s sim" in err and "strip-steps/s" in err and "<" in err  # elapsed<remaining

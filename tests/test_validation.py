@@ -1,0 +1,105 @@
+"""Bad input is refused before any kernel runs, with the field and value named."""
+
+import pytest
+from conftest import overrides
+
+import warpcloth as wc
+from warpcloth.scene import apply_overrides, read_scene_file, scene_from_dict
+
+
+def load(**fields):
+    return wc.load_scene("damped_swing", overrides(**fields))
+
+
+@pytest.mark.parametrize("fields, field, text", [
+    (dict(strip__spacing_mm=-5.0), "strip.spacing_mm", "must be > 0, got -5"),
+    (dict(strip__spacing_mm=3.0), "strip.spacing_mm", "does not divide strip.free_length_mm"),
+    (dict(strip__spacing_mm=60.0), "strip.spacing_mm", "does not divide"),
+    (dict(strip__free_length_mm=0.0), "strip.free_length_mm", "must be > 0"),
+    (dict(material__tensile_gf_per_cm=[2000.0, -3e4, 0.0, 0.0]), "material.tensile_gf_per_cm",
+     "not increasing at ε = 0.25"),
+    # interior minimum of dT/dε (where T'' = 0), found exactly
+    (dict(material__tensile_gf_per_cm=[2000.0, 0.0, -2e5, 5e5]), "material.tensile_gf_per_cm",
+     "not increasing at ε = 0.2 (dT/dε = -6000 gf/cm)"),
+    (dict(material__tensile_gf_per_cm=[0.0, 0.0, 0.0, 1e7]), "material.tensile_gf_per_cm",
+     "at ε = 0 (dT/dε = 0 gf/cm)"),
+    (dict(material__tensile_gf_per_cm=[2000.0, 0.0]), "material.tensile_gf_per_cm", "needs the 4"),
+    (dict(material__bending_rigidity_gf_cm2_per_cm=-0.1), "material.bending_rigidity_gf_cm2_per_cm",
+     "must be ≥ 0, got -0.1"),
+    (dict(material__hysteresis_d1_gf_cm_per_cm=-0.01), "material.hysteresis_d1_gf_cm_per_cm", "must be ≥ 0"),
+    (dict(material__hysteresis_alpha_cm=0.0), "material.hysteresis_alpha_cm", "must be > 0, got 0"),
+    (dict(material__hysteresis_k0_per_cm=-2.0), "material.hysteresis_k0_per_cm", "must be > 0"),
+    (dict(material__density_g_per_cm2=0.0), "material.density_g_per_cm2", "must be > 0"),
+    (dict(damping__gamma_per_s=-1.0), "damping.gamma_per_s", "must be ≥ 0"),
+    (dict(integrator__dt_s=0.0), "integrator.dt_s", "must be > 0"),
+    (dict(integrator__dt_s=0.01), "integrator.dt_s", "longer than the probe interval"),
+    (dict(integrator__scheme="rk4"), "integrator.scheme", "must be one of semi_implicit, forward"),
+    (dict(integrator__precision="float16"), "integrator.precision", "must be one of"),
+    (dict(output__probes_per_frame=0), "output.probes_per_frame", "must be ≥ 1"),
+    (dict(output__probes_per_frame=2.5), "output.probes_per_frame", "expected an integer"),
+    (dict(release__hold_x_mm=150.0), "release.hold_x_mm", "the free end reaches between"),
+    (dict(run__duration_s=1e9), "run.duration_s", "steps, more than"),
+    (dict(strip__width_mm="wide"), "strip.width_mm",
+     "expected a number, got 'wide'"),
+    (dict(release__enabled=1), "release.enabled", "expected true or false"),
+    (dict(clamp__motion="wobble"), "clamp.motion", "must be one of fixed, piecewise, table"),
+    (dict(clamp__motion="piecewise"), "clamp.segments", "needs at least one segment"),
+    (dict(clamp__motion="table", clamp__table_t_s=[0.0, 0.1], clamp__table_theta_rad=[0.0]),
+     "clamp.table_theta_rad", "needs as many samples"),
+    (dict(clamp__motion="table", clamp__table_t_s=[0.0, 0.1, 0.1], clamp__table_theta_rad=[0.0, 1.0, 2.0]),
+     "clamp.table_t_s[2]", "must be after"),
+])
+def test_field_errors_name_field_and_value(fields, field, text):
+    with pytest.raises(wc.SceneError) as info:
+        load(**fields)
+    assert info.value.field == field
+    assert str(info.value).startswith(field + ":")
+    assert text in str(info.value)
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf"])
+def test_non_finite_numbers_are_refused(value):
+    with pytest.raises(wc.SceneError, match=r"damping.gamma_per_s: must be a finite number"):
+        wc.load_scene("damped_swing", [f"damping.gamma_per_s={value}"])
+
+
+def test_unknown_fields_and_sections():
+    with pytest.raises(wc.SceneError, match=r"^strip.spacing: unknown field; known fields here: free_length_mm"):
+        wc.load_scene("damped_swing", ["strip.spacing=5"])
+    with pytest.raises(wc.SceneError, match=r"^solver: unknown field"):
+        wc.load_scene("damped_swing", ["solver.dt_s=1e-5"])
+
+
+def test_clamp_segments_must_be_contiguous_and_continuous():
+    base = read_scene_file("impulsive_rotation")
+    with pytest.raises(wc.SceneError, match=r"clamp.segments\[1\].theta_coefficients_si: θ jumps by 0.1 rad"):
+        scene_from_dict(apply_overrides(base, ["clamp.segments.1.theta_coefficients_si=[0.3, 16.0]"]))
+    with pytest.raises(wc.SceneError, match=r"clamp.segments\[1\].t_start_s: 0.06 s must equal"):
+        scene_from_dict(apply_overrides(base, ["clamp.segments.1.t_start_s=0.06"]))
+    with pytest.raises(wc.SceneError, match=r"clamp.segments\[0\].t_end_s: 0 must be after"):
+        scene_from_dict(apply_overrides(base, ["clamp.segments.0.t_end_s=0.0"]))
+    with pytest.raises(wc.SceneError, match=r"theta_coefficients_si: needs 1 to 5"):
+        scene_from_dict(apply_overrides(base, ["clamp.segments.0.theta_coefficients_si=[0,0,0,0,0,1.0]"]))
+
+
+def test_malformed_scene_files(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[strip\nspacing_mm = 5\n")
+    with pytest.raises(wc.SceneError, match="is not valid TOML"):
+        wc.load_scene(bad)
+    with pytest.raises(wc.SceneError, match="no bundled scene of that name .bundled: damped_swing, impulsive"):
+        wc.load_scene("no_such_scene")
+    with pytest.raises(wc.SceneError, match="strip: expected a table"):
+        scene_from_dict({"strip": 5})
+    with pytest.raises(wc.SceneError, match="an override must look like"):
+        wc.load_scene("damped_swing", ["integrator.dt_s"])
+    with pytest.raises(wc.SceneError, match="no list item '7'"):
+        wc.load_scene("impulsive_rotation", ["clamp.segments.7.t_end_s=1.0"])
+
+
+def test_empty_file_gives_the_documented_defaults(tmp_path):
+    empty = tmp_path / "empty.toml"
+    empty.write_text("")
+    scene = wc.load_scene(empty)
+    assert scene.strip.spacing_mm == 5.0 and scene.integrator.precision == "float64"
+    assert "illustrative" in scene.material.name
