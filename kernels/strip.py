@@ -190,7 +190,7 @@ def build_kernels(scalar: Any) -> KernelSet:
         n = control.n_segments[s]
         if n == 0:
             return zero, zero
-        lo = 0
+        lo = int(0)  # noqa: UP018 - Warp needs int() to make a loop-mutable variable
         hi = n - 1
         while lo < hi:
             mid = (lo + hi + 1) // 2
