@@ -11,6 +11,7 @@ before timing.
 from __future__ import annotations
 
 import argparse
+import logging
 import platform
 import time
 
@@ -37,7 +38,7 @@ def main() -> None:
     parser.add_argument("--scenes", nargs="+", default=["damped_swing"])
     parser.add_argument("--precision", default="float64", choices=["float64", "float32"])
     args = parser.parse_args()
-    wp.config.quiet = True
+    wp.config.log_level = logging.WARNING
     wp.init()
     print(f"machine: {platform.processor() or platform.machine()}, {platform.system()}, device {args.device}, "
           f"warp {wp.__version__}, {args.precision}")

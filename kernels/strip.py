@@ -243,11 +243,16 @@ def build_kernels(scalar: Any) -> KernelSet:
             x = scalar(step) / scalar(control.move_steps)
             p = x * x * x * (x * (x * scalar(6.0) - scalar(15.0)) + scalar(10.0))
             dp = scalar(30.0) * x * x * (x - one) * (x - one) / (scalar(control.move_steps) * control.dt)
+        turn = a1 - a0
+        if turn > wp.pi:  # the short way round, never through the clamp
+            turn = turn - scalar(2.0 * wp.pi)
+        elif turn < -wp.pi:
+            turn = turn + scalar(2.0 * wp.pi)
         r = r0 + (r1 - r0) * p
-        a = a0 + (a1 - a0) * p
+        a = a0 + turn * p
         radial = vec2(wp.cos(a), wp.sin(a))
         position = root + r * radial
-        velocity = dp * ((r1 - r0) * radial + r * (a1 - a0) * perp(radial))
+        velocity = dp * ((r1 - r0) * radial + r * turn * perp(radial))
         return position, velocity
 
     @wp.func

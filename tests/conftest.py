@@ -1,8 +1,10 @@
 """Shared helpers: every test runs on the CPU device (CI has no GPU)."""
 
+import logging
+
 import warp as wp
 
-wp.config.quiet = True
+wp.config.log_level = logging.WARNING
 
 
 def overrides(**fields):

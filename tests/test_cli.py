@@ -23,7 +23,7 @@ def test_run_writes_a_complete_run_directory(tmp_path):
     done = warpcloth_cli("run", "damped_swing", "--out", str(out), "--set", "run.duration_s=0.5",
                          "--set", "release.settle_time_s=0.2", "--no-progress", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
-    assert "first period" in done.stdout
+    assert "first swing period" in done.stdout
     meta = json.loads((out / "meta.json").read_text())
     assert meta["complete"] and meta["diverged"] == [] and meta["n_variants"] == 1
     with open(out / "probes.csv") as fh:

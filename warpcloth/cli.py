@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-import numpy as np
+import warp as wp
 
 from .analysis import first_period
 from .errors import DivergenceError, SceneError
@@ -27,6 +28,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     run_p.add_argument("--device", default=None, help="cpu or cuda (default: Warp's preferred device)")
     run_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
+    wp.config.log_level = logging.WARNING  # no init banner or module-load lines
 
     try:
         scene = load_scene(args.scene, args.overrides)
@@ -39,14 +41,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except DivergenceError as exc:
         print(f"warpcloth: {exc}\nRecorded up to the divergence: {out}", file=sys.stderr)
         return 3
-    laser = result.probe("laser_x", 0)
     tip = result.probe("tip_x", 0)
     print(f"wrote {out}/ (probes.csv, frames.npy, frame_times.npy, scene.toml, meta.json)")
     print(f"{result.strip_steps:.3g} strip-steps in {result.wall_time_s:.2f} s "
           f"({result.strip_steps / result.wall_time_s:.3g} strip-steps/s)")
-    period = first_period(result.t, laser if np.isfinite(laser).sum() > 3 else tip, level=0.0)
-    print(f"final tip ({tip[-1] * 1e3:.2f}, {result.probe('tip_y', 0)[-1] * 1e3:.2f}) mm; "
-          f"first period about x = 0: {period:.4f} s")
+    print(f"final free end ({tip[-1] * 1e3:.2f}, {result.probe('tip_y', 0)[-1] * 1e3:.2f}) mm, "
+          f"clamp angle {result.probe('clamp_angle', 0)[-1]:.4f} rad")
+    if scene.release.enabled:
+        period = first_period(result.t, result.probe("laser_x", 0), level=0.0)
+        print(f"first swing period (laser line crossing x = 0): {period:.4f} s")
     return 0
 
 

@@ -6,6 +6,7 @@ import numpy as np
 
 from warpcloth.kernels import FORWARD, SEMI_IMPLICIT
 
+from . import units
 from .clamp import MAX_DEGREE, clamp_pieces
 from .model import Model, clamp_edge
 
@@ -34,11 +35,10 @@ class Control:
             start[: len(a), s], end[: len(a), s], coefficients[: len(a), s] = a, b, c
         edge = clamp_edge(scene)
         self.rotation_centre = np.array(
-            [edge + 1e-3 * np.array([s.clamp.rotation_centre_dx_mm, s.clamp.rotation_centre_dy_mm])
+            [edge + units.LENGTH_MM * np.array([s.clamp.rotation_centre_dx_mm, s.clamp.rotation_centre_dy_mm])
              for s in model.scenes])
         self.hold_target = np.array(
-            [edge + 1e-3 * np.array([s.release.hold_x_mm, s.release.hold_y_mm]) for s in model.scenes])
-        self.pieces = pieces
+            [edge + units.LENGTH_MM * np.array([s.release.hold_x_mm, s.release.hold_y_mm]) for s in model.scenes])
         c = k.StripControl()
         c.segment_start = model.array(start)
         c.segment_end = model.array(end)

@@ -9,6 +9,7 @@ import warp as wp
 
 from warpcloth.kernels import KernelSet, build_kernels
 
+from . import units
 from .errors import SceneError
 from .material import to_si
 from .scene import Scene, batch_fields
@@ -37,7 +38,7 @@ def rest_positions(scene: Scene) -> np.ndarray:
 
 def clamp_edge(scene: Scene) -> np.ndarray:
     """The clamp's lowest point (origin of rotation-centre, hold and laser offsets)."""
-    return np.array([0.0, -scene.strip.clamp_length_mm * 1e-3])
+    return np.array([0.0, -scene.strip.clamp_length_mm * units.LENGTH_MM])
 
 
 class Model:
@@ -58,7 +59,7 @@ class Model:
         self.spacing = first.spacing
         self.gravity = first.run.gravity_m_per_s2
         materials = [to_si(s.material) for s in self.scenes]
-        self.width = np.array([s.strip.width_mm * 1e-3 for s in self.scenes])
+        self.width = np.array([s.strip.width_mm * units.LENGTH_MM for s in self.scenes])
         self.density = np.array([m.density for m in materials])
         self.node_mass = self.density * self.width * self.spacing
         self.tensile = np.array([m.tensile for m in materials])

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from . import units
 from .errors import SceneError
 from .material import DEFAULT_MATERIAL, validate_material
 
@@ -163,7 +164,7 @@ class Scene:
     @property
     def spacing(self) -> float:
         """Node spacing h in metres."""
-        return self.strip.spacing_mm * 1e-3
+        return self.strip.spacing_mm * units.LENGTH_MM
 
     @property
     def n_clamped(self) -> int:

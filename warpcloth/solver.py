@@ -7,6 +7,7 @@ import warp as wp
 
 from warpcloth.kernels import STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
 
+from . import units
 from .control import Control
 from .model import Model, clamp_edge
 from .state import State
@@ -25,7 +26,7 @@ class Solver:
         self.model = model
         self.control = control
         scene = model.scenes[0]
-        self.laser_height = float(clamp_edge(scene)[1] + scene.output.laser_height_mm * 1e-3)
+        self.laser_height = float(clamp_edge(scene)[1] + scene.output.laser_height_mm * units.LENGTH_MM)
         self.probes_per_frame = scene.output.probes_per_frame
 
     def advance(self, state: State, output_steps: np.ndarray, first_output: int, first_frame: int,

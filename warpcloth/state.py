@@ -63,7 +63,3 @@ class State:
         """Make every hinge fresh at its current curvature (rising branch, H = 0)."""
         wp.launch(self.model.kernels.initialise_hysteresis, dim=self.model.n_strips,
                   inputs=[self.model.struct, self.struct], device=self.model.device)
-
-    def positions(self) -> np.ndarray:
-        """Current node positions ``[node, strip, 2]`` (a host copy)."""
-        return self.struct.position.numpy()
