@@ -169,10 +169,10 @@ def simulate(
     finally:
         bar.close()
     wall_time = time.perf_counter() - started
-    result = RunResult(scenes, t, probes_all, frame_times, frames_all, diverged, wall_time,
-                       b * total_steps)
+    strip_steps = b * int(schedule.steps[i - 1])  # up to where the run stopped
+    result = RunResult(scenes, t, probes_all, frame_times, frames_all, diverged, wall_time, strip_steps)
     if writer is not None:
-        writer.close(diverged, {"wall_time_s": wall_time, "strip_steps": b * total_steps,
+        writer.close(diverged, {"wall_time_s": wall_time, "strip_steps": strip_steps,
                                 "device": str(model.device)})
     if diverged and on_divergence == "raise":
         raise DivergenceError("; ".join(describe_divergence(d) for d in diverged), diverged, result)
