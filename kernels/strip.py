@@ -29,6 +29,7 @@ STATUS_NONFINITE_ENERGY = 3
 PROBE_FIELDS = (
     "tip_x",
     "tip_y",
+    "tip_speed",
     "laser_x",
     "clamp_angle",
     "kinetic",
@@ -425,15 +426,16 @@ def build_kernels(scalar: Any) -> KernelSet:
         work = state.work[s]
         probes[k, 0, s] = tip[0]
         probes[k, 1, s] = tip[1]
-        probes[k, 2, s] = laser_crossing(model, state, s, laser_height)
-        probes[k, 3, s] = theta
-        probes[k, 4, s] = kinetic
-        probes[k, 5, s] = gravitational
-        probes[k, 6, s] = tensile
-        probes[k, 7, s] = work[0]
-        probes[k, 8, s] = work[1]
-        probes[k, 9, s] = work[2]
-        probes[k, 10, s] = work[3]
+        probes[k, 2, s] = wp.length(state.velocity[n - 1, s])
+        probes[k, 3, s] = laser_crossing(model, state, s, laser_height)
+        probes[k, 4, s] = theta
+        probes[k, 5, s] = kinetic
+        probes[k, 6, s] = gravitational
+        probes[k, 7, s] = tensile
+        probes[k, 8, s] = work[0]
+        probes[k, 9, s] = work[1]
+        probes[k, 10, s] = work[2]
+        probes[k, 11, s] = work[3]
         return kinetic + gravitational + tensile + work[0] + work[1] + work[2]
 
     @wp.kernel

@@ -269,6 +269,27 @@ def _parse_value(text: str) -> Any:
         return text  # a bare word such as forward or float32
 
 
+def set_field(data: dict, key: str, value: Any) -> None:
+    """Set the field ``key`` (dotted; list items by index) of raw scene ``data`` in place."""
+    parts = key.strip().split(".")
+    node: Any = data
+    for i, part in enumerate(parts):
+        last = i == len(parts) - 1
+        if isinstance(node, list):
+            if not part.isdigit() or int(part) >= len(node):
+                raise SceneError(".".join(parts[: i + 1]), f"no list item {part!r}")
+            if last:
+                node[int(part)] = value
+            else:
+                node = node[int(part)]
+        elif last:
+            node[part] = value
+        else:
+            node = node.setdefault(part, {})
+            if not isinstance(node, (dict, list)):
+                raise SceneError(".".join(parts[: i + 1]), "is a value, not a section")
+
+
 def apply_overrides(data: dict, overrides: typing.Iterable[str]) -> dict:
     """Return a copy of raw scene ``data`` with ``key=value`` overrides applied.
 
@@ -281,24 +302,7 @@ def apply_overrides(data: dict, overrides: typing.Iterable[str]) -> dict:
         if "=" not in item:
             raise SceneError(item, "an override must look like section.field=value")
         key, text = item.split("=", 1)
-        parts = key.strip().split(".")
-        node: Any = data
-        for i, part in enumerate(parts[:-1]):
-            if isinstance(node, list):
-                if not part.isdigit() or int(part) >= len(node):
-                    raise SceneError(".".join(parts[: i + 1]), f"no list item {part!r}")
-                node = node[int(part)]
-            else:
-                node = node.setdefault(part, {})
-                if not isinstance(node, (dict, list)):
-                    raise SceneError(".".join(parts[: i + 1]), "is a value, not a section")
-        last = parts[-1]
-        if isinstance(node, list):
-            if not last.isdigit() or int(last) >= len(node):
-                raise SceneError(key, f"no list item {last!r}")
-            node[int(last)] = _parse_value(text.strip())
-        else:
-            node[last] = _parse_value(text.strip())
+        set_field(data, key, _parse_value(text.strip()))
     return data
 
 
@@ -335,8 +339,13 @@ def scene_from_dict(data: dict) -> Scene:
 
 
 def load_scene(name_or_path: str | Path, overrides: typing.Iterable[str] = ()) -> Scene:
-    """Read a scene by path or bundled name, apply ``--set`` overrides, validate it."""
-    return scene_from_dict(apply_overrides(read_scene_file(name_or_path), overrides))
+    """Read a scene by path or bundled name, apply ``--set`` overrides, validate it.
+
+    A ``[sweep]`` section is ignored here: this is the sweep's base scene.
+    """
+    data = read_scene_file(name_or_path)
+    data.pop("sweep", None)
+    return scene_from_dict(apply_overrides(data, overrides))
 
 
 def _multiple(length: float, spacing: float) -> bool:
