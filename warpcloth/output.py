@@ -29,7 +29,8 @@ from .scene import Scene
 
 PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
 PROBE_UNITS = {
-    "t": "s", "variant": "index", "tip_x": "m", "tip_y": "m", "tip_speed": "m/s", "laser_x": "m (NaN when the strip misses the line)",
+    "t": "s", "variant": "index", "tip_x": "m", "tip_y": "m", "tip_speed": "m/s",
+    "laser_x": "m (NaN when the strip misses the line)",
     "clamp_angle": "rad", "kinetic": "J", "gravitational": "J", "tensile": "J",
     "bending_elastic_work": "J", "hysteresis_work": "J", "damping_work": "J", "drive_work": "J",
 }

@@ -108,7 +108,8 @@ def _random_block(spec: dict) -> tuple[list[str], np.ndarray]:
         return [], np.zeros((1, 0))
     unknown = set(block) - RANDOM_KEYS
     if unknown:
-        raise SceneError(f"sweep.random.{sorted(unknown)[0]}", f"unknown field; known: {', '.join(sorted(RANDOM_KEYS))}")
+        raise SceneError(f"sweep.random.{sorted(unknown)[0]}",
+                         f"unknown field; known: {', '.join(sorted(RANDOM_KEYS))}")
     method = block.get("method", "latin_hypercube")
     if method not in METHODS:
         raise SceneError("sweep.random.method", f"must be one of {', '.join(METHODS)}; got {method!r}")

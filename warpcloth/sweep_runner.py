@@ -128,7 +128,7 @@ def warm_kernel_cache(scenes: list[Scene], device: str | None) -> None:
         data = scene.to_dict()
         data["release"]["enabled"] = False
         data["run"]["duration_s"] = scene.output_interval
-        simulate(scene_from_dict(data), device=device, keep_frames=False)
+        simulate(scene_from_dict(data), device=device, keep_frames=False, on_divergence="record")
 
 
 def _prepare(sweep: Sweep, out: Path, max_batch: int) -> list[list[int]]:

@@ -1,0 +1,210 @@
+"""Sweeps: expansion, batching, results equal to single runs, resume after a real kill."""
+
+import copy
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+import tomli_w
+from conftest import overrides
+
+import warpcloth as wc
+from warpcloth.scene import apply_overrides, read_scene_file
+from warpcloth.sweep import expand, load_sweep
+from warpcloth.sweep_runner import run_sweep
+
+D1 = "material.hysteresis_d1_gf_cm_per_cm"
+GAMMA = "damping.gamma_per_s"
+ALPHA = "material.hysteresis_alpha_cm"
+
+
+def base(**fields):
+    """Short damped swing (0.2 s hold, 0.3 s record) as raw scene data."""
+    fields = dict(release__settle_time_s=0.2, release__move_time_s=0.1, run__duration_s=0.3) | fields
+    return apply_overrides(read_scene_file("damped_swing"), overrides(**fields))
+
+
+def with_sweep(raw, **spec):
+    raw = copy.deepcopy(raw)
+    raw["sweep"] = spec
+    return raw
+
+
+def test_expansion_is_grid_times_zip_times_random_and_deterministic():
+    raw = with_sweep(base(), seed=7, grid={D1: [0.0, 0.04], "strip.width_mm": [30.0, 40.0, 50.0]},
+                     zip={GAMMA: [0.1, 0.2], "clamp.rotation_centre_dy_mm": [0.0, 1.0]},
+                     random={"method": "uniform", "samples": 4, "ranges": {ALPHA: [2.0, 8.0]}})
+    a, b = expand(raw), expand(raw)
+    assert len(a.scenes) == 2 * 3 * 2 * 4
+    assert a.assignments == b.assignments and a.fingerprint == b.fingerprint
+    assert a.keys == [D1, "strip.width_mm", GAMMA, "clamp.rotation_centre_dy_mm", ALPHA]
+    assert a.assignments[0][D1] == 0.0 and a.assignments[-1][D1] == 0.04  # grid is the outer loop
+    assert [s.material.hysteresis_alpha_cm for s in a.scenes[:4]] == [v[ALPHA] for v in a.assignments[:4]]
+    other = expand(with_sweep(raw, **(raw["sweep"] | {"seed": 8})))
+    assert other.assignments != a.assignments
+
+
+def test_latin_hypercube_puts_one_sample_in_every_stratum():
+    n = 50
+    sweep = expand(with_sweep(base(), seed=3, random={"method": "latin_hypercube", "samples": n,
+                                                      "ranges": {D1: [0.0, 0.1], GAMMA: [1.0, 3.0]}}))
+    d1 = np.array([a[D1] for a in sweep.assignments])
+    gamma = np.array([a[GAMMA] for a in sweep.assignments])
+    assert sorted(np.floor(d1 / 0.1 * n).astype(int)) == list(range(n))
+    assert sorted(np.floor((gamma - 1.0) / 2.0 * n).astype(int)) == list(range(n))
+
+
+def test_batch_level_fields_make_separate_batches():
+    sweep = expand(with_sweep(base(), zip={"strip.spacing_mm": [5.0, 2.5, 5.0, 2.5, 5.0], GAMMA: [0, 1, 2, 3, 4]}))
+    batches = sweep.batches(max_batch=2)
+    assert batches == [[0, 2], [4], [1, 3]]
+
+
+@pytest.mark.parametrize("spec, field, text", [
+    ({}, "sweep", "no [sweep] section with a grid"),
+    ({"gird": {D1: [0.0]}}, "sweep", "no [sweep] section"),
+    ({"grid": {D1: [0.0]}, "gird": {}}, "sweep.gird", "unknown field"),
+    ({"grid": {"material.colour": [1.0]}}, 'sweep.grid."material.colour"', "is not a scene field"),
+    ({"grid": {D1: []}}, f'sweep.grid."{D1}"', "non-empty list"),
+    ({"grid": {D1: 0.04}}, f'sweep.grid."{D1}"', "non-empty list"),
+    ({"zip": {D1: [0.0, 0.1], GAMMA: [1.0]}}, "sweep.zip", "equal lengths"),
+    ({"grid": {D1: [0.0]}, "zip": {D1: [0.1]}}, f'sweep."{D1}"', "more than one block"),
+    ({"random": {"samples": 0, "ranges": {D1: [0, 1]}}}, "sweep.random.samples", "positive integer"),
+    ({"random": {"samples": 5, "ranges": {D1: [1.0, 0.5]}}}, f'sweep.random.ranges."{D1}"', "must be above"),
+    ({"random": {"samples": 5, "ranges": {D1: [0.0, "x"]}}}, f'sweep.random.ranges."{D1}"', "finite number"),
+    ({"random": {"samples": 5, "method": "sobol", "ranges": {D1: [0, 1]}}}, "sweep.random.method", "one of"),
+    ({"random": {"samples": 5, "ranges": {D1: [0, 1]}}, "seed": -1}, "sweep.seed", "non-negative"),
+    ({"grid": {D1: [0.04, -0.01]}}, "material.hysteresis_d1_gf_cm_per_cm",
+     f"in sweep variant 1 ({D1}=-0.01): must be ≥ 0"),
+])
+def test_bad_sweep_specs(spec, field, text):
+    with pytest.raises(wc.SceneError) as info:
+        expand(with_sweep(base(), **spec))
+    assert info.value.field == field and text in str(info.value)
+
+
+def small_sweep():
+    return expand(with_sweep(base(), grid={D1: [0.0, 0.04, 0.08]}, zip={GAMMA: [0.2, 2.0]}))
+
+
+def test_sweep_results_equal_single_runs(tmp_path):
+    sweep = small_sweep()
+    summary = run_sweep(sweep, tmp_path / "s", max_batch=4, workers=0)
+    assert len(summary) == 6 and summary["batch"].nunique() == 2
+    probes = pd.read_parquet(tmp_path / "s" / "probes")
+    for i, scene in enumerate(sweep.scenes):
+        single = wc.simulate(scene)
+        mine = probes[probes.variant == i].sort_values("t")
+        np.testing.assert_array_equal(mine["t"], single.t)
+        for name in ("tip_x", "laser_x", "hysteresis_work", "damping_work"):
+            np.testing.assert_array_equal(mine[name], single.probe(name, 0))
+        assert summary.loc[i, "damping_work_J"] == single.probe("damping_work", 0)[-1]
+    # stronger damping dissipates more and decays faster
+    assert (summary[summary[GAMMA] == 2.0]["damping_work_J"].values
+            > summary[summary[GAMMA] == 0.2]["damping_work_J"].values).all()
+
+
+def test_a_diverged_variant_is_recorded_and_the_sweep_goes_on(tmp_path):
+    raw = with_sweep(base(integrator__scheme="forward", integrator__dt_s=2e-5, release__enabled=False),
+                     zip={GAMMA: [0.0, 400.0], "material.tensile_gf_per_cm": [[2000.0, 0, 0, 2.93e7], [20.0, 0, 0, 0]]})
+    summary = run_sweep(expand(raw), tmp_path / "d", workers=0)
+    assert summary["diverged"].tolist() == [True, False]
+    assert summary.loc[0, "diverged_quantity"] == "tensile strain" and summary.loc[0, "diverged_time_s"] > 0
+
+
+def test_a_changed_sweep_does_not_resume_into_an_old_directory(tmp_path):
+    run_sweep(small_sweep(), tmp_path / "s", workers=0)
+    changed = expand(with_sweep(base(), grid={D1: [0.0, 0.05]}))
+    with pytest.raises(wc.SceneError, match="holds a different sweep"):
+        run_sweep(changed, tmp_path / "s", workers=0)
+
+
+def cli_sweep(scene_file, out, *extra):
+    return [sys.executable, "-m", "warpcloth.cli", "sweep", str(scene_file), "--out", str(out), "--no-progress",
+            *extra]
+
+
+def read_results(out):
+    summary = pd.read_parquet(out / "summary.parquet")
+    probes = pd.read_parquet(out / "probes").sort_values(["variant", "t"]).reset_index(drop=True)
+    return summary, probes
+
+
+def test_resume_after_the_process_is_killed(tmp_path):
+    scene_file = tmp_path / "sweep.toml"
+    raw = with_sweep(base(run__duration_s=0.6), grid={D1: [0.0, 0.02, 0.04, 0.06]}, zip={GAMMA: [0.1, 1.0]})
+    scene_file.write_text(tomli_w.dumps(raw))
+    reference = tmp_path / "reference"
+    subprocess.run(cli_sweep(scene_file, reference, "--workers", "0", "--max-batch", "1"), check=True, timeout=300)
+
+    out = tmp_path / "killed"
+    child = subprocess.Popen(cli_sweep(scene_file, out, "--workers", "0", "--max-batch", "1"))
+    deadline = time.time() + 120
+    while time.time() < deadline and len(list((out / "summary").glob("batch-*.parquet"))) < 2:
+        time.sleep(0.05)
+    os.kill(child.pid, signal.SIGKILL)  # a real kill: no cleanup runs
+    child.wait()
+    kept = {p.name: p.stat().st_mtime_ns for p in (out / "summary").glob("batch-*.parquet")}
+    assert 2 <= len(kept) < 8, "the kill should land mid-sweep"
+    assert not (out / "summary.parquet").exists()
+
+    subprocess.run(cli_sweep(scene_file, out, "--workers", "0", "--max-batch", "1"), check=True, timeout=300)
+    # only the missing batches ran: the finished ones were not rewritten
+    assert all((out / "summary" / name).stat().st_mtime_ns == t for name, t in kept.items())
+    assert not list(out.rglob("*.tmp"))
+    for mine, theirs in zip(read_results(out), read_results(reference), strict=True):
+        pd.testing.assert_frame_equal(mine, theirs)
+
+
+def test_local_dask_cluster_gives_the_in_process_results(tmp_path):
+    sweep = small_sweep()
+    run_sweep(sweep, tmp_path / "serial", max_batch=2, workers=0)
+    run_sweep(sweep, tmp_path / "dask", max_batch=2, workers=2)
+    for mine, theirs in zip(read_results(tmp_path / "dask"), read_results(tmp_path / "serial"), strict=True):
+        pd.testing.assert_frame_equal(mine, theirs)
+
+
+def test_scheduler_and_workers_as_processes_survive_a_killed_worker(tmp_path):
+    # A scheduler and two workers started as separate processes on loopback; one worker
+    # is killed once results start arriving. Dask reruns its batch elsewhere; results
+    # must equal a single-process run.
+    scene_file = tmp_path / "sweep.toml"
+    raw = with_sweep(base(run__duration_s=0.6), grid={D1: [0.0, 0.02, 0.04, 0.06]}, zip={GAMMA: [0.1, 1.0]})
+    scene_file.write_text(tomli_w.dumps(raw))
+    run_sweep(load_sweep(scene_file), tmp_path / "serial", max_batch=1, workers=0)
+
+    env = os.environ | {"DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
+    bin_dir = os.path.dirname(sys.executable)
+    scheduler_file = tmp_path / "scheduler.json"
+    procs = [subprocess.Popen([os.path.join(bin_dir, "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
+                               "--no-dashboard", "--scheduler-file", str(scheduler_file)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)]
+    try:
+        deadline = time.time() + 60
+        while not scheduler_file.exists() and time.time() < deadline:
+            time.sleep(0.1)
+        address = json.loads(scheduler_file.read_text())["address"]
+        for _ in range(2):
+            procs.append(subprocess.Popen([os.path.join(bin_dir, "dask"), "worker", address, "--nthreads", "1",
+                                           "--nworkers", "1", "--no-nanny", "--no-dashboard"],
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
+        out = tmp_path / "dask"
+        driver = subprocess.Popen(cli_sweep(scene_file, out, "--max-batch", "1", "--scheduler", address),
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        while time.time() < deadline + 120 and not list((out / "summary").glob("batch-*.parquet")):
+            time.sleep(0.05)
+        procs[1].kill()  # a worker dies mid-sweep
+        assert len(list((out / "summary").glob("batch-*.parquet"))) < 8
+        stdout, stderr = driver.communicate(timeout=300)
+        assert driver.returncode == 0, stderr
+        for mine, theirs in zip(read_results(out), read_results(tmp_path / "serial"), strict=True):
+            pd.testing.assert_frame_equal(mine, theirs)
+    finally:
+        for p in procs:
+            p.kill()
