@@ -69,6 +69,7 @@ def build_kernels(scalar: Any) -> KernelSet:
     vec2 = wp.types.vector(2, dtype=scalar)
     vec4 = wp.types.vector(4, dtype=scalar)
     vec5 = wp.types.vector(5, dtype=scalar)
+    mat22 = wp.types.matrix(shape=(2, 2), dtype=scalar)
     zero = scalar(0.0)
     one = scalar(1.0)
     half = scalar(0.5)
@@ -211,21 +212,16 @@ def build_kernels(scalar: Any) -> KernelSet:
         return theta, rate
 
     @wp.func
-    def rotate(v: vec2, angle: scalar):
-        ca = wp.cos(angle)
-        sa = wp.sin(angle)
-        return vec2(ca * v[0] - sa * v[1], sa * v[0] + ca * v[1])
-
-    @wp.func
     def perp(v: vec2):
         return vec2(-v[1], v[0])
 
     @wp.func
-    def signed_curvature(e1: vec2, e2: vec2):
-        # Curvature of the circle through the three nodes, and the chord |e1 + e2|.
+    def signed_curvature(e1: vec2, e2: vec2, l1: scalar, l2: scalar):
+        # Curvature of the circle through the three nodes (segments e1, e2 of lengths
+        # l1, l2), and the chord |e1 + e2|.
         chord = wp.length(e1 + e2)
         cross = e1[0] * e2[1] - e1[1] * e2[0]
-        return scalar(2.0) * cross / (wp.length(e1) * wp.length(e2) * chord), chord
+        return scalar(2.0) * cross / (l1 * l2 * chord), chord
 
     @wp.func
     def held_free_end(control: StripControl, root: vec2, rest_tip: vec2, s: int, step: int):
@@ -268,28 +264,31 @@ def build_kernels(scalar: Any) -> KernelSet:
         width = model.width[s]
         a = model.tensile[s]
         l0 = model.rest_length
-        # Segments inside the clamp move rigidly: only the edge segment and below strain.
-        for i in range(first + 1, n - 1):
-            segment = state.position[i + 1, s] - state.position[i, s]
-            length = wp.length(segment)
-            strain = (length - l0) / l0
-            if not (wp.abs(strain) <= control.max_strain):  # also catches NaN
-                return STATUS_STRAIN, i, strain
-            f = tensile_force_per_width(strain, a) * width / length * segment
-            state.force_tensile[i, s] = state.force_tensile[i, s] + f
-            state.force_tensile[i + 1, s] = state.force_tensile[i + 1, s] - f
         rigidity = model.bending_rigidity[s]
         d1 = model.hysteresis_d1[s]
         alpha = model.hysteresis_alpha[s]
         k0 = model.hysteresis_k0[s]
         m0 = model.hysteresis_m0[s]
-        for j in range(first + 1, n - 1):
-            h = j - first - 1
-            e1 = state.position[j, s] - state.position[j - 1, s]
-            e2 = state.position[j + 1, s] - state.position[j, s]
-            curvature, chord = signed_curvature(e1, e2)
+        # One pass down the strip: segment i (node i → i+1) and the hinge at node i share
+        # the segment vector and length, so each is loaded and measured once. Segments
+        # inside the clamp move rigidly: only the edge segment and below strain.
+        node = state.position[first + 1, s]
+        e1 = node - state.position[first, s]
+        l1 = wp.length(e1)
+        for i in range(first + 1, n - 1):
+            following = state.position[i + 1, s]
+            e2 = following - node
+            l2 = wp.length(e2)
+            strain = (l2 - l0) / l0
+            if not (wp.abs(strain) <= control.max_strain):  # also catches NaN
+                return STATUS_STRAIN, i, strain
+            f = tensile_force_per_width(strain, a) * width / l2 * e2
+            state.force_tensile[i, s] = state.force_tensile[i, s] + f
+            state.force_tensile[i + 1, s] = state.force_tensile[i + 1, s] - f
+            h = i - first - 1
+            curvature, chord = signed_curvature(e1, e2, l1, l2)
             if not (chord > scalar(1e-3) * l0):
-                return STATUS_FOLDED, j, chord / l0
+                return STATUS_FOLDED, i, chord / l0
             b, c = follow_hysteresis(
                 curvature, state.previous_curvature[h, s], state.branch[h, s], state.loop_centre[h, s],
                 d1, alpha, k0, m0,
@@ -298,16 +297,19 @@ def build_kernels(scalar: Any) -> KernelSet:
             state.loop_centre[h, s] = c
             state.previous_curvature[h, s] = curvature
             # τ = M·W acts on the turning angle φ; F = -τ ∇φ with ∇φ as below.
-            grad_i = perp(e1) / wp.dot(e1, e1)
-            grad_k = perp(e2) / wp.dot(e2, e2)
+            grad_i = perp(e1) / (l1 * l1)
+            grad_k = perp(e2) / (l2 * l2)
             tau_elastic = rigidity * curvature * width
             tau_hysteretic = hysteretic_offset(curvature - c, b, d1, alpha, k0, m0) * width
-            state.force_elastic[j - 1, s] = state.force_elastic[j - 1, s] - tau_elastic * grad_i
-            state.force_elastic[j + 1, s] = state.force_elastic[j + 1, s] - tau_elastic * grad_k
-            state.force_elastic[j, s] = state.force_elastic[j, s] + tau_elastic * (grad_i + grad_k)
-            state.force_hysteretic[j - 1, s] = state.force_hysteretic[j - 1, s] - tau_hysteretic * grad_i
-            state.force_hysteretic[j + 1, s] = state.force_hysteretic[j + 1, s] - tau_hysteretic * grad_k
-            state.force_hysteretic[j, s] = state.force_hysteretic[j, s] + tau_hysteretic * (grad_i + grad_k)
+            state.force_elastic[i - 1, s] = state.force_elastic[i - 1, s] - tau_elastic * grad_i
+            state.force_elastic[i + 1, s] = state.force_elastic[i + 1, s] - tau_elastic * grad_k
+            state.force_elastic[i, s] = state.force_elastic[i, s] + tau_elastic * (grad_i + grad_k)
+            state.force_hysteretic[i - 1, s] = state.force_hysteretic[i - 1, s] - tau_hysteretic * grad_i
+            state.force_hysteretic[i + 1, s] = state.force_hysteretic[i + 1, s] - tau_hysteretic * grad_k
+            state.force_hysteretic[i, s] = state.force_hysteretic[i, s] + tau_hysteretic * (grad_i + grad_k)
+            node = following
+            e1 = e2
+            l1 = l2
         return STATUS_OK, 0, zero
 
     @wp.func
@@ -368,8 +370,11 @@ def build_kernels(scalar: Any) -> KernelSet:
         # Clamp nodes follow the rigid rotation; only the two above the edge carry forces.
         theta, rate = clamp_angle(control, s, t_next)
         centre = control.rotation_centre[s]
+        ca = wp.cos(theta)  # once per substep, not per clamp node
+        sa = wp.sin(theta)
+        rotation = mat22(ca, -sa, sa, ca)
         for i in range(model.n_clamped):
-            arm = rotate(state.rest_position[i, s] - centre, theta)
+            arm = rotation * (state.rest_position[i, s] - centre)
             v_new = rate * perp(arm)
             if i >= model.n_clamped - 2:
                 sweep = (state.velocity[i, s] + v_new) * (half * dt)
@@ -491,7 +496,7 @@ def build_kernels(scalar: Any) -> KernelSet:
             h = j - first - 1
             e1 = state.position[j, s] - state.position[j - 1, s]
             e2 = state.position[j + 1, s] - state.position[j, s]
-            curvature, chord = signed_curvature(e1, e2)
+            curvature, chord = signed_curvature(e1, e2, wp.length(e1), wp.length(e2))
             state.branch[h, s] = one
             state.previous_curvature[h, s] = curvature
             state.loop_centre[h, s] = loop_centre_through(

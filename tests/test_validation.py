@@ -87,7 +87,7 @@ def test_malformed_scene_files(tmp_path):
     bad.write_text("[strip\nspacing_mm = 5\n")
     with pytest.raises(wc.SceneError, match="is not valid TOML"):
         wc.load_scene(bad)
-    with pytest.raises(wc.SceneError, match="no bundled scene of that name .bundled: damped_swing, damped_swing_sweep, impulsive"):
+    with pytest.raises(wc.SceneError, match="no bundled scene of that name .bundled: damped_swing, damped_swing_sw"):
         wc.load_scene("no_such_scene")
     with pytest.raises(wc.SceneError, match="strip: expected a table"):
         scene_from_dict({"strip": 5})
