@@ -208,3 +208,9 @@ def test_scheduler_and_workers_as_processes_survive_a_killed_worker(tmp_path):
     finally:
         for p in procs:
             p.kill()
+
+
+def test_overrides_reach_the_base_scene_and_the_sweep_options():
+    sweep = load_sweep("damped_swing_sweep", ["sweep.random.samples=12", "sweep.seed=5", "run.duration_s=0.5"])
+    assert len(sweep.scenes) == 12 and all(s.run.duration_s == 0.5 for s in sweep.scenes)
+    assert sweep.assignments != load_sweep("damped_swing_sweep", ["sweep.random.samples=12"]).assignments

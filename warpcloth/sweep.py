@@ -189,11 +189,13 @@ def expand(raw: dict) -> Sweep:
 def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Sweep:
     """Read a scene with a ``[sweep]`` section (path or bundled name) and expand it.
 
-    ``overrides`` (``key=value``) change the base scene, e.g. ``run.duration_s=1``.
+    ``overrides`` (``key=value``) change the base scene, e.g. ``run.duration_s=1``, or
+    the sweep's own options: ``sweep.seed``, ``sweep.random.samples``, ``sweep.random.method``.
     """
     raw = read_scene_file(name_or_path)
-    spec = raw.pop("sweep", None)
-    raw = apply_overrides(raw, overrides)
-    if spec is not None:
-        raw["sweep"] = spec
+    spec = {"sweep": raw.pop("sweep", None) or {}}
+    own = [o for o in overrides if o.split("=", 1)[0].strip().startswith("sweep.")]
+    spec = apply_overrides(spec, own)
+    raw = apply_overrides(raw, [o for o in overrides if o not in own])
+    raw["sweep"] = spec["sweep"]
     return expand(raw)
