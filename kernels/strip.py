@@ -46,6 +46,9 @@ PROBE_INDEX = {name: i for i, name in enumerate(PROBE_FIELDS)}
 # branch takes a logarithm (MODEL.md: clamp H to (-M0, M0) strictly).
 HYSTERESIS_MARGIN = {wp.float64: 1e-12, wp.float32: 1e-6}
 
+# Forward simulation only: no adjoint code to generate, compile and carry.
+wp.set_module_options({"enable_backward": False})
+
 
 @dataclass(frozen=True)
 class KernelSet:
