@@ -1,6 +1,7 @@
 """Strip-steps per second of the batched kernel, by batch size (run by hand).
 
     python benchmarks/throughput.py [--device cpu] [--sizes 1 64 1024] [--sim-time 0.05]
+                                    [--scenes damped_swing impulsive_rotation] [--precisions float64 float32]
 
 Each row runs B copies of a bundled scene (release phase off, so every substep is the
 same swinging work) and prints strip-steps/s, node-steps/s and the per-strip-step cost
@@ -36,20 +37,21 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[1, 64, 1024])
     parser.add_argument("--sim-time", type=float, default=0.05, help="simulated seconds per run")
     parser.add_argument("--scenes", nargs="+", default=["damped_swing"])
-    parser.add_argument("--precision", default="float64", choices=["float64", "float32"])
+    parser.add_argument("--precisions", nargs="+", default=["float64"], choices=["float64", "float32"])
     args = parser.parse_args()
     wp.config.log_level = logging.WARNING
     wp.init()
     print(f"machine: {platform.processor() or platform.machine()}, {platform.system()}, device {args.device}, "
-          f"warp {wp.__version__}, {args.precision}")
+          f"warp {wp.__version__}")
     for name in args.scenes:
-        print(f"\n{name}: {args.sim_time} s simulated per run")
-        print(f"{'batch':>6} {'strip-steps/s':>14} {'node-steps/s':>13} {'per-strip cost vs B=1':>22}")
-        base = None
-        for b in args.sizes:
-            rate, node_rate = measure(name, b, args.sim_time, args.device, args.precision)
-            base = base or rate
-            print(f"{b:>6} {rate:>14.3e} {node_rate:>13.3e} {base / rate:>21.2f}x")
+        for precision in args.precisions:
+            print(f"\n{name}, {precision}: {args.sim_time} s simulated per run")
+            print(f"{'batch':>6} {'strip-steps/s':>14} {'node-steps/s':>13} {'per-strip cost vs B=1':>22}")
+            base = None
+            for b in args.sizes:
+                rate, node_rate = measure(name, b, args.sim_time, args.device, precision)
+                base = base or rate
+                print(f"{b:>6} {rate:>14.3e} {node_rate:>13.3e} {base / rate:>21.2f}x")
 
 
 if __name__ == "__main__":
