@@ -16,6 +16,8 @@ from .runner import RunResult, run, simulate
 from .scene import Scene, apply_overrides, bundled_scenes, load_scene, scene_from_dict
 from .solver import Solver
 from .state import State
+from .sweep import Sweep, expand, load_sweep
+from .sweep_runner import run_sweep
 
 __all__ = [
     "Control",
@@ -26,12 +28,16 @@ __all__ = [
     "SceneError",
     "Solver",
     "State",
+    "Sweep",
     "apply_overrides",
     "bundled_scenes",
     "crossing_times",
+    "expand",
     "first_period",
     "load_scene",
+    "load_sweep",
     "run",
+    "run_sweep",
     "scene_from_dict",
     "simulate",
 ]
