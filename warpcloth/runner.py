@@ -196,13 +196,14 @@ def _collect(solver: Solver, state: State, schedule: Schedule, i: int, j: int, p
     keep = k >= 0
     if not keep.any():
         return bool(new_reports)
-    values = probes_buf.numpy()[: j - i][keep]  # [sample, field, variant]
+    values = probes_buf[: j - i].numpy()[keep]  # copy out only this chunk's samples
     valid = valid[keep]
     values = np.where(valid[:, None, :], values, np.nan)
     probes_all[k[keep]] = values
     is_frame = (k >= 0) & (k % schedule.probes_per_frame == 0)
     frame_index = k[is_frame] // schedule.probes_per_frame
-    frames = np.transpose(frames_buf.numpy()[: len(frame_index)], (0, 2, 1, 3))
+    frames = np.transpose(frames_buf[: len(frame_index)].numpy(), (0, 2, 1, 3)) if len(frame_index) else \
+        np.zeros((0, probes_all.shape[2], frames_buf.shape[1], 2))
     frames = np.where(valid[(k[keep] % schedule.probes_per_frame == 0)][:, :, None, None], frames, np.nan)
     if frames_all is not None and len(frame_index):
         frames_all[frame_index] = frames
