@@ -39,6 +39,8 @@ PROBE_FIELDS = (
     "hysteresis_work",
     "damping_work",
     "drive_work",
+    "loop_curvature",
+    "loop_moment",
 )
 PROBE_INDEX = {name: i for i, name in enumerate(PROBE_FIELDS)}
 
@@ -408,6 +410,7 @@ def build_kernels(scalar: Any) -> KernelSet:
         s: int,
         step: int,
         laser_height: scalar,
+        loop_hinge: int,
         probes: wp.array3d(dtype=scalar),
         k: int,
     ):
@@ -444,6 +447,15 @@ def build_kernels(scalar: Any) -> KernelSet:
         probes[k, 9, s] = work[1]
         probes[k, 10, s] = work[2]
         probes[k, 11, s] = work[3]
+        # The loop hinge's curvature at the last force evaluation and the moment per
+        # width there, read back from its hysteresis memory (no extra force pass).
+        curvature = state.previous_curvature[loop_hinge, s]
+        offset = hysteretic_offset(
+            curvature - state.loop_centre[loop_hinge, s], state.branch[loop_hinge, s], model.hysteresis_d1[s],
+            model.hysteresis_alpha[s], model.hysteresis_k0[s], model.hysteresis_m0[s],
+        )
+        probes[k, 12, s] = curvature
+        probes[k, 13, s] = model.bending_rigidity[s] * curvature + offset
         return kinetic + gravitational + tensile + work[0] + work[1] + work[2]
 
     @wp.kernel
@@ -456,6 +468,7 @@ def build_kernels(scalar: Any) -> KernelSet:
         first_frame: int,
         probes_per_frame: int,
         laser_height: scalar,
+        loop_hinge: int,
         probes: wp.array3d(dtype=scalar),
         frames: wp.array3d(dtype=vec2),
     ):
@@ -475,7 +488,7 @@ def build_kernels(scalar: Any) -> KernelSet:
                     state.step[s] = step
                     return
                 step += 1
-            energy = record_probes(model, control, state, s, step, laser_height, probes, k)
+            energy = record_probes(model, control, state, s, step, laser_height, loop_hinge, probes, k)
             if not wp.isfinite(energy):
                 state.status[s] = STATUS_NONFINITE_ENERGY
                 state.status_step[s] = step

@@ -33,6 +33,7 @@ PROBE_UNITS = {
     "laser_x": "m (NaN when the strip misses the line)",
     "clamp_angle": "rad", "kinetic": "J", "gravitational": "J", "tensile": "J",
     "bending_elastic_work": "J", "hysteresis_work": "J", "damping_work": "J", "drive_work": "J",
+    "loop_curvature": "1/m (output.loop_hinge_mm)", "loop_moment": "N·m/m (moment per width)",
 }
 
 

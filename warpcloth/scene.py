@@ -145,6 +145,8 @@ class OutputSection:
     frame_rate_hz: float = _field(60.0, "shape frames per second (the paper's video rate)", gt=0)
     probes_per_frame: int = _field(10, "probe samples per frame interval", ge=1)
     laser_height_mm: float = _field(-80.0, "height of the laser line, from the clamp's lowest point")
+    loop_hinge_mm: float = _field(0.0, "arc length below the clamp's lowest point of the hinge whose curvature and "
+                                  "moment are probed (the moment–curvature loop); 0 = the clamp-edge hinge", ge=0)
 
 
 @dataclass
@@ -165,6 +167,11 @@ class Scene:
     def spacing(self) -> float:
         """Node spacing h in metres."""
         return self.strip.spacing_mm * units.LENGTH_MM
+
+    @property
+    def loop_hinge(self) -> int:
+        """Index of the probed hinge (0 = the clamp-edge hinge)."""
+        return round(self.output.loop_hinge_mm / self.strip.spacing_mm)
 
     @property
     def n_clamped(self) -> int:
@@ -370,6 +377,11 @@ def validate_scene(scene: Scene) -> None:
             raise SceneError("release.hold_x_mm", f"held position ({scene.release.hold_x_mm:g}, "
                              f"{scene.release.hold_y_mm:g}) mm is {r:g} mm from the clamp's lowest point; "
                              f"the free end reaches between {st.spacing_mm:g} and {st.free_length_mm:g} mm")
+    n_hinges = scene.n_nodes - scene.n_clamped
+    if not _multiple(scene.output.loop_hinge_mm, st.spacing_mm) or scene.loop_hinge >= n_hinges:
+        raise SceneError("output.loop_hinge_mm", f"{scene.output.loop_hinge_mm:g} mm is not a hinge: hinges lie "
+                         f"every strip.spacing_mm = {st.spacing_mm:g} mm from 0 to "
+                         f"{st.free_length_mm - st.spacing_mm:g} mm below the clamp")
     dt = scene.integrator.dt_s
     if dt > scene.output_interval:
         raise SceneError("integrator.dt_s", f"{dt:g} s is longer than the probe interval "

@@ -28,6 +28,7 @@ class Solver:
         scene = model.scenes[0]
         self.laser_height = float(clamp_edge(scene)[1] + scene.output.laser_height_mm * units.LENGTH_MM)
         self.probes_per_frame = scene.output.probes_per_frame
+        self.loop_hinge = scene.loop_hinge
 
     def advance(self, state: State, output_steps: np.ndarray, first_output: int, first_frame: int,
                 probes: wp.array, frames: wp.array) -> None:
@@ -41,7 +42,8 @@ class Solver:
         steps = wp.array(np.asarray(output_steps, dtype=np.int32), dtype=int, device=self.model.device)
         wp.launch(k.advance, dim=self.model.n_strips, device=self.model.device,
                   inputs=[self.model.struct, self.control.struct, state.struct, steps, int(first_output),
-                          int(first_frame), self.probes_per_frame, k.scalar(self.laser_height), probes, frames])
+                          int(first_frame), self.probes_per_frame, k.scalar(self.laser_height), self.loop_hinge, probes,
+                          frames])
 
     def divergence_report(self, state: State, strip: int) -> dict | None:
         """Where and how ``strip`` diverged, or None while it is healthy."""

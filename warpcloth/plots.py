@@ -1,0 +1,232 @@
+"""2D figures of a run (the paper's Figs. 3b/8b, 9/11, 10, 12 and the energy budget) and
+of a sweep (a metric against one or two parameters), as PNG files, headless.
+
+Axes are in the units a textile lab reads: mm, degrees, and KES units for the bending
+loop (curvature in 1/cm, moment per width in gf·cm/cm), converted via ``units``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # no display needed, on CI or a cluster node
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from . import units  # noqa: E402
+from .bending import moment_along_path  # noqa: E402
+from .errors import SceneError  # noqa: E402
+from .material import to_si  # noqa: E402
+from .recording import Recording  # noqa: E402
+
+MM = 1 / units.LENGTH_MM
+DPI = 120
+
+
+def read_measured_series(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """A measured displacement series: CSV with columns time (s) and displacement (mm),
+    comma- or whitespace-separated, with or without one header line. Returns SI (s, m)."""
+    path = Path(path)
+    try:
+        text = path.read_text().splitlines()
+    except OSError as exc:
+        raise SceneError("--measured", f"cannot read {path}: {exc.strerror}") from None
+    rows = [line.replace(",", " ").split() for line in text if line.strip() and not line.lstrip().startswith("#")]
+    try:
+        float(rows[0][0])
+    except (ValueError, IndexError):
+        rows = rows[1:]  # a header line
+    try:
+        data = np.array([[float(v) for v in row[:2]] for row in rows])
+    except ValueError as exc:
+        raise SceneError("--measured", f"{path}: {exc}") from None
+    if data.ndim != 2 or data.shape[1] != 2 or len(data) < 2:
+        raise SceneError("--measured", f"{path}: expected at least two rows of 't_s, x_mm'")
+    if not np.all(np.isfinite(data)):
+        raise SceneError("--measured", f"{path}: row {int(np.nonzero(~np.isfinite(data))[0][0]) + 1} is not finite")
+    if np.any(np.diff(data[:, 0]) <= 0):
+        raise SceneError("--measured", f"{path}: times must increase")
+    return data[:, 0], data[:, 1] * units.LENGTH_MM
+
+
+def _label(recording: Recording, j: int) -> str:
+    varying = [c for c in recording.parameters.columns
+               if c != "variant" and recording.parameters[c].nunique() > 1][:2]
+    parts = [f"{c.split('.')[-1]}={recording.parameters[c].iloc[j]:.3g}" for c in varying]
+    return f"variant {recording.variants[j]}" + (f" ({', '.join(parts)})" if parts else "")
+
+
+def _save(fig: plt.Figure, path: Path) -> Path:
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path
+
+
+def plot_amplitude(recording: Recording, path: Path, measured: tuple[np.ndarray, np.ndarray] | None = None) -> Path:
+    """Laser-line displacement (and free-end x) against time, as in the paper's Fig. 10."""
+    fig, ax = plt.subplots(figsize=(8, 4))
+    laser_mm = recording.scenes[0].output.laser_height_mm
+    for j in range(len(recording.variants)):
+        t, laser = recording.probe("laser_x", j)
+        line, = ax.plot(t, laser * MM, lw=1.2, label=f"{_label(recording, j)}: laser line")
+        if len(recording.variants) == 1:
+            t, tip = recording.probe("tip_x", j)
+            ax.plot(t, tip * MM, lw=0.8, ls="--", color=line.get_color(), alpha=0.6, label="free end x")
+    if measured is not None:
+        ax.plot(measured[0], measured[1] * MM, "k.", ms=2.5, label="measured")
+    ax.axhline(0, color="0.6", lw=0.6)
+    ax.set(xlabel="time after release t (s)", ylabel="x (mm)",
+           title=f"Displacement at the laser line ({laser_mm:g} mm below the clamp)")
+    ax.legend(fontsize=7, loc="upper right")
+    return _save(fig, path)
+
+
+def plot_clamp_angle(recording: Recording, path: Path) -> Path:
+    """Clamp rotation angle against time, as in the paper's Fig. 12."""
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for j in range(len(recording.variants)):
+        t, theta = recording.probe("clamp_angle", j)
+        ax.plot(t, np.degrees(theta), lw=1.2, label=_label(recording, j))
+    ax.set(xlabel="t (s)", ylabel="clamp angle θ (deg)", title="Clamp rotation")
+    ax.legend(fontsize=7)
+    return _save(fig, path)
+
+
+def default_shape_times(recording: Recording, count: int = 10) -> np.ndarray:
+    """``count`` frame times spread evenly over the run."""
+    return np.linspace(recording.frame_times[0], recording.frame_times[-1], count)
+
+
+def plot_shapes(recording: Recording, path: Path, times: np.ndarray, variant: int = 0) -> Path:
+    """Stroboscopic overlay of the strip's shape at ``times`` (Figs. 9, 11)."""
+    fig, ax = plt.subplots(figsize=(6.5, 6))
+    frames = np.unique(np.searchsorted(recording.frame_times, times).clip(0, len(recording.frame_times) - 1))
+    colours = plt.cm.viridis(np.linspace(0, 1, len(frames)))
+    nc = recording.n_clamped
+    for colour, f in zip(colours, frames, strict=True):
+        xy = recording.frames[f, variant] * MM
+        ax.plot(xy[nc - 1 :, 0], xy[nc - 1 :, 1], color=colour, lw=1.4, label=f"{recording.frame_times[f]:.3f} s")
+        ax.plot(xy[:nc, 0], xy[:nc, 1], color="0.25", lw=4, solid_capstyle="butt")
+    ax.set_aspect("equal")
+    ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"Strip shapes, {_label(recording, variant)}")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title="t after release", title_fontsize=7)
+    return _save(fig, path)
+
+
+def kes_loop(recording: Recording, variant: int = 0, samples: int = 400) -> tuple[np.ndarray, np.ndarray]:
+    """The material's KES-FB2 loop (0 → K0 → −K0 → K0): curvature (1/m), moment (N·m/m)."""
+    material = to_si(recording.scenes[variant].material)
+    k0 = material.hysteresis_k0
+    path = np.concatenate([np.linspace(0, k0, samples), np.linspace(k0, -k0, 2 * samples)[1:],
+                           np.linspace(-k0, k0, 2 * samples)[1:]])
+    moment, _ = moment_along_path(material, path)
+    return path, moment
+
+
+def plot_bending_loop(recording: Recording, path: Path, variant: int = 0) -> Path:
+    """Moment–curvature path of the probed hinge over the run, over the material's KES
+    loop (Figs. 3b, 8b), in KES units."""
+    fig, ax = plt.subplots(figsize=(6, 5))
+    k, m = kes_loop(recording, variant)
+    ax.plot(k / units.CURVATURE_PER_CM, m / units.MOMENT_GF_CM_PER_CM, color="0.7", lw=3,
+            label="material (KES-FB2 loop, ±K0)")
+    _, curvature = recording.probe("loop_curvature", variant)
+    _, moment = recording.probe("loop_moment", variant)
+    ax.plot(curvature / units.CURVATURE_PER_CM, moment / units.MOMENT_GF_CM_PER_CM, lw=0.8, color="C3",
+            label="hinge over the run")
+    hinge = recording.scenes[variant].output.loop_hinge_mm
+    ax.axhline(0, color="0.8", lw=0.5)
+    ax.axvline(0, color="0.8", lw=0.5)
+    ax.set(xlabel="curvature K (1/cm)", ylabel="moment M (gf·cm/cm)",
+           title=f"Bending loop, hinge {hinge:g} mm below the clamp, {_label(recording, variant)}")
+    ax.legend(fontsize=7)
+    return _save(fig, path)
+
+
+ENERGY_TERMS = (("kinetic", "kinetic"), ("gravitational", "gravitational (rel. to t=0)"), ("tensile", "tensile"),
+                ("bending_elastic_work", "bending, elastic"), ("hysteresis_work", "dissipated by hysteresis"),
+                ("damping_work", "dissipated by damping"), ("drive_work", "done by the clamp (−)"))
+
+
+def plot_energy(recording: Recording, path: Path, variant: int = 0) -> Path:
+    """Energy budget against time: each term and their sum, which should stay constant."""
+    fig, ax = plt.subplots(figsize=(9.5, 4.5))
+    total = 0.0
+    for name, label in ENERGY_TERMS:
+        t, value = recording.probe(name, variant)
+        if name == "gravitational":
+            value = value - value[0]
+        if name == "drive_work":
+            value = -value
+        total = total + value
+        ax.plot(t, value * 1e6, lw=1, label=label)
+    ax.plot(t, total * 1e6, "k", lw=1.8, label="sum (conserved)")
+    ax.set(xlabel="t (s)", ylabel="energy (µJ)", title=f"Energy budget, {_label(recording, variant)}")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1))
+    return _save(fig, path)
+
+
+def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path | None = None,
+             times: np.ndarray | None = None, variant: int = 0) -> list[Path]:
+    """Write every run figure into ``out_dir``; returns the PNG paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    series = read_measured_series(measured) if measured else None
+    return [
+        plot_amplitude(recording, out / "amplitude.png", series),
+        plot_clamp_angle(recording, out / "clamp_angle.png"),
+        plot_shapes(recording, out / "shapes.png", default_shape_times(recording) if times is None else times,
+                    variant),
+        plot_bending_loop(recording, out / "bending_loop.png", variant),
+        plot_energy(recording, out / "energy.png", variant),
+    ]
+
+
+def read_sweep_summary(sweep_dir: str | Path) -> pd.DataFrame:
+    """Per-variant summary of a sweep (the merged file, or the finished batches so far)."""
+    sweep_dir = Path(sweep_dir)
+    merged = sweep_dir / "summary.parquet"
+    if merged.is_file():
+        return pd.read_parquet(merged)
+    parts = sorted((sweep_dir / "summary").glob("batch-*.parquet"))
+    if not parts:
+        raise SceneError("RUN_DIR", f"{sweep_dir} has no finished batch yet")
+    return pd.concat([pd.read_parquet(p) for p in parts]).sort_values("variant")
+
+
+def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: str | None = None) -> Path:
+    """A metric against one swept parameter (line, or points when others vary too) or
+    two (heat map on a grid, coloured points otherwise)."""
+    for name, flag in ((metric, "--metric"), (x, "--x"), (y, "--y")):
+        if name is not None and name not in summary:
+            raise SceneError(flag, f"{name!r} is not a column of the sweep summary; "
+                             f"known: {', '.join(c for c in summary.columns if c not in ('variant', 'batch'))}")
+    data = summary[~summary["diverged"]] if "diverged" in summary else summary
+    fig, ax = plt.subplots(figsize=(6.5, 4.8))
+    if y is None:
+        grouped = data.groupby(x)[metric]
+        if grouped.size().max() == 1:
+            ordered = data.sort_values(x)
+            ax.plot(ordered[x], ordered[metric], "o-", ms=3)
+        else:
+            ax.plot(data[x], data[metric], ".", ms=3, alpha=0.6, label="variants (other parameters vary)")
+            ax.plot(grouped.mean().index, grouped.mean().to_numpy(), "k-", lw=1, label="mean")
+            ax.legend(fontsize=7)
+        ax.set(xlabel=x, ylabel=metric)
+    else:
+        table = data.pivot_table(index=y, columns=x, values=metric, aggfunc="mean")
+        if table.size == len(data) and not table.isna().any().any():
+            mesh = ax.pcolormesh(table.columns, table.index, table.to_numpy(), shading="nearest", cmap="viridis")
+        else:
+            mesh = ax.scatter(data[x], data[y], c=data[metric], s=14, cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label=metric)
+        ax.set(xlabel=x, ylabel=y)
+    ax.set_title(f"{metric} over {len(data)} variants" + (f" ({len(summary) - len(data)} diverged)"
+                                                           if len(data) < len(summary) else ""))
+    return _save(fig, Path(path))
+
