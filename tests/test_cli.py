@@ -21,8 +21,9 @@ def warpcloth_cli(*args, cwd):
 def test_run_writes_a_complete_run_directory(tmp_path):
     out = tmp_path / "swing"
     done = warpcloth_cli("run", "damped_swing", "--out", str(out), "--set", "run.duration_s=0.5",
-                         "--set", "release.settle_time_s=0.2", "--no-progress", cwd=tmp_path)
+                         "--set", "release.settle_time_s=0.2", "--no-progress", "--usd", "swing.usda", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
+    assert "endTimeCode = 30" in (tmp_path / "swing.usda").read_text()  # 31 frames
     assert "first swing period" in done.stdout
     meta = json.loads((out / "meta.json").read_text())
     assert meta["complete"] and meta["diverged"] == [] and meta["n_variants"] == 1
