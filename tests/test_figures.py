@@ -10,7 +10,8 @@ from conftest import overrides
 from PIL import Image
 
 import warpcloth as wc
-from warpcloth.plots import plot_run, plot_sweep, read_measured_series, read_sweep_summary
+from warpcloth.measured import read_encoder, read_laser_trace, read_measurement, read_tracked_shapes
+from warpcloth.plots import plot_run, plot_sweep, read_sweep_summary
 from warpcloth.recording import load_recording
 
 SWING = overrides(run__duration_s=0.6, release__settle_time_s=0.1)
@@ -42,8 +43,8 @@ def test_run_figures_are_written_and_show_the_swing(swing_run, tmp_path):
     rng = np.random.default_rng(1)
     rows = [f"{ti:.5f},{xi * 1e3 + rng.normal(0, 0.2):.4f}" for ti, xi in zip(t[::5], x[::5], strict=True)]
     measured.write_text("t_s,x_mm\n" + "\n".join(rows) + "\n")
-    series = read_measured_series(measured)
-    np.testing.assert_allclose(series[1], x[::5], atol=1e-3)
+    series = read_laser_trace(measured)
+    np.testing.assert_allclose(series.x, x[::5], atol=1e-3)
     paths = plot_run(recording, tmp_path / "fig", measured=measured, times=np.array([0.0, 0.25, 0.5]))
     assert [p.name for p in paths] == ["amplitude.png", "clamp_angle.png", "shapes.png", "bending_loop.png",
                                        "energy.png"]
@@ -51,17 +52,34 @@ def test_run_figures_are_written_and_show_the_swing(swing_run, tmp_path):
         assert_not_blank(path)
 
 
-@pytest.mark.parametrize("text, message", [
-    ("t,x\n0.0,1.0\n", "at least two rows"),
-    ("0.0,1.0\n0.1,abc\n", "could not convert"),
-    ("0.0,1.0\n0.0,2.0\n", "times must increase"),
-    ("0.0,1.0\n0.1,nan\n", "row 2 is not finite"),
+@pytest.mark.parametrize("reader, text, message", [
+    (read_laser_trace, "t,x\n0.0,1.0\n", "at least two rows"),
+    (read_laser_trace, "0.0,1.0\n0.1,abc\n", "line 2: could not convert"),
+    (read_laser_trace, "0.0,1.0\n0.0,2.0\n", "data row 2 has t = 0 after 0"),
+    (read_laser_trace, "0.0,1.0\n0.1,nan\n", "data row 2 is not finite"),
+    (read_laser_trace, "0.0\n0.1\n", "line 1: expected 2 columns"),
+    (read_measurement, "0 0 0\n1 1 1\n", "has 3 columns"),
+    (read_tracked_shapes, "1,0.1,0,0,0\n0,0.0,0,0,0\n", "ordered by frame"),
+    (read_tracked_shapes, "0,0.0,-5,0,0\n1,0.1,0,0,0\n", "s must be ≥ 0"),
+    (read_encoder, "t,theta\n0.1,0\n0.05,1\n", "times must increase"),
 ])
-def test_bad_measured_files_are_named(tmp_path, text, message):
+def test_bad_measured_files_are_named(tmp_path, reader, text, message):
     path = tmp_path / "m.csv"
     path.write_text(text)
     with pytest.raises(wc.SceneError, match=message):
-        read_measured_series(path)
+        reader(path)
+
+
+def test_measured_forms_and_units(tmp_path):
+    path = tmp_path / "enc.csv"
+    path.write_text("t_s;theta_deg\n0;0\n0.1;90\n")
+    np.testing.assert_allclose(read_encoder(path)[1], [0, np.pi / 2])
+    path.write_text("# encoder\n0 0\n0.1 1.5\n")
+    np.testing.assert_allclose(read_encoder(path)[1], [0, 1.5])
+    path.write_text("frame,t_s,s_mm,x_mm,y_mm\n0,0,10,1,-10\n0,0,20,2,-20\n1,0.0167,10,1.5,-10\n")
+    shapes = read_measurement(path)
+    np.testing.assert_allclose(shapes.s, [0.01, 0.02, 0.01])
+    assert list(shapes.frame) == [0, 0, 1]
 
 
 def test_sweep_metric_plots(tmp_path):

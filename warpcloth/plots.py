@@ -21,36 +21,11 @@ from . import units  # noqa: E402
 from .bending import moment_along_path  # noqa: E402
 from .errors import SceneError  # noqa: E402
 from .material import to_si  # noqa: E402
+from .measured import LaserTrace, read_laser_trace  # noqa: E402
 from .recording import Recording  # noqa: E402
 
 MM = 1 / units.LENGTH_MM
 DPI = 120
-
-
-def read_measured_series(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """A measured displacement series: CSV with columns time (s) and displacement (mm),
-    comma- or whitespace-separated, with or without one header line. Returns SI (s, m)."""
-    path = Path(path)
-    try:
-        text = path.read_text().splitlines()
-    except OSError as exc:
-        raise SceneError("--measured", f"cannot read {path}: {exc.strerror}") from None
-    rows = [line.replace(",", " ").split() for line in text if line.strip() and not line.lstrip().startswith("#")]
-    try:
-        float(rows[0][0])
-    except (ValueError, IndexError):
-        rows = rows[1:]  # a header line
-    try:
-        data = np.array([[float(v) for v in row[:2]] for row in rows])
-    except ValueError as exc:
-        raise SceneError("--measured", f"{path}: {exc}") from None
-    if data.ndim != 2 or data.shape[1] != 2 or len(data) < 2:
-        raise SceneError("--measured", f"{path}: expected at least two rows of 't_s, x_mm'")
-    if not np.all(np.isfinite(data)):
-        raise SceneError("--measured", f"{path}: row {int(np.nonzero(~np.isfinite(data))[0][0]) + 1} is not finite")
-    if np.any(np.diff(data[:, 0]) <= 0):
-        raise SceneError("--measured", f"{path}: times must increase")
-    return data[:, 0], data[:, 1] * units.LENGTH_MM
 
 
 def _label(recording: Recording, j: int) -> str:
@@ -67,7 +42,7 @@ def _save(fig: plt.Figure, path: Path) -> Path:
     return path
 
 
-def plot_amplitude(recording: Recording, path: Path, measured: tuple[np.ndarray, np.ndarray] | None = None) -> Path:
+def plot_amplitude(recording: Recording, path: Path, measured: LaserTrace | None = None) -> Path:
     """Laser-line displacement (and free-end x) against time, as in the paper's Fig. 10."""
     fig, ax = plt.subplots(figsize=(8, 4))
     laser_mm = recording.scenes[0].output.laser_height_mm
@@ -78,7 +53,7 @@ def plot_amplitude(recording: Recording, path: Path, measured: tuple[np.ndarray,
             t, tip = recording.probe("tip_x", j)
             ax.plot(t, tip * MM, lw=0.8, ls="--", color=line.get_color(), alpha=0.6, label="free end x")
     if measured is not None:
-        ax.plot(measured[0], measured[1] * MM, "k.", ms=2.5, label="measured")
+        ax.plot(measured.t, measured.x * MM, "k.", ms=2.5, label="measured")
     ax.axhline(0, color="0.6", lw=0.6)
     ax.set(xlabel="time after release t (s)", ylabel="x (mm)",
            title=f"Displacement at the laser line ({laser_mm:g} mm below the clamp)")
@@ -176,7 +151,7 @@ def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path 
     """Write every run figure into ``out_dir``; returns the PNG paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    series = read_measured_series(measured) if measured else None
+    series = read_laser_trace(measured) if measured else None
     return [
         plot_amplitude(recording, out / "amplitude.png", series),
         plot_clamp_angle(recording, out / "clamp_angle.png"),
