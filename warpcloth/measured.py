@@ -17,6 +17,7 @@ clamp encoder      ``t, theta``                s, rad (deg when the header says 
 
 from __future__ import annotations
 
+import importlib.resources
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,10 +30,20 @@ from .errors import SceneError
 _SPLIT = re.compile(r"[,;\s]+")
 
 
+def bundled_data(name: str | Path) -> Path:
+    """``name`` itself if it is a file, else the bundled example of that name
+    (``damped_swing_laser`` or ``damped_swing_laser.csv``, from scenes/data/)."""
+    path = Path(name)
+    if path.is_file():
+        return path
+    resource = importlib.resources.files("warpcloth.scenes") / "data" / (path.stem + ".csv")
+    return Path(str(resource)) if path.parent == Path(".") and resource.is_file() else path
+
+
 def read_table(path: str | Path, n_columns: int | None, what: str, flag: str) -> tuple[np.ndarray, list[str] | None]:
     """Rows of ``n_columns`` numbers (None: as many as the first data row has) from a
-    CSV-like file, and its header (None if absent)."""
-    path = Path(path)
+    CSV-like file (or a bundled example by name), and its header (None if absent)."""
+    path = bundled_data(path)
     try:
         lines = path.read_text().splitlines()
     except OSError as exc:

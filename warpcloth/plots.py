@@ -21,7 +21,7 @@ from . import units  # noqa: E402
 from .bending import moment_along_path  # noqa: E402
 from .errors import SceneError  # noqa: E402
 from .material import to_si  # noqa: E402
-from .measured import LaserTrace, read_laser_trace  # noqa: E402
+from .measured import LaserTrace, TrackedShapes, read_laser_trace  # noqa: E402
 from .recording import Recording  # noqa: E402
 
 MM = 1 / units.LENGTH_MM
@@ -205,3 +205,56 @@ def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: 
                                                            if len(data) < len(summary) else ""))
     return _save(fig, Path(path))
 
+
+
+def plot_fit_overlay(result: object, objective: object, measurement: LaserTrace | TrackedShapes, fit: object,
+                     path: Path) -> Path:
+    """Measured against the best fit: the laser trace and its residual, or tracked
+    markers over the simulated strip at six of the measured frames (on the measured clock)."""
+    shift = fit.shift_s
+    title = ", ".join(f"{k.split('.')[-1]} = {v:.4g} ± {fit.sigma[k]:.2g}" for k, v in fit.parameters.items())
+    if isinstance(measurement, LaserTrace):
+        fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, height_ratios=[3, 1])
+        top.plot(measurement.t, measurement.x * MM, "k.", ms=2.5, label="measured")
+        top.plot(result.t - shift, result.probe("laser_x", 0) * MM, "C3", lw=1.2, label="best fit")
+        top.set(ylabel="x at the laser line (mm)")
+        top.legend(fontsize=7)
+        residual = objective.residuals(result, 0, shift)
+        bottom.plot(measurement.t, residual * MM, "C0.", ms=2)
+        bottom.axhline(0, color="0.6", lw=0.6)
+        bottom.set(xlabel="measured time (s)", ylabel="residual (mm)")
+        top.set_title(f"RMS {fit.rms * MM:.3g} mm; {title}", fontsize=8)
+        return _save(fig, path)
+    fig, ax = plt.subplots(figsize=(6.5, 6))
+    frames = np.unique(measurement.frame)
+    chosen = frames[np.linspace(0, len(frames) - 1, min(6, len(frames))).round().astype(int)]
+    edge = objective.edge
+    for colour, f in zip(plt.cm.viridis(np.linspace(0, 1, len(chosen))), chosen, strict=True):
+        rows = measurement.frame == f
+        t = measurement.t[rows][0]
+        k = int(np.abs(result.frame_times - (t + shift)).argmin())
+        xy = (result.frames[k, 0] - edge) * MM
+        nc = objective.scene.n_clamped
+        ax.plot(xy[nc - 1 :, 0], xy[nc - 1 :, 1], color=colour, lw=1.2, label=f"{t:.3f} s")
+        ax.plot(xy[:nc, 0], xy[:nc, 1], color="0.25", lw=3)
+        ax.plot(measurement.x[rows] * MM, measurement.y[rows] * MM, "o", color=colour, ms=3.5, mfc="none")
+    ax.set_aspect("equal")
+    ax.set(xlabel="x from the clamp's lowest point (mm)", ylabel="y (mm)")
+    ax.set_title(f"markers (o) vs best fit (lines); RMS {fit.rms * MM:.3g} mm\n{title}", fontsize=8)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title="measured t", title_fontsize=7)
+    return _save(fig, path)
+
+
+def plot_clamp_fit(t: np.ndarray, theta: np.ndarray, fit: object, path: Path) -> Path:
+    """Encoder angle and the fitted quartic-then-line θ(t), with the breakpoints marked."""
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5), sharex=True, height_ratios=[3, 1])
+    top.plot(t, np.degrees(theta), "k.", ms=2.5, label="encoder")
+    top.plot(t, np.degrees(fit.theta(t)), "C3", lw=1.2, label="quartic, then line")
+    for when in (fit.onset_s, fit.break_s, fit.stop_s):
+        top.axvline(when, color="0.7", lw=0.6, ls="--")
+    top.set(ylabel="θ (deg)", title=f"clamp motion fit, RMS {np.degrees(fit.rms_rad):.3g}°")
+    top.legend(fontsize=7)
+    bottom.plot(t, np.degrees(theta - fit.theta(t)), "C0.", ms=2)
+    bottom.axhline(0, color="0.6", lw=0.6)
+    bottom.set(xlabel="t (s)", ylabel="residual (deg)")
+    return _save(fig, path)

@@ -1,0 +1,159 @@
+"""Fitting the motion: synthetic measurements from runs with known parameters (plus noise
+of a stated size) are recovered; the clamp-angle fit recovers the paper's θ(t); bad
+requests are named."""
+
+import copy
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from conftest import overrides  # noqa: F401  (keeps Warp quiet)
+
+import warpcloth as wc
+from warpcloth.clamp_fit import ClampMotionFit, fit_clamp_motion, scene_with_clamp_motion
+from warpcloth.fit import SHIFT, fit_motion, free_parameters
+from warpcloth.measured import LaserTrace, TrackedShapes
+from warpcloth.model import clamp_edge
+from warpcloth.scene import read_scene_file, set_field
+
+
+def raw(name, **fields):
+    data = read_scene_file(name)
+    for key, value in fields.items():
+        set_field(data, key.replace("__", "."), value)
+    return data
+
+
+def with_fields(data, fields):
+    data = copy.deepcopy(data)
+    for key, value in fields.items():
+        set_field(data, key, value)
+    return wc.scene_from_dict(data)
+
+
+def test_damped_swing_gamma_and_d1_are_recovered():
+    # Truth γ = 0.55 /s, D1 = 0.025 gf·cm/cm; laser trace at 300 Hz with σ = 0.2 mm noise.
+    # Measured: γ 0.5505 ± 0.0015, D1 0.02505 ± 0.00013, RMS 0.200 mm (= the noise).
+    base = raw("damped_swing", release__settle_time_s=0.3, run__duration_s=1.2)
+    truth = {"damping.gamma_per_s": 0.55, "material.hysteresis_d1_gf_cm_per_cm": 0.025}
+    result = wc.simulate(with_fields(base, truth))
+    rng = np.random.default_rng(11)
+    t = result.t[::2]
+    measured = LaserTrace(t, result.probe("laser_x", 0)[::2] + rng.normal(0, 2e-4, len(t)))
+    free = free_parameters("gamma,D1", wc.scene_from_dict(copy.deepcopy(base)))
+    fit = fit_motion(base, measured, free, progress=False)
+    assert fit.converged
+    for name, value in truth.items():
+        assert abs(fit.parameters[name] - value) < 3 * fit.sigma[name]
+        assert abs(fit.parameters[name] - value) < 0.02 * value
+        assert fit.sigma[name] < 0.02 * value
+    assert fit.rms == pytest.approx(2e-4, rel=0.1)  # the residual is the noise, nothing systematic
+    assert fit.launches <= 12
+    stages = [h["stage"] for h in fit.history]
+    assert stages[0] == "space filling" and "step" in stages
+
+
+def tracked_markers(result, scene, offset, noise, rng):
+    edge, nc, h = clamp_edge(scene), scene.n_clamped, scene.spacing
+    rows = []
+    for f, t in enumerate(result.frame_times):
+        if t < offset:
+            continue
+        for s in np.arange(0.0, 0.1001, 0.01):
+            x, y = result.frames[f, 0, nc - 1 + round(s / h)] - edge + rng.normal(0, noise, 2)
+            rows.append((f, t - offset, s, x, y))
+    d = np.array(rows)
+    return TrackedShapes(d[:, 0].astype(int), d[:, 1], d[:, 2], d[:, 3], d[:, 4])
+
+
+def test_impulsive_rotation_centre_gamma_and_clock_are_recovered():
+    # Truth: rotation centre 4.0 mm above the clamp edge, γ = 0.8 /s; markers every 10 mm
+    # at 60 frames/s with σ = 0.3 mm; the camera clock starts 4 ms late. Measured:
+    # dy 3.999 ± 0.026 mm, γ 0.78 ± 0.058, shift 4.16 ± 0.20 ms.
+    base = raw("impulsive_rotation", run__duration_s=0.3)
+    truth = {"clamp.rotation_centre_dy_mm": 4.0, "damping.gamma_per_s": 0.8}
+    scene = with_fields(base, truth)
+    measured = tracked_markers(wc.simulate(scene), scene, 0.004, 3e-4, np.random.default_rng(4))
+    free = free_parameters("rotation_centre_dy_mm,gamma", wc.scene_from_dict(copy.deepcopy(base)))
+    fit = fit_motion(base, measured, free, align_start_s=0.01, progress=False)
+    truth[SHIFT] = 0.004
+    for name, value in truth.items():
+        assert abs(fit.parameters[name] - value) < 3 * fit.sigma[name]
+    assert fit.sigma["clamp.rotation_centre_dy_mm"] < 0.1  # mm: the rotation centre is what this pins down
+    assert fit.sigma[SHIFT] < 1e-3
+    assert fit.rms == pytest.approx(3e-4, rel=0.1)
+
+
+def test_clamp_motion_fit_recovers_the_quartic_then_line():
+    true = ClampMotionFit(0.01, 0.06, 0.13, 0.0, 3.2e4, 16.0, 0.0, 0)
+    t = np.arange(0.0, 0.2, 1e-3)
+    exact = fit_clamp_motion(t, true.theta(t))
+    assert exact.rms_rad < 1e-4
+    assert (exact.onset_s, exact.break_s, exact.stop_s) == pytest.approx((0.01, 0.06, 0.13), abs=1e-3)
+    assert exact.speed_rad_per_s == pytest.approx(16.0, rel=0.01)
+    noisy = fit_clamp_motion(t, true.theta(t) + np.random.default_rng(0).normal(0, 2e-3, len(t)))
+    assert noisy.rms_rad == pytest.approx(2e-3, rel=0.15)
+    assert noisy.speed_rad_per_s == pytest.approx(16.0, rel=0.01)
+    assert noisy.stop_s == pytest.approx(0.13, abs=1e-3)
+    # The fitted motion as a scene: the kernel's clamp angle follows the fit.
+    scene = wc.scene_from_dict(scene_with_clamp_motion(raw("impulsive_rotation", run__duration_s=0.2), noisy))
+    result = wc.simulate(scene)
+    np.testing.assert_allclose(result.probe("clamp_angle", 0), noisy.theta(result.t), atol=1e-9)
+    with pytest.raises(wc.SceneError, match="too few"):
+        fit_clamp_motion(t[:5], t[:5])
+    with pytest.raises(wc.SceneError, match="never changes"):
+        fit_clamp_motion(t, np.zeros_like(t))
+
+
+@pytest.mark.parametrize("names, bounds, message", [
+    ("stiffness", None, "neither a scene field nor one of"),
+    ("strip.spacing_mm", None, "cannot vary between the strips"),
+    ("material.name", None, "not a number"),
+    ("gamma", "gamma=1", "not name=LOW:HIGH"),
+    ("gamma", "gamma=2:1", "must be below"),
+    ("gamma", "D1=0:1", "'D1' is not among the --free"),
+    ("rotation_centre_dx_mm,release.hold_x_mm,clamp.table_t_s", None, "not a number"),
+    ("", None, "at least one parameter"),
+])
+def test_bad_fit_requests_are_named(names, bounds, message):
+    with pytest.raises(wc.SceneError, match=message):
+        free_parameters(names, wc.load_scene("impulsive_rotation"), bounds)
+
+
+def test_a_zero_parameter_needs_bounds():
+    scene = wc.load_scene("damped_swing", ["material.hysteresis_d1_gf_cm_per_cm=0.0"])
+    with pytest.raises(wc.SceneError, match="give --bounds D1=LOW:HIGH"):
+        free_parameters("D1", scene)
+    (d1,) = free_parameters("D1", scene, "D1=0:0.1")
+    assert (d1.lower, d1.upper, d1.field) == (0.0, 0.1, "material.hysteresis_d1_gf_cm_per_cm")
+
+
+def test_cli_fits_the_bundled_examples(tmp_path):
+    # The bundled data (scenes/data/make_motion_examples.py): encoder from the scene's
+    # own θ(t) with 0.1° noise; markers of a rotation about a centre 4.0 mm up, γ 0.8.
+    def cli(*args):
+        return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True,
+                              cwd=tmp_path, timeout=300)
+
+    done = cli("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation",
+               "-o", "fitted.toml", "--plot", "clamp.png")
+    assert done.returncode == 0, done.stderr
+    fitted = wc.load_scene(tmp_path / "fitted.toml")
+    quartic, second = fitted.clamp.segments
+    assert quartic.theta_coefficients_si[4] == pytest.approx(3.2e4, rel=0.05)
+    assert second.theta_coefficients_si[1] == pytest.approx(16.0, rel=0.01)
+    assert second.t_end_s == pytest.approx(0.12, abs=2e-3)
+    done = cli("fit", "impulsive_rotation", "--measured", "impulsive_rotation_shapes", "--free",
+               "gamma,rotation_centre_dy_mm", "--align-start", "0.01", "--out", "fit", "--no-progress")
+    assert done.returncode == 0, done.stderr
+    result = json.loads((tmp_path / "fit" / "fit.json").read_text())
+    dy, sigma = result["parameters"]["clamp.rotation_centre_dy_mm"], result["sigma"]["clamp.rotation_centre_dy_mm"]
+    assert abs(dy - 4.0) < 3 * sigma
+    for name in ("best.toml", "history.csv", "residuals.csv", "overlay.png"):
+        assert (tmp_path / "fit" / name).is_file()
+    best = wc.load_scene(tmp_path / "fit" / "best.toml")
+    assert best.clamp.rotation_centre_dy_mm == pytest.approx(dy) and best.run.duration_s == 0.5
+    done = cli("fit", "impulsive_rotation", "--measured", "impulsive_rotation_shapes", "--free", "bogus")
+    assert done.returncode == 2 and "--free" in done.stderr
