@@ -7,8 +7,8 @@ warpcloth run of a bundled scene with *known* parameters, sampled as the instrum
 would, plus seeded Gaussian noise of a stated size. A fit of these files should return
 the parameters below within its reported uncertainty.
 
-- ``damped_swing_laser.csv``: the damped swing (settle time shortened to 0.3 s) with
-  γ = 0.55 /s and D1 = 0.025 gf·cm/cm; laser-line displacement sampled at 300 Hz for
+- ``damped_swing_laser.csv``: the bundled damped swing with γ = 0.55 /s and
+  D1 = 0.025 gf·cm/cm; laser-line displacement sampled at 300 Hz for
   1.5 s; noise σ = 0.2 mm.
 - ``impulsive_rotation_shapes.csv``: the impulsive rotation (0.3 s) with the rotation
   centre 4.0 mm above the clamp's lowest point and γ = 0.8 /s; 11 markers every 10 mm
@@ -47,7 +47,7 @@ def scene_with(name: str, fields: dict) -> wc.Scene:
 
 def laser_trace(rng: np.random.Generator) -> str:
     """The damped swing's laser-line displacement, 300 Hz, σ = 0.2 mm."""
-    scene = scene_with("damped_swing", SWING_TRUTH | {"release.settle_time_s": 0.3, "run.duration_s": 1.5})
+    scene = scene_with("damped_swing", SWING_TRUTH | {"run.duration_s": 1.5})
     result = wc.simulate(scene)
     t, x = result.t[::2], result.probe("laser_x", 0)[::2] * 1e3 + rng.normal(0, 0.2, len(result.t[::2]))
     rows = "\n".join(f"{ti:.6f},{xi:.4f}" for ti, xi in zip(t, x, strict=True))
