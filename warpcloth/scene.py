@@ -23,6 +23,7 @@ from .errors import SceneError
 from .material import DEFAULT_MATERIAL, validate_material
 
 MAX_STEPS = 2**31 - 1
+MATERIAL_FILE_KEY = "material.from_file"
 
 
 def _field(default: Any, doc: str, *, gt: float | None = None, ge: float | None = None,
@@ -66,6 +67,9 @@ class MaterialSection:
                                         "α, steepness of the hysteresis branches", gt=0, per_strip=True)
     hysteresis_k0_per_cm: float = _field(DEFAULT_MATERIAL["hysteresis_k0_per_cm"],
                                          "K0, curvature where the KES loop closes", gt=0, per_strip=True)
+    from_file: str = _field("", "a material file (path ending in .toml, relative to the scene file) or a bundled "
+                            "material name; its values fill every [material] field the scene does not set itself",
+                            per_strip=True)
 
 
 @dataclass
@@ -277,8 +281,14 @@ def _parse_value(text: str) -> Any:
 
 
 def set_field(data: dict, key: str, value: Any) -> None:
-    """Set the field ``key`` (dotted; list items by index) of raw scene ``data`` in place."""
+    """Set the field ``key`` (dotted; list items by index) of raw scene ``data`` in place.
+
+    Setting ``material.from_file`` selects that material: the [material] values already in
+    ``data`` are dropped so that the file supplies them (set other material fields after it).
+    """
     parts = key.strip().split(".")
+    if parts == MATERIAL_FILE_KEY.split(".") and isinstance(data.get("material"), dict):
+        data["material"] = {k: v for k, v in data["material"].items() if k not in material_fields()}
     node: Any = data
     for i, part in enumerate(parts):
         last = i == len(parts) - 1
@@ -302,10 +312,13 @@ def apply_overrides(data: dict, overrides: typing.Iterable[str]) -> dict:
 
     Keys are dotted field names (``integrator.dt_s``); list items are addressed by
     index (``clamp.segments.1.t_end_s``). Values are TOML literals; a bare word is a
-    string. Unknown keys are reported when the result is parsed.
+    string. Unknown keys are reported when the result is parsed. A ``material.from_file``
+    override replaces the scene's own material values by the file's; the other
+    ``material.*`` overrides apply on top of it, wherever they stand in the list.
     """
     data = copy.deepcopy(data)
-    for item in overrides:
+    # stable sort: the material file first, so that it cannot undo a field override
+    for item in sorted(overrides, key=lambda o: o.split("=", 1)[0].strip() != MATERIAL_FILE_KEY):
         if "=" not in item:
             raise SceneError(item, "an override must look like section.field=value")
         key, text = item.split("=", 1)
@@ -319,8 +332,99 @@ def bundled_scenes() -> list[str]:
     return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
+def bundled_materials() -> list[str]:
+    """Names of the material files shipped with warpcloth (``scenes/materials/*.toml``)."""
+    root = importlib.resources.files("warpcloth.scenes") / "materials"
+    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def material_fields() -> list[str]:
+    """The [material] fields a material file must give (every one but ``from_file``)."""
+    return [f.name for f in dataclasses.fields(MaterialSection) if f.name != "from_file"]
+
+
+def read_material_file(ref: str | Path) -> dict:
+    """Raw TOML of a material file, validated; ``ref`` is a path ending in ``.toml``
+    (relative to the current directory) or the name of a bundled material.
+
+    The file holds a ``[material]`` table with every scene [material] field except
+    ``from_file``, plus ``source`` (where the numbers come from), and, for a fitted
+    material, a ``[fit]`` table (residuals, KES summary values) that is informational.
+    """
+    ref = str(ref)
+    if ref.endswith(".toml"):
+        path = Path(ref)
+        where = str(path)
+        try:
+            text = path.read_text()
+        except OSError as exc:
+            raise SceneError(MATERIAL_FILE_KEY, f"cannot read material file {ref!r}: {exc.strerror} (a path is "
+                             f"relative to the scene file; a bundled material is named without .toml: "
+                             f"{', '.join(bundled_materials())})") from None
+    else:
+        resource = importlib.resources.files("warpcloth.scenes") / "materials" / f"{ref}.toml"
+        if not ref or not resource.is_file():
+            raise SceneError(MATERIAL_FILE_KEY, f"no bundled material {ref!r} (bundled: "
+                             f"{', '.join(bundled_materials())}; a material file is a path ending in .toml)")
+        text = resource.read_text()
+        where = f"bundled material {ref}"
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(MATERIAL_FILE_KEY, f"{where} is not valid TOML: {exc}") from None
+    extra = sorted(set(data) - {"material", "fit"})
+    if extra:
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: unknown top-level entry {extra[0]!r}; a material file "
+                         "has a [material] and optionally a [fit] table")
+    material = data.get("material")
+    if not isinstance(material, dict) or not isinstance(data.get("fit", {}), dict):
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: needs a [material] table (and [fit], if any, a table)")
+    missing = [k for k in [*material_fields(), "source"] if k not in material]
+    if missing:
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: [material] lacks {', '.join(missing)}; a material file "
+                         "gives every field, so that nothing silently comes from the default material")
+    source = material["source"]
+    if not isinstance(source, str) or not source.strip():
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: material.source must say where the numbers come from, "
+                         f"got {source!r}")
+    if "from_file" in material:
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: a material file cannot refer to another (from_file)")
+    try:
+        _parse(MaterialSection, {k: v for k, v in material.items() if k != "source"}, "material")
+    except SceneError as exc:
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: {exc}") from None
+    return data
+
+
+def _with_material_file(data: dict) -> dict:
+    # The material file fills only what the scene leaves unset; a resolved scene sets
+    # every field, so the file is not even read (it may have moved since the run).
+    material = data.get("material")
+    if not isinstance(material, dict) or "from_file" not in material:
+        return data
+    ref = _coerce(material["from_file"], str, MATERIAL_FILE_KEY, {})
+    missing = [k for k in material_fields() if k not in material]
+    if not ref or not missing:
+        return data
+    values = read_material_file(ref)["material"]
+    return {**data, "material": {**{k: values[k] for k in missing}, **material}}
+
+
+def _rebase_material_file(data: dict, directory: Path) -> None:
+    # A material path written in a scene file is relative to that file, not to the
+    # directory the command runs in.
+    material = data.get("material")
+    ref = material.get("from_file") if isinstance(material, dict) else None
+    if isinstance(ref, str) and ref.endswith(".toml") and not Path(ref).is_absolute():
+        material["from_file"] = str((directory / ref).resolve())
+
+
 def read_scene_file(name_or_path: str | Path) -> dict:
-    """Raw TOML data of a scene given by path or by bundled name (``damped_swing``)."""
+    """Raw TOML data of a scene given by path or by bundled name (``damped_swing``).
+
+    A relative ``material.from_file`` path in the file is made absolute against the
+    scene file's directory.
+    """
     path = Path(name_or_path)
     if path.is_file():
         text = path.read_text()
@@ -333,14 +437,22 @@ def read_scene_file(name_or_path: str | Path) -> dict:
         text = resource.read_text()
         where = f"bundled scene {path.stem}"
     try:
-        return tomllib.loads(text)
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError("scene", f"{where} is not valid TOML: {exc}") from exc
+    if path.is_file():
+        _rebase_material_file(data, path.parent)
+    return data
 
 
 def scene_from_dict(data: dict) -> Scene:
-    """Parse and validate raw scene data."""
-    scene = _parse(Scene, data, "")
+    """Parse and validate raw scene data.
+
+    A ``material.from_file`` (path or bundled name) fills every [material] field the data
+    do not set; the scene holds the explicit values afterwards, so ``to_dict()`` re-reads
+    to the same scene.
+    """
+    scene = _parse(Scene, _with_material_file(data), "")
     validate_scene(scene)
     return scene
 

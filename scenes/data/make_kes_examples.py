@@ -1,0 +1,84 @@
+"""Generate the bundled KES example data: ``kes_fb1_example.csv`` and ``kes_fb2_example.csv``.
+
+They are synthetic: the model itself with known parameters plus seeded Gaussian noise,
+so that ``warpcloth material fit-kes`` can be checked against the truth. The material is
+MODEL.md's illustrative wool 90 % / nylon 10 % (``warpcloth.material.DEFAULT_MATERIAL``):
+tensile a = (2000, 0, 0, 2.93e7) gf/cm, D = 0.10 gf·cm²/cm, D1 = 0.04 gf·cm/cm,
+α = 5 cm, K0 = 2.5 1/cm.
+
+``kes_fb1_example.csv`` (header ``strain_percent,force_gf_per_cm``): loading from 0 to
+the strain εm where T(εm) = 500 gf/cm (the KES-FB1 standard maximum load; εm = 6.001 %),
+121 points equally spaced in strain, force T(ε) of the quartic; then unloading back to 0
+at the same strains (120 more points). The model has no tensile hysteresis, so the
+unloading force follows a stated simple rule: the loading curve scaled by (ε/εm)³,
+i.e. T(ε)·(ε/εm)³, which starts at Fm and ends at 0 below the loading curve (without
+noise: EMT 6.001 %, WT 8.162 gf·cm/cm², LT 0.544, RT 52.6 %). Noise: Gaussian,
+σ = 2 gf/cm, on every force (seed 2026); strain noise-free.
+
+``kes_fb2_example.csv`` (header ``curvature_per_cm,moment_gf_cm_per_cm``): the standard
+KES-FB2 cycle 0 → +2.5 → −2.5 → 0 1/cm in steps of 0.02 1/cm (501 points); the moment is
+the strip kernel's own hinge law along that path (``warpcloth.bending.moment_along_path``,
+the hinge starting fresh at K = 0; without noise B = 0.1004 gf·cm²/cm, 2HB = 0.0399
+gf·cm/cm), plus Gaussian noise σ = 0.002 gf·cm/cm (seed 2027); curvature noise-free (the
+instruments' controlled variable).
+
+Run ``python scenes/data/make_kes_examples.py`` to rewrite both files next to this script.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from warpcloth import units
+from warpcloth.bending import moment_along_path
+from warpcloth.kes import PERCENT
+from warpcloth.material import DEFAULT_MATERIAL, to_si
+from warpcloth.scene import MaterialSection
+
+HERE = Path(__file__).resolve().parent
+MAX_LOAD_GF_PER_CM = 500.0
+TENSILE_POINTS = 121
+TENSILE_NOISE_GF_PER_CM = 2.0
+UNLOADING_EXPONENT = 3
+CURVATURE_STEP_PER_CM = 0.02
+BENDING_NOISE_GF_CM_PER_CM = 0.002
+
+
+def tensile_example() -> np.ndarray:
+    """Rows (strain in %, force per width in gf/cm): loading to 500 gf/cm, then unloading."""
+    a = DEFAULT_MATERIAL["tensile_gf_per_cm"]
+    quartic = np.polynomial.Polynomial([0.0, *a])
+    roots = (quartic - MAX_LOAD_GF_PER_CM).roots()
+    em = min(r.real for r in roots if abs(r.imag) < 1e-9 and r.real > 0)
+    loading = np.linspace(0.0, em, TENSILE_POINTS)
+    unloading = loading[::-1][1:]
+    strain = np.concatenate([loading, unloading])
+    force = np.concatenate([quartic(loading), quartic(unloading) * (unloading / em) ** UNLOADING_EXPONENT])
+    force += np.random.default_rng(2026).normal(0.0, TENSILE_NOISE_GF_PER_CM, len(force))
+    return np.column_stack([strain / PERCENT, force])
+
+
+def bending_example() -> np.ndarray:
+    """Rows (curvature in 1/cm, moment per width in gf·cm/cm) of the cycle 0 → +2.5 → −2.5 → 0."""
+    k0 = DEFAULT_MATERIAL["hysteresis_k0_per_cm"]
+    n = round(k0 / CURVATURE_STEP_PER_CM)
+    k = np.concatenate([np.linspace(0.0, k0, n, endpoint=False), np.linspace(k0, -k0, 2 * n, endpoint=False),
+                        np.linspace(-k0, 0.0, n + 1)])
+    moment, _ = moment_along_path(to_si(MaterialSection()), k * units.CURVATURE_PER_CM)
+    moment = moment / units.MOMENT_GF_CM_PER_CM
+    moment += np.random.default_rng(2027).normal(0.0, BENDING_NOISE_GF_CM_PER_CM, len(moment))
+    return np.column_stack([k, moment])
+
+
+def main() -> None:
+    """Write both example files next to this script."""
+    np.savetxt(HERE / "kes_fb1_example.csv", tensile_example(), fmt=("%.4f", "%.3f"), delimiter=",",
+               header="strain_percent,force_gf_per_cm", comments="")
+    np.savetxt(HERE / "kes_fb2_example.csv", bending_example(), fmt=("%.3f", "%.5f"), delimiter=",",
+               header="curvature_per_cm,moment_gf_cm_per_cm", comments="")
+
+
+if __name__ == "__main__":
+    main()
