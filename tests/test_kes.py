@@ -367,6 +367,11 @@ def test_scene_by_bundled_name_set_override_and_sweep():
     raw["sweep"] = {"grid": {"material.from_file": ["cotton-broadcloth", "polyester-taffeta"]}}
     sweep = wc.expand(copy.deepcopy(raw))
     assert [s.material.bending_rigidity_gf_cm2_per_cm for s in sweep.scenes] == [0.07, 0.03]
+    # other swept material fields land on top of the file, listed before or after it
+    raw["sweep"] = {"grid": {"material.hysteresis_alpha_cm": [3.0], "material.from_file": ["cotton-broadcloth"]}}
+    (scene,) = wc.expand(copy.deepcopy(raw)).scenes
+    assert scene.material.hysteresis_alpha_cm == 3.0
+    assert scene.material.bending_rigidity_gf_cm2_per_cm == 0.07
 
 
 COTTON = read_material_file("cotton-broadcloth")["material"]

@@ -59,8 +59,7 @@ from .material import MaterialSI, tensile_slope_minimum, validate_material
 from .measured import bundled_data
 from .scene import IntegratorSection, MaterialSection, material_fields
 
-PERCENT = 1e-2
-"""Strain written in % → fraction (a number format, not a physical unit)."""
+PERCENT = units.STRAIN_PERCENT
 
 KES_FB1_GAUGE_MM = 50.0
 """Standard KES-FB1 gauge length (sample length between the chucks)."""

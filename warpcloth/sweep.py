@@ -177,7 +177,9 @@ def expand(raw: dict) -> Sweep:
     for i, assignment in enumerate(assignments):
         data = copy.deepcopy(base)
         try:
-            for key, value in assignment.items():
+            # A material file replaces the material, so it goes first and the other
+            # swept material fields land on top of it, whatever their order in [sweep].
+            for key, value in sorted(assignment.items(), key=lambda kv: not kv[0].endswith("from_file")):
                 set_field(data, key, value)
             scenes.append(scene_from_dict(data))
         except SceneError as exc:

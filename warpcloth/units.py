@@ -29,3 +29,6 @@ AREAL_DENSITY_G_PER_CM2 = 10.0
 
 LENGTH_MM = 1e-3
 """Scene lengths: mm → m."""
+
+STRAIN_PERCENT = 1e-2
+"""Strain written in % (KES-FB1 EMT, tensile CSVs) → fraction."""
