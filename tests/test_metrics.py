@@ -27,3 +27,20 @@ def test_swing_metrics_of_a_damped_oscillator(zeta):
 def test_no_swing_gives_nan_not_an_error():
     m = swing_metrics(np.arange(10) / 600, np.zeros(10))
     assert np.isnan(m["first_period_s"]) and m["n_half_cycles"] == 0
+
+
+def test_ripples_near_turning_points_are_not_half_cycles():
+    # The sweep found laser traces of nearly undamped strips whose higher modes put a
+    # ripple on the swing (a 0.06 mm wiggle near a 33 mm turning point); the old
+    # detector took the wiggle for two half-cycles and stopped there. A 0.5 % ripple at
+    # 7.3× the frequency must leave every half-cycle of the 0.5 s swing in place.
+    t = np.arange(0, 3, 1 / 600)
+    omega = 2 * np.pi / 0.5
+    zeta = 0.01
+    wd = omega * np.sqrt(1 - zeta**2)
+    x = 0.05 * np.exp(-zeta * omega * t) * (np.cos(wd * t) + zeta * omega / wd * np.sin(wd * t))
+    rippled = x + 2.5e-4 * np.sin(7.3 * omega * t)
+    clean, noisy = swing_metrics(t, x), swing_metrics(t, rippled)
+    assert clean["n_half_cycles"] == noisy["n_half_cycles"] == 11  # 12 turning points in 3 s
+    assert noisy["mean_log_decrement"] == pytest.approx(clean["mean_log_decrement"], rel=0.05)
+    assert noisy["first_period_s"] == pytest.approx(clean["first_period_s"], rel=0.01)

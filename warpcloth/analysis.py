@@ -31,47 +31,51 @@ def first_period(t: np.ndarray, x: np.ndarray, level: float | None = None) -> fl
 
 
 def extrema(t: np.ndarray, x: np.ndarray, starts_at_rest: bool = False,
-            floor: float = 1e-3) -> tuple[np.ndarray, np.ndarray]:
+            prominence: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
     """Alternating turning points (times, values) of an oscillation, parabola-refined.
 
-    With ``starts_at_rest`` (a release) the first sample is a turning point. They stop
-    once a half-cycle's amplitude falls below ``floor`` × the first one, where sampling
-    noise and tensile ripple would otherwise add false ones.
+    A turning point counts once the signal has moved back from it by more than
+    ``prominence`` × the signal's range, so ripples of higher modes near a turning point
+    (and sampling noise) are not taken for half-cycles, and the search ends by itself
+    once the swing has decayed below that. The last, unconfirmed extreme of the record
+    is not reported. With ``starts_at_rest`` (a release) the first sample is a turning
+    point.
     """
     t = np.asarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
     ok = np.isfinite(x)
     t, x = t[ok], x[ok]
-    if len(x) < 3:
+    if len(x) < 3 or np.ptp(x) == 0:
         return np.zeros(0), np.zeros(0)
-    d = np.diff(x)
-    i = np.nonzero(d[:-1] * d[1:] < 0)[0] + 1
+    threshold = prominence * np.ptp(x)
+    found = [0] if starts_at_rest else []
+    high = low = 0  # indices of the running maximum and minimum since the last turning point
+    rising = None  # direction of travel, unknown until the first confirmed move
+    for k in range(1, len(x)):
+        if x[k] > x[high]:
+            high = k
+        if x[k] < x[low]:
+            low = k
+        if rising is not False and x[k] < x[high] - threshold:
+            if rising:
+                found.append(high)
+            rising, low = False, k
+        elif rising is not True and x[k] > x[low] + threshold:
+            if rising is False:
+                found.append(low)
+            rising, high = True, k
     times, values = [], []
-    if starts_at_rest:
-        times.append(t[0])
-        values.append(x[0])
-    for j in i:
-        a, b, c = x[j - 1], x[j], x[j + 1]
-        curvature = a - 2 * b + c
-        shift = 0.5 * (a - c) / curvature if curvature != 0 else 0.0
-        times.append(t[j] + shift * (t[j + 1] - t[j]))
-        values.append(b - 0.25 * (a - c) * shift)
-    times, values = np.array(times), np.array(values)
-    # keep alternation: of two same-direction turning points keep the more extreme
-    keep_t, keep_v = list(times[:1]), list(values[:1])
-    for tt, vv in zip(times[1:], values[1:], strict=True):
-        if len(keep_v) >= 2 and (keep_v[-1] - keep_v[-2]) * (vv - keep_v[-1]) > 0:
-            keep_t[-1], keep_v[-1] = tt, vv
+    for j in found:
+        if 0 < j < len(x) - 1:
+            a, b, c = x[j - 1], x[j], x[j + 1]
+            curvature = a - 2 * b + c
+            shift = 0.5 * (a - c) / curvature if curvature != 0 else 0.0
+            times.append(t[j] + shift * (t[j + 1] - t[j]))
+            values.append(b - 0.25 * (a - c) * shift)
         else:
-            keep_t.append(tt)
-            keep_v.append(vv)
-    values = np.array(keep_v)
-    amplitude = np.abs(np.diff(values)) / 2
-    if len(amplitude):
-        small = np.nonzero(amplitude < floor * amplitude[0])[0]
-        if len(small):
-            return np.array(keep_t[: small[0] + 1]), values[: small[0] + 1]
-    return np.array(keep_t), values
+            times.append(t[j])
+            values.append(x[j])
+    return np.array(times), np.array(values)
 
 
 def swing_metrics(t: np.ndarray, signal: np.ndarray, starts_at_rest: bool = True) -> dict:

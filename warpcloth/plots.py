@@ -195,11 +195,14 @@ def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: 
         ax.set(xlabel=x, ylabel=metric)
     else:
         table = data.pivot_table(index=y, columns=x, values=metric, aggfunc="mean")
+        # Colours span the 2nd–98th percentile, so one outlier does not flatten the map.
+        lo, hi = np.nanpercentile(data[metric], [2, 98])
+        scale = {"cmap": "viridis", "vmin": lo, "vmax": hi if hi > lo else None}
         if table.size == len(data) and not table.isna().any().any():
-            mesh = ax.pcolormesh(table.columns, table.index, table.to_numpy(), shading="nearest", cmap="viridis")
+            mesh = ax.pcolormesh(table.columns, table.index, table.to_numpy(), shading="nearest", **scale)
         else:
-            mesh = ax.scatter(data[x], data[y], c=data[metric], s=14, cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label=metric)
+            mesh = ax.scatter(data[x], data[y], c=data[metric], s=14, **scale)
+        fig.colorbar(mesh, ax=ax, label=metric, extend="both")
         ax.set(xlabel=x, ylabel=y)
     ax.set_title(f"{metric} over {len(data)} variants" + (f" ({len(summary) - len(data)} diverged)"
                                                            if len(data) < len(summary) else ""))
