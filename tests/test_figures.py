@@ -76,6 +76,10 @@ def test_measured_forms_and_units(tmp_path):
     np.testing.assert_allclose(read_encoder(path)[1], [0, np.pi / 2])
     path.write_text("# encoder\n0 0\n0.1 1.5\n")
     np.testing.assert_allclose(read_encoder(path)[1], [0, 1.5])
+    path.write_text("t (s), theta (deg)\n0, 0\n0.1, 90\n")  # units in brackets, spaces
+    np.testing.assert_allclose(read_encoder(path)[1], [0, np.pi / 2])
+    path.write_bytes("0.0,1.0\n0.1,2.0\n0.2,3.0\n".encode("utf-8-sig"))  # a spreadsheet's byte-order mark
+    assert len(read_laser_trace(path).t) == 3
     path.write_text("frame,t_s,s_mm,x_mm,y_mm\n0,0,10,1,-10\n0,0,20,2,-20\n1,0.0167,10,1.5,-10\n")
     shapes = read_measurement(path)
     np.testing.assert_allclose(shapes.s, [0.01, 0.02, 0.01])

@@ -87,7 +87,7 @@ def test_impulsive_rotation_centre_gamma_and_clock_are_recovered():
 
 
 def test_clamp_motion_fit_recovers_the_quartic_then_line():
-    true = ClampMotionFit(0.01, 0.06, 0.13, 0.0, 3.2e4, 16.0, 0.0, 0)
+    true = ClampMotionFit(0.01, 0.06, 0.13, 0.05, 3.2e4, 16.0, 0.0, 0)  # the encoder reads 0.05 rad at rest
     t = np.arange(0.0, 0.2, 1e-3)
     exact = fit_clamp_motion(t, true.theta(t))
     assert exact.rms_rad < 1e-4
@@ -97,10 +97,12 @@ def test_clamp_motion_fit_recovers_the_quartic_then_line():
     assert noisy.rms_rad == pytest.approx(2e-3, rel=0.15)
     assert noisy.speed_rad_per_s == pytest.approx(16.0, rel=0.01)
     assert noisy.stop_s == pytest.approx(0.13, abs=1e-3)
-    # The fitted motion as a scene: the kernel's clamp angle follows the fit.
     scene = wc.scene_from_dict(scene_with_clamp_motion(raw("impulsive_rotation", run__duration_s=0.2), noisy))
     result = wc.simulate(scene)
-    np.testing.assert_allclose(result.probe("clamp_angle", 0), noisy.theta(result.t), atol=1e-9)
+    # The fitted motion as a scene: the kernel's clamp angle follows the fit, measured
+    # from the encoder's rest reading (no jump at t = 0).
+    np.testing.assert_allclose(result.probe("clamp_angle", 0), noisy.theta(result.t) - noisy.theta0_rad, atol=1e-9)
+    assert noisy.theta0_rad == pytest.approx(0.05, abs=2e-3) and result.probe("clamp_angle", 0)[0] == 0.0
     with pytest.raises(wc.SceneError, match="too few"):
         fit_clamp_motion(t[:5], t[:5])
     with pytest.raises(wc.SceneError, match="never changes"):
@@ -157,3 +159,10 @@ def test_cli_fits_the_bundled_examples(tmp_path):
     assert best.clamp.rotation_centre_dy_mm == pytest.approx(dy) and best.run.duration_s == 0.5
     done = cli("fit", "impulsive_rotation", "--measured", "impulsive_rotation_shapes", "--free", "bogus")
     assert done.returncode == 2 and "--free" in done.stderr
+
+
+def test_markers_beyond_the_free_end_are_refused():
+    base = raw("impulsive_rotation", run__duration_s=0.1)
+    markers = TrackedShapes(np.array([0, 1]), np.array([0.0, 0.05]), np.array([0.05, 0.12]), np.zeros(2), np.zeros(2))
+    with pytest.raises(wc.SceneError, match="s = 120 mm lies beyond the free end"):
+        fit_motion(base, markers, free_parameters("gamma", wc.scene_from_dict(copy.deepcopy(base))), progress=False)

@@ -120,8 +120,11 @@ def test_value_clips_give_the_same_samples_and_move_with_the_file(rotation_run, 
     recording = load_recording(rotation_run)
     n_frames = len(recording.frame_times)
     export_usd(recording, tmp_path / "a" / "clipped.usdc", frames_per_clip=4)
-    clips = sorted((tmp_path / "a" / "clipped_clips").glob("frames-*.usdc"))
-    assert len(clips) == -(-n_frames // 4)
+    (clips_dir,) = (tmp_path / "a").glob("clipped_clips_*")
+    assert len(list(clips_dir.glob("frames-*.usdc"))) == -(-n_frames // 4)
+    export_usd(recording, tmp_path / "a" / "clipped.usdc", frames_per_clip=5)  # replaces the old clips
+    (clips_dir,) = (tmp_path / "a").glob("clipped_clips_*")
+    assert len(list(clips_dir.glob("frames-*.usdc"))) == -(-n_frames // 5)
     (tmp_path / "a").rename(tmp_path / "moved")  # asset paths are relative
     stage = Usd.Stage.Open(str(tmp_path / "moved" / "clipped.usdc"))
     assert stage.GetTimeCodesPerSecond() == 60.0 and stage.GetEndTimeCode() == n_frames - 1
@@ -189,3 +192,53 @@ def test_a_killed_export_leaves_a_complete_stage_or_none(swing_batch, tmp_path):
         assert points.GetNumTimeSamples() == n_frames
     # The one being written when the kill came is only a temporary directory.
     assert all(p.name.startswith(".k") for p in tmp_path.iterdir() if p.is_dir())
+
+
+def test_a_diverged_strip_is_hidden_and_an_interrupted_run_is_cut(tmp_path):
+    # Forward Euler at dt = 2e-5 s blows up the default strip (tests/test_batch.py); the
+    # soft, damped one runs on. The diverged strip's frames are NaN on disk, it keeps
+    # its last shape for drawing and is hidden from its divergence on; the clamp stays
+    # finite.
+    def hanging(**fields):
+        return wc.load_scene("damped_swing", overrides(
+            release__enabled=False, integrator__dt_s=2e-5, integrator__scheme="forward", run__duration_s=0.3,
+            **fields))
+
+    scenes = [hanging(damping__gamma_per_s=0.0),
+              hanging(damping__gamma_per_s=400.0, material__tensile_gf_per_cm=[20.0, 0.0, 0.0, 0.0])]
+    wc.simulate(scenes, out=tmp_path / "run", on_divergence="record")
+    recording = load_recording(tmp_path / "run")
+    alive = recording.alive
+    assert alive[0, 0] and not alive[-1, 0] and alive[:, 1].all()
+    last = int(np.nonzero(alive[:, 0])[0][-1])
+    np.testing.assert_array_equal(recording.drawable_frames[-1, 0], recording.frames[last, 0])
+    stage = Usd.Stage.Open(str(export_usd(recording, tmp_path / "d.usda")))
+    hidden = UsdGeom.Imageable(stage.GetPrimAtPath("/World/Strips/variant_0000")).GetVisibilityAttr()
+    assert hidden.Get(last) == UsdGeom.Tokens.inherited and hidden.Get(last + 1) == UsdGeom.Tokens.invisible
+    healthy = UsdGeom.Imageable(stage.GetPrimAtPath("/World/Strips/variant_0001"))
+    assert healthy.GetVisibilityAttr().GetNumTimeSamples() == 0
+    clamp = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Clamps/variant_0000"))
+    assert np.isfinite(np.array(clamp.ComputeLocalToWorldTransform(len(recording.frame_times) - 1))).all()
+    # An interrupted run (meta.json still says incomplete): read up to its last frame.
+    meta = tmp_path / "run" / "meta.json"
+    meta.write_text(meta.read_text().replace('"complete": true', '"complete": false'))
+    frames = np.load(tmp_path / "run" / "frames.npy", mmap_mode="r+")
+    frames[12:] = np.nan
+    frames.flush()
+    cut = load_recording(tmp_path / "run")
+    assert not cut.complete and len(cut.frame_times) == 12 and np.isfinite(cut.frames[:, 1]).all()
+
+
+def test_a_sweep_whose_material_file_changed_is_refused(tmp_path):
+    import importlib.resources
+
+    material = tmp_path / "fabric.toml"
+    bundled = importlib.resources.files("warpcloth.scenes") / "materials" / "wool90-nylon10.toml"
+    material.write_text(bundled.read_text())
+    sweep = wc.expand({"run": {"duration_s": 0.05}, "release": {"settle_time_s": 0.05},
+                       "material": {"from_file": str(material)}, "sweep": {"grid": {"damping.gamma_per_s": [0.1]}}})
+    wc.run_sweep(sweep, tmp_path / "sweep", workers=0, frames=True, progress=False)
+    assert load_recording(tmp_path / "sweep").scenes[0].material.density_g_per_cm2 == 0.0203
+    material.write_text(material.read_text().replace("density_g_per_cm2 = 2.03e-2", "density_g_per_cm2 = 4e-2"))
+    with pytest.raises(wc.SceneError, match="no longer resolve"):
+        load_recording(tmp_path / "sweep")

@@ -54,11 +54,13 @@ class ClampMotionFit:
         return self.theta0_rad + self.quartic_rad_per_s4 * quartic + self.speed_rad_per_s * line
 
     def segments(self) -> list[dict]:
-        """The motion as scene ``clamp.segments`` (θ = Σ c_k (t − t_start)^k)."""
-        theta_break = self.theta0_rad + self.quartic_rad_per_s4 * (self.break_s - self.onset_s) ** 4
+        """The motion as scene ``clamp.segments`` (θ = Σ c_k (t − t_start)^k), measured
+        from the encoder's reading at rest θ0: a scene's θ turns the clamp away from the
+        hanging rest shape, so an encoder zero offset must not become a jump at t = 0."""
+        theta_break = self.quartic_rad_per_s4 * (self.break_s - self.onset_s) ** 4
         return [
             {"t_start_s": self.onset_s, "t_end_s": self.break_s,
-             "theta_coefficients_si": [self.theta0_rad, 0.0, 0.0, 0.0, self.quartic_rad_per_s4]},
+             "theta_coefficients_si": [0.0, 0.0, 0.0, 0.0, self.quartic_rad_per_s4]},
             {"t_start_s": self.break_s, "t_end_s": self.stop_s,
              "theta_coefficients_si": [theta_break, self.speed_rad_per_s]},
         ]

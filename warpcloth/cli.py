@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -235,8 +236,11 @@ def _clamp(args: argparse.Namespace) -> int:
     data.pop("sweep", None)
     scene = scene_from_dict(data)  # validates before anything is written
     out = Path(args.output)
-    out.write_text(tomli_w.dumps(scene.to_dict()))
-    print(f"onset {fit.onset_s:.4f} s, quartic {fit.quartic_rad_per_s4:.5g} rad/s⁴ to {fit.break_s:.4f} s, "
+    tmp = out.with_name(f".{out.name}.tmp")
+    tmp.write_text(tomli_w.dumps(scene.to_dict()))
+    os.replace(tmp, out)
+    print(f"encoder at rest {fit.theta0_rad:.4g} rad (the scene's θ is measured from it); "
+          f"onset {fit.onset_s:.4f} s, quartic {fit.quartic_rad_per_s4:.5g} rad/s⁴ to {fit.break_s:.4f} s, "
           f"then {fit.speed_rad_per_s:.5g} rad/s to {fit.stop_s:.4f} s (slope jump at the break "
           f"{fit.slope_jump_rad_per_s:+.3g} rad/s); RMS {fit.rms_rad:.3g} rad over {fit.n_samples} samples")
     print(f"wrote {out}")

@@ -28,6 +28,7 @@ import copy
 import dataclasses
 import json
 import math
+import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -161,6 +162,13 @@ class Objective:
             set_field(self.base, "output.frame_rate_hz", scene.output.frame_rate_hz * scene.output.probes_per_frame)
             set_field(self.base, "output.probes_per_frame", 1)
         self.scene = scene_from_dict(copy.deepcopy(self.base))
+        if isinstance(measurement, TrackedShapes):
+            free_length = self.scene.strip.free_length_mm * 1e-3
+            beyond = measurement.s > free_length * (1 + 1e-9)
+            if beyond.any():
+                raise SceneError("--measured", f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond the "
+                                 f"free end ({free_length * 1e3:g} mm below the clamp's lowest point); s is the arc "
+                                 "length from the clamp's lowest point, not from the clamp's top")
         self.edge = clamp_edge(self.scene)
         self.shift_step = 0.5 * self.scene.output_interval
         self.launches = 0
@@ -190,15 +198,19 @@ class Objective:
         return simulate(scenes, device=self.device, on_divergence="record",
                         keep_frames=isinstance(self.measurement, TrackedShapes))
 
-    def residuals(self, result: RunResult, j: int, shift: float) -> np.ndarray:
-        """Simulated minus measured, SI, for variant j of a result at clock offset δ."""
+    def residuals(self, result: RunResult, j: int, shift: float, penalise: bool = True) -> np.ndarray:
+        """Simulated minus measured, SI, for variant j of a result at clock offset δ.
+
+        Where the simulation has no value (the strip misses the laser line, or diverged)
+        the residual is a penalty that steers the search away, or NaN with
+        ``penalise=False`` (for reporting)."""
         m = self.measurement
         t = m.t + shift
         if isinstance(m, LaserTrace):
             sim = np.interp(t, result.t, result.probe("laser_x", j))
             # Where the strip misses the laser line the signal is undefined: count the
             # whole measured swing as missed there, so the search moves away.
-            return np.where(np.isfinite(sim), sim - m.x, np.ptp(m.x))
+            return np.where(np.isfinite(sim) | (not penalise), sim - m.x, np.ptp(m.x))
         frames = result.frames[:, j] - self.edge  # [time, node, xy] from the clamp's lowest point
         nc = self.scene.n_clamped
         arc = m.s / self.scene.spacing + (nc - 1)  # fractional node index of each marker
@@ -213,7 +225,8 @@ class Objective:
 
         sim = at(frames[k]) * (1 - w_time) + at(frames[k + 1]) * w_time
         diff = sim - np.column_stack([m.x, m.y])
-        return np.where(np.isfinite(diff), diff, 0.1).ravel()  # a diverged strip: 10 cm per coordinate
+        missing = 0.1 if penalise else np.nan  # a diverged strip: 10 cm per coordinate
+        return np.where(np.isfinite(diff), diff, missing).ravel()
 
     def best_shift(self, result: RunResult, j: int) -> float:
         """The clock offset minimising the RMS for variant j (a scan; 0 when not aligning)."""
@@ -385,7 +398,10 @@ def _summarise(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarra
 def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | TrackedShapes, out: str | Path,
               device: str | None = None) -> list[Path]:
     """Write the fit: ``best.toml`` (reruns the best fit with the scene's own duration and
-    output), ``fit.json``, ``history.csv``, ``residuals.csv`` and ``overlay.png``."""
+    output), ``fit.json``, ``history.csv``, ``residuals.csv`` and ``overlay.png``.
+
+    The best fit is rerun and every file prepared under a temporary name before any is
+    renamed into place, so a failure leaves no mixture of old and new files."""
     import pandas as pd
     import tomli_w
 
@@ -399,13 +415,9 @@ def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | Tr
         if name != SHIFT:
             set_field(best, name, value)
     scene = scene_from_dict(copy.deepcopy(best))
-    paths = [out / "best.toml", out / "fit.json", out / "history.csv", out / "residuals.csv"]
-    paths[0].write_text(tomli_w.dumps(scene.to_dict()))
-    paths[1].write_text(json.dumps(fit.to_json(), indent=1))
-    pd.DataFrame(fit.history).to_csv(paths[2], index=False)
     objective = Objective(best, measurement, [], abs(fit.shift_s), device)
     result = objective.run(np.zeros((1, 0)))
-    residual = objective.residuals(result, 0, fit.shift_s)
+    residual = objective.residuals(result, 0, fit.shift_s, penalise=False)
     if isinstance(measurement, LaserTrace):
         table = pd.DataFrame({"t_s": measurement.t, "measured_x_mm": measurement.x * 1e3,
                               "simulated_x_mm": (measurement.x + residual) * 1e3, "residual_mm": residual * 1e3})
@@ -413,6 +425,13 @@ def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | Tr
         r = residual.reshape(-1, 2)
         table = pd.DataFrame({"frame": measurement.frame, "t_s": measurement.t, "s_mm": measurement.s * 1e3,
                               "residual_x_mm": r[:, 0] * 1e3, "residual_y_mm": r[:, 1] * 1e3})
-    table.to_csv(paths[3], index=False)
-    paths.append(plot_fit_overlay(result, objective, measurement, fit, out / "overlay.png"))
-    return paths
+    names = ["best.toml", "fit.json", "history.csv", "residuals.csv", "overlay.png"]
+    staged = [out / f".{name}.tmp{Path(name).suffix}" for name in names]
+    staged[0].write_text(tomli_w.dumps(scene.to_dict()))
+    staged[1].write_text(json.dumps(fit.to_json(), indent=1))
+    pd.DataFrame(fit.history).to_csv(staged[2], index=False)
+    table.to_csv(staged[3], index=False)
+    plot_fit_overlay(result, objective, measurement, fit, staged[4])
+    for tmp, name in zip(staged, names, strict=True):
+        os.replace(tmp, out / name)
+    return [out / name for name in names]

@@ -45,7 +45,7 @@ def read_table(path: str | Path, n_columns: int | None, what: str, flag: str) ->
     CSV-like file (or a bundled example by name), and its header (None if absent)."""
     path = bundled_data(path)
     try:
-        lines = path.read_text().splitlines()
+        lines = path.read_text(encoding="utf-8-sig").splitlines()  # a spreadsheet's BOM is not data
     except OSError as exc:
         raise SceneError(flag, f"cannot read {path}: {exc.strerror}") from None
     numbered = [(i + 1, _SPLIT.split(line.strip())) for i, line in enumerate(lines)
@@ -137,7 +137,7 @@ def read_encoder(path: str | Path, angle_unit: str | None = None,
     data, header = read_table(path, 2, "t_s, theta", flag)
     _increasing(data[:, 0], path, flag)
     if angle_unit is None:
-        angle_unit = "deg" if header and "deg" in header[1] else "rad"
+        angle_unit = "deg" if header and any("deg" in cell for cell in header[1:]) else "rad"
     if angle_unit not in ("rad", "deg"):
         raise SceneError("--angle-unit", f"must be rad or deg, got {angle_unit!r}")
     theta = np.radians(data[:, 1]) if angle_unit == "deg" else data[:, 1]

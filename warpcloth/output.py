@@ -71,6 +71,9 @@ class RunWriter:
         np.save(self.dir / "frame_times.npy", frame_times)
         self.frames = np.lib.format.open_memmap(self.dir / "frames.npy", mode="w+", dtype=np.float64,
                                                 shape=(len(frame_times), len(scenes), n_nodes, 2))
+        # Frames never reached (an interrupted run, strips stopped by a divergence) read
+        # as NaN, never as a strip collapsed onto the origin.
+        self.frames[:] = np.nan
         self.probes = open(self.dir / "probes.csv", "w")  # noqa: SIM115 - closed in close()
         self.probes.write(",".join(PROBE_COLUMNS) + "\n")
 

@@ -80,7 +80,7 @@ def default_shape_times(recording: Recording, count: int = 10) -> np.ndarray:
 def plot_shapes(recording: Recording, path: Path, times: np.ndarray, variant: int = 0) -> Path:
     """Stroboscopic overlay of the strip's shape at ``times`` (Figs. 9, 11)."""
     fig, ax = plt.subplots(figsize=(6.5, 6))
-    frames = np.unique(np.searchsorted(recording.frame_times, times).clip(0, len(recording.frame_times) - 1))
+    frames = np.unique(recording.nearest_frames(times))
     colours = plt.cm.viridis(np.linspace(0, 1, len(frames)))
     nc = recording.n_clamped
     for colour, f in zip(colours, frames, strict=True):
@@ -222,7 +222,7 @@ def plot_fit_overlay(result: object, objective: object, measurement: LaserTrace 
         top.plot(result.t - shift, result.probe("laser_x", 0) * MM, "C3", lw=1.2, label="best fit")
         top.set(ylabel="x at the laser line (mm)")
         top.legend(fontsize=7)
-        residual = objective.residuals(result, 0, shift)
+        residual = objective.residuals(result, 0, shift, penalise=False)
         bottom.plot(measurement.t, residual * MM, "C0.", ms=2)
         bottom.axhline(0, color="0.6", lw=0.6)
         bottom.set(xlabel="measured time (s)", ylabel="residual (mm)")

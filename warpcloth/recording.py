@@ -9,6 +9,7 @@ a large sweep reads only theirs.
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 from dataclasses import dataclass
@@ -39,6 +40,36 @@ class Recording:
     frames: np.ndarray
     probes: pd.DataFrame
     parameters: pd.DataFrame
+    complete: bool = True
+
+    @property
+    def alive(self) -> np.ndarray:
+        """``[frame, variant]``: whether the strip has a recorded shape (False after a
+        divergence)."""
+        return np.isfinite(self.frames).all(axis=(2, 3))
+
+    @functools.cached_property
+    def drawable_frames(self) -> np.ndarray:
+        """Frames for drawing: a strip without a recorded shape (after it diverged) keeps
+        its last recorded one, or its rest shape if it has none."""
+        frames = np.array(self.frames)
+        for j, scene in enumerate(self.scenes):
+            last = rest_positions(scene)
+            for f in range(len(frames)):
+                if np.isfinite(frames[f, j]).all():
+                    last = frames[f, j]
+                else:
+                    frames[f, j] = last
+        return frames
+
+    def nearest_frames(self, times: np.ndarray) -> np.ndarray:
+        """Indices of the frames nearest to ``times`` (s after release)."""
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        late = times[(times < self.frame_times[0] - 1e-9) | (times > self.frame_times[-1] + 1e-9)]
+        if len(late):
+            raise SceneError("--times", f"{late[0]:g} s is outside the recording "
+                             f"({self.frame_times[0]:g} to {self.frame_times[-1]:g} s)")
+        return np.abs(self.frame_times[None, :] - times[:, None]).argmin(axis=1)
 
     @property
     def frame_rate(self) -> float:
@@ -59,7 +90,7 @@ class Recording:
         """Per frame, the clamp's rotation angle (rad) and translation (m) that carry its
         rest nodes onto the recorded ones (a rigid motion, least squares)."""
         rest = rest_positions(self.scenes[j])[: self.n_clamped]
-        moved = self.frames[:, j, : self.n_clamped]
+        moved = self.drawable_frames[:, j, : self.n_clamped]
         rest_c = rest - rest.mean(axis=0)
         moved_c = moved - moved.mean(axis=1, keepdims=True)
         cross = (rest_c[None, :, 0] * moved_c[..., 1] - rest_c[None, :, 1] * moved_c[..., 0]).sum(axis=1)
@@ -167,11 +198,17 @@ def _load_run(path: Path, variants: str | None, where: str | None) -> Recording:
     parameters = per_strip_parameters(scenes)
     parameters.insert(0, "variant", np.arange(len(scenes)))
     chosen = _select(parameters, variants, where)
-    frames = np.load(path / "frames.npy", mmap_mode="r")
+    frames = np.asarray(np.load(path / "frames.npy", mmap_mode="r")[:, chosen])
+    times = np.load(path / "frame_times.npy")
+    if not meta["complete"]:
+        # An interrupted run: keep the frames it reached.
+        reached = np.nonzero(np.isfinite(frames).any(axis=(1, 2, 3)))[0]
+        if not len(reached):
+            raise SceneError("RUN_DIR", f"{path} was interrupted before its first frame")
+        frames, times = frames[: reached[-1] + 1], times[: reached[-1] + 1]
     probes = pd.read_csv(path / "probes.csv")
-    return Recording(path, chosen, [scenes[i] for i in chosen], np.load(path / "frame_times.npy"),
-                     np.asarray(frames[:, chosen]), probes[probes["variant"].isin(chosen)],
-                     parameters.iloc[chosen].reset_index(drop=True))
+    return Recording(path, chosen, [scenes[i] for i in chosen], times, frames, probes[probes["variant"].isin(chosen)],
+                     parameters.iloc[chosen].reset_index(drop=True), bool(meta["complete"]))
 
 
 def _load_sweep(path: Path, variants: str | None, where: str | None) -> Recording:
@@ -179,6 +216,9 @@ def _load_sweep(path: Path, variants: str | None, where: str | None) -> Recordin
 
     info = json.loads((path / "sweep.json").read_text())
     sweep = expand(info["base_scene"] | {"sweep": info["sweep"]})
+    if sweep.fingerprint != info["fingerprint"]:
+        raise SceneError("RUN_DIR", f"{path}: its variants no longer resolve to the scenes that were simulated "
+                         "(a material file it uses has changed?); the stored results cannot be labelled")
     parameters = per_strip_parameters(sweep.scenes)
     parameters.insert(0, "variant", np.arange(len(sweep.scenes)))
     chosen = _select(parameters, variants, where)
@@ -186,8 +226,9 @@ def _load_sweep(path: Path, variants: str | None, where: str | None) -> Recordin
     needed = sorted({where_is[v][0] for v in chosen})
     missing = [b for b in needed if not (path / "frames" / f"batch-{b:04d}.npy").is_file()]
     if missing:
-        raise SceneError("RUN_DIR", f"{path} has no shape frames for batch {missing[0]}: run the sweep with "
-                         "--frames (or let it finish) to export, plot or render its variants")
+        raise SceneError("RUN_DIR", f"{path} has no shape frames for batch {missing[0]}: that batch ran without "
+                         "--frames (or has not finished); a resumed sweep keeps finished batches, so run it with "
+                         "--frames into a new --out directory")
     stores = {b: np.load(path / "frames" / f"batch-{b:04d}.npy", mmap_mode="r") for b in needed}
     n_frames = min(len(s) for s in stores.values())
     frames = np.stack([stores[where_is[v][0]][:n_frames, where_is[v][1]] for v in chosen], axis=1)

@@ -58,13 +58,12 @@ class StripRenderer:
 
     def _ribbon_points(self, frame: int, j: int) -> np.ndarray:
         width = self.recording.scenes[j].strip.width_mm * 1e-3
-        return ribbon_vertices(np.nan_to_num(self.recording.frames[frame, j]), width).astype(float)
+        return ribbon_vertices(self.recording.drawable_frames[frame, j], width).astype(float)
 
     def _frame_camera(self) -> None:
         # Framed once on everything the run visits. Seen slightly from the side and
         # above, so the ribbon's width shows, while x still runs left to right.
-        xy = self.recording.frames.reshape(-1, 2)
-        xy = xy[np.isfinite(xy).all(axis=1)]
+        xy = self.recording.drawable_frames.reshape(-1, 2)
         lo, hi = xy.min(axis=0), xy.max(axis=0)
         centre = (lo + hi) / 2
         span = max(hi - lo) * 1.2 + 0.01
@@ -121,16 +120,6 @@ class StripRenderer:
         self.plotter.close()
 
 
-def frames_at(recording: Recording, times: np.ndarray) -> np.ndarray:
-    """Indices of the frames nearest to ``times`` (s after release)."""
-    times = np.asarray(times, dtype=float)
-    late = times[(times < recording.frame_times[0] - 1e-9) | (times > recording.frame_times[-1] + 1e-9)]
-    if len(late):
-        raise SceneError("--times", f"{late[0]:g} s is outside the recording "
-                         f"({recording.frame_times[0]:g} to {recording.frame_times[-1]:g} s)")
-    return np.abs(recording.frame_times[None, :] - times[:, None]).argmin(axis=1)
-
-
 def render_run(recording: Recording, out_dir: str | Path, *, times: np.ndarray | None = None,
                movie: str | None = "motion.gif", stride: int = 1) -> list[Path]:
     """PNGs of the frames at ``times`` (default: six spread over the run) and, unless
@@ -142,7 +131,7 @@ def render_run(recording: Recording, out_dir: str | Path, *, times: np.ndarray |
     renderer = StripRenderer(recording)
     written = []
     try:
-        for f in frames_at(recording, times):
+        for f in recording.nearest_frames(times):
             path = out / f"frame_{f:05d}.png"
             renderer.screenshot(int(f), path)
             written.append(path)

@@ -40,10 +40,7 @@ def _primvar_name(field: str) -> str:
 
 
 def _extent(points: np.ndarray, pad: float) -> Vt.Vec3fArray:
-    finite = points[np.isfinite(points).all(axis=-1)]
-    if not len(finite):
-        finite = np.zeros((1, 3))
-    lo, hi = finite.min(axis=0) - pad, finite.max(axis=0) + pad
+    lo, hi = points.min(axis=0) - pad, points.max(axis=0) + pad
     return Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))])
 
 
@@ -53,7 +50,8 @@ def _author(stage: Usd.Stage, recording: Recording, frames: range, ribbon: bool)
     one_prim = n_variants > PRIM_PER_STRIP_LIMIT
     colours = variant_colours(colour_values(recording))
     n_nodes = recording.frames.shape[2]
-    points = points3(recording.frames)  # [frame, variant, node, 3]
+    points = points3(recording.drawable_frames)  # [frame, variant, node, 3]
+    alive = recording.alive
     UsdGeom.Xform.Define(stage, "/World")
     UsdGeom.Scope.Define(stage, "/World/Strips")
     UsdGeom.Scope.Define(stage, "/World/Clamps")
@@ -68,7 +66,7 @@ def _author(stage: Usd.Stage, recording: Recording, frames: range, ribbon: bool)
         _write_primvars(curves, recording, slice(None), UsdGeom.Tokens.uniform, colours)
         for f in frames:
             flat = points[f].reshape(-1, 3)
-            curves.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(np.nan_to_num(flat)), f)
+            curves.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(flat), f)
             curves.GetExtentAttr().Set(_extent(flat, pad), f)
     else:
         for j, variant in enumerate(recording.variants):
@@ -81,12 +79,23 @@ def _author(stage: Usd.Stage, recording: Recording, frames: range, ribbon: bool)
             curve.SetWidthsInterpolation(UsdGeom.Tokens.constant)
             _write_primvars(curve, recording, slice(j, j + 1), UsdGeom.Tokens.constant, colours[j : j + 1])
             for f in frames:
-                curve.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(np.nan_to_num(points[f, j])), f)
+                curve.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(points[f, j]), f)
                 curve.GetExtentAttr().Set(_extent(points[f, j], pad), f)
+            _hide_after_divergence(curve, alive[:, j], frames)
             if ribbon:
-                _author_ribbon(stage, recording, j, name, frames, colours[j])
+                _hide_after_divergence(_author_ribbon(stage, recording, j, name, frames, colours[j]), alive[:, j],
+                                       frames)
     for j, variant in enumerate(recording.variants):
         _author_clamp(stage, recording, j, f"/World/Clamps/variant_{variant:04d}", frames)
+
+
+def _hide_after_divergence(prim: UsdGeom.Imageable, alive: np.ndarray, frames: range) -> None:
+    # A strip that diverged is hidden from then on (its points hold the last shape).
+    if alive.all():
+        return
+    attr = prim.CreateVisibilityAttr()
+    for f in frames:
+        attr.Set(UsdGeom.Tokens.inherited if alive[f] else UsdGeom.Tokens.invisible, f)
 
 
 def _write_primvars(prim: UsdGeom.Gprim, recording: Recording, rows: slice, interpolation: str,
@@ -103,7 +112,7 @@ def _write_primvars(prim: UsdGeom.Gprim, recording: Recording, rows: slice, inte
 
 
 def _author_ribbon(stage: Usd.Stage, recording: Recording, j: int, name: str, frames: range,
-                   colour: np.ndarray) -> None:
+                   colour: np.ndarray) -> UsdGeom.Mesh:
     width = recording.scenes[j].strip.width_mm * 1e-3
     mesh = UsdGeom.Mesh.Define(stage, f"/World/Ribbons/{name}")
     counts, indices = ribbon_quads(recording.frames.shape[2])
@@ -113,9 +122,10 @@ def _author_ribbon(stage: Usd.Stage, recording: Recording, j: int, name: str, fr
     mesh.CreateDoubleSidedAttr(True)
     mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.constant).Set(Vt.Vec3fArray([Gf.Vec3f(*map(float, colour))]))
     for f in frames:
-        vertices = ribbon_vertices(np.nan_to_num(recording.frames[f, j]), width)
+        vertices = ribbon_vertices(recording.drawable_frames[f, j], width)
         mesh.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(vertices), f)
         mesh.GetExtentAttr().Set(_extent(vertices, 0.0), f)
+    return mesh
 
 
 def _author_clamp(stage: Usd.Stage, recording: Recording, j: int, path: str, frames: range) -> None:
@@ -150,7 +160,7 @@ def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = Fal
     """Write ``recording`` as a USD stage at ``out_file`` (.usd, .usda or .usdc).
 
     ``frames_per_clip`` splits the time samples into value-clip layers of that many
-    frames in ``<stem>_clips/`` beside the file; by default they are split only when
+    frames in ``<stem>_clips_<token>/`` beside the file; by default they are split only when
     one layer would hold more than ``CLIP_POINTS`` node positions.
     """
     out = Path(out_file)
@@ -166,10 +176,12 @@ def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = Fal
         raise SceneError("--frames-per-clip", f"{frames_per_clip} must be at least 1")
     out.parent.mkdir(parents=True, exist_ok=True)
     fps = recording.frame_rate
-    clips_dir = out.with_name(out.stem + "_clips")
     with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.stem}.") as tmp:
         staging = Path(tmp)
         root_path = staging / out.name
+        # Clips of each export get a directory of their own, so the previous root keeps
+        # its clips until the new root has replaced it.
+        clips_dir = out.with_name(f"{out.stem}_clips_{staging.name.rsplit('.', 1)[-1]}")
         stage = Usd.Stage.CreateNew(str(root_path))
         _set_stage_metadata(stage, n_frames, fps)
         if frames_per_clip is None or frames_per_clip >= n_frames:
@@ -179,15 +191,14 @@ def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = Fal
             stage.GetRootLayer().subLayerPaths.append(f"./{clips_dir.name}/{stitched.name}")
         stage.SetDefaultPrim(stage.DefinePrim("/World"))
         stage.GetRootLayer().Save()
-        # The clips directory first, the root layer last: the root's appearance marks the
-        # export complete; an older export of the same name stays whole until then.
+        # Clips first, the root layer last: the root's appearance marks the export
+        # complete; only then do the previous export's clips go.
         if (staging / clips_dir.name).exists():
-            if clips_dir.exists():
-                shutil.rmtree(clips_dir)
             os.replace(staging / clips_dir.name, clips_dir)
-        elif clips_dir.exists():
-            shutil.rmtree(clips_dir)
         os.replace(root_path, out)
+    for old in out.parent.glob(f"{out.stem}_clips_*"):
+        if old != clips_dir and old.is_dir():
+            shutil.rmtree(old)
     return out
 
 
