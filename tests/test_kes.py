@@ -439,3 +439,49 @@ def test_cli_fit_kes_requires_the_density(tmp_path):
     assert done.returncode == 2
     assert "--density-g-per-cm2: the mass per area is not part of KES-FB1/FB2 data" in done.stderr
     assert not (tmp_path / "m.toml").exists()
+
+
+def test_material_paths_in_sweeps_and_overrides_and_list_items(tmp_path, monkeypatch):
+    # A path among a [sweep]'s values is relative to the scene file, one given with --set
+    # to the working directory; both are recorded absolute. A list item of a material
+    # that comes from a file starts from the file's list. An empty reference is refused.
+    (tmp_path / "proj" / "mats").mkdir(parents=True)
+    cotton = read_material_file("cotton-broadcloth")
+    write(tmp_path / "proj" / "mats" / "c.toml", tomli_w.dumps({"material": cotton["material"]}))
+    text = (ROOT / "scenes" / "damped_swing.toml").read_text()
+    text += '\n[sweep.grid]\n"material.from_file" = ["mats/c.toml", "polyester-taffeta"]\n'
+    write(tmp_path / "proj" / "sweep.toml", text)
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    sweep = wc.load_sweep(tmp_path / "proj" / "sweep.toml")
+    assert sweep.scenes[0].material.from_file == str((tmp_path / "proj" / "mats" / "c.toml").resolve())
+    assert sweep.scenes[0].material.density_g_per_cm2 == cotton["material"]["density_g_per_cm2"]
+    monkeypatch.chdir(tmp_path / "proj")
+    scene = wc.load_scene("damped_swing", ["material.from_file=mats/c.toml", "material.tensile_gf_per_cm.3=1e8"])
+    assert scene.material.from_file == str((tmp_path / "proj" / "mats" / "c.toml").resolve())
+    assert scene.material.tensile_gf_per_cm == [*cotton["material"]["tensile_gf_per_cm"][:3], 1e8]
+    with pytest.raises(SceneError, match="names no material file"):
+        wc.load_scene("damped_swing", ['material.from_file=""'])
+
+
+def test_instrument_exports_are_read(tmp_path):
+    # A Latin-1 comment (µ from Windows software), tab separation with spaces in the
+    # names, and the unit decision recorded.
+    strain = np.linspace(0, 0.05, 11)
+    force = 9000 * strain + 1e8 * strain**4
+    body = "".join(f"{e * 100}\t{t}\n" for e, t in zip(strain, force, strict=True))
+    path = tmp_path / "fb1.txt"
+    path.write_bytes(("# sample 12 µm\nStrain (%)\tForce (gf/cm)\n" + body).encode("latin-1"))
+    loop = kes.read_tensile_csv(path)
+    np.testing.assert_allclose(loop.strain, strain, atol=1e-15)
+    assert loop.strain_unit == "strain in percent (from the header)"
+    bare = write(tmp_path / "bare.csv", body)
+    assert kes.read_tensile_csv(bare).strain_unit == "strain in percent (guessed: the column's maximum is above 1)"
+
+
+def test_a_bending_loop_must_start_from_rest(tmp_path):
+    k = kes_cycle()
+    start = int(np.argmax(k))  # the same cycle, begun at +K0
+    path = write(tmp_path / "fb2.csv", bending_text(np.concatenate([k[start:], k[1 : start + 1]])))
+    with pytest.raises(SceneError, match="not from rest"):
+        kes.read_bending_csv(path)

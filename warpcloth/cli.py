@@ -298,6 +298,7 @@ def _material(args: argparse.Namespace) -> int:
     source = (f"fitted by warpcloth material fit-kes to {args.tensile} (KES-FB1) and {args.bending} (KES-FB2); "
               f"density {args.density_g_per_cm2:g} g/cm² given on the command line")
     data = kes.material_file_data(fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain)
+    print(f"tensile file's first column read as {fit.tensile_loop.strain_unit}")
     t, tk, b, bk = fit.tensile, fit.tensile_kes, fit.bending, fit.bending_kes
     rt = f", RT {tk.rt_percent:.1f} %" if tk.rt_percent is not None else " (no unloading branch: no RT)"
     print(f"tensile ({args.tensile}, {data['fit']['tensile_loading_points']} loading points): T(ε) = a1 ε + a2 ε² "

@@ -44,6 +44,7 @@ Residuals are RMS(fit − data) in KES units and that RMS relative to the data's
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -56,7 +57,7 @@ from . import units
 from .bending import moment_along_path
 from .errors import SceneError
 from .material import MaterialSI, tensile_slope_minimum, validate_material
-from .measured import bundled_data
+from .measured import bundled_data, read_text
 from .scene import IntegratorSection, MaterialSection, material_fields
 
 PERCENT = units.STRAIN_PERCENT
@@ -108,6 +109,7 @@ class TensileLoop:
     rows: np.ndarray  # where each point came from: file line (1-based) or sample number
     source: str  # file name, or "tensile data"
     row_label: str = "line"
+    strain_unit: str = "fraction"  # how the first column was read, and why
 
     @property
     def turn(self) -> int:
@@ -224,6 +226,7 @@ class KesFit:
         t, b, tk, bk = self.tensile, self.bending, self.tensile_kes, self.bending_kes
         table = {
             "tensile_file": self.tensile_loop.source,
+            "tensile_first_column": self.tensile_loop.strain_unit,
             "tensile_loading_points": len(self.tensile_loop.strain[self.tensile_loop.loading]),
             "tensile_rms_gf_per_cm": t.rms_gf_per_cm,
             "tensile_rms_relative": t.rms_relative,
@@ -256,7 +259,7 @@ def _read_columns(path: str | Path, what: str) -> tuple[list[str] | None, np.nda
     # a decimal comma. Returns (header or None, values [n, 2], file line of each row).
     path = bundled_data(path)
     try:
-        lines = path.read_text().splitlines()
+        lines = read_text(path).splitlines()
     except OSError as exc:
         raise SceneError(str(path), f"cannot read the {what} file: {exc.strerror}") from None
     header = None
@@ -269,6 +272,8 @@ def _read_columns(path: str | Path, what: str) -> tuple[list[str] | None, np.nda
             fields = [f.strip().replace(",", ".") for f in text.split(";")]
         elif "," in text:
             fields = [f.strip() for f in text.split(",")]
+        elif "\t" in text:  # tab-separated: names may contain spaces ("Strain (%)")
+            fields = [f.strip() for f in text.split("\t")]
         else:
             fields = text.split()
         while fields and not fields[-1]:
@@ -339,10 +344,14 @@ def read_tensile_csv(path: str | Path, strain_unit: str | None = None,
                              f"given as {strain_unit}")
         unit = said or strain_unit
     _check_finite(values, rows, str(path), ("strain", "force"))
+    how = "from the header" if header is not None and unit != strain_unit else "as given"
     if unit is None:
         unit = "percent" if len(values) and np.max(values[:, 0]) > 1 else "fraction"
+        how = "guessed: the column's maximum is " + ("above" if unit == "percent" else "at most") + " 1"
     scale = {"percent": PERCENT, "fraction": 1.0, "mm": 1.0 / gauge_length_mm}[unit]
-    return tensile_loop(values[:, 0] * scale, values[:, 1], source=str(path), rows=rows)
+    loop = tensile_loop(values[:, 0] * scale, values[:, 1], source=str(path), rows=rows)
+    described = f"extension in mm over a {gauge_length_mm:g} mm gauge" if unit == "mm" else f"strain in {unit}"
+    return dataclasses.replace(loop, strain_unit=f"{described} ({how})")
 
 
 def read_bending_csv(path: str | Path) -> BendingLoop:
@@ -426,6 +435,10 @@ def bending_loop(curvature: np.ndarray, moment: np.ndarray, source: str = "bendi
         raise SceneError(source, f"the loop does not reach both signs of curvature: K runs from {low:.4g} to "
                          f"{high:.4g} 1/cm; a KES-FB2 loop goes to +K0 and −K0 (each side at least "
                          f"{LOOP_REACH:.0%} of the largest |K|)")
+    if abs(curvature[0]) > LOOP_CLOSURE * k0:
+        raise SceneError(source, f"the loop starts at K = {curvature[0]:.4g} 1/cm ({label} {rows[0]}), not from "
+                         "rest: the model's hinge starts fresh at the first row, as a KES-FB2 cycle does from K = 0; "
+                         "give the cycle from its start")
     gap = abs(curvature[-1] - curvature[0])
     if gap > LOOP_CLOSURE * k0:
         raise SceneError(source, f"the loop does not close: it starts at K = {curvature[0]:.4g} 1/cm ({label} "

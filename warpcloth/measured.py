@@ -40,12 +40,22 @@ def bundled_data(name: str | Path) -> Path:
     return Path(str(resource)) if path.parent == Path(".") and resource.is_file() else path
 
 
+def read_text(path: Path) -> str:
+    """A data file's text: UTF-8 (a spreadsheet's byte-order mark dropped), else Latin-1,
+    as instrument software on Windows writes it; the numbers are ASCII either way."""
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
 def read_table(path: str | Path, n_columns: int | None, what: str, flag: str) -> tuple[np.ndarray, list[str] | None]:
     """Rows of ``n_columns`` numbers (None: as many as the first data row has) from a
     CSV-like file (or a bundled example by name), and its header (None if absent)."""
     path = bundled_data(path)
     try:
-        lines = path.read_text(encoding="utf-8-sig").splitlines()  # a spreadsheet's BOM is not data
+        lines = read_text(path).splitlines()
     except OSError as exc:
         raise SceneError(flag, f"cannot read {path}: {exc.strerror}") from None
     numbered = [(i + 1, _SPLIT.split(line.strip())) for i, line in enumerate(lines)

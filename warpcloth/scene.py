@@ -287,8 +287,17 @@ def set_field(data: dict, key: str, value: Any) -> None:
     ``data`` are dropped so that the file supplies them (set other material fields after it).
     """
     parts = key.strip().split(".")
-    if parts == MATERIAL_FILE_KEY.split(".") and isinstance(data.get("material"), dict):
-        data["material"] = {k: v for k, v in data["material"].items() if k not in material_fields()}
+    if parts == MATERIAL_FILE_KEY.split("."):
+        if not isinstance(value, str) or not value.strip():
+            raise SceneError(MATERIAL_FILE_KEY, f"{value!r} names no material file; give a bundled material name "
+                             f"({', '.join(bundled_materials())}) or a path ending in .toml")
+        if value.endswith(".toml") and not Path(value).is_absolute():
+            value = str(Path(value).resolve())  # relative to where the command runs, recorded absolute
+        if isinstance(data.get("material"), dict):
+            data["material"] = {k: v for k, v in data["material"].items() if k not in material_fields()}
+    elif parts[0] == "material" and len(parts) > 2:
+        # A list item of a material that comes from a file: the file's list first.
+        data.update(_with_material_file(data))
     node: Any = data
     for i, part in enumerate(parts):
         last = i == len(parts) - 1
@@ -411,12 +420,21 @@ def _with_material_file(data: dict) -> dict:
 
 
 def _rebase_material_file(data: dict, directory: Path) -> None:
-    # A material path written in a scene file is relative to that file, not to the
-    # directory the command runs in.
+    # A material path written in a scene file, in [material] or among the values of a
+    # [sweep], is relative to that file, not to the directory the command runs in.
+    def rebase(ref: Any) -> Any:
+        if isinstance(ref, str) and ref.endswith(".toml") and not Path(ref).is_absolute():
+            return str((directory / ref).resolve())
+        return ref
+
     material = data.get("material")
-    ref = material.get("from_file") if isinstance(material, dict) else None
-    if isinstance(ref, str) and ref.endswith(".toml") and not Path(ref).is_absolute():
-        material["from_file"] = str((directory / ref).resolve())
+    if isinstance(material, dict) and "from_file" in material:
+        material["from_file"] = rebase(material["from_file"])
+    sweep = data.get("sweep")
+    for block in ("grid", "zip"):
+        table = sweep.get(block) if isinstance(sweep, dict) else None
+        if isinstance(table, dict) and isinstance(table.get(MATERIAL_FILE_KEY), list):
+            table[MATERIAL_FILE_KEY] = [rebase(ref) for ref in table[MATERIAL_FILE_KEY]]
 
 
 def read_scene_file(name_or_path: str | Path) -> dict:
