@@ -174,11 +174,6 @@ class Objective:
         self.launches = 0
         self.variants = 0
 
-    @property
-    def n_parameters(self) -> int:
-        """Coordinates of a point: the free parameters, and δ when aligning."""
-        return len(self.free) + (1 if self.align else 0)
-
     def values(self, u: np.ndarray) -> dict[str, float]:
         """Physical values (the scene fields) of a unit-box point."""
         return {p.field: p.lower + float(x) * (p.upper - p.lower) for p, x in zip(self.free, u, strict=False)}
@@ -262,14 +257,11 @@ class FitResult:
     variants: int
     wall_time_s: float
     history: list[dict] = field(default_factory=list)
-    scene: dict = field(default_factory=dict)
     converged: bool = False
 
     def to_json(self) -> dict:
-        """Everything but the scene, JSON-ready."""
-        data = dataclasses.asdict(self)
-        data.pop("scene")
-        return data
+        """Everything, JSON-ready."""
+        return dataclasses.asdict(self)
 
 
 def _latin_hypercube(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
@@ -389,10 +381,9 @@ def _summarise(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarra
     correlation = covariance / np.outer(sigma, sigma)
     names = [f.field for f in objective.free] + ([SHIFT] if objective.align else [])
     values = objective.values(u) | ({SHIFT: shift} if objective.align else {})
-    scene = objective.scene_data(u)
     return FitResult(values, dict(zip(names, sigma.tolist(), strict=True)), correlation.tolist(),
                      float(np.sqrt(np.mean(residual**2))), shift, n, objective.launches, objective.variants, wall,
-                     history, scene, converged)
+                     history, converged)
 
 
 def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | TrackedShapes, out: str | Path,

@@ -377,6 +377,19 @@ def _check_finite(values: np.ndarray, rows: np.ndarray, source: str, names: tupl
         raise SceneError(source, f"{label} {rows[i]}: {names[j]} is {values[i, j]}; every value must be finite")
 
 
+def _paired(x: np.ndarray, y: np.ndarray, rows: np.ndarray | None, source: str,
+            names: tuple[str, str]) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
+    # Two equally long finite columns, and where each row came from (file line or sample).
+    x = np.asarray(x, dtype=np.float64).ravel()
+    y = np.asarray(y, dtype=np.float64).ravel()
+    label = "line" if rows is not None else "sample"
+    rows = np.arange(1, len(x) + 1) if rows is None else np.asarray(rows)
+    if len(x) != len(y):
+        raise SceneError(source, f"{len(x)} {names[0]}s but {len(y)} {names[1]}s")
+    _check_finite(np.column_stack([x, y]), rows, source, names, label)
+    return x, y, rows, label
+
+
 def tensile_loop(strain: np.ndarray, force: np.ndarray, source: str = "tensile data",
                  rows: np.ndarray | None = None) -> TensileLoop:
     """A validated tensile loop from arrays: strain as a fraction, force per width in gf/cm.
@@ -384,13 +397,7 @@ def tensile_loop(strain: np.ndarray, force: np.ndarray, source: str = "tensile d
     Loading runs from the first point to the maximum strain and must not go back in strain;
     unloading, if any, must not go forward.
     """
-    strain = np.asarray(strain, dtype=np.float64).ravel()
-    force = np.asarray(force, dtype=np.float64).ravel()
-    label = "line" if rows is not None else "sample"
-    rows = np.arange(1, len(strain) + 1) if rows is None else np.asarray(rows)
-    if len(strain) != len(force):
-        raise SceneError(source, f"{len(strain)} strains but {len(force)} forces")
-    _check_finite(np.column_stack([strain, force]), rows, source, ("strain", "force"), label)
+    strain, force, rows, label = _paired(strain, force, rows, source, ("strain", "force"))
     loop = TensileLoop(strain, force, rows, source, label)
     n_loading = loop.turn + 1 if len(strain) else 0
     if n_loading < MIN_LOADING_POINTS:
@@ -416,13 +423,7 @@ def bending_loop(curvature: np.ndarray, moment: np.ndarray, source: str = "bendi
     One cycle from rest: it must reach both signs of curvature (each at least half the
     largest |K|) and end within 10 % of the largest |K| of where it started.
     """
-    curvature = np.asarray(curvature, dtype=np.float64).ravel()
-    moment = np.asarray(moment, dtype=np.float64).ravel()
-    label = "line" if rows is not None else "sample"
-    rows = np.arange(1, len(curvature) + 1) if rows is None else np.asarray(rows)
-    if len(curvature) != len(moment):
-        raise SceneError(source, f"{len(curvature)} curvatures but {len(moment)} moments")
-    _check_finite(np.column_stack([curvature, moment]), rows, source, ("curvature", "moment"), label)
+    curvature, moment, rows, label = _paired(curvature, moment, rows, source, ("curvature", "moment"))
     if len(curvature) < MIN_BENDING_POINTS:
         raise SceneError(source, f"the loop has {len(curvature)} point(s); fitting D, D1 and α along "
                          f"0 → +K0 → −K0 → 0 needs at least {MIN_BENDING_POINTS}")

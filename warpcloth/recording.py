@@ -52,15 +52,13 @@ class Recording:
     def drawable_frames(self) -> np.ndarray:
         """Frames for drawing: a strip without a recorded shape (after it diverged) keeps
         its last recorded one, or its rest shape if it has none."""
-        frames = np.array(self.frames)
-        for j, scene in enumerate(self.scenes):
-            last = rest_positions(scene)
-            for f in range(len(frames)):
-                if np.isfinite(frames[f, j]).all():
-                    last = frames[f, j]
-                else:
-                    frames[f, j] = last
-        return frames
+        # Forward fill along time: each frame takes the latest recorded one at or before it;
+        # a rest shape is prepended for strips with none yet.
+        rest = np.stack([rest_positions(scene) for scene in self.scenes])
+        filled = np.concatenate([rest[None], self.frames])
+        alive = np.concatenate([np.ones((1, len(self.scenes)), dtype=bool), self.alive])
+        latest = np.maximum.accumulate(np.where(alive, np.arange(len(filled))[:, None], 0), axis=0)
+        return filled[latest, np.arange(len(self.scenes))[None, :]][1:]
 
     def nearest_frames(self, times: np.ndarray) -> np.ndarray:
         """Indices of the frames nearest to ``times`` (s after release)."""

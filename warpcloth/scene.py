@@ -352,6 +352,13 @@ def material_fields() -> list[str]:
     return [f.name for f in dataclasses.fields(MaterialSection) if f.name != "from_file"]
 
 
+def _parse_toml(text: str, where: str, field: str) -> dict:
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(field, f"{where} is not valid TOML: {exc}") from None
+
+
 def read_material_file(ref: str | Path) -> dict:
     """Raw TOML of a material file, validated; ``ref`` is a path ending in ``.toml``
     (relative to the current directory) or the name of a bundled material.
@@ -377,10 +384,7 @@ def read_material_file(ref: str | Path) -> dict:
                              f"{', '.join(bundled_materials())}; a material file is a path ending in .toml)")
         text = resource.read_text()
         where = f"bundled material {ref}"
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(MATERIAL_FILE_KEY, f"{where} is not valid TOML: {exc}") from None
+    data = _parse_toml(text, where, MATERIAL_FILE_KEY)
     extra = sorted(set(data) - {"material", "fit"})
     if extra:
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: unknown top-level entry {extra[0]!r}; a material file "
@@ -454,10 +458,7 @@ def read_scene_file(name_or_path: str | Path) -> dict:
                              f"name (bundled: {', '.join(bundled_scenes())})")
         text = resource.read_text()
         where = f"bundled scene {path.stem}"
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError("scene", f"{where} is not valid TOML: {exc}") from exc
+    data = _parse_toml(text, where, "scene")
     if path.is_file():
         _rebase_material_file(data, path.parent)
     return data
