@@ -21,8 +21,7 @@ import numpy as np
 import warp as wp
 
 import warpcloth as wc
-from warpcloth.material import to_si
-from warpcloth.model import rest_positions
+from warpcloth.scene import rest_positions, to_si
 
 
 class NumpyStrips:

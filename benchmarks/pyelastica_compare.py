@@ -6,7 +6,7 @@
 The problem is the bundled ``damped_swing`` scene with D1 = 0 (linear bending), γ = 0
 (no damping) and the release phase off: the strip hangs from its clamp and starts at rest
 in the first mode shape W(ξ) of the clamped hanging beam with a 1 mm tip amplitude. The
-exact first period is T = 2π / (λ √(B/(ρ_A L⁴))) from ``warpcloth.analysis.hanging_beam_mode``
+exact first period is T = 2π / (λ √(B/(ρ_A L⁴))) from ``warpcloth.calibrate.references.hanging_beam_mode``
 (γ = ρ_A g L³ / B ≈ 203, T = 0.50513 s).
 
 PyElastica (a Cosserat rod code) gets the same strip as a round rod hanging along −y:
@@ -45,9 +45,9 @@ import warp as wp
 from elastica.version import VERSION as ELASTICA_VERSION
 
 import warpcloth as wc
-from warpcloth.analysis import first_period, hanging_beam_mode
-from warpcloth.material import to_si
-from warpcloth.model import rest_positions
+from warpcloth.calibrate.metrics import first_period
+from warpcloth.calibrate.references import hanging_beam_mode
+from warpcloth.scene import rest_positions, to_si
 
 AMPLITUDE = 1e-3  # m, tip amplitude of the initial mode shape
 EQUAL_DT = 1e-6  # s, the common step of the throughput comparison

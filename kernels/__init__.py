@@ -1,30 +1,38 @@
-"""Warp kernels of warpcloth, installed as ``warpcloth.kernels``.
+"""Warp kernels of warpcloth, installed as ``warpcloth.kernels`` (docs/model.md).
 
-The physics lives here; :mod:`warpcloth` only builds arrays and launches.
+One file per concern, each building its Warp functions per precision (``build``):
+
+- :mod:`.types` — vectors and matrices of a precision
+- :mod:`.tensile` — tensile law T(ε), its energy and tangent
+- :mod:`.bending_tagawa2003` — the paper's hysteretic bending law (:mod:`.laws` lists the laws)
+- :mod:`.geometry` — normals and hinge curvature of a chain
+- :mod:`.drives` — clamp rotation θ(t) and the held free end
+- :mod:`.integrators` — explicit Euler node updates and the stepping struct
+- :mod:`.structs` — what a strip is (``StripModel``) and is doing (``StripState``)
+- :mod:`.forces` — the internal-force pass
+- :mod:`.probes` — the recorded quantities
+- :mod:`.strip` — the fused kernel that advances a batch through many substeps
+
+Only Warp and the standard library are imported here; :mod:`warpcloth` builds arrays
+and launches.
 """
 
-from .strip import (
-    FORWARD,
-    PROBE_FIELDS,
-    PROBE_INDEX,
-    SEMI_IMPLICIT,
-    STATUS_FOLDED,
-    STATUS_NONFINITE_ENERGY,
-    STATUS_OK,
-    STATUS_STRAIN,
-    KernelSet,
-    build_kernels,
-)
+from .drives import MAX_DEGREE
+from .laws import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_law
+from .probes import PROBE_FIELDS, PROBE_INDEX
+from .status import STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
+from .strip import build as build_strip
 
 __all__ = [
-    "FORWARD",
+    "BENDING_LAWS",
+    "DEFAULT_BENDING_LAW",
+    "MAX_DEGREE",
     "PROBE_FIELDS",
     "PROBE_INDEX",
-    "SEMI_IMPLICIT",
     "STATUS_FOLDED",
     "STATUS_NONFINITE_ENERGY",
     "STATUS_OK",
     "STATUS_STRAIN",
-    "KernelSet",
-    "build_kernels",
+    "bending_law",
+    "build_strip",
 ]

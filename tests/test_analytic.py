@@ -7,8 +7,7 @@ import pytest
 from conftest import overrides
 
 import warpcloth as wc
-from warpcloth.material import to_si
-from warpcloth.model import rest_positions
+from warpcloth.scene import rest_positions, to_si
 
 
 def bessel_j0(x):
@@ -98,7 +97,7 @@ def test_clamped_free_beam_first_period():
 def test_hanging_beam_reference_limits():
     # The Rayleigh–Ritz reference itself: the cantilever root 1.8751041² (to 1e-9), and
     # the heavy-chain limit approached from above as γ grows (an upper bound).
-    from warpcloth.analysis import hanging_beam_mode
+    from warpcloth.calibrate.references import hanging_beam_mode
 
     assert hanging_beam_mode(0.0)[0] == pytest.approx(1.875104068711961**2, rel=1e-9)
     ratios = [hanging_beam_mode(g)[0] ** 2 / g for g in (1e2, 1e3, 1e4)]
@@ -107,7 +106,7 @@ def test_hanging_beam_reference_limits():
 
 def hanging_strip_period_error(spacing_mm: float) -> float:
     """Relative error of the linear-elastic hanging strip's first period."""
-    from warpcloth.analysis import hanging_beam_mode
+    from warpcloth.calibrate.references import hanging_beam_mode
 
     scene = wc.load_scene("damped_swing", overrides(
         strip__spacing_mm=spacing_mm, material__hysteresis_d1_gf_cm_per_cm=0.0, damping__gamma_per_s=0.0,
@@ -127,7 +126,7 @@ def hanging_strip_period_error(spacing_mm: float) -> float:
 def test_linear_elastic_hanging_strip_period():
     # Gravity and linear bending together (D1 = 0): the exact first period of the
     # clamped hanging beam, W⁗ − γ((1−ξ)W′)′ = λ²W with γ = ρ_A g L³/D = 203
-    # (T = 0.50513 s from warpcloth.analysis.hanging_beam_mode), started in its mode
+    # (T = 0.50513 s from warpcloth.calibrate.references.hanging_beam_mode), started in its mode
     # shape. Measured +1.42 % (h = 5 mm), +0.84 % (2.5), +0.41 % (1.25): first order, the
     # clamp root again (bending is concentrated in the boundary layer at the clamp).
     coarse = hanging_strip_period_error(2.5)

@@ -5,9 +5,8 @@ import pytest
 from conftest import overrides
 
 import warpcloth as wc
-from warpcloth.clamp import clamp_pieces, evaluate
-from warpcloth.control import Control
-from warpcloth.model import Model
+from warpcloth.scene.clamp_motion import clamp_pieces, evaluate
+from warpcloth.scene import build_batch
 
 
 def test_piecewise_quartic_then_line_matches_host_evaluation():
@@ -22,7 +21,7 @@ def test_piecewise_quartic_then_line_matches_host_evaluation():
 def test_clamp_nodes_rotate_rigidly_about_the_rotation_centre():
     scene = wc.load_scene("impulsive_rotation", overrides(run__duration_s=0.2))
     result = wc.simulate(scene)
-    centre = Control(Model([scene])).rotation_centre[0]
+    centre = build_batch([scene]).control.rotation_centre[0]
     theta = evaluate(*clamp_pieces(scene.clamp), result.frame_times)
     clamp = result.frames[:, 0, : scene.n_clamped]
     rest = clamp[0]

@@ -10,9 +10,9 @@ from conftest import overrides
 from PIL import Image
 
 import warpcloth as wc
-from warpcloth.measured import read_encoder, read_laser_trace, read_measurement, read_tracked_shapes
-from warpcloth.plots import plot_run, plot_sweep, read_sweep_summary
-from warpcloth.recording import load_recording
+from warpcloth.io.measured import read_encoder, read_laser_trace, read_measurement, read_tracked_shapes
+from warpcloth.io.recording import load_recording
+from warpcloth.viz.plots import plot_run, plot_sweep, read_sweep_summary
 
 SWING = overrides(run__duration_s=0.6, release__settle_time_s=0.1)
 
@@ -108,7 +108,7 @@ def ribbon_columns(image):
 
 
 def test_render_draws_the_strip_where_it_is(swing_run, tmp_path):
-    from warpcloth.render import render_run
+    from warpcloth.viz.render import render_run
 
     recording = load_recording(swing_run)
     # The free end is held at x = +50 mm and released; a quarter period later it is

@@ -12,11 +12,10 @@ import pytest
 from conftest import overrides  # noqa: F401  (keeps Warp quiet)
 
 import warpcloth as wc
-from warpcloth.clamp_fit import ClampMotionFit, fit_clamp_motion, scene_with_clamp_motion
-from warpcloth.fit import SHIFT, fit_motion, free_parameters
-from warpcloth.measured import LaserTrace, TrackedShapes
-from warpcloth.model import clamp_edge
-from warpcloth.scene import read_scene_file, set_field
+from warpcloth.calibrate.clamp_fit import ClampMotionFit, fit_clamp_motion, scene_with_clamp_motion
+from warpcloth.calibrate.motion_fit import SHIFT, fit_motion, free_parameters
+from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.scene import clamp_edge, read_scene_file, set_field
 
 
 def raw(name, **fields):

@@ -1,6 +1,6 @@
 """The hysteretic bending law (paper eqs. 3-4, MODEL.md) on a single hinge.
 
-Runs the kernel's own hinge logic through warpcloth.bending.moment_along_path.
+Runs the kernel's own hinge logic through warpcloth.sim.moment_along_path.
 """
 
 import math
@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 from conftest import overrides  # noqa: F401  (keeps Warp quiet)
 
-from warpcloth.bending import moment_along_path
-from warpcloth.material import MaterialSI, to_si
-from warpcloth.scene import MaterialSection
+from warpcloth.scene import MaterialSection, to_si
+from warpcloth.sim import MaterialSI, moment_along_path
 
 DEFAULT = to_si(MaterialSection())
 

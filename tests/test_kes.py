@@ -15,18 +15,21 @@ import tomli_w
 from conftest import overrides  # noqa: F401  (keeps Warp quiet)
 
 import warpcloth as wc
-from warpcloth import kes, units
-from warpcloth.bending import moment_along_path
+from warpcloth import units
+from warpcloth.calibrate import kes
 from warpcloth.errors import SceneError
-from warpcloth.material import DEFAULT_MATERIAL, tensile_slope_minimum, to_si
 from warpcloth.scene import (
+    DEFAULT_MATERIAL,
     MaterialSection,
     bundled_materials,
     material_fields,
     read_material_file,
     read_scene_file,
     scene_from_dict,
+    tensile_slope_minimum,
+    to_si,
 )
+from warpcloth.sim import moment_along_path
 
 ROOT = Path(__file__).resolve().parents[1]
 FB1 = ROOT / "scenes" / "data" / "kes_fb1_example.csv"

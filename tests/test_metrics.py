@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from warpcloth.analysis import swing_metrics
+from warpcloth.calibrate.metrics import swing_metrics
 
 
 @pytest.mark.parametrize("zeta", [0.005, 0.02, 0.08])

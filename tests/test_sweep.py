@@ -15,9 +15,8 @@ import tomli_w
 from conftest import overrides
 
 import warpcloth as wc
-from warpcloth.scene import apply_overrides, read_scene_file
-from warpcloth.sweep import expand, load_sweep
-from warpcloth.sweep_runner import run_sweep
+from warpcloth.scene import apply_overrides, expand, load_sweep, read_scene_file
+from warpcloth.sweeps import run_sweep
 
 D1 = "material.hysteresis_d1_gf_cm_per_cm"
 GAMMA = "damping.gamma_per_s"

@@ -13,9 +13,9 @@ from conftest import overrides
 from pxr import Usd, UsdGeom
 
 import warpcloth as wc
-from warpcloth import usd
-from warpcloth.recording import load_recording
-from warpcloth.usd import export_usd
+from warpcloth.io import usd
+from warpcloth.io.recording import load_recording
+from warpcloth.io.usd import export_usd
 
 ROTATION = overrides(run__duration_s=0.2, strip__spacing_mm=5.0, integrator__dt_s=1e-5)
 SWING = overrides(run__duration_s=0.3, release__settle_time_s=0.1)
@@ -174,7 +174,7 @@ def test_a_failed_export_leaves_the_previous_file_whole(rotation_run, tmp_path, 
 def test_a_killed_export_leaves_a_complete_stage_or_none(swing_batch, tmp_path):
     # A real SIGKILL of an exporting process at several moments: the stage is either
     # absent or opens with every frame (it is only renamed into place when complete).
-    script = ("import sys; from warpcloth.recording import load_recording; from warpcloth.usd import export_usd;"
+    script = ("import sys; from warpcloth import load_recording, export_usd;"
               "r = load_recording(sys.argv[1]); print('ready', flush=True);"
               "[export_usd(r, sys.argv[2] + f'/k{i}.usda', ribbon=True) for i in range(1000)]")
     proc = subprocess.Popen([sys.executable, "-c", script, str(swing_batch), str(tmp_path)], stdout=subprocess.PIPE,

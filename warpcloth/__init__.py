@@ -1,43 +1,52 @@
 """warpcloth: batched Warp simulation of hanging fabric strips with hysteretic bending.
 
 The physics follows Tagawa, Hayashi & Kijima, "Dynamic Cloth Simulation and its
-Evaluation Experiments in Vacuum", as specified in MODEL.md. Typical use::
+Evaluation Experiments in Vacuum", as written up in docs/model.md. Typical use::
 
-    import warpcloth
-    result = warpcloth.run("damped_swing", ["damping.gamma_per_s=0.3"])
+    import warpcloth as wc
+    result = wc.run("damped_swing", ["damping.gamma_per_s=0.3"])
     tip_x = result.probe("tip_x", variant=0)
+
+The namespaces :mod:`warpcloth.sim` (the SI simulation core), :mod:`warpcloth.scene`,
+:mod:`warpcloth.calibrate`, :mod:`warpcloth.viz` and :mod:`warpcloth.io` hold the rest.
 """
 
-from .analysis import crossing_times, first_period
-from .control import Control
-from .errors import DivergenceError, SceneError
-from .model import Model
-from .runner import RunResult, run, simulate
-from .scene import Scene, apply_overrides, bundled_scenes, load_scene, scene_from_dict
-from .solver import Solver
-from .state import State
-from .sweep import Sweep, expand, load_sweep
-from .sweep_runner import run_sweep
+from . import calibrate, io, scene, sim, viz
+from .calibrate.metrics import crossing_times, first_period
+from .errors import DataFileError, DivergenceError, OptionError, SceneError, WarpclothError
+from .io.recording import Recording, load_recording
+from .io.usd import export_usd
+from .runs import run, simulate
+from .scene import Scene, Sweep, apply_overrides, bundled_scenes, expand, load_scene, load_sweep, scene_from_dict
+from .sim import RunResult
+from .sweeps import run_sweep
 
 __all__ = [
-    "Control",
+    "DataFileError",
     "DivergenceError",
-    "Model",
+    "OptionError",
+    "Recording",
     "RunResult",
     "Scene",
     "SceneError",
-    "Solver",
-    "State",
     "Sweep",
+    "WarpclothError",
     "apply_overrides",
     "bundled_scenes",
+    "calibrate",
     "crossing_times",
     "expand",
+    "export_usd",
     "first_period",
+    "io",
+    "load_recording",
     "load_scene",
     "load_sweep",
     "run",
     "run_sweep",
+    "scene",
     "scene_from_dict",
+    "sim",
     "simulate",
+    "viz",
 ]

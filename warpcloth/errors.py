@@ -1,9 +1,14 @@
-"""Errors that warpcloth raises with a message meant for the person who wrote the input."""
+"""The errors warpcloth raises, each with a message meant for the person who wrote the
+input. The command line maps them to exit codes in one place (warpcloth.cli)."""
 
 from __future__ import annotations
 
 
-class SceneError(ValueError):
+class WarpclothError(Exception):
+    """Base of every error warpcloth raises on purpose (bad input, a diverged run)."""
+
+
+class SceneError(WarpclothError, ValueError):
     """A scene or material field is missing, unknown, mistyped or out of range.
 
     ``field`` is the dotted name of the offending field (e.g. ``strip.spacing_mm``).
@@ -14,7 +19,31 @@ class SceneError(ValueError):
         super().__init__(f"{field}: {message}")
 
 
-class DivergenceError(RuntimeError):
+class OptionError(WarpclothError, ValueError):
+    """A command-line option (or the matching keyword argument) has an unusable value.
+
+    ``option`` is the option as typed (e.g. ``--variants``).
+    """
+
+    def __init__(self, option: str, message: str) -> None:
+        self.option = option
+        super().__init__(f"{option}: {message}")
+
+
+class DataFileError(WarpclothError, ValueError):
+    """A data file (measurement, KES loop, run or sweep directory) cannot be used as it is.
+
+    ``path`` names the file and ``line`` the 1-based line when one is to blame.
+    """
+
+    def __init__(self, path: str, message: str, line: int | None = None) -> None:
+        self.path = str(path)
+        self.line = line
+        where = self.path if line is None else f"{self.path}, line {line}"
+        super().__init__(f"{where}: {message}")
+
+
+class DivergenceError(WarpclothError, RuntimeError):
     """A strip's state became non-finite or physically absurd during a run.
 
     ``diverged`` lists one dict per diverged strip (strip, time, step, quantity, where,

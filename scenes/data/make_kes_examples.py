@@ -2,7 +2,7 @@
 
 They are synthetic: the model itself with known parameters plus seeded Gaussian noise,
 so that ``warpcloth material fit-kes`` can be checked against the truth. The material is
-MODEL.md's illustrative wool 90 % / nylon 10 % (``warpcloth.material.DEFAULT_MATERIAL``):
+MODEL.md's illustrative wool 90 % / nylon 10 % (``warpcloth.scene.DEFAULT_MATERIAL``):
 tensile a = (2000, 0, 0, 2.93e7) gf/cm, D = 0.10 gf·cm²/cm, D1 = 0.04 gf·cm/cm,
 α = 5 cm, K0 = 2.5 1/cm.
 
@@ -17,7 +17,7 @@ noise: EMT 6.001 %, WT 8.162 gf·cm/cm², LT 0.544, RT 52.6 %). Noise: Gaussian,
 
 ``kes_fb2_example.csv`` (header ``curvature_per_cm,moment_gf_cm_per_cm``): the standard
 KES-FB2 cycle 0 → +2.5 → −2.5 → 0 1/cm in steps of 0.02 1/cm (501 points); the moment is
-the strip kernel's own hinge law along that path (``warpcloth.bending.moment_along_path``,
+the strip kernel's own hinge law along that path (``warpcloth.sim.moment_along_path``,
 the hinge starting fresh at K = 0; without noise B = 0.1004 gf·cm²/cm, 2HB = 0.0399
 gf·cm/cm), plus Gaussian noise σ = 0.002 gf·cm/cm (seed 2027); curvature noise-free (the
 instruments' controlled variable).
@@ -32,10 +32,9 @@ from pathlib import Path
 import numpy as np
 
 from warpcloth import units
-from warpcloth.bending import moment_along_path
-from warpcloth.kes import PERCENT
-from warpcloth.material import DEFAULT_MATERIAL, to_si
-from warpcloth.scene import MaterialSection
+from warpcloth.calibrate.kes import PERCENT
+from warpcloth.scene import DEFAULT_MATERIAL, MaterialSection, to_si
+from warpcloth.sim import moment_along_path
 
 HERE = Path(__file__).resolve().parent
 MAX_LOAD_GF_PER_CM = 500.0

@@ -29,8 +29,7 @@ import numpy as np
 import warp as wp
 
 import warpcloth as wc
-from warpcloth.model import clamp_edge
-from warpcloth.scene import read_scene_file, set_field
+from warpcloth.scene import clamp_edge, read_scene_file, set_field
 
 HERE = Path(__file__).parent
 SWING_TRUTH = {"damping.gamma_per_s": 0.55, "material.hysteresis_d1_gf_cm_per_cm": 0.025}

@@ -1,0 +1,172 @@
+"""The paper's hysteretic bending law, ``"tagawa2003"`` (paper eqs. 3-4; docs/model.md §4).
+
+Moment per width M = D K + h(K − c), where h is the hysteretic offset on the current
+branch (h₊ while curvature rises, h₋ while it falls) of a KES loop of amplitude D1,
+steepness α and closing curvature K0, and c is the loop centre. At every reversal the
+loop is translated along M = D K so that the moment stays continuous.
+
+A law is one file: its per-strip parameters packed in one vector, its per-hinge memory
+packed in one vector, and wp.funcs for a fresh hinge, the branch logic, the moment and
+its tangent dM/dK. The strip kernel and :data:`moment_along_path` (the law alone, on
+prescribed curvature paths) use exactly these functions.
+"""
+
+import functools
+import math
+from types import SimpleNamespace
+from typing import Any
+
+import warp as wp
+
+from .types import precision
+
+NAME = "tagawa2003"
+
+PARAMETERS = ("bending_rigidity", "hysteresis_d1", "hysteresis_alpha", "hysteresis_k0", "hysteresis_m0")
+"""Layout of the packed per-strip parameter vector: D (N·m), D1 (N), α (m), K0 (1/m), M0 (N)."""
+
+MEMORY = ("branch", "loop_centre", "previous_curvature")
+"""Layout of the packed per-hinge memory: +1 rising / −1 falling, c (1/m), K at the last
+force evaluation (1/m)."""
+
+# Fraction of M0 kept between a hysteretic offset and its asymptote before the inverse
+# branch takes a logarithm (docs/model.md §4: H is clamped to (−M0, M0) strictly).
+HYSTERESIS_MARGIN = {wp.float64: 1e-12, wp.float32: 1e-6}
+
+wp.set_module_options({"enable_backward": False})
+
+
+def loop_asymptote(d1: float, alpha: float, k0: float) -> float:
+    """M0 = ½ D1 (1 + e^{−2αK0}), the asymptote of the hysteretic offset (N)."""
+    return 0.5 * d1 * (1.0 + math.exp(-2.0 * alpha * k0))
+
+
+def packed_parameters(bending_rigidity: float, d1: float, alpha: float, k0: float) -> tuple[float, ...]:
+    """The per-strip parameter vector (layout :data:`PARAMETERS`) from D, D1, α, K0 in SI."""
+    return (bending_rigidity, d1, alpha, k0, loop_asymptote(d1, alpha, k0))
+
+
+@functools.cache
+def build(scalar: Any) -> SimpleNamespace:
+    """The law's Warp types, functions and path kernel for ``scalar``."""
+    types = precision(scalar)
+    vec3, vec5 = types.vec3, types.vec5
+    zero = scalar(0.0)
+    one = scalar(1.0)
+    margin = scalar(HYSTERESIS_MARGIN[scalar])
+
+    @wp.func
+    def hysteretic_offset(u: scalar, branch: scalar, p: vec5):
+        # h₊ / h₋ with u = K − c measured from the loop centre. Without hysteresis
+        # (D1 = 0, so M0 = 0) both branches are exactly 0: skip the exponential, the
+        # largest single cost of a hinge (elastic sweep variants run ~25 % faster).
+        d1 = p[1]
+        if d1 == zero:
+            return zero
+        alpha = p[2]
+        k0 = p[3]
+        m0 = p[4]
+        if branch > zero:
+            return m0 - d1 * wp.exp(-alpha * (k0 + u))
+        return -m0 + d1 * wp.exp(-alpha * (k0 - u))
+
+    @wp.func
+    def loop_centre_through(curvature: scalar, offset: scalar, branch: scalar, p: vec5):
+        # Centre c that puts the point (curvature, offset) on the given branch, so the
+        # moment stays continuous when the branch is entered there.
+        d1 = p[1]
+        if d1 <= zero:
+            return curvature
+        alpha = p[2]
+        k0 = p[3]
+        m0 = p[4]
+        limit = m0 * (one - margin)
+        h = wp.clamp(offset, -limit, limit)
+        # c = K − u with u = h₊⁻¹(H) or h₋⁻¹(H)
+        if branch > zero:
+            return curvature + k0 + wp.log((m0 - h) / d1) / alpha
+        return curvature - k0 - wp.log((h + m0) / d1) / alpha
+
+    @wp.func
+    def fresh_memory(curvature: scalar, p: vec5):
+        # A hinge that has never bent back: rising branch, no offset at its curvature.
+        return vec3(one, loop_centre_through(curvature, zero, one, p), curvature)
+
+    @wp.func
+    def follow(curvature: scalar, memory: vec3, p: vec5):
+        # A reversal happens at the previous curvature; the loop is translated along
+        # M = D K so that the offset there is unchanged on the new branch.
+        b = memory[0]
+        c = memory[1]
+        previous = memory[2]
+        if (curvature - previous) * b < zero:
+            offset = hysteretic_offset(previous - c, b, p)
+            b = -b
+            c = loop_centre_through(previous, offset, b, p)
+        return vec3(b, c, curvature)
+
+    @wp.func
+    def last_curvature(memory: vec3):
+        # The curvature the hinge saw at its last force evaluation.
+        return memory[2]
+
+    @wp.func
+    def elastic_moment(curvature: scalar, p: vec5):
+        return p[0] * curvature
+
+    @wp.func
+    def hysteretic_moment(curvature: scalar, memory: vec3, p: vec5):
+        return hysteretic_offset(curvature - memory[1], memory[0], p)
+
+    @wp.func
+    def tangent(curvature: scalar, memory: vec3, p: vec5):
+        # dM/dK on the current branch: D plus the slope of h, α D1 e^{−α(K0 ± u)} > 0.
+        d1 = p[1]
+        if d1 == zero:
+            return p[0]
+        alpha = p[2]
+        k0 = p[3]
+        u = curvature - memory[1]
+        if memory[0] > zero:
+            return p[0] + alpha * d1 * wp.exp(-alpha * (k0 + u))
+        return p[0] + alpha * d1 * wp.exp(-alpha * (k0 - u))
+
+    @wp.kernel
+    def moment_along_path(
+        curvature_path: wp.array2d(dtype=scalar),
+        parameters: wp.array(dtype=vec5),
+        moment: wp.array2d(dtype=scalar),
+        slope: wp.array2d(dtype=scalar),
+        work: wp.array(dtype=scalar),
+    ):
+        """Moment per width M and tangent dM/dK along curvature paths ``[sample, hinge]``.
+
+        Each hinge starts fresh at its first sample; ``work`` accumulates
+        Σ M_n (K_{n+1} − K_n), the bending work per width with a left-point rule.
+        """
+        s = wp.tid()
+        p = parameters[s]
+        memory = fresh_memory(curvature_path[0, s], p)
+        w = zero
+        for n in range(curvature_path.shape[0]):
+            k = curvature_path[n, s]
+            memory = follow(k, memory, p)
+            m = elastic_moment(k, p) + hysteretic_moment(k, memory, p)
+            moment[n, s] = m
+            slope[n, s] = tangent(k, memory, p)
+            if n + 1 < curvature_path.shape[0]:
+                w = w + m * (curvature_path[n + 1, s] - k)
+        work[s] = w
+
+    return SimpleNamespace(
+        name=NAME,
+        Parameters=vec5,
+        Memory=vec3,
+        fresh_memory=fresh_memory,
+        follow=follow,
+        last_curvature=last_curvature,
+        elastic_moment=elastic_moment,
+        hysteretic_moment=hysteretic_moment,
+        tangent=tangent,
+        moment_along_path=moment_along_path,
+    )

@@ -1,0 +1,98 @@
+"""What drives the strips: the clamp's rigid rotation θ(t) and the held free end
+(docs/model.md §7-8).
+
+θ(t) is a piecewise polynomial per strip (at most quartic pieces), held constant
+outside its span; before the release the free end is carried along a polar path to
+its hold target and held there.
+"""
+
+import functools
+from types import SimpleNamespace
+from typing import Any
+
+import warp as wp
+
+from . import geometry
+from .types import precision
+
+MAX_DEGREE = 4
+"""Highest power of a clamp-motion piece θ = Σ c_k (t − start)^k."""
+
+
+@functools.cache
+def build(scalar: Any) -> SimpleNamespace:
+    """The ``StripControl`` struct and the drive functions for ``scalar``."""
+    types = precision(scalar)
+    vec2, vec5 = types.vec2, types.vec5
+    zero = scalar(0.0)
+    one = scalar(1.0)
+    perp = geometry.build(scalar).perp
+
+    @wp.struct
+    class StripControl:
+        """What drives the strips: clamp rotation θ(t) and the held free end (SI)."""
+
+        segment_start: wp.array2d(dtype=scalar)  # [segment, strip], s
+        segment_end: wp.array2d(dtype=scalar)
+        segment_coefficients: wp.array2d(dtype=vec5)  # θ = Σ c_k (t - start)^k, rad/s^k
+        n_segments: wp.array(dtype=int)
+        rotation_centre: wp.array(dtype=vec2)  # m, absolute
+        hold_target: wp.array(dtype=vec2)  # free-end held position, m, absolute
+        settle_damping: wp.array(dtype=scalar)  # γ while held, 1/s
+
+    @wp.func
+    def clamp_angle(control: StripControl, s: int, t: scalar):
+        # θ and dθ/dt of the piecewise polynomial; held constant outside its span.
+        n = control.n_segments[s]
+        if n == 0:
+            return zero, zero
+        lo = int(0)  # noqa: UP018 - Warp needs int() to make a loop-mutable variable
+        hi = n - 1
+        while lo < hi:
+            mid = (lo + hi + 1) // 2
+            if control.segment_start[mid, s] <= t:
+                lo = mid
+            else:
+                hi = mid - 1
+        start = control.segment_start[lo, s]
+        end = control.segment_end[lo, s]
+        tau = wp.clamp(t, start, end) - start
+        moving = t >= start and t <= end
+        c = control.segment_coefficients[lo, s]
+        theta = c[0] + tau * (c[1] + tau * (c[2] + tau * (c[3] + tau * c[4])))
+        rate = zero
+        if moving:
+            rate = c[1] + tau * (scalar(2.0) * c[2] + tau * (scalar(3.0) * c[3] + tau * scalar(4.0) * c[4]))
+        return theta, rate
+
+    @wp.func
+    def held_free_end(control: StripControl, root: vec2, rest_tip: vec2, s: int, step: int, move_steps: int,
+                      dt: scalar):
+        # The free end is carried from its hanging position to the hold target along a
+        # polar path about the clamp's lowest point (radius and angle blended by a C²
+        # smootherstep), so no segment is stretched on the way; then it stays there.
+        start = rest_tip - root
+        target = control.hold_target[s] - root
+        r0 = wp.length(start)
+        r1 = wp.length(target)
+        a0 = wp.atan2(start[1], start[0])
+        a1 = wp.atan2(target[1], target[0])
+        p = one
+        dp = zero
+        if step < move_steps:
+            x = scalar(step) / scalar(move_steps)
+            p = x * x * x * (x * (x * scalar(6.0) - scalar(15.0)) + scalar(10.0))
+            dp = scalar(30.0) * x * x * (x - one) * (x - one) / (scalar(move_steps) * dt)
+        turn = a1 - a0
+        if turn > wp.pi:  # the short way round, never through the clamp
+            turn = turn - scalar(2.0 * wp.pi)
+        elif turn < -wp.pi:
+            turn = turn + scalar(2.0 * wp.pi)
+        r = r0 + (r1 - r0) * p
+        a = a0 + turn * p
+        radial = vec2(wp.cos(a), wp.sin(a))
+        position = root + r * radial
+        velocity = dp * ((r1 - r0) * radial + r * turn * perp(radial))
+        return position, velocity
+
+    return SimpleNamespace(StripControl=StripControl, clamp_angle=clamp_angle, held_free_end=held_free_end)

@@ -1,0 +1,82 @@
+"""Internal forces of a strip: tension of every free segment and the bending couple of
+every hinge (docs/model.md §3-5), accumulated in one pass down the chain.
+"""
+
+import functools
+from types import SimpleNamespace
+from typing import Any
+
+import warp as wp
+
+from . import geometry, integrators, structs, tensile
+from .status import STATUS_FOLDED, STATUS_OK, STATUS_STRAIN
+from .types import precision
+
+
+@functools.cache
+def build(scalar: Any, law_name: str) -> SimpleNamespace:
+    """``accumulate_internal_forces`` for ``scalar`` and the bending law ``law_name``."""
+    vec2 = precision(scalar).vec2
+    zero = scalar(0.0)
+    strip = structs.build(scalar, law_name)
+    StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
+    Stepping = integrators.build(scalar).Stepping
+    tension = tensile.build(scalar).force_per_width
+    geo = geometry.build(scalar)
+    perp, signed_curvature = geo.perp, geo.signed_curvature
+
+    @wp.func
+    def accumulate_internal_forces(model: StripModel, stepping: Stepping, state: StripState, s: int):
+        # Returns 0 when healthy, or a status code with the offending index and value.
+        n = model.n_nodes
+        first = model.n_clamped - 2  # clamped node above the clamp-edge hinge
+        # Only the two nodes above the first hinge start from zero here; every node below is
+        # first reached as node i + 1 of the pass and stored then (0 - f, bitwise the same
+        # as zeroing first), which saves a sweep over three [node, strip] buffers.
+        for i in range(first, first + 2):
+            state.force_tensile[i, s] = vec2()
+            state.force_elastic[i, s] = vec2()
+            state.force_hysteretic[i, s] = vec2()
+        width = model.width[s]
+        a = model.tensile[s]
+        l0 = model.rest_length
+        p = model.bending[s]
+        # One pass down the strip: segment i (node i → i+1) and the hinge at node i share
+        # the segment vector and length, so each is loaded and measured once. Segments
+        # inside the clamp move rigidly: only the edge segment and below strain.
+        node = state.position[first + 1, s]
+        e1 = node - state.position[first, s]
+        l1 = wp.length(e1)
+        for i in range(first + 1, n - 1):
+            following = state.position[i + 1, s]
+            e2 = following - node
+            l2 = wp.length(e2)
+            strain = (l2 - l0) / l0
+            if not (wp.abs(strain) <= stepping.max_strain):  # also catches NaN
+                return STATUS_STRAIN, i, strain
+            f = tension(strain, a) * width / l2 * e2
+            state.force_tensile[i, s] = state.force_tensile[i, s] + f
+            state.force_tensile[i + 1, s] = vec2() - f
+            h = i - first - 1
+            curvature, chord = signed_curvature(e1, e2, l1, l2)
+            if not (chord > scalar(1e-3) * l0):
+                return STATUS_FOLDED, i, chord / l0
+            memory = law.follow(curvature, state.hinge[h, s], p)
+            state.hinge[h, s] = memory
+            # τ = M·W acts on the turning angle φ; F = -τ ∇φ with ∇φ as below.
+            grad_i = perp(e1) / (l1 * l1)
+            grad_k = perp(e2) / (l2 * l2)
+            tau_elastic = law.elastic_moment(curvature, p) * width
+            tau_hysteretic = law.hysteretic_moment(curvature, memory, p) * width
+            state.force_elastic[i - 1, s] = state.force_elastic[i - 1, s] - tau_elastic * grad_i
+            state.force_elastic[i + 1, s] = vec2() - tau_elastic * grad_k
+            state.force_elastic[i, s] = state.force_elastic[i, s] + tau_elastic * (grad_i + grad_k)
+            state.force_hysteretic[i - 1, s] = state.force_hysteretic[i - 1, s] - tau_hysteretic * grad_i
+            state.force_hysteretic[i + 1, s] = vec2() - tau_hysteretic * grad_k
+            state.force_hysteretic[i, s] = state.force_hysteretic[i, s] + tau_hysteretic * (grad_i + grad_k)
+            node = following
+            e1 = e2
+            l1 = l2
+        return STATUS_OK, 0, zero
+
+    return SimpleNamespace(accumulate_internal_forces=accumulate_internal_forces)

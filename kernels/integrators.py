@@ -1,0 +1,44 @@
+"""Explicit Euler updates of one free node and the stepping parameters the solver owns
+(docs/model.md §9).
+
+A scheme is a wp.func ``(x, v, f, m, dt) -> (x_new, v_new)``; the strip kernel is
+generated per scheme, so the choice costs no branch inside the substep loop.
+"""
+
+import functools
+from types import SimpleNamespace
+from typing import Any
+
+import warp as wp
+
+from .types import precision
+
+
+@functools.cache
+def build(scalar: Any) -> SimpleNamespace:
+    """The ``Stepping`` struct and the ``schemes`` (name → node update) for ``scalar``."""
+    vec2 = precision(scalar).vec2
+
+    @wp.struct
+    class Stepping:
+        """How the solver steps: dt, its divergence limit, and the drive phases in steps."""
+
+        dt: scalar
+        max_strain: scalar  # |ε| beyond which a strip counts as diverged
+        release_step: int  # step index of t = 0 (release); the hold lasts before it
+        move_steps: int  # steps spent carrying the free end to the hold target
+
+    @wp.func
+    def semi_implicit_euler(x: vec2, v: vec2, f: vec2, m: scalar, dt: scalar):
+        # Symplectic: the position moves with the updated velocity.
+        v_new = v + f * (dt / m)
+        return x + v_new * dt, v_new
+
+    @wp.func
+    def forward_euler(x: vec2, v: vec2, f: vec2, m: scalar, dt: scalar):
+        # The paper's eqs. 5-6: the position moves with the old velocity.
+        v_new = v + f * (dt / m)
+        return x + v * dt, v_new
+
+    return SimpleNamespace(Stepping=Stepping,
+                           schemes={"semi_implicit": semi_implicit_euler, "forward": forward_euler})

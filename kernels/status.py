@@ -1,0 +1,6 @@
+"""Health codes a strip's thread writes to ``status`` when it stops (docs/model.md §11)."""
+
+STATUS_OK = 0
+STATUS_STRAIN = 1
+STATUS_FOLDED = 2
+STATUS_NONFINITE_ENERGY = 3

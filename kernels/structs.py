@@ -1,0 +1,57 @@
+"""What a batch of strips *is* (``StripModel``) and *is doing* (``StripState``), as Warp
+structs for one precision and bending law.
+
+Per-node arrays are laid out ``[node, strip]``: at a given node index the threads of a
+GPU warp read neighbouring strips, i.e. consecutive addresses (coalesced).
+"""
+
+import functools
+from types import SimpleNamespace
+from typing import Any
+
+import warp as wp
+
+from .laws import bending_law
+from .types import precision
+
+
+@functools.cache
+def build(scalar: Any, law_name: str) -> SimpleNamespace:
+    """``StripModel`` and ``StripState`` for ``scalar`` and the bending law ``law_name``."""
+    types = precision(scalar)
+    vec2, vec4 = types.vec2, types.vec4
+    law = bending_law(law_name).build(scalar)
+
+    @wp.struct
+    class StripModel:
+        """What the strips are: batch geometry and per-strip material (SI)."""
+
+        n_nodes: int
+        n_clamped: int
+        rest_length: scalar
+        gravity: scalar
+        rest_position: wp.array2d(dtype=vec2)  # [node, strip]; clamp nodes rotate rigidly from these
+        tensile: wp.array(dtype=vec4)  # a1..a4 of T(ε), N/m
+        bending: wp.array(dtype=law.Parameters)  # the bending law's packed parameters
+        width: wp.array(dtype=scalar)  # W, m
+        node_mass: wp.array(dtype=scalar)  # ρ_A W h, kg (half at the free end)
+        damping: wp.array(dtype=scalar)  # γ after release, 1/s
+
+    @wp.struct
+    class StripState:
+        """What the strips are doing: nodes, hinge memory, work done, health."""
+
+        position: wp.array2d(dtype=vec2)  # [node, strip]
+        velocity: wp.array2d(dtype=vec2)
+        force_tensile: wp.array2d(dtype=vec2)  # scratch, per substep
+        force_elastic: wp.array2d(dtype=vec2)
+        force_hysteretic: wp.array2d(dtype=vec2)
+        hinge: wp.array2d(dtype=law.Memory)  # [hinge, strip], the bending law's memory
+        work: wp.array(dtype=vec4)  # (bending elastic, hysteresis, damping, drive), J
+        step: wp.array(dtype=int)  # substeps done so far
+        status: wp.array(dtype=int)
+        status_step: wp.array(dtype=int)
+        status_index: wp.array(dtype=int)  # segment or hinge where it happened
+        status_value: wp.array(dtype=scalar)
+
+    return SimpleNamespace(StripModel=StripModel, StripState=StripState, law=law)

@@ -1,0 +1,39 @@
+"""Refactor guard: today's code reproduces the saved golden outputs bitwise.
+
+The goldens (tests/golden/, written by tests/golden/make_goldens.py) are the probes and
+frames of both bundled scenes and a small sweep's summaries. A change that is meant to
+alter results regenerates them and says why in its commit; any other change must leave
+every bit as it was (restructuring code is not allowed to reorder floating-point work).
+"""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+GOLDEN = Path(__file__).parent / "golden"
+sys.path.insert(0, str(GOLDEN))
+from make_goldens import SCENES, scene_outputs, sweep_summary  # noqa: E402
+
+
+def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_bundled_scene_is_bitwise_golden(name):
+    expected = np.load(GOLDEN / f"{name}.npz")
+    actual = scene_outputs(name)
+    assert set(actual) == set(expected.files)
+    for key, value in actual.items():
+        assert same_bits(value, expected[key]), f"{name}: {key} differs from the golden output"
+
+
+def test_sweep_summary_is_bitwise_golden(tmp_path):
+    expected = pd.read_parquet(GOLDEN / "sweep_summary.parquet")
+    actual = sweep_summary(tmp_path / "sweep")
+    pd.testing.assert_frame_equal(actual.reset_index(drop=True), expected, check_exact=True)
+    for column in expected.select_dtypes("number"):
+        assert same_bits(actual[column].to_numpy(), expected[column].to_numpy()), column

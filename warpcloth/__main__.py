@@ -1,0 +1,7 @@
+"""``python -m warpcloth``: the ``warpcloth`` command."""
+
+import sys
+
+from .cli import main
+
+sys.exit(main())

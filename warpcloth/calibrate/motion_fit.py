@@ -1,0 +1,425 @@
+"""Fitting free scene parameters to a measured motion with batched runs.
+
+The paper tuned viscous damping and the rotation centre by hand until simulation matched
+its vacuum experiments; this does the same by least squares. The discrepancy is the RMS
+over time of simulated minus measured (the laser-line displacement, or tracked marker
+positions), optionally after shifting the measured clock by a fitted start-time offset.
+
+Search, every step one batched launch of the strip kernel:
+
+1. **Space filling.** A seeded Latin hypercube over the bounds (``space_filling``
+   variants in one batch); the best variant starts the local search.
+2. **Speculative Levenberg–Marquardt.** Each iteration launches one batch holding the
+   proposed step from the current Jacobian, a central-difference stencil around that
+   proposal (so if it is accepted its Jacobian comes with it), and two more cautious
+   steps (10× and 100× the damping) in case it is not. The start-time offset is a
+   parameter too, but its Jacobian column comes from re-sampling the same runs, so it
+   costs no variants.
+
+The uncertainty is the Gauss–Newton covariance s²(JᵀJ)⁻¹ at the optimum with s² the
+residual variance. It assumes independent residuals; measured residuals are usually
+correlated in time, so read it as a lower bound (the profile of the cost along each
+parameter, in ``history``, shows the actual valley).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from warpcloth.errors import SceneError
+from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.runs import simulate
+from warpcloth.scene import Scene, batch_fields, clamp_edge, scene_from_dict, set_field
+from warpcloth.sim import RunResult
+
+ALIASES = {
+    "gamma": "damping.gamma_per_s",
+    "D": "material.bending_rigidity_gf_cm2_per_cm",
+    "D1": "material.hysteresis_d1_gf_cm_per_cm",
+    "alpha": "material.hysteresis_alpha_cm",
+    "K0": "material.hysteresis_k0_per_cm",
+    "density": "material.density_g_per_cm2",
+    "rotation_centre_dx_mm": "clamp.rotation_centre_dx_mm",
+    "rotation_centre_dy_mm": "clamp.rotation_centre_dy_mm",
+    "hold_x_mm": "release.hold_x_mm",
+    "hold_y_mm": "release.hold_y_mm",
+}
+"""Short names accepted by ``--free`` (any per-strip numeric field also works by its dotted name)."""
+
+SHIFT = "time_shift_s"
+STENCIL_STEP = 2e-3  # central-difference step, as a fraction of each parameter's range
+MAX_LAMBDA = 1e8
+
+
+@dataclass(frozen=True)
+class FreeParameter:
+    """A scene field fitted within [lower, upper]."""
+
+    name: str
+    field: str
+    lower: float
+    upper: float
+    initial: float
+
+
+def _field_value(scene: Scene, name: str) -> float:
+    section, key = name.split(".")
+    return getattr(getattr(scene, section), key)
+
+
+def free_parameters(names: str | list[str], base: Scene, bounds: str | None = None) -> list[FreeParameter]:
+    """Resolve ``--free`` names (aliases or dotted fields) and ``--bounds name=lo:hi,...``.
+
+    Default bounds: a rotation centre or held position ± 10 mm around the scene's value;
+    γ from 0 to 4× the scene's value (at least 2 /s); D1 from 0 to 4×; any other
+    positive field from ¼× to 4×.
+    """
+    names = [n.strip() for n in (names.split(",") if isinstance(names, str) else names) if n.strip()]
+    if not names:
+        raise SceneError("--free", "name at least one parameter to fit, e.g. gamma,D1")
+    given = _parse_bounds(bounds)
+    fixed = set(batch_fields())
+    out = []
+    for name in names:
+        dotted = ALIASES.get(name, name)
+        if dotted.count(".") != 1 or not hasattr(base, dotted.split(".")[0]) or not hasattr(
+                getattr(base, dotted.split(".")[0]), dotted.split(".")[1]):
+            raise SceneError("--free", f"{name!r} is neither a scene field nor one of {', '.join(ALIASES)}")
+        value = _field_value(base, dotted)
+        if dotted in fixed or isinstance(value, (bool, str, list)):
+            raise SceneError("--free", f"{name} ({dotted}) cannot vary between the strips of one batch or is not "
+                             "a number; only per-strip numeric fields can be fitted")
+        key = name if name in given else dotted if dotted in given else None
+        if key is not None:
+            lower, upper = given.pop(key)
+        elif dotted.endswith("_mm") and ("rotation_centre" in dotted or "hold_" in dotted):
+            lower, upper = value - 10.0, value + 10.0
+        elif dotted == "damping.gamma_per_s":
+            lower, upper = 0.0, max(4 * value, 2.0)
+        elif dotted == "material.hysteresis_d1_gf_cm_per_cm" and value > 0:
+            lower, upper = 0.0, 4 * value
+        elif value > 0:
+            lower, upper = value / 4, value * 4
+        else:
+            raise SceneError("--bounds", f"{name} is {value:g} in the scene, so no default range; give "
+                             f"--bounds {name}=LOW:HIGH")
+        if not lower < upper:
+            raise SceneError("--bounds", f"{name}: lower bound {lower:g} must be below upper bound {upper:g}")
+        out.append(FreeParameter(name, dotted, float(lower), float(upper), float(min(max(value, lower), upper))))
+    if given:
+        raise SceneError("--bounds", f"{next(iter(given))!r} is not among the --free parameters")
+    return out
+
+
+def _parse_bounds(text: str | None) -> dict[str, tuple[float, float]]:
+    out = {}
+    for item in (text or "").split(","):
+        if not item.strip():
+            continue
+        try:
+            name, span = item.split("=")
+            lo, hi = span.split(":")
+            out[name.strip()] = (float(lo), float(hi))
+        except ValueError:
+            raise SceneError("--bounds", f"{item.strip()!r} is not name=LOW:HIGH (e.g. gamma=0:2)") from None
+    return out
+
+
+class Objective:
+    """Residuals of simulated against measured motion for batches of parameter points.
+
+    A point is ``u`` in the unit box (one coordinate per free parameter) plus, when
+    the start time is aligned, the clock offset δ (s): simulated time = measured + δ.
+    """
+
+    def __init__(self, base: dict, measurement: LaserTrace | TrackedShapes, free: list[FreeParameter],
+                 align_start_s: float = 0.0, device: str | None = None) -> None:
+        self.measurement = measurement
+        self.free = free
+        self.align = float(align_start_s)
+        self.device = device
+        self.base = copy.deepcopy(base)
+        self.base.pop("sweep", None)
+        scene = scene_from_dict(copy.deepcopy(self.base))
+        t_end = float(measurement.t[-1]) + self.align
+        if measurement.t[0] + self.align < 0:
+            raise SceneError("--measured", f"measured times start at {measurement.t[0]:g} s, before the scene's "
+                             "t = 0 (release or clamp start) even with the allowed --align-start; shift them")
+        set_field(self.base, "run.duration_s", t_end + scene.output_interval)
+        if isinstance(measurement, TrackedShapes):
+            # Shapes are compared at the probe rate, so the time alignment interpolates
+            # between samples 1/600 s apart instead of video frames.
+            set_field(self.base, "output.frame_rate_hz", scene.output.frame_rate_hz * scene.output.probes_per_frame)
+            set_field(self.base, "output.probes_per_frame", 1)
+        self.scene = scene_from_dict(copy.deepcopy(self.base))
+        if isinstance(measurement, TrackedShapes):
+            free_length = self.scene.strip.free_length_mm * 1e-3
+            beyond = measurement.s > free_length * (1 + 1e-9)
+            if beyond.any():
+                raise SceneError("--measured", f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond the "
+                                 f"free end ({free_length * 1e3:g} mm below the clamp's lowest point); s is the arc "
+                                 "length from the clamp's lowest point, not from the clamp's top")
+        self.edge = clamp_edge(self.scene)
+        self.shift_step = 0.5 * self.scene.output_interval
+        self.launches = 0
+        self.variants = 0
+
+    def values(self, u: np.ndarray) -> dict[str, float]:
+        """Physical values (the scene fields) of a unit-box point."""
+        return {p.field: p.lower + float(x) * (p.upper - p.lower) for p, x in zip(self.free, u, strict=False)}
+
+    def scene_data(self, u: np.ndarray) -> dict:
+        """Raw scene data of a point (the duration and output rate set for fitting)."""
+        data = copy.deepcopy(self.base)
+        for name, value in self.values(u).items():
+            set_field(data, name, value)
+        return data
+
+    def run(self, points: np.ndarray) -> RunResult:
+        """Simulate every point (rows) in one batch."""
+        scenes = [scene_from_dict(self.scene_data(u)) for u in points]
+        self.launches += 1
+        self.variants += len(points)
+        return simulate(scenes, device=self.device, on_divergence="record",
+                        keep_frames=isinstance(self.measurement, TrackedShapes))
+
+    def residuals(self, result: RunResult, j: int, shift: float, penalise: bool = True) -> np.ndarray:
+        """Simulated minus measured, SI, for variant j of a result at clock offset δ.
+
+        Where the simulation has no value (the strip misses the laser line, or diverged)
+        the residual is a penalty that steers the search away, or NaN with
+        ``penalise=False`` (for reporting)."""
+        m = self.measurement
+        t = m.t + shift
+        if isinstance(m, LaserTrace):
+            sim = np.interp(t, result.t, result.probe("laser_x", j))
+            # Where the strip misses the laser line the signal is undefined: count the
+            # whole measured swing as missed there, so the search moves away.
+            return np.where(np.isfinite(sim) | (not penalise), sim - m.x, np.ptp(m.x))
+        frames = result.frames[:, j] - self.edge  # [time, node, xy] from the clamp's lowest point
+        nc = self.scene.n_clamped
+        arc = m.s / self.scene.spacing + (nc - 1)  # fractional node index of each marker
+        node = np.clip(np.floor(arc).astype(int), 0, self.scene.n_nodes - 2)
+        w_node = (arc - node)[:, None]
+        ft = result.frame_times
+        k = np.clip(np.searchsorted(ft, t) - 1, 0, len(ft) - 2)
+        w_time = ((t - ft[k]) / (ft[k + 1] - ft[k])).clip(0, 1)[:, None]
+
+        def at(frame: np.ndarray) -> np.ndarray:
+            return frame[np.arange(len(node)), node] * (1 - w_node) + frame[np.arange(len(node)), node + 1] * w_node
+
+        sim = at(frames[k]) * (1 - w_time) + at(frames[k + 1]) * w_time
+        diff = sim - np.column_stack([m.x, m.y])
+        missing = 0.1 if penalise else np.nan  # a diverged strip: 10 cm per coordinate
+        return np.where(np.isfinite(diff), diff, missing).ravel()
+
+    def best_shift(self, result: RunResult, j: int) -> float:
+        """The clock offset minimising the RMS for variant j (a scan; 0 when not aligning)."""
+        if not self.align:
+            return 0.0
+        shifts = np.linspace(-self.align, self.align, 81)
+        costs = [np.mean(self.residuals(result, j, d) ** 2) for d in shifts]
+        return float(shifts[int(np.argmin(costs))])
+
+    def jacobian(self, result: RunResult, stencil: list[tuple[int, int, float]], centre: int,
+                 shift: float) -> np.ndarray:
+        """Columns ∂r/∂u_i from stencil pairs (plus, minus, Δu), and ∂r/∂δ by re-sampling."""
+        columns = [(self.residuals(result, plus, shift) - self.residuals(result, minus, shift)) / du
+                   for plus, minus, du in stencil]
+        if self.align:
+            h = self.shift_step
+            columns.append((self.residuals(result, centre, shift + h) - self.residuals(result, centre, shift - h))
+                           / (2 * h))
+        return np.column_stack(columns)
+
+
+@dataclass
+class FitResult:
+    """Best parameters, their uncertainty, and how the search went."""
+
+    parameters: dict[str, float]
+    sigma: dict[str, float]
+    correlation: list[list[float]]
+    rms: float
+    shift_s: float
+    n_residuals: int
+    launches: int
+    variants: int
+    wall_time_s: float
+    history: list[dict] = field(default_factory=list)
+    converged: bool = False
+
+    def to_json(self) -> dict:
+        """Everything, JSON-ready."""
+        return dataclasses.asdict(self)
+
+
+def _latin_hypercube(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
+    return (np.stack([rng.permutation(n) for _ in range(d)], axis=1) + rng.random((n, d))) / n
+
+
+def _stencil(point: np.ndarray, d: int) -> tuple[list[np.ndarray], list[tuple[int, int, float]]]:
+    # Rows after the centre: +h and −h along each coordinate, kept inside the box.
+    rows, pairs = [], []
+    for i in range(d):
+        plus, minus = point.copy(), point.copy()
+        plus[i] = min(point[i] + STENCIL_STEP, 1.0)
+        minus[i] = max(point[i] - STENCIL_STEP, 0.0)
+        pairs.append((1 + 2 * i, 2 + 2 * i, plus[i] - minus[i]))
+        rows += [plus, minus]
+    return rows, pairs
+
+
+def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[FreeParameter], *,
+               align_start_s: float = 0.0, space_filling: int | None = None, max_iterations: int = 25,
+               seed: int = 0, device: str | None = None, progress: bool = True) -> FitResult:
+    """Fit ``free`` parameters of raw scene ``base`` to ``measurement`` (see the module doc)."""
+    started = time.perf_counter()
+    objective = Objective(base, measurement, free, align_start_s, device)
+    d = len(free)
+    rng = np.random.default_rng(seed)
+    n0 = space_filling or max(16, 8 * d)
+    bar = tqdm(total=max_iterations + 1, desc="fit", unit="launch", disable=not progress)
+    history: list[dict] = []
+
+    def record(stage: str, u: np.ndarray, shift: float, rms: float) -> None:
+        history.append({"launch": objective.launches, "stage": stage, "rms": rms, "shift_s": shift}
+                       | objective.values(u))
+        bar.set_postfix(rms=f"{rms:.4g}")
+        bar.update(1)
+
+    # 1. space filling (the scene's own values join the sample)
+    points = np.vstack([[(p.initial - p.lower) / (p.upper - p.lower) for p in free], _latin_hypercube(n0, d, rng)])
+    result = objective.run(points)
+    shifts = [objective.best_shift(result, j) for j in range(len(points))]
+    costs = [np.mean(objective.residuals(result, j, s) ** 2) for j, s in enumerate(shifts)]
+    best = int(np.argmin(costs))
+    u, shift, cost = points[best], shifts[best], costs[best]
+    record("space filling", u, shift, math.sqrt(cost))
+
+    # 2. speculative Levenberg–Marquardt on q = (u, δ if aligning)
+    q = np.append(u, shift) if objective.align else u.copy()
+    jac, residual = None, objective.residuals(result, best, shift)
+    lam, converged = 1e-2, False
+    for _ in range(max_iterations):
+        # The first launch only takes the Jacobian at the start; later ones also try steps.
+        proposals = [q] if jac is None else [_lm_step(q, jac, residual, lam * f, objective) for f in (1, 10, 100)]
+        stencil_rows, pairs = _stencil(proposals[0][:d], d)
+        result = objective.run(np.vstack([proposals[0][:d], *stencil_rows, *[p[:d] for p in proposals[1:]]]))
+        rows = [0, *range(1 + 2 * d, 2 * d + len(proposals))]
+        trials = [(objective.residuals(result, row, _shift_of(p, d)), row, p) for row, p in zip(rows, proposals,
+                                                                                                 strict=True)]
+        trial_costs = [float(np.mean(r**2)) for r, _, _ in trials]
+        if jac is None or trial_costs[0] < cost:
+            improvement = cost - trial_costs[0] if jac is not None else math.inf
+            q, cost, residual = proposals[0], trial_costs[0], trials[0][0]
+            jac = objective.jacobian(result, pairs, 0, _shift_of(q, d))
+            lam = max(lam / 3, 1e-7)
+            record("step", q[:d], _shift_of(q, d), math.sqrt(cost))
+            if 0 <= improvement <= 1e-4 * cost:
+                converged = True
+                break
+        elif min(trial_costs[1:]) < cost:
+            k = 1 + int(np.argmin(trial_costs[1:]))
+            q, cost, residual = proposals[k], trial_costs[k], trials[k][0]
+            lam *= 10  # the Jacobian stays the one taken nearby; it is refreshed on the next full step
+            record("cautious step", q[:d], _shift_of(q, d), math.sqrt(cost))
+        else:
+            lam *= 100
+            record("rejected", q[:d], _shift_of(q, d), math.sqrt(cost))
+            if lam > MAX_LAMBDA:
+                converged = True
+                break
+    bar.close()
+    u, shift = q[:d], _shift_of(q, d)
+    if history[-1]["stage"] != "step":  # the Jacobian must be taken at the reported point
+        stencil_rows, pairs = _stencil(u, d)
+        result = objective.run(np.vstack([u, *stencil_rows]))
+        jac = objective.jacobian(result, pairs, 0, shift)
+        residual = objective.residuals(result, 0, shift)
+    return _summarise(objective, u, shift, jac, residual, history, converged, time.perf_counter() - started)
+
+
+def _shift_of(q: np.ndarray, d: int) -> float:
+    return float(q[d]) if len(q) > d else 0.0
+
+
+def _lm_step(q: np.ndarray, jac: np.ndarray, residual: np.ndarray, lam: float, objective: Objective) -> np.ndarray:
+    # (JᵀJ + λ diag JᵀJ) Δ = −Jᵀr, then back into the box (and the allowed clock offsets).
+    normal = jac.T @ jac
+    scale = np.diag(normal).copy()
+    scale[scale <= 0] = 1.0
+    point = q + np.linalg.solve(normal + lam * np.diag(scale), -jac.T @ residual)
+    d = len(objective.free)
+    point[:d] = np.clip(point[:d], 0.0, 1.0)
+    if objective.align:
+        point[d] = np.clip(point[d], -objective.align, objective.align)
+    return point
+
+
+def _summarise(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarray, residual: np.ndarray,
+               history: list[dict], converged: bool, wall: float) -> FitResult:
+    n, p = len(residual), jac.shape[1]
+    ranges = np.array([f.upper - f.lower for f in objective.free] + ([1.0] if objective.align else []))
+    physical = jac / ranges  # ∂r/∂(field value)
+    variance = float(residual @ residual) / max(n - p, 1)
+    try:
+        covariance = variance * np.linalg.inv(physical.T @ physical)
+    except np.linalg.LinAlgError:
+        covariance = np.full((p, p), np.nan)
+    sigma = np.sqrt(np.clip(np.diag(covariance), 0, None))
+    correlation = covariance / np.outer(sigma, sigma)
+    names = [f.field for f in objective.free] + ([SHIFT] if objective.align else [])
+    values = objective.values(u) | ({SHIFT: shift} if objective.align else {})
+    return FitResult(values, dict(zip(names, sigma.tolist(), strict=True)), correlation.tolist(),
+                     float(np.sqrt(np.mean(residual**2))), shift, n, objective.launches, objective.variants, wall,
+                     history, converged)
+
+
+def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | TrackedShapes, out: str | Path,
+              device: str | None = None) -> list[Path]:
+    """Write the fit: ``best.toml`` (reruns the best fit with the scene's own duration and
+    output), ``fit.json``, ``history.csv``, ``residuals.csv`` and ``overlay.png``.
+
+    The best fit is rerun and every file prepared under a temporary name before any is
+    renamed into place, so a failure leaves no mixture of old and new files."""
+    import pandas as pd
+    import tomli_w
+
+    from warpcloth.io.atomic import write_files_atomically
+    from warpcloth.viz.plots import plot_fit_overlay
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    best = copy.deepcopy(objective_base)
+    best.pop("sweep", None)
+    for name, value in fit.parameters.items():
+        if name != SHIFT:
+            set_field(best, name, value)
+    scene = scene_from_dict(copy.deepcopy(best))
+    objective = Objective(best, measurement, [], abs(fit.shift_s), device)
+    result = objective.run(np.zeros((1, 0)))
+    residual = objective.residuals(result, 0, fit.shift_s, penalise=False)
+    if isinstance(measurement, LaserTrace):
+        table = pd.DataFrame({"t_s": measurement.t, "measured_x_mm": measurement.x * 1e3,
+                              "simulated_x_mm": (measurement.x + residual) * 1e3, "residual_mm": residual * 1e3})
+    else:
+        r = residual.reshape(-1, 2)
+        table = pd.DataFrame({"frame": measurement.frame, "t_s": measurement.t, "s_mm": measurement.s * 1e3,
+                              "residual_x_mm": r[:, 0] * 1e3, "residual_y_mm": r[:, 1] * 1e3})
+    return write_files_atomically(out, {
+        "best.toml": lambda p: p.write_text(tomli_w.dumps(scene.to_dict())),
+        "fit.json": lambda p: p.write_text(json.dumps(fit.to_json(), indent=1)),
+        "history.csv": lambda p: pd.DataFrame(fit.history).to_csv(p, index=False),
+        "residuals.csv": lambda p: table.to_csv(p, index=False),
+        "overlay.png": lambda p: plot_fit_overlay(result, objective, measurement, fit, p),
+    })

@@ -1,0 +1,91 @@
+"""``warpcloth fit`` and ``warpcloth clamp fit-angle``: calibrate against measured motion."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from warpcloth.scene import scene_from_dict
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``fit`` and ``clamp fit-angle``."""
+    fit_p = sub.add_parser("fit", help="fit free scene parameters to a measured motion (batched runs)")
+    fit_p.add_argument("scene", help="scene file or bundled scene whose experiment was measured")
+    fit_p.set_defaults(handler=fit_command)
+    fit_p.add_argument("--measured", required=True,
+                       help="CSV: laser trace 't_s, x_mm' or tracked shapes 'frame, t_s, s_mm, x_mm, y_mm'")
+    fit_p.add_argument("--free", required=True, help="parameters to fit, e.g. gamma,rotation_centre_dy_mm,D1 "
+                       "(aliases: gamma D D1 alpha K0 density rotation_centre_dx_mm rotation_centre_dy_mm "
+                       "hold_x_mm hold_y_mm; or any per-strip field by dotted name)")
+    fit_p.add_argument("--bounds", help="name=LOW:HIGH,... (default: see README)")
+    fit_p.add_argument("--align-start", type=float, default=0.0, metavar="SECONDS",
+                       help="also fit a clock offset between measurement and simulation, within ± this")
+    fit_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a field of the scene first")
+    fit_p.add_argument("--out", help="fit directory (default: runs/fit-<scene name>)")
+    fit_p.add_argument("--space-filling", type=int, default=None, help="variants in the first, space-filling batch")
+    fit_p.add_argument("--max-iterations", type=int, default=25, help="local refinement launches at most")
+    fit_p.add_argument("--seed", type=int, default=0, help="seed of the space-filling sample")
+    fit_p.add_argument("--device", default=None, help="cpu or cuda")
+    fit_p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    clamp_p = sub.add_parser("clamp", help="clamp motion tools")
+    clamp_sub = clamp_p.add_subparsers(dest="clamp_command", required=True)
+    angle_p = clamp_sub.add_parser("fit-angle", help="fit the quartic-then-line θ(t) to an encoder series")
+    angle_p.set_defaults(handler=clamp_fit_angle_command)
+    angle_p.add_argument("encoder", metavar="ENCODER", help="CSV 't_s, theta' (rad; deg if the header says deg)")
+    angle_p.add_argument("--scene", required=True, help="scene to write the fitted motion into")
+    angle_p.add_argument("-o", "--output", required=True, help="the new scene file (TOML)")
+    angle_p.add_argument("--angle-unit", choices=("rad", "deg"), default=None, help="override the header's unit")
+    angle_p.add_argument("--plot", help="also write a PNG of the encoder data and the fit")
+
+
+def fit_command(args: argparse.Namespace) -> int:
+    """Fit the free parameters and write the fit directory."""
+    from warpcloth.calibrate.motion_fit import fit_motion, free_parameters, write_fit
+    from warpcloth.io.measured import read_measurement
+    from warpcloth.scene import apply_overrides, read_scene_file
+
+    base = apply_overrides(read_scene_file(args.scene), args.overrides)
+    base.pop("sweep", None)
+    measurement = read_measurement(args.measured)
+    free = free_parameters(args.free, scene_from_dict(base), args.bounds)
+    out = Path(args.out or Path("runs") / f"fit-{Path(args.scene).stem}")
+    fit = fit_motion(base, measurement, free, align_start_s=args.align_start, space_filling=args.space_filling,
+                     max_iterations=args.max_iterations, seed=args.seed, device=args.device,
+                     progress=not args.no_progress)
+    write_fit(fit, base, measurement, out, args.device)
+    print(f"RMS {fit.rms * 1e3:.4g} mm over {fit.n_residuals} residuals; {fit.launches} launches, "
+          f"{fit.variants} variants, {fit.wall_time_s:.1f} s{'' if fit.converged else ' (iteration limit reached)'}")
+    for name, value in fit.parameters.items():
+        print(f"  {name} = {value:.6g} ± {fit.sigma[name]:.2g}")
+    print(f"wrote {out}/ (best.toml reruns the best fit: warpcloth run {out / 'best.toml'})")
+    return 0
+
+
+def clamp_fit_angle_command(args: argparse.Namespace) -> int:
+    """Fit θ(t) to an encoder series and write a scene with that clamp motion."""
+    import tomli_w
+
+    from warpcloth.calibrate.clamp_fit import fit_clamp_motion, scene_with_clamp_motion
+    from warpcloth.io.atomic import write_text_atomically
+    from warpcloth.io.measured import read_encoder
+    from warpcloth.scene import read_scene_file
+
+    t, theta = read_encoder(args.encoder, args.angle_unit)
+    fit = fit_clamp_motion(t, theta)
+    data = scene_with_clamp_motion(read_scene_file(args.scene), fit)
+    data.pop("sweep", None)
+    scene = scene_from_dict(data)  # validates before anything is written
+    out = Path(args.output)
+    write_text_atomically(out, tomli_w.dumps(scene.to_dict()))
+    print(f"encoder at rest {fit.theta0_rad:.4g} rad (the scene's θ is measured from it); "
+          f"onset {fit.onset_s:.4f} s, quartic {fit.quartic_rad_per_s4:.5g} rad/s⁴ to {fit.break_s:.4f} s, "
+          f"then {fit.speed_rad_per_s:.5g} rad/s to {fit.stop_s:.4f} s (slope jump at the break "
+          f"{fit.slope_jump_rad_per_s:+.3g} rad/s); RMS {fit.rms_rad:.3g} rad over {fit.n_samples} samples")
+    print(f"wrote {out}")
+    if args.plot:
+        from warpcloth.viz.plots import plot_clamp_fit
+
+        print(f"wrote {plot_clamp_fit(t, theta, fit, Path(args.plot))}")
+    return 0

@@ -1,0 +1,49 @@
+"""``warpcloth run``: simulate a scene into a run directory."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from warpcloth.calibrate.metrics import first_period
+from warpcloth.errors import DivergenceError
+from warpcloth.runs import simulate
+from warpcloth.scene import bundled_scenes, load_scene
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``run``."""
+    run_p = sub.add_parser("run", help="simulate a scene and write a run directory")
+    run_p.add_argument("scene", help=f"scene file, or a bundled scene: {', '.join(bundled_scenes())}")
+    run_p.add_argument("--out", help="run directory (default: runs/<scene name>)")
+    run_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a scene field by dotted name, e.g. integrator.dt_s=1e-7")
+    run_p.add_argument("--device", default=None, help="cpu or cuda (default: Warp's preferred device)")
+    run_p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run_p.add_argument("--usd", metavar="FILE", help="also export the run as a USD stage (.usd, .usda or .usdc)")
+    run_p.set_defaults(handler=run_scene)
+
+
+def run_scene(args: argparse.Namespace) -> int:
+    """Simulate one scene, report where its free end ended and its first period."""
+    scene = load_scene(args.scene, args.overrides)
+    out = Path(args.out or Path("runs") / Path(args.scene).stem)
+    try:
+        result = simulate(scene, device=args.device, out=out, progress=not args.no_progress)
+    except DivergenceError as exc:
+        raise DivergenceError(f"{exc}\nRecorded up to the divergence: {out}", exc.diverged, exc.result) from None
+    tip = result.probe("tip_x", 0)
+    print(f"wrote {out}/ (probes.csv, frames.npy, frame_times.npy, scene.toml, meta.json)")
+    print(f"{result.strip_steps:.3g} strip-steps in {result.wall_time_s:.2f} s "
+          f"({result.strip_steps / result.wall_time_s:.3g} strip-steps/s)")
+    print(f"final free end ({tip[-1] * 1e3:.2f}, {result.probe('tip_y', 0)[-1] * 1e3:.2f}) mm, "
+          f"clamp angle {result.probe('clamp_angle', 0)[-1]:.4f} rad")
+    if scene.release.enabled:
+        period = first_period(result.t, result.probe("laser_x", 0), level=0.0)
+        print(f"first swing period (laser line crossing x = 0): {period:.4f} s")
+    if args.usd:
+        from warpcloth.io.recording import load_recording
+        from warpcloth.io.usd import export_usd
+
+        print(f"wrote {export_usd(load_recording(out), args.usd)}")
+    return 0

@@ -1,0 +1,39 @@
+"""``warpcloth sweep``: run or resume the [sweep] of a scene."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``sweep``."""
+    sweep_p = sub.add_parser("sweep", help="run (or resume) the [sweep] of a scene into a sweep directory")
+    sweep_p.add_argument("scene", help="scene file with a [sweep] section, or a bundled one")
+    sweep_p.add_argument("--out", help="sweep directory (default: runs/<scene name>); rerun to resume")
+    sweep_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                         help="override a field of the base scene")
+    sweep_p.add_argument("--max-batch", type=int, default=None,
+                         help="strips per batch (default: from the memory per strip and the worker count)")
+    sweep_p.add_argument("--workers", type=int, default=None,
+                         help="local Dask worker processes (default: one per core; 0 = run in this process)")
+    sweep_p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler to use instead")
+    sweep_p.add_argument("--device", default=None, help="cpu or cuda, on every worker")
+    sweep_p.add_argument("--frames", action="store_true", help="also store shape frames (large)")
+    sweep_p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sweep_p.set_defaults(handler=run_sweep_command)
+
+
+def run_sweep_command(args: argparse.Namespace) -> int:
+    """Expand the sweep, run its missing batches, report the summary."""
+    from warpcloth.scene import load_sweep
+    from warpcloth.sweeps import run_sweep
+
+    out = Path(args.out or Path("runs") / Path(args.scene).stem)
+    sweep = load_sweep(args.scene, args.overrides)
+    summary = run_sweep(sweep, out, max_batch=args.max_batch, workers=args.workers, scheduler=args.scheduler,
+                        device=args.device, frames=args.frames, progress=not args.no_progress)
+    n_div = int(summary["diverged"].sum())
+    print(f"wrote {out}/ ({len(summary)} variants: summary.csv, summary.parquet, probes/, variants.csv); "
+          f"{n_div} diverged")
+    return 0

@@ -1,0 +1,84 @@
+"""``warpcloth export-usd | plot | render``: look at a run or at sweep variants."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from warpcloth.errors import OptionError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``export-usd``, ``plot`` and ``render``."""
+    def selection(p: argparse.ArgumentParser) -> None:
+        p.add_argument("run_dir", metavar="RUN_DIR", help="a run directory, or a sweep directory run with --frames")
+        p.add_argument("--variants", help="which variants: 3, 1,4,9 or 0:50 (default: all)")
+        p.add_argument("--where", help="parameter filter: 'field OP value[,...]', e.g. 'damping.gamma_per_s<0.5'")
+
+    usd_p = sub.add_parser("export-usd", help="write a run (or sweep variants) as an animated USD stage")
+    selection(usd_p)
+    usd_p.add_argument("-o", "--output", required=True, help="stage file: .usd or .usdc (binary), .usda (text)")
+    usd_p.add_argument("--ribbon", action="store_true", help="also write each strip as a mesh of its real width")
+    usd_p.set_defaults(handler=export_usd_command)
+    usd_p.add_argument("--frames-per-clip", type=int, default=None,
+                       help="split frames into value-clip layers of this many frames (default: only when large)")
+    plot_p = sub.add_parser("plot", help="PNG figures of a run, or a sweep metric against parameters")
+    selection(plot_p)
+    plot_p.set_defaults(handler=plot_command)
+    plot_p.add_argument("--out", help="figure directory (default: RUN_DIR/figures)")
+    plot_p.add_argument("--measured", help="CSV of a measured displacement: t (s), x (mm); overlaid on amplitude.png")
+    plot_p.add_argument("--times", type=float, nargs="+", help="shape-overlay times, s after release")
+    plot_p.add_argument("--metric", help="sweep: summary column to plot (e.g. first_period_s)")
+    plot_p.add_argument("--x", help="sweep: parameter on the x axis (a swept field, e.g. damping.gamma_per_s)")
+    plot_p.add_argument("--y", help="sweep: second parameter (heat map)")
+    render_p = sub.add_parser("render", help="3D PNG frames and an animation of a run (pyvista, off screen)")
+    selection(render_p)
+    render_p.set_defaults(handler=render_command)
+    render_p.add_argument("--out", help="image directory (default: RUN_DIR/render)")
+    render_p.add_argument("--times", type=float, nargs="+", help="times of the PNG frames, s after release")
+    render_p.add_argument("--movie", default="motion.gif", help="animation file name, .gif or .mp4; 'none' for none")
+    render_p.add_argument("--stride", type=int, default=1, help="animate every n-th frame (at real speed)")
+
+
+def export_usd_command(args: argparse.Namespace) -> int:
+    """Write the selected variants as an animated USD stage."""
+    from warpcloth.io.recording import load_recording
+    from warpcloth.io.usd import export_usd
+
+    recording = load_recording(args.run_dir, args.variants, args.where)
+    out = export_usd(recording, args.output, ribbon=args.ribbon, frames_per_clip=args.frames_per_clip)
+    print(f"wrote {out} ({len(recording.variants)} variants, {len(recording.frame_times)} frames)")
+    return 0
+
+
+def plot_command(args: argparse.Namespace) -> int:
+    """Figures of a run, or one sweep metric against parameters."""
+    from warpcloth.io.recording import load_recording
+    from warpcloth.viz.plots import plot_run, plot_sweep, read_sweep_summary
+
+    out = Path(args.out or Path(args.run_dir) / "figures")
+    if args.metric or args.x:
+        if not (args.metric and args.x):
+            raise OptionError("--metric", "a sweep plot needs both --metric and --x")
+        out.mkdir(parents=True, exist_ok=True)
+        name = f"{args.metric}_vs_{args.x}" + (f"_{args.y}" if args.y else "")
+        path = plot_sweep(read_sweep_summary(args.run_dir), out / f"{name}.png", args.metric, args.x, args.y)
+        print(f"wrote {path}")
+        return 0
+    recording = load_recording(args.run_dir, args.variants, args.where)
+    for path in plot_run(recording, out, measured=args.measured, times=args.times):
+        print(f"wrote {path}")
+    return 0
+
+
+def render_command(args: argparse.Namespace) -> int:
+    """Off-screen 3D PNG frames and an animation."""
+    from warpcloth.io.recording import load_recording
+    from warpcloth.viz.render import render_run
+
+    recording = load_recording(args.run_dir, args.variants, args.where)
+    movie = None if args.movie == "none" else args.movie
+    out = Path(args.out or Path(args.run_dir) / "render")
+    for path in render_run(recording, out, times=args.times, movie=movie, stride=args.stride):
+        print(f"wrote {path}")
+    return 0

@@ -1,0 +1,236 @@
+"""Reading back what a run or a sweep wrote, for export, plots and renders.
+
+A :class:`Recording` is the view every consumer shares: the variants' resolved scenes,
+shape frames ``[frame, variant, node, xy]`` (m), probe series and the per-variant
+parameters, from either a run directory (``warpcloth run``) or a sweep directory
+(``warpcloth sweep --frames``). Frames are memory-mapped, so selecting a few variants of
+a large sweep reads only theirs.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from warpcloth.errors import SceneError
+from warpcloth.kernels import PROBE_FIELDS
+from warpcloth.scene import Scene, batch_fields, read_scene_file, rest_positions, scene_from_dict
+
+
+@dataclass
+class Recording:
+    """Frames, probes and parameters of selected variants of a run or sweep.
+
+    ``variants`` holds the variant numbers as the run or sweep numbered them;
+    ``frames[:, j]`` and ``probes[variants[j]]`` belong to ``scenes[j]``.
+    """
+
+    source: Path
+    variants: np.ndarray
+    scenes: list[Scene]
+    frame_times: np.ndarray
+    frames: np.ndarray
+    probes: pd.DataFrame
+    parameters: pd.DataFrame
+    complete: bool = True
+
+    @property
+    def alive(self) -> np.ndarray:
+        """``[frame, variant]``: whether the strip has a recorded shape (False after a
+        divergence)."""
+        return np.isfinite(self.frames).all(axis=(2, 3))
+
+    @functools.cached_property
+    def drawable_frames(self) -> np.ndarray:
+        """Frames for drawing: a strip without a recorded shape (after it diverged) keeps
+        its last recorded one, or its rest shape if it has none."""
+        # Forward fill along time: each frame takes the latest recorded one at or before it;
+        # a rest shape is prepended for strips with none yet.
+        rest = np.stack([rest_positions(scene) for scene in self.scenes])
+        filled = np.concatenate([rest[None], self.frames])
+        alive = np.concatenate([np.ones((1, len(self.scenes)), dtype=bool), self.alive])
+        latest = np.maximum.accumulate(np.where(alive, np.arange(len(filled))[:, None], 0), axis=0)
+        return filled[latest, np.arange(len(self.scenes))[None, :]][1:]
+
+    def nearest_frames(self, times: np.ndarray) -> np.ndarray:
+        """Indices of the frames nearest to ``times`` (s after release)."""
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        late = times[(times < self.frame_times[0] - 1e-9) | (times > self.frame_times[-1] + 1e-9)]
+        if len(late):
+            raise SceneError("--times", f"{late[0]:g} s is outside the recording "
+                             f"({self.frame_times[0]:g} to {self.frame_times[-1]:g} s)")
+        return np.abs(self.frame_times[None, :] - times[:, None]).argmin(axis=1)
+
+    @property
+    def frame_rate(self) -> float:
+        """Shape frames per second."""
+        return self.scenes[0].output.frame_rate_hz
+
+    @property
+    def n_clamped(self) -> int:
+        """Clamp nodes at the top of every strip."""
+        return self.scenes[0].n_clamped
+
+    def probe(self, name: str, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """Times and values of one probe of the j-th selected variant."""
+        rows = self.probes[self.probes["variant"] == self.variants[j]]
+        return rows["t"].to_numpy(), rows[name].to_numpy()
+
+    def clamp_pose(self, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """Per frame, the clamp's rotation angle (rad) and translation (m) that carry its
+        rest nodes onto the recorded ones (a rigid motion, least squares)."""
+        rest = rest_positions(self.scenes[j])[: self.n_clamped]
+        moved = self.drawable_frames[:, j, : self.n_clamped]
+        rest_c = rest - rest.mean(axis=0)
+        moved_c = moved - moved.mean(axis=1, keepdims=True)
+        cross = (rest_c[None, :, 0] * moved_c[..., 1] - rest_c[None, :, 1] * moved_c[..., 0]).sum(axis=1)
+        dot = (rest_c[None] * moved_c).sum(axis=(1, 2))
+        angle = np.arctan2(cross, dot)
+        c, s = np.cos(angle), np.sin(angle)
+        centre = rest.mean(axis=0)
+        rotated = np.stack([c * centre[0] - s * centre[1], s * centre[0] + c * centre[1]], axis=-1)
+        return angle, moved.mean(axis=1) - rotated
+
+
+def parse_variants(text: str | None, n_variants: int) -> np.ndarray:
+    """Variant numbers from ``"3"``, ``"0:50"``, ``"0:50:5"`` or ``"1,4,9"`` (None: all)."""
+    if text is None:
+        return np.arange(n_variants)
+    text = text.strip()
+    try:
+        if ":" in text:
+            parts = [int(p) if p else None for p in text.split(":")]
+            chosen = np.arange(n_variants)[slice(*parts)]
+        else:
+            chosen = np.array([int(p) for p in text.split(",")])
+    except ValueError:
+        raise SceneError("--variants", f"{text!r} is not a variant number, list (1,4,9) or range (0:50)") from None
+    if len(chosen) == 0:
+        raise SceneError("--variants", f"{text!r} selects no variant of {n_variants}")
+    bad = chosen[(chosen < 0) | (chosen >= n_variants)]
+    if len(bad):
+        raise SceneError("--variants", f"variant {bad[0]} does not exist (there are {n_variants})")
+    return chosen
+
+
+_FILTER = re.compile(r"^\s*([\w.]+)\s*(<=|>=|==|!=|<|>)\s*(\S+)\s*$")
+
+
+def filter_variants(parameters: pd.DataFrame, where: str) -> np.ndarray:
+    """Variant numbers whose parameters satisfy every ``field OP value`` clause of
+    ``where`` (clauses separated by commas, OP one of < <= > >= == !=)."""
+    keep = np.ones(len(parameters), dtype=bool)
+    for clause in where.split(","):
+        match = _FILTER.match(clause)
+        if not match:
+            raise SceneError("--where", f"{clause.strip()!r} is not 'field OP value' (e.g. damping.gamma_per_s<0.5)")
+        name, op, value = match.groups()
+        if name not in parameters:
+            raise SceneError("--where", f"{name!r} is not a parameter of these variants; "
+                             f"known: {', '.join(c for c in parameters.columns if c != 'variant')}")
+        column = parameters[name]
+        try:
+            number = float(value)
+        except ValueError:
+            raise SceneError("--where", f"{value!r} in {clause.strip()!r} is not a number") from None
+        keep &= {"<": column < number, "<=": column <= number, ">": column > number, ">=": column >= number,
+                 "==": column == number, "!=": column != number}[op].to_numpy()
+    chosen = parameters["variant"].to_numpy()[keep]
+    if len(chosen) == 0:
+        raise SceneError("--where", f"{where!r} matches no variant")
+    return chosen
+
+
+def per_strip_parameters(scenes: list[Scene]) -> pd.DataFrame:
+    """One row per scene: every scalar field that may vary per strip (dotted names)."""
+    fixed = set(batch_fields())
+    rows = []
+    for scene in scenes:
+        row = {}
+        for section, values in scene.to_dict().items():
+            for key, value in values.items():
+                name = f"{section}.{key}"
+                if name not in fixed and isinstance(value, (int, float)) and not isinstance(value, bool):
+                    row[name] = float(value)
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def load_recording(path: str | Path, variants: str | None = None, where: str | None = None) -> Recording:
+    """Open a run directory or a sweep directory (chosen by its files) and select variants.
+
+    ``variants`` is a selection as for :func:`parse_variants`; ``where`` a parameter
+    filter as for :func:`filter_variants`; both may be given (the filter applies to
+    the selection).
+    """
+    path = Path(path)
+    if (path / "sweep.json").is_file():
+        return _load_sweep(path, variants, where)
+    if (path / "meta.json").is_file():
+        return _load_run(path, variants, where)
+    raise SceneError("RUN_DIR", f"{path} is neither a run directory (meta.json) nor a sweep directory (sweep.json)")
+
+
+def _select(parameters: pd.DataFrame, variants: str | None, where: str | None) -> np.ndarray:
+    chosen = parse_variants(variants, len(parameters))
+    if where:
+        chosen = np.intersect1d(chosen, filter_variants(parameters.iloc[chosen], where))
+    return chosen
+
+
+def _load_run(path: Path, variants: str | None, where: str | None) -> Recording:
+    meta = json.loads((path / "meta.json").read_text())
+    if meta["n_variants"] == 1:
+        scenes = [scene_from_dict(read_scene_file(path / "scene.toml"))]
+    else:
+        scenes = [scene_from_dict(read_scene_file(path / "variants" / f"{i:04d}.toml"))
+                  for i in range(meta["n_variants"])]
+    parameters = per_strip_parameters(scenes)
+    parameters.insert(0, "variant", np.arange(len(scenes)))
+    chosen = _select(parameters, variants, where)
+    frames = np.asarray(np.load(path / "frames.npy", mmap_mode="r")[:, chosen])
+    times = np.load(path / "frame_times.npy")
+    if not meta["complete"]:
+        # An interrupted run: keep the frames it reached.
+        reached = np.nonzero(np.isfinite(frames).any(axis=(1, 2, 3)))[0]
+        if not len(reached):
+            raise SceneError("RUN_DIR", f"{path} was interrupted before its first frame")
+        frames, times = frames[: reached[-1] + 1], times[: reached[-1] + 1]
+    probes = pd.read_csv(path / "probes.csv")
+    return Recording(path, chosen, [scenes[i] for i in chosen], times, frames, probes[probes["variant"].isin(chosen)],
+                     parameters.iloc[chosen].reset_index(drop=True), bool(meta["complete"]))
+
+
+def _load_sweep(path: Path, variants: str | None, where: str | None) -> Recording:
+    from warpcloth.scene import expand
+
+    info = json.loads((path / "sweep.json").read_text())
+    sweep = expand(info["base_scene"] | {"sweep": info["sweep"]})
+    if sweep.fingerprint != info["fingerprint"]:
+        raise SceneError("RUN_DIR", f"{path}: its variants no longer resolve to the scenes that were simulated "
+                         "(a material file it uses has changed?); the stored results cannot be labelled")
+    parameters = per_strip_parameters(sweep.scenes)
+    parameters.insert(0, "variant", np.arange(len(sweep.scenes)))
+    chosen = _select(parameters, variants, where)
+    where_is = {v: (b, k) for b, ids in enumerate(info["batches"]) for k, v in enumerate(ids)}
+    needed = sorted({where_is[v][0] for v in chosen})
+    missing = [b for b in needed if not (path / "frames" / f"batch-{b:04d}.npy").is_file()]
+    if missing:
+        raise SceneError("RUN_DIR", f"{path} has no shape frames for batch {missing[0]}: that batch ran without "
+                         "--frames (or has not finished); a resumed sweep keeps finished batches, so run it with "
+                         "--frames into a new --out directory")
+    stores = {b: np.load(path / "frames" / f"batch-{b:04d}.npy", mmap_mode="r") for b in needed}
+    n_frames = min(len(s) for s in stores.values())
+    frames = np.stack([stores[where_is[v][0]][:n_frames, where_is[v][1]] for v in chosen], axis=1)
+    probes = pd.concat([pd.read_parquet(path / "probes" / f"batch-{b:04d}.parquet",
+                                        filters=[("variant", "in", [int(v) for v in chosen])]) for b in needed])
+    probes = probes[["t", "variant", *PROBE_FIELDS]]
+    frame_times = np.arange(n_frames) / sweep.scenes[0].output.frame_rate_hz
+    return Recording(path, chosen, [sweep.scenes[i] for i in chosen], frame_times, frames, probes,
+                     parameters.iloc[chosen].reset_index(drop=True))

@@ -1,0 +1,103 @@
+"""Run directories: results stream to disk as they are produced.
+
+Layout of a run directory::
+
+    scene.toml          resolved scene (every field, defaults included); for a batch,
+                        variants/NNNN.toml, one per strip
+    probes.csv          one row per (t, variant); columns PROBE_COLUMNS, SI units
+    frames.npy          float array (frame, variant, node, xy) of node positions, m
+    frame_times.npy     (frame,) times of the frames, s
+    meta.json           sizes, units, health of every strip, completeness
+
+``meta.json`` is written first with ``"complete": false`` and rewritten at the end,
+so an interrupted run is recognisable; probes.csv and frames.npy hold everything
+simulated up to the interruption.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import tomli_w
+
+from warpcloth.kernels import PROBE_FIELDS
+from warpcloth.scene import Scene
+
+from .atomic import write_text_atomically
+
+PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
+PROBE_UNITS = {
+    "t": "s", "variant": "index", "tip_x": "m", "tip_y": "m", "tip_speed": "m/s",
+    "laser_x": "m (NaN when the strip misses the line)",
+    "clamp_angle": "rad", "kinetic": "J", "gravitational": "J", "tensile": "J",
+    "bending_elastic_work": "J", "hysteresis_work": "J", "damping_work": "J", "drive_work": "J",
+    "loop_curvature": "1/m (output.loop_hinge_mm)", "loop_moment": "N·m/m (moment per width)",
+}
+
+
+def write_scene(path: Path, scene: Scene) -> None:
+    """Write a resolved scene as TOML."""
+    path.write_text(tomli_w.dumps(scene.to_dict()))
+
+
+class RunWriter:
+    """Streams one batch run into a directory (see the module docstring)."""
+
+    def __init__(self, out_dir: str | Path, scenes: list[Scene], n_nodes: int, frame_times: np.ndarray) -> None:
+        self.dir = Path(out_dir)
+        self.dir.mkdir(parents=True, exist_ok=True)
+        if len(scenes) == 1:
+            write_scene(self.dir / "scene.toml", scenes[0])
+        else:
+            (self.dir / "variants").mkdir(exist_ok=True)
+            for i, scene in enumerate(scenes):
+                write_scene(self.dir / "variants" / f"{i:04d}.toml", scene)
+        self.meta = {
+            "complete": False,
+            "n_variants": len(scenes),
+            "n_nodes": n_nodes,
+            "n_clamped": scenes[0].n_clamped,
+            "spacing_m": scenes[0].spacing,
+            "probe_columns": list(PROBE_COLUMNS),
+            "probe_units": PROBE_UNITS,
+            "frames": {"file": "frames.npy", "shape": [len(frame_times), len(scenes), n_nodes, 2],
+                       "axes": ["frame", "variant", "node", "xy"], "unit": "m",
+                       "times_file": "frame_times.npy"},
+            "diverged": [],
+        }
+        self._write_meta()
+        np.save(self.dir / "frame_times.npy", frame_times)
+        self.frames = np.lib.format.open_memmap(self.dir / "frames.npy", mode="w+", dtype=np.float64,
+                                                shape=(len(frame_times), len(scenes), n_nodes, 2))
+        # Frames never reached (an interrupted run, strips stopped by a divergence) read
+        # as NaN, never as a strip collapsed onto the origin.
+        self.frames[:] = np.nan
+        self.probes = open(self.dir / "probes.csv", "w")  # noqa: SIM115 - closed in close()
+        self.probes.write(",".join(PROBE_COLUMNS) + "\n")
+
+    def _write_meta(self) -> None:
+        write_text_atomically(self.dir / "meta.json", json.dumps(self.meta, indent=2))
+
+    def write_probes(self, t: np.ndarray, variant: np.ndarray, values: np.ndarray) -> None:
+        """Append rows: times, variant indices and values ``[row, field]``."""
+        rows = np.column_stack([t, variant, values])
+        fmt = ["%.10g", "%d"] + ["%.17g"] * values.shape[1]
+        np.savetxt(self.probes, rows, fmt=fmt, delimiter=",")
+        self.probes.flush()
+
+    def write_frames(self, first: int, frames: np.ndarray) -> None:
+        """Store frames ``[frame, variant, node, xy]`` starting at frame index ``first``."""
+        self.frames[first : first + len(frames)] = frames
+        self.frames.flush()
+
+    def close(self, diverged: list[dict], extra: dict) -> None:
+        """Finish the files and mark the run complete."""
+        self.probes.close()
+        self.frames.flush()
+        del self.frames
+        self.meta["diverged"] = diverged
+        self.meta.update(extra)
+        self.meta["complete"] = True
+        self._write_meta()

@@ -1,0 +1,58 @@
+"""Scenes: the schema, parsing, ``--set`` overrides, validation, materials, sweeps, and
+:func:`build_batch`, the one step from scenes to simulation objects (SI)."""
+
+from .build import Batch, build_batch, builder_for, check_batch
+from .files import bundled_scenes, load_scene, read_scene_file, scene_from_dict
+from .geometry import clamp_edge, rest_positions
+from .materials import (
+    MATERIAL_FILE_KEY,
+    bundled_materials,
+    material_fields,
+    read_material_file,
+    tensile_slope_minimum,
+    to_si,
+    validate_material,
+)
+from .overrides import apply_overrides, set_field
+from .schema import (
+    DEFAULT_MATERIAL,
+    DEFAULT_MATERIAL_NAME,
+    ClampSection,
+    IntegratorSection,
+    MaterialSection,
+    Scene,
+    batch_fields,
+)
+from .sweep import Sweep, expand, load_sweep
+
+__all__ = [
+    "DEFAULT_MATERIAL",
+    "DEFAULT_MATERIAL_NAME",
+    "MATERIAL_FILE_KEY",
+    "Batch",
+    "ClampSection",
+    "IntegratorSection",
+    "MaterialSection",
+    "Scene",
+    "Sweep",
+    "apply_overrides",
+    "batch_fields",
+    "build_batch",
+    "builder_for",
+    "bundled_materials",
+    "bundled_scenes",
+    "check_batch",
+    "clamp_edge",
+    "expand",
+    "load_scene",
+    "load_sweep",
+    "material_fields",
+    "read_material_file",
+    "read_scene_file",
+    "rest_positions",
+    "scene_from_dict",
+    "set_field",
+    "tensile_slope_minimum",
+    "to_si",
+    "validate_material",
+]

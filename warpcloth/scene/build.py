@@ -1,0 +1,85 @@
+"""Scenes → simulation objects: the only place that reads scene fields to simulate.
+
+A batch is one scene per strip; fields that are not ``per_strip`` must agree across it.
+Offsets in the scene (rotation centre, hold target, laser line) are measured from the
+clamp's lowest point in mm; here they become absolute positions in m.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from warpcloth import units
+from warpcloth.errors import SceneError
+from warpcloth.sim import SOLVERS, ClampMotion, Control, ExplicitEulerSolver, Model, Recorder, StripBuilder
+
+from .clamp_motion import clamp_pieces
+from .geometry import clamp_edge, rest_positions
+from .materials import to_si
+from .schema import Scene, batch_fields
+
+
+@dataclass
+class Batch:
+    """What :func:`build_batch` makes: the model, its drives, the solver and the recorder."""
+
+    model: Model
+    control: Control
+    solver: ExplicitEulerSolver
+    recorder: Recorder
+
+
+def check_batch(scenes: Sequence[Scene]) -> None:
+    """Raise SceneError unless every batch-level field agrees across ``scenes``."""
+    if not scenes:
+        raise SceneError("scenes", "a batch needs at least one scene")
+    first = scenes[0].to_dict()
+    for i, scene in enumerate(scenes[1:], start=1):
+        other = scene.to_dict()
+        for name in batch_fields():
+            section, key = name.split(".")
+            if first[section][key] != other[section][key]:
+                raise SceneError(name, f"differs between variant 0 ({first[section][key]!r}) and variant {i} "
+                                 f"({other[section][key]!r}); it cannot vary within one batch")
+
+
+def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
+    """A :class:`StripBuilder` holding one strip per scene, in SI."""
+    check_batch(scenes)
+    first = scenes[0]
+    builder = StripBuilder(rest_positions(first), first.n_clamped, first.spacing, first.run.gravity_m_per_s2,
+                           release_time=first.preroll, move_time=first.release.move_time_s)
+    edge = clamp_edge(first)
+    for scene in scenes:
+        start, end, coefficients = clamp_pieces(scene.clamp)
+        builder.add_strip(
+            to_si(scene.material),
+            width=scene.strip.width_mm * units.LENGTH_MM,
+            damping=scene.damping.gamma_per_s,
+            clamp=ClampMotion(start, end, coefficients),
+            rotation_centre=edge + units.LENGTH_MM * np.array([scene.clamp.rotation_centre_dx_mm,
+                                                               scene.clamp.rotation_centre_dy_mm]),
+            hold_target=edge + units.LENGTH_MM * np.array([scene.release.hold_x_mm, scene.release.hold_y_mm]),
+            settle_damping=scene.release.settle_damping_per_s,
+        )
+    return builder
+
+
+def build_batch(scenes: Sequence[Scene], device: str | None = None) -> Batch:
+    """Model, control, solver and recorder of one batch of scenes."""
+    first = scenes[0] if scenes else None
+    builder = builder_for(scenes)
+    integrator = first.integrator
+    model = builder.finalize(device=device, precision=integrator.precision)
+    solver = SOLVERS[integrator.scheme](model, dt=integrator.dt_s, divergence_strain=integrator.divergence_strain)
+    recorder = Recorder(
+        interval=first.output_interval,
+        probes_per_frame=first.output.probes_per_frame,
+        duration=first.run.duration_s,
+        laser_height=float(clamp_edge(first)[1] + first.output.laser_height_mm * units.LENGTH_MM),
+        loop_hinge=first.loop_hinge,
+    )
+    return Batch(model, model.control(), solver, recorder)

@@ -1,0 +1,85 @@
+"""Scene files: by path or bundled name, parsed, overridden and validated."""
+
+from __future__ import annotations
+
+import importlib.resources
+import typing
+from pathlib import Path
+from typing import Any
+
+from warpcloth.errors import SceneError
+
+from .materials import MATERIAL_FILE_KEY, with_material_file
+from .overrides import apply_overrides
+from .parse import parse_section, parse_toml
+from .schema import Scene
+from .validate import validate_scene
+
+
+def bundled_scenes() -> list[str]:
+    """Names of the scenes shipped with warpcloth."""
+    root = importlib.resources.files("warpcloth.scenes")
+    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def _rebase_material_file(data: dict, directory: Path) -> None:
+    # A material path written in a scene file, in [material] or among the values of a
+    # [sweep], is relative to that file, not to the directory the command runs in.
+    def rebase(ref: Any) -> Any:
+        if isinstance(ref, str) and ref.endswith(".toml") and not Path(ref).is_absolute():
+            return str((directory / ref).resolve())
+        return ref
+
+    material = data.get("material")
+    if isinstance(material, dict) and "from_file" in material:
+        material["from_file"] = rebase(material["from_file"])
+    sweep = data.get("sweep")
+    for block in ("grid", "zip"):
+        table = sweep.get(block) if isinstance(sweep, dict) else None
+        if isinstance(table, dict) and isinstance(table.get(MATERIAL_FILE_KEY), list):
+            table[MATERIAL_FILE_KEY] = [rebase(ref) for ref in table[MATERIAL_FILE_KEY]]
+
+
+def read_scene_file(name_or_path: str | Path) -> dict:
+    """Raw TOML data of a scene given by path or by bundled name (``damped_swing``).
+
+    A relative ``material.from_file`` path in the file is made absolute against the
+    scene file's directory.
+    """
+    path = Path(name_or_path)
+    if path.is_file():
+        text = path.read_text()
+        where = str(path)
+    else:
+        resource = importlib.resources.files("warpcloth.scenes") / f"{path.stem}.toml"
+        if path.suffix not in ("", ".toml") or not resource.is_file():
+            raise SceneError("scene", f"no scene file {str(name_or_path)!r} and no bundled scene of that "
+                             f"name (bundled: {', '.join(bundled_scenes())})")
+        text = resource.read_text()
+        where = f"bundled scene {path.stem}"
+    data = parse_toml(text, where, "scene")
+    if path.is_file():
+        _rebase_material_file(data, path.parent)
+    return data
+
+
+def scene_from_dict(data: dict) -> Scene:
+    """Parse and validate raw scene data.
+
+    A ``material.from_file`` (path or bundled name) fills every [material] field the data
+    do not set; the scene holds the explicit values afterwards, so ``to_dict()`` re-reads
+    to the same scene.
+    """
+    scene = parse_section(Scene, with_material_file(data), "")
+    validate_scene(scene)
+    return scene
+
+
+def load_scene(name_or_path: str | Path, overrides: typing.Iterable[str] = ()) -> Scene:
+    """Read a scene by path or bundled name, apply ``--set`` overrides, validate it.
+
+    A ``[sweep]`` section is ignored here: this is the sweep's base scene.
+    """
+    data = read_scene_file(name_or_path)
+    data.pop("sweep", None)
+    return scene_from_dict(apply_overrides(data, overrides))

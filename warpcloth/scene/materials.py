@@ -1,0 +1,132 @@
+"""Materials: KES → SI (the one conversion), physical validity, and material files
+(bundled by name, or a path ending in .toml) that fill a scene's [material]."""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.resources
+from pathlib import Path
+
+import numpy as np
+
+from warpcloth import units
+from warpcloth.errors import SceneError
+from warpcloth.sim import MaterialSI
+
+from .parse import coerce_value, parse_section, parse_toml
+from .schema import MaterialSection
+
+MATERIAL_FILE_KEY = "material.from_file"
+
+def to_si(section: MaterialSection) -> MaterialSI:
+    """Convert a KES-unit material section to SI (the only KES → SI conversion of a material)."""
+    return MaterialSI(
+        density=section.density_g_per_cm2 * units.AREAL_DENSITY_G_PER_CM2,
+        tensile=tuple(a * units.TENSILE_GF_PER_CM for a in section.tensile_gf_per_cm),
+        bending_rigidity=section.bending_rigidity_gf_cm2_per_cm * units.RIGIDITY_GF_CM2_PER_CM,
+        hysteresis_d1=section.hysteresis_d1_gf_cm_per_cm * units.MOMENT_GF_CM_PER_CM,
+        hysteresis_alpha=section.hysteresis_alpha_cm * units.LENGTH_CM,
+        hysteresis_k0=section.hysteresis_k0_per_cm * units.CURVATURE_PER_CM,
+    )
+
+
+def tensile_slope_minimum(coefficients: list[float], max_strain: float) -> tuple[float, float]:
+    """Smallest dT/dε of the quartic on [0, max_strain] and the strain where it occurs.
+
+    The minimum of a cubic slope lies at an end or where T'' = 0, so it is found exactly.
+    """
+    a1, a2, a3, a4 = coefficients
+    slope = np.polynomial.Polynomial([a1, 2 * a2, 3 * a3, 4 * a4])
+    candidates = [0.0, max_strain]
+    candidates += [r.real for r in slope.deriv().roots() if abs(r.imag) < 1e-12 and 0 < r.real < max_strain]
+    values = [(float(slope(e)), e) for e in candidates]
+    return min(values)
+
+
+def validate_material(section: MaterialSection, max_strain: float, prefix: str) -> None:
+    """Raise SceneError unless the material is physically usable up to ``max_strain``."""
+    a = section.tensile_gf_per_cm
+    if len(a) != 4:
+        raise SceneError(f"{prefix}.tensile_gf_per_cm", f"needs the 4 coefficients a1..a4, got {len(a)}")
+    slope, strain = tensile_slope_minimum(a, max_strain)
+    if not slope > 0:
+        raise SceneError(f"{prefix}.tensile_gf_per_cm",
+                         f"T(ε) with a = {a} is not increasing at ε = {strain:.4g} (dT/dε = {slope:.4g} "
+                         f"gf/cm); it must increase on [0, integrator.divergence_strain = {max_strain:g}]")
+
+
+def bundled_materials() -> list[str]:
+    """Names of the material files shipped with warpcloth (``scenes/materials/*.toml``)."""
+    root = importlib.resources.files("warpcloth.scenes") / "materials"
+    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def material_fields() -> list[str]:
+    """The [material] fields a material file must give (every one but ``from_file``)."""
+    return [f.name for f in dataclasses.fields(MaterialSection) if f.name != "from_file"]
+
+
+def read_material_file(ref: str | Path) -> dict:
+    """Raw TOML of a material file, validated; ``ref`` is a path ending in ``.toml``
+    (relative to the current directory) or the name of a bundled material.
+
+    The file holds a ``[material]`` table with every scene [material] field except
+    ``from_file``, plus ``source`` (where the numbers come from), and, for a fitted
+    material, a ``[fit]`` table (residuals, KES summary values) that is informational.
+    """
+    ref = str(ref)
+    if ref.endswith(".toml"):
+        path = Path(ref)
+        where = str(path)
+        try:
+            text = path.read_text()
+        except OSError as exc:
+            raise SceneError(MATERIAL_FILE_KEY, f"cannot read material file {ref!r}: {exc.strerror} (a path is "
+                             f"relative to the scene file; a bundled material is named without .toml: "
+                             f"{', '.join(bundled_materials())})") from None
+    else:
+        resource = importlib.resources.files("warpcloth.scenes") / "materials" / f"{ref}.toml"
+        if not ref or not resource.is_file():
+            raise SceneError(MATERIAL_FILE_KEY, f"no bundled material {ref!r} (bundled: "
+                             f"{', '.join(bundled_materials())}; a material file is a path ending in .toml)")
+        text = resource.read_text()
+        where = f"bundled material {ref}"
+    data = parse_toml(text, where, MATERIAL_FILE_KEY)
+    extra = sorted(set(data) - {"material", "fit"})
+    if extra:
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: unknown top-level entry {extra[0]!r}; a material file "
+                         "has a [material] and optionally a [fit] table")
+    material = data.get("material")
+    if not isinstance(material, dict) or not isinstance(data.get("fit", {}), dict):
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: needs a [material] table (and [fit], if any, a table)")
+    missing = [k for k in [*material_fields(), "source"] if k not in material]
+    if missing:
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: [material] lacks {', '.join(missing)}; a material file "
+                         "gives every field, so that nothing silently comes from the default material")
+    source = material["source"]
+    if not isinstance(source, str) or not source.strip():
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: material.source must say where the numbers come from, "
+                         f"got {source!r}")
+    if "from_file" in material:
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: a material file cannot refer to another (from_file)")
+    try:
+        parse_section(MaterialSection, {k: v for k, v in material.items() if k != "source"}, "material")
+    except SceneError as exc:
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: {exc}") from None
+    return data
+
+
+def with_material_file(data: dict) -> dict:
+    """Raw scene ``data`` with the [material] fields it leaves unset taken from its
+    ``material.from_file`` (unchanged when it names none or sets every field)."""
+    # The material file fills only what the scene leaves unset; a resolved scene sets
+    # every field, so the file is not even read (it may have moved since the run).
+    material = data.get("material")
+    if not isinstance(material, dict) or "from_file" not in material:
+        return data
+    ref = coerce_value(material["from_file"], str, MATERIAL_FILE_KEY, {})
+    missing = [k for k in material_fields() if k not in material]
+    if not ref or not missing:
+        return data
+    values = read_material_file(ref)["material"]
+    return {**data, "material": {**{k: values[k] for k in missing}, **material}}

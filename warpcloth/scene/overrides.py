@@ -1,0 +1,75 @@
+"""``--set`` overrides: one dotted-name grammar for the command line, sweeps and fits."""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+import typing
+from pathlib import Path
+from typing import Any
+
+from warpcloth.errors import SceneError
+
+from .materials import MATERIAL_FILE_KEY, bundled_materials, material_fields, with_material_file
+
+
+def _parse_value(text: str) -> Any:
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text  # a bare word such as forward or float32
+
+
+def set_field(data: dict, key: str, value: Any) -> None:
+    """Set the field ``key`` (dotted; list items by index) of raw scene ``data`` in place.
+
+    Setting ``material.from_file`` selects that material: the [material] values already in
+    ``data`` are dropped so that the file supplies them (set other material fields after it).
+    """
+    parts = key.strip().split(".")
+    if parts == MATERIAL_FILE_KEY.split("."):
+        if not isinstance(value, str) or not value.strip():
+            raise SceneError(MATERIAL_FILE_KEY, f"{value!r} names no material file; give a bundled material name "
+                             f"({', '.join(bundled_materials())}) or a path ending in .toml")
+        if value.endswith(".toml") and not Path(value).is_absolute():
+            value = str(Path(value).resolve())  # relative to where the command runs, recorded absolute
+        if isinstance(data.get("material"), dict):
+            data["material"] = {k: v for k, v in data["material"].items() if k not in material_fields()}
+    elif parts[0] == "material" and len(parts) > 2:
+        # A list item of a material that comes from a file: the file's list first.
+        data.update(with_material_file(data))
+    node: Any = data
+    for i, part in enumerate(parts):
+        last = i == len(parts) - 1
+        if isinstance(node, list):
+            if not part.isdigit() or int(part) >= len(node):
+                raise SceneError(".".join(parts[: i + 1]), f"no list item {part!r}")
+            if last:
+                node[int(part)] = value
+            else:
+                node = node[int(part)]
+        elif last:
+            node[part] = value
+        else:
+            node = node.setdefault(part, {})
+            if not isinstance(node, (dict, list)):
+                raise SceneError(".".join(parts[: i + 1]), "is a value, not a section")
+
+
+def apply_overrides(data: dict, overrides: typing.Iterable[str]) -> dict:
+    """Return a copy of raw scene ``data`` with ``key=value`` overrides applied.
+
+    Keys are dotted field names (``integrator.dt_s``); list items are addressed by
+    index (``clamp.segments.1.t_end_s``). Values are TOML literals; a bare word is a
+    string. Unknown keys are reported when the result is parsed. A ``material.from_file``
+    override replaces the scene's own material values by the file's; the other
+    ``material.*`` overrides apply on top of it, wherever they stand in the list.
+    """
+    data = copy.deepcopy(data)
+    # stable sort: the material file first, so that it cannot undo a field override
+    for item in sorted(overrides, key=lambda o: o.split("=", 1)[0].strip() != MATERIAL_FILE_KEY):
+        if "=" not in item:
+            raise SceneError(item, "an override must look like section.field=value")
+        key, text = item.split("=", 1)
+        set_field(data, key, _parse_value(text.strip()))
+    return data

@@ -1,0 +1,220 @@
+"""The scene schema: what a scene file may say, field by field.
+
+A scene is a TOML file whose sections map onto the dataclasses below. Every field
+carries its unit in its name and a one-line description in its metadata (the README's
+scene reference is the same information); ``per_strip`` fields may differ between the
+strips of one batch, the others split a sweep into batches. The default material is the
+bundled material file ``wool90-nylon10``: its numbers live there only.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.resources
+import tomllib
+import typing
+from dataclasses import dataclass, field
+from typing import Any
+
+from warpcloth import units
+
+DEFAULT_MATERIAL_NAME = "wool90-nylon10"
+"""The bundled material every scene uses unless it says otherwise."""
+
+
+def _bundled_default_material() -> dict:
+    resource = importlib.resources.files("warpcloth.scenes") / "materials" / f"{DEFAULT_MATERIAL_NAME}.toml"
+    values = tomllib.loads(resource.read_text())["material"]
+    return {k: v for k, v in values.items() if k != "source"}
+
+
+DEFAULT_MATERIAL = _bundled_default_material()
+"""The default material's fields, read from the bundled ``wool90-nylon10`` material file:
+docs/model.md's illustrative wool 90 % / nylon 10 % (warp direction). The paper's measured
+Fig. 8 curves are not in its text, so these numbers are plausible, not measured."""
+
+def _field(default: Any, doc: str, *, gt: float | None = None, ge: float | None = None,
+           choices: tuple[str, ...] | None = None, per_strip: bool = False) -> Any:
+    meta = {"doc": doc, "gt": gt, "ge": ge, "choices": choices, "per_strip": per_strip}
+    if isinstance(default, list):
+        return field(default_factory=lambda: list(default), metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+@dataclass
+class StripSection:
+    """Geometry of the strip (paper §3.1)."""
+
+    free_length_mm: float = _field(100.0, "length hanging below the clamp", gt=0)
+    clamp_length_mm: float = _field(20.0, "length held in the clamp (kinematic nodes)", gt=0)
+    width_mm: float = _field(50.0, "strip width W (forces, masses and moments scale with it)",
+                             gt=0, per_strip=True)
+    spacing_mm: float = _field(5.0, "node spacing h; must divide both lengths", gt=0)
+
+
+@dataclass
+class MaterialSection:
+    """Fabric in KES units; converted to SI once, by warpcloth.scene.to_si."""
+
+    name: str = _field(DEFAULT_MATERIAL["name"], "label (the default is illustrative, docs/model.md)",
+                       per_strip=True)
+    density_g_per_cm2: float = _field(DEFAULT_MATERIAL["density_g_per_cm2"], "mass per area ρ_A",
+                                      gt=0, per_strip=True)
+    tensile_gf_per_cm: list[float] = _field(
+        DEFAULT_MATERIAL["tensile_gf_per_cm"],
+        "a1..a4 of T(ε) = a1 ε + a2 ε² + a3 ε³ + a4 ε⁴ (force per width, KES-FB1 upper loop)",
+        per_strip=True)
+    bending_rigidity_gf_cm2_per_cm: float = _field(
+        DEFAULT_MATERIAL["bending_rigidity_gf_cm2_per_cm"], "D, slope of the centre line M = D K",
+        ge=0, per_strip=True)
+    hysteresis_d1_gf_cm_per_cm: float = _field(
+        DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"], "D1, hysteresis amplitude (0 = elastic)",
+        ge=0, per_strip=True)
+    hysteresis_alpha_cm: float = _field(DEFAULT_MATERIAL["hysteresis_alpha_cm"],
+                                        "α, steepness of the hysteresis branches", gt=0, per_strip=True)
+    hysteresis_k0_per_cm: float = _field(DEFAULT_MATERIAL["hysteresis_k0_per_cm"],
+                                         "K0, curvature where the KES loop closes", gt=0, per_strip=True)
+    from_file: str = _field("", "a material file (path ending in .toml, relative to the scene file) or a bundled "
+                            "material name; its values fill every [material] field the scene does not set itself",
+                            per_strip=True)
+
+
+@dataclass
+class DampingSection:
+    """Viscous damping F = −γ m v (residual air and internal viscosity, tuned)."""
+
+    gamma_per_s: float = _field(0.0, "γ after release", ge=0, per_strip=True)
+
+
+@dataclass
+class ClampSegment:
+    """One piece of θ(t) = Σ c_k (t − t_start)^k on [t_start, t_end]."""
+
+    t_start_s: float = _field(0.0, "segment start time", per_strip=True)
+    t_end_s: float = _field(0.0, "segment end time (> t_start_s)", per_strip=True)
+    theta_coefficients_si: list[float] = _field([0.0], "c_0..c_4 in rad/s^k (at most a quartic)",
+                                                per_strip=True)
+
+
+@dataclass
+class ClampSection:
+    """Kinematic clamp: rigid rotation θ(t) about a rotation centre."""
+
+    motion: str = _field("fixed", "fixed | piecewise (segments) | table (sampled θ)",
+                         choices=("fixed", "piecewise", "table"), per_strip=True)
+    rotation_centre_dx_mm: float = _field(0.0, "rotation centre x offset from the clamp's lowest point",
+                                          per_strip=True)
+    rotation_centre_dy_mm: float = _field(0.0, "rotation centre y offset (up +) from the clamp's lowest point",
+                                          per_strip=True)
+    segments: list[ClampSegment] = _field([], "piecewise polynomial θ(t), contiguous, θ continuous",
+                                          per_strip=True)
+    table_t_s: list[float] = _field([], "sampled times, strictly increasing", per_strip=True)
+    table_theta_rad: list[float] = _field([], "sampled angles (counter-clockwise +)", per_strip=True)
+    interpolation: str = _field("linear", "linear | cubic (natural spline) for a table",
+                                choices=("linear", "cubic"), per_strip=True)
+
+
+@dataclass
+class ReleaseSection:
+    """Hold-and-release start of the damped swing: the free end is carried to a held
+    position, held while the strip settles, then released at t = 0."""
+
+    enabled: bool = _field(False, "start with the hold-and-release phase")
+    hold_x_mm: float = _field(50.0, "held free-end x, from the clamp's lowest point", per_strip=True)
+    hold_y_mm: float = _field(-80.0, "held free-end y (up +), from the clamp's lowest point",
+                              per_strip=True)
+    move_time_s: float = _field(0.3, "time to carry the free end to the held position", gt=0)
+    settle_time_s: float = _field(1.0, "time held before release", ge=0)
+    settle_damping_per_s: float = _field(20.0, "γ while held, so the strip settles", ge=0,
+                                         per_strip=True)
+
+
+@dataclass
+class IntegratorSection:
+    """Explicit time integration (paper §2.3)."""
+
+    scheme: str = _field("semi_implicit", "semi_implicit (symplectic Euler) | forward (paper eqs. 5–6)",
+                         choices=("semi_implicit", "forward"))
+    dt_s: float = _field(1e-5, "time step (the paper used 1e-7)", gt=0)
+    precision: str = _field("float64", "float64 | float32", choices=("float64", "float32"))
+    divergence_strain: float = _field(0.25, "|ε| beyond which a strip counts as diverged; the "
+                                      "tensile curve must increase up to it", gt=0)
+
+
+@dataclass
+class RunSection:
+    """Length of the recorded run and the environment."""
+
+    duration_s: float = _field(2.0, "recorded time after t = 0 (release)", gt=0)
+    gravity_m_per_s2: float = _field(9.80665, "g (0 for the beam test)", ge=0)
+
+
+@dataclass
+class OutputSection:
+    """What is recorded and how often."""
+
+    frame_rate_hz: float = _field(60.0, "shape frames per second (the paper's video rate)", gt=0)
+    probes_per_frame: int = _field(10, "probe samples per frame interval", ge=1)
+    laser_height_mm: float = _field(-80.0, "height of the laser line, from the clamp's lowest point")
+    loop_hinge_mm: float = _field(0.0, "arc length below the clamp's lowest point of the hinge whose curvature and "
+                                  "moment are probed (the moment–curvature loop); 0 = the clamp-edge hinge", ge=0)
+
+
+@dataclass
+class Scene:
+    """A complete, validated description of one strip experiment."""
+
+    strip: StripSection = field(default_factory=StripSection)
+    material: MaterialSection = field(default_factory=MaterialSection)
+    damping: DampingSection = field(default_factory=DampingSection)
+    clamp: ClampSection = field(default_factory=ClampSection)
+    release: ReleaseSection = field(default_factory=ReleaseSection)
+    integrator: IntegratorSection = field(default_factory=IntegratorSection)
+    run: RunSection = field(default_factory=RunSection)
+    output: OutputSection = field(default_factory=OutputSection)
+
+    # Derived quantities used by the orchestration (SI, computed after validation).
+    @property
+    def spacing(self) -> float:
+        """Node spacing h in metres."""
+        return self.strip.spacing_mm * units.LENGTH_MM
+
+    @property
+    def loop_hinge(self) -> int:
+        """Index of the probed hinge (0 = the clamp-edge hinge)."""
+        return round(self.output.loop_hinge_mm / self.strip.spacing_mm)
+
+    @property
+    def n_clamped(self) -> int:
+        """Number of kinematic clamp nodes (s ≤ clamp length)."""
+        return round(self.strip.clamp_length_mm / self.strip.spacing_mm) + 1
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes, clamp included."""
+        return round((self.strip.clamp_length_mm + self.strip.free_length_mm) / self.strip.spacing_mm) + 1
+
+    @property
+    def output_interval(self) -> float:
+        """Seconds between probe samples."""
+        return 1.0 / (self.output.frame_rate_hz * self.output.probes_per_frame)
+
+    @property
+    def preroll(self) -> float:
+        """Seconds simulated before t = 0 (the hold), 0 without a release phase."""
+        return self.release.move_time_s + self.release.settle_time_s if self.release.enabled else 0.0
+
+    def to_dict(self) -> dict:
+        """Plain nested dict (TOML-ready) of every field, defaults included."""
+        return dataclasses.asdict(self)
+
+
+def batch_fields() -> list[str]:
+    """Dotted names of the fields that must agree across the strips of one batch."""
+    return [f"{section}.{f.name}" for section, tp in field_types(Scene).items()
+            for f in dataclasses.fields(tp) if not f.metadata["per_strip"]]
+
+
+def field_types(cls: type) -> dict[str, Any]:
+    """The resolved type of every field of the dataclass ``cls``."""
+    return typing.get_type_hints(cls)

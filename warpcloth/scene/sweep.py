@@ -1,0 +1,206 @@
+"""Parameter sweeps: the ``[sweep]`` section of a scene, expanded into variants and batches.
+
+A sweep varies scene fields given by dotted name (list items by index, e.g.
+``material.tensile_gf_per_cm.3``)::
+
+    [sweep]
+    seed = 1                                   # for random sampling
+    [sweep.grid]                               # Cartesian product
+    "material.hysteresis_d1_gf_cm_per_cm" = [0.0, 0.02, 0.04]
+    [sweep.zip]                                # parallel lists, one variant per position
+    "clamp.rotation_centre_dy_mm" = [0.0, 1.4, 2.8]
+    "damping.gamma_per_s" = [0.1, 0.2, 0.3]
+    [sweep.random]                             # seeded sampling inside ranges
+    method = "latin_hypercube"                 # or "uniform"
+    samples = 100
+    ranges = { "material.hysteresis_alpha_cm" = [2.0, 8.0] }
+
+The variants are grid × zip × random (each block optional), in that nesting order, so
+the expansion is deterministic under the seed. Fields that cannot vary inside one batch
+(spacing, dt, durations, integrator, ...) split the variants into separate batches.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import itertools
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from warpcloth.errors import SceneError
+
+from .files import read_scene_file, scene_from_dict
+from .overrides import apply_overrides, set_field
+from .schema import Scene, batch_fields
+
+SWEEP_KEYS = {"seed", "grid", "zip", "random"}
+RANDOM_KEYS = {"method", "samples", "ranges"}
+METHODS = ("uniform", "latin_hypercube")
+
+
+@dataclass
+class Sweep:
+    """An expanded sweep: one resolved scene per variant, and what each one set."""
+
+    base: dict  # raw base scene (without [sweep])
+    spec: dict  # the raw [sweep] section
+    keys: list[str]  # swept fields, in column order
+    assignments: list[dict[str, Any]]  # per variant: field -> value
+    scenes: list[Scene]
+
+    @property
+    def fingerprint(self) -> str:
+        """Hash of every variant's resolved scene: identifies the sweep for resuming."""
+        text = json.dumps([s.to_dict() for s in self.scenes], sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def batches(self, max_batch: int) -> list[list[int]]:
+        """Variant indices per batch: grouped by batch-level fields, at most max_batch each."""
+        if max_batch < 1:
+            raise SceneError("--max-batch", f"must be ≥ 1, got {max_batch}")
+        names = batch_fields()
+        groups: dict[str, list[int]] = {}
+        for i, scene in enumerate(self.scenes):
+            d = scene.to_dict()
+            key = json.dumps([d[n.split(".")[0]][n.split(".")[1]] for n in names])
+            groups.setdefault(key, []).append(i)
+        return [ids[j : j + max_batch] for ids in groups.values() for j in range(0, len(ids), max_batch)]
+
+
+def _field_exists(resolved: dict, key: str) -> bool:
+    node: Any = resolved
+    for part in key.split("."):
+        if isinstance(node, dict) and part in node:
+            node = node[part]
+        elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
+            node = node[int(part)]
+        else:
+            return False
+    return True
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SceneError(where, f"expected a finite number, got {value!r}")
+    return float(value)
+
+
+def _table(spec: dict, name: str) -> dict:
+    table = spec.get(name, {})
+    if not isinstance(table, dict):
+        raise SceneError(f"sweep.{name}", f"expected a table of field = values, got {table!r}")
+    return table
+
+
+def _value_lists(table: dict, where: str) -> dict[str, list]:
+    for key, values in table.items():
+        if not isinstance(values, list) or not values:
+            raise SceneError(f'{where}."{key}"', f"expected a non-empty list of values, got {values!r}")
+    return table
+
+
+def _random_block(spec: dict) -> tuple[list[str], np.ndarray]:
+    block = _table(spec, "random")
+    if not block:
+        return [], np.zeros((1, 0))
+    unknown = set(block) - RANDOM_KEYS
+    if unknown:
+        raise SceneError(f"sweep.random.{sorted(unknown)[0]}",
+                         f"unknown field; known: {', '.join(sorted(RANDOM_KEYS))}")
+    method = block.get("method", "latin_hypercube")
+    if method not in METHODS:
+        raise SceneError("sweep.random.method", f"must be one of {', '.join(METHODS)}; got {method!r}")
+    samples = block.get("samples")
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+        raise SceneError("sweep.random.samples", f"expected a positive integer, got {samples!r}")
+    ranges = block.get("ranges", {})
+    if not isinstance(ranges, dict) or not ranges:
+        raise SceneError("sweep.random.ranges", "expected a table of field = [low, high]")
+    bounds = []
+    for key, rng in ranges.items():
+        where = f'sweep.random.ranges."{key}"'
+        if not isinstance(rng, list) or len(rng) != 2:
+            raise SceneError(where, f"expected [low, high], got {rng!r}")
+        low, high = _number(rng[0], where), _number(rng[1], where)
+        if not high > low:
+            raise SceneError(where, f"high ({high:g}) must be above low ({low:g})")
+        bounds.append((low, high))
+    seed = spec.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise SceneError("sweep.seed", f"expected a non-negative integer, got {seed!r}")
+    generator = np.random.default_rng(seed)
+    d = len(bounds)
+    if method == "uniform":
+        unit = generator.random((samples, d))
+    else:  # one sample per stratum in every dimension, strata paired at random
+        unit = (np.argsort(generator.random((d, samples)), axis=1).T + generator.random((samples, d))) / samples
+    low = np.array([b[0] for b in bounds])
+    high = np.array([b[1] for b in bounds])
+    return list(ranges), low + unit * (high - low)
+
+
+def expand(raw: dict) -> Sweep:
+    """Expand a raw scene with a ``[sweep]`` section into validated variant scenes."""
+    base = copy.deepcopy(raw)
+    spec = base.pop("sweep", None)
+    if not isinstance(spec, dict) or not (set(spec) & {"grid", "zip", "random"}):
+        raise SceneError("sweep", "the scene has no [sweep] section with a grid, zip or random block")
+    unknown = set(spec) - SWEEP_KEYS
+    if unknown:
+        raise SceneError(f"sweep.{sorted(unknown)[0]}", f"unknown field; known: {', '.join(sorted(SWEEP_KEYS))}")
+    resolved = scene_from_dict(copy.deepcopy(base)).to_dict()
+    grid = _value_lists(_table(spec, "grid"), "sweep.grid")
+    zipped = _value_lists(_table(spec, "zip"), "sweep.zip")
+    lengths = {len(v) for v in zipped.values()}
+    if len(lengths) > 1:
+        raise SceneError("sweep.zip", f"lists must have equal lengths, got {sorted(lengths)}")
+    random_keys, random_values = _random_block(spec)
+    keys = list(grid) + list(zipped) + random_keys
+    for where, block in (("sweep.grid", grid), ("sweep.zip", zipped), ("sweep.random.ranges", random_keys)):
+        for key in block:
+            if not _field_exists(resolved, key):
+                raise SceneError(f'{where}."{key}"', "is not a scene field (dotted name, list items by index)")
+    seen = set()
+    for key in keys:
+        if key in seen:
+            raise SceneError(f'sweep."{key}"', "is swept in more than one block")
+        seen.add(key)
+    grid_rows = list(itertools.product(*grid.values())) if grid else [()]
+    zip_rows = list(zip(*zipped.values(), strict=True)) if zipped else [()]
+    assignments = []
+    for g, z, r in itertools.product(grid_rows, zip_rows, random_values):
+        assignments.append(dict(zip(keys, [*g, *z, *(float(x) for x in r)], strict=True)))
+    scenes = []
+    for i, assignment in enumerate(assignments):
+        data = copy.deepcopy(base)
+        try:
+            # A material file replaces the material, so it goes first and the other
+            # swept material fields land on top of it, whatever their order in [sweep].
+            for key, value in sorted(assignment.items(), key=lambda kv: not kv[0].endswith("from_file")):
+                set_field(data, key, value)
+            scenes.append(scene_from_dict(data))
+        except SceneError as exc:
+            what = ", ".join(f"{k}={v!r}" for k, v in assignment.items())
+            raise SceneError(exc.field, f"in sweep variant {i} ({what}): {str(exc).split(': ', 1)[1]}") from exc
+    return Sweep(base, spec, keys, assignments, scenes)
+
+
+def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Sweep:
+    """Read a scene with a ``[sweep]`` section (path or bundled name) and expand it.
+
+    ``overrides`` (``key=value``) change the base scene, e.g. ``run.duration_s=1``, or
+    the sweep's own options: ``sweep.seed``, ``sweep.random.samples``, ``sweep.random.method``.
+    """
+    raw = read_scene_file(name_or_path)
+    spec = {"sweep": raw.pop("sweep", None) or {}}
+    own = [o for o in overrides if o.split("=", 1)[0].strip().startswith("sweep.")]
+    spec = apply_overrides(spec, own)
+    raw = apply_overrides(raw, [o for o in overrides if o not in own])
+    raw["sweep"] = spec["sweep"]
+    return expand(raw)

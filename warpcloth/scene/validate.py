@@ -1,0 +1,82 @@
+"""Cross-field checks of a parsed scene that single fields cannot express."""
+
+from __future__ import annotations
+
+import math
+
+from warpcloth.errors import SceneError
+
+from .materials import validate_material
+from .schema import ClampSection, Scene
+
+MAX_STEPS = 2**31 - 1
+
+
+def _multiple(length: float, spacing: float) -> bool:
+    ratio = length / spacing
+    return abs(ratio - round(ratio)) < 1e-9 * max(1.0, ratio)
+
+
+def validate_scene(scene: Scene) -> None:
+    """Cross-field checks that single fields cannot express; raises SceneError."""
+    st = scene.strip
+    for name in ("free_length_mm", "clamp_length_mm"):
+        if not _multiple(getattr(st, name), st.spacing_mm):
+            raise SceneError("strip.spacing_mm", f"{st.spacing_mm:g} mm does not divide strip.{name} = "
+                             f"{getattr(st, name):g} mm into whole segments")
+    if scene.n_nodes - scene.n_clamped < 2:
+        raise SceneError("strip.spacing_mm", f"{st.spacing_mm:g} mm leaves fewer than 2 free nodes")
+    validate_material(scene.material, scene.integrator.divergence_strain, "material")
+    _validate_clamp(scene.clamp)
+    if scene.release.enabled:
+        r = math.hypot(scene.release.hold_x_mm, scene.release.hold_y_mm)
+        if not st.spacing_mm <= r <= st.free_length_mm:
+            raise SceneError("release.hold_x_mm", f"held position ({scene.release.hold_x_mm:g}, "
+                             f"{scene.release.hold_y_mm:g}) mm is {r:g} mm from the clamp's lowest point; "
+                             f"the free end reaches between {st.spacing_mm:g} and {st.free_length_mm:g} mm")
+    n_hinges = scene.n_nodes - scene.n_clamped
+    if not _multiple(scene.output.loop_hinge_mm, st.spacing_mm) or scene.loop_hinge >= n_hinges:
+        raise SceneError("output.loop_hinge_mm", f"{scene.output.loop_hinge_mm:g} mm is not a hinge: hinges lie "
+                         f"every strip.spacing_mm = {st.spacing_mm:g} mm from 0 to "
+                         f"{st.free_length_mm - st.spacing_mm:g} mm below the clamp")
+    dt = scene.integrator.dt_s
+    if dt > scene.output_interval:
+        raise SceneError("integrator.dt_s", f"{dt:g} s is longer than the probe interval "
+                         f"{scene.output_interval:g} s (output.frame_rate_hz × output.probes_per_frame)")
+    steps = (scene.preroll + scene.run.duration_s) / dt
+    if steps > MAX_STEPS:
+        raise SceneError("run.duration_s", f"{scene.preroll + scene.run.duration_s:g} s at dt {dt:g} s is "
+                         f"{steps:.3g} steps, more than {MAX_STEPS}")
+
+
+def _validate_clamp(clamp: ClampSection) -> None:
+    if clamp.motion == "piecewise":
+        if not clamp.segments:
+            raise SceneError("clamp.segments", "motion = 'piecewise' needs at least one segment")
+        for i, seg in enumerate(clamp.segments):
+            where = f"clamp.segments[{i}]"
+            if not seg.t_end_s > seg.t_start_s:
+                raise SceneError(f"{where}.t_end_s", f"{seg.t_end_s:g} must be after t_start_s {seg.t_start_s:g}")
+            if not 1 <= len(seg.theta_coefficients_si) <= 5:
+                raise SceneError(f"{where}.theta_coefficients_si",
+                                 f"needs 1 to 5 coefficients (up to a quartic), got {len(seg.theta_coefficients_si)}")
+            if i:
+                prev = clamp.segments[i - 1]
+                if abs(seg.t_start_s - prev.t_end_s) > 1e-12:
+                    raise SceneError(f"{where}.t_start_s", f"{seg.t_start_s:g} s must equal the previous "
+                                     f"segment's t_end_s {prev.t_end_s:g} s")
+                tau = prev.t_end_s - prev.t_start_s
+                end = sum(c * tau**k for k, c in enumerate(prev.theta_coefficients_si))
+                jump = seg.theta_coefficients_si[0] - end
+                if abs(jump) > 1e-9 * max(1.0, abs(end)):
+                    raise SceneError(f"{where}.theta_coefficients_si",
+                                     f"θ jumps by {jump:.3g} rad at t = {seg.t_start_s:g} s; the clamp "
+                                     "cannot teleport (make c_0 equal the previous segment's end value)")
+    elif clamp.motion == "table":
+        t, th = clamp.table_t_s, clamp.table_theta_rad
+        if len(t) < 2 or len(t) != len(th):
+            raise SceneError("clamp.table_theta_rad", f"needs as many samples as clamp.table_t_s, at least 2 "
+                             f"(got {len(t)} times and {len(th)} angles)")
+        for i in range(1, len(t)):
+            if not t[i] > t[i - 1]:
+                raise SceneError(f"clamp.table_t_s[{i}]", f"{t[i]:g} s must be after {t[i - 1]:g} s")

@@ -1,0 +1,40 @@
+"""The simulation core, in SI arrays only: no scene files, no KES units, no file formats.
+
+- :class:`StripBuilder` → :class:`Model` (what the strips *are*), ``model.state()`` →
+  :class:`State` (what they *are doing*), ``model.control()`` → :class:`Control` (what
+  drives them);
+- a solver per integrator (:data:`SOLVERS`) advances them (what advances them);
+- a :class:`Recorder` says what is recorded and when; :func:`simulate_batch` runs the
+  chunked launches with progress and the divergence policy.
+"""
+
+from .bending import moment_along_path
+from .builder import ClampMotion, StripBuilder
+from .control import Control
+from .material import MaterialSI
+from .model import PRECISIONS, Model
+from .recorder import Recorder, Schedule
+from .runner import RunResult, Sink, simulate_batch
+from .solvers import SOLVERS, ExplicitEulerSolver, ForwardEulerSolver, SemiImplicitEulerSolver, describe_divergence
+from .state import State
+
+__all__ = [
+    "PRECISIONS",
+    "SOLVERS",
+    "ClampMotion",
+    "Control",
+    "ExplicitEulerSolver",
+    "ForwardEulerSolver",
+    "MaterialSI",
+    "Model",
+    "Recorder",
+    "RunResult",
+    "Schedule",
+    "SemiImplicitEulerSolver",
+    "Sink",
+    "State",
+    "StripBuilder",
+    "describe_divergence",
+    "moment_along_path",
+    "simulate_batch",
+]

@@ -1,0 +1,49 @@
+"""The bending law on its own: moment along prescribed curvature paths.
+
+Runs the strip kernel's hinge logic (the same Warp functions) on curvature histories, for
+plotting a material's KES loop, fitting it, and testing the law in isolation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import warp as wp
+
+from warpcloth.kernels import bending_tagawa2003
+
+from .material import MaterialSI
+
+
+def moment_along_path(materials: MaterialSI | Sequence[MaterialSI], curvature: np.ndarray,
+                      device: str | None = "cpu", with_tangent: bool = False) -> tuple[np.ndarray, ...]:
+    """Moment per width M (N·m/m) along curvature paths (1/m), one column per material.
+
+    ``curvature`` is ``[sample]`` or ``[sample, path]``; each hinge starts fresh at its
+    first sample (rising branch, no hysteretic offset). Returns ``(M, work)`` where
+    ``work[path]`` = Σ M_n (K_{n+1} − K_n), the bending work per width (N), accumulated
+    with a left-point rule; with ``with_tangent`` also the law's dM/dK (N·m), shaped as M.
+    """
+    materials = [materials] if isinstance(materials, MaterialSI) else list(materials)
+    k = np.asarray(curvature, dtype=np.float64)
+    single = k.ndim == 1
+    if single:
+        k = k[:, None]
+    if k.shape[1] == 1 and len(materials) > 1:
+        k = np.repeat(k, len(materials), axis=1)
+    if k.shape[1] != len(materials):
+        raise ValueError(f"{k.shape[1]} curvature paths for {len(materials)} materials")
+    law = bending_tagawa2003.build(wp.float64)
+    parameters = wp.array(np.array([m.bending_parameters() for m in materials]), dtype=law.Parameters,
+                          device=device)
+    moment = wp.zeros(k.shape, dtype=wp.float64, device=device)
+    slope = wp.zeros(k.shape, dtype=wp.float64, device=device)
+    work = wp.zeros(k.shape[1], dtype=wp.float64, device=device)
+    wp.launch(law.moment_along_path, dim=k.shape[1], device=device,
+              inputs=[wp.array(np.ascontiguousarray(k), dtype=wp.float64, device=device), parameters, moment, slope,
+                      work])
+    m, dm = moment.numpy(), slope.numpy()
+    if single:
+        m, dm = m[:, 0], dm[:, 0]
+    return (m, work.numpy(), dm) if with_tangent else (m, work.numpy())

@@ -1,0 +1,82 @@
+"""What a batch of strips *is*: geometry and per-strip material, as Warp arrays (SI)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import warp as wp
+
+from warpcloth.kernels import structs
+from warpcloth.kernels.types import precision as precision_types
+
+if TYPE_CHECKING:
+    from .builder import StripBuilder
+    from .control import Control
+    from .state import State
+
+PRECISIONS = {"float64": wp.float64, "float32": wp.float32}
+
+
+class Model:
+    """Static description of B strips sharing node count, spacing and gravity.
+
+    Made by :meth:`warpcloth.sim.StripBuilder.finalize`. Material, width and damping may
+    differ per strip; :meth:`state` and :meth:`control` make the matching dynamic state
+    and drives.
+    """
+
+    def __init__(self, builder: StripBuilder, device: str | None = None, precision: str = "float64",
+                 bending_law: str = "tagawa2003") -> None:
+        self.device = wp.get_device(device)
+        self.precision = precision
+        self.scalar = PRECISIONS[precision]
+        self.types = precision_types(self.scalar)
+        self.bending_law = bending_law
+        self.structs = structs.build(self.scalar, bending_law)
+        self.builder = builder
+        strips = builder.strips
+        self.n_strips = len(strips)
+        self.n_nodes = len(builder.rest_positions)
+        self.n_clamped = builder.n_clamped
+        self.spacing = builder.spacing
+        self.gravity = builder.gravity
+        self.rest_positions = builder.rest_positions
+        self.width = np.array([s.width for s in strips])
+        self.density = np.array([s.material.density for s in strips])
+        self.node_mass = self.density * self.width * self.spacing
+        self.tensile = np.array([s.material.tensile for s in strips])
+        self.bending = np.array([s.material.bending_parameters() for s in strips])
+        self.damping = np.array([s.damping for s in strips])
+        self.struct = self._build_struct()
+
+    def array(self, values: np.ndarray, dtype: object = None) -> wp.array:
+        """A Warp array of ``values`` on this model's device in its precision."""
+        return wp.array(np.ascontiguousarray(values), dtype=dtype or self.scalar, device=self.device)
+
+    def state(self) -> State:
+        """A state at rest in the rest shape, every hinge fresh."""
+        from .state import State
+
+        return State(self)
+
+    def control(self) -> Control:
+        """The drives the strips were built with (clamp motion, hold and release)."""
+        from .control import Control
+
+        return Control(self)
+
+    def _build_struct(self) -> object:
+        t = self.types
+        m = self.structs.StripModel()
+        m.n_nodes = self.n_nodes
+        m.n_clamped = self.n_clamped
+        m.rest_length = self.scalar(self.spacing)
+        m.gravity = self.scalar(self.gravity)
+        m.rest_position = self.array(np.repeat(self.rest_positions[:, None, :], self.n_strips, axis=1), t.vec2)
+        m.tensile = self.array(self.tensile, t.vec4)
+        m.bending = self.array(self.bending, self.structs.law.Parameters)
+        m.width = self.array(self.width)
+        m.node_mass = self.array(self.node_mass)
+        m.damping = self.array(self.damping)
+        return m

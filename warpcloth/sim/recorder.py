@@ -1,0 +1,80 @@
+"""What is recorded and when: the named probes, the laser line, the probed hinge, and
+the output schedule of a run (docs/model.md §12)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX
+
+if TYPE_CHECKING:
+    from .control import Control
+    from .solvers import ExplicitEulerSolver
+
+
+@dataclass(frozen=True)
+class Recorder:
+    """Probes every ``interval`` s (from t = 0 to ``duration``), a shape frame every
+    ``probes_per_frame`` probes; the laser line at height ``laser_height`` (m, absolute)
+    and the moment–curvature loop of hinge ``loop_hinge`` (0 = the clamp-edge hinge)."""
+
+    interval: float
+    probes_per_frame: int
+    duration: float
+    laser_height: float
+    loop_hinge: int = 0
+
+    fields = PROBE_FIELDS
+    index = PROBE_INDEX
+
+    def settings(self, struct_type: Any, scalar: Any) -> object:
+        """The kernel's ProbeSettings struct."""
+        s = struct_type()
+        s.laser_height = scalar(self.laser_height)
+        s.loop_hinge = self.loop_hinge
+        s.probes_per_frame = self.probes_per_frame
+        return s
+
+    def schedule(self, control: Control, solver: ExplicitEulerSolver) -> Schedule:
+        """The output samples of a run: hold samples (k < 0) are run, not kept."""
+        interval, dt = self.interval, solver.dt
+        release_step = solver.release_step(control)
+        k_min = -math.floor(control.release_time / interval + 1e-9)
+        k_max = math.floor(self.duration / interval + 1e-9)
+        k = np.arange(k_min, k_max + 1)
+        steps = np.maximum(0, release_step + np.rint(k * interval / dt).astype(np.int64))
+        return Schedule(k_min, steps, self.probes_per_frame, release_step, dt)
+
+
+@dataclass
+class Schedule:
+    """Output samples k_min..k_max at t_k = k·interval; sample k ends at ``steps[k - k_min]``."""
+
+    k_min: int
+    steps: np.ndarray
+    probes_per_frame: int
+    release_step: int
+    dt: float
+
+    def times(self, k: np.ndarray) -> np.ndarray:
+        """Exact simulated times of samples ``k``."""
+        return (self.steps[np.asarray(k) - self.k_min] - self.release_step) * self.dt
+
+    @property
+    def kept(self) -> np.ndarray:
+        """Sample indices kept (t ≥ 0)."""
+        return np.arange(0, self.k_min + len(self.steps))
+
+    @property
+    def frame_samples(self) -> np.ndarray:
+        """Sample indices that are also frames."""
+        return self.kept[:: self.probes_per_frame]
+
+    @property
+    def frame_times(self) -> np.ndarray:
+        """Times of the shape frames, s."""
+        return self.times(self.frame_samples)

@@ -1,0 +1,190 @@
+"""Running a batch: chunked launches sized to the wall clock, progress, the divergence
+policy, and streaming each finished chunk to a sink (e.g. a run directory writer)."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+import warp as wp
+from tqdm import tqdm
+
+from warpcloth.errors import DivergenceError
+from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, STATUS_NONFINITE_ENERGY
+
+from .control import Control
+from .model import Model
+from .recorder import Recorder, Schedule
+from .solvers import ExplicitEulerSolver, describe_divergence
+from .state import State
+
+TARGET_LAUNCH_SECONDS = 0.5  # long enough to amortise launch cost, short enough for progress
+BUFFER_BYTES = 64 * 2**20  # cap on the per-chunk probe and frame buffers
+DIVERGENCE_POLICIES = ("raise", "record")
+
+
+class Sink(Protocol):
+    """Where a run streams its results as they are produced."""
+
+    def write_probes(self, t: np.ndarray, variant: np.ndarray, values: np.ndarray) -> None:
+        """Append probe rows: times, strip indices and values ``[row, field]``."""
+
+    def write_frames(self, first: int, frames: np.ndarray) -> None:
+        """Store frames ``[frame, strip, node, xy]`` from frame index ``first`` on."""
+
+    def close(self, diverged: list[dict], extra: dict) -> None:
+        """Finish: the run ended (completely, or at a divergence it reports)."""
+
+
+@dataclass
+class RunResult:
+    """Everything a run recorded, in SI units.
+
+    ``probes`` is ``[sample, field, variant]`` (fields: PROBE_FIELDS) at times ``t``;
+    ``frames`` is ``[frame, variant, node, xy]`` at ``frame_times``. Rows after a
+    strip's divergence are NaN here (and absent from probes.csv). ``scenes`` holds what
+    each strip was built from, when it was built from scenes.
+    """
+
+    scenes: list[Any]
+    t: np.ndarray
+    probes: np.ndarray
+    frame_times: np.ndarray
+    frames: np.ndarray | None
+    diverged: list[dict] = field(default_factory=list)
+    wall_time_s: float = 0.0
+    strip_steps: int = 0
+
+    def probe(self, name: str, variant: int | None = None) -> np.ndarray:
+        """Time series of one probe: ``[sample, variant]``, or ``[sample]`` for one variant."""
+        series = self.probes[:, PROBE_INDEX[name], :]
+        return series if variant is None else series[:, variant]
+
+    def energy_total(self) -> np.ndarray:
+        """Budget that should stay constant: kinetic + gravitational + tensile + work done
+        against bending and damping − work done by the drives, ``[sample, variant]``."""
+        p = self.probe
+        return (p("kinetic") + p("gravitational") + p("tensile") + p("bending_elastic_work")
+                + p("hysteresis_work") + p("damping_work") - p("drive_work"))
+
+
+def simulate_batch(
+    model: Model,
+    control: Control,
+    solver: ExplicitEulerSolver,
+    recorder: Recorder,
+    state: State | None = None,
+    *,
+    sink: Sink | None = None,
+    progress: bool = False,
+    on_divergence: str = "raise",
+    keep_frames: bool = True,
+    labels: list[Any] | None = None,
+) -> RunResult:
+    """Run a built batch to the end of the recorder's schedule and return what it recorded.
+
+    ``sink`` receives each finished chunk (see :class:`Sink`). ``on_divergence="raise"``
+    stops at the first diverged strip with a DivergenceError (its ``result`` holds what
+    was recorded); ``"record"`` lets the other strips go on. ``labels`` become
+    ``RunResult.scenes``.
+    """
+    if on_divergence not in DIVERGENCE_POLICIES:
+        raise ValueError(f"on_divergence must be 'raise' or 'record', got {on_divergence!r}")
+    state = state or model.state()
+    schedule = recorder.schedule(control, solver)
+    n_kept, frame_samples = len(schedule.kept), schedule.frame_samples
+    b, n, nq = model.n_strips, model.n_nodes, len(PROBE_FIELDS)
+    t = schedule.times(schedule.kept)
+    frame_times = schedule.times(frame_samples)
+    probes_all = np.full((n_kept, nq, b), np.nan)
+    frames_all = np.full((len(frame_samples), b, n, 2), np.nan) if keep_frames else None
+
+    ppf = schedule.probes_per_frame
+    cap = max(1, min(len(schedule.steps), BUFFER_BYTES // (8 * nq * b)))
+    cap_frames = max(1, min(len(frame_samples), BUFFER_BYTES // (16 * n * b)))
+    cap = min(cap, cap_frames * ppf)
+    probes_buf = wp.zeros((cap, nq, b), dtype=model.scalar, device=model.device)
+    frames_buf = wp.zeros((cap // ppf + 1, n, b), dtype=model.types.vec2, device=model.device)
+
+    diverged: list[dict] = []
+    total_steps = int(schedule.steps[-1])
+    bar = tqdm(total=float(schedule.times(schedule.k_min + len(schedule.steps) - 1)
+                           - schedule.times(schedule.k_min)),
+               unit="s", unit_scale=False, desc="simulated", disable=not progress, dynamic_ncols=True,
+               bar_format="{l_bar}{bar}| {n:.3f}/{total:.3f} s sim [{elapsed}<{remaining}, {rate_fmt}{postfix}]")
+    started = time.perf_counter()
+    chunk = max(1, min(cap, round(2000 / max(1.0, total_steps / len(schedule.steps)))))
+    i = 0
+    try:
+        while i < len(schedule.steps):
+            j = min(len(schedule.steps), i + chunk)
+            k0 = schedule.k_min + i
+            first_frame = -(-max(k0, 0) // ppf)
+            tic = time.perf_counter()
+            solver.advance(state, control, recorder, schedule.steps[i:j], k0, first_frame, probes_buf, frames_buf)
+            wp.synchronize_device(model.device)
+            wall = time.perf_counter() - tic
+            new = _collect(solver, state, control, schedule, i, j, probes_buf, frames_buf, probes_all, frames_all,
+                           sink, diverged)
+            steps_done = int(schedule.steps[j - 1] - (schedule.steps[i - 1] if i else 0))
+            bar.set_postfix_str(f"{b * steps_done / max(wall, 1e-9):.3g} strip-steps/s")
+            bar.update(float(schedule.times(schedule.k_min + j - 1) - schedule.times(schedule.k_min)) - bar.n)
+            i = j
+            chunk = max(1, min(cap, round(chunk * TARGET_LAUNCH_SECONDS / max(wall, 1e-3))))
+            if new and on_divergence == "raise":
+                break
+            if len(diverged) == b:
+                break
+    finally:
+        bar.close()
+    wall_time = time.perf_counter() - started
+    strip_steps = b * int(schedule.steps[i - 1])  # up to where the run stopped
+    result = RunResult(list(labels or []), t, probes_all, frame_times, frames_all, diverged, wall_time, strip_steps)
+    if sink is not None:
+        sink.close(diverged, {"wall_time_s": wall_time, "strip_steps": strip_steps, "device": str(model.device)})
+    if diverged and on_divergence == "raise":
+        raise DivergenceError("; ".join(describe_divergence(d) for d in diverged), diverged, result)
+    return result
+
+
+def _collect(solver: ExplicitEulerSolver, state: State, control: Control, schedule: Schedule, i: int, j: int,
+             probes_buf: wp.array, frames_buf: wp.array, probes_all: np.ndarray, frames_all: np.ndarray | None,
+             sink: Sink | None, diverged: list[dict]) -> bool:
+    """Copy a finished chunk out, drop samples after a divergence, stream it to the sink."""
+    status = state.struct.status.numpy()
+    known = {d["strip"] for d in diverged}
+    new_reports = [solver.divergence_report(state, control, int(s)) for s in np.nonzero(status)[0]
+                   if s not in known]
+    diverged.extend(new_reports)
+    steps = schedule.steps[i:j]
+    valid = np.ones((j - i, probes_all.shape[2]), dtype=bool)
+    for d in diverged:
+        last_ok = steps < d["step"] if d["code"] == STATUS_NONFINITE_ENERGY else steps <= d["step"]
+        valid[:, d["strip"]] &= last_ok
+    k = schedule.k_min + np.arange(i, j)
+    keep = k >= 0
+    if not keep.any():
+        return bool(new_reports)
+    values = probes_buf[: j - i].numpy()[keep]  # copy out only this chunk's samples
+    valid = valid[keep]
+    values = np.where(valid[:, None, :], values, np.nan)
+    probes_all[k[keep]] = values
+    is_frame = (k >= 0) & (k % schedule.probes_per_frame == 0)
+    frame_index = k[is_frame] // schedule.probes_per_frame
+    frames = np.transpose(frames_buf[: len(frame_index)].numpy(), (0, 2, 1, 3)) if len(frame_index) else \
+        np.zeros((0, probes_all.shape[2], frames_buf.shape[1], 2))
+    frames = np.where(valid[(k[keep] % schedule.probes_per_frame == 0)][:, :, None, None], frames, np.nan)
+    if frames_all is not None and len(frame_index):
+        frames_all[frame_index] = frames
+    if sink is not None:
+        times = schedule.times(k[keep])
+        rows_t = np.repeat(times, values.shape[2])
+        rows_v = np.tile(np.arange(values.shape[2]), len(times))
+        flat = np.transpose(values, (0, 2, 1)).reshape(-1, values.shape[1])
+        ok = valid.reshape(-1)
+        sink.write_probes(rows_t[ok], rows_v[ok], flat[ok])
+        if len(frame_index):
+            sink.write_frames(int(frame_index[0]), frames)
+    return bool(new_reports)

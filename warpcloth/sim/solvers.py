@@ -1,0 +1,125 @@
+"""What advances a batch of strips: one solver class per integrator, each owning its
+time step and divergence limit, advancing every strip through a chunk of output samples
+in one kernel launch (docs/model.md §9, §11).
+
+Adding an integrator: a node update in ``kernels/integrators.py`` (or a new kernel) and a
+solver class here registered in :data:`SOLVERS`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import warp as wp
+
+from warpcloth.kernels import STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN, build_strip
+
+from .control import Control
+from .model import Model
+from .recorder import Recorder
+from .state import State
+
+QUANTITY = {
+    STATUS_STRAIN: "tensile strain",
+    STATUS_FOLDED: "hinge chord |e1+e2|/h (the strip folded onto itself)",
+    STATUS_NONFINITE_ENERGY: "total energy (not finite)",
+}
+
+
+class ExplicitEulerSolver:
+    """Explicit Euler with the node update of :attr:`scheme`; stability limits dt.
+
+    ``divergence_strain``: a strip whose tensile strain leaves ± this (NaN included)
+    stops and is reported, as is one that folds onto itself or whose energy is not finite.
+    """
+
+    scheme = ""
+    advice = ""
+
+    def __init__(self, model: Model, dt: float, divergence_strain: float = 0.25) -> None:
+        self.model = model
+        self.dt = dt
+        self.divergence_strain = divergence_strain
+        self.kernels = build_strip(model.scalar, self.scheme, model.bending_law)
+
+    def step_of(self, time: float) -> int:
+        """The step count nearest ``time`` seconds."""
+        return round(time / self.dt)
+
+    def release_step(self, control: Control) -> int:
+        """Step index of t = 0 under ``control``."""
+        return self.step_of(control.release_time)
+
+    def _stepping(self, control: Control) -> object:
+        s = self.kernels.Stepping()
+        s.dt = self.model.scalar(self.dt)
+        s.max_strain = self.model.scalar(self.divergence_strain)
+        s.release_step = self.release_step(control)
+        s.move_steps = max(1, self.step_of(control.move_time))
+        return s
+
+    def advance(self, state: State, control: Control, recorder: Recorder, output_steps: np.ndarray,
+                first_output: int, first_frame: int, probes: wp.array, frames: wp.array) -> None:
+        """Advance every healthy strip to each step in ``output_steps`` in one launch.
+
+        Probe k of the chunk goes to ``probes[k, :, strip]``; outputs that are frames
+        (index ≥ 0, a multiple of probes_per_frame) go to ``frames[index // ppf −
+        first_frame]``. Strips that diverge stop and report through ``state.struct.status``.
+        """
+        model = self.model
+        steps = wp.array(np.asarray(output_steps, dtype=np.int32), dtype=int, device=model.device)
+        wp.launch(self.kernels.advance, dim=model.n_strips, device=model.device,
+                  inputs=[model.struct, control.struct, self._stepping(control), state.struct,
+                          recorder.settings(self.kernels.ProbeSettings, model.scalar), steps, int(first_output),
+                          int(first_frame), probes, frames])
+
+    def divergence_report(self, state: State, control: Control, strip: int) -> dict | None:
+        """Where and how ``strip`` diverged, or None while it is healthy."""
+        code = int(state.struct.status.numpy()[strip])
+        if code == STATUS_OK:
+            return None
+        step = int(state.struct.status_step.numpy()[strip])
+        return {
+            "strip": strip,
+            "code": code,
+            "step": step,
+            "time_s": (step - self.release_step(control)) * self.dt,
+            "quantity": QUANTITY[code],
+            "where": int(state.struct.status_index.numpy()[strip]),
+            "value": float(state.struct.status_value.numpy()[strip]),
+            "limit": self.divergence_strain,
+            "scheme": self.scheme,
+            "dt_s": self.dt,
+        }
+
+
+class SemiImplicitEulerSolver(ExplicitEulerSolver):
+    """Symplectic (semi-implicit) Euler: velocities first, positions with the new velocity."""
+
+    scheme = "semi_implicit"
+
+
+class ForwardEulerSolver(ExplicitEulerSolver):
+    """Forward Euler, the paper's eqs. 5-6; it amplifies every undamped oscillation."""
+
+    scheme = "forward"
+    advice = (" or integrator.scheme = semi_implicit (forward Euler amplifies every undamped"
+              " oscillation, docs/model.md §9)")
+
+
+SOLVERS: dict[str, type[ExplicitEulerSolver]] = {
+    SemiImplicitEulerSolver.scheme: SemiImplicitEulerSolver,
+    ForwardEulerSolver.scheme: ForwardEulerSolver,
+}
+"""Solver class of each ``integrator.scheme``."""
+
+
+def describe_divergence(report: dict) -> str:
+    """One sentence a user can act on."""
+    where = f" at segment {report['where']}" if report["code"] == STATUS_STRAIN else (
+        f" at hinge node {report['where']}" if report["code"] == STATUS_FOLDED else "")
+    limit = (f", beyond integrator.divergence_strain = {report['limit']:g}"
+             if report["code"] == STATUS_STRAIN else "")
+    advice = f"try a smaller integrator.dt_s (now {report['dt_s']:g} s, e.g. {report['dt_s'] / 4:g})"
+    advice += SOLVERS[report["scheme"]].advice
+    return (f"strip {report['strip']} diverged at t = {report['time_s']:.6g} s (step {report['step']}): "
+            f"{report['quantity']} = {report['value']:.4g}{where}{limit}; {advice}")

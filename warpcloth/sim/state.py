@@ -1,0 +1,60 @@
+"""What a batch of strips *is doing*: node positions and velocities, the bending law's
+memory of every hinge, the work done so far, and each strip's health."""
+
+from __future__ import annotations
+
+import numpy as np
+import warp as wp
+
+from warpcloth.kernels.strip import hinge_kernels
+
+from .model import Model
+
+
+class State:
+    """Dynamic state of B strips, laid out ``[node, strip]`` / ``[hinge, strip]``.
+
+    Starts in the model's rest shape and at rest with fresh hinges; :meth:`set_positions`
+    replaces the shape (and re-initialises the hinges there, so it carries no moment offset).
+    """
+
+    def __init__(self, model: Model) -> None:
+        self.model = model
+        t = model.types
+        n, b = model.n_nodes, model.n_strips
+        n_hinges = n - model.n_clamped
+
+        def nodes() -> wp.array:
+            return wp.zeros((n, b), dtype=t.vec2, device=model.device)
+
+        def per_strip(dtype: object) -> wp.array:
+            return wp.zeros(b, dtype=dtype, device=model.device)
+
+        s = model.structs.StripState()
+        s.position = wp.clone(model.struct.rest_position)
+        s.velocity = nodes()
+        s.force_tensile = nodes()
+        s.force_elastic = nodes()
+        s.force_hysteretic = nodes()
+        s.hinge = wp.zeros((n_hinges, b), dtype=model.structs.law.Memory, device=model.device)
+        s.work = per_strip(t.vec4)
+        s.step = per_strip(int)
+        s.status = per_strip(int)
+        s.status_step = per_strip(int)
+        s.status_index = per_strip(int)
+        s.status_value = per_strip(t.scalar)
+        self.struct = s
+        self.reset_hinges()
+
+    def set_positions(self, positions: np.ndarray, velocities: np.ndarray | None = None) -> None:
+        """Replace node positions ``[node, strip, 2]`` (and velocities), e.g. a mode shape."""
+        vec2 = self.model.types.vec2
+        self.struct.position.assign(self.model.array(positions, vec2))
+        if velocities is not None:
+            self.struct.velocity.assign(self.model.array(velocities, vec2))
+        self.reset_hinges()
+
+    def reset_hinges(self) -> None:
+        """Make every hinge fresh at its current curvature (no memory of past bending)."""
+        kernel = hinge_kernels(self.model.scalar, self.model.bending_law).initialise_hinges
+        wp.launch(kernel, dim=self.model.n_strips, inputs=[self.model.struct, self.struct], device=self.model.device)

@@ -1,0 +1,231 @@
+"""Running a sweep: batches as Dask tasks, results streamed per batch, resumable.
+
+Layout of a sweep directory::
+
+    sweep.json              fingerprint of the expanded sweep, the batch layout, the spec
+    variants.csv            variant, batch and the swept field values (written first)
+    summary/batch-NNNN.parquet   per variant: parameters and summary metrics
+    probes/batch-NNNN.parquet    probe series, long format (variant, t, probe fields)
+    frames/batch-NNNN.npy        optional shape frames [frame, variant-in-batch, node, xy]
+    summary.parquet, summary.csv merged summaries, written when every batch is done
+
+``pandas.read_parquet(DIR / "probes")`` opens the whole probe store (one file per batch,
+i.e. chunked by batch); ``xarray`` users convert with ``.set_index(["variant", "t"]).to_xarray()``.
+
+A batch is complete when its summary file exists. Every file is written to a temporary
+name and renamed, so a killed process or a lost Dask worker leaves no half-written
+result; the same command run again computes only the batches that are missing. Each
+strip's result does not depend on the batch it ran in (tests/test_batch.py), so the
+final results are identical however often the sweep was interrupted.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+from tqdm import tqdm
+
+from warpcloth.calibrate.metrics import swing_metrics
+from warpcloth.errors import SceneError
+from warpcloth.io.atomic import write_atomically
+from warpcloth.kernels import PROBE_FIELDS
+from warpcloth.runs import simulate
+from warpcloth.scene import Scene, Sweep, scene_from_dict
+
+WORKER_MEMORY_BYTES = 1 << 30  # per-batch result memory a worker may hold
+BATCHES_PER_WORKER = 8  # enough batches for balance, progress and resume granularity
+SUMMARY_SCALARS = ("first_period_s", "first_amplitude_m", "mean_log_decrement", "n_half_cycles",
+                   "peak_tip_speed_m_per_s", "hysteresis_work_J", "damping_work_J", "diverged",
+                   "diverged_time_s", "diverged_quantity")
+
+
+def default_max_batch(scene: Scene, n_variants: int, workers: int, frames: bool) -> int:
+    """Largest batch whose recorded results fit a worker's memory budget, and small
+    enough that every worker gets several batches."""
+    n_samples = int(scene.run.duration_s / scene.output_interval) + 1
+    per_strip = 8 * len(PROBE_FIELDS) * n_samples * 2 + 16 * 8 * scene.n_nodes
+    if frames:
+        per_strip += 16 * scene.n_nodes * (int(scene.run.duration_s * scene.output.frame_rate_hz) + 1) * 2
+    memory_cap = max(1, WORKER_MEMORY_BYTES // per_strip)
+    balance = -(-n_variants // (BATCHES_PER_WORKER * max(1, workers)))
+    return max(1, min(memory_cap, balance))
+
+
+def _save_npy(path: Path, array: np.ndarray) -> None:
+    with open(path, "wb") as fh:  # a handle, so numpy does not append ".npy" to the temporary name
+        np.save(fh, array)
+
+
+def _summary_path(out: Path, batch: int) -> Path:
+    return out / "summary" / f"batch-{batch:04d}.parquet"
+
+
+def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[dict],
+              assignments: list[dict], device: str | None, frames: bool) -> dict:
+    """Simulate one batch and write its files (runs in a Dask worker or in-process)."""
+    out = Path(out_dir)
+    scenes = [scene_from_dict(d) for d in scene_dicts]
+    started = time.perf_counter()
+    result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames)
+    wall = time.perf_counter() - started
+    diverged = {d["strip"]: d for d in result.diverged}
+
+    columns = {"variant": [], "t": []} | {name: [] for name in PROBE_FIELDS}
+    rows = []
+    for local, variant in enumerate(variants):
+        values = result.probes[:, :, local]
+        ok = np.isfinite(values[:, PROBE_FIELDS.index("tip_x")])
+        columns["variant"].append(np.full(ok.sum(), variant, dtype=np.int32))
+        columns["t"].append(result.t[ok])
+        for q, name in enumerate(PROBE_FIELDS):
+            columns[name].append(values[ok, q])
+        laser = result.probe("laser_x", local)[ok]
+        signal = laser if np.isfinite(laser).sum() > 0.9 * len(laser) else result.probe("tip_x", local)[ok]
+        metrics = swing_metrics(result.t[ok], signal, starts_at_rest=scenes[local].release.enabled)
+        report = diverged.get(local)
+        row = {"variant": variant, "batch": batch}
+        row |= {key: (json.dumps(v) if isinstance(v, list) else v) for key, v in assignments[local].items()}
+        row |= metrics
+        row |= {
+            "peak_tip_speed_m_per_s": float(np.nanmax(result.probe("tip_speed", local))),
+            "hysteresis_work_J": float(result.probe("hysteresis_work", local)[ok][-1]),
+            "damping_work_J": float(result.probe("damping_work", local)[ok][-1]),
+            "diverged": report is not None,
+            "diverged_time_s": report["time_s"] if report else float("nan"),
+            "diverged_quantity": report["quantity"] if report else "",
+        }
+        rows.append(row)
+    probes = pa.table({k: np.concatenate(v) for k, v in columns.items()})
+    write_atomically(out / "probes" / f"batch-{batch:04d}.parquet", lambda p: pq.write_table(probes, p))
+    if frames:
+        write_atomically(out / "frames" / f"batch-{batch:04d}.npy", lambda p: _save_npy(p, result.frames))
+    summary = pa.Table.from_pylist(rows)
+    write_atomically(_summary_path(out, batch), lambda p: pq.write_table(summary, p))  # last: marks the batch done
+    return {"batch": batch, "n_variants": len(variants), "strip_steps": result.strip_steps, "wall_s": wall}
+
+
+def warm_kernel_cache(scenes: list[Scene], device: str | None) -> None:
+    """Compile the kernels once in this process, so workers load them from Warp's cache
+    instead of several processes compiling into it at once (Warp FAQ)."""
+    for precision in sorted({s.integrator.precision for s in scenes}):
+        scene = next(s for s in scenes if s.integrator.precision == precision)
+        data = scene.to_dict()
+        data["release"]["enabled"] = False
+        data["run"]["duration_s"] = scene.output_interval
+        simulate(scene_from_dict(data), device=device, keep_frames=False, on_divergence="record")
+
+
+def _prepare(sweep: Sweep, out: Path, max_batch: int) -> list[list[int]]:
+    manifest = out / "sweep.json"
+    fingerprint = sweep.fingerprint
+    if manifest.exists():
+        stored = json.loads(manifest.read_text())
+        if stored["fingerprint"] != fingerprint:
+            raise SceneError("--out", f"{out} holds a different sweep (its scenes or sweep spec changed); "
+                             "choose a new --out directory to start this one")
+        return stored["batches"]
+    batches = sweep.batches(max_batch)
+    for sub in ("summary", "probes", "frames"):
+        (out / sub).mkdir(parents=True, exist_ok=True)
+    batch_of = {v: b for b, ids in enumerate(batches) for v in ids}
+    table = pd.DataFrame([{"variant": i, "batch": batch_of[i]}
+                          | {k: (json.dumps(v) if isinstance(v, list) else v) for k, v in a.items()}
+                          for i, a in enumerate(sweep.assignments)])
+    write_atomically(out / "variants.csv", lambda p: table.to_csv(p, index=False))
+    info = {"fingerprint": fingerprint, "n_variants": len(sweep.scenes), "keys": sweep.keys,
+            "batches": batches, "sweep": sweep.spec, "base_scene": sweep.base, "complete": False}
+    write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
+    return batches
+
+
+def run_sweep(
+    sweep: Sweep,
+    out: str | Path,
+    *,
+    max_batch: int | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    device: str | None = None,
+    frames: bool = False,
+    progress: bool = False,
+) -> pd.DataFrame:
+    """Run (or resume) a sweep into ``out`` and return the merged per-variant summary.
+
+    ``workers=0`` runs the batches in this process; otherwise they are Dask tasks on a
+    LocalCluster of ``workers`` single-threaded worker processes (default: one per
+    core), or on the running cluster at ``scheduler``.
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    n_workers = (os.cpu_count() or 1) if workers is None else workers
+    max_batch = max_batch or default_max_batch(sweep.scenes[0], len(sweep.scenes), n_workers, frames)
+    batches = _prepare(sweep, out, max_batch)
+    pending = [b for b, ids in enumerate(batches) if not _summary_path(out, b).exists()]
+    done = len(sweep.scenes) - sum(len(batches[b]) for b in pending)
+    bar = tqdm(total=len(sweep.scenes), initial=done, unit="variant", desc="sweep", disable=not progress,
+               dynamic_ncols=True)
+    started = time.perf_counter()
+    strip_steps = 0
+
+    def finished(info: dict) -> None:
+        nonlocal strip_steps
+        strip_steps += info["strip_steps"]
+        bar.update(info["n_variants"])
+        bar.set_postfix_str(f"{strip_steps / (time.perf_counter() - started):.3g} strip-steps/s")
+
+    def task(b: int) -> tuple:
+        ids = batches[b]
+        return (str(out), b, ids, [sweep.scenes[i].to_dict() for i in ids], [sweep.assignments[i] for i in ids],
+                device, frames)
+
+    try:
+        if pending:
+            warm_kernel_cache([sweep.scenes[batches[b][0]] for b in pending], device)
+            if scheduler is None and n_workers == 0:
+                for b in pending:
+                    finished(run_batch(*task(b)))
+            else:
+                _run_on_dask(pending, task, finished, n_workers, scheduler, sweep.fingerprint)
+    finally:
+        bar.close()
+    summary = pd.concat([pd.read_parquet(_summary_path(out, b)) for b in range(len(batches))])
+    summary = summary.sort_values("variant").reset_index(drop=True)
+    write_atomically(out / "summary.parquet", lambda p: summary.to_parquet(p, index=False))
+    scalar = [c for c in summary.columns if c not in ("half_cycle_amplitude_m", "log_decrement")]
+    write_atomically(out / "summary.csv", lambda p: summary[scalar].to_csv(p, index=False))
+    manifest = out / "sweep.json"
+    info = json.loads(manifest.read_text()) | {"complete": True}
+    write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
+    return summary
+
+
+def _run_on_dask(pending: list[int], task: Callable[[int], tuple], finished: Callable[[dict], None],
+                 n_workers: int, scheduler: str | None, fingerprint: str) -> None:
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    if scheduler is not None:
+        client = Client(scheduler)
+        cluster = None
+    else:
+        # One single-threaded process per core: Warp's CPU backend runs a launch on one thread.
+        cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+        client = Client(cluster)
+    try:
+        futures = [client.submit(run_batch, *task(b), key=f"warpcloth-{fingerprint[:12]}-batch-{b:04d}",
+                                 pure=False, retries=2) for b in pending]
+        for future in as_completed(futures):
+            finished(future.result())
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

@@ -1,0 +1,65 @@
+"""Drawable geometry shared by the USD export and the renders: ribbons of the strip's
+real width, the clamp's box, and colours per variant (all SI metres)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from warpcloth.io.recording import Recording
+
+CLAMP_JAW_M = 3.0e-3  # drawn thickness of each clamp jaw
+BOX_QUADS = [0, 1, 3, 2, 4, 6, 7, 5, 0, 4, 5, 1, 2, 3, 7, 6, 0, 2, 6, 4, 1, 5, 7, 3]
+"""Quads of the clamp box, 4 corner indices each, outward-facing."""
+
+
+def variant_colours(values: np.ndarray) -> np.ndarray:
+    """RGB in [0, 1] per value, from the viridis map over the values' range."""
+    from matplotlib import colormaps
+
+    values = np.asarray(values, dtype=float)
+    span = np.ptp(values) if len(values) else 0.0
+    scaled = (values - values.min()) / span if span > 0 else np.full(len(values), 0.5)
+    return colormaps["viridis"](scaled)[:, :3]
+
+
+def colour_values(recording: Recording) -> np.ndarray:
+    """What colours the variants: the first parameter that differs between them, else
+    the variant number."""
+    for name in recording.parameters.columns:
+        if name != "variant" and recording.parameters[name].nunique() > 1:
+            return recording.parameters[name].to_numpy()
+    return recording.variants.astype(float)
+
+
+def points3(xy: np.ndarray) -> np.ndarray:
+    """(x, y) → (x, y, 0) as float32, the precision USD points and VTK meshes use."""
+    out = np.zeros((*xy.shape[:-1], 3), dtype=np.float32)
+    out[..., :2] = xy
+    return out
+
+
+def ribbon_vertices(xy: np.ndarray, width: float) -> np.ndarray:
+    """Vertices of a ribbon of ``width`` (m) along nodes ``xy``: for node i, 2i at
+    z = −W/2 and 2i + 1 at z = +W/2."""
+    p = points3(xy)
+    edge = np.repeat(p[:, None], 2, axis=1)
+    edge[:, 0, 2], edge[:, 1, 2] = -width / 2, width / 2
+    return edge.reshape(-1, 3)
+
+
+def ribbon_quads(n_nodes: int) -> tuple[list[int], list[int]]:
+    """Face vertex counts and indices of the ribbon's quads (one per segment)."""
+    counts = [4] * (n_nodes - 1)
+    indices = []
+    for i in range(n_nodes - 1):
+        indices += [2 * i, 2 * i + 1, 2 * i + 3, 2 * i + 2]
+    return counts, indices
+
+
+def clamp_box(recording: Recording, j: int) -> np.ndarray:
+    """The 8 corners of the clamp's jaws at rest (clamp top at the origin)."""
+    scene = recording.scenes[j]
+    length = scene.strip.clamp_length_mm * 1e-3
+    half_w = scene.strip.width_mm * 1e-3 / 2
+    x = (-CLAMP_JAW_M, CLAMP_JAW_M)
+    return np.array([[xx, yy, zz] for xx in x for yy in (-length, 0.0) for zz in (-half_w, half_w)], dtype=float)

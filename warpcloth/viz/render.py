@@ -1,0 +1,143 @@
+"""3D renders of a recording with pyvista, off screen: a PNG per chosen frame and an
+animation (GIF, or MP4 when imageio-ffmpeg is installed).
+
+Each strip is drawn as a ribbon of its real width (z), the clamp as a grey box moving
+rigidly with the clamp nodes, the time after release stamped in a corner. The camera
+looks along −z at the x–y plane of the motion with a parallel projection, framed once
+for the whole run so frames compare directly.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from warpcloth.errors import SceneError
+from warpcloth.io.recording import Recording
+
+if not os.environ.get("DISPLAY"):
+    # Headless: go straight to EGL instead of trying an X server first.
+    os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
+import pyvista as pv  # noqa: E402
+
+from warpcloth.viz.geometry import BOX_QUADS, clamp_box, colour_values, ribbon_quads, ribbon_vertices, variant_colours  # noqa: E402
+
+WINDOW = (960, 720)
+CAMERA_AZIMUTH_DEG = 25.0  # about the vertical, from the +z side
+CAMERA_ELEVATION_DEG = 15.0
+BACKGROUND = "white"
+
+
+class StripRenderer:
+    """An off-screen pyvista scene of the selected variants, updated frame by frame."""
+
+    def __init__(self, recording: Recording, window_size: tuple[int, int] = WINDOW) -> None:
+        self.recording = recording
+        self.plotter = pv.Plotter(off_screen=True, window_size=list(window_size))
+        self.plotter.set_background(BACKGROUND)
+        n_nodes = recording.frames.shape[2]
+        counts, indices = ribbon_quads(n_nodes)
+        faces = np.hstack([[c, *indices[4 * i : 4 * i + 4]] for i, c in enumerate(counts)])
+        colours = variant_colours(colour_values(recording))
+        self.ribbons = []
+        self.clamps = []
+        for j in range(len(recording.variants)):
+            ribbon = pv.PolyData(self._ribbon_points(0, j), faces)
+            self.plotter.add_mesh(ribbon, color=colours[j], smooth_shading=True)
+            self.ribbons.append(ribbon)
+            box = clamp_box(recording, j)
+            clamp = pv.PolyData(box.copy(), np.hstack([[4, *BOX_QUADS[4 * k : 4 * k + 4]] for k in range(6)]))
+            self.plotter.add_mesh(clamp, color=(0.35, 0.35, 0.38))
+            self.clamps.append((clamp, box))
+        self.angle_and_shift = [recording.clamp_pose(j) for j in range(len(recording.variants))]
+        self.stamp = self.plotter.add_text("", position="upper_left", font_size=12, color="black")
+        self._frame_camera()
+
+    def _ribbon_points(self, frame: int, j: int) -> np.ndarray:
+        width = self.recording.scenes[j].strip.width_mm * 1e-3
+        return ribbon_vertices(self.recording.drawable_frames[frame, j], width).astype(float)
+
+    def _frame_camera(self) -> None:
+        # Framed once on everything the run visits. Seen slightly from the side and
+        # above, so the ribbon's width shows, while x still runs left to right.
+        xy = self.recording.drawable_frames.reshape(-1, 2)
+        lo, hi = xy.min(axis=0), xy.max(axis=0)
+        centre = (lo + hi) / 2
+        span = max(hi - lo) * 1.2 + 0.01
+        azimuth, elevation = np.radians(CAMERA_AZIMUTH_DEG), np.radians(CAMERA_ELEVATION_DEG)
+        direction = np.array([np.sin(azimuth) * np.cos(elevation), np.sin(elevation),
+                              np.cos(azimuth) * np.cos(elevation)])
+        self.plotter.camera.focal_point = (centre[0], centre[1], 0.0)
+        self.plotter.camera.position = tuple(np.array([centre[0], centre[1], 0.0]) + direction)
+        self.plotter.camera.up = (0.0, 1.0, 0.0)
+        self.plotter.enable_parallel_projection()
+        self.plotter.camera.parallel_scale = span / 2
+
+    def show_frame(self, frame: int) -> None:
+        """Move every ribbon and clamp to ``frame`` and stamp its time."""
+        for j, ribbon in enumerate(self.ribbons):
+            ribbon.points = self._ribbon_points(frame, j)
+            angle, shift = self.angle_and_shift[j]
+            c, s = np.cos(angle[frame]), np.sin(angle[frame])
+            clamp, box = self.clamps[j]
+            moved = box.copy()
+            moved[:, 0] = c * box[:, 0] - s * box[:, 1] + shift[frame, 0]
+            moved[:, 1] = s * box[:, 0] + c * box[:, 1] + shift[frame, 1]
+            clamp.points = moved
+        self.stamp.SetText(2, f"t = {self.recording.frame_times[frame]:.3f} s")
+        self.plotter.render()
+
+    def screenshot(self, frame: int, path: str | Path) -> np.ndarray:
+        """Render ``frame`` to a PNG; returns the image [row, column, rgb]."""
+        self.show_frame(frame)
+        return self.plotter.screenshot(str(path), return_img=True)
+
+    def animate(self, path: str | Path, frames: np.ndarray, fps: float) -> Path:
+        """Write an animation of ``frames`` (GIF, or MP4 with imageio-ffmpeg)."""
+        path = Path(path)
+        if path.suffix == ".gif":
+            self.plotter.open_gif(str(path), fps=fps)
+        elif path.suffix == ".mp4":
+            try:
+                import imageio_ffmpeg  # noqa: F401
+            except ImportError:
+                raise SceneError("--movie", "MP4 needs the imageio-ffmpeg package (pip install imageio-ffmpeg); "
+                                 "a .gif needs nothing more") from None
+            self.plotter.open_movie(str(path), framerate=fps)
+        else:
+            raise SceneError("--movie", f"{path} must end in .gif or .mp4")
+        for f in frames:
+            self.show_frame(int(f))
+            self.plotter.write_frame()
+        self.plotter.mwriter.close()
+        return path
+
+    def close(self) -> None:
+        """Release the render window."""
+        self.plotter.close()
+
+
+def render_run(recording: Recording, out_dir: str | Path, *, times: np.ndarray | None = None,
+               movie: str | None = "motion.gif", stride: int = 1) -> list[Path]:
+    """PNGs of the frames at ``times`` (default: six spread over the run) and, unless
+    ``movie`` is None, an animation of every ``stride``-th frame at real speed."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    if times is None:
+        times = np.linspace(recording.frame_times[0], recording.frame_times[-1], 6)
+    renderer = StripRenderer(recording)
+    written = []
+    try:
+        for f in recording.nearest_frames(times):
+            path = out / f"frame_{f:05d}.png"
+            renderer.screenshot(int(f), path)
+            written.append(path)
+        if movie:
+            frames = np.arange(0, len(recording.frame_times), max(1, stride))
+            written.append(renderer.animate(out / movie, frames, recording.frame_rate / max(1, stride)))
+    finally:
+        renderer.close()
+    return written
