@@ -7,6 +7,7 @@ its hold target and held there.
 """
 
 import functools
+import math
 from types import SimpleNamespace
 from typing import Any
 
@@ -26,6 +27,10 @@ def build(scalar: Any) -> SimpleNamespace:
     vec2, vec5 = types.vec2, types.vec5
     zero = scalar(0.0)
     one = scalar(1.0)
+    # π in the kernel's precision, formed here: 2.0 * wp.pi inside a Warp function is a
+    # float32 product.
+    pi = scalar(math.pi)
+    two_pi = scalar(2.0 * math.pi)
     perp = geometry.build(scalar).perp
 
     @wp.struct
@@ -84,10 +89,10 @@ def build(scalar: Any) -> SimpleNamespace:
             p = x * x * x * (x * (x * scalar(6.0) - scalar(15.0)) + scalar(10.0))
             dp = scalar(30.0) * x * x * (x - one) * (x - one) / (scalar(move_steps) * dt)
         turn = a1 - a0
-        if turn > wp.pi:  # the short way round, never through the clamp
-            turn = turn - scalar(2.0 * wp.pi)
-        elif turn < -wp.pi:
-            turn = turn + scalar(2.0 * wp.pi)
+        if turn > pi:  # the short way round, never through the clamp
+            turn = turn - two_pi
+        elif turn < -pi:
+            turn = turn + two_pi
         r = r0 + (r1 - r0) * p
         a = a0 + turn * p
         radial = vec2(wp.cos(a), wp.sin(a))

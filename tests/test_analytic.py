@@ -1,4 +1,4 @@
-"""Small-amplitude periods against closed-form references (MODEL.md, 'Validation')."""
+"""Small-amplitude periods against closed-form references (docs/model.md §15)."""
 
 import math
 
@@ -81,7 +81,7 @@ def beam_period_error(spacing_mm: float) -> float:
 def test_clamped_free_beam_first_period():
     # No gravity, D1 = 0: the clamped-free beam, ω₁ = 1.8751² √(D W / (ρ_A W L⁴)),
     # started in its first mode shape with a 1 mm tip amplitude.
-    # The clamp of MODEL.md is built in only to first order: the clamp-edge hinge sees the
+    # The paper's clamp (docs/model.md §5.3) is built in only to first order: the clamp-edge hinge sees the
     # clamped node above it (a one-sided slope condition), so the strip acts as if its
     # root were h/2 inside the clamp, period × (1 + h/2L)². Measured +5.4 % at h = 5 mm,
     # +2.6 % at 2.5 mm, +1.3 % at 1.25 mm. The issue's 2 % holds from h = 1.25 mm, and

@@ -5,8 +5,8 @@ import pytest
 from conftest import overrides
 
 import warpcloth as wc
-from warpcloth.scene.clamp_motion import clamp_pieces, evaluate
 from warpcloth.scene import build_batch
+from warpcloth.scene.clamp_motion import clamp_pieces, evaluate
 
 
 def test_piecewise_quartic_then_line_matches_host_evaluation():

@@ -1,4 +1,4 @@
-"""Energy budget of the damped swing (MODEL.md, 'Validation')."""
+"""Energy budget of the damped swing (docs/model.md §15.5)."""
 
 import numpy as np
 from conftest import overrides
@@ -44,7 +44,7 @@ def test_budget_closes_with_hysteresis_and_damping():
     # both mechanisms really dissipate here, each a sizeable share of the swing energy
     assert hysteresis[-1] > 0.2 * scale and damping[-1] > 0.2 * scale
     # damping work never decreases; hysteresis work may (the offset returns work just
-    # after a reversal, MODEL.md), but the mechanical energy must fall overall
+    # after a reversal, docs/model.md §4.3), but the mechanical energy must fall overall
     assert np.all(np.diff(damping) >= -1e-20)
     mechanical = total - hysteresis - damping
     assert mechanical[-1] < mechanical[0] - 0.5 * scale

@@ -10,8 +10,8 @@ from conftest import overrides
 from PIL import Image
 
 import warpcloth as wc
+from warpcloth.io.load import load_recording
 from warpcloth.io.measured import read_encoder, read_laser_trace, read_measurement, read_tracked_shapes
-from warpcloth.io.recording import load_recording
 from warpcloth.viz.plots import plot_run, plot_sweep, read_sweep_summary
 
 SWING = overrides(run__duration_s=0.6, release__settle_time_s=0.1)

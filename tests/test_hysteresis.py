@@ -1,4 +1,4 @@
-"""The hysteretic bending law (paper eqs. 3-4, MODEL.md) on a single hinge.
+"""The hysteretic bending law (paper eqs. 3-4, docs/model.md §4) on a single hinge.
 
 Runs the kernel's own hinge logic through warpcloth.sim.moment_along_path.
 """

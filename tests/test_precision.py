@@ -1,4 +1,4 @@
-"""float32 is offered only where it agrees with float64 (MODEL.md, 'Precision')."""
+"""float32 is offered only where it agrees with float64 (docs/model.md §9.4)."""
 
 import numpy as np
 import pytest
@@ -11,7 +11,7 @@ import warpcloth as wc
 def test_float32_agrees_with_float64_at_the_default_dt(name, duration):
     # Measured at the scenes' default dt: the float32 tip path differs by ≤ 0.2 mm
     # (0.3-0.7 % of the motion) and the swing period by 0.01 %. At the paper's 1e-7 s a
-    # float32 position update keeps only a few bits (MODEL.md), so float32 is documented
+    # float32 position update keeps only a few bits (docs/model.md §9.4), so float32 is documented
     # for the default dt only. Bound: 1 % of the tip's excursion.
     f64 = wc.simulate(wc.load_scene(name, overrides(run__duration_s=duration)))
     f32 = wc.simulate(wc.load_scene(name, overrides(run__duration_s=duration, integrator__precision="float32")))

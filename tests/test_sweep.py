@@ -120,7 +120,7 @@ def test_a_diverged_variant_is_recorded_and_the_sweep_goes_on(tmp_path):
 def test_a_changed_sweep_does_not_resume_into_an_old_directory(tmp_path):
     run_sweep(small_sweep(), tmp_path / "s", workers=0)
     changed = expand(with_sweep(base(), grid={D1: [0.0, 0.05]}))
-    with pytest.raises(wc.SceneError, match="holds a different sweep"):
+    with pytest.raises(wc.OptionError, match="holds a different sweep"):
         run_sweep(changed, tmp_path / "s", workers=0)
 
 

@@ -14,7 +14,7 @@ from pxr import Usd, UsdGeom
 
 import warpcloth as wc
 from warpcloth.io import usd
-from warpcloth.io.recording import load_recording
+from warpcloth.io.load import load_recording
 from warpcloth.io.usd import export_usd
 
 ROTATION = overrides(run__duration_s=0.2, strip__spacing_mm=5.0, integrator__dt_s=1e-5)
@@ -112,7 +112,7 @@ def test_many_variants_share_one_curves_prim(swing_batch, tmp_path, monkeypatch)
     assert gamma.GetInterpolation() == UsdGeom.Tokens.uniform and list(gamma.Get()) == [0.1, 0.5, 2.0]
     points = curve_points(stage, "/World/Strips/curves", 12).reshape(3, n_nodes, 3)
     np.testing.assert_allclose(points[..., :2], recording.frames[12], atol=1e-7)
-    with pytest.raises(wc.SceneError, match="--ribbon"):
+    with pytest.raises(wc.OptionError, match="--ribbon"):
         export_usd(recording, tmp_path / "many_ribbons.usd", ribbon=True)
 
 
@@ -144,14 +144,14 @@ def test_sweep_variants_are_selected_by_range_and_by_parameter(tmp_path):
     stage = Usd.Stage.Open(str(export_usd(picked, tmp_path / "sweep.usda")))
     assert [p.GetName() for p in stage.GetPrimAtPath("/World/Strips").GetChildren()] == ["variant_0001",
                                                                                          "variant_0002"]
-    with pytest.raises(wc.SceneError, match="--where"):
+    with pytest.raises(wc.OptionError, match="--where"):
         load_recording(tmp_path / "sweep", where="damping.gamma_per_s>9")
-    with pytest.raises(wc.SceneError, match="--variants"):
+    with pytest.raises(wc.OptionError, match="--variants"):
         load_recording(tmp_path / "sweep", variants="7")
     no_frames = wc.expand({"run": {"duration_s": 0.05}, "release": {"settle_time_s": 0.05},
                            "sweep": {"grid": {"damping.gamma_per_s": [0.1]}}})
     wc.run_sweep(no_frames, tmp_path / "bare", workers=0, progress=False)
-    with pytest.raises(wc.SceneError, match="--frames"):
+    with pytest.raises(wc.DataFileError, match="--frames"):
         load_recording(tmp_path / "bare")
 
 
@@ -240,5 +240,5 @@ def test_a_sweep_whose_material_file_changed_is_refused(tmp_path):
     wc.run_sweep(sweep, tmp_path / "sweep", workers=0, frames=True, progress=False)
     assert load_recording(tmp_path / "sweep").scenes[0].material.density_g_per_cm2 == 0.0203
     material.write_text(material.read_text().replace("density_g_per_cm2 = 2.03e-2", "density_g_per_cm2 = 4e-2"))
-    with pytest.raises(wc.SceneError, match="no longer resolve"):
+    with pytest.raises(wc.DataFileError, match="no longer resolve"):
         load_recording(tmp_path / "sweep")

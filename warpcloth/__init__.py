@@ -14,7 +14,8 @@ The namespaces :mod:`warpcloth.sim` (the SI simulation core), :mod:`warpcloth.sc
 from . import calibrate, io, scene, sim, viz
 from .calibrate.metrics import crossing_times, first_period
 from .errors import DataFileError, DivergenceError, OptionError, SceneError, WarpclothError
-from .io.recording import Recording, load_recording
+from .io.load import load_recording
+from .io.recording import Recording
 from .io.usd import export_usd
 from .runs import run, simulate
 from .scene import Scene, Sweep, apply_overrides, bundled_scenes, expand, load_scene, load_sweep, scene_from_dict

@@ -1,21 +1,7 @@
-"""Running a sweep: batches as Dask tasks, results streamed per batch, resumable.
+"""Running a sweep: batches as Dask tasks, each streamed to the sweep directory
+(:mod:`warpcloth.io.sweep_dir`) as it finishes, resumable.
 
-Layout of a sweep directory::
-
-    sweep.json              fingerprint of the expanded sweep, the batch layout, the spec
-    variants.csv            variant, batch and the swept field values (written first)
-    summary/batch-NNNN.parquet   per variant: parameters and summary metrics
-    probes/batch-NNNN.parquet    probe series, long format (variant, t, probe fields)
-    frames/batch-NNNN.npy        optional shape frames [frame, variant-in-batch, node, xy]
-    summary.parquet, summary.csv merged summaries, written when every batch is done
-
-``pandas.read_parquet(DIR / "probes")`` opens the whole probe store (one file per batch,
-i.e. chunked by batch); ``xarray`` users convert with ``.set_index(["variant", "t"]).to_xarray()``.
-
-A batch is complete when its summary file exists. Every file is written to a temporary
-name and renamed, so a killed process or a lost Dask worker leaves no half-written
-result; the same command run again computes only the batches that are missing. Each
-strip's result does not depend on the batch it ran in (tests/test_batch.py), so the
+Each strip's result does not depend on the batch it ran in (tests/test_batch.py), so the
 final results are identical however often the sweep was interrupted.
 """
 
@@ -30,13 +16,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import pyarrow as pa
-import pyarrow.parquet as pq
 from tqdm import tqdm
 
 from warpcloth.calibrate.metrics import swing_metrics
-from warpcloth.errors import SceneError
-from warpcloth.io.atomic import write_atomically
+from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, Sweep, scene_from_dict
@@ -60,19 +43,9 @@ def default_max_batch(scene: Scene, n_variants: int, workers: int, frames: bool)
     return max(1, min(memory_cap, balance))
 
 
-def _save_npy(path: Path, array: np.ndarray) -> None:
-    with open(path, "wb") as fh:  # a handle, so numpy does not append ".npy" to the temporary name
-        np.save(fh, array)
-
-
-def _summary_path(out: Path, batch: int) -> Path:
-    return out / "summary" / f"batch-{batch:04d}.parquet"
-
-
 def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[dict],
               assignments: list[dict], device: str | None, frames: bool) -> dict:
     """Simulate one batch and write its files (runs in a Dask worker or in-process)."""
-    out = Path(out_dir)
     scenes = [scene_from_dict(d) for d in scene_dicts]
     started = time.perf_counter()
     result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames)
@@ -104,12 +77,8 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
             "diverged_quantity": report["quantity"] if report else "",
         }
         rows.append(row)
-    probes = pa.table({k: np.concatenate(v) for k, v in columns.items()})
-    write_atomically(out / "probes" / f"batch-{batch:04d}.parquet", lambda p: pq.write_table(probes, p))
-    if frames:
-        write_atomically(out / "frames" / f"batch-{batch:04d}.npy", lambda p: _save_npy(p, result.frames))
-    summary = pa.Table.from_pylist(rows)
-    write_atomically(_summary_path(out, batch), lambda p: pq.write_table(summary, p))  # last: marks the batch done
+    SweepDirectory(out_dir).write_batch(batch, {k: np.concatenate(v) for k, v in columns.items()}, rows,
+                                        result.frames if frames else None)
     return {"batch": batch, "n_variants": len(variants), "strip_steps": result.strip_steps, "wall_s": wall}
 
 
@@ -122,29 +91,6 @@ def warm_kernel_cache(scenes: list[Scene], device: str | None) -> None:
         data["release"]["enabled"] = False
         data["run"]["duration_s"] = scene.output_interval
         simulate(scene_from_dict(data), device=device, keep_frames=False, on_divergence="record")
-
-
-def _prepare(sweep: Sweep, out: Path, max_batch: int) -> list[list[int]]:
-    manifest = out / "sweep.json"
-    fingerprint = sweep.fingerprint
-    if manifest.exists():
-        stored = json.loads(manifest.read_text())
-        if stored["fingerprint"] != fingerprint:
-            raise SceneError("--out", f"{out} holds a different sweep (its scenes or sweep spec changed); "
-                             "choose a new --out directory to start this one")
-        return stored["batches"]
-    batches = sweep.batches(max_batch)
-    for sub in ("summary", "probes", "frames"):
-        (out / sub).mkdir(parents=True, exist_ok=True)
-    batch_of = {v: b for b, ids in enumerate(batches) for v in ids}
-    table = pd.DataFrame([{"variant": i, "batch": batch_of[i]}
-                          | {k: (json.dumps(v) if isinstance(v, list) else v) for k, v in a.items()}
-                          for i, a in enumerate(sweep.assignments)])
-    write_atomically(out / "variants.csv", lambda p: table.to_csv(p, index=False))
-    info = {"fingerprint": fingerprint, "n_variants": len(sweep.scenes), "keys": sweep.keys,
-            "batches": batches, "sweep": sweep.spec, "base_scene": sweep.base, "complete": False}
-    write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
-    return batches
 
 
 def run_sweep(
@@ -166,10 +112,11 @@ def run_sweep(
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    directory = SweepDirectory(out)
     n_workers = (os.cpu_count() or 1) if workers is None else workers
     max_batch = max_batch or default_max_batch(sweep.scenes[0], len(sweep.scenes), n_workers, frames)
-    batches = _prepare(sweep, out, max_batch)
-    pending = [b for b, ids in enumerate(batches) if not _summary_path(out, b).exists()]
+    batches = directory.prepare(sweep, lambda: sweep.batches(max_batch))
+    pending = [b for b in range(len(batches)) if not directory.is_done(b)]
     done = len(sweep.scenes) - sum(len(batches[b]) for b in pending)
     bar = tqdm(total=len(sweep.scenes), initial=done, unit="variant", desc="sweep", disable=not progress,
                dynamic_ncols=True)
@@ -197,15 +144,7 @@ def run_sweep(
                 _run_on_dask(pending, task, finished, n_workers, scheduler, sweep.fingerprint)
     finally:
         bar.close()
-    summary = pd.concat([pd.read_parquet(_summary_path(out, b)) for b in range(len(batches))])
-    summary = summary.sort_values("variant").reset_index(drop=True)
-    write_atomically(out / "summary.parquet", lambda p: summary.to_parquet(p, index=False))
-    scalar = [c for c in summary.columns if c not in ("half_cycle_amplitude_m", "log_decrement")]
-    write_atomically(out / "summary.csv", lambda p: summary[scalar].to_csv(p, index=False))
-    manifest = out / "sweep.json"
-    info = json.loads(manifest.read_text()) | {"complete": True}
-    write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
-    return summary
+    return directory.finish(len(batches))
 
 
 def _run_on_dask(pending: list[int], task: Callable[[int], tuple], finished: Callable[[dict], None],

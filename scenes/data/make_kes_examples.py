@@ -2,7 +2,7 @@
 
 They are synthetic: the model itself with known parameters plus seeded Gaussian noise,
 so that ``warpcloth material fit-kes`` can be checked against the truth. The material is
-MODEL.md's illustrative wool 90 % / nylon 10 % (``warpcloth.scene.DEFAULT_MATERIAL``):
+The illustrative wool 90 % / nylon 10 % (``warpcloth.scene.DEFAULT_MATERIAL``):
 tensile a = (2000, 0, 0, 2.93e7) gf/cm, D = 0.10 gf·cm²/cm, D1 = 0.04 gf·cm/cm,
 α = 5 cm, K0 = 2.5 1/cm.
 

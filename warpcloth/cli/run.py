@@ -42,7 +42,7 @@ def run_scene(args: argparse.Namespace) -> int:
         period = first_period(result.t, result.probe("laser_x", 0), level=0.0)
         print(f"first swing period (laser line crossing x = 0): {period:.4f} s")
     if args.usd:
-        from warpcloth.io.recording import load_recording
+        from warpcloth.io.load import load_recording
         from warpcloth.io.usd import export_usd
 
         print(f"wrote {export_usd(load_recording(out), args.usd)}")

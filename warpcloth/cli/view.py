@@ -42,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def export_usd_command(args: argparse.Namespace) -> int:
     """Write the selected variants as an animated USD stage."""
-    from warpcloth.io.recording import load_recording
+    from warpcloth.io.load import load_recording
     from warpcloth.io.usd import export_usd
 
     recording = load_recording(args.run_dir, args.variants, args.where)
@@ -53,7 +53,7 @@ def export_usd_command(args: argparse.Namespace) -> int:
 
 def plot_command(args: argparse.Namespace) -> int:
     """Figures of a run, or one sweep metric against parameters."""
-    from warpcloth.io.recording import load_recording
+    from warpcloth.io.load import load_recording
     from warpcloth.viz.plots import plot_run, plot_sweep, read_sweep_summary
 
     out = Path(args.out or Path(args.run_dir) / "figures")
@@ -73,7 +73,7 @@ def plot_command(args: argparse.Namespace) -> int:
 
 def render_command(args: argparse.Namespace) -> int:
     """Off-screen 3D PNG frames and an animation."""
-    from warpcloth.io.recording import load_recording
+    from warpcloth.io.load import load_recording
     from warpcloth.viz.render import render_run
 
     recording = load_recording(args.run_dir, args.variants, args.where)

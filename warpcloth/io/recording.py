@@ -2,15 +2,14 @@
 
 A :class:`Recording` is the view every consumer shares: the variants' resolved scenes,
 shape frames ``[frame, variant, node, xy]`` (m), probe series and the per-variant
-parameters, from either a run directory (``warpcloth run``) or a sweep directory
-(``warpcloth sweep --frames``). Frames are memory-mapped, so selecting a few variants of
-a large sweep reads only theirs.
+parameters, read from a run directory (:mod:`.run_dir`) or a sweep directory
+(:mod:`.sweep_dir`) by :func:`warpcloth.io.load.load_recording`. Frames are
+memory-mapped, so selecting a few variants of a large sweep reads only theirs.
 """
 
 from __future__ import annotations
 
 import functools
-import json
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,9 +17,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from warpcloth.errors import SceneError
-from warpcloth.kernels import PROBE_FIELDS
-from warpcloth.scene import Scene, batch_fields, read_scene_file, rest_positions, scene_from_dict
+from warpcloth.errors import OptionError
+from warpcloth.scene import Scene, batch_fields, rest_positions
 
 
 @dataclass
@@ -63,7 +61,7 @@ class Recording:
         times = np.atleast_1d(np.asarray(times, dtype=float))
         late = times[(times < self.frame_times[0] - 1e-9) | (times > self.frame_times[-1] + 1e-9)]
         if len(late):
-            raise SceneError("--times", f"{late[0]:g} s is outside the recording "
+            raise OptionError("--times", f"{late[0]:g} s is outside the recording "
                              f"({self.frame_times[0]:g} to {self.frame_times[-1]:g} s)")
         return np.abs(self.frame_times[None, :] - times[:, None]).argmin(axis=1)
 
@@ -110,12 +108,12 @@ def parse_variants(text: str | None, n_variants: int) -> np.ndarray:
         else:
             chosen = np.array([int(p) for p in text.split(",")])
     except ValueError:
-        raise SceneError("--variants", f"{text!r} is not a variant number, list (1,4,9) or range (0:50)") from None
+        raise OptionError("--variants", f"{text!r} is not a variant number, list (1,4,9) or range (0:50)") from None
     if len(chosen) == 0:
-        raise SceneError("--variants", f"{text!r} selects no variant of {n_variants}")
+        raise OptionError("--variants", f"{text!r} selects no variant of {n_variants}")
     bad = chosen[(chosen < 0) | (chosen >= n_variants)]
     if len(bad):
-        raise SceneError("--variants", f"variant {bad[0]} does not exist (there are {n_variants})")
+        raise OptionError("--variants", f"variant {bad[0]} does not exist (there are {n_variants})")
     return chosen
 
 
@@ -129,21 +127,21 @@ def filter_variants(parameters: pd.DataFrame, where: str) -> np.ndarray:
     for clause in where.split(","):
         match = _FILTER.match(clause)
         if not match:
-            raise SceneError("--where", f"{clause.strip()!r} is not 'field OP value' (e.g. damping.gamma_per_s<0.5)")
+            raise OptionError("--where", f"{clause.strip()!r} is not 'field OP value' (e.g. damping.gamma_per_s<0.5)")
         name, op, value = match.groups()
         if name not in parameters:
-            raise SceneError("--where", f"{name!r} is not a parameter of these variants; "
+            raise OptionError("--where", f"{name!r} is not a parameter of these variants; "
                              f"known: {', '.join(c for c in parameters.columns if c != 'variant')}")
         column = parameters[name]
         try:
             number = float(value)
         except ValueError:
-            raise SceneError("--where", f"{value!r} in {clause.strip()!r} is not a number") from None
+            raise OptionError("--where", f"{value!r} in {clause.strip()!r} is not a number") from None
         keep &= {"<": column < number, "<=": column <= number, ">": column > number, ">=": column >= number,
                  "==": column == number, "!=": column != number}[op].to_numpy()
     chosen = parameters["variant"].to_numpy()[keep]
     if len(chosen) == 0:
-        raise SceneError("--where", f"{where!r} matches no variant")
+        raise OptionError("--where", f"{where!r} matches no variant")
     return chosen
 
 
@@ -162,75 +160,9 @@ def per_strip_parameters(scenes: list[Scene]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def load_recording(path: str | Path, variants: str | None = None, where: str | None = None) -> Recording:
-    """Open a run directory or a sweep directory (chosen by its files) and select variants.
-
-    ``variants`` is a selection as for :func:`parse_variants`; ``where`` a parameter
-    filter as for :func:`filter_variants`; both may be given (the filter applies to
-    the selection).
-    """
-    path = Path(path)
-    if (path / "sweep.json").is_file():
-        return _load_sweep(path, variants, where)
-    if (path / "meta.json").is_file():
-        return _load_run(path, variants, where)
-    raise SceneError("RUN_DIR", f"{path} is neither a run directory (meta.json) nor a sweep directory (sweep.json)")
-
-
-def _select(parameters: pd.DataFrame, variants: str | None, where: str | None) -> np.ndarray:
+def select_variants(parameters: pd.DataFrame, variants: str | None, where: str | None) -> np.ndarray:
+    """Variant numbers chosen by a ``--variants`` selection and a ``--where`` filter (both optional)."""
     chosen = parse_variants(variants, len(parameters))
     if where:
         chosen = np.intersect1d(chosen, filter_variants(parameters.iloc[chosen], where))
     return chosen
-
-
-def _load_run(path: Path, variants: str | None, where: str | None) -> Recording:
-    meta = json.loads((path / "meta.json").read_text())
-    if meta["n_variants"] == 1:
-        scenes = [scene_from_dict(read_scene_file(path / "scene.toml"))]
-    else:
-        scenes = [scene_from_dict(read_scene_file(path / "variants" / f"{i:04d}.toml"))
-                  for i in range(meta["n_variants"])]
-    parameters = per_strip_parameters(scenes)
-    parameters.insert(0, "variant", np.arange(len(scenes)))
-    chosen = _select(parameters, variants, where)
-    frames = np.asarray(np.load(path / "frames.npy", mmap_mode="r")[:, chosen])
-    times = np.load(path / "frame_times.npy")
-    if not meta["complete"]:
-        # An interrupted run: keep the frames it reached.
-        reached = np.nonzero(np.isfinite(frames).any(axis=(1, 2, 3)))[0]
-        if not len(reached):
-            raise SceneError("RUN_DIR", f"{path} was interrupted before its first frame")
-        frames, times = frames[: reached[-1] + 1], times[: reached[-1] + 1]
-    probes = pd.read_csv(path / "probes.csv")
-    return Recording(path, chosen, [scenes[i] for i in chosen], times, frames, probes[probes["variant"].isin(chosen)],
-                     parameters.iloc[chosen].reset_index(drop=True), bool(meta["complete"]))
-
-
-def _load_sweep(path: Path, variants: str | None, where: str | None) -> Recording:
-    from warpcloth.scene import expand
-
-    info = json.loads((path / "sweep.json").read_text())
-    sweep = expand(info["base_scene"] | {"sweep": info["sweep"]})
-    if sweep.fingerprint != info["fingerprint"]:
-        raise SceneError("RUN_DIR", f"{path}: its variants no longer resolve to the scenes that were simulated "
-                         "(a material file it uses has changed?); the stored results cannot be labelled")
-    parameters = per_strip_parameters(sweep.scenes)
-    parameters.insert(0, "variant", np.arange(len(sweep.scenes)))
-    chosen = _select(parameters, variants, where)
-    where_is = {v: (b, k) for b, ids in enumerate(info["batches"]) for k, v in enumerate(ids)}
-    needed = sorted({where_is[v][0] for v in chosen})
-    missing = [b for b in needed if not (path / "frames" / f"batch-{b:04d}.npy").is_file()]
-    if missing:
-        raise SceneError("RUN_DIR", f"{path} has no shape frames for batch {missing[0]}: that batch ran without "
-                         "--frames (or has not finished); a resumed sweep keeps finished batches, so run it with "
-                         "--frames into a new --out directory")
-    stores = {b: np.load(path / "frames" / f"batch-{b:04d}.npy", mmap_mode="r") for b in needed}
-    n_frames = min(len(s) for s in stores.values())
-    frames = np.stack([stores[where_is[v][0]][:n_frames, where_is[v][1]] for v in chosen], axis=1)
-    probes = pd.concat([pd.read_parquet(path / "probes" / f"batch-{b:04d}.parquet",
-                                        filters=[("variant", "in", [int(v) for v in chosen])]) for b in needed])
-    probes = probes[["t", "variant", *PROBE_FIELDS]]
-    frame_times = np.arange(n_frames) / sweep.scenes[0].output.frame_rate_hz
-    return Recording(path, chosen, [sweep.scenes[i] for i in chosen], frame_times, frames, probes,
-                     parameters.iloc[chosen].reset_index(drop=True))

@@ -1,4 +1,4 @@
-"""Run directories: results stream to disk as they are produced.
+"""Run directories: results stream to disk as they are produced, and are read back.
 
 Layout of a run directory::
 
@@ -20,12 +20,15 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import tomli_w
 
+from warpcloth.errors import DataFileError
 from warpcloth.kernels import PROBE_FIELDS
-from warpcloth.scene import Scene
+from warpcloth.scene import Scene, read_scene_file, scene_from_dict
 
 from .atomic import write_text_atomically
+from .recording import Recording, per_strip_parameters, select_variants
 
 PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
 PROBE_UNITS = {
@@ -101,3 +104,27 @@ class RunWriter:
         self.meta.update(extra)
         self.meta["complete"] = True
         self._write_meta()
+
+
+def read_run(path: Path, variants: str | None = None, where: str | None = None) -> Recording:
+    """Selected variants of a run directory as a Recording (an interrupted run: the frames it reached)."""
+    meta = json.loads((path / "meta.json").read_text())
+    if meta["n_variants"] == 1:
+        scenes = [scene_from_dict(read_scene_file(path / "scene.toml"))]
+    else:
+        scenes = [scene_from_dict(read_scene_file(path / "variants" / f"{i:04d}.toml"))
+                  for i in range(meta["n_variants"])]
+    parameters = per_strip_parameters(scenes)
+    parameters.insert(0, "variant", np.arange(len(scenes)))
+    chosen = select_variants(parameters, variants, where)
+    frames = np.asarray(np.load(path / "frames.npy", mmap_mode="r")[:, chosen])
+    times = np.load(path / "frame_times.npy")
+    if not meta["complete"]:
+        # An interrupted run: keep the frames it reached.
+        reached = np.nonzero(np.isfinite(frames).any(axis=(1, 2, 3)))[0]
+        if not len(reached):
+            raise DataFileError(path, "the run was interrupted before its first frame")
+        frames, times = frames[: reached[-1] + 1], times[: reached[-1] + 1]
+    probes = pd.read_csv(path / "probes.csv")
+    return Recording(path, chosen, [scenes[i] for i in chosen], times, frames, probes[probes["variant"].isin(chosen)],
+                     parameters.iloc[chosen].reset_index(drop=True), bool(meta["complete"]))

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils, Vt
 
-from warpcloth.errors import SceneError
+from warpcloth.errors import OptionError
 from warpcloth.io.recording import Recording
 from warpcloth.viz.geometry import (
     BOX_QUADS,
@@ -173,15 +173,15 @@ def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = Fal
     """
     out = Path(out_file)
     if out.suffix not in USD_SUFFIXES:
-        raise SceneError("-o", f"{out} must end in one of {', '.join(USD_SUFFIXES)}")
+        raise OptionError("-o", f"{out} must end in one of {', '.join(USD_SUFFIXES)}")
     if ribbon and len(recording.variants) > PRIM_PER_STRIP_LIMIT:
-        raise SceneError("--ribbon", f"ribbons are written per variant; select at most {PRIM_PER_STRIP_LIMIT} "
+        raise OptionError("--ribbon", f"ribbons are written per variant; select at most {PRIM_PER_STRIP_LIMIT} "
                          f"of the {len(recording.variants)} variants (--variants, --where)")
     n_frames, n_variants, n_nodes = recording.frames.shape[:3]
     if frames_per_clip is None and n_frames * n_variants * n_nodes > CLIP_POINTS:
         frames_per_clip = max(1, CLIP_POINTS // (n_variants * n_nodes))
     if frames_per_clip is not None and frames_per_clip < 1:
-        raise SceneError("--frames-per-clip", f"{frames_per_clip} must be at least 1")
+        raise OptionError("--frames-per-clip", f"{frames_per_clip} must be at least 1")
     out.parent.mkdir(parents=True, exist_ok=True)
     fps = recording.frame_rate
     with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.stem}.") as tmp:

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from warpcloth.kernels import MAX_DEGREE, drives
 
-from .model import Model
+if TYPE_CHECKING:
+    from .model import Model
 
 
 class Control:

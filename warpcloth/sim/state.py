@@ -3,12 +3,15 @@ memory of every hinge, the work done so far, and each strip's health."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import warp as wp
 
 from warpcloth.kernels.strip import hinge_kernels
 
-from .model import Model
+if TYPE_CHECKING:
+    from .model import Model
 
 
 class State:

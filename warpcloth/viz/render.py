@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from warpcloth.errors import SceneError
+from warpcloth.errors import OptionError
 from warpcloth.io.recording import Recording
 
 if not os.environ.get("DISPLAY"):
@@ -104,11 +104,11 @@ class StripRenderer:
             try:
                 import imageio_ffmpeg  # noqa: F401
             except ImportError:
-                raise SceneError("--movie", "MP4 needs the imageio-ffmpeg package (pip install imageio-ffmpeg); "
+                raise OptionError("--movie", "MP4 needs the imageio-ffmpeg package (pip install imageio-ffmpeg); "
                                  "a .gif needs nothing more") from None
             self.plotter.open_movie(str(path), framerate=fps)
         else:
-            raise SceneError("--movie", f"{path} must end in .gif or .mp4")
+            raise OptionError("--movie", f"{path} must end in .gif or .mp4")
         for f in frames:
             self.show_frame(int(f))
             self.plotter.write_frame()

@@ -1,0 +1,137 @@
+"""Sweep directories: results stream to disk per batch, and are read back as Recordings.
+
+Layout of a sweep directory::
+
+    sweep.json              fingerprint of the expanded sweep, the batch layout, the spec
+    variants.csv            variant, batch and the swept field values (written first)
+    summary/batch-NNNN.parquet   per variant: parameters and summary metrics
+    probes/batch-NNNN.parquet    probe series, long format (variant, t, probe fields)
+    frames/batch-NNNN.npy        optional shape frames [frame, variant-in-batch, node, xy]
+    summary.parquet, summary.csv merged summaries, written when every batch is done
+
+``pandas.read_parquet(DIR / "probes")`` opens the whole probe store (one file per batch,
+i.e. chunked by batch); ``xarray`` users convert with ``.set_index(["variant", "t"]).to_xarray()``.
+
+A batch is complete when its summary file exists. Every file is written through
+:mod:`warpcloth.io.atomic`, so a killed process or a lost Dask worker leaves no
+half-written result, and the same sweep run again computes only the batches that are
+missing.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from warpcloth.errors import DataFileError, OptionError
+from warpcloth.kernels import PROBE_FIELDS
+from warpcloth.scene import Sweep, expand
+
+from .atomic import write_atomically
+from .recording import Recording, per_strip_parameters, select_variants
+
+LIST_COLUMNS = ("half_cycle_amplitude_m", "log_decrement")
+"""Summary columns holding a list per variant: in summary.parquet, not summary.csv."""
+
+
+def _save_npy(path: Path, array: np.ndarray) -> None:
+    with open(path, "wb") as fh:  # a handle, so numpy never appends ".npy" to the name
+        np.save(fh, array)
+
+
+def _cell(value: object) -> object:
+    return json.dumps(value) if isinstance(value, list) else value
+
+
+class SweepDirectory:
+    """One sweep directory on disk (see the module docstring)."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+
+    def summary_path(self, batch: int) -> Path:
+        """The per-batch summary file, whose existence marks the batch done."""
+        return self.path / "summary" / f"batch-{batch:04d}.parquet"
+
+    def is_done(self, batch: int) -> bool:
+        """Whether ``batch`` has been written completely."""
+        return self.summary_path(batch).exists()
+
+    def prepare(self, sweep: Sweep, plan: Callable[[], list[list[int]]]) -> list[list[int]]:
+        """The batch layout: the stored one when this directory holds the same sweep
+        (resume), else ``plan()``'s, written with the manifest and variants.csv."""
+        manifest = self.path / "sweep.json"
+        if manifest.exists():
+            stored = json.loads(manifest.read_text())
+            if stored["fingerprint"] != sweep.fingerprint:
+                raise OptionError("--out", f"{self.path} holds a different sweep (its scenes or sweep spec "
+                                  "changed); choose a new --out directory to start this one")
+            return stored["batches"]
+        batches = plan()
+        for sub in ("summary", "probes", "frames"):
+            (self.path / sub).mkdir(parents=True, exist_ok=True)
+        batch_of = {v: b for b, ids in enumerate(batches) for v in ids}
+        table = pd.DataFrame([{"variant": i, "batch": batch_of[i]} | {k: _cell(v) for k, v in a.items()}
+                              for i, a in enumerate(sweep.assignments)])
+        write_atomically(self.path / "variants.csv", lambda p: table.to_csv(p, index=False))
+        info = {"fingerprint": sweep.fingerprint, "n_variants": len(sweep.scenes), "keys": sweep.keys,
+                "batches": batches, "sweep": sweep.spec, "base_scene": sweep.base, "complete": False}
+        write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
+        return batches
+
+    def write_batch(self, batch: int, probes: dict[str, np.ndarray], summary_rows: list[dict],
+                    frames: np.ndarray | None) -> None:
+        """Store one batch: probe columns, optional frames, then (last) its summary rows."""
+        table = pa.table(probes)
+        write_atomically(self.path / "probes" / f"batch-{batch:04d}.parquet", lambda p: pq.write_table(table, p))
+        if frames is not None:
+            write_atomically(self.path / "frames" / f"batch-{batch:04d}.npy", lambda p: _save_npy(p, frames))
+        summary = pa.Table.from_pylist(summary_rows)
+        write_atomically(self.summary_path(batch), lambda p: pq.write_table(summary, p))  # last: marks it done
+
+    def finish(self, n_batches: int) -> pd.DataFrame:
+        """Merge every batch's summary into summary.parquet and summary.csv, mark the
+        sweep complete, and return the merged summary (sorted by variant)."""
+        summary = pd.concat([pd.read_parquet(self.summary_path(b)) for b in range(n_batches)])
+        summary = summary.sort_values("variant").reset_index(drop=True)
+        write_atomically(self.path / "summary.parquet", lambda p: summary.to_parquet(p, index=False))
+        scalar = [c for c in summary.columns if c not in LIST_COLUMNS]
+        write_atomically(self.path / "summary.csv", lambda p: summary[scalar].to_csv(p, index=False))
+        manifest = self.path / "sweep.json"
+        info = json.loads(manifest.read_text()) | {"complete": True}
+        write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
+        return summary
+
+
+def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording:
+    """Selected variants of a sweep directory run with ``--frames``, as a Recording."""
+    info = json.loads((path / "sweep.json").read_text())
+    sweep = expand(info["base_scene"] | {"sweep": info["sweep"]})
+    if sweep.fingerprint != info["fingerprint"]:
+        raise DataFileError(path, "its variants no longer resolve to the scenes that were simulated "
+                            "(a material file it uses has changed?); the stored results cannot be labelled")
+    parameters = per_strip_parameters(sweep.scenes)
+    parameters.insert(0, "variant", np.arange(len(sweep.scenes)))
+    chosen = select_variants(parameters, variants, where)
+    where_is = {v: (b, k) for b, ids in enumerate(info["batches"]) for k, v in enumerate(ids)}
+    needed = sorted({where_is[v][0] for v in chosen})
+    missing = [b for b in needed if not (path / "frames" / f"batch-{b:04d}.npy").is_file()]
+    if missing:
+        raise DataFileError(path, f"has no shape frames for batch {missing[0]}: that batch ran without --frames "
+                            "(or has not finished); a resumed sweep keeps finished batches, so run it with "
+                            "--frames into a new --out directory")
+    stores = {b: np.load(path / "frames" / f"batch-{b:04d}.npy", mmap_mode="r") for b in needed}
+    n_frames = min(len(s) for s in stores.values())
+    frames = np.stack([stores[where_is[v][0]][:n_frames, where_is[v][1]] for v in chosen], axis=1)
+    probes = pd.concat([pd.read_parquet(path / "probes" / f"batch-{b:04d}.parquet",
+                                        filters=[("variant", "in", [int(v) for v in chosen])]) for b in needed])
+    probes = probes[["t", "variant", *PROBE_FIELDS]]
+    frame_times = np.arange(n_frames) / sweep.scenes[0].output.frame_rate_hz
+    return Recording(path, chosen, [sweep.scenes[i] for i in chosen], frame_times, frames, probes,
+                     parameters.iloc[chosen].reset_index(drop=True))
