@@ -19,7 +19,7 @@ and launches.
 
 from .drives import MAX_DEGREE
 from .laws import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_law
-from .probes import PROBE_FIELDS, PROBE_INDEX
+from .probes import PROBE_FIELDS, PROBE_INDEX, PROBE_UNITS
 from .status import STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
 from .strip import build as build_strip
 
@@ -29,6 +29,7 @@ __all__ = [
     "MAX_DEGREE",
     "PROBE_FIELDS",
     "PROBE_INDEX",
+    "PROBE_UNITS",
     "STATUS_FOLDED",
     "STATUS_NONFINITE_ENERGY",
     "STATUS_OK",

@@ -2,7 +2,7 @@
 
 The probe buffer is ``[sample, field, strip]`` with fields in :data:`PROBE_FIELDS`
 order; the kernel writes each field through its named slot, so adding a probe is one
-name here and one line in ``record_probes``.
+name and its unit here and one line in ``record_probes``.
 """
 
 import functools
@@ -33,6 +33,15 @@ PROBE_FIELDS = (
 
 PROBE_INDEX = {name: i for i, name in enumerate(PROBE_FIELDS)}
 """Slot of each probe quantity."""
+
+PROBE_UNITS = {
+    "tip_x": "m", "tip_y": "m", "tip_speed": "m/s",
+    "laser_x": "m (NaN when the strip misses the line)",
+    "clamp_angle": "rad", "kinetic": "J", "gravitational": "J", "tensile": "J",
+    "bending_elastic_work": "J", "hysteresis_work": "J", "damping_work": "J", "drive_work": "J",
+    "loop_curvature": "1/m (output.loop_hinge_mm)", "loop_moment": "N·m/m (moment per width)",
+}
+"""SI unit of each probe quantity, as written into a run directory's meta.json."""
 
 
 @functools.cache

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import warp as wp
 from conftest import overrides
-from warpcloth.kernels import bending_tagawa2003, tensile
+from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, PROBE_UNITS, bending_tagawa2003, tensile
 from warpcloth.kernels.types import precision
 
 import warpcloth as wc
@@ -105,6 +105,11 @@ def test_bending_tangent_is_the_slope_of_the_moment_on_each_branch():
     elastic = sim.MaterialSI(material.density, material.tensile, material.bending_rigidity, 0.0, 1.0, 1.0)
     _, _, flat = sim.moment_along_path(elastic, path, with_tangent=True)
     assert np.all(flat == material.bending_rigidity)  # D1 = 0: the law is M = D K exactly
+
+
+def test_every_probe_has_a_slot_and_a_unit():
+    assert list(PROBE_INDEX) == list(PROBE_FIELDS) == list(PROBE_UNITS)
+    assert sorted(PROBE_INDEX.values()) == list(range(len(PROBE_FIELDS)))
 
 
 def test_packed_parameters_follow_the_declared_layout():

@@ -12,13 +12,13 @@ The namespaces :mod:`warpcloth.sim` (the SI simulation core), :mod:`warpcloth.sc
 """
 
 from . import calibrate, io, scene, sim, viz
-from .calibrate.metrics import crossing_times, first_period
+from .calibrate.metrics import first_period
 from .errors import DataFileError, DivergenceError, OptionError, SceneError, WarpclothError
 from .io.load import load_recording
 from .io.recording import Recording
 from .io.usd import export_usd
 from .runs import run, simulate
-from .scene import Scene, Sweep, apply_overrides, bundled_scenes, expand, load_scene, load_sweep, scene_from_dict
+from .scene import Scene, Sweep, bundled_scenes, expand, load_scene, load_sweep, scene_from_dict
 from .sim import RunResult
 from .sweeps import run_sweep
 
@@ -32,10 +32,8 @@ __all__ = [
     "SceneError",
     "Sweep",
     "WarpclothError",
-    "apply_overrides",
     "bundled_scenes",
     "calibrate",
-    "crossing_times",
     "expand",
     "export_usd",
     "first_period",

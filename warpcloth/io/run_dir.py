@@ -24,20 +24,13 @@ import pandas as pd
 import tomli_w
 
 from warpcloth.errors import DataFileError
-from warpcloth.kernels import PROBE_FIELDS
+from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 from warpcloth.scene import Scene, read_scene_file, scene_from_dict
 
 from .atomic import write_text_atomically
 from .recording import Recording, per_strip_parameters, select_variants
 
 PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
-PROBE_UNITS = {
-    "t": "s", "variant": "index", "tip_x": "m", "tip_y": "m", "tip_speed": "m/s",
-    "laser_x": "m (NaN when the strip misses the line)",
-    "clamp_angle": "rad", "kinetic": "J", "gravitational": "J", "tensile": "J",
-    "bending_elastic_work": "J", "hysteresis_work": "J", "damping_work": "J", "drive_work": "J",
-    "loop_curvature": "1/m (output.loop_hinge_mm)", "loop_moment": "N·m/m (moment per width)",
-}
 
 
 def write_scene(path: Path, scene: Scene) -> None:
@@ -64,7 +57,7 @@ class RunWriter:
             "n_clamped": scenes[0].n_clamped,
             "spacing_m": scenes[0].spacing,
             "probe_columns": list(PROBE_COLUMNS),
-            "probe_units": PROBE_UNITS,
+            "probe_units": {"t": "s", "variant": "index", **PROBE_UNITS},
             "frames": {"file": "frames.npy", "shape": [len(frame_times), len(scenes), n_nodes, 2],
                        "axes": ["frame", "variant", "node", "xy"], "unit": "m",
                        "times_file": "frame_times.npy"},

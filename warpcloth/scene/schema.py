@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from warpcloth import units
+from warpcloth.sim import SOLVERS
 
 DEFAULT_MATERIAL_NAME = "wool90-nylon10"
 """The bundled material every scene uses unless it says otherwise."""
@@ -134,7 +135,7 @@ class IntegratorSection:
     """Explicit time integration (paper §2.3)."""
 
     scheme: str = _field("semi_implicit", "semi_implicit (symplectic Euler) | forward (paper eqs. 5–6)",
-                         choices=("semi_implicit", "forward"))
+                         choices=tuple(SOLVERS))
     dt_s: float = _field(1e-5, "time step (the paper used 1e-7)", gt=0)
     precision: str = _field("float64", "float64 | float32", choices=("float64", "float32"))
     divergence_strain: float = _field(0.25, "|ε| beyond which a strip counts as diverged; the "
