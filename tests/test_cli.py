@@ -5,6 +5,7 @@ import json
 import subprocess
 import sys
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -73,7 +74,15 @@ def test_wheel_maps_kernels_and_scenes_into_the_warpcloth_namespace(tmp_path):
     assert done.returncode == 0, done.stderr
     (wheel,) = tmp_path.glob("warpcloth-*.whl")
     names = zipfile.ZipFile(wheel).namelist()
-    assert "warpcloth/kernels/strip.py" in names
+    # every module of the source tree is in the wheel (a subpackage missing from
+    # pyproject's list would install a package that cannot import itself)
+    root_path = Path(root)
+    sources = {f"warpcloth/{p.relative_to(root_path / 'warpcloth').as_posix()}"
+               for p in (root_path / "warpcloth").rglob("*.py")}
+    sources |= {f"warpcloth/kernels/{p.relative_to(root_path / 'kernels').as_posix()}"
+                for p in (root_path / "kernels").rglob("*.py")}
+    assert sources - set(names) == set()
+    assert "warpcloth/kernels/strip.py" in names and "warpcloth/calibrate/kes/readers.py" in names
     assert "warpcloth/scenes/damped_swing.toml" in names and "warpcloth/scenes/impulsive_rotation.toml" in names
     assert not any(n.startswith("kernels/") or n.startswith("scenes/") for n in names)
 

@@ -1,6 +1,7 @@
 """Figures and renders, headless: files exist, are not blank, and show the strip where
 the simulation put it."""
 
+import re
 import subprocess
 import sys
 
@@ -53,21 +54,32 @@ def test_run_figures_are_written_and_show_the_swing(swing_run, tmp_path):
 
 
 @pytest.mark.parametrize("reader, text, message", [
-    (read_laser_trace, "t,x\n0.0,1.0\n", "at least two rows"),
-    (read_laser_trace, "0.0,1.0\n0.1,abc\n", "line 2: could not convert"),
-    (read_laser_trace, "0.0,1.0\n0.0,2.0\n", "data row 2 has t = 0 after 0"),
-    (read_laser_trace, "0.0,1.0\n0.1,nan\n", "data row 2 is not finite"),
-    (read_laser_trace, "0.0\n0.1\n", "line 1: expected 2 columns"),
-    (read_measurement, "0 0 0\n1 1 1\n", "has 3 columns"),
-    (read_tracked_shapes, "1,0.1,0,0,0\n0,0.0,0,0,0\n", "ordered by frame"),
-    (read_tracked_shapes, "0,0.0,-5,0,0\n1,0.1,0,0,0\n", "s must be ≥ 0"),
-    (read_encoder, "t,theta\n0.1,0\n0.05,1\n", "times must increase"),
+    (read_laser_trace, "t,x\n0.0,1.0\n", "m.csv: expected at least two rows of laser trace"),
+    (read_laser_trace, "0.0,1.0\n0.1,abc\n", "m.csv, line 2: 'abc' is not a number"),
+    (read_laser_trace, "0.0,1.0\n0.0,2.0\n", r"m.csv, line 2: times must increase; t = 0 after 0 \(line 1\)"),
+    (read_laser_trace, "0.0,1.0\n0.1,nan\n", "m.csv, line 2: x_mm is nan; every value must be finite"),
+    (read_laser_trace, "0.0\n0.1\n", "m.csv, line 1: expected 2 columns, got 1"),
+    (read_measurement, "0 0 0\n1 1 1\n", "m.csv, line 1: has 3 columns"),
+    (read_tracked_shapes, "1,0.1,0,0,0\n0,0.0,0,0,0\n",
+     r"m.csv, line 2: frame 0 at t = 0 s after frame 1 at t = 0.1 s \(line 1\): rows must be ordered by frame"),
+    (read_tracked_shapes, "0,0.0,-5,0,0\n1,0.1,0,0,0\n", "m.csv, line 1: arc length s must be ≥ 0"),
+    (read_encoder, "t,theta\n0.1,0\n0.05,1\n", "m.csv, line 3: times must increase"),
 ])
 def test_bad_measured_files_are_named(tmp_path, reader, text, message):
     path = tmp_path / "m.csv"
     path.write_text(text)
-    with pytest.raises(wc.SceneError, match=message):
+    with pytest.raises(wc.DataFileError, match=message):
         reader(path)
+
+
+def test_measured_file_options_are_named(tmp_path):
+    # A file an option names that cannot be read blames the option; a bad --angle-unit too.
+    with pytest.raises(wc.OptionError, match="--measured: cannot read the laser trace file .*nope.csv"):
+        read_laser_trace(tmp_path / "nope.csv")
+    path = tmp_path / "enc.csv"
+    path.write_text("0,0\n0.1,1\n")
+    with pytest.raises(wc.OptionError, match="--angle-unit: must be rad or deg, got 'grad'"):
+        read_encoder(path, "grad")
 
 
 def test_measured_forms_and_units(tmp_path):
@@ -84,6 +96,87 @@ def test_measured_forms_and_units(tmp_path):
     shapes = read_measurement(path)
     np.testing.assert_allclose(shapes.s, [0.01, 0.02, 0.01])
     assert list(shapes.frame) == [0, 0, 1]
+
+
+# One reader (warpcloth.io.csv) for every instrument file: the measured-motion readers
+# and the KES readers read the same file the same way.
+
+T_PERCENT = np.array([0.0, 0.5, 1.25, 2.0, 3.0, 4.5, 6.0])  # a laser trace's t, or a loop's strain in %
+X_FORCE = np.array([-0.75, 2.5, 31.0, 62.25, 110.5, 240.0, 500.0])  # x in mm, or force in gf/cm
+
+
+def numbers(delimiter, decimal=".", fmt="{:.4f}"):
+    return "".join(f"{fmt.format(a).replace('.', decimal)}{delimiter}{fmt.format(b).replace('.', decimal)}\n"
+                   for a, b in zip(T_PERCENT, X_FORCE, strict=True))
+
+
+def read_both(path):
+    """The file as a laser trace and as a KES-FB1 loop."""
+    from warpcloth.calibrate import kes
+
+    return read_laser_trace(path), kes.read_tensile_csv(path)
+
+
+@pytest.mark.parametrize("name, text", [
+    ("semicolon.csv", "# exported with decimal commas\n\n" + numbers(";", ",")),
+    ("semicolon_trailing.csv", numbers(";", ",").replace("\n", ";\n")),  # a spreadsheet's trailing delimiter
+    ("tab.txt", numbers("\t")),
+    ("tab_comma.txt", numbers("\t", ",")),  # decimal commas: no number in the file has a point
+    ("spaces_comma.txt", numbers("   ", ",")),
+])
+def test_every_reader_reads_a_delimiter_the_same(tmp_path, name, text):
+    # Before one reader, the laser-trace reader split "0,5000;2,5000" at the commas too,
+    # into t = 0, x = 5000 mm. Every form here reads exactly as the plain comma file.
+    plain = tmp_path / "plain.csv"
+    plain.write_text(numbers(","))
+    path = tmp_path / name
+    path.write_text(text)
+    (trace, loop), (plain_trace, plain_loop) = read_both(path), read_both(plain)
+    np.testing.assert_array_equal(plain_trace.t, T_PERCENT)
+    np.testing.assert_array_equal(plain_trace.x, X_FORCE * 1e-3)
+    np.testing.assert_array_equal(plain_loop.strain, T_PERCENT * 1e-2)
+    np.testing.assert_array_equal(plain_loop.force, X_FORCE)
+    for a, b in ((trace.t, plain_trace.t), (trace.x, plain_trace.x), (loop.strain, plain_loop.strain),
+                 (loop.force, plain_loop.force)):
+        np.testing.assert_array_equal(a, b, err_msg=name)
+    assert list(loop.rows) == list(plain_loop.rows + (2 if name == "semicolon.csv" else 0))  # file lines
+
+
+def test_tab_separated_names_with_spaces_are_read_by_every_reader(tmp_path):
+    path = tmp_path / "tab.txt"
+    path.write_text("Strain (%)\tForce (gf/cm)\n" + numbers("\t", ","))
+    trace, loop = read_both(path)
+    np.testing.assert_array_equal(trace.t, T_PERCENT)
+    np.testing.assert_array_equal(loop.force, X_FORCE)
+    assert loop.strain_unit == "strain in percent (from the header)"
+    assert list(loop.rows) == list(range(2, 2 + len(T_PERCENT)))
+    path.write_text("t (s)\ttheta (deg)\n0\t0\n0,1\t90\n")
+    np.testing.assert_allclose(read_encoder(path)[1], [0, np.pi / 2])
+
+
+@pytest.mark.parametrize("torn, message", [
+    ("2,0;62,25\n3,0;110,5\n4,5", "line 7: expected 2 columns, got 1: '4,5'"),  # a torn last line
+    ("2,0;62,25\n3,0;1x0,5\n", "line 6: '1x0,5' is not a number"),
+    ("2,0;62,25\n;110,5\n", "line 6: column 1 is empty"),
+    ("2,0;62,25\n3,0;inf\n", "line 6: {x} is inf; every value must be finite"),
+])
+def test_a_torn_or_non_numeric_cell_is_named_with_its_line_by_every_reader(tmp_path, torn, message):
+    from warpcloth.calibrate import kes
+
+    path = tmp_path / "torn.csv"
+    path.write_text("# a comment\n\nt;x\n0,0;-0,75\n" + torn)  # lines 1-3: comment, blank, header
+    second = {read_laser_trace: "x_mm", read_measurement: "column 2", kes.read_tensile_csv: "force",
+              read_encoder: "theta"}
+    for read, x in second.items():
+        with pytest.raises(wc.DataFileError, match=f"torn.csv, {re.escape(message.format(x=x))}"):
+            read(path)
+
+
+def test_an_ambiguous_decimal_comma_is_refused_naming_the_lines(tmp_path):
+    path = tmp_path / "mixed.txt"
+    path.write_text("t\tx\n0\t1.5\n0,1\t2\n")
+    with pytest.raises(wc.DataFileError, match=r"mixed.txt, line 3: a decimal comma, but line 2 has a decimal point"):
+        read_laser_trace(path)
 
 
 def test_sweep_metric_plots(tmp_path):

@@ -17,7 +17,8 @@ from conftest import overrides  # noqa: F401  (keeps Warp quiet)
 import warpcloth as wc
 from warpcloth import units
 from warpcloth.calibrate import kes
-from warpcloth.errors import SceneError
+from warpcloth.calibrate.kes.least_squares import least_squares_above
+from warpcloth.errors import DataFileError, OptionError, SceneError
 from warpcloth.scene import (
     DEFAULT_MATERIAL,
     MaterialSection,
@@ -120,12 +121,12 @@ def test_tensile_fit_is_constrained_when_the_quartic_would_turn_down():
 
 def test_constrained_least_squares_on_hand_cases():
     # min ‖x − b‖ with x ≥ 0 is max(b, 0); min ‖x − (2, 2)‖ with x1 + x2 ≤ 1 is (½, ½).
-    x = kes._least_squares_above(np.eye(3), np.array([1.0, -2.0, 3.0]), np.eye(3), np.zeros(3))
+    x = least_squares_above(np.eye(3), np.array([1.0, -2.0, 3.0]), np.eye(3), np.zeros(3))
     np.testing.assert_allclose(x, [1.0, 0.0, 3.0], atol=1e-12)
-    x = kes._least_squares_above(np.eye(2), np.array([2.0, 2.0]), -np.ones((1, 2)), np.array([-1.0]))
+    x = least_squares_above(np.eye(2), np.array([2.0, 2.0]), -np.ones((1, 2)), np.array([-1.0]))
     np.testing.assert_allclose(x, [0.5, 0.5], atol=1e-12)
     with pytest.raises(ValueError, match="infeasible"):
-        kes._least_squares_above(np.eye(1), np.array([0.0]), np.array([[1.0], [-1.0]]), np.array([1.0, 0.0]))
+        least_squares_above(np.eye(1), np.array([0.0]), np.array([[1.0], [-1.0]]), np.array([1.0, 0.0]))
 
 
 def test_noisy_example_data_are_fitted_sensibly():
@@ -258,18 +259,18 @@ def test_bending_reader_forms(tmp_path):
 ])
 def test_bad_tensile_data_is_named(tmp_path, text, strain_unit, message):
     path = write(tmp_path / "fb1.csv", text)
-    with pytest.raises(SceneError, match="fb1.csv") as err:
+    with pytest.raises(DataFileError, match="fb1.csv") as err:
         kes.read_tensile_csv(path, strain_unit)
     assert message in str(err.value)
 
 
 def test_bad_tensile_options_are_named(tmp_path):
     path = write(tmp_path / "fb1.csv", "0,0\n")
-    with pytest.raises(SceneError, match="--strain-unit: must be one of percent, fraction, mm; got 'inch'"):
+    with pytest.raises(OptionError, match="--strain-unit: must be one of percent, fraction, mm; got 'inch'"):
         kes.read_tensile_csv(path, "inch")
-    with pytest.raises(SceneError, match="--gauge-length-mm: must be a positive length in mm, got -5"):
+    with pytest.raises(OptionError, match="--gauge-length-mm: must be a positive length in mm, got -5"):
         kes.read_tensile_csv(path, gauge_length_mm=-5)
-    with pytest.raises(SceneError, match="cannot read the KES-FB1 tensile file"):
+    with pytest.raises(DataFileError, match="missing.csv: cannot read the KES-FB1 tensile file"):
         kes.read_tensile_csv(tmp_path / "missing.csv")
 
 
@@ -287,7 +288,7 @@ def bending_text(k, m=None):
 ])
 def test_bad_bending_loops_are_named(tmp_path, k, message):
     path = write(tmp_path / "fb2.csv", bending_text(k))
-    with pytest.raises(SceneError, match="fb2.csv") as err:
+    with pytest.raises(DataFileError, match="fb2.csv") as err:
         kes.read_bending_csv(path)
     assert message in str(err.value)
 
@@ -299,7 +300,7 @@ def test_bad_bending_loops_are_named(tmp_path, k, message):
 ])
 def test_bad_bending_header_is_named(tmp_path, header, message):
     path = write(tmp_path / "fb2.csv", header + "\n0,0\n1,0.1\n")
-    with pytest.raises(SceneError) as err:
+    with pytest.raises(DataFileError, match="fb2.csv") as err:
         kes.read_bending_csv(path)
     assert message in str(err.value)
 
@@ -308,7 +309,7 @@ def test_bending_non_finite_value_is_named(tmp_path):
     k = kes_cycle(step=0.25)
     m = 0.1 * k
     m[7] = np.inf
-    with pytest.raises(SceneError, match=r"fb2.csv: line 9: moment is inf; every value must be finite"):
+    with pytest.raises(DataFileError, match=r"fb2.csv, line 9: moment is inf; every value must be finite"):
         kes.read_bending_csv(write(tmp_path / "fb2.csv", bending_text(k, m)))
 
 
@@ -486,5 +487,5 @@ def test_a_bending_loop_must_start_from_rest(tmp_path):
     k = kes_cycle()
     start = int(np.argmax(k))  # the same cycle, begun at +K0
     path = write(tmp_path / "fb2.csv", bending_text(np.concatenate([k[start:], k[1 : start + 1]])))
-    with pytest.raises(SceneError, match="not from rest"):
+    with pytest.raises(DataFileError, match="not from rest"):
         kes.read_bending_csv(path)

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from warpcloth.errors import SceneError
+from warpcloth.errors import OptionError
 
 GRID = 24  # breakpoint candidates per axis and refinement round
 ROUNDS = 5
@@ -88,10 +88,10 @@ def fit_clamp_motion(t: np.ndarray, theta: np.ndarray) -> ClampMotionFit:
     theta = np.asarray(theta, dtype=float)
     start = t[0]
     if len(t) < MIN_SAMPLES:
-        raise SceneError("ENCODER", f"{len(t)} samples are too few to place three breakpoints; "
-                         f"give at least {MIN_SAMPLES}")
+        raise OptionError("ENCODER", f"{len(t)} samples are too few to place three breakpoints; "
+                          f"give at least {MIN_SAMPLES}")
     if np.ptp(theta) <= 0:
-        raise SceneError("ENCODER", "the angle never changes: there is no clamp motion to fit")
+        raise OptionError("ENCODER", "the angle never changes: there is no clamp motion to fit")
     scale = t[-1] - t[0]
     t = (t - t[0]) / scale
     lo, hi = 0.0, 1.0

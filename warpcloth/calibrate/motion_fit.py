@@ -8,7 +8,9 @@ positions), optionally after shifting the measured clock by a fitted start-time 
 Search, every step one batched launch of the strip kernel:
 
 1. **Space filling.** A seeded Latin hypercube over the bounds (``space_filling``
-   variants in one batch); the best variant starts the local search.
+   variants in one batch; the sampler of a sweep's random block,
+   :func:`warpcloth.scene.sampling.latin_hypercube`); the best variant starts the local
+   search.
 2. **Speculative Levenberg–Marquardt.** Each iteration launches one batch holding the
    proposed step from the current Jacobian, a central-difference stencil around that
    proposal (so if it is accepted its Jacobian comes with it), and two more cautious
@@ -35,10 +37,11 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from warpcloth.errors import SceneError
+from warpcloth.errors import OptionError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, batch_fields, clamp_edge, scene_from_dict, set_field
+from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.sim import RunResult
 
 ALIASES = {
@@ -85,7 +88,7 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
     """
     names = [n.strip() for n in (names.split(",") if isinstance(names, str) else names) if n.strip()]
     if not names:
-        raise SceneError("--free", "name at least one parameter to fit, e.g. gamma,D1")
+        raise OptionError("--free", "name at least one parameter to fit, e.g. gamma,D1")
     given = _parse_bounds(bounds)
     fixed = set(batch_fields())
     out = []
@@ -93,11 +96,11 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
         dotted = ALIASES.get(name, name)
         if dotted.count(".") != 1 or not hasattr(base, dotted.split(".")[0]) or not hasattr(
                 getattr(base, dotted.split(".")[0]), dotted.split(".")[1]):
-            raise SceneError("--free", f"{name!r} is neither a scene field nor one of {', '.join(ALIASES)}")
+            raise OptionError("--free", f"{name!r} is neither a scene field nor one of {', '.join(ALIASES)}")
         value = _field_value(base, dotted)
         if dotted in fixed or isinstance(value, (bool, str, list)):
-            raise SceneError("--free", f"{name} ({dotted}) cannot vary between the strips of one batch or is not "
-                             "a number; only per-strip numeric fields can be fitted")
+            raise OptionError("--free", f"{name} ({dotted}) cannot vary between the strips of one batch or is not "
+                              "a number; only per-strip numeric fields can be fitted")
         key = name if name in given else dotted if dotted in given else None
         if key is not None:
             lower, upper = given.pop(key)
@@ -110,13 +113,13 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
         elif value > 0:
             lower, upper = value / 4, value * 4
         else:
-            raise SceneError("--bounds", f"{name} is {value:g} in the scene, so no default range; give "
-                             f"--bounds {name}=LOW:HIGH")
+            raise OptionError("--bounds", f"{name} is {value:g} in the scene, so no default range; give "
+                              f"--bounds {name}=LOW:HIGH")
         if not lower < upper:
-            raise SceneError("--bounds", f"{name}: lower bound {lower:g} must be below upper bound {upper:g}")
+            raise OptionError("--bounds", f"{name}: lower bound {lower:g} must be below upper bound {upper:g}")
         out.append(FreeParameter(name, dotted, float(lower), float(upper), float(min(max(value, lower), upper))))
     if given:
-        raise SceneError("--bounds", f"{next(iter(given))!r} is not among the --free parameters")
+        raise OptionError("--bounds", f"{next(iter(given))!r} is not among the --free parameters")
     return out
 
 
@@ -130,7 +133,7 @@ def _parse_bounds(text: str | None) -> dict[str, tuple[float, float]]:
             lo, hi = span.split(":")
             out[name.strip()] = (float(lo), float(hi))
         except ValueError:
-            raise SceneError("--bounds", f"{item.strip()!r} is not name=LOW:HIGH (e.g. gamma=0:2)") from None
+            raise OptionError("--bounds", f"{item.strip()!r} is not name=LOW:HIGH (e.g. gamma=0:2)") from None
     return out
 
 
@@ -152,8 +155,8 @@ class Objective:
         scene = scene_from_dict(copy.deepcopy(self.base))
         t_end = float(measurement.t[-1]) + self.align
         if measurement.t[0] + self.align < 0:
-            raise SceneError("--measured", f"measured times start at {measurement.t[0]:g} s, before the scene's "
-                             "t = 0 (release or clamp start) even with the allowed --align-start; shift them")
+            raise OptionError("--measured", f"measured times start at {measurement.t[0]:g} s, before the scene's "
+                              "t = 0 (release or clamp start) even with the allowed --align-start; shift them")
         set_field(self.base, "run.duration_s", t_end + scene.output_interval)
         if isinstance(measurement, TrackedShapes):
             # Shapes are compared at the probe rate, so the time alignment interpolates
@@ -165,9 +168,9 @@ class Objective:
             free_length = self.scene.strip.free_length_mm * 1e-3
             beyond = measurement.s > free_length * (1 + 1e-9)
             if beyond.any():
-                raise SceneError("--measured", f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond the "
-                                 f"free end ({free_length * 1e3:g} mm below the clamp's lowest point); s is the arc "
-                                 "length from the clamp's lowest point, not from the clamp's top")
+                raise OptionError("--measured", f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond "
+                                  f"the free end ({free_length * 1e3:g} mm below the clamp's lowest point); s is the "
+                                  "arc length from the clamp's lowest point, not from the clamp's top")
         self.edge = clamp_edge(self.scene)
         self.shift_step = 0.5 * self.scene.output_interval
         self.launches = 0
@@ -263,10 +266,6 @@ class FitResult:
         return dataclasses.asdict(self)
 
 
-def _latin_hypercube(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
-    return (np.stack([rng.permutation(n) for _ in range(d)], axis=1) + rng.random((n, d))) / n
-
-
 def _stencil(point: np.ndarray, d: int) -> tuple[list[np.ndarray], list[tuple[int, int, float]]]:
     # Rows after the centre: +h and −h along each coordinate, kept inside the box.
     rows, pairs = [], []
@@ -298,7 +297,7 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
         bar.update(1)
 
     # 1. space filling (the scene's own values join the sample)
-    points = np.vstack([[(p.initial - p.lower) / (p.upper - p.lower) for p in free], _latin_hypercube(n0, d, rng)])
+    points = np.vstack([[(p.initial - p.lower) / (p.upper - p.lower) for p in free], latin_hypercube(n0, d, rng)])
     result = objective.run(points)
     shifts = [objective.best_shift(result, j) for j in range(len(points))]
     costs = [np.mean(objective.residuals(result, j, s) ** 2) for j, s in enumerate(shifts)]

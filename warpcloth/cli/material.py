@@ -53,8 +53,8 @@ def material_command(args: argparse.Namespace) -> int:
     if not max_strain > 0:
         raise OptionError("--divergence-strain", f"must be > 0, got {max_strain:g}")
     gauge = kes.KES_FB1_GAUGE_MM if args.gauge_length_mm is None else args.gauge_length_mm
-    fit = kes.fit_kes(kes.read_tensile_csv(args.tensile, args.strain_unit, gauge), kes.read_bending_csv(args.bending),
-                      max_strain)
+    fit = kes.fit_kes(kes.read_tensile_csv(args.tensile, args.strain_unit, gauge, flag="--tensile"),
+                      kes.read_bending_csv(args.bending, flag="--bending"), max_strain)
     source = (f"fitted by warpcloth material fit-kes to {args.tensile} (KES-FB1) and {args.bending} (KES-FB2); "
               f"density {args.density_g_per_cm2:g} g/cm² given on the command line")
     data = kes.material_file_data(fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain)
@@ -79,5 +79,7 @@ def material_command(args: argparse.Namespace) -> int:
     print(f"wrote {kes.write_material_file(out, data)} (a scene uses it with from_file = \"{out}\" in its "
           f"[material], or --set material.from_file={out})")
     if args.plot:
-        print(f"wrote {kes.plot_kes_fit(fit, args.plot)}")
+        from warpcloth.viz.plots import plot_kes_fit
+
+        print(f"wrote {plot_kes_fit(fit, args.plot)}")
     return 0

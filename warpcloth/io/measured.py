@@ -1,7 +1,7 @@
 """Measured data as a lab writes it: CSV files read into SI arrays, with clear errors.
 
-Three forms (comma-, semicolon- or whitespace-separated; one optional header line;
-lines starting with ``#`` are comments):
+Three forms, each read by :func:`warpcloth.io.csv.read_csv` (delimiter ``,`` ``;`` tab or
+whitespace, decimal commas, one optional header line, ``#`` comments; see there):
 
 =================  ==========================  =============================================
 form               columns                     units
@@ -13,84 +13,49 @@ tracked shapes     ``frame, t, s, x, y``       -, s, mm (arc length of the marke
 clamp encoder      ``t, theta``                s, rad (deg when the header says ``theta_deg``
                                                or ``deg``, or ``angle_unit="deg"`` is given)
 =================  ==========================  =============================================
+
+Columns beyond those a form has are ignored. Anything wrong in a file is a
+DataFileError naming the file (and the line, where one is to blame); a file that cannot
+be read at all is an OptionError of the option (``flag``) that named it.
 """
 
 from __future__ import annotations
 
-import importlib.resources
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from warpcloth import units
-from warpcloth.errors import SceneError
+from warpcloth.errors import DataFileError, OptionError
 
-_SPLIT = re.compile(r"[,;\s]+")
+from .csv import Table, bundled_data, read_csv, read_text
 
+__all__ = ["LaserTrace", "TrackedShapes", "bundled_data", "read_encoder", "read_laser_trace", "read_measurement",
+           "read_table", "read_text", "read_tracked_shapes"]
 
-def bundled_data(name: str | Path) -> Path:
-    """``name`` itself if it is a file, else the bundled example of that name
-    (``damped_swing_laser`` or ``damped_swing_laser.csv``, from scenes/data/)."""
-    path = Path(name)
-    if path.is_file():
-        return path
-    resource = importlib.resources.files("warpcloth.scenes") / "data" / (path.stem + ".csv")
-    return Path(str(resource)) if path.parent == Path(".") and resource.is_file() else path
+_LASER = ("t_s", "x_mm")
+_SHAPES = ("frame", "t_s", "s_mm", "x_mm", "y_mm")
+_ENCODER = ("t_s", "theta")
 
 
-def read_text(path: Path) -> str:
-    """A data file's text: UTF-8 (a spreadsheet's byte-order mark dropped), else Latin-1,
-    as instrument software on Windows writes it; the numbers are ASCII either way."""
-    data = path.read_bytes()
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        return data.decode("latin-1")
+def read_table(path: str | Path, n_columns: int | None, what: str, flag: str,
+               names: tuple[str, ...] | None = None) -> Table:
+    """At least two rows of ``n_columns`` numbers (None: as many as the first data row
+    has; more are ignored) from a measured-data file or a bundled example by name."""
+    table = read_csv(path, n_columns, what=what, names=names, extra_columns=True, flag=flag)
+    if len(table.values) < 2:
+        columns = f" ({', '.join(names)})" if names else ""
+        raise DataFileError(table.path, f"expected at least two rows of {what}{columns}, got {len(table.values)}")
+    return table
 
 
-def read_table(path: str | Path, n_columns: int | None, what: str, flag: str) -> tuple[np.ndarray, list[str] | None]:
-    """Rows of ``n_columns`` numbers (None: as many as the first data row has) from a
-    CSV-like file (or a bundled example by name), and its header (None if absent)."""
-    path = bundled_data(path)
-    try:
-        lines = read_text(path).splitlines()
-    except OSError as exc:
-        raise SceneError(flag, f"cannot read {path}: {exc.strerror}") from None
-    numbered = [(i + 1, _SPLIT.split(line.strip())) for i, line in enumerate(lines)
-                if line.strip() and not line.lstrip().startswith("#")]
-    header = None
-    if numbered:
-        try:
-            float(numbered[0][1][0])
-        except ValueError:
-            header = [h.strip().lower() for h in numbered[0][1]]
-            numbered = numbered[1:]
-    if n_columns is None:
-        n_columns = len(numbered[0][1]) if numbered else 1
-    rows = []
-    for line_no, cells in numbered:
-        if len(cells) < n_columns:
-            raise SceneError(flag, f"{path} line {line_no}: expected {n_columns} columns ({what}), got {len(cells)}")
-        try:
-            rows.append([float(c) for c in cells[:n_columns]])
-        except ValueError as exc:
-            raise SceneError(flag, f"{path} line {line_no}: {exc}") from None
-    data = np.array(rows, dtype=float).reshape(-1, n_columns)
-    if len(data) < 2:
-        raise SceneError(flag, f"{path}: expected at least two rows of '{what}', got {len(data)}")
-    bad = np.nonzero(~np.isfinite(data).all(axis=1))[0]
-    if len(bad):
-        raise SceneError(flag, f"{path}: data row {bad[0] + 1} is not finite: {data[bad[0]].tolist()}")
-    return data, header
-
-
-def _increasing(t: np.ndarray, path: str | Path, flag: str) -> None:
+def _increasing(table: Table, t: np.ndarray) -> None:
     step = np.diff(t)
     if np.any(step <= 0):
         i = int(np.argmax(step <= 0))
-        raise SceneError(flag, f"{path}: times must increase; data row {i + 2} has t = {t[i + 1]:g} after {t[i]:g}")
+        raise DataFileError(table.path, f"times must increase; t = {t[i + 1]:g} after {t[i]:g} (line "
+                            f"{table.lines[i]})", int(table.lines[i + 1]))
 
 
 @dataclass(frozen=True)
@@ -115,27 +80,34 @@ class TrackedShapes:
 
 def read_laser_trace(path: str | Path, flag: str = "--measured") -> LaserTrace:
     """Read ``t (s), x (mm)``."""
-    return _laser_trace(read_table(path, 2, "t_s, x_mm", flag)[0], path, flag)
+    return _laser_trace(read_table(path, 2, "laser trace", flag, _LASER))
 
 
-def _laser_trace(data: np.ndarray, path: str | Path, flag: str) -> LaserTrace:
-    _increasing(data[:, 0], path, flag)
+def _laser_trace(table: Table) -> LaserTrace:
+    data = table.values
+    _increasing(table, data[:, 0])
     return LaserTrace(data[:, 0], data[:, 1] * units.LENGTH_MM)
 
 
 def read_tracked_shapes(path: str | Path, flag: str = "--measured") -> TrackedShapes:
     """Read ``frame, t (s), s (mm), x (mm), y (mm)``, ordered by frame with later
     frames at later times."""
-    return _tracked_shapes(read_table(path, 5, "frame, t_s, s_mm, x_mm, y_mm", flag)[0], path, flag)
+    return _tracked_shapes(read_table(path, 5, "tracked shapes", flag, _SHAPES))
 
 
-def _tracked_shapes(data: np.ndarray, path: str | Path, flag: str) -> TrackedShapes:
+def _tracked_shapes(table: Table) -> TrackedShapes:
+    data, lines = table.values, table.lines
     frame, t = data[:, 0], data[:, 1]
-    if np.any(np.diff(frame) < 0) or np.any(np.diff(t)[np.diff(frame) > 0] <= 0):
-        raise SceneError(flag, f"{path}: rows must be ordered by frame, and later frames must have later times")
+    disordered = (np.diff(frame) < 0) | ((np.diff(frame) > 0) & (np.diff(t) <= 0))
+    if np.any(disordered):
+        i = int(np.argmax(disordered))
+        raise DataFileError(table.path, f"frame {frame[i + 1]:g} at t = {t[i + 1]:g} s after frame {frame[i]:g} at "
+                            f"t = {t[i]:g} s (line {lines[i]}): rows must be ordered by frame, and later frames "
+                            "must have later times", int(lines[i + 1]))
     if np.any(data[:, 2] < 0):
-        raise SceneError(flag, f"{path}: arc length s must be ≥ 0 (from the clamp's lowest point), "
-                         f"got {data[:, 2].min():g} mm")
+        i = int(np.argmax(data[:, 2] < 0))
+        raise DataFileError(table.path, f"arc length s must be ≥ 0 (from the clamp's lowest point), got "
+                            f"{data[i, 2]:g} mm", int(lines[i]))
     mm = units.LENGTH_MM
     return TrackedShapes(frame.astype(int), t, data[:, 2] * mm, data[:, 3] * mm, data[:, 4] * mm)
 
@@ -144,22 +116,24 @@ def read_encoder(path: str | Path, angle_unit: str | None = None,
                  flag: str = "ENCODER") -> tuple[np.ndarray, np.ndarray]:
     """Read a clamp encoder series ``t (s), theta``; returns (t, θ in rad). The angle
     unit comes from ``angle_unit`` ("rad" or "deg"), else from the header, else rad."""
-    data, header = read_table(path, 2, "t_s, theta", flag)
-    _increasing(data[:, 0], path, flag)
+    if angle_unit not in (None, "rad", "deg"):
+        raise OptionError("--angle-unit", f"must be rad or deg, got {angle_unit!r}")
+    table = read_table(path, 2, "encoder", flag, _ENCODER)
+    data, header = table.values, table.header
+    _increasing(table, data[:, 0])
     if angle_unit is None:
-        angle_unit = "deg" if header and any("deg" in cell for cell in header[1:]) else "rad"
-    if angle_unit not in ("rad", "deg"):
-        raise SceneError("--angle-unit", f"must be rad or deg, got {angle_unit!r}")
+        angle_unit = "deg" if header and any("deg" in cell.lower() for cell in header[1:]) else "rad"
     theta = np.radians(data[:, 1]) if angle_unit == "deg" else data[:, 1]
     return data[:, 0], theta
 
 
 def read_measurement(path: str | Path, flag: str = "--measured") -> LaserTrace | TrackedShapes:
     """A laser trace (2 columns) or tracked shapes (5 columns), told apart by the column count."""
-    data, _ = read_table(path, None, "t_s, x_mm  or  frame, t_s, s_mm, x_mm, y_mm", flag)
-    if data.shape[1] == 2:
-        return _laser_trace(data, path, flag)
-    if data.shape[1] == 5:
-        return _tracked_shapes(data, path, flag)
-    raise SceneError(flag, f"{path} has {data.shape[1]} columns: a laser trace has 2 (t_s, x_mm), "
-                     "tracked shapes 5 (frame, t_s, s_mm, x_mm, y_mm)")
+    table = read_table(path, None, "measured motion", flag)
+    n = table.values.shape[1]
+    if n == 2:
+        return _laser_trace(table)
+    if n == 5:
+        return _tracked_shapes(table)
+    raise DataFileError(table.path, f"has {n} columns: a laser trace has 2 (t_s, x_mm), tracked shapes 5 "
+                        "(frame, t_s, s_mm, x_mm, y_mm)", int(table.lines[0]))

@@ -37,6 +37,7 @@ from warpcloth.errors import SceneError
 
 from .files import read_scene_file, scene_from_dict
 from .overrides import apply_overrides, set_field
+from .sampling import latin_hypercube
 from .schema import Scene, batch_fields
 
 SWEEP_KEYS = {"seed", "grid", "zip", "random"}
@@ -136,10 +137,8 @@ def _random_block(spec: dict) -> tuple[list[str], np.ndarray]:
         raise SceneError("sweep.seed", f"expected a non-negative integer, got {seed!r}")
     generator = np.random.default_rng(seed)
     d = len(bounds)
-    if method == "uniform":
-        unit = generator.random((samples, d))
-    else:  # one sample per stratum in every dimension, strata paired at random
-        unit = (np.argsort(generator.random((d, samples)), axis=1).T + generator.random((samples, d))) / samples
+    # latin_hypercube: one sample per stratum in every dimension, strata paired at random
+    unit = generator.random((samples, d)) if method == "uniform" else latin_hypercube(samples, d, generator)
     low = np.array([b[0] for b in bounds])
     high = np.array([b[1] for b in bounds])
     return list(ranges), low + unit * (high - low)

@@ -1,5 +1,6 @@
-"""2D figures of a run (the paper's Figs. 3b/8b, 9/11, 10, 12 and the energy budget) and
-of a sweep (a metric against one or two parameters), as PNG files, headless.
+"""2D figures of a run (the paper's Figs. 3b/8b, 9/11, 10, 12 and the energy budget), of
+a sweep (a metric against one or two parameters) and of fits (the motion, the clamp
+angle, a KES material), as PNG files, headless.
 
 Axes are in the units a textile lab reads: mm, degrees, and KES units for the bending
 loop (curvature in 1/cm, moment per width in gf·cm/cm), converted via ``units``.
@@ -261,3 +262,43 @@ def plot_clamp_fit(t: np.ndarray, theta: np.ndarray, fit: object, path: Path) ->
     bottom.axhline(0, color="0.6", lw=0.6)
     bottom.set(xlabel="t (s)", ylabel="residual (deg)")
     return _save(fig, path)
+
+
+def plot_kes_fit(fit: object, path: str | Path) -> Path:
+    """PNG of a KES fit (a :class:`warpcloth.calibrate.kes.KesFit`) against its data:
+    tensile (left) and bending (right), the KES values in the titles."""
+    from matplotlib.figure import Figure  # no pyplot: no global backend state
+
+    path = Path(path)
+    figure = Figure(figsize=(11, 4.6), dpi=120, layout="constrained")
+    left, right = figure.subplots(1, 2)
+    tl, tk, tf = fit.tensile_loop, fit.tensile_kes, fit.tensile
+    left.plot(tl.strain / units.STRAIN_PERCENT, tl.force, ".", ms=3, color="0.4", label="data")
+    e = np.linspace(0.0, float(tl.strain.max()), 200)
+    left.plot(e / units.STRAIN_PERCENT, tf(e), "-", color="C0", label="quartic fit (loading)")
+    rt = f", RT {tk.rt_percent:.1f} %" if tk.rt_percent is not None else ""
+    left.set_title(f"KES-FB1: EMT {tk.emt_percent:.2f} %, LT {tk.lt:.3f}, WT {tk.wt_gf_cm_per_cm2:.3g} "
+                   f"gf·cm/cm²{rt}", fontsize=9)
+    left.set_xlabel("strain (%)")
+    left.set_ylabel("force per width T (gf/cm)")
+    a = ", ".join(f"{c:.4g}" for c in tf.coefficients)
+    left.text(0.03, 0.97, f"a = ({a}) gf/cm\nRMS {tf.rms_gf_per_cm:.3g} gf/cm ({tf.rms_relative:.2%} of range)"
+              + ("\nconstrained to increase" if tf.constrained else ""),
+              transform=left.transAxes, va="top", fontsize=8, bbox={"fc": "white", "alpha": 0.8})
+    left.legend(loc="lower right", fontsize=8)
+    bl, bk, bf = fit.bending_loop, fit.bending_kes, fit.bending
+    right.plot(bl.curvature, bl.moment, ".", ms=3, color="0.4", label="data")
+    right.plot(bl.curvature, bf.moment, "-", color="C3", label="model fit")
+    b = f"{bk.b_gf_cm2_per_cm:.4g}" if bk.b_gf_cm2_per_cm is not None else "n/a"
+    hb = f"{bk.hb2_gf_cm_per_cm:.4g}" if bk.hb2_gf_cm_per_cm is not None else "n/a"
+    right.set_title(f"KES-FB2: B {b} gf·cm²/cm, 2HB {hb} gf·cm/cm", fontsize=9)
+    right.set_xlabel("curvature K (1/cm)")
+    right.set_ylabel("moment per width M (gf·cm/cm)")
+    right.text(0.03, 0.97, f"D {bf.rigidity_gf_cm2_per_cm:.4g} gf·cm²/cm, D1 {bf.d1_gf_cm_per_cm:.4g} gf·cm/cm\n"
+               f"α {bf.alpha_cm:.4g} cm, K0 {bf.k0_per_cm:.4g} 1/cm\n"
+               f"RMS {bf.rms_gf_cm_per_cm:.3g} gf·cm/cm ({bf.rms_relative:.2%} of range)",
+               transform=right.transAxes, va="top", fontsize=8, bbox={"fc": "white", "alpha": 0.8})
+    right.legend(loc="lower right", fontsize=8)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path)
+    return path

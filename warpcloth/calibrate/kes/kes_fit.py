@@ -1,0 +1,68 @@
+"""One KES-FB1 and one KES-FB2 loop fitted together: the tensile quartic, the bending
+law and the KES values of both (docs/model.md §13), and the material they make."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .bending_tagawa2003 import BendingFit, fit_bending
+from .kes_values import BendingSummary, TensileSummary, bending_summary, tensile_summary
+from .readers import BendingLoop, TensileLoop
+from .tensile_fit import DIVERGENCE_STRAIN, TensileFit, fit_tensile
+
+
+@dataclass(frozen=True)
+class KesFit:
+    """Everything fitted to one KES-FB1 and one KES-FB2 loop."""
+
+    tensile_loop: TensileLoop
+    bending_loop: BendingLoop
+    tensile: TensileFit
+    bending: BendingFit
+    tensile_kes: TensileSummary
+    bending_kes: BendingSummary
+
+    def material(self, name: str, density_g_per_cm2: float) -> dict:
+        """The scene [material] fields (KES units); density and name come from elsewhere."""
+        return {
+            "name": name,
+            "density_g_per_cm2": float(density_g_per_cm2),
+            "tensile_gf_per_cm": [float(a) for a in self.tensile.coefficients],
+            "bending_rigidity_gf_cm2_per_cm": float(self.bending.rigidity_gf_cm2_per_cm),
+            "hysteresis_d1_gf_cm_per_cm": float(self.bending.d1_gf_cm_per_cm),
+            "hysteresis_alpha_cm": float(self.bending.alpha_cm),
+            "hysteresis_k0_per_cm": float(self.bending.k0_per_cm),
+        }
+
+    def summary_table(self) -> dict:
+        """The [fit] table of a material file: residuals and KES values (omitted where undefined)."""
+        t, b, tk, bk = self.tensile, self.bending, self.tensile_kes, self.bending_kes
+        table = {
+            "tensile_file": self.tensile_loop.source,
+            "tensile_first_column": self.tensile_loop.strain_unit,
+            "tensile_loading_points": len(self.tensile_loop.strain[self.tensile_loop.loading]),
+            "tensile_rms_gf_per_cm": t.rms_gf_per_cm,
+            "tensile_rms_relative": t.rms_relative,
+            "tensile_constrained": t.constrained,
+            "bending_file": self.bending_loop.source,
+            "bending_points": len(self.bending_loop.curvature),
+            "bending_rms_gf_cm_per_cm": b.rms_gf_cm_per_cm,
+            "bending_rms_relative": b.rms_relative,
+            "emt_percent": tk.emt_percent,
+            "fm_gf_per_cm": tk.fm_gf_per_cm,
+            "wt_gf_cm_per_cm2": tk.wt_gf_cm_per_cm2,
+            "lt": tk.lt,
+            "rt_percent": tk.rt_percent,
+            "b_gf_cm2_per_cm": bk.b_gf_cm2_per_cm,
+            "2hb_gf_cm_per_cm": bk.hb2_gf_cm_per_cm,
+        }
+        return {k: (float(v) if isinstance(v, np.floating) else v) for k, v in table.items() if v is not None}
+
+
+def fit_kes(tensile: TensileLoop, bending: BendingLoop, max_strain: float = DIVERGENCE_STRAIN,
+            device: str | None = "cpu") -> KesFit:
+    """Fit the tensile quartic and the bending law, and compute the KES values of both loops."""
+    return KesFit(tensile, bending, fit_tensile(tensile, max_strain), fit_bending(bending, device),
+                  tensile_summary(tensile), bending_summary(bending))

@@ -1,0 +1,289 @@
+"""KES-FB1 and KES-FB2 loops: read from the instruments' CSV exports (or built from
+arrays), their units inferred, validated as the fits need them (docs/model.md §13.1).
+
+**Tensile (KES-FB1)**, a CSV of strain (or extension) and force per width T in gf/cm, in
+the order measured: loading from the first row to the maximum strain, then (optionally)
+unloading. The unit of the first column comes from its header when the header says
+(``strain_percent``, ``strain_%``, ``strain_fraction``, ``extension_mm``; a plain
+``strain`` does not say), else from ``strain_unit`` (``percent``, ``fraction`` or
+``mm``), else automatically: a column whose maximum exceeds 1 is in percent, otherwise a
+fraction (a fabric is never stretched by 100 %, nor loaded to its 500 gf/cm standard
+load below 1 % strain). Extension in mm is divided by the gauge length
+(``gauge_length_mm``, KES-FB1 standard 50 mm). Units as docs/model.md §1.
+
+**Bending (KES-FB2)**, a CSV of curvature K in 1/cm and moment per width M in
+gf·cm/cm: one cycle from rest, e.g. the standard 0 → +2.5 → −2.5 → 0 1/cm.
+
+The files are read by :func:`warpcloth.io.csv.read_csv` (the one reader of instrument
+files: delimiter, decimal commas, header, comments). Anything wrong with the data is a
+DataFileError naming the file (or the arrays' source) and, where one is to blame, the
+line; ``--strain-unit`` and ``--gauge-length-mm`` values are OptionErrors.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from warpcloth import units
+from warpcloth.errors import DataFileError, OptionError
+from warpcloth.io.csv import WHITESPACE, Table, read_csv
+
+PERCENT = units.STRAIN_PERCENT
+"""Strain written in % → fraction (KES-FB1 files, EMT)."""
+
+KES_FB1_GAUGE_MM = 50.0
+"""Standard KES-FB1 gauge length (sample length between the chucks)."""
+
+MIN_LOADING_POINTS = 6
+"""The quartic has 4 coefficients; 2 more points leave a residual to judge it by."""
+
+MIN_BENDING_POINTS = 12
+"""At least 3 parameters on 3 legs (0 → +K0, +K0 → −K0, −K0 → 0) of a few points each."""
+
+LOOP_CLOSURE = 0.1
+"""A loop closes if it ends within this fraction of its largest |K| of its start."""
+
+LOOP_REACH = 0.5
+"""Each sign of curvature must reach this fraction of the loop's largest |K|."""
+
+STRAIN_UNITS = ("percent", "fraction", "mm")
+"""The units a KES-FB1 file's first column may be given in (``strain_unit``)."""
+
+_TENSILE_NAMES = ({"strain", "extension", "elongation", "eps", "epsilon"}, {"force", "load", "tension", "t", "f"})
+_BENDING_NAMES = ({"curvature", "k", "kappa"}, {"moment", "bending", "m"})
+
+
+@dataclass(frozen=True)
+class TensileLoop:
+    """A KES-FB1 tensile loop in measurement order: strain (fraction), force per width (gf/cm)."""
+
+    strain: np.ndarray
+    force: np.ndarray
+    rows: np.ndarray  # where each point came from: file line (1-based) or sample number
+    source: str  # file name, or "tensile data"
+    row_label: str = "line"
+    strain_unit: str = "fraction"  # how the first column was read, and why
+
+    @property
+    def turn(self) -> int:
+        """Index of the maximum strain: loading is [0, turn], unloading [turn, end]."""
+        return int(np.argmax(self.strain))
+
+    @property
+    def loading(self) -> slice:
+        """The loading (upper) branch."""
+        return slice(0, self.turn + 1)
+
+    @property
+    def unloading(self) -> slice:
+        """The unloading branch (starts at the turn; a single point when there is none)."""
+        return slice(self.turn, len(self.strain))
+
+
+@dataclass(frozen=True)
+class BendingLoop:
+    """A KES-FB2 bending loop in measurement order: curvature (1/cm), moment per width (gf·cm/cm)."""
+
+    curvature: np.ndarray
+    moment: np.ndarray
+    rows: np.ndarray
+    source: str
+    row_label: str = "line"
+
+    @property
+    def k0(self) -> float:
+        """The loop's largest |K| (1/cm), where the model's loop closes."""
+        return float(np.max(np.abs(self.curvature)))
+
+    def legs(self) -> list[slice]:
+        """The cycle's legs: split at its first maximum and first minimum of K."""
+        cuts = sorted({0, int(np.argmax(self.curvature)), int(np.argmin(self.curvature)), len(self.curvature) - 1})
+        return [slice(a, b + 1) for a, b in zip(cuts[:-1], cuts[1:], strict=False)]
+
+
+# ---------------------------------------------------------------------------------- files
+
+
+def _tokens(name: str) -> list[str]:
+    # The words of a column name: "Strain (%)" → strain, percent; "M (gf·cm/cm)" → m, gf, cm, per, cm.
+    text = name.lower().replace("%", " percent ").replace("/", " per ")
+    return re.findall(r"[a-z0-9]+", text)
+
+
+def _read_columns(path: str | Path, what: str, names: tuple[str, str], flag: str | None) -> Table:
+    # Two numeric columns (see warpcloth.io.csv); a header, if any, of two names.
+    table = read_csv(path, 2, what=what, names=names, flag=flag)
+    if table.header is not None and len(table.header) != 2:
+        spaces = " (with whitespace separation a name cannot contain spaces)" if table.delimiter == WHITESPACE else ""
+        raise DataFileError(table.path, f"the header {table.header_text!r} has {len(table.header)} column names, "
+                            f"expected 2{spaces}", table.header_line)
+    return table
+
+
+def _check_name(path: str | Path, line: int | None, column: int, name: str, words: set[str],
+                units_ok: list[set[str]], expected: str) -> set[str]:
+    # The column's name must be one of ``words`` and any unit it states one of ``units_ok``;
+    # returns the unit tokens (what is left of the name).
+    tokens = _tokens(name)
+    unit = set(tokens) - words - {"per", "width", "of"}
+    if not set(tokens) & words or (unit and unit not in units_ok):
+        raise DataFileError(str(path), f"header: column {column} is {name!r}; expected {expected}", line)
+    return unit
+
+
+def read_tensile_csv(path: str | Path, strain_unit: str | None = None,
+                     gauge_length_mm: float = KES_FB1_GAUGE_MM, *, flag: str | None = None) -> TensileLoop:
+    """Read a KES-FB1 loop: columns strain (%, fraction) or extension (mm), force per width (gf/cm).
+
+    ``path`` may also name a bundled example (``kes_fb1_example``); ``flag`` is the
+    option that named the file, if one did (it is blamed when the file cannot be read).
+
+    The first column's unit: the header's when it says, else ``strain_unit`` (percent,
+    fraction, mm), else percent when its maximum exceeds 1 and a fraction otherwise.
+    """
+    if strain_unit is not None and strain_unit not in STRAIN_UNITS:
+        raise OptionError("--strain-unit", f"must be one of {', '.join(STRAIN_UNITS)}; got {strain_unit!r}")
+    if not (math.isfinite(gauge_length_mm) and gauge_length_mm > 0):
+        raise OptionError("--gauge-length-mm", f"must be a positive length in mm, got {gauge_length_mm!r}")
+    table = _read_columns(path, "KES-FB1 tensile", ("strain", "force"), flag)
+    header, values, rows, line = table.header, table.values, table.lines, table.header_line
+    unit = strain_unit
+    if header is not None:
+        first = _check_name(path, line, 1, header[0], _TENSILE_NAMES[0],
+                            [{"percent"}, {"pct"}, {"fraction"}, {"frac"}, {"mm"}],
+                            "strain_percent, strain_fraction, strain or extension_mm")
+        _check_name(path, line, 2, header[1], _TENSILE_NAMES[1], [{"gf", "cm"}], "force per width in gf/cm "
+                    "(e.g. force_gf_per_cm; a KES-FB2 bending file has curvature and moment)")
+        said = {"percent": "percent", "pct": "percent", "fraction": "fraction", "frac": "fraction",
+                "mm": "mm"}.get(next(iter(first), ""))
+        if said is None and set(_tokens(header[0])) & {"extension", "elongation"}:
+            said = strain_unit
+            if said != "mm":
+                raise DataFileError(str(path), f"header: column 1 is {header[0]!r}: say its unit (extension_mm) or "
+                                    "give strain_unit='mm'", line)
+        if said and strain_unit and said != strain_unit:
+            raise DataFileError(str(path), f"header: column 1 {header[0]!r} says {said}, but the strain unit was "
+                                f"given as {strain_unit}", line)
+        unit = said or strain_unit
+    how = "from the header" if header is not None and unit != strain_unit else "as given"
+    if unit is None:
+        unit = "percent" if len(values) and np.max(values[:, 0]) > 1 else "fraction"
+        how = "guessed: the column's maximum is " + ("above" if unit == "percent" else "at most") + " 1"
+    scale = {"percent": PERCENT, "fraction": 1.0, "mm": 1.0 / gauge_length_mm}[unit]
+    loop = tensile_loop(values[:, 0] * scale, values[:, 1], source=str(path), rows=rows)
+    described = f"extension in mm over a {gauge_length_mm:g} mm gauge" if unit == "mm" else f"strain in {unit}"
+    return dataclasses.replace(loop, strain_unit=f"{described} ({how})")
+
+
+def read_bending_csv(path: str | Path, *, flag: str | None = None) -> BendingLoop:
+    """Read a KES-FB2 loop: columns curvature (1/cm) and moment per width (gf·cm/cm).
+
+    ``path`` may also name a bundled example (``kes_fb2_example``); ``flag`` is the
+    option that named the file, if one did.
+    """
+    table = _read_columns(path, "KES-FB2 bending", ("curvature", "moment"), flag)
+    header, values, line = table.header, table.values, table.header_line
+    if header is not None:
+        _check_name(path, line, 1, header[0], _BENDING_NAMES[0], [{"cm"}, {"1", "cm"}],
+                    "curvature in 1/cm (e.g. curvature_per_cm; a KES-FB1 tensile file has strain and force)")
+        _check_name(path, line, 2, header[1], _BENDING_NAMES[1], [{"gf", "cm"}],
+                    "moment per width in gf·cm/cm (e.g. moment_gf_cm_per_cm)")
+    return bending_loop(values[:, 0], values[:, 1], source=str(path), rows=table.lines)
+
+
+# ---------------------------------------------------------------------------------- validation
+
+
+def _error(source: str, label: str, row: object, message: str) -> DataFileError:
+    # A file's line goes into the error's line; an array's sample number into its message.
+    if label == "line":
+        return DataFileError(source, message, int(row))
+    return DataFileError(source, f"{label} {row}: {message}")
+
+
+def _check_finite(values: np.ndarray, rows: np.ndarray, source: str, names: tuple[str, str],
+                  label: str = "line") -> None:
+    bad = np.nonzero(~np.isfinite(values))
+    if len(bad[0]):
+        i, j = int(bad[0][0]), int(bad[1][0])
+        raise _error(source, label, rows[i], f"{names[j]} is {values[i, j]}; every value must be finite")
+
+
+def _paired(x: np.ndarray, y: np.ndarray, rows: np.ndarray | None, source: str,
+            names: tuple[str, str]) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
+    # Two equally long finite columns, and where each row came from (file line or sample).
+    x = np.asarray(x, dtype=np.float64).ravel()
+    y = np.asarray(y, dtype=np.float64).ravel()
+    label = "line" if rows is not None else "sample"
+    rows = np.arange(1, len(x) + 1) if rows is None else np.asarray(rows)
+    if len(x) != len(y):
+        raise DataFileError(source, f"{len(x)} {names[0]}s but {len(y)} {names[1]}s")
+    _check_finite(np.column_stack([x, y]), rows, source, names, label)
+    return x, y, rows, label
+
+
+def tensile_loop(strain: np.ndarray, force: np.ndarray, source: str = "tensile data",
+                 rows: np.ndarray | None = None) -> TensileLoop:
+    """A validated tensile loop from arrays: strain as a fraction, force per width in gf/cm.
+
+    Loading runs from the first point to the maximum strain and must not go back in strain;
+    unloading, if any, must not go forward. ``rows`` are the file lines of the points
+    (None: the points are samples 1, 2, …).
+    """
+    strain, force, rows, label = _paired(strain, force, rows, source, ("strain", "force"))
+    loop = TensileLoop(strain, force, rows, source, label)
+    n_loading = loop.turn + 1 if len(strain) else 0
+    if n_loading < MIN_LOADING_POINTS:
+        raise DataFileError(source, f"the loading branch (first row to the maximum strain) has {n_loading} "
+                            f"point(s); fitting the quartic needs at least {MIN_LOADING_POINTS}")
+    if not strain[loop.turn] > 0:
+        raise DataFileError(source, f"the strain never exceeds 0 (maximum {strain[loop.turn]:g})")
+    for part, sign, what in ((loop.loading, 1, "loading"), (loop.unloading, -1, "unloading")):
+        index = np.arange(len(strain))[part]
+        step = sign * np.diff(strain[part])
+        if np.any(step < 0):
+            i = int(index[np.nonzero(step < 0)[0][0]])
+            raise _error(source, label, rows[i + 1], f"strain {strain[i + 1]:.6g} after {strain[i]:.6g} ({label} "
+                         f"{rows[i]}): the {what} branch must be monotonic in strain (loading runs to the maximum "
+                         f"strain, {strain[loop.turn]:.6g} at {label} {rows[loop.turn]})")
+    return loop
+
+
+def bending_loop(curvature: np.ndarray, moment: np.ndarray, source: str = "bending data",
+                 rows: np.ndarray | None = None) -> BendingLoop:
+    """A validated bending loop from arrays: curvature in 1/cm, moment per width in gf·cm/cm.
+
+    One cycle from rest: it must reach both signs of curvature (each at least half the
+    largest |K|) and end within 10 % of the largest |K| of where it started. ``rows`` as
+    for :func:`tensile_loop`.
+    """
+    curvature, moment, rows, label = _paired(curvature, moment, rows, source, ("curvature", "moment"))
+    if len(curvature) < MIN_BENDING_POINTS:
+        raise DataFileError(source, f"the loop has {len(curvature)} point(s); fitting D, D1 and α along "
+                            f"0 → +K0 → −K0 → 0 needs at least {MIN_BENDING_POINTS}")
+    loop = BendingLoop(curvature, moment, rows, source, label)
+    k0 = loop.k0
+    if not k0 > 0:
+        raise DataFileError(source, "the curvature is 0 throughout")
+    low, high = float(curvature.min()), float(curvature.max())
+    if high < LOOP_REACH * k0 or low > -LOOP_REACH * k0:
+        raise DataFileError(source, f"the loop does not reach both signs of curvature: K runs from {low:.4g} to "
+                            f"{high:.4g} 1/cm; a KES-FB2 loop goes to +K0 and −K0 (each side at least "
+                            f"{LOOP_REACH:.0%} of the largest |K|)")
+    if abs(curvature[0]) > LOOP_CLOSURE * k0:
+        raise DataFileError(source, f"the loop starts at K = {curvature[0]:.4g} 1/cm ({label} {rows[0]}), not "
+                            "from rest: the model's hinge starts fresh at the first row, as a KES-FB2 cycle does "
+                            "from K = 0; give the cycle from its start")
+    gap = abs(curvature[-1] - curvature[0])
+    if gap > LOOP_CLOSURE * k0:
+        raise DataFileError(source, f"the loop does not close: it starts at K = {curvature[0]:.4g} 1/cm ({label} "
+                            f"{rows[0]}) and ends at K = {curvature[-1]:.4g} 1/cm ({label} {rows[-1]}); a KES-FB2 "
+                            f"loop returns to its start (within {LOOP_CLOSURE:.0%} of the largest |K|, {k0:.4g} "
+                            "1/cm)")
+    return loop
