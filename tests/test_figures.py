@@ -190,7 +190,7 @@ def test_sweep_metric_plots(tmp_path):
                       "material.hysteresis_d1_gf_cm_per_cm")
     assert_not_blank(line)
     assert_not_blank(heat)
-    with pytest.raises(wc.SceneError, match="--metric"):
+    with pytest.raises(wc.OptionError, match="--metric: .no_such_metric. is not a column of the sweep summary"):
         plot_sweep(summary, tmp_path / "bad.png", "no_such_metric", "damping.gamma_per_s")
 
 

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from warpcloth.errors import SceneError
+from warpcloth.errors import OptionError, SceneError
 
 from .files import read_scene_file, scene_from_dict
 from .overrides import apply_overrides, set_field
@@ -64,7 +64,7 @@ class Sweep:
     def batches(self, max_batch: int) -> list[list[int]]:
         """Variant indices per batch: grouped by batch-level fields, at most max_batch each."""
         if max_batch < 1:
-            raise SceneError("--max-batch", f"must be ≥ 1, got {max_batch}")
+            raise OptionError("--max-batch", f"must be ≥ 1, got {max_batch}")
         names = batch_fields()
         groups: dict[str, list[int]] = {}
         for i, scene in enumerate(self.scenes):

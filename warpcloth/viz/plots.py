@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from warpcloth import units  # noqa: E402
-from warpcloth.errors import SceneError  # noqa: E402
+from warpcloth.errors import DataFileError, OptionError  # noqa: E402
 from warpcloth.io.measured import LaserTrace, TrackedShapes, read_laser_trace  # noqa: E402
 from warpcloth.io.recording import Recording  # noqa: E402
 from warpcloth.scene import to_si  # noqa: E402
@@ -171,7 +171,7 @@ def read_sweep_summary(sweep_dir: str | Path) -> pd.DataFrame:
         return pd.read_parquet(merged)
     parts = sorted((sweep_dir / "summary").glob("batch-*.parquet"))
     if not parts:
-        raise SceneError("RUN_DIR", f"{sweep_dir} has no finished batch yet")
+        raise DataFileError(sweep_dir, "the sweep has no finished batch yet")
     return pd.concat([pd.read_parquet(p) for p in parts]).sort_values("variant")
 
 
@@ -180,7 +180,7 @@ def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: 
     two (heat map on a grid, coloured points otherwise)."""
     for name, flag in ((metric, "--metric"), (x, "--x"), (y, "--y")):
         if name is not None and name not in summary:
-            raise SceneError(flag, f"{name!r} is not a column of the sweep summary; "
+            raise OptionError(flag, f"{name!r} is not a column of the sweep summary; "
                              f"known: {', '.join(c for c in summary.columns if c not in ('variant', 'batch'))}")
     data = summary[~summary["diverged"]] if "diverged" in summary else summary
     fig, ax = plt.subplots(figsize=(6.5, 4.8))
