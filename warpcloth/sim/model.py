@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import warp as wp
 
-from warpcloth.kernels import structs
+from warpcloth.kernels import DEFAULT_BENDING_LAW, structs
 from warpcloth.kernels.types import precision as precision_types
 
 if TYPE_CHECKING:
@@ -27,7 +27,7 @@ class Model:
     """
 
     def __init__(self, builder: StripBuilder, device: str | None = None, precision: str = "float64",
-                 bending_law: str = "tagawa2003") -> None:
+                 bending_law: str = DEFAULT_BENDING_LAW) -> None:
         self.device = wp.get_device(device)
         self.precision = precision
         self.scalar = PRECISIONS[precision]
