@@ -17,16 +17,20 @@ Only Warp and the standard library are imported here; :mod:`warpcloth` builds ar
 and launches.
 """
 
+from . import bending_tagawa2003, drives, structs
 from .drives import MAX_DEGREE
 from .laws import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_law
 from .probes import PROBE_FIELDS, PROBE_INDEX, PROBE_UNITS
 from .status import STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
 from .strip import build as build_strip
+from .strip import hinge_kernels
+from .types import Precision, precision
 
 __all__ = [
     "BENDING_LAWS",
     "DEFAULT_BENDING_LAW",
     "MAX_DEGREE",
+    "Precision",
     "PROBE_FIELDS",
     "PROBE_INDEX",
     "PROBE_UNITS",
@@ -35,5 +39,10 @@ __all__ = [
     "STATUS_OK",
     "STATUS_STRAIN",
     "bending_law",
+    "bending_tagawa2003",
     "build_strip",
+    "drives",
+    "hinge_kernels",
+    "precision",
+    "structs",
 ]

@@ -30,7 +30,7 @@ MEMORY = ("branch", "loop_centre", "previous_curvature")
 force evaluation (1/m)."""
 
 # Fraction of M0 kept between a hysteretic offset and its asymptote before the inverse
-# branch takes a logarithm (docs/model.md §4: H is clamped to (−M0, M0) strictly).
+# branch takes a logarithm (docs/model.md §4.4: H is clamped to (−M0, M0) strictly).
 HYSTERESIS_MARGIN = {wp.float64: 1e-12, wp.float32: 1e-6}
 
 wp.set_module_options({"enable_backward": False})
@@ -131,7 +131,7 @@ def build(scalar: Any) -> SimpleNamespace:
             return p[0] + alpha * d1 * wp.exp(-alpha * (k0 + u))
         return p[0] + alpha * d1 * wp.exp(-alpha * (k0 - u))
 
-    @wp.kernel
+    @wp.kernel(module="unique", enable_backward=False)
     def moment_along_path(
         curvature_path: wp.array2d(dtype=scalar),
         parameters: wp.array(dtype=vec5),

@@ -21,7 +21,7 @@ def build(scalar: Any) -> SimpleNamespace:
     @wp.func
     def signed_curvature(e1: vec2, e2: vec2, l1: scalar, l2: scalar):
         # Curvature of the circle through the three nodes (segments e1, e2 of lengths
-        # l1, l2), and the chord |e1 + e2| (docs/model.md §4).
+        # l1, l2), and the chord |e1 + e2| (docs/model.md §4.1).
         chord = wp.length(e1 + e2)
         cross = e1[0] * e2[1] - e1[1] * e2[0]
         return scalar(2.0) * cross / (l1 * l2 * chord), chord

@@ -1,4 +1,4 @@
-"""The bending laws a strip can use, by name (``material.bending_law``).
+"""The bending laws a strip can use, by name (``StripBuilder.finalize(bending_law=...)``).
 
 Adding a law: a new ``bending_<name>.py`` with the same interface as
 :mod:`.bending_tagawa2003` (NAME, PARAMETERS, MEMORY, ``packed_parameters``, ``build``)

@@ -18,7 +18,10 @@ from . import drives, forces, geometry, integrators, probes, structs
 from .status import STATUS_NONFINITE_ENERGY, STATUS_OK
 from .types import precision
 
-# Forward simulation only: no adjoint code to generate, compile and carry.
+# Forward simulation only: no adjoint code to generate, compile and carry. Each kernel
+# is a Warp module of its own (module="unique"): its compiled binary is keyed by its own
+# code alone, so a process that builds another precision or scheme later recompiles
+# nothing it already has, and sweep workers load what the driver compiled.
 wp.set_module_options({"enable_backward": False})
 
 
@@ -123,7 +126,7 @@ def build(scalar: Any, scheme: str, law_name: str) -> SimpleNamespace:
         state.status_value[s] = value
         state.step[s] = step
 
-    @wp.kernel
+    @wp.kernel(module="unique", enable_backward=False)
     def advance(
         model: StripModel,
         control: StripControl,
@@ -178,7 +181,7 @@ def hinge_kernels(scalar: Any, law_name: str) -> SimpleNamespace:
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
     signed_curvature = geometry.build(scalar).signed_curvature
 
-    @wp.kernel
+    @wp.kernel(module="unique", enable_backward=False)
     def initialise_hinges(model: StripModel, state: StripState):
         """Start every hinge fresh at its current curvature (for tagawa2003: rising, no offset)."""
         s = wp.tid()

@@ -92,3 +92,25 @@ def test_progress_bar_shows_simulated_time_rate_and_eta(capsys):
     wc.simulate(scene, progress=True)
     err = capsys.readouterr().err
     assert "0.050/0.050 s sim" in err and "strip-steps/s" in err and "<" in err  # elapsed<remaining
+
+
+@pytest.mark.parametrize("args, message", [
+    (("sweep", "damped_swing_sweep", "--max-batch", "0"), "--max-batch: must be ≥ 1, got 0"),
+    (("sweep", "damped_swing_sweep", "--workers", "-1"), "--workers: must be ≥ 0"),
+    (("run", "impulsive_rotation", "--device", "gpu7"), "argument --device: 'gpu7' is not a device of this machine"),
+    (("run", "impulsive_rotation", "--usd", "stage.txt"), "--usd: stage.txt must end in one of .usd, .usda, .usdc"),
+])
+def test_bad_options_are_refused_before_anything_runs(tmp_path, args, message):
+    done = warpcloth_cli(*args, "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert done.returncode == 2 and message in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr
+    assert not (tmp_path / "out").exists()  # refused before any directory or kernel
+
+
+def test_an_unwritable_output_is_one_line_not_a_traceback(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    done = warpcloth_cli("run", "impulsive_rotation", "--set", "run.duration_s=0.01", "--no-progress",
+                         "--out", str(blocker / "run"), cwd=tmp_path)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert str(blocker / "run") in done.stderr or str(blocker) in done.stderr

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import warp as wp
 from conftest import overrides
-from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, PROBE_UNITS, bending_tagawa2003, tensile
+from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, PROBE_UNITS, bending_tagawa2003, integrators, tensile
 from warpcloth.kernels.types import precision
 
 import warpcloth as wc
@@ -36,15 +36,35 @@ def test_a_batch_built_in_si_runs_bit_for_bit_like_its_scene():
     np.testing.assert_array_equal(result.frames, expected.frames)
 
 
-def test_builder_refuses_a_chain_without_free_nodes():
+def chain(n, h=5e-3):
+    return np.stack([np.zeros(n), -h * np.arange(n)], axis=-1)
+
+
+def test_builder_refuses_what_the_kernel_cannot_simulate():
     with pytest.raises(ValueError, match="at least 2 free nodes"):
-        sim.StripBuilder(np.zeros((4, 2)), n_clamped=3, spacing=5e-3)
+        sim.StripBuilder(chain(4), n_clamped=3, spacing=5e-3)
+    with pytest.raises(ValueError, match=r"segment \d of rest_positions is 0.005 m long, not the spacing 0.001 m"):
+        sim.StripBuilder(chain(8), n_clamped=3, spacing=1e-3)
     with pytest.raises(ValueError, match="at least one strip"):
-        sim.StripBuilder(np.zeros((8, 2)), n_clamped=3, spacing=5e-3).finalize()
+        sim.StripBuilder(chain(8), n_clamped=3, spacing=5e-3).finalize()
+    with pytest.raises(TypeError, match="base of the Euler solvers"):
+        builder = sim.StripBuilder(chain(8), n_clamped=3, spacing=5e-3)
+        builder.add_strip(to_si(wc.load_scene("damped_swing").material), width=0.05)
+        sim.ExplicitEulerSolver(builder.finalize(), dt=1e-5)
+
+
+def test_a_model_keeps_what_was_built():
+    material = to_si(wc.load_scene("damped_swing").material)
+    builder = sim.StripBuilder(chain(8), n_clamped=3, spacing=5e-3)
+    builder.add_strip(material, width=0.05)
+    model = builder.finalize()
+    builder.add_strip(material, width=0.03)  # after finalize: a new batch, not this model
+    assert model.n_strips == 1 and model.control().rotation_centre.shape == (1, 2)
+    assert model.state().struct.position.shape == (8, 1)
 
 
 def test_each_scheme_has_its_solver_and_they_differ_by_order_dt():
-    assert set(sim.SOLVERS) == {"semi_implicit", "forward"}
+    assert set(sim.SOLVERS) == {"semi_implicit", "forward"} == set(integrators.build(wp.float64).schemes)
 
     def gap(dt):
         runs = {scheme: wc.simulate(wc.load_scene("impulsive_rotation", overrides(

@@ -13,9 +13,9 @@ from conftest import overrides
 from pxr import Usd, UsdGeom
 
 import warpcloth as wc
-from warpcloth.io import usd
 from warpcloth.io.load import load_recording
-from warpcloth.io.usd import export_usd
+from warpcloth.viz import usd
+from warpcloth.viz.usd import export_usd
 
 ROTATION = overrides(run__duration_s=0.2, strip__spacing_mm=5.0, integrator__dt_s=1e-5)
 SWING = overrides(run__duration_s=0.3, release__settle_time_s=0.1)

@@ -16,11 +16,11 @@ from .calibrate.metrics import first_period
 from .errors import DataFileError, DivergenceError, OptionError, SceneError, WarpclothError
 from .io.load import load_recording
 from .io.recording import Recording
-from .io.usd import export_usd
 from .runs import run, simulate
 from .scene import Scene, Sweep, bundled_scenes, expand, load_scene, load_sweep, scene_from_dict
 from .sim import RunResult
 from .sweeps import run_sweep
+from .viz.usd import export_usd
 
 __all__ = [
     "DataFileError",

@@ -10,6 +10,7 @@ import numpy as np
 from .io.run_dir import RunWriter
 from .scene import Scene, build_batch, load_scene
 from .sim import RunResult, simulate_batch
+from .sim.runner import check_divergence_policy
 
 
 def simulate(
@@ -33,8 +34,7 @@ def simulate(
     fresh there.
     """
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
-    if on_divergence not in ("raise", "record"):
-        raise ValueError(f"on_divergence must be 'raise' or 'record', got {on_divergence!r}")
+    check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
     batch = build_batch(scenes, device)
     state = batch.model.state()
     if initial_positions is not None:

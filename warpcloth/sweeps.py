@@ -19,6 +19,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from warpcloth.calibrate.metrics import swing_metrics
+from warpcloth.errors import OptionError
 from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.runs import simulate
@@ -84,9 +85,12 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
 
 def warm_kernel_cache(scenes: list[Scene], device: str | None) -> None:
     """Compile the kernels once in this process, so workers load them from Warp's cache
-    instead of several processes compiling into it at once (Warp FAQ)."""
-    for precision in sorted({s.integrator.precision for s in scenes}):
-        scene = next(s for s in scenes if s.integrator.precision == precision)
+    instead of several processes compiling into it at once (Warp FAQ). Each kernel is a
+    module of its own (kernels/strip.py), so one short run per (precision, scheme) that
+    the batches use warms exactly what the workers will load."""
+    configurations = {(s.integrator.precision, s.integrator.scheme) for s in scenes}
+    for precision, scheme in sorted(configurations):
+        scene = next(s for s in scenes if (s.integrator.precision, s.integrator.scheme) == (precision, scheme))
         data = scene.to_dict()
         data["release"]["enabled"] = False
         data["run"]["duration_s"] = scene.output_interval
@@ -110,11 +114,16 @@ def run_sweep(
     LocalCluster of ``workers`` single-threaded worker processes (default: one per
     core), or on the running cluster at ``scheduler``.
     """
+    if workers is not None and workers < 0:
+        raise OptionError("--workers", f"must be ≥ 0 (0 runs the batches in this process), got {workers}")
+    if max_batch is not None and max_batch < 1:
+        raise OptionError("--max-batch", f"must be ≥ 1, got {max_batch}")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     directory = SweepDirectory(out)
     n_workers = (os.cpu_count() or 1) if workers is None else workers
-    max_batch = max_batch or default_max_batch(sweep.scenes[0], len(sweep.scenes), n_workers, frames)
+    if max_batch is None:
+        max_batch = default_max_batch(sweep.scenes[0], len(sweep.scenes), n_workers, frames)
     batches = directory.prepare(sweep, lambda: sweep.batches(max_batch))
     pending = [b for b in range(len(batches)) if not directory.is_done(b)]
     done = len(sweep.scenes) - sum(len(batches[b]) for b in pending)

@@ -20,8 +20,9 @@ from . import fit, material, run, sweep, view
 COMMAND_GROUPS = (run, sweep, view, fit, material)
 """Each registers its subcommands with a ``handler`` (see :func:`main`)."""
 
-EXIT_CODES = {SceneError: 2, DataFileError: 2, OptionError: 2, DivergenceError: 3}
-WHAT = {SceneError: "error in scene", DataFileError: "error in data file", OptionError: "error in option"}
+WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (OptionError, "error in option"))
+EXIT_UNUSABLE_INPUT = 2
+EXIT_DIVERGED = 3
 
 
 def parser() -> argparse.ArgumentParser:
@@ -37,14 +38,19 @@ def parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``warpcloth`` command; returns the exit status."""
+    wp.config.log_level = logging.WARNING  # no init banner or module-load lines (--device inits Warp)
     args = parser().parse_args(argv)
-    wp.config.log_level = logging.WARNING  # no init banner or module-load lines
     try:
         return args.handler(args)
     except DivergenceError as exc:
         print(f"warpcloth {args.command}: {exc}", file=sys.stderr)
-        return EXIT_CODES[DivergenceError]
+        return EXIT_DIVERGED
     except WarpclothError as exc:
-        kind = type(exc)
-        print(f"warpcloth {args.command}: {WHAT.get(kind, 'error')}: {exc}", file=sys.stderr)
-        return EXIT_CODES.get(kind, 2)
+        what = next((text for kind, text in WHAT if isinstance(exc, kind)), "error")
+        print(f"warpcloth {args.command}: {what}: {exc}", file=sys.stderr)
+        return EXIT_UNUSABLE_INPUT
+    except OSError as exc:
+        # a file that cannot be read or written (missing directory, no permission, full disk)
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"warpcloth {args.command}: {exc.strerror or exc}{where}", file=sys.stderr)
+        return EXIT_UNUSABLE_INPUT

@@ -7,6 +7,8 @@ from pathlib import Path
 
 from warpcloth.scene import scene_from_dict
 
+from .options import device
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``fit`` and ``clamp fit-angle``."""
@@ -27,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     fit_p.add_argument("--space-filling", type=int, default=None, help="variants in the first, space-filling batch")
     fit_p.add_argument("--max-iterations", type=int, default=25, help="local refinement launches at most")
     fit_p.add_argument("--seed", type=int, default=0, help="seed of the space-filling sample")
-    fit_p.add_argument("--device", default=None, help="cpu or cuda")
+    fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda")
     fit_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     clamp_p = sub.add_parser("clamp", help="clamp motion tools")
     clamp_sub = clamp_p.add_subparsers(dest="clamp_command", required=True)

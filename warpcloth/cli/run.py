@@ -10,6 +10,8 @@ from warpcloth.errors import DivergenceError
 from warpcloth.runs import simulate
 from warpcloth.scene import bundled_scenes, load_scene
 
+from .options import device
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``run``."""
@@ -18,7 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     run_p.add_argument("--out", help="run directory (default: runs/<scene name>)")
     run_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                        help="override a scene field by dotted name, e.g. integrator.dt_s=1e-7")
-    run_p.add_argument("--device", default=None, help="cpu or cuda (default: Warp's preferred device)")
+    run_p.add_argument("--device", type=device, default=None, help="cpu or cuda (default: Warp's preferred device)")
     run_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     run_p.add_argument("--usd", metavar="FILE", help="also export the run as a USD stage (.usd, .usda or .usdc)")
     run_p.set_defaults(handler=run_scene)
@@ -26,6 +28,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run_scene(args: argparse.Namespace) -> int:
     """Simulate one scene, report where its free end ended and its first period."""
+    if args.usd:
+        from warpcloth.viz.usd import check_stage_path
+
+        check_stage_path(args.usd, "--usd")  # before the run, not after it
     scene = load_scene(args.scene, args.overrides)
     out = Path(args.out or Path("runs") / Path(args.scene).stem)
     try:
@@ -43,7 +49,7 @@ def run_scene(args: argparse.Namespace) -> int:
         print(f"first swing period (laser line crossing x = 0): {period:.4f} s")
     if args.usd:
         from warpcloth.io.load import load_recording
-        from warpcloth.io.usd import export_usd
+        from warpcloth.viz.usd import export_usd
 
         print(f"wrote {export_usd(load_recording(out), args.usd)}")
     return 0

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .options import device
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``sweep``."""
@@ -18,7 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p.add_argument("--workers", type=int, default=None,
                          help="local Dask worker processes (default: one per core; 0 = run in this process)")
     sweep_p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler to use instead")
-    sweep_p.add_argument("--device", default=None, help="cpu or cuda, on every worker")
+    sweep_p.add_argument("--device", type=device, default=None, help="cpu or cuda, on every worker")
     sweep_p.add_argument("--frames", action="store_true", help="also store shape frames (large)")
     sweep_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     sweep_p.set_defaults(handler=run_sweep_command)

@@ -43,7 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def export_usd_command(args: argparse.Namespace) -> int:
     """Write the selected variants as an animated USD stage."""
     from warpcloth.io.load import load_recording
-    from warpcloth.io.usd import export_usd
+    from warpcloth.viz.usd import export_usd
 
     recording = load_recording(args.run_dir, args.variants, args.where)
     out = export_usd(recording, args.output, ribbon=args.ribbon, frames_per_clip=args.frames_per_clip)

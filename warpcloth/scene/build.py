@@ -14,7 +14,7 @@ import numpy as np
 
 from warpcloth import units
 from warpcloth.errors import SceneError
-from warpcloth.sim import SOLVERS, ClampMotion, Control, ExplicitEulerSolver, Model, Recorder, StripBuilder
+from warpcloth.sim import SOLVERS, ClampMotion, Control, Model, Recorder, Solver, StripBuilder
 
 from .clamp_motion import clamp_pieces
 from .geometry import clamp_edge, rest_positions
@@ -28,7 +28,7 @@ class Batch:
 
     model: Model
     control: Control
-    solver: ExplicitEulerSolver
+    solver: Solver
     recorder: Recorder
 
 

@@ -134,7 +134,7 @@ class ReleaseSection:
 class IntegratorSection:
     """Explicit time integration (paper §2.3)."""
 
-    scheme: str = _field("semi_implicit", "semi_implicit (symplectic Euler) | forward (paper eqs. 5–6)",
+    scheme: str = _field("semi_implicit", " | ".join(f"{name} ({solver.label})" for name, solver in SOLVERS.items()),
                          choices=tuple(SOLVERS))
     dt_s: float = _field(1e-5, "time step (the paper used 1e-7)", gt=0)
     precision: str = _field("float64", "float64 | float32", choices=("float64", "float32"))

@@ -15,7 +15,14 @@ from .material import MaterialSI
 from .model import PRECISIONS, Model
 from .recorder import Recorder, Schedule
 from .runner import RunResult, Sink, simulate_batch
-from .solvers import SOLVERS, ExplicitEulerSolver, ForwardEulerSolver, SemiImplicitEulerSolver, describe_divergence
+from .solvers import (
+    SOLVERS,
+    ExplicitEulerSolver,
+    ForwardEulerSolver,
+    SemiImplicitEulerSolver,
+    Solver,
+    describe_divergence,
+)
 from .state import State
 
 __all__ = [
@@ -32,6 +39,7 @@ __all__ = [
     "Schedule",
     "SemiImplicitEulerSolver",
     "Sink",
+    "Solver",
     "State",
     "StripBuilder",
     "describe_divergence",

@@ -62,6 +62,12 @@ class StripBuilder:
             raise ValueError(f"rest_positions must be [node, xy], got shape {self.rest_positions.shape}")
         if not 2 <= n_clamped <= len(self.rest_positions) - 2:
             raise ValueError(f"n_clamped = {n_clamped} must leave at least 2 free nodes of {len(rest_positions)}")
+        lengths = np.linalg.norm(np.diff(self.rest_positions, axis=0), axis=1)
+        worst = int(np.argmax(np.abs(lengths - spacing)))
+        if not abs(lengths[worst] - spacing) <= 1e-9 * spacing:
+            # every segment shares one rest length in the kernel: the chain must be uniform
+            raise ValueError(f"segment {worst} of rest_positions is {lengths[worst]:.6g} m long, not the spacing "
+                             f"{spacing:.6g} m")
         self.n_clamped = n_clamped
         self.spacing = spacing
         self.gravity = gravity

@@ -21,9 +21,9 @@ class Control:
     """
 
     def __init__(self, model: Model) -> None:
-        strips = model.builder.strips
-        self.release_time = model.builder.release_time
-        self.move_time = model.builder.move_time
+        strips = model.strips
+        self.release_time = model.release_time
+        self.move_time = model.move_time
         n_pieces = max(1, max(len(s.clamp.start) for s in strips))
         b = model.n_strips
         start = np.zeros((n_pieces, b))

@@ -8,7 +8,7 @@ import numpy as np
 import warp as wp
 
 from warpcloth.kernels import DEFAULT_BENDING_LAW, structs
-from warpcloth.kernels.types import precision as precision_types
+from warpcloth.kernels import precision as precision_types
 
 if TYPE_CHECKING:
     from .builder import StripBuilder
@@ -34,14 +34,18 @@ class Model:
         self.types = precision_types(self.scalar)
         self.bending_law = bending_law
         self.structs = structs.build(self.scalar, bending_law)
-        self.builder = builder
-        strips = builder.strips
+        # A copy of what was built: adding strips to the builder afterwards does not
+        # change this model.
+        self.strips = tuple(builder.strips)
+        self.release_time = builder.release_time
+        self.move_time = builder.move_time
+        strips = self.strips
         self.n_strips = len(strips)
         self.n_nodes = len(builder.rest_positions)
         self.n_clamped = builder.n_clamped
         self.spacing = builder.spacing
         self.gravity = builder.gravity
-        self.rest_positions = builder.rest_positions
+        self.rest_positions = builder.rest_positions.copy()
         self.width = np.array([s.width for s in strips])
         self.density = np.array([s.material.density for s in strips])
         self.node_mass = self.density * self.width * self.spacing

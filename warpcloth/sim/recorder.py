@@ -9,11 +9,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX
-
 if TYPE_CHECKING:
     from .control import Control
-    from .solvers import ExplicitEulerSolver
+    from .solvers import Solver
 
 
 @dataclass(frozen=True)
@@ -28,9 +26,6 @@ class Recorder:
     laser_height: float
     loop_hinge: int = 0
 
-    fields = PROBE_FIELDS
-    index = PROBE_INDEX
-
     def settings(self, struct_type: Any, scalar: Any) -> object:
         """The kernel's ProbeSettings struct."""
         s = struct_type()
@@ -39,7 +34,7 @@ class Recorder:
         s.probes_per_frame = self.probes_per_frame
         return s
 
-    def schedule(self, control: Control, solver: ExplicitEulerSolver) -> Schedule:
+    def schedule(self, control: Control, solver: Solver) -> Schedule:
         """The output samples of a run: hold samples (k < 0) are run, not kept."""
         interval, dt = self.interval, solver.dt
         release_step = solver.release_step(control)

@@ -17,12 +17,18 @@ from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, STATUS_NONFINITE_ENERGY
 from .control import Control
 from .model import Model
 from .recorder import Recorder, Schedule
-from .solvers import ExplicitEulerSolver, describe_divergence
+from .solvers import Solver, describe_divergence
 from .state import State
 
 TARGET_LAUNCH_SECONDS = 0.5  # long enough to amortise launch cost, short enough for progress
 BUFFER_BYTES = 64 * 2**20  # cap on the per-chunk probe and frame buffers
 DIVERGENCE_POLICIES = ("raise", "record")
+
+
+def check_divergence_policy(on_divergence: str) -> None:
+    """Raise ValueError unless ``on_divergence`` is one of :data:`DIVERGENCE_POLICIES`."""
+    if on_divergence not in DIVERGENCE_POLICIES:
+        raise ValueError(f"on_divergence must be 'raise' or 'record', got {on_divergence!r}")
 
 
 class Sink(Protocol):
@@ -73,7 +79,7 @@ class RunResult:
 def simulate_batch(
     model: Model,
     control: Control,
-    solver: ExplicitEulerSolver,
+    solver: Solver,
     recorder: Recorder,
     state: State | None = None,
     *,
@@ -90,8 +96,7 @@ def simulate_batch(
     was recorded); ``"record"`` lets the other strips go on. ``labels`` become
     ``RunResult.scenes``.
     """
-    if on_divergence not in DIVERGENCE_POLICIES:
-        raise ValueError(f"on_divergence must be 'raise' or 'record', got {on_divergence!r}")
+    check_divergence_policy(on_divergence)
     state = state or model.state()
     schedule = recorder.schedule(control, solver)
     n_kept, frame_samples = len(schedule.kept), schedule.frame_samples
@@ -149,7 +154,7 @@ def simulate_batch(
     return result
 
 
-def _collect(solver: ExplicitEulerSolver, state: State, control: Control, schedule: Schedule, i: int, j: int,
+def _collect(solver: Solver, state: State, control: Control, schedule: Schedule, i: int, j: int,
              probes_buf: wp.array, frames_buf: wp.array, probes_all: np.ndarray, frames_all: np.ndarray | None,
              sink: Sink | None, diverged: list[dict]) -> bool:
     """Copy a finished chunk out, drop samples after a divergence, stream it to the sink."""

@@ -8,6 +8,8 @@ solver class here registered in :data:`SOLVERS`.
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 import warp as wp
 
@@ -25,6 +27,23 @@ QUANTITY = {
 }
 
 
+class Solver(Protocol):
+    """What the runner needs of a solver: its time step, where t = 0 falls, one launch
+    that advances every strip through a chunk of outputs, and a divergence report."""
+
+    dt: float
+
+    def release_step(self, control: Control) -> int:
+        """Step index of t = 0 under ``control``."""
+
+    def advance(self, state: State, control: Control, recorder: Recorder, output_steps: np.ndarray,
+                first_output: int, first_frame: int, probes: wp.array, frames: wp.array) -> None:
+        """Advance every healthy strip to each of ``output_steps``, recording probes and frames."""
+
+    def divergence_report(self, state: State, control: Control, strip: int) -> dict | None:
+        """Where and how ``strip`` diverged, or None while it is healthy."""
+
+
 class ExplicitEulerSolver:
     """Explicit Euler with the node update of :attr:`scheme`; stability limits dt.
 
@@ -33,9 +52,13 @@ class ExplicitEulerSolver:
     """
 
     scheme = ""
+    label = ""
     advice = ""
 
     def __init__(self, model: Model, dt: float, divergence_strain: float = 0.25) -> None:
+        if not self.scheme:
+            raise TypeError("ExplicitEulerSolver is the base of the Euler solvers; use one of "
+                            f"{', '.join(c.__name__ for c in SOLVERS.values())}")
         self.model = model
         self.dt = dt
         self.divergence_strain = divergence_strain
@@ -96,12 +119,14 @@ class SemiImplicitEulerSolver(ExplicitEulerSolver):
     """Symplectic (semi-implicit) Euler: velocities first, positions with the new velocity."""
 
     scheme = "semi_implicit"
+    label = "symplectic Euler"
 
 
 class ForwardEulerSolver(ExplicitEulerSolver):
     """Forward Euler, the paper's eqs. 5-6; it amplifies every undamped oscillation."""
 
     scheme = "forward"
+    label = "paper eqs. 5–6"
     advice = (" or integrator.scheme = semi_implicit (forward Euler amplifies every undamped"
               " oscillation, docs/model.md §9)")
 

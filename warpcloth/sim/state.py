@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import warp as wp
 
-from warpcloth.kernels.strip import hinge_kernels
+from warpcloth.kernels import hinge_kernels
 
 if TYPE_CHECKING:
     from .model import Model

@@ -43,6 +43,14 @@ CLIP_POINTS = 2_000_000  # node positions per layer above which frames go to val
 USD_SUFFIXES = (".usd", ".usda", ".usdc")
 
 
+def check_stage_path(path: str | Path, option: str = "-o") -> Path:
+    """``path`` as a Path if it names a USD stage file, else an OptionError of ``option``."""
+    out = Path(path)
+    if out.suffix not in USD_SUFFIXES:
+        raise OptionError(option, f"{out} must end in one of {', '.join(USD_SUFFIXES)}")
+    return out
+
+
 def _primvar_name(field: str) -> str:
     return "warpcloth:" + field.replace(".", ":")
 
@@ -171,9 +179,7 @@ def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = Fal
     frames in ``<stem>_clips_<token>/`` beside the file; by default they are split only when
     one layer would hold more than ``CLIP_POINTS`` node positions.
     """
-    out = Path(out_file)
-    if out.suffix not in USD_SUFFIXES:
-        raise OptionError("-o", f"{out} must end in one of {', '.join(USD_SUFFIXES)}")
+    out = check_stage_path(out_file)
     if ribbon and len(recording.variants) > PRIM_PER_STRIP_LIMIT:
         raise OptionError("--ribbon", f"ribbons are written per variant; select at most {PRIM_PER_STRIP_LIMIT} "
                          f"of the {len(recording.variants)} variants (--variants, --where)")
