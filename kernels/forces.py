@@ -41,6 +41,7 @@ def build(scalar: Any, law_name: str) -> SimpleNamespace:
         a = model.tensile[s]
         l0 = model.rest_length
         p = model.bending[s]
+        edge_scale = model.edge_curvature_scale[s]
         # One pass down the strip: segment i (node i → i+1) and the hinge at node i share
         # the segment vector and length, so each is loaded and measured once. Segments
         # inside the clamp move rigidly: only the edge segment and below strain.
@@ -61,6 +62,11 @@ def build(scalar: Any, law_name: str) -> SimpleNamespace:
             curvature, chord = signed_curvature(e1, e2, l1, l2)
             if not (chord > scalar(1e-3) * l0):
                 return STATUS_FOLDED, i, chord / l0
+            if h == 0:
+                # The clamp-edge hinge bends only the half segment below the built-in end
+                # (docs/model.md §5.3): its curvature is the turning angle over h/2, twice
+                # the chain's; the paper's model keeps h (scale 1, bitwise the same).
+                curvature = curvature * edge_scale
             memory = law.follow(curvature, state.hinge[h, s], p)
             state.hinge[h, s] = memory
             # τ = M·W acts on the turning angle φ; F = -τ ∇φ with ∇φ as below.

@@ -191,6 +191,8 @@ def hinge_kernels(scalar: Any, law_name: str) -> SimpleNamespace:
             e1 = state.position[j, s] - state.position[j - 1, s]
             e2 = state.position[j + 1, s] - state.position[j, s]
             curvature, chord = signed_curvature(e1, e2, wp.length(e1), wp.length(e2))
+            if j == first + 1:
+                curvature = curvature * model.edge_curvature_scale[s]  # as the force pass sees it
             state.hinge[j - first - 1, s] = law.fresh_memory(curvature, p)
 
     return SimpleNamespace(initialise_hinges=initialise_hinges)

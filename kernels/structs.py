@@ -36,6 +36,7 @@ def build(scalar: Any, law_name: str) -> SimpleNamespace:
         width: wp.array(dtype=scalar)  # W, m
         node_mass: wp.array(dtype=scalar)  # ρ_A W h, kg (half at the free end)
         damping: wp.array(dtype=scalar)  # γ after release, 1/s
+        edge_curvature_scale: wp.array(dtype=scalar)  # h / length of the clamp-edge hinge (docs/model.md §5.3)
 
     @wp.struct
     class StripState:

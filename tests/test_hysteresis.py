@@ -141,26 +141,32 @@ def frame_curvature(frames, node):
     return 2 * cross / lengths
 
 
+@pytest.mark.parametrize("edge", ["paper", "second_order"])
 @pytest.mark.parametrize("hinge_mm", [0.0, 20.0])
-def test_loop_probe_records_the_chosen_hinge(hinge_mm):
+def test_loop_probe_records_the_chosen_hinge(hinge_mm, edge):
     # The probed curvature is that hinge's curvature one substep before the recorded
     # node positions: its gap to the frames' circumcircle curvature halves with dt
     # (measured 7.3e-3 → 3.7e-3 → 1.8e-3 1/m at 20 mm), while the neighbouring hinges
     # differ by 2.5–3.6 1/m. The probed moment obeys the law: exactly D K without
-    # hysteresis, within ±M0 of D K with it, tracing a loop that dissipates.
+    # hysteresis, within ±M0 of D K with it, tracing a loop that dissipates. With the
+    # second-order edge, the clamp-edge hinge bends half a segment: twice the turning
+    # angle's circumcircle curvature (docs/model.md §5.3).
     import warpcloth as wc
+
+    scale = 2.0 if edge == "second_order" and hinge_mm == 0.0 else 1.0
 
     for d1 in (0.0, 0.04):
         gaps = []
         for dt in (1e-5, 5e-6):
             scene = wc.load_scene("damped_swing", overrides(
                 run__duration_s=0.6, output__loop_hinge_mm=hinge_mm, material__hysteresis_d1_gf_cm_per_cm=d1,
-                integrator__dt_s=dt))
+                integrator__dt_s=dt, clamp__edge_hinge=edge))
             result = wc.simulate(scene)
             curvature, moment = result.probe("loop_curvature", 0), result.probe("loop_moment", 0)
             node = scene.n_clamped - 1 + scene.loop_hinge
             at_frames = curvature[:: scene.output.probes_per_frame]
-            gaps.append([np.abs(at_frames - frame_curvature(result.frames[:, 0], node + o)).max() for o in (0, 1)])
+            expected = [(scale if o == 0 else 1.0) * frame_curvature(result.frames[:, 0], node + o) for o in (0, 1)]
+            gaps.append([np.abs(at_frames - e).max() for e in expected])
         (coarse, neighbour), (fine, _) = gaps
         assert 1.7 < coarse / fine < 2.3 and fine < 0.01 * neighbour
         material = to_si(scene.material)

@@ -19,6 +19,9 @@ from typing import Any
 from warpcloth import units
 from warpcloth.sim import SOLVERS
 
+EDGE_HINGES = ("second_order", "paper")
+"""Choices of ``clamp.edge_hinge``, the treatment of the built-in end (docs/model.md §5.3)."""
+
 DEFAULT_MATERIAL_NAME = "wool90-nylon10"
 """The bundled material every scene uses unless it says otherwise."""
 
@@ -113,6 +116,9 @@ class ClampSection:
     table_theta_rad: list[float] = _field([], "sampled angles (counter-clockwise +)", per_strip=True)
     interpolation: str = _field("linear", "linear | cubic (natural spline) for a table",
                                 choices=("linear", "cubic"), per_strip=True)
+    edge_hinge: str = _field("paper", "second_order (the clamp-edge hinge bends the half segment below "
+                             "the built-in end: second order in h) | paper (the paper's model: as if clamped "
+                             "h/2 inside the clamp, first order)", choices=EDGE_HINGES, per_strip=True)
 
 
 @dataclass

@@ -44,6 +44,7 @@ class StripSpec:
     rotation_centre: np.ndarray
     hold_target: np.ndarray
     settle_damping: float
+    edge_hinge_length: float
 
 
 class StripBuilder:
@@ -82,17 +83,23 @@ class StripBuilder:
 
     def add_strip(self, material: MaterialSI, *, width: float, damping: float = 0.0,
                   clamp: ClampMotion | None = None, rotation_centre: Sequence[float] | None = None,
-                  hold_target: Sequence[float] | None = None, settle_damping: float = 0.0) -> int:
+                  hold_target: Sequence[float] | None = None, settle_damping: float = 0.0,
+                  edge_hinge_length: float | None = None) -> int:
         """Add one strip (SI: m, 1/s, absolute positions); returns its index in the batch.
 
         ``rotation_centre`` defaults to the clamp edge and ``hold_target`` to the free
-        end's rest position.
+        end's rest position. ``edge_hinge_length`` is the length of strip the clamp-edge
+        hinge bends: h (the default) is the paper's model, which acts as if clamped h/2
+        inside the clamp; h/2 makes the built-in end second order in h (docs/model.md §5.3).
         """
+        edge = self.spacing if edge_hinge_length is None else edge_hinge_length
+        if not 0 < edge <= self.spacing:
+            raise ValueError(f"edge_hinge_length = {edge:g} m must lie in (0, spacing = {self.spacing:g} m]")
         self.strips.append(StripSpec(
             material=material, width=width, damping=damping, clamp=clamp or ClampMotion(),
             rotation_centre=np.asarray(self.clamp_edge if rotation_centre is None else rotation_centre, dtype=float),
             hold_target=np.asarray(self.rest_positions[-1] if hold_target is None else hold_target, dtype=float),
-            settle_damping=settle_damping))
+            settle_damping=settle_damping, edge_hinge_length=edge))
         return len(self.strips) - 1
 
     def finalize(self, device: str | None = None, precision: str = "float64",

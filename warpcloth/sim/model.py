@@ -52,6 +52,7 @@ class Model:
         self.tensile = np.array([s.material.tensile for s in strips])
         self.bending = np.array([s.material.bending_parameters() for s in strips])
         self.damping = np.array([s.damping for s in strips])
+        self.edge_curvature_scale = np.array([self.spacing / s.edge_hinge_length for s in strips])
         self.struct = self._build_struct()
 
     def array(self, values: np.ndarray, dtype: object = None) -> wp.array:
@@ -83,4 +84,5 @@ class Model:
         m.width = self.array(self.width)
         m.node_mass = self.array(self.node_mass)
         m.damping = self.array(self.damping)
+        m.edge_curvature_scale = self.array(self.edge_curvature_scale)
         return m
