@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -42,3 +43,45 @@ def hanging_beam_mode(gamma: float, mode: int = 0, n_basis: int = 24) -> tuple[f
         return sum(c * x**2 * p(x) for c, p in zip(coefficients, polys, strict=True)) / tip
 
     return float(np.sqrt(values[mode])), shape
+
+
+def heavy_elastica(kappa: float, steps: int = 4000) -> dict[str, float]:
+    """Static shape of an inextensible cantilever clamped horizontally under its own weight.
+
+    θ(s), the tangent's angle below the horizontal at s = arc length / L, solves
+    θ'' = −κ (1 − s) cos θ with θ(0) = 0 (built in) and θ'(1) = 0 (free end), κ = ρ_A g L³ / D.
+    Shooting on θ'(0), bracketed by [0, κ/2] (the small-deflection value is κ/2 and the
+    weight's arm only shortens as the strip droops), bisected to rounding; RK4 in s.
+    Returns the tip's reach x/L and drop y/L (of ∫cos θ, ∫sin θ), the tip angle θ(1) in
+    rad, and the root slope θ'(0).
+    """
+    ds = 1.0 / steps
+
+    def shoot(slope: float) -> tuple[float, float, float, float]:
+        theta, omega, x, y = 0.0, slope, 0.0, 0.0
+
+        def rhs(s: float, th: float, om: float) -> tuple[float, float, float, float]:
+            return om, -kappa * (1.0 - s) * math.cos(th), math.cos(th), math.sin(th)
+
+        for i in range(steps):
+            s = i * ds
+            k1 = rhs(s, theta, omega)
+            k2 = rhs(s + ds / 2, theta + ds / 2 * k1[0], omega + ds / 2 * k1[1])
+            k3 = rhs(s + ds / 2, theta + ds / 2 * k2[0], omega + ds / 2 * k2[1])
+            k4 = rhs(s + ds, theta + ds * k3[0], omega + ds * k3[1])
+            theta += ds / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+            omega += ds / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+            x += ds / 6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2])
+            y += ds / 6 * (k1[3] + 2 * k2[3] + 2 * k3[3] + k4[3])
+        return theta, omega, x, y
+
+    low, high = 0.0, 0.5 * kappa
+    for _ in range(60):
+        mid = 0.5 * (low + high)
+        if shoot(mid)[1] < 0.0:
+            low = mid
+        else:
+            high = mid
+    slope = 0.5 * (low + high)
+    theta, _, x, y = shoot(slope)
+    return {"tip_reach": x, "tip_drop": y, "tip_angle": theta, "root_slope": slope}
