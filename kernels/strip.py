@@ -104,11 +104,19 @@ def build(scalar: Any, scheme: str, law_name: str) -> SimpleNamespace:
         ca = wp.cos(theta)  # once per substep, not per clamp node
         sa = wp.sin(theta)
         rotation = mat22(ca, -sa, sa, ca)
+        # The work of the forces at x_n on the clamp nodes uses their centred displacement
+        # (x_{n+1} - x_{n-1}) / 2, as the free nodes' (v_n + v_{n+1}) dt / 2 is: the clamp's
+        # positions are analytic, so x_{n-1} is its pose one step back (docs/model.md §10.3).
+        theta_before, _rate_before = clamp_angle(control, s, t_next - scalar(2.0) * dt)
+        cb = wp.cos(theta_before)
+        sb = wp.sin(theta_before)
+        rotation_before = mat22(cb, -sb, sb, cb)
         for i in range(model.n_clamped):
             arm = rotation * (model.rest_position[i, s] - centre)
             v_new = rate * perp(arm)
             if i >= model.n_clamped - 2:
-                sweep = (state.velocity[i, s] + v_new) * (half * dt)
+                before = rotation_before * (model.rest_position[i, s] - centre)
+                sweep = (arm - before) * half
                 f_int = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
                 work = work + work_on(state, i, s, sweep) + vec4(zero, zero, zero, -wp.dot(f_int, sweep))
             state.position[i, s] = centre + arm

@@ -13,6 +13,9 @@ own accuracy tests (tests/test_clamp_root.py).
 
 Provenance: every case but ``quartic_and_wrapping_hold`` was written by the code before
 the package was split by concept (commit 3bd8c39) and is reproduced bit for bit after it.
+The cases whose clamp moves (``impulsive_rotation``, ``forward_euler``, ``cubic_table``)
+were rewritten when the work on the clamp nodes became centred (issue 10): their frames
+and every probe but the work columns were checked bitwise equal to 3bd8c39's first.
 That one was written after commit 32078f0, which forms 1/3 (tensile energy) and 2π (the
 hold's wrap) in double precision instead of float32 inside the kernel; the old code gives
 a tensile energy off by 3e-8 of its a2 term there and a carried path off by ~1e-7 rad.
