@@ -85,3 +85,45 @@ def heavy_elastica(kappa: float, steps: int = 4000) -> dict[str, float]:
     slope = 0.5 * (low + high)
     theta, _, x, y = shoot(slope)
     return {"tip_reach": x, "tip_drop": y, "tip_angle": theta, "root_slope": slope}
+
+
+def hanging_beam_eigenvalue(gamma: float, steps: int = 2000, lambda_max: float = 60.0) -> float:
+    """λ of the first mode of W⁗ − γ((1−ξ)W′)′ = λ²W by shooting: a second reference,
+    independent of :func:`hanging_beam_mode`'s Rayleigh–Ritz.
+
+    From the clamp (W = W′ = 0) two solutions start with (W″, W‴) = (1, 0) and (0, 1);
+    the free end needs W″(1) = 0 and the shear W‴(1) − γ(1 − 1)W′(1) = W‴(1) = 0, so λ is
+    the first zero of det[[W″_a, W″_b], [W‴_a, W‴_b]](ξ = 1), bracketed on a grid of λ
+    (all integrated at once, RK4 in ξ) and narrowed on finer grids inside the bracket.
+    """
+
+    def determinant(lam: np.ndarray) -> np.ndarray:
+        lam = np.atleast_1d(np.asarray(lam, dtype=float))
+        y = np.zeros((len(lam), 4, 2))
+        y[:, 2, 0] = 1.0
+        y[:, 3, 1] = 1.0
+        dxi = 1.0 / steps
+
+        def rhs(xi: float, y: np.ndarray) -> np.ndarray:
+            w, w1, w2, w3 = y[:, 0], y[:, 1], y[:, 2], y[:, 3]
+            w4 = gamma * ((1.0 - xi) * w2 - w1) + (lam**2)[:, None] * w
+            return np.stack([w1, w2, w3, w4], axis=1)
+
+        for i in range(steps):
+            xi = i * dxi
+            k1 = rhs(xi, y)
+            k2 = rhs(xi + dxi / 2, y + dxi / 2 * k1)
+            k3 = rhs(xi + dxi / 2, y + dxi / 2 * k2)
+            k4 = rhs(xi + dxi, y + dxi * k3)
+            y = y + dxi / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        return y[:, 2, 0] * y[:, 3, 1] - y[:, 2, 1] * y[:, 3, 0]
+
+    low, high = 0.5, lambda_max
+    for _ in range(7):  # each round: the first sign change on 48 points of the bracket
+        grid = np.linspace(low, high, 48)
+        values = determinant(grid)
+        change = np.nonzero(np.sign(values[:-1]) != np.sign(values[1:]))[0]
+        if not len(change):
+            raise ValueError(f"no eigenvalue below λ = {lambda_max:g} for γ = {gamma:g}")
+        low, high = grid[change[0]], grid[change[0] + 1]
+    return 0.5 * (low + high)
