@@ -82,12 +82,26 @@ def test_clamp_segments_must_be_contiguous_and_continuous():
         scene_from_dict(apply_overrides(base, ["clamp.segments.0.theta_coefficients_si=[0,0,0,0,0,1.0]"]))
 
 
+@pytest.mark.parametrize("reference", ["exp/damped_swing.toml", "damped_swing.toml", "exp/damped_swing"])
+def test_a_path_is_a_path_never_the_bundled_scene_of_its_stem(tmp_path, monkeypatch, reference):
+    # A reference with a directory part or a .toml suffix is a file that must exist: it
+    # used to fall back silently on the bundled scene of the same stem and run that.
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(wc.DataFileError, match=f"{reference}: no such scene file .a path, because it"):
+        wc.load_scene(reference)
+    with pytest.raises(wc.DataFileError, match="no such scene file"):
+        wc.load_sweep(reference)
+    (tmp_path / "damped_swing.toml").write_text('[damping]\ngamma_per_s = 0.7\n')
+    assert wc.load_scene(tmp_path / "damped_swing.toml").damping.gamma_per_s == 0.7  # the file, not the bundle
+    assert wc.load_scene("damped_swing").damping.gamma_per_s == 0.3  # a bare name is the bundled scene
+
+
 def test_malformed_scene_files(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text("[strip\nspacing_mm = 5\n")
     with pytest.raises(wc.SceneError, match="is not valid TOML"):
         wc.load_scene(bad)
-    with pytest.raises(wc.SceneError, match="no bundled scene of that name .bundled: damped_swing, damped_swing_sw"):
+    with pytest.raises(wc.OptionError, match="SCENE: no bundled scene 'no_such_scene' .bundled: damped_swing, "):
         wc.load_scene("no_such_scene")
     with pytest.raises(wc.SceneError, match="strip: expected a table"):
         scene_from_dict({"strip": 5})

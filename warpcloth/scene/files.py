@@ -7,7 +7,7 @@ import typing
 from pathlib import Path
 from typing import Any
 
-from warpcloth.errors import SceneError
+from warpcloth.errors import DataFileError, OptionError
 
 from .materials import MATERIAL_FILE_KEY, with_material_file
 from .overrides import apply_overrides
@@ -40,25 +40,37 @@ def _rebase_material_file(data: dict, directory: Path) -> None:
             table[MATERIAL_FILE_KEY] = [rebase(ref) for ref in table[MATERIAL_FILE_KEY]]
 
 
+def is_path(name_or_path: str | Path) -> bool:
+    """Whether a scene or material reference is a file path: it has a directory part or
+    ends in ``.toml``. Anything else is a bare name, looked up among the bundled files."""
+    path = Path(name_or_path)
+    return path.suffix == ".toml" or len(path.parts) > 1 or path.is_absolute()
+
+
 def read_scene_file(name_or_path: str | Path) -> dict:
     """Raw TOML data of a scene given by path or by bundled name (``damped_swing``).
 
-    A relative ``material.from_file`` path in the file is made absolute against the
-    scene file's directory.
+    A path (see :func:`is_path`) must name an existing file: it never falls back on the
+    bundled scene of the same stem. A relative ``material.from_file`` path in the file is
+    made absolute against the scene file's directory.
     """
     path = Path(name_or_path)
-    if path.is_file():
+    if is_path(path):
+        if not path.is_file():
+            why = "ends in .toml" if path.suffix == ".toml" else "names a directory"
+            raise DataFileError(path, f"no such scene file (a path, because it {why}; a bundled scene is named "
+                                f"without either: {', '.join(bundled_scenes())})")
         text = path.read_text()
         where = str(path)
     else:
-        resource = importlib.resources.files("warpcloth.scenes") / f"{path.stem}.toml"
-        if path.suffix not in ("", ".toml") or not resource.is_file():
-            raise SceneError("scene", f"no scene file {str(name_or_path)!r} and no bundled scene of that "
-                             f"name (bundled: {', '.join(bundled_scenes())})")
+        resource = importlib.resources.files("warpcloth.scenes") / f"{path.name}.toml"
+        if not resource.is_file():
+            raise OptionError("SCENE", f"no bundled scene {str(name_or_path)!r} (bundled: "
+                             f"{', '.join(bundled_scenes())}; a scene file is a path ending in .toml)")
         text = resource.read_text()
-        where = f"bundled scene {path.stem}"
+        where = f"bundled scene {path.name}"
     data = parse_toml(text, where, "scene")
-    if path.is_file():
+    if is_path(path):
         _rebase_material_file(data, path.parent)
     return data
 
