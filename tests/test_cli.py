@@ -2,8 +2,10 @@
 
 import csv
 import json
+import signal
 import subprocess
 import sys
+import time
 import zipfile
 from pathlib import Path
 
@@ -114,3 +116,54 @@ def test_an_unwritable_output_is_one_line_not_a_traceback(tmp_path):
                          "--out", str(blocker / "run"), cwd=tmp_path)
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert str(blocker / "run") in done.stderr or str(blocker) in done.stderr
+
+
+def run_files(directory):
+    return {p.relative_to(directory): p.read_bytes() for p in sorted(directory.rglob("*")) if p.is_file()}
+
+
+def test_an_existing_run_is_never_replaced_silently(tmp_path):
+    out = tmp_path / "swing"
+    first = ("run", "impulsive_rotation", "--set", "run.duration_s=0.02", "--no-progress", "--out", str(out))
+    assert warpcloth_cli(*first, cwd=tmp_path).returncode == 0
+    before = run_files(out)
+    again = warpcloth_cli("run", "impulsive_rotation", "--set", "run.duration_s=0.03", "--no-progress",
+                          "--out", str(out), cwd=tmp_path)
+    assert again.returncode == 2 and f"--out: {out} already holds a run" in again.stderr
+    assert run_files(out) == before  # untouched, byte for byte
+    with pytest.raises(wc.OptionError, match="already holds a run"):
+        wc.simulate(wc.load_scene("impulsive_rotation"), out=out)
+    sweep = warpcloth_cli("sweep", "damped_swing_sweep", "--out", str(out), "--workers", "0", cwd=tmp_path)
+    assert sweep.returncode == 2 and "already holds a run" in sweep.stderr
+    replaced = warpcloth_cli("run", "impulsive_rotation", "--set", "run.duration_s=0.03", "--no-progress",
+                             "--out", str(out), "--overwrite", cwd=tmp_path)
+    assert replaced.returncode == 0, replaced.stderr
+    assert wc.load_scene(out / "scene.toml").run.duration_s == 0.03
+    assert json.loads((out / "meta.json").read_text())["complete"]
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no staging left
+
+
+def test_a_killed_overwrite_leaves_the_old_run_whole(tmp_path):
+    # A real SIGKILL while the replacing run is streaming: the old run is byte-identical,
+    # the new one sits only in a hidden staging directory marked incomplete.
+    out = tmp_path / "swing"
+    assert warpcloth_cli("run", "impulsive_rotation", "--set", "run.duration_s=0.02", "--no-progress",
+                         "--out", str(out), cwd=tmp_path).returncode == 0
+    before = run_files(out)
+    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set",
+                             "run.duration_s=60", "--no-progress", "--out", str(out), "--overwrite"], cwd=tmp_path,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        staging = []
+        while time.monotonic() < deadline and not staging:
+            staging = [p for p in tmp_path.iterdir()
+                       if p.name.startswith(".swing.new-") and (p / "probes.csv").is_file()
+                       and (p / "probes.csv").stat().st_size > 1000]
+            time.sleep(0.2)
+        assert staging, "the replacing run never started streaming"
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+    assert run_files(out) == before
+    assert json.loads((staging[0] / "meta.json").read_text())["complete"] is False

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .io.run_dir import RunWriter
+from .io.run_dir import RunWriter, check_output_directory
 from .scene import Scene, build_batch, load_scene
 from .sim import RunResult, simulate_batch
 from .sim.runner import check_divergence_policy
@@ -23,6 +23,7 @@ def simulate(
     keep_frames: bool = True,
     initial_positions: np.ndarray | None = None,
     initial_velocities: np.ndarray | None = None,
+    overwrite: bool = False,
 ) -> RunResult:
     """Run one batch of strips (one scene per strip) and return what it recorded.
 
@@ -31,10 +32,13 @@ def simulate(
     DivergenceError (its ``result`` holds what was recorded); ``"record"`` lets the other
     strips go on. ``initial_positions`` / ``initial_velocities`` (``[node, variant, xy]``,
     m and m/s) replace the straight hanging start, e.g. with a mode shape; hinges start
-    fresh there.
+    fresh there. An ``out`` that already holds something is refused unless ``overwrite``,
+    and then replaced only once the new run is complete.
     """
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
+    if out is not None:
+        check_output_directory(out, overwrite)
     batch = build_batch(scenes, device)
     state = batch.model.state()
     if initial_positions is not None:
@@ -42,7 +46,7 @@ def simulate(
     sink = None
     if out is not None:
         frame_times = batch.recorder.schedule(batch.control, batch.solver).frame_times
-        sink = RunWriter(out, scenes, batch.model.n_nodes, frame_times)
+        sink = RunWriter(out, scenes, batch.model.n_nodes, frame_times, overwrite=overwrite)
     return simulate_batch(batch.model, batch.control, batch.solver, batch.recorder, state, sink=sink,
                           progress=progress, on_divergence=on_divergence, keep_frames=keep_frames, labels=scenes)
 

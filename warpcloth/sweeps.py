@@ -119,6 +119,10 @@ def run_sweep(
     if max_batch is not None and max_batch < 1:
         raise OptionError("--max-batch", f"must be ≥ 1, got {max_batch}")
     out = Path(out)
+    if out.is_dir() and any(out.iterdir()) and not (out / "sweep.json").is_file():
+        # resuming is for the same sweep only; a run or other files are never mixed into
+        held = "a run" if (out / "meta.json").is_file() else "files that are not a sweep"
+        raise OptionError("--out", f"{out} already holds {held}; choose another --out")
     out.mkdir(parents=True, exist_ok=True)
     directory = SweepDirectory(out)
     n_workers = (os.cpu_count() or 1) if workers is None else workers

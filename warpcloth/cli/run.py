@@ -23,6 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     run_p.add_argument("--device", type=device, default=None, help="cpu or cuda (default: Warp's preferred device)")
     run_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     run_p.add_argument("--usd", metavar="FILE", help="also export the run as a USD stage (.usd, .usda or .usdc)")
+    run_p.add_argument("--overwrite", action="store_true",
+                       help="replace what --out holds, once the new run is complete (default: refuse)")
     run_p.set_defaults(handler=run_scene)
 
 
@@ -35,7 +37,7 @@ def run_scene(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene, args.overrides)
     out = Path(args.out or Path("runs") / Path(args.scene).stem)
     try:
-        result = simulate(scene, device=args.device, out=out, progress=not args.no_progress)
+        result = simulate(scene, device=args.device, out=out, progress=not args.no_progress, overwrite=args.overwrite)
     except DivergenceError as exc:
         raise DivergenceError(f"{exc}\nRecorded up to the divergence: {out}", exc.diverged, exc.result) from None
     tip = result.probe("tip_x", 0)

@@ -17,13 +17,15 @@ simulated up to the interruption.
 from __future__ import annotations
 
 import json
+import os
+import shutil
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import tomli_w
 
-from warpcloth.errors import DataFileError
+from warpcloth.errors import DataFileError, OptionError
 from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 from warpcloth.scene import Scene, read_scene_file, scene_from_dict
 
@@ -38,11 +40,39 @@ def write_scene(path: Path, scene: Scene) -> None:
     path.write_text(tomli_w.dumps(scene.to_dict()))
 
 
-class RunWriter:
-    """Streams one batch run into a directory (see the module docstring)."""
+def check_output_directory(out_dir: str | Path, overwrite: bool = False) -> None:
+    """Refuse an output directory that already holds something, unless ``overwrite``.
 
-    def __init__(self, out_dir: str | Path, scenes: list[Scene], n_nodes: int, frame_times: np.ndarray) -> None:
-        self.dir = Path(out_dir)
+    An existing result is never replaced silently: without ``overwrite`` a non-empty
+    directory is an OptionError of ``--out``; with it, :class:`RunWriter` writes the new
+    run aside and swaps it in only once complete.
+    """
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise OptionError("--out", f"{out} is a file, not a run directory")
+    if out.is_dir() and any(out.iterdir()) and not overwrite:
+        what = "a run" if (out / "meta.json").is_file() else "a sweep" if (out / "sweep.json").is_file() else "files"
+        raise OptionError("--out", f"{out} already holds {what}; choose another --out, or pass --overwrite "
+                          "(the old one is replaced only once the new run is complete)")
+
+
+class RunWriter:
+    """Streams one batch run into a directory (see the module docstring).
+
+    Into a new or empty directory the run streams in place (an interrupted run reads as
+    incomplete there). Over an existing result (``overwrite``) it streams into a hidden
+    sibling ``.<name>.new-<pid>`` and replaces the old directory only in :meth:`close`,
+    so a kill or a failure leaves the old result as it was.
+    """
+
+    def __init__(self, out_dir: str | Path, scenes: list[Scene], n_nodes: int, frame_times: np.ndarray,
+                 overwrite: bool = False) -> None:
+        check_output_directory(out_dir, overwrite)
+        self.target = Path(out_dir)
+        replacing = self.target.is_dir() and any(self.target.iterdir())
+        self.dir = self.target.with_name(f".{self.target.name}.new-{os.getpid()}") if replacing else self.target
+        if replacing and self.dir.exists():
+            shutil.rmtree(self.dir)  # a staging directory this process left before
         self.dir.mkdir(parents=True, exist_ok=True)
         if len(scenes) == 1:
             write_scene(self.dir / "scene.toml", scenes[0])
@@ -97,6 +127,14 @@ class RunWriter:
         self.meta.update(extra)
         self.meta["complete"] = True
         self._write_meta()
+        if self.dir != self.target:
+            # Swap: the old result moves aside, the complete new one takes its name, then
+            # the old goes. Killed between the two renames, both survive (hidden names).
+            old = self.target.with_name(f".{self.target.name}.old-{os.getpid()}")
+            os.replace(self.target, old)
+            os.replace(self.dir, self.target)
+            shutil.rmtree(old)
+            self.dir = self.target
 
 
 def read_run(path: Path, variants: str | None = None, where: str | None = None) -> Recording:
