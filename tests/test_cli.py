@@ -167,3 +167,25 @@ def test_a_killed_overwrite_leaves_the_old_run_whole(tmp_path):
         proc.wait(timeout=30)
     assert run_files(out) == before
     assert json.loads((staging[0] / "meta.json").read_text())["complete"] is False
+
+
+def test_result_files_are_refused_when_present_unless_overwrite(tmp_path):
+    # A fitted scene, a material file and a USD stage are results too: an existing one
+    # is refused before any work, and --overwrite replaces it (atomically).
+    run = ("run", "impulsive_rotation", "--set", "run.duration_s=0.02", "--no-progress", "--out", "r")
+    assert warpcloth_cli(*run, cwd=tmp_path).returncode == 0
+    commands = {
+        "stage.usda": ("export-usd", "r", "-o", "stage.usda"),
+        "mat.toml": ("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example",
+                     "-o", "mat.toml", "--density-g-per-cm2", "2.03e-2"),
+        "fitted.toml": ("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation",
+                        "-o", "fitted.toml"),
+    }
+    for name, command in commands.items():
+        (tmp_path / name).write_text("a result someone kept\n")
+        refused = warpcloth_cli(*command, cwd=tmp_path)
+        assert refused.returncode == 2 and f"{name} already exists" in refused.stderr, refused.stderr
+        assert (tmp_path / name).read_text() == "a result someone kept\n"
+        done = warpcloth_cli(*command, "--overwrite", cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        assert (tmp_path / name).read_text() != "a result someone kept\n"

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from warpcloth.scene import scene_from_dict
 
-from .options import device
+from .options import add_overwrite, device, new_result
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,6 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     fit_p.add_argument("--seed", type=int, default=0, help="seed of the space-filling sample")
     fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda")
     fit_p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_overwrite(fit_p, "fit directory --out")
     clamp_p = sub.add_parser("clamp", help="clamp motion tools")
     clamp_sub = clamp_p.add_subparsers(dest="clamp_command", required=True)
     angle_p = clamp_sub.add_parser("fit-angle", help="fit the quartic-then-line θ(t) to an encoder series")
@@ -40,6 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     angle_p.add_argument("-o", "--output", required=True, help="the new scene file (TOML)")
     angle_p.add_argument("--angle-unit", choices=("rad", "deg"), default=None, help="override the header's unit")
     angle_p.add_argument("--plot", help="also write a PNG of the encoder data and the fit")
+    add_overwrite(angle_p, "scene file -o")
 
 
 def fit_command(args: argparse.Namespace) -> int:
@@ -52,7 +54,7 @@ def fit_command(args: argparse.Namespace) -> int:
     base.pop("sweep", None)
     measurement = read_measurement(args.measured)
     free = free_parameters(args.free, scene_from_dict(base), args.bounds)
-    out = Path(args.out or Path("runs") / f"fit-{Path(args.scene).stem}")
+    out = new_result(args.out or Path("runs") / f"fit-{Path(args.scene).stem}", args.overwrite, "--out")
     fit = fit_motion(base, measurement, free, align_start_s=args.align_start, space_filling=args.space_filling,
                      max_iterations=args.max_iterations, seed=args.seed, device=args.device,
                      progress=not args.no_progress)
@@ -74,12 +76,12 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
     from warpcloth.io.measured import read_encoder
     from warpcloth.scene import read_scene_file
 
+    out = new_result(args.output, args.overwrite, "-o")
     t, theta = read_encoder(args.encoder, args.angle_unit)
     fit = fit_clamp_motion(t, theta)
     data = scene_with_clamp_motion(read_scene_file(args.scene), fit)
     data.pop("sweep", None)
     scene = scene_from_dict(data)  # validates before anything is written
-    out = Path(args.output)
     write_text_atomically(out, tomli_w.dumps(scene.to_dict()))
     print(f"encoder at rest {fit.theta0_rad:.4g} rad (the scene's θ is measured from it); "
           f"onset {fit.onset_s:.4f} s, quartic {fit.quartic_rad_per_s4:.5g} rad/s⁴ to {fit.break_s:.4f} s, "

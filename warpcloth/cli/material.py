@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from warpcloth.errors import OptionError
+
+from .options import add_overwrite, new_result
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -30,6 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     kes_p.add_argument("--divergence-strain", type=float, default=None,
                        help="T(ε) must increase up to this strain (default: the scenes' default, 0.25)")
     kes_p.add_argument("--plot", help="also write a PNG of the data against the fit")
+    add_overwrite(kes_p, "material file")
     material_sub.add_parser("list", help="list the bundled materials and where their numbers come from")
     material_p.set_defaults(handler=material_command)
 
@@ -46,7 +48,7 @@ def material_command(args: argparse.Namespace) -> int:
     if args.density_g_per_cm2 is None:
         raise OptionError("--density-g-per-cm2", "the mass per area is not part of KES-FB1/FB2 data; weigh a "
                          "sample and give it in g/cm² (e.g. 2.03e-2 for the illustrative wool/nylon)")
-    out = Path(args.output)
+    out = new_result(args.output, args.overwrite, "--output")
     if out.suffix != ".toml":
         raise OptionError("--output", f"{out} must end in .toml (scenes refer to material files by such a path)")
     max_strain = kes.DIVERGENCE_STRAIN if args.divergence_strain is None else args.divergence_strain

@@ -4,8 +4,11 @@ before anything runs."""
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import warp as wp
+
+from warpcloth.errors import OptionError
 
 
 def device(value: str) -> str:
@@ -17,3 +20,18 @@ def device(value: str) -> str:
         raise argparse.ArgumentTypeError(f"{value!r} is not a device of this machine ({exc}); it has: {known}") \
             from None
     return value
+
+
+def add_overwrite(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--overwrite``: replace an existing ``what`` (default: refuse it)."""
+    parser.add_argument("--overwrite", action="store_true", help=f"replace an existing {what} (default: refuse)")
+
+
+def new_result(path: str | Path, overwrite: bool, option: str) -> Path:
+    """``path`` for a result about to be written: refused when something is there already,
+    unless ``overwrite`` (the writers replace it atomically, only once the new one is whole)."""
+    out = Path(path)
+    exists = out.is_file() or (out.is_dir() and any(out.iterdir()))
+    if exists and not overwrite:
+        raise OptionError(option, f"{out} already exists; choose another {option}, or pass --overwrite")
+    return out

@@ -7,6 +7,8 @@ from pathlib import Path
 
 from warpcloth.errors import OptionError
 
+from .options import add_overwrite, new_result
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``export-usd``, ``plot`` and ``render``."""
@@ -20,6 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     usd_p.add_argument("-o", "--output", required=True, help="stage file: .usd or .usdc (binary), .usda (text)")
     usd_p.add_argument("--ribbon", action="store_true", help="also write each strip as a mesh of its real width")
     usd_p.set_defaults(handler=export_usd_command)
+    add_overwrite(usd_p, "stage -o")
     usd_p.add_argument("--frames-per-clip", type=int, default=None,
                        help="split frames into value-clip layers of this many frames (default: only when large)")
     plot_p = sub.add_parser("plot", help="PNG figures of a run, or a sweep metric against parameters")
@@ -46,7 +49,8 @@ def export_usd_command(args: argparse.Namespace) -> int:
     from warpcloth.viz.usd import export_usd
 
     recording = load_recording(args.run_dir, args.variants, args.where)
-    out = export_usd(recording, args.output, ribbon=args.ribbon, frames_per_clip=args.frames_per_clip)
+    out = export_usd(recording, new_result(args.output, args.overwrite, "-o"), ribbon=args.ribbon,
+                     frames_per_clip=args.frames_per_clip)
     print(f"wrote {out} ({len(recording.variants)} variants, {len(recording.frame_times)} frames)")
     return 0
 
