@@ -10,10 +10,12 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from warpcloth.kernels import PROBE_FIELDS
 
 import warpcloth as wc
+from warpcloth import load_recording
 
 
 def warpcloth_cli(*args, cwd):
@@ -189,3 +191,21 @@ def test_result_files_are_refused_when_present_unless_overwrite(tmp_path):
         done = warpcloth_cli(*command, "--overwrite", cwd=tmp_path)
         assert done.returncode == 0, done.stderr
         assert (tmp_path / name).read_text() != "a result someone kept\n"
+
+
+def test_a_torn_last_probe_row_is_never_read_as_data(tmp_path):
+    # A kill (or a full disk) in the middle of appending a row leaves a partial last line;
+    # "…e-05" cut to "…e-0" or "1.23" would read as a wrong number, not as missing data.
+    out = tmp_path / "r"
+    wc.simulate(wc.load_scene("impulsive_rotation", ["run.duration_s=0.02"]), out=out)
+    whole = load_recording(out).probes
+    probes = out / "probes.csv"
+    text = probes.read_text()
+    probes.write_text(text[: len(text) - 9])  # cut inside the last row's last number
+    with pytest.raises(wc.DataFileError, match="last row is torn although meta.json says the run is complete"):
+        load_recording(out)
+    meta = json.loads((out / "meta.json").read_text())
+    (out / "meta.json").write_text(json.dumps(meta | {"complete": False}))
+    partial = load_recording(out).probes
+    assert len(partial) == len(whole) - 1
+    pd.testing.assert_frame_equal(partial.reset_index(drop=True), whole.iloc[:-1].reset_index(drop=True))

@@ -16,6 +16,7 @@ simulated up to the interruption.
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import shutil
@@ -137,6 +138,29 @@ class RunWriter:
             self.dir = self.target
 
 
+def read_probes(path: Path, complete: bool) -> pd.DataFrame:
+    """The probe rows of run directory ``path``.
+
+    Rows are appended whole and flushed, so only an interrupted write can leave a partial
+    last line (a number cut before its exponent would read orders of magnitude wrong): it
+    is dropped from an incomplete run and refused in one that claims to be complete.
+    """
+    file = path / "probes.csv"
+    text = file.read_text()
+    if text and not text.endswith("\n"):
+        if complete:
+            raise DataFileError(file, "its last row is torn although meta.json says the run is complete")
+        text = text[: text.rfind("\n") + 1]
+    try:
+        table = pd.read_csv(io.StringIO(text))
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        raise DataFileError(file, f"is not a probe table: {exc}") from None
+    if list(table.columns) != list(PROBE_COLUMNS):
+        raise DataFileError(file, f"has columns {', '.join(map(str, table.columns))}; a run writes "
+                            f"{', '.join(PROBE_COLUMNS)}")
+    return table
+
+
 def read_run(path: Path, variants: str | None = None, where: str | None = None) -> Recording:
     """Selected variants of a run directory as a Recording (an interrupted run: the frames it reached)."""
     meta = json.loads((path / "meta.json").read_text())
@@ -156,6 +180,6 @@ def read_run(path: Path, variants: str | None = None, where: str | None = None) 
         if not len(reached):
             raise DataFileError(path, "the run was interrupted before its first frame")
         frames, times = frames[: reached[-1] + 1], times[: reached[-1] + 1]
-    probes = pd.read_csv(path / "probes.csv")
+    probes = read_probes(path, bool(meta["complete"]))
     return Recording(path, chosen, [scenes[i] for i in chosen], times, frames, probes[probes["variant"].isin(chosen)],
                      parameters.iloc[chosen].reset_index(drop=True), bool(meta["complete"]))
