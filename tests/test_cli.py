@@ -209,3 +209,19 @@ def test_a_torn_last_probe_row_is_never_read_as_data(tmp_path):
     partial = load_recording(out).probes
     assert len(partial) == len(whole) - 1
     pd.testing.assert_frame_equal(partial.reset_index(drop=True), whole.iloc[:-1].reset_index(drop=True))
+
+
+def test_ctrl_c_is_one_line_and_keeps_what_was_written(tmp_path):
+    out = tmp_path / "r"
+    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set", "run.duration_s=60",
+                             "--no-progress", "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not ((out / "probes.csv").is_file()
+                                               and (out / "probes.csv").stat().st_size > 1000):
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and "interrupted" in stderr and "Traceback" not in stderr, stderr
+    assert json.loads((out / "meta.json").read_text())["complete"] is False
+    assert len(load_recording(out).probes) > 0  # the interrupted run reads back up to where it stopped

@@ -1,7 +1,8 @@
 """The ``warpcloth`` command: a registry of command groups and the one error boundary.
 
 Exit codes: 0 done; 2 the input is unusable (a scene field, a data file or an option,
-named in the message); 3 a run diverged (what was recorded before it is kept).
+named in the message) or a file cannot be read or written; 3 a run diverged (what was
+recorded before it is kept); 130 interrupted (Ctrl-C: what was written is kept).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ COMMAND_GROUPS = (run, sweep, view, fit, material)
 WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (OptionError, "error in option"))
 EXIT_UNUSABLE_INPUT = 2
 EXIT_DIVERGED = 3
+EXIT_INTERRUPTED = 130  # the shell's convention for SIGINT
 
 
 def parser() -> argparse.ArgumentParser:
@@ -49,6 +51,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         what = next((text for kind, text in WHAT if isinstance(exc, kind)), "error")
         print(f"warpcloth {args.command}: {what}: {exc}", file=sys.stderr)
         return EXIT_UNUSABLE_INPUT
+    except KeyboardInterrupt:
+        # Everything finished so far is on disk; an interrupted run directory says
+        # "complete": false in its meta.json, a sweep resumes from its finished batches.
+        print(f"warpcloth {args.command}: interrupted; what was written so far is kept and marked incomplete",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
     except OSError as exc:
         # a file that cannot be read or written (missing directory, no permission, full disk)
         where = f": {exc.filename}" if exc.filename else ""
