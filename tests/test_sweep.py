@@ -213,3 +213,16 @@ def test_overrides_reach_the_base_scene_and_the_sweep_options():
     sweep = load_sweep("damped_swing_sweep", ["sweep.random.samples=12", "sweep.seed=5", "run.duration_s=0.5"])
     assert len(sweep.scenes) == 12 and all(s.run.duration_s == 0.5 for s in sweep.scenes)
     assert sweep.assignments != load_sweep("damped_swing_sweep", ["sweep.random.samples=12"]).assignments
+
+
+def test_a_variant_that_diverges_during_the_hold_does_not_stop_the_sweep(tmp_path):
+    # A tensile curve so soft that gravity stretches the strip past divergence_strain while
+    # it is held: no sample after t = 0 exists for it, and the sweep still completes.
+    tensile = [[2000.0, 0.0, 0.0, 2.93e7], [0.5, 0.0, 0.0, 0.0]]
+    sweep = wc.expand({"run": {"duration_s": 0.05}, "release": {"enabled": True, "settle_time_s": 0.05},
+                       "sweep": {"zip": {"material.tensile_gf_per_cm": tensile}}})
+    summary = wc.run_sweep(sweep, tmp_path / "s", workers=0)
+    healthy, soft = summary.iloc[0], summary.iloc[1]
+    assert not healthy["diverged"] and healthy["hysteresis_work_J"] > 0
+    assert soft["diverged"] and soft["diverged_time_s"] < 0 and soft["diverged_quantity"] == "tensile strain"
+    assert np.isnan(soft["hysteresis_work_J"]) and np.isnan(soft["first_period_s"]) and soft["n_half_cycles"] == 0

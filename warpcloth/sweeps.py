@@ -44,6 +44,15 @@ def default_max_batch(scene: Scene, n_variants: int, workers: int, frames: bool)
     return max(1, min(memory_cap, balance))
 
 
+def _last(series: np.ndarray) -> float:
+    # NaN for a strip with no recorded sample (it diverged during the hold, before t = 0)
+    return float(series[-1]) if len(series) else float("nan")
+
+
+def _peak(series: np.ndarray) -> float:
+    return float(np.max(series)) if len(series) else float("nan")
+
+
 def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[dict],
               assignments: list[dict], device: str | None, frames: bool) -> dict:
     """Simulate one batch and write its files (runs in a Dask worker or in-process)."""
@@ -70,9 +79,9 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
         row |= {key: (json.dumps(v) if isinstance(v, list) else v) for key, v in assignments[local].items()}
         row |= metrics
         row |= {
-            "peak_tip_speed_m_per_s": float(np.nanmax(result.probe("tip_speed", local))),
-            "hysteresis_work_J": float(result.probe("hysteresis_work", local)[ok][-1]),
-            "damping_work_J": float(result.probe("damping_work", local)[ok][-1]),
+            "peak_tip_speed_m_per_s": _peak(result.probe("tip_speed", local)[ok]),
+            "hysteresis_work_J": _last(result.probe("hysteresis_work", local)[ok]),
+            "damping_work_J": _last(result.probe("damping_work", local)[ok]),
             "diverged": report is not None,
             "diverged_time_s": report["time_s"] if report else float("nan"),
             "diverged_quantity": report["quantity"] if report else "",
