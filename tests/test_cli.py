@@ -225,3 +225,19 @@ def test_ctrl_c_is_one_line_and_keeps_what_was_written(tmp_path):
     assert proc.returncode == 130 and "interrupted" in stderr and "Traceback" not in stderr, stderr
     assert json.loads((out / "meta.json").read_text())["complete"] is False
     assert len(load_recording(out).probes) > 0  # the interrupted run reads back up to where it stopped
+
+
+@pytest.mark.parametrize("damage", ["meta.json torn", "meta.json missing"])
+def test_a_damaged_run_directory_is_named_not_a_traceback(tmp_path, damage):
+    out = tmp_path / "r"
+    wc.simulate(wc.load_scene("impulsive_rotation", ["run.duration_s=0.02"]), out=out)
+    (out / "sweep.json").unlink(missing_ok=True)
+    if damage == "meta.json torn":
+        (out / "meta.json").write_text((out / "meta.json").read_text()[:40])
+        with pytest.raises(wc.DataFileError, match=r"meta.json: is damaged \(not valid JSON"):
+            load_recording(out)
+    else:
+        (out / "meta.json").unlink()
+        (out / "probes.csv").touch()
+    done = warpcloth_cli("plot", str(out), cwd=tmp_path)
+    assert done.returncode == 2 and "Traceback" not in done.stderr and str(out) in done.stderr, done.stderr

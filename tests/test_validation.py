@@ -117,3 +117,18 @@ def test_empty_file_gives_the_documented_defaults(tmp_path):
     scene = wc.load_scene(empty)
     assert scene.strip.spacing_mm == 5.0 and scene.integrator.precision == "float64"
     assert "illustrative" in scene.material.name
+
+
+@pytest.mark.parametrize("content, message", [
+    (b"\x00\x01\x02\xff\xfe binary", "is not UTF-8 text"),
+    ("[damping]\ngamma_per_s = 0.5  # réglé\n".encode("latin-1"), r"is not UTF-8 text \(byte 0xe9"),
+])
+def test_a_scene_file_that_is_not_utf8_text_is_named(tmp_path, content, message):
+    path = tmp_path / "scene.toml"
+    path.write_bytes(content)
+    with pytest.raises(wc.DataFileError, match=message):
+        wc.load_scene(path)
+    material = tmp_path / "fabric.toml"
+    material.write_bytes(content)
+    with pytest.raises(wc.DataFileError, match=message):
+        wc.load_scene("damped_swing", [f"material.from_file={str(material)!r}"])

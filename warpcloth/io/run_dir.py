@@ -31,6 +31,7 @@ from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 from warpcloth.scene import Scene, read_scene_file, scene_from_dict
 
 from .atomic import write_text_atomically
+from .json_file import read_json
 from .recording import Recording, per_strip_parameters, select_variants
 
 PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
@@ -163,7 +164,7 @@ def read_probes(path: Path, complete: bool) -> pd.DataFrame:
 
 def read_run(path: Path, variants: str | None = None, where: str | None = None) -> Recording:
     """Selected variants of a run directory as a Recording (an interrupted run: the frames it reached)."""
-    meta = json.loads((path / "meta.json").read_text())
+    meta = read_json(path / "meta.json")
     if meta["n_variants"] == 1:
         scenes = [scene_from_dict(read_scene_file(path / "scene.toml"))]
     else:

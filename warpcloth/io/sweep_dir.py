@@ -34,6 +34,7 @@ from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.scene import Sweep, expand
 
 from .atomic import write_atomically
+from .json_file import read_json
 from .recording import Recording, per_strip_parameters, select_variants
 
 LIST_COLUMNS = ("half_cycle_amplitude_m", "log_decrement")
@@ -68,7 +69,7 @@ class SweepDirectory:
         (resume), else ``plan()``'s, written with the manifest and variants.csv."""
         manifest = self.path / "sweep.json"
         if manifest.exists():
-            stored = json.loads(manifest.read_text())
+            stored = read_json(manifest)
             if stored["fingerprint"] != sweep.fingerprint:
                 raise OptionError("--out", f"{self.path} holds a different sweep (its scenes or sweep spec "
                                   "changed); choose a new --out directory to start this one")
@@ -104,14 +105,14 @@ class SweepDirectory:
         scalar = [c for c in summary.columns if c not in LIST_COLUMNS]
         write_atomically(self.path / "summary.csv", lambda p: summary[scalar].to_csv(p, index=False))
         manifest = self.path / "sweep.json"
-        info = json.loads(manifest.read_text()) | {"complete": True}
+        info = read_json(manifest) | {"complete": True}
         write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
         return summary
 
 
 def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording:
     """Selected variants of a sweep directory run with ``--frames``, as a Recording."""
-    info = json.loads((path / "sweep.json").read_text())
+    info = read_json(path / "sweep.json")
     sweep = expand(info["base_scene"] | {"sweep": info["sweep"]})
     if sweep.fingerprint != info["fingerprint"]:
         raise DataFileError(path, "its variants no longer resolve to the scenes that were simulated "

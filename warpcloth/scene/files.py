@@ -11,7 +11,7 @@ from warpcloth.errors import DataFileError, OptionError
 
 from .materials import MATERIAL_FILE_KEY, with_material_file
 from .overrides import apply_overrides
-from .parse import parse_section, parse_toml
+from .parse import parse_section, parse_toml, read_toml_text
 from .schema import Scene
 from .validate import validate_scene
 
@@ -60,7 +60,7 @@ def read_scene_file(name_or_path: str | Path) -> dict:
             why = "ends in .toml" if path.suffix == ".toml" else "names a directory"
             raise DataFileError(path, f"no such scene file (a path, because it {why}; a bundled scene is named "
                                 f"without either: {', '.join(bundled_scenes())})")
-        text = path.read_text()
+        text = read_toml_text(path)
         where = str(path)
     else:
         resource = importlib.resources.files("warpcloth.scenes") / f"{path.name}.toml"

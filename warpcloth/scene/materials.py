@@ -13,7 +13,7 @@ from warpcloth import units
 from warpcloth.errors import SceneError
 from warpcloth.sim import MaterialSI
 
-from .parse import coerce_value, parse_section, parse_toml
+from .parse import coerce_value, parse_section, parse_toml, read_toml_text
 from .schema import MaterialSection
 
 MATERIAL_FILE_KEY = "material.from_file"
@@ -79,7 +79,7 @@ def read_material_file(ref: str | Path) -> dict:
         path = Path(ref)
         where = str(path)
         try:
-            text = path.read_text()
+            text = read_toml_text(path)
         except OSError as exc:
             raise SceneError(MATERIAL_FILE_KEY, f"cannot read material file {ref!r}: {exc.strerror} (a path is "
                              f"relative to the scene file; a bundled material is named without .toml: "

@@ -9,9 +9,10 @@ import dataclasses
 import math
 import tomllib
 import typing
+from pathlib import Path
 from typing import Any
 
-from warpcloth.errors import SceneError
+from warpcloth.errors import DataFileError, SceneError
 
 from .schema import field_types
 
@@ -77,6 +78,16 @@ def parse_section(cls: type, data: Any, prefix: str) -> Any:
         else:
             kwargs[name] = coerce_value(data[name], tp, where, dict(f.metadata))
     return cls(**kwargs)
+
+
+def read_toml_text(path: Path) -> str:
+    """The text of a TOML file (UTF-8, as TOML requires; a byte-order mark is dropped);
+    a file that is not UTF-8 text is a DataFileError naming it, not a traceback."""
+    try:
+        return path.read_bytes().decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DataFileError(path, f"is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start}); "
+                            "a scene or material file is TOML, which is UTF-8") from None
 
 
 def parse_toml(text: str, where: str, field: str) -> dict:
