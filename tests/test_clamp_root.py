@@ -8,11 +8,12 @@ import math
 import numpy as np
 import pytest
 from conftest import overrides
+from test_analytic import mode_start
 
 import warpcloth as wc
 from warpcloth.calibrate.metrics import crossing_times
 from warpcloth.calibrate.references import hanging_beam_eigenvalue, hanging_beam_mode
-from warpcloth.scene import rest_positions, to_si
+from warpcloth.scene import to_si
 
 EDGES = ("paper", "second_order")
 SPACINGS_MM = (5.0, 2.5, 1.25)
@@ -60,11 +61,8 @@ def period_errors():
                 length = scene.strip.free_length_mm * 1e-3
                 gamma = material.density * gravity * length**3 / material.bending_rigidity
                 lam, shape = hanging_beam_mode(gamma)
-                x = rest_positions(scene)
-                s_free = np.maximum(0.0, -x[:, 1] - scene.strip.clamp_length_mm * 1e-3)
-                x[:, 0] = 1e-3 * shape(s_free / length) * (s_free > 0)
                 scenes.append(scene)
-                starts.append(x)
+                starts.append(mode_start(scene, lambda s, f=shape, span=length: f(s / span) * (s > 0), 1e-3)[:, 0])
                 omega = lam * math.sqrt(material.bending_rigidity / (material.density * length**4))
                 exact.append(2 * math.pi / omega)
         result = wc.simulate(scenes, initial_positions=np.stack(starts, axis=1))
