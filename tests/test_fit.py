@@ -43,7 +43,7 @@ def test_damped_swing_gamma_and_d1_are_recovered():
     measured = LaserTrace(t, result.probe("laser_x", 0)[::2] + rng.normal(0, 2e-4, len(t)))
     free = free_parameters("gamma,D1", wc.scene_from_dict(copy.deepcopy(base)))
     fit = fit_motion(base, measured, free, progress=False)
-    assert fit.converged
+    assert fit.converged and fit.at_bound == []
     for name, value in truth.items():
         assert abs(fit.parameters[name] - value) < 3 * fit.sigma[name]
         assert abs(fit.parameters[name] - value) < 0.02 * value
@@ -166,3 +166,14 @@ def test_markers_beyond_the_free_end_are_refused():
     markers = TrackedShapes(np.array([0, 1]), np.array([0.0, 0.05]), np.array([0.05, 0.12]), np.zeros(2), np.zeros(2))
     with pytest.raises(wc.OptionError, match="--measured: a marker at s = 120 mm lies beyond the free end"):
         fit_motion(base, markers, free_parameters("gamma", wc.scene_from_dict(copy.deepcopy(base))), progress=False)
+
+
+def test_a_fit_that_ends_on_a_bound_says_so_and_exits_non_zero(tmp_path):
+    # Truth γ = 0.55 /s in the bundled trace; bounds that exclude it pin γ at 5: the search
+    # ends there at many times the noise, and that must not read as a fitted value.
+    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "fit", "damped_swing", "--measured",
+                           "damped_swing_laser", "--free", "gamma", "--bounds", "gamma=5:6", "--max-iterations", "3",
+                           "--out", "fit", "--no-progress"], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert done.returncode == 4, done.stderr
+    assert "not a fit: damping.gamma_per_s = 5 (bounds 5:6) ended on a bound" in done.stderr
+    assert json.loads((tmp_path / "fit" / "fit.json").read_text())["at_bound"] == ["damping.gamma_per_s"]

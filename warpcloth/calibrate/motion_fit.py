@@ -61,6 +61,7 @@ ALIASES = {
 SHIFT = "time_shift_s"
 STENCIL_STEP = 2e-3  # central-difference step, as a fraction of each parameter's range
 MAX_LAMBDA = 1e8
+AT_BOUND = 1e-3  # a parameter this close to a bound, as a fraction of its range, ended on it
 
 
 @dataclass(frozen=True)
@@ -260,6 +261,7 @@ class FitResult:
     wall_time_s: float
     history: list[dict] = field(default_factory=list)
     converged: bool = False
+    at_bound: list[str] = field(default_factory=list)  # fields within 0.1 % of the range of a bound
 
     def to_json(self) -> dict:
         """Everything, JSON-ready."""
@@ -345,7 +347,11 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
         result = objective.run(np.vstack([u, *stencil_rows]))
         jac = objective.jacobian(result, pairs, 0, shift)
         residual = objective.residuals(result, 0, shift)
-    return _summarise(objective, u, shift, jac, residual, history, converged, time.perf_counter() - started)
+    fit = _summarise(objective, u, shift, jac, residual, history, converged, time.perf_counter() - started)
+    # A parameter on its bound is not a fitted value (the optimum lies beyond), and its
+    # σ from the local Jacobian means nothing: say so rather than report it as a fit.
+    fit.at_bound = [p.field for p, ui in zip(free, u, strict=True) if min(ui, 1.0 - ui) <= AT_BOUND]
+    return fit
 
 
 def _shift_of(q: np.ndarray, d: int) -> float:

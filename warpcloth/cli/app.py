@@ -2,7 +2,8 @@
 
 Exit codes: 0 done; 2 the input is unusable (a scene field, a data file or an option,
 named in the message) or a file cannot be read or written; 3 a run diverged (what was
-recorded before it is kept); 130 interrupted (Ctrl-C: what was written is kept).
+recorded before it is kept); 4 a fit ended on a bound (written, but not a fit); 130
+interrupted (Ctrl-C: what was written is kept).
 """
 
 from __future__ import annotations

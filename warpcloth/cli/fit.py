@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from warpcloth.scene import scene_from_dict
 
-from .options import add_overwrite, device, new_result
+from .options import EXIT_UNTRUSTED_FIT, add_overwrite, device, new_result
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -64,6 +65,13 @@ def fit_command(args: argparse.Namespace) -> int:
     for name, value in fit.parameters.items():
         print(f"  {name} = {value:.6g} ± {fit.sigma[name]:.2g}")
     print(f"wrote {out}/ (best.toml reruns the best fit: warpcloth run {out / 'best.toml'})")
+    if fit.at_bound:
+        bounds = {p.field: (p.lower, p.upper) for p in free}
+        ended = ", ".join(f"{f} = {fit.parameters[f]:.6g} (bounds {bounds[f][0]:g}:{bounds[f][1]:g})"
+                          for f in fit.at_bound)
+        print(f"warpcloth fit: not a fit: {ended} ended on a bound, so the optimum lies outside and the values and σ "
+              "above are not estimates; widen --bounds or fix the model (fit.json lists at_bound)", file=sys.stderr)
+        return EXIT_UNTRUSTED_FIT
     return 0
 
 

@@ -10,6 +10,9 @@ import warp as wp
 
 from warpcloth.errors import OptionError
 
+EXIT_UNTRUSTED_FIT = 4
+"""Exit status of a fit whose result is written but must not be read as a fit (it ended on a bound)."""
+
 
 def device(value: str) -> str:
     """``--device``: a Warp device of this machine (checked before anything runs)."""
