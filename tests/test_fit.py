@@ -34,7 +34,7 @@ def with_fields(data, fields):
 
 def test_damped_swing_gamma_and_d1_are_recovered():
     # Truth γ = 0.55 /s, D1 = 0.025 gf·cm/cm; laser trace at 300 Hz with σ = 0.2 mm noise.
-    # Measured: γ 0.5484 ± 0.0019, D1 0.02518 ± 0.00018, RMS 0.196 mm (= the noise).
+    # Measured: γ 0.5479 ± 0.0021, D1 0.02524 ± 0.00021, RMS 0.196 mm (= the noise).
     base = raw("damped_swing", release__settle_time_s=0.3, run__duration_s=1.2)
     truth = {"damping.gamma_per_s": 0.55, "material.hysteresis_d1_gf_cm_per_cm": 0.025}
     result = wc.simulate(with_fields(base, truth))
@@ -70,7 +70,7 @@ def tracked_markers(result, scene, offset, noise, rng):
 def test_impulsive_rotation_centre_gamma_and_clock_are_recovered():
     # Truth: rotation centre 4.0 mm above the clamp edge, γ = 0.8 /s; markers every 10 mm
     # at 60 frames/s with σ = 0.3 mm; the camera clock starts 4 ms late. Measured:
-    # dy 3.999 ± 0.026 mm, γ 0.78 ± 0.058, shift 4.16 ± 0.20 ms.
+    # dy 3.999 ± 0.026 mm, γ 0.78 ± 0.053, shift 4.15 ± 0.18 ms.
     base = raw("impulsive_rotation", run__duration_s=0.3)
     truth = {"clamp.rotation_centre_dy_mm": 4.0, "damping.gamma_per_s": 0.8}
     scene = with_fields(base, truth)

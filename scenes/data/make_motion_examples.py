@@ -4,7 +4,8 @@
 
 They are synthetic: the paper's measured curves are not in its text, so each file is a
 warpcloth run of a bundled scene with *known* parameters, sampled as the instrument
-would, plus seeded Gaussian noise of a stated size. A fit of these files should return
+would, plus seeded Gaussian noise of a stated size. The runs use the scenes' default edge
+model (``clamp.edge_hinge = "second_order"``). A fit of these files should return
 the parameters below within its reported uncertainty.
 
 - ``damped_swing_laser.csv``: the bundled damped swing with γ = 0.55 /s and

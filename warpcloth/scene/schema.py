@@ -116,7 +116,7 @@ class ClampSection:
     table_theta_rad: list[float] = _field([], "sampled angles (counter-clockwise +)", per_strip=True)
     interpolation: str = _field("linear", "linear | cubic (natural spline) for a table",
                                 choices=("linear", "cubic"), per_strip=True)
-    edge_hinge: str = _field("paper", "second_order (the clamp-edge hinge bends the half segment below "
+    edge_hinge: str = _field("second_order", "second_order (the clamp-edge hinge bends the half segment below "
                              "the built-in end: second order in h) | paper (the paper's model: as if clamped "
                              "h/2 inside the clamp, first order)", choices=EDGE_HINGES, per_strip=True)
 

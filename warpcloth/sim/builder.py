@@ -89,10 +89,11 @@ class StripBuilder:
 
         ``rotation_centre`` defaults to the clamp edge and ``hold_target`` to the free
         end's rest position. ``edge_hinge_length`` is the length of strip the clamp-edge
-        hinge bends: h (the default) is the paper's model, which acts as if clamped h/2
-        inside the clamp; h/2 makes the built-in end second order in h (docs/model.md §5.3).
+        hinge bends: h/2 (the default, like a scene's ``clamp.edge_hinge = "second_order"``)
+        makes the built-in end second order in h; h is the paper's model, which acts as if
+        clamped h/2 inside the clamp (docs/model.md §5.3).
         """
-        edge = self.spacing if edge_hinge_length is None else edge_hinge_length
+        edge = 0.5 * self.spacing if edge_hinge_length is None else edge_hinge_length
         if not 0 < edge <= self.spacing:
             raise ValueError(f"edge_hinge_length = {edge:g} m must lie in (0, spacing = {self.spacing:g} m]")
         self.strips.append(StripSpec(
