@@ -119,7 +119,12 @@ def build(scalar: Any, scheme: str, law_name: str) -> SimpleNamespace:
                 sweep = (arm - before) * half
                 f_int = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
                 work = work + work_on(state, i, s, sweep) + vec4(zero, zero, zero, -wp.dot(f_int, sweep))
-            state.position[i, s] = centre + arm
+            if theta == zero:
+                # A clamp at rest sits exactly on its rest positions, wherever its rotation
+                # centre is: centre + (X - centre) would move it by rounding.
+                state.position[i, s] = model.rest_position[i, s]
+            else:
+                state.position[i, s] = centre + arm
             state.velocity[i, s] = v_new
         if step + 1 == stepping.release_step:
             work = vec4()  # the energy budget is reported from the release on

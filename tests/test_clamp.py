@@ -31,6 +31,19 @@ def test_clamp_nodes_rotate_rigidly_about_the_rotation_centre():
         np.testing.assert_allclose(frame, expected, atol=1e-15)
 
 
+def test_a_rotation_centre_does_nothing_to_a_clamp_that_does_not_turn():
+    # θ = 0 throughout: the clamp stays on its rest positions whatever the centre, bit
+    # for bit (centre + (X − centre) used to move it by rounding, and the run with it).
+    runs = [wc.simulate(wc.load_scene("damped_swing", overrides(
+        run__duration_s=0.2, release__settle_time_s=0.1, clamp__rotation_centre_dx_mm=dx,
+        clamp__rotation_centre_dy_mm=dy))) for dx, dy in ((0.0, 0.0), (3.0, 7.3), (-11.0, 2.8))]
+    rest = build_batch([wc.load_scene("damped_swing")]).model.rest_positions
+    for run in runs:
+        assert run.frames.tobytes() == runs[0].frames.tobytes()
+        assert run.probes.tobytes() == runs[0].probes.tobytes()
+    assert runs[0].frames[:, 0, :5].tobytes() == np.broadcast_to(rest[:5], runs[0].frames[:, 0, :5].shape).tobytes()
+
+
 def test_sampled_table_linear_and_cubic():
     t = [0.0, 0.02, 0.05, 0.08, 0.1]
     theta = [0.0, 0.05, 0.3, 0.6, 0.7]
