@@ -1,15 +1,18 @@
 """The ``warpcloth`` command: a registry of command groups and the one error boundary.
 
 Exit codes: 0 done; 2 the input is unusable (a scene field, a data file or an option,
-named in the message) or a file cannot be read or written; 3 a run diverged (what was
-recorded before it is kept); 4 a fit ended on a bound (written, but not a fit); 130
-interrupted (Ctrl-C: what was written is kept).
+named in the message); 3 a run diverged (what was recorded before it is kept); 4 a fit
+ended on a bound (written, but not a fit); 5 a file could not be read or written (full
+disk, file-size limit, permissions: what was committed before is kept); 130 interrupted
+(Ctrl-C: what was written is kept).
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import logging
+import os
 import sys
 from collections.abc import Sequence
 
@@ -25,7 +28,9 @@ COMMAND_GROUPS = (run, sweep, view, fit, material)
 WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (OptionError, "error in option"))
 EXIT_UNUSABLE_INPUT = 2
 EXIT_DIVERGED = 3
+EXIT_IO = 5
 EXIT_INTERRUPTED = 130  # the shell's convention for SIGINT
+FULL = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -39,9 +44,26 @@ def parser() -> argparse.ArgumentParser:
     return top
 
 
+def init_warp_quietly() -> None:
+    """Initialise Warp without its native notice that a machine has no CUDA driver: on a
+    CPU machine every command would print it. (A --device cuda there is refused with
+    its own message.)"""
+    wp.config.log_level = logging.WARNING  # no init banner or module-load lines
+    sys.stderr.flush()
+    saved = os.dup(2)
+    silent = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(silent, 2)
+        wp.init()
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(silent)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``warpcloth`` command; returns the exit status."""
-    wp.config.log_level = logging.WARNING  # no init banner or module-load lines (--device inits Warp)
+    init_warp_quietly()
     args = parser().parse_args(argv)
     try:
         return args.handler(args)
@@ -61,5 +83,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OSError as exc:
         # a file that cannot be read or written (missing directory, no permission, full disk)
         where = f": {exc.filename}" if exc.filename else ""
-        print(f"warpcloth {args.command}: {exc.strerror or exc}{where}", file=sys.stderr)
-        return EXIT_UNUSABLE_INPUT
+        advice = ("; free space (or raise the file-size limit) and rerun: what was committed before is kept, "
+                  "an unfinished run is marked incomplete" if exc.errno in FULL else "")
+        print(f"warpcloth {args.command}: I/O error: {exc.strerror or exc}{where}{advice}", file=sys.stderr)
+        return EXIT_IO

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from warpcloth.scene import scene_from_dict
 
-from .options import EXIT_UNTRUSTED_FIT, add_overwrite, device, new_result
+from .options import EXIT_UNTRUSTED_FIT, add_overwrite, at_least, device, new_result, non_negative
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -22,13 +22,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "(aliases: gamma D D1 alpha K0 density rotation_centre_dx_mm rotation_centre_dy_mm "
                        "hold_x_mm hold_y_mm; or any per-strip field by dotted name)")
     fit_p.add_argument("--bounds", help="name=LOW:HIGH,... (default: see README)")
-    fit_p.add_argument("--align-start", type=float, default=0.0, metavar="SECONDS",
+    fit_p.add_argument("--align-start", type=non_negative, default=0.0, metavar="SECONDS",
                        help="also fit a clock offset between measurement and simulation, within ± this")
     fit_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                        help="override a field of the scene first")
     fit_p.add_argument("--out", help="fit directory (default: runs/fit-<scene name>)")
-    fit_p.add_argument("--space-filling", type=int, default=None, help="variants in the first, space-filling batch")
-    fit_p.add_argument("--max-iterations", type=int, default=25, help="local refinement launches at most")
+    fit_p.add_argument("--space-filling", type=at_least(0), default=None,
+                       help="variants in the first, space-filling batch")
+    fit_p.add_argument("--max-iterations", type=at_least(0), default=25, help="local refinement launches at most")
     fit_p.add_argument("--seed", type=int, default=0, help="seed of the space-filling sample")
     fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda")
     fit_p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -6,7 +6,7 @@ import argparse
 
 from warpcloth.errors import OptionError
 
-from .options import add_overwrite, new_result
+from .options import add_overwrite, new_result, positive
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,15 +20,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     kes_p.add_argument("--bending", required=True, metavar="FB2.csv",
                        help="KES-FB2 loop: curvature (1/cm), moment per width (gf·cm/cm)")
     kes_p.add_argument("-o", "--output", required=True, help="the material file to write (.toml)")
-    kes_p.add_argument("--density-g-per-cm2", type=float, default=None,
+    kes_p.add_argument("--density-g-per-cm2", type=positive, default=None,
                        help="mass per area ρ_A (required: KES-FB1/FB2 data do not contain it)")
     kes_p.add_argument("--name", help="material name (default: the output file's stem)")
     kes_p.add_argument("--strain-unit", choices=("percent", "fraction", "mm"), default=None,
                        help="unit of the tensile file's first column when its header does not say "
                        "(default: percent if its maximum exceeds 1, else fraction)")
-    kes_p.add_argument("--gauge-length-mm", type=float, default=None,
+    kes_p.add_argument("--gauge-length-mm", type=positive, default=None,
                        help="gauge length for extension in mm (default: 50, the KES-FB1 standard)")
-    kes_p.add_argument("--divergence-strain", type=float, default=None,
+    kes_p.add_argument("--divergence-strain", type=positive, default=None,
                        help="T(ε) must increase up to this strain (default: the scenes' default, 0.25)")
     kes_p.add_argument("--plot", help="also write a PNG of the data against the fit")
     add_overwrite(kes_p, "material file")

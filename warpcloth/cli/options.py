@@ -4,6 +4,8 @@ before anything runs."""
 from __future__ import annotations
 
 import argparse
+import math
+from collections.abc import Callable
 from pathlib import Path
 
 import warp as wp
@@ -23,6 +25,47 @@ def device(value: str) -> str:
         raise argparse.ArgumentTypeError(f"{value!r} is not a device of this machine ({exc}); it has: {known}") \
             from None
     return value
+
+
+def finite(value: str) -> float:
+    """A number option that must be finite (NaN or infinity would silently mean something else)."""
+    try:
+        number = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{value!r} is not a number") from None
+    if not math.isfinite(number):
+        raise argparse.ArgumentTypeError(f"{value!r} is not a finite number")
+    return number
+
+
+def positive(value: str) -> float:
+    """A finite number option that must be > 0."""
+    number = finite(value)
+    if number <= 0:
+        raise argparse.ArgumentTypeError(f"{value!r} must be positive")
+    return number
+
+
+def non_negative(value: str) -> float:
+    """A finite number option that must be ≥ 0."""
+    number = finite(value)
+    if number < 0:
+        raise argparse.ArgumentTypeError(f"{value!r} must not be negative")
+    return number
+
+
+def at_least(minimum: int) -> Callable[[str], int]:
+    """An integer option type that refuses values below ``minimum``."""
+    def parse(value: str) -> int:
+        try:
+            number = int(value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{value!r} is not an integer") from None
+        if number < minimum:
+            raise argparse.ArgumentTypeError(f"{value} must be at least {minimum}")
+        return number
+    parse.__name__ = f"integer >= {minimum}"
+    return parse
 
 
 def add_overwrite(parser: argparse.ArgumentParser, what: str) -> None:

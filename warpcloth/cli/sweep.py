@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .options import device
+from .options import at_least, device
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,9 +15,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p.add_argument("--out", help="sweep directory (default: runs/<scene name>); rerun to resume")
     sweep_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                          help="override a field of the base scene")
-    sweep_p.add_argument("--max-batch", type=int, default=None,
+    sweep_p.add_argument("--max-batch", type=at_least(1), default=None,
                          help="strips per batch (default: from the memory per strip and the worker count)")
-    sweep_p.add_argument("--workers", type=int, default=None,
+    sweep_p.add_argument("--workers", type=at_least(0), default=None,
                          help="local Dask worker processes (default: one per core; 0 = run in this process)")
     sweep_p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler to use instead")
     sweep_p.add_argument("--device", type=device, default=None, help="cpu or cuda, on every worker")

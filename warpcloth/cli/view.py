@@ -7,7 +7,7 @@ from pathlib import Path
 
 from warpcloth.errors import OptionError
 
-from .options import add_overwrite, new_result
+from .options import add_overwrite, at_least, finite, new_result
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -23,14 +23,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     usd_p.add_argument("--ribbon", action="store_true", help="also write each strip as a mesh of its real width")
     usd_p.set_defaults(handler=export_usd_command)
     add_overwrite(usd_p, "stage -o")
-    usd_p.add_argument("--frames-per-clip", type=int, default=None,
+    usd_p.add_argument("--frames-per-clip", type=at_least(1), default=None,
                        help="split frames into value-clip layers of this many frames (default: only when large)")
     plot_p = sub.add_parser("plot", help="PNG figures of a run, or a sweep metric against parameters")
     selection(plot_p)
     plot_p.set_defaults(handler=plot_command)
     plot_p.add_argument("--out", help="figure directory (default: RUN_DIR/figures)")
     plot_p.add_argument("--measured", help="CSV of a measured displacement: t (s), x (mm); overlaid on amplitude.png")
-    plot_p.add_argument("--times", type=float, nargs="+", help="shape-overlay times, s after release")
+    plot_p.add_argument("--times", type=finite, nargs="+", help="shape-overlay times, s after release")
     plot_p.add_argument("--metric", help="sweep: summary column to plot (e.g. first_period_s)")
     plot_p.add_argument("--x", help="sweep: parameter on the x axis (a swept field, e.g. damping.gamma_per_s)")
     plot_p.add_argument("--y", help="sweep: second parameter (heat map)")
@@ -38,9 +38,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     selection(render_p)
     render_p.set_defaults(handler=render_command)
     render_p.add_argument("--out", help="image directory (default: RUN_DIR/render)")
-    render_p.add_argument("--times", type=float, nargs="+", help="times of the PNG frames, s after release")
+    render_p.add_argument("--times", type=finite, nargs="+", help="times of the PNG frames, s after release")
     render_p.add_argument("--movie", default="motion.gif", help="animation file name, .gif or .mp4; 'none' for none")
-    render_p.add_argument("--stride", type=int, default=1, help="animate every n-th frame (at real speed)")
+    render_p.add_argument("--stride", type=at_least(1), default=1, help="animate every n-th frame (at real speed)")
 
 
 def export_usd_command(args: argparse.Namespace) -> int:

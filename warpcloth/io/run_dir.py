@@ -10,12 +10,20 @@ Layout of a run directory::
     meta.json           sizes, units, health of every strip, completeness
 
 ``meta.json`` is written first with ``"complete": false`` and rewritten at the end,
-so an interrupted run is recognisable; probes.csv and frames.npy hold everything
-simulated up to the interruption.
+so an interrupted run is recognisable. After every chunk is durable (flushed and
+fsynced) meta.json's ``"committed"`` says how much of the streamed files is valid: the
+probe rows and bytes of probes.csv and the frames of frames.npy. A reader of an
+interrupted run uses exactly that part (a torn tail written after the last commit is
+ignored, not parsed); a complete run whose files disagree with it is refused.
+frames.npy is written with ordinary writes, never through a memory map: on a full disk a
+mapped page fails as a signal that kills the process, a write as an error that is
+reported. Its space is reserved when the run starts, so a disk too small for it fails
+then, before any kernel runs.
 """
 
 from __future__ import annotations
 
+import errno
 import io
 import json
 import os
@@ -30,7 +38,7 @@ from warpcloth.errors import DataFileError, OptionError
 from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 from warpcloth.scene import Scene, read_scene_file, scene_from_dict
 
-from .atomic import write_text_atomically
+from .atomic import naming, write_npy_atomically, write_text_atomically
 from .json_file import read_json
 from .recording import Recording, per_strip_parameters, select_variants
 
@@ -40,6 +48,18 @@ PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
 def write_scene(path: Path, scene: Scene) -> None:
     """Write a resolved scene as TOML."""
     path.write_text(tomli_w.dumps(scene.to_dict()))
+
+
+def reserve(file: io.BufferedWriter, size: int) -> None:
+    """Give ``file`` its final ``size`` now: allocated on disk where the file system can
+    (a full disk fails here, before the run), else a sparse extension."""
+    file.flush()
+    try:
+        os.posix_fallocate(file.fileno(), 0, size)
+    except OSError as exc:
+        if exc.errno not in (errno.EOPNOTSUPP, errno.EINVAL, errno.ENOSYS):
+            raise
+        os.ftruncate(file.fileno(), size)
 
 
 def check_output_directory(out_dir: str | Path, overwrite: bool = False) -> None:
@@ -95,36 +115,69 @@ class RunWriter:
                        "times_file": "frame_times.npy"},
             "diverged": [],
         }
+        self.meta["committed"] = {"probe_rows": 0, "probe_bytes": 0, "frames": 0}
         self._write_meta()
-        np.save(self.dir / "frame_times.npy", frame_times)
-        self.frames = np.lib.format.open_memmap(self.dir / "frames.npy", mode="w+", dtype=np.float64,
-                                                shape=(len(frame_times), len(scenes), n_nodes, 2))
-        # Frames never reached (an interrupted run, strips stopped by a divergence) read
-        # as NaN, never as a strip collapsed onto the origin.
-        self.frames[:] = np.nan
-        self.probes = open(self.dir / "probes.csv", "w")  # noqa: SIM115 - closed in close()
+        write_npy_atomically(self.dir / "frame_times.npy", frame_times)
+        self.frame_shape = (len(frame_times), len(scenes), n_nodes, 2)
+        self.frames = open(self.dir / "frames.npy", "wb")  # noqa: SIM115 - closed in close()
+        np.lib.format.write_array_header_1_0(self.frames, {"descr": "<f8", "fortran_order": False,
+                                                           "shape": self.frame_shape})
+        self.frame_offset = self.frames.tell()
+        self.frame_bytes = int(np.prod(self.frame_shape[1:])) * 8
+        with naming(self.dir / "frames.npy"):
+            reserve(self.frames, self.frame_offset + self.frame_shape[0] * self.frame_bytes)
+        self.frames_written = 0
+        self.probes = open(self.dir / "probes.csv", "w", newline="\n")  # noqa: SIM115 - closed in close()
         self.probes.write(",".join(PROBE_COLUMNS) + "\n")
+        self._commit(0)
 
     def _write_meta(self) -> None:
         write_text_atomically(self.dir / "meta.json", json.dumps(self.meta, indent=2))
+
+    def _commit(self, rows: int) -> None:
+        # Data first, durably; then the record of how much of it is valid.
+        with naming(self.dir / "probes.csv"):
+            self.probes.flush()
+            os.fsync(self.probes.fileno())
+        with naming(self.dir / "frames.npy"):
+            self.frames.flush()
+            os.fsync(self.frames.fileno())
+        committed = self.meta["committed"]
+        committed["probe_rows"] += rows
+        committed["probe_bytes"] = self.probes.tell()
+        committed["frames"] = self.frames_written
+        self._write_meta()
 
     def write_probes(self, t: np.ndarray, variant: np.ndarray, values: np.ndarray) -> None:
         """Append rows: times, variant indices and values ``[row, field]``."""
         rows = np.column_stack([t, variant, values])
         fmt = ["%.10g", "%d"] + ["%.17g"] * values.shape[1]
-        np.savetxt(self.probes, rows, fmt=fmt, delimiter=",")
-        self.probes.flush()
+        with naming(self.dir / "probes.csv"):
+            np.savetxt(self.probes, rows, fmt=fmt, delimiter=",")
+        self._commit(len(rows))
 
     def write_frames(self, first: int, frames: np.ndarray) -> None:
         """Store frames ``[frame, variant, node, xy]`` starting at frame index ``first``."""
-        self.frames[first : first + len(frames)] = frames
-        self.frames.flush()
+        self._write_frame_block(first, np.ascontiguousarray(frames, dtype="<f8"))
+        self.frames_written = max(self.frames_written, first + len(frames))
+        self._commit(0)
+
+    def _write_frame_block(self, first: int, block: np.ndarray) -> None:
+        with naming(self.dir / "frames.npy"):
+            self.frames.seek(self.frame_offset + first * self.frame_bytes)
+            self.frames.write(block.tobytes())
 
     def close(self, diverged: list[dict], extra: dict) -> None:
         """Finish the files and mark the run complete."""
+        # Frames never reached (every strip stopped by a divergence) read as NaN, never
+        # as a strip collapsed onto the origin.
+        missing = self.frame_shape[0] - self.frames_written
+        if missing:
+            self._write_frame_block(self.frames_written, np.full((missing, *self.frame_shape[1:]), np.nan))
+            self.frames_written = self.frame_shape[0]
+        self._commit(0)
         self.probes.close()
-        self.frames.flush()
-        del self.frames
+        self.frames.close()
         self.meta["diverged"] = diverged
         self.meta.update(extra)
         self.meta["complete"] = True
@@ -139,19 +192,25 @@ class RunWriter:
             self.dir = self.target
 
 
-def read_probes(path: Path, complete: bool) -> pd.DataFrame:
-    """The probe rows of run directory ``path``.
+def read_probes(path: Path, meta: dict) -> pd.DataFrame:
+    """The committed probe rows of run directory ``path`` (see the module docstring).
 
-    Rows are appended whole and flushed, so only an interrupted write can leave a partial
-    last line (a number cut before its exponent would read orders of magnitude wrong): it
-    is dropped from an incomplete run and refused in one that claims to be complete.
+    Only the part of probes.csv that meta.json records as committed is parsed: rows
+    written after the last commit (a torn tail, where a number cut before its exponent
+    would read orders of magnitude wrong) are ignored in an interrupted run; a complete
+    run whose file is not exactly its committed size is refused.
     """
     file = path / "probes.csv"
-    text = file.read_text()
-    if text and not text.endswith("\n"):
-        if complete:
-            raise DataFileError(file, "its last row is torn although meta.json says the run is complete")
-        text = text[: text.rfind("\n") + 1]
+    committed = meta["committed"]
+    with open(file, "rb") as fh:
+        data = fh.read()
+    if meta["complete"] and len(data) != committed["probe_bytes"]:
+        raise DataFileError(file, f"holds {len(data)} bytes but meta.json records {committed['probe_bytes']} for "
+                            "the complete run: the file was truncated or changed")
+    if len(data) < committed["probe_bytes"]:
+        raise DataFileError(file, f"is shorter ({len(data)} bytes) than its committed part "
+                            f"({committed['probe_bytes']} bytes): the file was truncated")
+    text = data[: committed["probe_bytes"]].decode("utf-8", errors="replace")
     try:
         table = pd.read_csv(io.StringIO(text))
     except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
@@ -173,14 +232,15 @@ def read_run(path: Path, variants: str | None = None, where: str | None = None) 
     parameters = per_strip_parameters(scenes)
     parameters.insert(0, "variant", np.arange(len(scenes)))
     chosen = select_variants(parameters, variants, where)
-    frames = np.asarray(np.load(path / "frames.npy", mmap_mode="r")[:, chosen])
-    times = np.load(path / "frame_times.npy")
-    if not meta["complete"]:
-        # An interrupted run: keep the frames it reached.
-        reached = np.nonzero(np.isfinite(frames).any(axis=(1, 2, 3)))[0]
-        if not len(reached):
-            raise DataFileError(path, "the run was interrupted before its first frame")
-        frames, times = frames[: reached[-1] + 1], times[: reached[-1] + 1]
-    probes = read_probes(path, bool(meta["complete"]))
+    if "committed" not in meta:
+        raise DataFileError(path / "meta.json", "has no record of the committed rows and frames (written by a "
+                            "older warpcloth); rerun the scene to read it")
+    # An interrupted run: the frames it committed.
+    reached = meta["committed"]["frames"]
+    if not reached:
+        raise DataFileError(path, "the run was interrupted before its first frame")
+    frames = np.asarray(np.load(path / "frames.npy", mmap_mode="r")[:reached, chosen])
+    times = np.load(path / "frame_times.npy")[:reached]
+    probes = read_probes(path, meta)
     return Recording(path, chosen, [scenes[i] for i in chosen], times, frames, probes[probes["variant"].isin(chosen)],
                      parameters.iloc[chosen].reset_index(drop=True), bool(meta["complete"]))

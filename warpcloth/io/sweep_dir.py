@@ -33,17 +33,12 @@ from warpcloth.errors import DataFileError, OptionError
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.scene import Sweep, expand
 
-from .atomic import write_atomically
+from .atomic import write_atomically, write_npy_atomically
 from .json_file import read_json
 from .recording import Recording, per_strip_parameters, select_variants
 
 LIST_COLUMNS = ("half_cycle_amplitude_m", "log_decrement")
 """Summary columns holding a list per variant: in summary.parquet, not summary.csv."""
-
-
-def _save_npy(path: Path, array: np.ndarray) -> None:
-    with open(path, "wb") as fh:  # a handle, so numpy never appends ".npy" to the name
-        np.save(fh, array)
 
 
 def _cell(value: object) -> object:
@@ -92,7 +87,7 @@ class SweepDirectory:
         table = pa.table(probes)
         write_atomically(self.path / "probes" / f"batch-{batch:04d}.parquet", lambda p: pq.write_table(table, p))
         if frames is not None:
-            write_atomically(self.path / "frames" / f"batch-{batch:04d}.npy", lambda p: _save_npy(p, frames))
+            write_npy_atomically(self.path / "frames" / f"batch-{batch:04d}.npy", frames)
         summary = pa.Table.from_pylist(summary_rows)
         write_atomically(self.summary_path(batch), lambda p: pq.write_table(summary, p))  # last: marks it done
 

@@ -17,13 +17,16 @@ a killed export leaves the previous file or none, never half a stage.
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
 import shutil
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils, Vt
+from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdUtils, Vt
 
 from warpcloth.errors import OptionError
 from warpcloth.io.recording import Recording
@@ -171,6 +174,20 @@ def _set_stage_metadata(stage: Usd.Stage, n_frames: int, fps: float) -> None:
     stage.SetEndTimeCode(max(n_frames - 1, 0))
 
 
+@contextlib.contextmanager
+def usd_write_errors(out: Path) -> Iterator[None]:
+    """USD reports a failed write (a full disk, a file-size limit) as a Tf error, not an
+    OSError; make it one that names the stage, so the CLI says it in one line."""
+    try:
+        yield
+    except Tf.ErrorException as exc:
+        text = str(exc)
+        code = next((c for c, words in ((errno.EFBIG, "File too large"), (errno.ENOSPC, "No space left"))
+                     if words in text), errno.EIO)
+        raise OSError(code, os.strerror(code) if code != errno.EIO else "USD could not write the stage",
+                      str(out)) from None
+
+
 def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = False,
                frames_per_clip: int | None = None) -> Path:
     """Write ``recording`` as a USD stage at ``out_file`` (.usd, .usda or .usdc).
@@ -190,7 +207,7 @@ def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = Fal
         raise OptionError("--frames-per-clip", f"{frames_per_clip} must be at least 1")
     out.parent.mkdir(parents=True, exist_ok=True)
     fps = recording.frame_rate
-    with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.stem}.") as tmp:
+    with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.stem}.") as tmp, usd_write_errors(out):
         staging = Path(tmp)
         root_path = staging / out.name
         # Clips of each export get a directory of their own, so the previous root keeps

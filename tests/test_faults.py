@@ -1,0 +1,105 @@
+"""Real faults, not mocks: a full disk (a file-size limit set with setrlimit in the child,
+which needs no root), a SIGKILL in the middle of streaming, and what each leaves behind.
+
+The promise (README, "What warpcloth promises"): a full disk is exit 5 and one line; a
+kill or a full disk leaves either the old result or a new one marked incomplete whose
+committed part reads back exactly, never a torn file that reads as valid.
+"""
+
+import json
+import resource
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import warpcloth as wc
+from warpcloth.io.load import load_recording
+
+
+def limited_cli(*args, cwd, max_file_bytes):
+    """``warpcloth ARGS`` in a child whose files may not grow past ``max_file_bytes``
+    (writes beyond fail with EFBIG: Python ignores SIGXFSZ)."""
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (max_file_bytes, max_file_bytes))
+    return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=300, preexec_fn=limit)
+
+
+def test_a_disk_that_fills_during_a_run_is_exit_5_and_leaves_the_committed_part(tmp_path):
+    # 30 s of the swing: 0.7 MB of frames (reserved at the start) and ~7 MB of probe rows
+    # in chunks of growing size; a 3 MB limit stops it while it streams probes.
+    done = limited_cli("run", "damped_swing", "--set", "run.duration_s=30", "--out", "r", "--no-progress",
+                       cwd=tmp_path, max_file_bytes=3_000_000)
+    assert done.returncode == 5, done.stderr
+    assert "I/O error: File too large" in done.stderr and "what was committed before is kept" in done.stderr
+    assert "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    meta = json.loads((tmp_path / "r" / "meta.json").read_text())
+    assert meta["complete"] is False and meta["committed"]["probe_rows"] > 0
+    recording = load_recording(tmp_path / "r")
+    assert not recording.complete
+    assert len(recording.probes) == meta["committed"]["probe_rows"]
+    assert np.isfinite(recording.probes.to_numpy()).all()  # no number read from a torn tail
+    assert len(recording.frame_times) == meta["committed"]["frames"] > 0
+    assert np.isfinite(recording.frames).all()
+
+
+def test_a_disk_too_small_for_the_frames_fails_before_any_kernel_runs(tmp_path):
+    done = limited_cli("run", "damped_swing", "--out", "r", "--no-progress", cwd=tmp_path, max_file_bytes=50_000)
+    assert done.returncode == 5 and "File too large" in done.stderr and "frames.npy" in done.stderr, done.stderr
+    meta = json.loads((tmp_path / "r" / "meta.json").read_text())
+    assert meta["complete"] is False and meta["committed"]["probe_rows"] == 0
+
+
+def test_a_full_disk_never_destroys_the_result_being_replaced(tmp_path):
+    wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.2", "release.settle_time_s=0.1"]),
+                out=tmp_path / "r")
+    before = {p.name: p.read_bytes() for p in (tmp_path / "r").iterdir()}
+    done = limited_cli("run", "damped_swing", "--out", "r", "--overwrite", "--no-progress", cwd=tmp_path,
+                       max_file_bytes=300_000)
+    assert done.returncode == 5, done.stderr
+    assert {p.name: p.read_bytes() for p in (tmp_path / "r").iterdir()} == before
+    assert load_recording(tmp_path / "r").complete
+
+
+@pytest.mark.parametrize("stage", ["material", "stage"])
+def test_a_full_disk_never_truncates_an_existing_file(tmp_path, stage):
+    # material fit-kes and export-usd replace their output only once the new one is whole.
+    if stage == "material":
+        target = tmp_path / "m.toml"
+        args = ("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example",
+                "--density-g-per-cm2", "0.02", "-o", str(target), "--overwrite")
+        target.write_text("# an existing material file\n" + "x = 1\n" * 10)
+        limit = 200
+    else:
+        wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.2", "release.settle_time_s=0.1"]),
+                    out=tmp_path / "r")
+        target = tmp_path / "s.usda"
+        target.write_text("#usda 1.0\n")
+        args = ("export-usd", str(tmp_path / "r"), "-o", str(target), "--overwrite")
+        limit = 2_000
+    before = target.read_bytes()
+    done = limited_cli(*args, cwd=tmp_path, max_file_bytes=limit)
+    assert done.returncode == 5 and "Traceback" not in done.stderr, done.stderr
+    assert target.read_bytes() == before
+
+
+def test_a_run_killed_while_streaming_reads_back_its_committed_part(tmp_path):
+    out = tmp_path / "r"
+    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set", "run.duration_s=60",
+                             "--no-progress", "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not ((out / "probes.csv").is_file()
+                                               and (out / "probes.csv").stat().st_size > 200_000):
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)  # no handler, no cleanup: wherever it was
+    proc.communicate(timeout=60)
+    meta = json.loads((out / "meta.json").read_text())
+    recording = load_recording(out)
+    assert not recording.complete and len(recording.probes) == meta["committed"]["probe_rows"] > 0
+    assert np.isfinite(recording.probes.to_numpy()).all()
+    assert len(recording.frame_times) == meta["committed"]["frames"] and np.isfinite(recording.frames).all()
