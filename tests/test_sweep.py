@@ -115,6 +115,7 @@ def test_a_diverged_variant_is_recorded_and_the_sweep_goes_on(tmp_path):
     summary = run_sweep(expand(raw), tmp_path / "d", workers=0)
     assert summary["diverged"].tolist() == [True, False]
     assert summary.loc[0, "diverged_quantity"] == "tensile strain" and summary.loc[0, "diverged_time_s"] > 0
+    assert summary.loc[0, "diverged_phase"] == "record"
 
 
 def test_a_changed_sweep_does_not_resume_into_an_old_directory(tmp_path):
@@ -225,4 +226,5 @@ def test_a_variant_that_diverges_during_the_hold_does_not_stop_the_sweep(tmp_pat
     healthy, soft = summary.iloc[0], summary.iloc[1]
     assert not healthy["diverged"] and healthy["hysteresis_work_J"] > 0
     assert soft["diverged"] and soft["diverged_time_s"] < 0 and soft["diverged_quantity"] == "tensile strain"
+    assert soft["diverged_phase"] == "move"  # gravity stretches it past the limit as it is carried
     assert np.isnan(soft["hysteresis_work_J"]) and np.isnan(soft["first_period_s"]) and soft["n_half_cycles"] == 0

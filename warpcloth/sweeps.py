@@ -29,7 +29,7 @@ WORKER_MEMORY_BYTES = 1 << 30  # per-batch result memory a worker may hold
 BATCHES_PER_WORKER = 8  # enough batches for balance, progress and resume granularity
 SUMMARY_SCALARS = ("first_period_s", "first_amplitude_m", "mean_log_decrement", "n_half_cycles",
                    "peak_tip_speed_m_per_s", "hysteresis_work_J", "damping_work_J", "diverged",
-                   "diverged_time_s", "diverged_quantity")
+                   "diverged_time_s", "diverged_phase", "diverged_quantity")
 
 
 def default_max_batch(scene: Scene, n_variants: int, workers: int, frames: bool) -> int:
@@ -84,6 +84,7 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
             "damping_work_J": _last(result.probe("damping_work", local)[ok]),
             "diverged": report is not None,
             "diverged_time_s": report["time_s"] if report else float("nan"),
+            "diverged_phase": report["phase"] if report else "",
             "diverged_quantity": report["quantity"] if report else "",
         }
         rows.append(row)

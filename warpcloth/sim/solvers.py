@@ -101,11 +101,13 @@ class ExplicitEulerSolver:
         if code == STATUS_OK:
             return None
         step = int(state.struct.status_step.numpy()[strip])
+        time_s = (step - self.release_step(control)) * self.dt
         return {
             "strip": strip,
             "code": code,
             "step": step,
-            "time_s": (step - self.release_step(control)) * self.dt,
+            "time_s": time_s,
+            "phase": phase_at(time_s, control),
             "quantity": QUANTITY[code],
             "where": int(state.struct.status_index.numpy()[strip]),
             "value": float(state.struct.status_value.numpy()[strip]),
@@ -138,6 +140,18 @@ SOLVERS: dict[str, type[ExplicitEulerSolver]] = {
 """Solver class of each ``integrator.scheme``."""
 
 
+PHASES = ("move", "hold", "record")
+"""Phases of a run: the free end carried to its hold target, held there while the strip
+settles, then the record from t = 0 (the release, or the start of a run without one)."""
+
+
+def phase_at(time_s: float, control: Control) -> str:
+    """The phase (:data:`PHASES`) a time after the release (negative before it) falls in."""
+    if time_s >= 0:
+        return "record"
+    return "move" if time_s + control.release_time < control.move_time else "hold"
+
+
 def describe_divergence(report: dict) -> str:
     """One sentence a user can act on."""
     where = f" at segment {report['where']}" if report["code"] == STATUS_STRAIN else (
@@ -146,5 +160,7 @@ def describe_divergence(report: dict) -> str:
              if report["code"] == STATUS_STRAIN else "")
     advice = f"try a smaller integrator.dt_s (now {report['dt_s']:g} s, e.g. {report['dt_s'] / 4:g})"
     advice += SOLVERS[report["scheme"]].advice
-    return (f"strip {report['strip']} diverged at t = {report['time_s']:.6g} s (step {report['step']}): "
+    during = {"move": "while its free end was carried to the hold", "hold": "during the hold",
+              "record": "after t = 0"}[report["phase"]]
+    return (f"strip {report['strip']} diverged {during}, at t = {report['time_s']:.6g} s (step {report['step']}): "
             f"{report['quantity']} = {report['value']:.4g}{where}{limit}; {advice}")
