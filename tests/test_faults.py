@@ -103,3 +103,52 @@ def test_a_run_killed_while_streaming_reads_back_its_committed_part(tmp_path):
     assert not recording.complete and len(recording.probes) == meta["committed"]["probe_rows"] > 0
     assert np.isfinite(recording.probes.to_numpy()).all()
     assert len(recording.frame_times) == meta["committed"]["frames"] and np.isfinite(recording.frames).all()
+
+
+ABSURD = ["run.duration_s=20000", "output.probes_per_frame=1666"]  # 2e9 probe samples: 0.2 TB in memory, 0.7 on disk
+
+
+def test_work_too_large_for_memory_is_refused_with_its_numbers_and_knobs(tmp_path):
+    with pytest.raises(wc.ResourceError, match=r"would take [0-9.]+ [GT]B of memory, more than 50% of the .* "
+                       r"available; record less \(output.probes_per_frame, output.frame_rate_hz, run.duration_s\)"):
+        wc.simulate(wc.load_scene("damped_swing", ABSURD))
+    from warpcloth.sim.resources import check_memory
+
+    check_memory(10_000, "x", "y", available=21_000)
+    with pytest.raises(wc.ResourceError, match="x would take 11 kB of memory, more than 50% of the 20 kB available; y"):
+        check_memory(11_000, "x", "y", available=20_000)
+
+
+def test_work_too_large_for_memory_is_refused_by_the_command_too(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--out", "big",
+                           *(a for s in ABSURD for a in ("--set", s))], capture_output=True, text=True, cwd=tmp_path,
+                          timeout=300)
+    assert done.returncode == 2 and "warpcloth run: too large: the recorded probes and frames" in done.stderr
+    assert "Traceback" not in done.stderr and not (tmp_path / "big").exists()
+
+
+def test_output_too_large_for_the_disk_is_refused_before_anything_is_written(tmp_path):
+    # 2e6 frames of 1666 probe samples: ~1 TB of probes.csv, refused by its estimate
+    # before the run directory exists.
+    from warpcloth.io.run_dir import RunWriter
+
+    scene = wc.load_scene("damped_swing", ["output.probes_per_frame=1666"])
+    with pytest.raises(wc.ResourceError, match=r"the run's frames.npy and probes.csv would write [0-9.]+ TB to "
+                       r".*big, whose file system has [0-9.]+ [kMGT]?B free; free space, choose another --out"):
+        RunWriter(tmp_path / "big", [scene], scene.n_nodes, np.zeros(2_000_000))
+    assert not (tmp_path / "big").exists()
+    from warpcloth.sim.resources import check_disk
+
+    check_disk(tmp_path / "new" / "deeper", 1, "x", "y")  # a path that does not exist yet is measured by its parent
+
+
+def test_a_huge_sweep_is_refused_before_it_is_expanded(tmp_path):
+    started = time.monotonic()
+    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "sweep", "damped_swing_sweep", "--set",
+                           "sweep.random.samples=1000000", "--out", "s"], capture_output=True, text=True, cwd=tmp_path,
+                          timeout=300)
+    assert done.returncode == 2 and "the sweep has 1000000 variants, more than 100000" in done.stderr
+    assert "--max-variants" in done.stderr and not (tmp_path / "s").exists()
+    assert time.monotonic() - started < 60  # not minutes of expansion first
+    with pytest.raises(wc.OptionError, match="the sweep has 12 variants, more than 10"):
+        wc.load_sweep("damped_swing_sweep", ["sweep.random.samples=12"], max_variants=10)

@@ -13,7 +13,7 @@ The namespaces :mod:`warpcloth.sim` (the SI simulation core), :mod:`warpcloth.sc
 
 from . import calibrate, io, scene, sim, viz
 from .calibrate.metrics import first_period
-from .errors import DataFileError, DivergenceError, OptionError, SceneError, WarpclothError
+from .errors import DataFileError, DivergenceError, OptionError, ResourceError, SceneError, WarpclothError
 from .io.load import load_recording
 from .io.recording import Recording
 from .runs import run, simulate
@@ -26,6 +26,7 @@ __all__ = [
     "DataFileError",
     "DivergenceError",
     "OptionError",
+    "ResourceError",
     "Recording",
     "RunResult",
     "Scene",

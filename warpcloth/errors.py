@@ -43,6 +43,11 @@ class DataFileError(WarpclothError, ValueError):
         super().__init__(f"{where}: {message}")
 
 
+class ResourceError(WarpclothError, ValueError):
+    """The work asked for needs more memory or disk than there is; the message gives
+    the numbers and what to change."""
+
+
 class DivergenceError(WarpclothError, RuntimeError):
     """A strip's state became non-finite or physically absurd during a run.
 

@@ -10,7 +10,7 @@ import numpy as np
 from .io.run_dir import RunWriter, check_output_directory
 from .scene import Scene, build_batch, load_scene
 from .sim import RunResult, simulate_batch
-from .sim.runner import check_divergence_policy
+from .sim.runner import check_divergence_policy, check_recording_fits
 
 
 def simulate(
@@ -40,6 +40,7 @@ def simulate(
     if out is not None:
         check_output_directory(out, overwrite)
     batch = build_batch(scenes, device)
+    check_recording_fits(batch.model, batch.control, batch.recorder, keep_frames)
     state = batch.model.state()
     if initial_positions is not None:
         state.set_positions(initial_positions, initial_velocities)

@@ -1,7 +1,8 @@
 """The ``warpcloth`` command: a registry of command groups and the one error boundary.
 
 Exit codes: 0 done; 2 the input is unusable (a scene field, a data file or an option,
-named in the message); 3 a run diverged (what was recorded before it is kept); 4 a fit
+named in the message, or work too large for this machine's free memory or disk, with
+what to change); 3 a run diverged (what was recorded before it is kept); 4 a fit
 ended on a bound (written, but not a fit); 5 a file could not be read or written (full
 disk, file-size limit, permissions: what was committed before is kept); 130 interrupted
 (Ctrl-C: what was written is kept).
@@ -18,14 +19,15 @@ from collections.abc import Sequence
 
 import warp as wp
 
-from warpcloth.errors import DataFileError, DivergenceError, OptionError, SceneError, WarpclothError
+from warpcloth.errors import DataFileError, DivergenceError, OptionError, ResourceError, SceneError, WarpclothError
 
 from . import fit, material, run, sweep, view
 
 COMMAND_GROUPS = (run, sweep, view, fit, material)
 """Each registers its subcommands with a ``handler`` (see :func:`main`)."""
 
-WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (OptionError, "error in option"))
+WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (OptionError, "error in option"),
+        (ResourceError, "too large"))
 EXIT_UNUSABLE_INPUT = 2
 EXIT_DIVERGED = 3
 EXIT_IO = 5

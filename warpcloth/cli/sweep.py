@@ -22,17 +22,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler to use instead")
     sweep_p.add_argument("--device", type=device, default=None, help="cpu or cuda, on every worker")
     sweep_p.add_argument("--frames", action="store_true", help="also store shape frames (large)")
+    sweep_p.add_argument("--max-variants", type=at_least(1), default=None,
+                         help="refuse a sweep of more variants than this (default: 100000)")
     sweep_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     sweep_p.set_defaults(handler=run_sweep_command)
 
 
 def run_sweep_command(args: argparse.Namespace) -> int:
     """Expand the sweep, run its missing batches, report the summary."""
-    from warpcloth.scene import load_sweep
+    from warpcloth.scene.sweep import MAX_VARIANTS, load_sweep
     from warpcloth.sweeps import run_sweep
 
     out = Path(args.out or Path("runs") / Path(args.scene).stem)
-    sweep = load_sweep(args.scene, args.overrides)
+    sweep = load_sweep(args.scene, args.overrides, max_variants=args.max_variants or MAX_VARIANTS,
+                       progress=not args.no_progress)
     summary = run_sweep(sweep, out, max_batch=args.max_batch, workers=args.workers, scheduler=args.scheduler,
                         device=args.device, frames=args.frames, progress=not args.no_progress)
     n_div = int(summary["diverged"].sum())

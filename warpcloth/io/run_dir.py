@@ -37,6 +37,7 @@ import tomli_w
 from warpcloth.errors import DataFileError, OptionError
 from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 from warpcloth.scene import Scene, read_scene_file, scene_from_dict
+from warpcloth.sim.resources import check_disk
 
 from .atomic import naming, write_npy_atomically, write_text_atomically
 from .json_file import read_json
@@ -95,6 +96,11 @@ class RunWriter:
         self.dir = self.target.with_name(f".{self.target.name}.new-{os.getpid()}") if replacing else self.target
         if replacing and self.dir.exists():
             shutil.rmtree(self.dir)  # a staging directory this process left before
+        n_samples = (len(frame_times) - 1) * scenes[0].output.probes_per_frame + 1
+        row_bytes = 16 + 24 * len(PROBE_FIELDS)  # "%.17g" fields of at most 24 characters
+        check_disk(self.target, 16 * len(frame_times) * len(scenes) * n_nodes + n_samples * len(scenes) * row_bytes,
+                   "the run's frames.npy and probes.csv", "free space, choose another --out, or record less "
+                   "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)")
         self.dir.mkdir(parents=True, exist_ok=True)
         if len(scenes) == 1:
             write_scene(self.dir / "scene.toml", scenes[0])

@@ -108,7 +108,7 @@ class SweepDirectory:
 def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording:
     """Selected variants of a sweep directory run with ``--frames``, as a Recording."""
     info = read_json(path / "sweep.json")
-    sweep = expand(info["base_scene"] | {"sweep": info["sweep"]})
+    sweep = expand(info["base_scene"] | {"sweep": info["sweep"]}, max_variants=info["n_variants"])
     if sweep.fingerprint != info["fingerprint"]:
         raise DataFileError(path, "its variants no longer resolve to the scenes that were simulated "
                             "(a material file it uses has changed?); the stored results cannot be labelled")

@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from warpcloth.errors import OptionError, SceneError
 
@@ -39,6 +40,10 @@ from .files import read_scene_file, scene_from_dict
 from .overrides import apply_overrides, set_field
 from .sampling import latin_hypercube
 from .schema import Scene, batch_fields
+
+MAX_VARIANTS = 100_000
+"""Default cap on a sweep's variants: each is a validated scene held in memory (a few kB,
+~1 ms to build), so a million would take many minutes and gigabytes before any runs."""
 
 SWEEP_KEYS = {"seed", "grid", "zip", "random"}
 RANDOM_KEYS = {"method", "samples", "ranges"}
@@ -144,8 +149,12 @@ def _random_block(spec: dict) -> tuple[list[str], np.ndarray]:
     return list(ranges), low + unit * (high - low)
 
 
-def expand(raw: dict) -> Sweep:
-    """Expand a raw scene with a ``[sweep]`` section into validated variant scenes."""
+def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) -> Sweep:
+    """Expand a raw scene with a ``[sweep]`` section into validated variant scenes.
+
+    A sweep of more than ``max_variants`` variants is refused before it is expanded;
+    ``progress`` shows a bar while a large one is.
+    """
     base = copy.deepcopy(raw)
     spec = base.pop("sweep", None)
     if not isinstance(spec, dict) or not (set(spec) & {"grid", "zip", "random"}):
@@ -170,12 +179,19 @@ def expand(raw: dict) -> Sweep:
         if key in seen:
             raise SceneError(f'sweep."{key}"', "is swept in more than one block")
         seen.add(key)
+    n_variants = math.prod(len(v) for v in grid.values()) * max(lengths or {1}) * len(random_values)
+    if n_variants > max_variants:
+        raise OptionError("--max-variants", f"the sweep has {n_variants} variants, more than {max_variants}; each "
+                          "is a validated scene in memory (~1 ms and a few kB apiece): split it into several "
+                          "sweeps, or raise --max-variants (Python: max_variants=)")
     grid_rows = list(itertools.product(*grid.values())) if grid else [()]
     zip_rows = list(zip(*zipped.values(), strict=True)) if zipped else [()]
     assignments = []
     for g, z, r in itertools.product(grid_rows, zip_rows, random_values):
         assignments.append(dict(zip(keys, [*g, *z, *(float(x) for x in r)], strict=True)))
     scenes = []
+    bar = tqdm(total=len(assignments), desc="expanding sweep", unit=" variants", disable=not progress,
+               dynamic_ncols=True)
     for i, assignment in enumerate(assignments):
         data = copy.deepcopy(base)
         try:
@@ -187,14 +203,18 @@ def expand(raw: dict) -> Sweep:
         except SceneError as exc:
             what = ", ".join(f"{k}={v!r}" for k, v in assignment.items())
             raise SceneError(exc.field, f"in sweep variant {i} ({what}): {str(exc).split(': ', 1)[1]}") from exc
+        bar.update()
+    bar.close()
     return Sweep(base, spec, keys, assignments, scenes)
 
 
-def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Sweep:
+def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] = (),
+               max_variants: int = MAX_VARIANTS, progress: bool = False) -> Sweep:
     """Read a scene with a ``[sweep]`` section (path or bundled name) and expand it.
 
     ``overrides`` (``key=value``) change the base scene, e.g. ``run.duration_s=1``, or
     the sweep's own options: ``sweep.seed``, ``sweep.random.samples``, ``sweep.random.method``.
+    ``max_variants`` and ``progress`` are :func:`expand`'s.
     """
     raw = read_scene_file(name_or_path)
     spec = {"sweep": raw.pop("sweep", None) or {}}
@@ -202,4 +222,4 @@ def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] 
     spec = apply_overrides(spec, own)
     raw = apply_overrides(raw, [o for o in overrides if o not in own])
     raw["sweep"] = spec["sweep"]
-    return expand(raw)
+    return expand(raw, max_variants, progress)

@@ -34,12 +34,16 @@ class Recorder:
         s.probes_per_frame = self.probes_per_frame
         return s
 
+    def sample_range(self, control: Control) -> tuple[int, int]:
+        """First and last output sample k (k < 0 during the hold), without building arrays."""
+        return (-math.floor(control.release_time / self.interval + 1e-9),
+                math.floor(self.duration / self.interval + 1e-9))
+
     def schedule(self, control: Control, solver: Solver) -> Schedule:
         """The output samples of a run: hold samples (k < 0) are run, not kept."""
         interval, dt = self.interval, solver.dt
         release_step = solver.release_step(control)
-        k_min = -math.floor(control.release_time / interval + 1e-9)
-        k_max = math.floor(self.duration / interval + 1e-9)
+        k_min, k_max = self.sample_range(control)
         k = np.arange(k_min, k_max + 1)
         steps = np.maximum(0, release_step + np.rint(k * interval / dt).astype(np.int64))
         return Schedule(k_min, steps, self.probes_per_frame, release_step, dt)

@@ -17,6 +17,7 @@ from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, STATUS_NONFINITE_ENERGY
 from .control import Control
 from .model import Model
 from .recorder import Recorder, Schedule
+from .resources import check_memory
 from .solvers import Solver, describe_divergence
 from .state import State
 
@@ -76,6 +77,19 @@ class RunResult:
                 + p("hysteresis_work") + p("damping_work") - p("drive_work"))
 
 
+def check_recording_fits(model: Model, control: Control, recorder: Recorder, keep_frames: bool = True) -> None:
+    """Refuse, before anything is allocated, a run whose recorded results (and output
+    schedule) would not fit in memory (:func:`~warpcloth.sim.resources.check_memory`)."""
+    b, n, nq = model.n_strips, model.n_nodes, len(PROBE_FIELDS)
+    k_min, k_max = recorder.sample_range(control)
+    n_frames = k_max // recorder.probes_per_frame + 1
+    # the schedule's own arrays (steps, times: 8 B per sample each) and the recorded results
+    check_memory(16 * (k_max - k_min + 1) + 8 * (k_max + 1) * nq * b + (16 * n_frames * b * n if keep_frames else 0),
+                 f"the recorded probes{' and frames' if keep_frames else ''} of {b} strip(s)",
+                 "record less (output.probes_per_frame, output.frame_rate_hz, run.duration_s), run fewer "
+                 "strips at once (sweep --max-batch), or keep frames only on disk (keep_frames=False)")
+
+
 def simulate_batch(
     model: Model,
     control: Control,
@@ -97,10 +111,11 @@ def simulate_batch(
     ``RunResult.scenes``.
     """
     check_divergence_policy(on_divergence)
+    check_recording_fits(model, control, recorder, keep_frames)
     state = state or model.state()
     schedule = recorder.schedule(control, solver)
-    n_kept, frame_samples = len(schedule.kept), schedule.frame_samples
     b, n, nq = model.n_strips, model.n_nodes, len(PROBE_FIELDS)
+    n_kept, frame_samples = len(schedule.kept), schedule.frame_samples
     t = schedule.times(schedule.kept)
     frame_times = schedule.times(frame_samples)
     probes_all = np.full((n_kept, nq, b), np.nan)

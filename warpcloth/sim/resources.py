@@ -1,0 +1,53 @@
+"""What a run will take, estimated before it is taken: memory for the recorded results
+and disk for the streamed files. Work that does not fit is refused with its numbers and
+the fields or options that shrink it, instead of failing (or swapping) part way."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+from warpcloth.errors import ResourceError
+
+MEMORY_FRACTION = 0.5
+"""Share of the memory available now that one run's recorded results may take."""
+
+
+def available_memory() -> int:
+    """Bytes of memory available to a new allocation (Linux MemAvailable, else free pages)."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+
+
+def size_text(n: float) -> str:
+    """A byte count for a message: three digits and a decimal unit."""
+    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= scale:
+            return f"{n / scale:.3g} {unit}"
+    return f"{n:.0f} B"
+
+
+def check_memory(needed: int, what: str, knobs: str, available: int | None = None) -> None:
+    """Refuse ``needed`` bytes of ``what`` when over :data:`MEMORY_FRACTION` of the memory available."""
+    available = available_memory() if available is None else available
+    if needed > MEMORY_FRACTION * available:
+        raise ResourceError(f"{what} would take {size_text(needed)} of memory, more than "
+                            f"{MEMORY_FRACTION:.0%} of the {size_text(available)} available; {knobs}")
+
+
+def check_disk(target: str | Path, needed: int, what: str, knobs: str) -> None:
+    """Refuse writing ``needed`` bytes of ``what`` to ``target`` (a path that may not exist
+    yet) when its file system has less free."""
+    target = Path(target)
+    existing = next(p for p in (target, *target.absolute().parents) if p.exists())
+    free = shutil.disk_usage(existing).free
+    if needed > free:
+        raise ResourceError(f"{what} would write {size_text(needed)} to {target}, whose file system has "
+                            f"{size_text(free)} free; {knobs}")
