@@ -152,3 +152,20 @@ def test_a_huge_sweep_is_refused_before_it_is_expanded(tmp_path):
     assert time.monotonic() - started < 60  # not minutes of expansion first
     with pytest.raises(wc.OptionError, match="the sweep has 12 variants, more than 10"):
         wc.load_sweep("damped_swing_sweep", ["sweep.random.samples=12"], max_variants=10)
+
+
+def test_two_runs_started_into_one_directory_never_interleave(tmp_path):
+    # Started together, both may find --out empty; exactly one writes it, the other is
+    # refused, and what is left is one complete run equal to a run made alone.
+    args = [sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set", "run.duration_s=1",
+            "--no-progress", "--out", "r"]
+    procs = [subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for _ in range(2)]
+    outcomes = sorted((p.wait(timeout=300), p.communicate()[1]) for p in procs)
+    assert outcomes[0][0] == 0 and outcomes[1][0] == 2, outcomes
+    assert ("is being written by another warpcloth process" in outcomes[1][1]
+            or "already holds" in outcomes[1][1]), outcomes[1][1]
+    recording = load_recording(tmp_path / "r")
+    alone = wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=1"]))
+    assert recording.complete and len(recording.probes) == len(alone.t)
+    np.testing.assert_array_equal(recording.probes["tip_x"].to_numpy(), alone.probe("tip_x", 0))

@@ -79,7 +79,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         # Everything finished so far is on disk; an interrupted run directory says
         # "complete": false in its meta.json, a sweep resumes from its finished batches.
-        print(f"warpcloth {args.command}: interrupted; what was written so far is kept and marked incomplete",
+        out = getattr(args, "out", None)
+        where = f" in {out}" if out else ""
+        print(f"warpcloth {args.command}: interrupted; what was written so far is kept{where} and marked incomplete",
               file=sys.stderr)
         return EXIT_INTERRUPTED
     except OSError as exc:

@@ -44,6 +44,8 @@ from .json_file import read_json
 from .recording import Recording, per_strip_parameters, select_variants
 
 PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
+WRITING = ".writing"
+"""Marker of a run directory a process is streaming into (left behind by a killed one)."""
 
 
 def write_scene(path: Path, scene: Scene) -> None:
@@ -102,6 +104,13 @@ class RunWriter:
                    "the run's frames.npy and probes.csv", "free space, choose another --out, or record less "
                    "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)")
         self.dir.mkdir(parents=True, exist_ok=True)
+        # One writer per directory: a second process that passed the emptiness check at
+        # the same moment finds the marker and stops instead of interleaving its rows.
+        try:
+            os.close(os.open(self.dir / WRITING, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        except FileExistsError:
+            raise OptionError("--out", f"{self.target} is being written by another warpcloth process; "
+                              "choose another --out") from None
         if len(scenes) == 1:
             write_scene(self.dir / "scene.toml", scenes[0])
         else:
@@ -188,6 +197,7 @@ class RunWriter:
         self.meta.update(extra)
         self.meta["complete"] = True
         self._write_meta()
+        (self.dir / WRITING).unlink()
         if self.dir != self.target:
             # Swap: the old result moves aside, the complete new one takes its name, then
             # the old goes. Killed between the two renames, both survive (hidden names).
