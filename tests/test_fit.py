@@ -9,6 +9,7 @@ import sys
 
 import numpy as np
 import pytest
+import warp as wp
 from conftest import overrides  # noqa: F401  (keeps Warp quiet)
 
 import warpcloth as wc
@@ -43,7 +44,7 @@ def test_damped_swing_gamma_and_d1_are_recovered():
     measured = LaserTrace(t, result.probe("laser_x", 0)[::2] + rng.normal(0, 2e-4, len(t)))
     free = free_parameters("gamma,D1", wc.scene_from_dict(copy.deepcopy(base)))
     fit = fit_motion(base, measured, free, progress=False)
-    assert fit.converged and fit.at_bound == []
+    assert fit.converged and fit.at_bound == [] and fit.status == "converged" and fit.problems == []
     for name, value in truth.items():
         assert abs(fit.parameters[name] - value) < 3 * fit.sigma[name]
         assert abs(fit.parameters[name] - value) < 0.02 * value
@@ -151,7 +152,9 @@ def test_cli_fits_the_bundled_examples(tmp_path):
                "gamma,rotation_centre_dy_mm", "--align-start", "0.01", "--out", "fit", "--no-progress")
     assert done.returncode == 0, done.stderr
     result = json.loads((tmp_path / "fit" / "fit.json").read_text())
-    dy, sigma = result["parameters"]["clamp.rotation_centre_dy_mm"], result["sigma"]["clamp.rotation_centre_dy_mm"]
+    assert result["status"] == "converged" and result["problems"] == []
+    dy, sigma = (result["parameters"]["clamp.rotation_centre_dy_mm"][k] for k in ("value", "sigma"))
+    assert result["inputs"]["measured"]["sha256"] and result["provenance"]["warp"] == wp.__version__
     assert abs(dy - 4.0) < 3 * sigma
     for name in ("best.toml", "history.csv", "residuals.csv", "overlay.png"):
         assert (tmp_path / "fit" / name).is_file()
@@ -175,5 +178,6 @@ def test_a_fit_that_ends_on_a_bound_says_so_and_exits_non_zero(tmp_path):
                            "damped_swing_laser", "--free", "gamma", "--bounds", "gamma=5:6", "--max-iterations", "3",
                            "--out", "fit", "--no-progress"], capture_output=True, text=True, cwd=tmp_path, timeout=300)
     assert done.returncode == 4, done.stderr
-    assert "not a fit: damping.gamma_per_s = 5 (bounds 5:6) ended on a bound" in done.stderr
-    assert json.loads((tmp_path / "fit" / "fit.json").read_text())["at_bound"] == ["damping.gamma_per_s"]
+    assert "not a fit (at_bound): damping.gamma_per_s = 5 ended on a bound (5:6)" in done.stderr
+    result = json.loads((tmp_path / "fit" / "fit.json").read_text())
+    assert result["status"] == "at_bound" and result["parameters"]["damping.gamma_per_s"]["at_bound"] is True

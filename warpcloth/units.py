@@ -32,3 +32,12 @@ LENGTH_MM = 1e-3
 
 STRAIN_PERCENT = 1e-2
 """Strain written in % (KES-FB1 EMT, tensile CSVs) → fraction."""
+
+
+MEASURED_UNITS = {
+    "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6},
+    "length": {"m": 1.0, "cm": 1e-2, "mm": LENGTH_MM, "um": 1e-6, "µm": 1e-6},
+    "angle": {"rad": 1.0, "mrad": 1e-3, "deg": 0.017453292519943295},
+}
+"""Units a measured-data header may name per quantity (``t_ms``, ``x_m``, ``theta [deg]``),
+and each one's factor to SI (s, m, rad)."""

@@ -22,12 +22,20 @@ The uncertainty is the Gauss–Newton covariance s²(JᵀJ)⁻¹ at the optimum 
 residual variance. It assumes independent residuals; measured residuals are usually
 correlated in time, so read it as a lower bound (the profile of the cost along each
 parameter, in ``history``, shows the actual valley).
+
+Every fit ends with a :data:`STATUSES` verdict that cannot read as success when it is
+not: ``failed`` (the best run does not reproduce the measured quantity everywhere, or the
+search stopped at its iteration limit), ``at_bound`` (a parameter within 0.1 % of the
+range of a bound: the optimum lies beyond, the value is not an estimate),
+``not_identifiable`` (two parameters correlated beyond 0.95, or a singular Jacobian: the
+data do not separate them), ``poor_fit`` (RMS above 3× the measurement noise, given or
+estimated from the data by :func:`~warpcloth.calibrate.noise.difference_noise`), else
+``converged``.
 """
 
 from __future__ import annotations
 
 import copy
-import dataclasses
 import json
 import math
 import time
@@ -43,6 +51,8 @@ from warpcloth.runs import simulate
 from warpcloth.scene import Scene, batch_fields, clamp_edge, scene_from_dict, set_field
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.sim import RunResult
+
+from .noise import difference_noise
 
 ALIASES = {
     "gamma": "damping.gamma_per_s",
@@ -62,6 +72,10 @@ SHIFT = "time_shift_s"
 STENCIL_STEP = 2e-3  # central-difference step, as a fraction of each parameter's range
 MAX_LAMBDA = 1e8
 AT_BOUND = 1e-3  # a parameter this close to a bound, as a fraction of its range, ended on it
+POOR_FIT_FACTOR = 3.0  # an RMS above this many times the noise is not explained by the model
+NOT_IDENTIFIABLE_CORRELATION = 0.95
+STATUSES = ("converged", "at_bound", "poor_fit", "not_identifiable", "failed")
+"""Verdicts of a fit, from the only one that is a fit to the worst (see the module docstring)."""
 
 
 @dataclass(frozen=True)
@@ -260,12 +274,67 @@ class FitResult:
     variants: int
     wall_time_s: float
     history: list[dict] = field(default_factory=list)
-    converged: bool = False
+    converged: bool = False  # the search met its convergence test (not the iteration limit)
     at_bound: list[str] = field(default_factory=list)  # fields within 0.1 % of the range of a bound
+    bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+    noise: float = float("nan")  # measurement noise σ the RMS is judged against, SI
+    noise_source: str = ""
+    status: str = "failed"
+    problems: list[str] = field(default_factory=list)  # why the status is not "converged"
 
     def to_json(self) -> dict:
-        """Everything, JSON-ready."""
-        return dataclasses.asdict(self)
+        """The verdict, each parameter with its 1σ and bounds, and how the search went;
+        lengths in mm, names with their units."""
+        return {
+            "status": self.status,
+            "problems": self.problems,
+            "rms_mm": self.rms * 1e3,
+            "noise_mm": self.noise * 1e3,
+            "noise_source": self.noise_source,
+            "parameters": {name: {"value": value, "sigma": self.sigma[name], "at_bound": name in self.at_bound,
+                                  "bounds": list(self.bounds.get(name, ()))}
+                           for name, value in self.parameters.items()},
+            "correlation": {"names": list(self.parameters), "matrix": self.correlation},
+            "n_residuals": self.n_residuals,
+            "search_converged": self.converged,
+            "launches": self.launches,
+            "variants": self.variants,
+            "wall_time_s": self.wall_time_s,
+            "history": self.history,
+        }
+
+    def judge(self, missing: int) -> None:
+        """Set :attr:`status` and :attr:`problems` (``missing``: measured points the best
+        run has no value for). Problems are listed worst first; the status is the worst's."""
+        names = list(self.parameters)
+        corr = np.asarray(self.correlation, dtype=float)
+        found: list[tuple[str, str]] = []
+        if missing or not math.isfinite(self.rms):
+            found.append(("failed", f"the best run has no value for {missing} of the {self.n_residuals} measured "
+                                    "points (the strip misses the laser line or diverged)" if missing
+                          else f"the RMS is {self.rms}"))
+        for name in self.at_bound:
+            low, high = self.bounds[name]
+            found.append(("at_bound", f"{name} = {self.parameters[name]:.6g} ended on a bound ({low:g}:{high:g}); "
+                                      "the optimum lies outside, so it is not an estimate: widen --bounds or fix "
+                                      "the model"))
+        if not all(math.isfinite(v) for v in self.sigma.values()):
+            found.append(("not_identifiable", "the Jacobian is singular: some parameter does not change the fit"))
+        for i in range(len(names)):
+            for j in range(i):
+                if abs(corr[i, j]) > NOT_IDENTIFIABLE_CORRELATION:
+                    found.append(("not_identifiable", f"{names[i]} and {names[j]} are correlated {corr[i, j]:+.3f}: "
+                                                      "the data do not separate them; fix one, or measure what "
+                                                      "distinguishes them"))
+        if math.isfinite(self.noise) and self.rms > POOR_FIT_FACTOR * self.noise:
+            found.append(("poor_fit", f"the RMS {self.rms * 1e3:.4g} mm is {self.rms / self.noise:.1f}× the "
+                                      f"measurement noise {self.noise * 1e3:.3g} mm ({self.noise_source}): the "
+                                      "model with these free parameters does not explain the data"))
+        if not self.converged:
+            found.append(("failed", "the search stopped at its iteration limit before converging "
+                                    "(raise --max-iterations)"))
+        self.status = found[0][0] if found else "converged"
+        self.problems = [message for _, message in found]
 
 
 def _stencil(point: np.ndarray, d: int) -> tuple[list[np.ndarray], list[tuple[int, int, float]]]:
@@ -282,8 +351,12 @@ def _stencil(point: np.ndarray, d: int) -> tuple[list[np.ndarray], list[tuple[in
 
 def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[FreeParameter], *,
                align_start_s: float = 0.0, space_filling: int | None = None, max_iterations: int = 25,
-               seed: int = 0, device: str | None = None, progress: bool = True) -> FitResult:
-    """Fit ``free`` parameters of raw scene ``base`` to ``measurement`` (see the module doc)."""
+               seed: int = 0, device: str | None = None, progress: bool = True,
+               noise: float | None = None) -> FitResult:
+    """Fit ``free`` parameters of raw scene ``base`` to ``measurement`` (see the module doc).
+
+    ``noise`` is the measurement's σ (m) the RMS is judged against; by default it is
+    estimated from the measurement (:func:`measurement_noise`)."""
     started = time.perf_counter()
     objective = Objective(base, measurement, free, align_start_s, device)
     d = len(free)
@@ -351,7 +424,26 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
     # A parameter on its bound is not a fitted value (the optimum lies beyond), and its
     # σ from the local Jacobian means nothing: say so rather than report it as a fit.
     fit.at_bound = [p.field for p, ui in zip(free, u, strict=True) if min(ui, 1.0 - ui) <= AT_BOUND]
+    fit.bounds = {p.field: (p.lower, p.upper) for p in free} | ({SHIFT: (-objective.align, objective.align)}
+                                                                  if objective.align else {})
+    if noise is None:
+        fit.noise, fit.noise_source = measurement_noise(measurement), "estimated from the data's 4th differences"
+    else:
+        fit.noise, fit.noise_source = float(noise), "given"
+    # result row 0 is the reported point (accepted last, or re-run above)
+    fit.judge(int(np.isnan(objective.residuals(result, 0, shift, penalise=False)).sum()))
     return fit
+
+
+def measurement_noise(measurement: LaserTrace | TrackedShapes) -> float:
+    """σ of a measurement's noise from the data alone (each marker coordinate a series)."""
+    if isinstance(measurement, LaserTrace):
+        return difference_noise([measurement.x])
+    order = np.lexsort((measurement.frame, measurement.s))
+    s = measurement.s[order]
+    starts = np.flatnonzero(np.r_[True, np.diff(s) != 0, True])
+    pieces = [slice(a, b) for a, b in zip(starts[:-1], starts[1:], strict=True)]
+    return difference_noise([measurement.x[order][p] for p in pieces] + [measurement.y[order][p] for p in pieces])
 
 
 def _shift_of(q: np.ndarray, d: int) -> float:
@@ -391,9 +483,10 @@ def _summarise(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarra
 
 
 def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | TrackedShapes, out: str | Path,
-              device: str | None = None) -> list[Path]:
+              device: str | None = None, inputs: dict | None = None) -> list[Path]:
     """Write the fit: ``best.toml`` (reruns the best fit with the scene's own duration and
-    output), ``fit.json``, ``history.csv``, ``residuals.csv`` and ``overlay.png``.
+    output), ``fit.json`` (with ``inputs``, e.g. the measured file and its checksum, the
+    seed, and the provenance), ``history.csv``, ``residuals.csv`` and ``overlay.png``.
 
     The best fit is rerun and every file prepared under a temporary name before any is
     renamed into place, so a failure leaves no mixture of old and new files."""
@@ -401,6 +494,7 @@ def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | Tr
     import tomli_w
 
     from warpcloth.io.atomic import write_files_atomically
+    from warpcloth.io.provenance import provenance
     from warpcloth.viz.plots import plot_fit_overlay
 
     out = Path(out)
@@ -423,7 +517,8 @@ def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | Tr
                               "residual_x_mm": r[:, 0] * 1e3, "residual_y_mm": r[:, 1] * 1e3})
     return write_files_atomically(out, {
         "best.toml": lambda p: p.write_text(tomli_w.dumps(scene.to_dict())),
-        "fit.json": lambda p: p.write_text(json.dumps(fit.to_json(), indent=1)),
+        "fit.json": lambda p: p.write_text(json.dumps(fit.to_json() | {"inputs": inputs or {},
+                                                                        "provenance": provenance(device)}, indent=1)),
         "history.csv": lambda p: pd.DataFrame(fit.history).to_csv(p, index=False),
         "residuals.csv": lambda p: table.to_csv(p, index=False),
         "overlay.png": lambda p: plot_fit_overlay(result, objective, measurement, fit, p),

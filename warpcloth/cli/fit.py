@@ -8,7 +8,7 @@ from pathlib import Path
 
 from warpcloth.scene import scene_from_dict
 
-from .options import EXIT_UNTRUSTED_FIT, add_overwrite, at_least, device, new_result, non_negative
+from .options import EXIT_FIT_STATUS, add_overwrite, at_least, device, new_result, non_negative, positive
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,6 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="variants in the first, space-filling batch")
     fit_p.add_argument("--max-iterations", type=at_least(0), default=25, help="local refinement launches at most")
     fit_p.add_argument("--seed", type=int, default=0, help="seed of the space-filling sample")
+    fit_p.add_argument("--noise", type=positive, default=None, metavar="MM",
+                       help="measurement noise σ in mm the RMS is judged against (default: estimated from the data)")
     fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda")
     fit_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_overwrite(fit_p, "fit directory --out")
@@ -49,7 +51,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def fit_command(args: argparse.Namespace) -> int:
     """Fit the free parameters and write the fit directory."""
     from warpcloth.calibrate.motion_fit import fit_motion, free_parameters, write_fit
-    from warpcloth.io.measured import read_measurement
+    from warpcloth.io.measured import bundled_data, read_measurement
+    from warpcloth.io.provenance import file_checksum
     from warpcloth.scene import apply_overrides, read_scene_file
 
     base = apply_overrides(read_scene_file(args.scene), args.overrides)
@@ -59,21 +62,21 @@ def fit_command(args: argparse.Namespace) -> int:
     out = new_result(args.out or Path("runs") / f"fit-{Path(args.scene).stem}", args.overwrite, "--out")
     fit = fit_motion(base, measurement, free, align_start_s=args.align_start, space_filling=args.space_filling,
                      max_iterations=args.max_iterations, seed=args.seed, device=args.device,
-                     progress=not args.no_progress)
-    write_fit(fit, base, measurement, out, args.device)
-    print(f"RMS {fit.rms * 1e3:.4g} mm over {fit.n_residuals} residuals; {fit.launches} launches, "
-          f"{fit.variants} variants, {fit.wall_time_s:.1f} s{'' if fit.converged else ' (iteration limit reached)'}")
+                     progress=not args.no_progress, noise=None if args.noise is None else args.noise * 1e-3)
+    inputs = {"scene": str(args.scene), "overrides": args.overrides, "measured": file_checksum(
+        bundled_data(args.measured)), "free": [p.field for p in free], "align_start_s": args.align_start,
+        "space_filling": args.space_filling, "max_iterations": args.max_iterations, "seed": args.seed}
+    write_fit(fit, base, measurement, out, args.device, inputs)
+    print(f"RMS {fit.rms * 1e3:.4g} mm over {fit.n_residuals} residuals (noise {fit.noise * 1e3:.3g} mm, "
+          f"{fit.noise_source}); {fit.launches} launches, {fit.variants} variants, {fit.wall_time_s:.1f} s")
     for name, value in fit.parameters.items():
-        print(f"  {name} = {value:.6g} ± {fit.sigma[name]:.2g}")
+        print(f"  {name} = {value:.6g} ± {fit.sigma[name]:.2g}{'  (on a bound)' if name in fit.at_bound else ''}")
+    print(f"status: {fit.status}")
     print(f"wrote {out}/ (best.toml reruns the best fit: warpcloth run {out / 'best.toml'})")
-    if fit.at_bound:
-        bounds = {p.field: (p.lower, p.upper) for p in free}
-        ended = ", ".join(f"{f} = {fit.parameters[f]:.6g} (bounds {bounds[f][0]:g}:{bounds[f][1]:g})"
-                          for f in fit.at_bound)
-        print(f"warpcloth fit: not a fit: {ended} ended on a bound, so the optimum lies outside and the values and σ "
-              "above are not estimates; widen --bounds or fix the model (fit.json lists at_bound)", file=sys.stderr)
-        return EXIT_UNTRUSTED_FIT
-    return 0
+    if fit.status != "converged":
+        print(f"warpcloth fit: not a fit ({fit.status}): " + "; ".join(fit.problems) + " — the values and σ above "
+              "are not estimates to report (fit.json has status and problems)", file=sys.stderr)
+    return EXIT_FIT_STATUS[fit.status]
 
 
 def clamp_fit_angle_command(args: argparse.Namespace) -> int:

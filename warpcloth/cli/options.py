@@ -12,8 +12,9 @@ import warp as wp
 
 from warpcloth.errors import OptionError
 
-EXIT_UNTRUSTED_FIT = 4
-"""Exit status of a fit whose result is written but must not be read as a fit (it ended on a bound)."""
+EXIT_FIT_STATUS = {"converged": 0, "at_bound": 4, "poor_fit": 6, "not_identifiable": 7, "failed": 8}
+"""Exit status of a fit by its verdict: only ``converged`` is 0; every other result is
+written (to look at) but must not be read as a fit."""
 
 
 def device(value: str) -> str:

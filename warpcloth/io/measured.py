@@ -10,17 +10,22 @@ laser / tip trace  ``t, x``                    s, mm (displacement at the laser 
 tracked shapes     ``frame, t, s, x, y``       -, s, mm (arc length of the marker from the
                                                clamp's lowest point), mm, mm (from the clamp's
                                                lowest point at rest, y up)
-clamp encoder      ``t, theta``                s, rad (deg when the header says ``theta_deg``
-                                               or ``deg``, or ``angle_unit="deg"`` is given)
+clamp encoder      ``t, theta``                s, rad (``angle_unit`` overrides the header)
 =================  ==========================  =============================================
 
-Columns beyond those a form has are ignored. Anything wrong in a file is a
+**Units in the header are honoured**: a header name may end in a unit, after an
+underscore or in brackets (``t_ms``, ``x_m``, ``theta_deg``, ``time [ms]``, ``x (cm)``;
+:data:`warpcloth.units.MEASURED_UNITS` lists them); a name without one (``t``, ``x``)
+takes the form's unit above; a unit that is not one of the column's quantity (``x_s``,
+``t_in``) is an error naming the file, line and column. Columns beyond those a form has
+are ignored. Anything wrong in a file is a
 DataFileError naming the file (and the line, where one is to blame); a file that cannot
 be read at all is an OptionError of the option (``flag``) that named it.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -48,6 +53,40 @@ def read_table(path: str | Path, n_columns: int | None, what: str, flag: str,
         columns = f" ({', '.join(names)})" if names else ""
         raise DataFileError(table.path, f"expected at least two rows of {what}{columns}, got {len(table.values)}")
     return table
+
+
+_QUANTITY = {"t_s": ("time", "s"), "x_mm": ("length", "mm"), "y_mm": ("length", "mm"), "s_mm": ("length", "mm"),
+             "theta": ("angle", "rad"), "frame": (None, None)}
+_UNIT = re.compile(r"(?:_|\s*[\[(]\s*)([A-Za-zµ]+)\s*[\])]?\s*$")
+
+
+def header_unit(table: Table, column: int, role: str) -> float:
+    """Factor to SI of ``column`` (0-based) for its ``role`` (a name of the form, e.g.
+    ``x_mm``), from the unit its header names, else the role's own unit."""
+    quantity, default = _QUANTITY[role]
+    if quantity is None:
+        return 1.0
+    known = units.MEASURED_UNITS[quantity]
+    if not table.header or column >= len(table.header):
+        return known[default]
+    name = table.header[column]
+    match = _UNIT.search(name)
+    if match is None:
+        return known[default]
+    unit = match.group(1)
+    if unit not in known and unit.lower() not in known:
+        raise DataFileError(table.path, f"column {column + 1} is headed {name!r}: {unit!r} is not a {quantity} "
+                            f"unit (known: {', '.join(known)}); write e.g. {role.split('_')[0]}_{default}, or a "
+                            f"name without a unit for {default}", table.header_line)
+    return known.get(unit, known.get(unit.lower()))
+
+
+def _scaled(table: Table, roles: tuple[str, ...]) -> np.ndarray:
+    """The table's first ``len(roles)`` columns in SI, each by its header's unit."""
+    data = table.values[:, : len(roles)].copy()
+    for column, role in enumerate(roles):
+        data[:, column] *= header_unit(table, column, role)
+    return data
 
 
 def _increasing(table: Table, t: np.ndarray) -> None:
@@ -84,9 +123,9 @@ def read_laser_trace(path: str | Path, flag: str = "--measured") -> LaserTrace:
 
 
 def _laser_trace(table: Table) -> LaserTrace:
-    data = table.values
+    data = _scaled(table, _LASER)
     _increasing(table, data[:, 0])
-    return LaserTrace(data[:, 0], data[:, 1] * units.LENGTH_MM)
+    return LaserTrace(data[:, 0], data[:, 1])
 
 
 def read_tracked_shapes(path: str | Path, flag: str = "--measured") -> TrackedShapes:
@@ -96,7 +135,7 @@ def read_tracked_shapes(path: str | Path, flag: str = "--measured") -> TrackedSh
 
 
 def _tracked_shapes(table: Table) -> TrackedShapes:
-    data, lines = table.values, table.lines
+    data, lines = _scaled(table, _SHAPES), table.lines
     frame, t = data[:, 0], data[:, 1]
     disordered = (np.diff(frame) < 0) | ((np.diff(frame) > 0) & (np.diff(t) <= 0))
     if np.any(disordered):
@@ -107,9 +146,8 @@ def _tracked_shapes(table: Table) -> TrackedShapes:
     if np.any(data[:, 2] < 0):
         i = int(np.argmax(data[:, 2] < 0))
         raise DataFileError(table.path, f"arc length s must be ≥ 0 (from the clamp's lowest point), got "
-                            f"{data[i, 2]:g} mm", int(lines[i]))
-    mm = units.LENGTH_MM
-    return TrackedShapes(frame.astype(int), t, data[:, 2] * mm, data[:, 3] * mm, data[:, 4] * mm)
+                            f"{table.values[i, 2]:g}", int(lines[i]))
+    return TrackedShapes(frame.astype(int), t, data[:, 2], data[:, 3], data[:, 4])
 
 
 def read_encoder(path: str | Path, angle_unit: str | None = None,
@@ -119,12 +157,11 @@ def read_encoder(path: str | Path, angle_unit: str | None = None,
     if angle_unit not in (None, "rad", "deg"):
         raise OptionError("--angle-unit", f"must be rad or deg, got {angle_unit!r}")
     table = read_table(path, 2, "encoder", flag, _ENCODER)
-    data, header = table.values, table.header
+    data = _scaled(table, _ENCODER)
     _increasing(table, data[:, 0])
-    if angle_unit is None:
-        angle_unit = "deg" if header and any("deg" in cell.lower() for cell in header[1:]) else "rad"
-    theta = np.radians(data[:, 1]) if angle_unit == "deg" else data[:, 1]
-    return data[:, 0], theta
+    if angle_unit is not None:
+        data[:, 1] = table.values[:, 1] * units.MEASURED_UNITS["angle"][angle_unit]
+    return data[:, 0], data[:, 1]
 
 
 def read_measurement(path: str | Path, flag: str = "--measured") -> LaserTrace | TrackedShapes:
