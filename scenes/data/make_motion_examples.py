@@ -15,9 +15,9 @@ the parameters below within its reported uncertainty.
   centre 4.0 mm above the clamp's lowest point and γ = 0.8 /s; 11 markers every 10 mm
   along the strip tracked at 60 frames/s; noise σ = 0.3 mm per coordinate; the camera
   clock starts 4 ms after the clamp (so ``--align-start`` has something to find).
-- ``impulsive_rotation_encoder.csv``: the bundled scene's θ(t) (3.2e4 t⁴ to 0.05 s,
-  then 16 rad/s to 0.12 s, then held) sampled at 1 kHz for 0.2 s, in degrees; noise
-  σ = 0.1°.
+- ``impulsive_rotation_encoder.csv``: the bundled scene's θ(t) (at rest until t = 0,
+  3.2e4 t⁴ to 0.05 s, then 16 rad/s to 0.12 s, then held) sampled at 1 kHz from −0.03 s
+  to 0.2 s, in degrees, the encoder reading 0.25° at rest; noise σ = 0.1°.
 """
 
 from __future__ import annotations
@@ -71,13 +71,15 @@ def tracked_shapes(rng: np.random.Generator) -> str:
 
 
 def encoder(rng: np.random.Generator) -> str:
-    """The bundled rotation's θ(t) at 1 kHz in degrees, σ = 0.1°."""
-    t = np.arange(0.0, 0.2, 1e-3)
-    theta = np.where(t < 0.05, 3.2e4 * t**4, 0.2 + 16.0 * (np.minimum(t, 0.12) - 0.05))
-    degrees = np.degrees(theta) + rng.normal(0, 0.1, len(t))
+    """The bundled rotation's θ(t) at 1 kHz in degrees from 30 ms before the start, the
+    encoder reading 0.25° at rest, σ = 0.1°."""
+    t = np.round(np.arange(-0.03, 0.2, 1e-3), 6)
+    tau = np.clip(t, 0.0, None)
+    theta = np.where(tau < 0.05, 3.2e4 * tau**4, 0.2 + 16.0 * (np.minimum(tau, 0.12) - 0.05))
+    degrees = 0.25 + np.degrees(theta) + rng.normal(0, 0.1, len(t))
     rows = "\n".join(f"{ti:.4f},{di:.4f}" for ti, di in zip(t, degrees, strict=True))
-    return ("# synthetic: 3.2e4 t^4 to 0.05 s, 16 rad/s to 0.12 s, noise 0.1 deg "
-            f"(scenes/data/make_motion_examples.py)\nt_s,theta_deg\n{rows}\n")
+    return ("# synthetic: at rest (reading 0.25 deg) until t = 0, then 3.2e4 t^4 to 0.05 s, 16 rad/s to 0.12 s, "
+            f"stopped; noise 0.1 deg (scenes/data/make_motion_examples.py)\nt_s,theta_deg\n{rows}\n")
 
 
 def main() -> None:

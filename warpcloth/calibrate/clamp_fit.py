@@ -1,131 +1,265 @@
-"""Fitting the paper's clamp motion, a quartic then a straight line, to an encoder series.
+"""Fitting the clamp motion to an encoder series: rest, a general quartic, straight lines,
+and rest again if the clamp stops within the record (the paper's Fig. 12 fitted a
+4th-order polynomial to its encoder start, then a constant speed).
 
-The model (paper Fig. 12, with its onset and stop found by the fit)::
+The forms (:data:`FORMS`)::
 
-    θ(t) = θ0                                   t < t0
-         = θ0 + c (t − t0)⁴                     t0 ≤ t < t1     (the impulsive start)
-         = θ0 + c (t1 − t0)⁴ + ω (t − t1)       t1 ≤ t < t2     (constant angular speed)
-         = θ(t2)                                t ≥ t2          (the clamp stops)
+    θ(t) = θ0                                          t < t0          (at rest)
+         = θ0 + a1 τ + a2 τ² + a3 τ³ + a4 τ⁴, τ = t − t0   t0 ≤ t < t1     (the impulsive start)
+         = θ(t1) + ω1 (t − t1),  ω1 = θ'(t1⁻)          t1 ≤ t < t2     (constant angular speed)
+         = θ(t2) + ω2 (t − t2)                         t2 ≤ t < ts     (a second speed, if any)
+         = θ(ts)                                       t ≥ ts          (stopped, if it stops)
 
-For given breakpoints (t0, t1, t2) the model is linear in (θ0, c, ω), so each candidate
-is a 3-unknown least-squares solve; the breakpoints are chosen by a grid search over
-the data's time range refined around the best cell. The slope is left free at t1 (the
-paper's fit is two pieces, not a spline); the fit reports the slope jump so a user can
-see whether the data support a smooth join.
+θ0 is the encoder's reading at rest: the mean of the samples before the onset, not a
+fitted constant (an encoder offset must not trade against the start). θ is continuous
+everywhere and θ' at the quartic's end (the line continues the start's speed); between
+two lines and at the stop the speed may jump, as a drive's does. For given breakpoints
+the model is linear in a1…a4 and the later speeds, so each candidate is one small
+least-squares solve; the breakpoints come from a grid over the record refined by
+coordinate scans. The form is chosen by the Bayesian information criterion among those
+the data can hold (each needs a few samples per piece).
+
+The noise is estimated from the data: the smaller of the scatter of the samples at rest
+and the 4th-difference estimate (:func:`~warpcloth.calibrate.noise.difference_noise`). A fit
+whose RMS exceeds 3× that noise is ``poor_fit``: its θ(t) does not describe the encoder
+and a scene driven by it would be wrong for the whole record.
 """
 
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass
+import itertools
+import math
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from warpcloth.errors import OptionError
 
-GRID = 24  # breakpoint candidates per axis and refinement round
-ROUNDS = 5
-MIN_SAMPLES = 12
+from .noise import difference_noise
+
+FORMS = {
+    "quartic, line, rest": (1, True),
+    "quartic, line": (1, False),
+    "quartic, line, line, rest": (2, True),
+    "quartic, line, line": (2, False),
+}
+"""Each form's number of straight lines and whether the clamp comes to rest in the record."""
+GRID = 26  # breakpoint candidates per axis in the first search
+STARTS = 6  # best grid cells refined (a breakpoint search has local minima)
+REFINE_ROUNDS = 6
+MIN_PER_PIECE = 4  # samples a piece needs to be fitted
+MIN_REST = 3  # samples before the onset needed to read the rest angle
+POOR_FIT_FACTOR = 3.0
 
 
 @dataclass(frozen=True)
 class ClampMotionFit:
-    """A fitted quartic-then-line clamp motion (SI: s, rad, rad/s)."""
+    """A fitted clamp motion (SI: s, rad, rad/s^k) and how well it describes the encoder."""
 
+    form: str
     onset_s: float
-    break_s: float
-    stop_s: float
-    theta0_rad: float
-    quartic_rad_per_s4: float
-    speed_rad_per_s: float
+    breaks_s: tuple[float, ...]  # quartic → first line, then line → line
+    stop_s: float | None  # None: still moving at the end of the record
+    rest_rad: float  # the encoder's reading at rest, θ0
+    quartic_si: tuple[float, float, float, float]  # a1 … a4
+    speeds_rad_per_s: tuple[float, ...]  # each line's speed
     rms_rad: float
+    noise_rad: float
+    noise_source: str
     n_samples: int
-
-    @property
-    def slope_jump_rad_per_s(self) -> float:
-        """ω minus the quartic's slope at the break (0 for a smooth join)."""
-        return self.speed_rad_per_s - 4 * self.quartic_rad_per_s4 * (self.break_s - self.onset_s) ** 3
+    bic: float
+    status: str = "converged"
+    problems: list[str] = field(default_factory=list)
+    candidates: dict[str, float] = field(default_factory=dict)  # form → RMS (rad) of its best fit
 
     def theta(self, t: np.ndarray) -> np.ndarray:
         """The fitted θ(t)."""
-        t = np.asarray(t, dtype=float)
-        quartic = np.clip(np.minimum(t, self.break_s) - self.onset_s, 0, None) ** 4
-        line = np.clip(np.minimum(t, self.stop_s) - self.break_s, 0, None)
-        return self.theta0_rad + self.quartic_rad_per_s4 * quartic + self.speed_rad_per_s * line
+        return self.rest_rad + _shape(np.atleast_1d(np.asarray(t, dtype=float)), self.onset_s, self.breaks_s,
+                                      self.stop_s, np.array([*self.quartic_si, *self.speeds_rad_per_s[1:]]))
 
-    def segments(self) -> list[dict]:
+    def segments(self, until_s: float | None = None) -> list[dict]:
         """The motion as scene ``clamp.segments`` (θ = Σ c_k (t − t_start)^k), measured
-        from the encoder's reading at rest θ0: a scene's θ turns the clamp away from the
-        hanging rest shape, so an encoder zero offset must not become a jump at t = 0."""
-        theta_break = self.quartic_rad_per_s4 * (self.break_s - self.onset_s) ** 4
-        return [
-            {"t_start_s": self.onset_s, "t_end_s": self.break_s,
-             "theta_coefficients_si": [0.0, 0.0, 0.0, 0.0, self.quartic_rad_per_s4]},
-            {"t_start_s": self.break_s, "t_end_s": self.stop_s,
-             "theta_coefficients_si": [theta_break, self.speed_rad_per_s]},
-        ]
+        from the rest reading θ0: a scene's θ turns the clamp away from the hanging rest
+        shape, so an encoder offset must not become a jump at t = 0. A motion that does
+        not stop in the record continues its last line to ``until_s`` (then holds)."""
+        ends = [*self.breaks_s[1:], self.stop_s if self.stop_s is not None else max(until_s or 0.0, self.end_s)]
+        pieces = [{"t_start_s": self.onset_s, "t_end_s": self.breaks_s[0],
+                   "theta_coefficients_si": [0.0, *self.quartic_si]}]
+        for start, end, speed in zip(self.breaks_s, ends, self.speeds_rad_per_s, strict=True):
+            pieces.append({"t_start_s": start, "t_end_s": end,
+                           "theta_coefficients_si": [float(self.theta(start)[0] - self.rest_rad), speed]})
+        return pieces
+
+    @property
+    def end_s(self) -> float:
+        """The last breakpoint (the stop, or the last line's start)."""
+        return self.stop_s if self.stop_s is not None else self.breaks_s[-1]
+
+    @property
+    def breakpoints_s(self) -> tuple[float, ...]:
+        """Onset, breaks and stop, in time order."""
+        return (self.onset_s, *self.breaks_s, *(() if self.stop_s is None else (self.stop_s,)))
 
 
-def _costs(t: np.ndarray, theta: np.ndarray, t0: float, t1: np.ndarray,
-           t2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    # Squared residual and coefficients for one onset and many (t1, t2) pairs at once,
-    # through the 3×3 normal equations. Times are in units of the data's span, so the
-    # columns are O(1) and a tiny ridge only matters for an empty column.
-    quartic = np.clip(np.minimum(t[None], t1[:, None]) - t0, 0, None) ** 4
-    line = np.clip(np.minimum(t[None], t2[:, None]) - t1[:, None], 0, None)
-    a = np.stack([np.ones_like(quartic), quartic, line], axis=-1)  # [pair, sample, 3]
-    normal = np.einsum("psi,psj->pij", a, a)
-    normal += 1e-12 * np.trace(normal, axis1=1, axis2=2)[:, None, None] * np.eye(3)
-    rhs = np.einsum("psi,s->pi", a, theta)
-    coefficients = np.linalg.solve(normal, rhs[..., None])[..., 0]
-    residual = np.einsum("psi,pi->ps", a, coefficients) - theta[None]
-    return np.sum(residual**2, axis=1), coefficients
+def _shape(t: np.ndarray, t0: float, breaks: tuple[float, ...], stop: float | None,
+           coefficients: np.ndarray) -> np.ndarray:
+    point = np.array([[t0, *breaks, *(() if stop is None else (stop,))]])
+    return _columns(t, point, len(breaks), stop is not None)[0] @ coefficients
+
+
+def _columns(t: np.ndarray, points: np.ndarray, lines: int, stops: bool) -> np.ndarray:
+    # θ − θ0 = A @ (a1, a2, a3, a4, ω2, ...) for breakpoint sets ``points`` [candidate,
+    # onset, breaks..., stop?]: every piece continues the one before it.
+    t = t[None, :]
+    t0, breaks = points[:, :1], [points[:, 1 + i:2 + i] for i in range(lines)]
+    te = np.minimum(t, points[:, -1:]) if stops else t
+    t1 = breaks[0]
+    tau = np.clip(np.minimum(te, t1) - t0, 0, None)
+    tau1 = t1 - t0
+    after = np.clip(np.minimum(te, breaks[1] if lines > 1 else np.inf) - t1, 0, None)
+    cols = [tau**k + k * tau1 ** (k - 1) * after for k in range(1, 5)]
+    for i in range(1, lines):
+        end = breaks[i + 1] if i + 1 < lines else np.inf
+        cols.append(np.clip(np.minimum(te, end) - breaks[i], 0, None))
+    return np.stack(cols, axis=-1)
+
+
+def _solve(t: np.ndarray, theta: np.ndarray, points: np.ndarray, lines: int,
+           stops: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cost, coefficients and rest angle of many breakpoint sets ``points`` [candidate, k]
+    (times scaled to the record, so the columns are O(1)); infinite cost for a set that
+    leaves a piece too few samples."""
+    edges = np.searchsorted(t, points)
+    counts = np.diff(np.column_stack([np.zeros(len(points), int), edges, np.full(len(points), len(t))]), axis=1)
+    usable = (counts[:, 0] >= MIN_REST) & np.all(counts[:, 1:] >= MIN_PER_PIECE, axis=1)
+    costs = np.full(len(points), np.inf)
+    coefficients = np.zeros((len(points), 3 + lines))
+    prefix = np.concatenate([[0.0], np.cumsum(theta)])
+    rests = prefix[edges[:, 0]] / np.maximum(edges[:, 0], 1)
+    for chunk in np.array_split(np.flatnonzero(usable), max(1, int(usable.sum()) // 1500 + 1)):
+        if not len(chunk):
+            continue
+        a = _columns(t, points[chunk], lines, stops)
+        b = theta[None, :] - rests[chunk, None]
+        normal = np.einsum("csi,csj->cij", a, a)
+        normal += 1e-12 * np.trace(normal, axis1=1, axis2=2)[:, None, None] * np.eye(normal.shape[1])
+        x = np.linalg.solve(normal, np.einsum("csi,cs->ci", a, b)[..., None])[..., 0]
+        r = np.einsum("csi,ci->cs", a, x) - b
+        costs[chunk], coefficients[chunk] = np.sum(r**2, axis=1), x
+    return costs, coefficients, rests
+
+
+def _guided(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool) -> np.ndarray:
+    # Candidates placed by the data: the onset between the start of the record and where θ
+    # first leaves its rest band (a quartic start is flat, so the onset precedes that),
+    # the stop where θ last leaves its final value; the breaks on a fine grid between.
+    # A grid over the whole record is too coarse for a stop that must sit within a sample.
+    sigma = max(difference_noise([theta]), 1e-12)
+    moved = np.flatnonzero(np.abs(theta - np.median(theta[:MIN_REST])) > 6 * sigma)
+    departure = t[moved[0]] if len(moved) else t[-1]
+    settled = np.flatnonzero(np.abs(theta - np.median(theta[-MIN_REST:])) > 6 * sigma)
+    arrival = t[min(settled[-1] + 1, len(t) - 1)] if len(settled) else t[-1]
+    onsets = np.linspace(t[0], departure, 8)[1:]
+    step = np.median(np.diff(t))
+    ends = arrival + step * np.arange(-2, 3) if stops else [t[-1]]
+    out = []
+    for t0 in onsets:
+        for end in ends:
+            inner = np.linspace(t0, end, 42)[1:-1]
+            for breaks in itertools.combinations(inner, lines):
+                out.append([t0, *breaks, *([end] if stops else [])])
+    return np.array(out).reshape(-1, 1 + lines + (1 if stops else 0))
+
+
+def _search(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool) -> tuple[float, np.ndarray, np.ndarray, float]:
+    # grid over the record, then coordinate scans around the best few (distinct) starts
+    k = 1 + lines + (1 if stops else 0)
+    grid = np.linspace(t[0], t[-1], GRID)
+    points = np.vstack([np.array(list(itertools.combinations(grid[1:-1], k))), _guided(t, theta, lines, stops)])
+    costs, _, _ = _solve(t, theta, points, lines, stops)
+    if not np.isfinite(costs).any():
+        return math.inf, np.zeros(k), np.zeros(3 + lines), 0.0
+    best_cost, best_point = math.inf, None
+    for start in np.argsort(costs)[:STARTS]:
+        if not np.isfinite(costs[start]):
+            break
+        point, cost = points[start].copy(), costs[start]
+        span = (t[-1] - t[0]) / (GRID - 1)
+        for _ in range(REFINE_ROUNDS):
+            for i in range(k):
+                trial = np.repeat(point[None], 25, axis=0)
+                trial[:, i] = np.linspace(point[i] - span, point[i] + span, 25)
+                trial = trial[np.all(np.diff(trial, axis=1) > 0, axis=1) & (trial[:, 0] > t[0])
+                              & (trial[:, -1] < t[-1])]
+                c, _, _ = _solve(t, theta, trial, lines, stops)
+                j = int(np.argmin(c))
+                if c[j] < cost:
+                    point, cost = trial[j], c[j]
+            span /= 4
+        if cost < best_cost:
+            best_cost, best_point = cost, point
+    c, x, r = _solve(t, theta, best_point[None], lines, stops)
+    return float(c[0]), best_point, x[0], float(r[0])
 
 
 def fit_clamp_motion(t: np.ndarray, theta: np.ndarray) -> ClampMotionFit:
-    """Least-squares quartic-then-line fit of an encoder series (s, rad)."""
+    """Least-squares fit of every form of :data:`FORMS` to an encoder series (s, rad),
+    the one with the lowest BIC returned with its status (see the module docstring)."""
     t = np.asarray(t, dtype=float)
     theta = np.asarray(theta, dtype=float)
-    start = t[0]
-    if len(t) < MIN_SAMPLES:
-        raise OptionError("ENCODER", f"{len(t)} samples are too few to place three breakpoints; "
-                          f"give at least {MIN_SAMPLES}")
+    needed = MIN_REST + 3 * MIN_PER_PIECE
+    if len(t) < needed:
+        raise OptionError("ENCODER", f"{len(t)} samples are too few for rest, a quartic, a line and a stop; "
+                          f"give at least {needed}")
     if np.ptp(theta) <= 0:
         raise OptionError("ENCODER", "the angle never changes: there is no clamp motion to fit")
-    scale = t[-1] - t[0]
-    t = (t - t[0]) / scale
-    lo, hi = 0.0, 1.0
-    best = (np.inf, None, None)
-    span = hi - lo
-    centre = None
-    for _ in range(ROUNDS):
-        if centre is None:
-            axes = [np.linspace(lo, hi, GRID)] * 3
-        else:
-            axes = [np.clip(np.linspace(c - span, c + span, GRID), lo, hi) for c in centre]
-        for t0 in axes[0]:
-            t1, t2 = (g.ravel() for g in np.meshgrid(axes[1], axes[2], indexing="ij"))
-            valid = (t1 > t0) & (t2 > t1)
-            if not valid.any():
-                continue
-            costs, coefficients = _costs(t, theta, t0, t1[valid], t2[valid])
-            k = int(np.argmin(costs))
-            if costs[k] < best[0]:
-                best = (costs[k], (t0, t1[valid][k], t2[valid][k]), coefficients[k])
-        centre = best[1]
-        span = 2 * span / GRID
-    cost, breaks, (theta0, quartic, speed) = best
-    t0, t1, t2 = (start + b * scale for b in breaks)
-    return ClampMotionFit(float(t0), float(t1), float(t2), float(theta0), float(quartic / scale**4),
-                          float(speed / scale), float(np.sqrt(cost / len(t))), len(t))
+    n = len(t)
+    origin, scale = t[0], t[-1] - t[0]
+    unit_t = (t - origin) / scale  # the search works on the record scaled to [0, 1]
+    found = {}
+    for form, (lines, stops) in FORMS.items():
+        cost, point, x, rest = _search(unit_t, theta, lines, stops)
+        point = origin + point * scale
+        x = x / scale ** np.array([1, 2, 3, 4, *[1] * (lines - 1)])
+        if not math.isfinite(cost):
+            continue
+        k = 1 + len(x) + len(point)  # θ0, the linear coefficients, the breakpoints
+        bic = n * math.log(max(cost, 1e-300) / n) + k * math.log(n)
+        found[form] = (bic, cost, point, x, rest, lines, stops)
+    if not found:
+        raise OptionError("ENCODER", "no form fits: every candidate leaves a piece with fewer than "
+                          f"{MIN_PER_PIECE} samples or fewer than {MIN_REST} at rest before the onset")
+    form = min(found, key=lambda f: found[f][0])
+    bic, cost, point, x, rest, lines, stops = found[form]
+    t0, breaks = float(point[0]), tuple(float(b) for b in point[1:1 + lines])
+    stop = float(point[1 + lines]) if stops else None
+    speeds = (float(sum(k * x[k - 1] * (breaks[0] - t0) ** (k - 1) for k in range(1, 5))), *map(float, x[4:]))
+    # The smaller of two estimates: samples the fit calls "at rest" may not be (a wrong
+    # form puts its onset late), and 4th differences grow where θ changes abruptly.
+    at_rest = theta[t < t0]
+    estimates = {"the encoder's 4th differences": difference_noise([theta])}
+    if len(at_rest) >= 8:
+        estimates[f"the scatter of the {len(at_rest)} samples at rest"] = float(np.std(at_rest, ddof=1))
+    source = min(estimates, key=estimates.get)
+    noise = estimates[source]
+    rms = math.sqrt(cost / n)
+    problems = []
+    if rms > POOR_FIT_FACTOR * noise:
+        problems.append(f"the RMS {rms:.3g} rad is {rms / noise:.1f}× the encoder's noise {noise:.2g} rad "
+                        f"({source}): no form of rest, quartic, lines and stop describes this encoder")
+    return ClampMotionFit(form, t0, breaks, stop, rest, tuple(float(v) for v in x[:4]), speeds, rms, noise, source,
+                          n, bic, "poor_fit" if problems else "converged", problems,
+                          {f: math.sqrt(v[1] / n) for f, v in found.items()})
 
 
-def scene_with_clamp_motion(raw_scene: dict, fit: ClampMotionFit) -> dict:
-    """A copy of raw scene data whose clamp follows ``fit`` (motion = "piecewise")."""
+def scene_with_clamp_motion(raw_scene: dict, fit: ClampMotionFit, until_s: float | None = None) -> dict:
+    """A copy of raw scene data whose clamp follows ``fit`` (motion = "piecewise"); a
+    motion still going at the end of the record continues to ``until_s``."""
     data = copy.deepcopy(raw_scene)
     clamp = data.setdefault("clamp", {})
     clamp["motion"] = "piecewise"
-    clamp["segments"] = fit.segments()
+    clamp["segments"] = fit.segments(until_s)
     for key in ("table_t_s", "table_theta_rad"):
         clamp.pop(key, None)
     return data

@@ -38,13 +38,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_overwrite(fit_p, "fit directory --out")
     clamp_p = sub.add_parser("clamp", help="clamp motion tools")
     clamp_sub = clamp_p.add_subparsers(dest="clamp_command", required=True)
-    angle_p = clamp_sub.add_parser("fit-angle", help="fit the quartic-then-line θ(t) to an encoder series")
+    angle_p = clamp_sub.add_parser("fit-angle", help="fit rest, a quartic, lines and a stop to an encoder series")
     angle_p.set_defaults(handler=clamp_fit_angle_command)
-    angle_p.add_argument("encoder", metavar="ENCODER", help="CSV 't_s, theta' (rad; deg if the header says deg)")
+    angle_p.add_argument("encoder", metavar="ENCODER", help="CSV 't_s, theta' (rad, or the header's unit: theta_deg)")
     angle_p.add_argument("--scene", required=True, help="scene to write the fitted motion into")
     angle_p.add_argument("-o", "--output", required=True, help="the new scene file (TOML)")
     angle_p.add_argument("--angle-unit", choices=("rad", "deg"), default=None, help="override the header's unit")
     angle_p.add_argument("--plot", help="also write a PNG of the encoder data and the fit")
+    angle_p.add_argument("--accept", action="store_true",
+                         help="exit 0 even when the fit is poor (RMS above 3× the encoder's noise)")
     add_overwrite(angle_p, "scene file -o")
 
 
@@ -91,17 +93,30 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
     out = new_result(args.output, args.overwrite, "-o")
     t, theta = read_encoder(args.encoder, args.angle_unit)
     fit = fit_clamp_motion(t, theta)
-    data = scene_with_clamp_motion(read_scene_file(args.scene), fit)
+    raw = read_scene_file(args.scene)
+    data = scene_with_clamp_motion(raw, fit, until_s=scene_from_dict(raw).run.duration_s)
     data.pop("sweep", None)
     scene = scene_from_dict(data)  # validates before anything is written
     write_text_atomically(out, tomli_w.dumps(scene.to_dict()))
-    print(f"encoder at rest {fit.theta0_rad:.4g} rad (the scene's θ is measured from it); "
-          f"onset {fit.onset_s:.4f} s, quartic {fit.quartic_rad_per_s4:.5g} rad/s⁴ to {fit.break_s:.4f} s, "
-          f"then {fit.speed_rad_per_s:.5g} rad/s to {fit.stop_s:.4f} s (slope jump at the break "
-          f"{fit.slope_jump_rad_per_s:+.3g} rad/s); RMS {fit.rms_rad:.3g} rad over {fit.n_samples} samples")
+    a = ", ".join(f"{c:.5g}" for c in fit.quartic_si)
+    lines = "; ".join(f"{w:.5g} rad/s from {b:.4f} s" for w, b in zip(fit.speeds_rad_per_s, fit.breaks_s, strict=True))
+    end = (f"stopped at {fit.stop_s:.4f} s" if fit.stop_s is not None else
+           f"still moving at the end of the record ({t[-1]:.4f} s): the scene continues the last line to "
+           f"{scene.run.duration_s:g} s (run.duration_s)")
+    print(f"form: {fit.form} (lowest BIC; RMS of each form: "
+          + ", ".join(f"{f} {r:.3g} rad" for f, r in fit.candidates.items()) + ")")
+    print(f"encoder at rest {fit.rest_rad:.4g} rad (the mean before the onset; the scene's θ is measured from it); "
+          f"onset {fit.onset_s:.4f} s; quartic a1…a4 = ({a}) rad/s^k; then {lines}; {end}")
+    print(f"RMS {fit.rms_rad:.3g} rad over {fit.n_samples} samples, noise {fit.noise_rad:.2g} rad ({fit.noise_source})"
+          f"; status: {fit.status}")
     print(f"wrote {out}")
     if args.plot:
         from warpcloth.viz.plots import plot_clamp_fit
 
         print(f"wrote {plot_clamp_fit(t, theta, fit, Path(args.plot))}")
+    if fit.status != "converged":
+        print(f"warpcloth clamp fit-angle: not a fit ({fit.status}): " + "; ".join(fit.problems)
+              + (" (accepted with --accept)" if args.accept else "; a scene driven by it is wrong for the whole "
+                 "record (--accept to use it anyway)"), file=sys.stderr)
+        return 0 if args.accept else EXIT_FIT_STATUS[fit.status]
     return 0

@@ -250,13 +250,14 @@ def plot_fit_overlay(result: object, objective: object, measurement: LaserTrace 
 
 
 def plot_clamp_fit(t: np.ndarray, theta: np.ndarray, fit: object, path: Path) -> Path:
-    """Encoder angle and the fitted quartic-then-line θ(t), with the breakpoints marked."""
+    """Encoder angle and the fitted θ(t) (rest, quartic, lines, stop), breakpoints marked."""
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5), sharex=True, height_ratios=[3, 1])
     top.plot(t, np.degrees(theta), "k.", ms=2.5, label="encoder")
-    top.plot(t, np.degrees(fit.theta(t)), "C3", lw=1.2, label="quartic, then line")
-    for when in (fit.onset_s, fit.break_s, fit.stop_s):
+    top.plot(t, np.degrees(fit.theta(t)), "C3", lw=1.2, label=fit.form)
+    for when in fit.breakpoints_s:
         top.axvline(when, color="0.7", lw=0.6, ls="--")
-    top.set(ylabel="θ (deg)", title=f"clamp motion fit, RMS {np.degrees(fit.rms_rad):.3g}°")
+    top.set(ylabel="θ (deg)", title=f"clamp motion fit, RMS {np.degrees(fit.rms_rad):.3g}° "
+            f"(noise {np.degrees(fit.noise_rad):.2g}°): {fit.status}")
     top.legend(fontsize=7)
     bottom.plot(t, np.degrees(theta - fit.theta(t)), "C0.", ms=2)
     bottom.axhline(0, color="0.6", lw=0.6)

@@ -1,0 +1,164 @@
+"""The documented calibration path, checked on data made by an independent θ(t): the
+clamp-motion fit (general quartics, one or two lines, a stop or none, an offset at rest,
+header units), its verdict on encoders it cannot describe, and ``clamp fit-angle`` then
+``fit`` recovering the rotation centre, γ and D1 (issue 12's acceptance)."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from conftest import overrides  # noqa: F401  (keeps Warp quiet)
+
+import warpcloth as wc
+from warpcloth.calibrate.clamp_fit import fit_clamp_motion, scene_with_clamp_motion
+from warpcloth.calibrate.motion_fit import measurement_noise
+from warpcloth.io.measured import LaserTrace, read_encoder, read_measurement
+from warpcloth.scene import clamp_edge, read_scene_file
+
+T = np.round(np.arange(-0.02, 0.2, 1e-3), 6)
+QUARTIC = (2.0, 30.0, 900.0, 2e4)  # a1 … a4 (rad/s^k), the general start of issue 12
+
+
+def motion(t, onset=0.0, quartic=QUARTIC, break_s=0.05, second=None, stop=None):
+    """θ(t) computed directly: rest, the quartic, lines continuing its slope, a stop."""
+    def q(x):
+        return sum(a * x ** (k + 1) for k, a in enumerate(quartic))
+
+    def dq(x):
+        return sum((k + 1) * a * x**k for k, a in enumerate(quartic))
+
+    te = np.minimum(t, stop) if stop is not None else t
+    tau, tau1 = np.clip(te - onset, 0, None), break_s - onset
+    theta = np.where(tau < tau1, q(tau), q(tau1) + dq(tau1) * (te - break_s))
+    if second is not None:
+        t2, speed = second
+        theta = np.where(te > t2, q(tau1) + dq(tau1) * (t2 - break_s) + speed * (te - t2), theta)
+    return theta
+
+
+CASES = {
+    "general quartic, never stops": ({}, "quartic, line"),
+    "t⁴ start, line, stop": ({"quartic": (0.0, 0.0, 0.0, 3.2e4), "stop": 0.12}, "quartic, line, rest"),
+    "two lines, stop": ({"quartic": (0.0, 0.0, 0.0, 3.2e4), "second": (0.09, -8.0), "stop": 0.14},
+                        "quartic, line, line, rest"),
+    "general quartic, two lines, never stops": ({"second": (0.11, 5.0)}, "quartic, line, line"),
+}
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_the_clamp_fit_recovers_each_form_with_an_offset_at_rest(case):
+    fields, form = CASES[case]
+    truth = motion(T, **fields) - 0.0004  # the encoder reads -0.4 mrad at rest
+    fit = fit_clamp_motion(T, truth + np.random.default_rng(3).normal(0, 1e-3, len(T)))
+    assert fit.form == form and fit.status == "converged", (fit.form, fit.problems)
+    assert fit.rest_rad == pytest.approx(-0.0004, abs=1e-3)  # the mean of ~20 samples of σ 1 mrad
+    assert np.abs(fit.theta(T) - truth).max() < 2e-3  # within 2σ of the noise everywhere
+    assert fit.noise_rad == pytest.approx(1e-3, rel=0.25) and fit.rms_rad == pytest.approx(1e-3, rel=0.15)
+    assert fit.breaks_s[0] == pytest.approx(0.05, abs=2e-3)
+    if "stop" in fields:
+        assert fit.stop_s == pytest.approx(fields["stop"], abs=1e-3)
+    else:
+        assert fit.stop_s is None
+
+
+def test_an_encoder_no_form_describes_is_a_poor_fit_and_the_command_says_so(tmp_path):
+    wobble = 0.3 * np.sin(100 * np.clip(T, 0, None)) + np.random.default_rng(1).normal(0, 1e-3, len(T))
+    fit = fit_clamp_motion(T, wobble)
+    assert fit.status == "poor_fit" and "× the encoder's noise" in fit.problems[0]
+    encoder = tmp_path / "wobble.csv"
+    encoder.write_text("t_ms,theta_rad\n" + "\n".join(f"{t * 1e3:.3f},{v:.6f}" for t, v in zip(T, wobble,
+                                                                                               strict=True)))
+
+    def cli(*extra):
+        return subprocess.run([sys.executable, "-m", "warpcloth.cli", "clamp", "fit-angle", str(encoder), "--scene",
+                               "impulsive_rotation", "-o", "w.toml", "--overwrite", *extra], capture_output=True,
+                              text=True, cwd=tmp_path, timeout=300)
+
+    done = cli()
+    assert done.returncode == 6 and "not a fit (poor_fit)" in done.stderr and "--accept" in done.stderr
+    assert "Traceback" not in done.stderr
+    assert cli("--accept").returncode == 0
+
+
+def test_a_fitted_motion_drives_the_clamp_from_its_rest_reading():
+    truth = motion(T, stop=0.12) + 0.05
+    fit = fit_clamp_motion(T, truth)
+    raw = read_scene_file("impulsive_rotation")
+    raw["run"]["duration_s"] = 0.2
+    result = wc.simulate(wc.scene_from_dict(scene_with_clamp_motion(raw, fit, until_s=0.2)))
+    # the kernel's clamp angle is the fit, measured from the encoder's rest reading
+    np.testing.assert_allclose(result.probe("clamp_angle", 0), fit.theta(result.t) - fit.rest_rad, atol=1e-9)
+    assert abs(result.probe("clamp_angle", 0)[0]) < 1e-5 and fit.rest_rad == pytest.approx(0.05, abs=1e-9)
+    with pytest.raises(wc.OptionError, match="ENCODER: 5 samples are too few"):
+        fit_clamp_motion(T[:5], T[:5])
+    with pytest.raises(wc.OptionError, match="ENCODER: the angle never changes"):
+        fit_clamp_motion(T, np.zeros_like(T))
+
+
+def test_header_units_are_honoured(tmp_path):
+    degrees = tmp_path / "deg.csv"
+    degrees.write_text("time [ms], angle_deg\n0,0\n10,90\n20,180\n")
+    t, theta = read_encoder(degrees)
+    np.testing.assert_allclose(t, [0.0, 0.01, 0.02]) and np.testing.assert_allclose(theta, [0, np.pi / 2, np.pi])
+    metres = tmp_path / "m.csv"
+    metres.write_text("t_s,x_m\n0,0.001\n0.1,0.002\n")
+    np.testing.assert_allclose(read_measurement(metres).x, [0.001, 0.002])
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t_min,x_mm\n0,1\n1,2\n")
+    with pytest.raises(wc.DataFileError, match=r"bad.csv, line 1: column 1 is headed 't_min': 'min' is not a time "
+                       r"unit \(known: s, ms, us, µs\)"):
+        read_measurement(bad)
+
+
+def test_the_noise_of_a_measurement_is_estimated_from_the_data():
+    t = np.arange(0, 1.5, 1 / 300)
+    swing = 0.047 * np.exp(-0.3 * t) * np.cos(12 * t)
+    for sigma in (5e-5, 2e-4, 1e-3):
+        noisy = swing + np.random.default_rng(0).normal(0, sigma, len(t))
+        assert measurement_noise(LaserTrace(t, noisy)) == pytest.approx(sigma, rel=0.2)
+
+
+def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path):
+    # Issue 12's acceptance: an encoder of a general quartic start and a line that does
+    # not stop in the record; the "measurement" made with that θ(t) given to the
+    # simulator as a dense cubic table (an independent path from the fitted pieces);
+    # markers with 0.1 mm noise. clamp fit-angle, then fit γ, dy, D1 from the command line.
+    truth = {"clamp.rotation_centre_dy_mm": 2.8, "damping.gamma_per_s": 0.4,
+             "material.hysteresis_d1_gf_cm_per_cm": 0.05}
+    table_t = np.linspace(0.0, 0.3, 601)
+    theta = motion(table_t)
+    measured_scene = wc.load_scene("impulsive_rotation", [
+        "run.duration_s=0.25", 'clamp.motion="table"', 'clamp.interpolation="cubic"',
+        f"clamp.table_t_s={table_t.tolist()}", f"clamp.table_theta_rad={theta.tolist()}",
+        *(f"{k}={v}" for k, v in truth.items())])
+    result = wc.simulate(measured_scene)
+    rng = np.random.default_rng(12)
+    edge, nc, h = clamp_edge(measured_scene), measured_scene.n_clamped, measured_scene.spacing
+    rows = [f"{f},{t:.6f},{s:g},{x:.5f},{y:.5f}" for f, t in enumerate(result.frame_times)
+            for s in range(0, 101, 10)
+            for x, y in [((result.frames[f, 0, nc - 1 + round(s * 1e-3 / h)] - edge) * 1e3 + rng.normal(0, 0.1, 2))]]
+    (tmp_path / "markers.csv").write_text("frame,t_s,s_mm,x_mm,y_mm\n" + "\n".join(rows) + "\n")
+    encoder_t = np.round(np.arange(-0.02, 0.2, 1e-3), 6)
+    reading = motion(encoder_t) - 0.0004 + rng.normal(0, 1e-3, len(encoder_t))
+    (tmp_path / "encoder.csv").write_text("t_s,theta_rad\n" + "\n".join(
+        f"{t:.4f},{v:.6f}" for t, v in zip(encoder_t, reading, strict=True)))
+
+    def cli(*args):
+        return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True,
+                              cwd=tmp_path, timeout=600)
+
+    done = cli("clamp", "fit-angle", "encoder.csv", "--scene", "impulsive_rotation", "-o", "measured.toml")
+    assert done.returncode == 0, done.stderr
+    done = cli("fit", "measured.toml", "--measured", "markers.csv", "--free", "gamma,rotation_centre_dy_mm,D1",
+               "--set", "run.duration_s=0.25", "--out", "fit", "--no-progress")
+    assert done.returncode == 0, done.stdout + done.stderr
+    fitted = json.loads((tmp_path / "fit" / "fit.json").read_text())
+    assert fitted["status"] == "converged"
+    value = {k: v["value"] for k, v in fitted["parameters"].items()}
+    print("fit:", {k: f"{v['value']:.5g} ± {v['sigma']:.2g}" for k, v in fitted["parameters"].items()},
+          f"RMS {fitted['rms_mm']:.3g} mm, noise {fitted['noise_mm']:.3g} mm")
+    assert abs(value["clamp.rotation_centre_dy_mm"] - 2.8) < 0.05
+    assert abs(value["damping.gamma_per_s"] / 0.4 - 1) < 0.05
+    assert abs(value["material.hysteresis_d1_gf_cm_per_cm"] / 0.05 - 1) < 0.02
