@@ -25,24 +25,24 @@ def warpcloth_cli(*args, cwd):
 
 def test_run_writes_a_complete_run_directory(tmp_path):
     out = tmp_path / "swing"
-    done = warpcloth_cli("run", "damped_swing", "--out", str(out), "--set", "run.duration_s=0.5",
+    done = warpcloth_cli("run", "damped_swing", "--out", str(out), "--set", "run.duration_s=0.8",
                          "--set", "release.settle_time_s=0.2", "--no-progress", "--usd", "swing.usda", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
-    assert "endTimeCode = 30" in (tmp_path / "swing.usda").read_text()  # 31 frames
-    assert "first swing period" in done.stdout
+    assert "endTimeCode = 48" in (tmp_path / "swing.usda").read_text()  # 49 frames
+    assert "first period 0.5" in done.stdout and "turning points" in done.stdout
     meta = json.loads((out / "meta.json").read_text())
     assert meta["complete"] and meta["diverged"] == [] and meta["n_variants"] == 1
     with open(out / "probes.csv") as fh:
         rows = list(csv.reader(fh))
     assert rows[0] == ["t", "variant", *PROBE_FIELDS]
     t = np.array([float(r[0]) for r in rows[1:]])
-    assert len(t) == 301 and t[0] == 0.0 and t[-1] == pytest.approx(0.5)
+    assert len(t) == 481 and t[0] == 0.0 and t[-1] == pytest.approx(0.8)
     frames = np.load(out / "frames.npy")
     times = np.load(out / "frame_times.npy")
-    assert frames.shape == (31, 1, 25, 2) and times.shape == (31,)
+    assert frames.shape == (49, 1, 25, 2) and times.shape == (49,)
     # the file agrees with the API on the same scene
     scene = wc.load_scene(out / "scene.toml")
-    assert scene.run.duration_s == 0.5 and scene.release.settle_time_s == 0.2
+    assert scene.run.duration_s == 0.8 and scene.release.settle_time_s == 0.2
     api = wc.simulate(scene)
     np.testing.assert_array_equal(frames, api.frames)
     tip = np.array([float(r[2]) for r in rows[1:]])

@@ -180,10 +180,11 @@ def test_an_ambiguous_decimal_comma_is_refused_naming_the_lines(tmp_path):
 
 
 def test_sweep_metric_plots(tmp_path):
-    sweep = wc.expand({"run": {"duration_s": 0.6}, "release": {"settle_time_s": 0.1},
+    sweep = wc.expand({"run": {"duration_s": 0.6}, "release": {"enabled": True, "settle_time_s": 0.1},
                        "sweep": {"grid": {"damping.gamma_per_s": [0.1, 1.0, 3.0],
                                           "material.hysteresis_d1_gf_cm_per_cm": [0.0, 0.04]}}})
-    wc.run_sweep(sweep, tmp_path / "sweep", workers=0, progress=False)
+    summary = wc.run_sweep(sweep, tmp_path / "sweep", workers=0, progress=False)
+    assert np.isfinite(summary["first_amplitude_m"]).all()  # real swings, not rounding
     summary = read_sweep_summary(tmp_path / "sweep")
     line = plot_sweep(summary, tmp_path / "line.png", "first_amplitude_m", "damping.gamma_per_s")
     heat = plot_sweep(summary, tmp_path / "heat.png", "first_amplitude_m", "damping.gamma_per_s",

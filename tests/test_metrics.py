@@ -44,3 +44,52 @@ def test_ripples_near_turning_points_are_not_half_cycles():
     assert clean["n_half_cycles"] == noisy["n_half_cycles"] == 11  # 12 turning points in 3 s
     assert noisy["mean_log_decrement"] == pytest.approx(clean["mean_log_decrement"], rel=0.05)
     assert noisy["first_period_s"] == pytest.approx(clean["first_period_s"], rel=0.01)
+
+
+def test_one_ruler_for_runs_sweeps_and_measured_traces(tmp_path):
+    # The sweep summary, `analyse` of a run of the same scene, and `analyse` of that run's
+    # laser line written out as a measured trace give the same first period and decrements.
+    import subprocess
+    import sys
+
+    import warpcloth as wc
+    from warpcloth.calibrate.analysis import analyse
+    from warpcloth.scene import read_scene_file
+
+    base = read_scene_file("damped_swing")
+    base["run"]["duration_s"] = 1.2
+    sweep = wc.expand(base | {"sweep": {"grid": {"damping.gamma_per_s": [0.3, 0.9]}}})
+    wc.run_sweep(sweep, tmp_path / "s", workers=0, progress=False)
+    from_sweep = analyse(tmp_path / "s")
+    wc.simulate(sweep.scenes[1], out=tmp_path / "r")
+    (from_run,) = analyse(tmp_path / "r")
+    keys = ("first_period_s", "first_amplitude_mm", "mean_log_decrement", "n_half_cycles", "log_decrement")
+    assert 3 <= from_run["n_half_cycles"] <= 6  # the swing's half-cycles, not ripples
+    # equal up to probes.csv's 10-digit times
+    for k in keys[:4]:
+        assert from_run[k] == pytest.approx(from_sweep[1][k], rel=1e-9), k
+    probes = wc.load_recording(tmp_path / "r").probes
+    trace = tmp_path / "lab.csv"
+    trace.write_text("t_s,x_mm\n" + "\n".join(f"{t!r},{x * 1e3!r}" for t, x in zip(probes["t"], probes["laser_x"],
+                                                                                   strict=True)))
+    (from_trace,) = analyse(trace)
+    for k in keys[:4]:
+        assert from_trace[k] == pytest.approx(from_run[k], rel=1e-12), k
+    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "analyse", str(trace), str(tmp_path / "r"),
+                           str(tmp_path / "s"), "--csv", str(tmp_path / "t.csv")], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    import pandas as pd
+
+    table = pd.read_csv(tmp_path / "t.csv")
+    assert len(table) == 4 and table["first_period_s"].iloc[1] == pytest.approx(table["first_period_s"].iloc[3])
+
+
+def test_a_strip_at_rest_has_no_swing():
+    # a hanging strip's laser signal is rounding (1e-22 m): no half-cycles, no period
+    import warpcloth as wc
+    from warpcloth.calibrate.metrics import swing_summary
+
+    still = wc.simulate(wc.load_scene("damped_swing", ["release.enabled=false", "run.duration_s=0.5"]))
+    metrics = swing_summary(still.t, still.probe("laser_x", 0), still.probe("tip_x", 0))
+    assert metrics["n_half_cycles"] == 0 and np.isnan(metrics["first_period_s"])

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from warpcloth.calibrate.metrics import swing_metrics
+from warpcloth.calibrate.metrics import swing_summary
 from warpcloth.errors import OptionError
 from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.kernels import PROBE_FIELDS
@@ -71,9 +71,9 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
         columns["t"].append(result.t[ok])
         for q, name in enumerate(PROBE_FIELDS):
             columns[name].append(values[ok, q])
-        laser = result.probe("laser_x", local)[ok]
-        signal = laser if np.isfinite(laser).sum() > 0.9 * len(laser) else result.probe("tip_x", local)[ok]
-        metrics = swing_metrics(result.t[ok], signal, starts_at_rest=scenes[local].release.enabled)
+        metrics = swing_summary(result.t[ok], result.probe("laser_x", local)[ok], result.probe("tip_x", local)[ok],
+                                starts_at_rest=scenes[local].release.enabled)
+        metrics.pop("signal")
         report = diverged.get(local)
         row = {"variant": variant, "batch": batch}
         row |= {key: (json.dumps(v) if isinstance(v, list) else v) for key, v in assignments[local].items()}

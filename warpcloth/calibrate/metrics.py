@@ -1,4 +1,12 @@
-"""Measurements on recorded signals (periods, crossings) shared by tests and tools."""
+"""Measurements on recorded signals: the one ruler for simulation and experiment.
+
+:func:`swing_summary` is *the* definition of a swing's first period, amplitudes and
+decrements, used alike by ``warpcloth run``'s summary, the sweep summary and
+``warpcloth analyse`` (on a measured trace or a run), so lab and simulation are measured
+the same way: turning points of the laser-line displacement (the tip's where the strip
+misses the line), the first period from turning point 0 to 2. :func:`first_period`
+(between level crossings) is the instrument of the small-amplitude analytic tests.
+"""
 
 from __future__ import annotations
 
@@ -28,22 +36,27 @@ def first_period(t: np.ndarray, x: np.ndarray, level: float | None = None) -> fl
     return float(c[2] - c[0]) if len(c) >= 3 else float("nan")
 
 
+RESOLUTION_M = 1e-9
+"""Swings smaller than this (m) are rounding, not motion: a strip at rest has none."""
+
+
 def extrema(t: np.ndarray, x: np.ndarray, starts_at_rest: bool = False,
-            prominence: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
+            prominence: float = 0.01, resolution: float = RESOLUTION_M) -> tuple[np.ndarray, np.ndarray]:
     """Alternating turning points (times, values) of an oscillation, parabola-refined.
 
     A turning point counts once the signal has moved back from it by more than
     ``prominence`` × the signal's range, so ripples of higher modes near a turning point
     (and sampling noise) are not taken for half-cycles, and the search ends by itself
     once the swing has decayed below that. The last, unconfirmed extreme of the record
-    is not reported. With ``starts_at_rest`` (a release) the first sample is a turning
+    is not reported, nor anything in a signal whose range is below ``resolution``.
+    With ``starts_at_rest`` (a release) the first sample is a turning
     point.
     """
     t = np.asarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
     ok = np.isfinite(x)
     t, x = t[ok], x[ok]
-    if len(x) < 3 or np.ptp(x) == 0:
+    if len(x) < 3 or np.ptp(x) <= resolution:
         return np.zeros(0), np.zeros(0)
     threshold = prominence * np.ptp(x)
     found = [0] if starts_at_rest else []
@@ -74,6 +87,16 @@ def extrema(t: np.ndarray, x: np.ndarray, starts_at_rest: bool = False,
             times.append(t[j])
             values.append(x[j])
     return np.array(times), np.array(values)
+
+
+def swing_summary(t: np.ndarray, laser: np.ndarray, tip: np.ndarray | None = None,
+                  starts_at_rest: bool = True) -> dict:
+    """:func:`swing_metrics` of the laser-line displacement, or of ``tip`` when the strip
+    misses the laser line in more than a tenth of the samples; ``"signal"`` says which."""
+    laser = np.asarray(laser, dtype=float)
+    use_laser = tip is None or np.isfinite(laser).sum() > 0.9 * len(laser)
+    metrics = swing_metrics(t, laser if use_laser else tip, starts_at_rest)
+    return {"signal": "laser_x" if use_laser else "tip_x"} | metrics
 
 
 def swing_metrics(t: np.ndarray, signal: np.ndarray, starts_at_rest: bool = True) -> dict:

@@ -21,9 +21,9 @@ import warp as wp
 
 from warpcloth.errors import DataFileError, DivergenceError, OptionError, ResourceError, SceneError, WarpclothError
 
-from . import fit, material, run, sweep, view
+from . import analyse, fit, material, run, sweep, view
 
-COMMAND_GROUPS = (run, sweep, view, fit, material)
+COMMAND_GROUPS = (run, sweep, view, fit, material, analyse)
 """Each registers its subcommands with a ``handler`` (see :func:`main`)."""
 
 WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (OptionError, "error in option"),
@@ -39,7 +39,7 @@ def parser() -> argparse.ArgumentParser:
     """The argument parser of every command."""
     top = argparse.ArgumentParser(
         prog="warpcloth", description="Batched Warp simulation of hanging fabric strips: "
-        "run | sweep | export-usd | plot | render | fit | clamp | material (--help on each).")
+        "run | sweep | export-usd | plot | render | fit | clamp | material | analyse (--help on each).")
     sub = top.add_subparsers(dest="command", required=True)
     for group in COMMAND_GROUPS:
         group.register(sub)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from warpcloth.calibrate.metrics import first_period
+from warpcloth.calibrate.metrics import swing_summary
 from warpcloth.errors import DivergenceError
 from warpcloth.runs import simulate
 from warpcloth.scene import bundled_scenes, load_scene
@@ -46,9 +46,12 @@ def run_scene(args: argparse.Namespace) -> int:
           f"({result.strip_steps / result.wall_time_s:.3g} strip-steps/s)")
     print(f"final free end ({tip[-1] * 1e3:.2f}, {result.probe('tip_y', 0)[-1] * 1e3:.2f}) mm, "
           f"clamp angle {result.probe('clamp_angle', 0)[-1]:.4f} rad")
-    if scene.release.enabled:
-        period = first_period(result.t, result.probe("laser_x", 0), level=0.0)
-        print(f"first swing period (laser line crossing x = 0): {period:.4f} s")
+    summary = swing_summary(result.t, result.probe("laser_x", 0), tip, starts_at_rest=True)
+    if scene.release.enabled and summary["n_half_cycles"] >= 2:  # a released swing
+        print(f"first period {summary['first_period_s']:.4f} s, first amplitude "
+              f"{summary['first_amplitude_m'] * 1e3:.2f} mm, mean log decrement {summary['mean_log_decrement']:.4f} "
+              f"per half-cycle over {summary['n_half_cycles']} ({summary['signal']}, turning points; the sweep "
+              "summary and `warpcloth analyse` measure the same way)")
     if args.usd:
         from warpcloth.io.load import load_recording
         from warpcloth.viz.usd import export_usd

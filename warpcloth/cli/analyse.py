@@ -1,0 +1,45 @@
+"""``warpcloth analyse``: the swing metrics of measured traces, runs and sweeps, side by side."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .options import add_overwrite, new_result
+
+COLUMNS = ("source", "variant", "signal", "first_period_s", "first_amplitude_mm", "mean_log_decrement",
+           "n_half_cycles", "log_decrement")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``analyse``."""
+    p = sub.add_parser("analyse", help="first period, amplitudes and decrements of measured traces, runs and "
+                       "sweeps, measured one way (the sweep summary's)")
+    p.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="a measured laser trace 't_s, x_mm' (or a bundled one by name), a run directory or a "
+                        "sweep directory")
+    p.add_argument("--in-motion", action="store_true",
+                   help="measured traces do not start at rest at their t = 0 (default: they start at the release)")
+    p.add_argument("--csv", help="also write the table as CSV")
+    add_overwrite(p, "--csv file")
+    p.set_defaults(handler=analyse_command)
+
+
+def analyse_command(args: argparse.Namespace) -> int:
+    """Print (and optionally write) one row per measured trace and per run or sweep variant."""
+    import pandas as pd
+
+    from warpcloth.calibrate.analysis import analyse
+
+    out = new_result(args.csv, args.overwrite, "--csv") if args.csv else None
+    rows = [row for source in args.inputs for row in analyse(source, starts_at_rest=not args.in_motion)]
+    table = pd.DataFrame(rows, columns=list(COLUMNS))
+    table["variant"] = table["variant"].astype("Int64")  # empty for a measured trace
+    with pd.option_context("display.max_columns", None, "display.width", 160, "display.max_colwidth", 48):
+        print(table.drop(columns="log_decrement").to_string(index=False, float_format=lambda v: f"{v:.5g}"))
+    if out is not None:
+        from warpcloth.io.atomic import write_atomically
+
+        write_atomically(Path(out), lambda p: table.to_csv(p, index=False))
+        print(f"wrote {out}")
+    return 0
