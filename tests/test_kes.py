@@ -489,3 +489,28 @@ def test_a_bending_loop_must_start_from_rest(tmp_path):
     path = write(tmp_path / "fb2.csv", bending_text(np.concatenate([k[start:], k[1 : start + 1]])))
     with pytest.raises(DataFileError, match="not from rest"):
         kes.read_bending_csv(path)
+
+
+def test_a_loop_the_law_cannot_describe_is_not_reported_as_a_fit(tmp_path):
+    # A "bending loop" that is a sine: the fit ends hundreds of times the data's noise
+    # away; the material file records that, and the command exits 6 unless --accept.
+    import subprocess
+    import sys
+
+    k = np.concatenate([np.linspace(0, 2.5, 100), np.linspace(2.5, -2.5, 200), np.linspace(-2.5, 0, 100)])
+    moment = 0.3 * np.sin(5 * k) + np.random.default_rng(0).normal(0, 0.001, len(k))
+    (tmp_path / "fb2.csv").write_text("curvature_per_cm,moment_gf_cm_per_cm\n" + "\n".join(
+        f"{a:.5f},{b:.6f}" for a, b in zip(k, moment, strict=True)))
+
+    def cli(*extra):
+        return subprocess.run([sys.executable, "-m", "warpcloth.cli", "material", "fit-kes", "--tensile",
+                               "kes_fb1_example", "--bending", "fb2.csv", "--density-g-per-cm2", "0.02", "-o", "m.toml",
+                               "--overwrite", *extra], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+
+    done = cli()
+    assert done.returncode == 6 and "not a fit (poor_fit): the bending RMS" in done.stderr, done.stderr
+    import tomllib
+
+    fit_table = tomllib.loads((tmp_path / "m.toml").read_text())["fit"]
+    assert fit_table["status"] == "poor_fit" and "× the noise of the data" in fit_table["problems"][0]
+    assert cli("--accept").returncode == 0

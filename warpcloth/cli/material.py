@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from warpcloth.errors import OptionError
 
-from .options import add_overwrite, new_result, positive
+from .options import EXIT_FIT_STATUS, add_overwrite, new_result, positive
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,6 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     kes_p.add_argument("--divergence-strain", type=positive, default=None,
                        help="T(ε) must increase up to this strain (default: the scenes' default, 0.25)")
     kes_p.add_argument("--plot", help="also write a PNG of the data against the fit")
+    kes_p.add_argument("--accept", action="store_true", help="exit 0 even when the fit is not trusted")
     add_overwrite(kes_p, "material file")
     material_sub.add_parser("list", help="list the bundled materials and where their numbers come from")
     material_p.set_defaults(handler=material_command)
@@ -84,4 +86,11 @@ def material_command(args: argparse.Namespace) -> int:
         from warpcloth.viz.plots import plot_kes_fit
 
         print(f"wrote {plot_kes_fit(fit, args.plot)}")
+    status, problems = fit.verdict()
+    print(f"status: {status}")
+    if status != "converged":
+        print(f"warpcloth material fit-kes: not a fit ({status}): " + "; ".join(problems)
+              + (" (accepted with --accept)" if args.accept else " (the material file records it; --accept to "
+                 "exit 0 anyway)"), file=sys.stderr)
+        return 0 if args.accept else EXIT_FIT_STATUS[status]
     return 0
