@@ -162,3 +162,38 @@ def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path):
     assert abs(value["clamp.rotation_centre_dy_mm"] - 2.8) < 0.05
     assert abs(value["damping.gamma_per_s"] / 0.4 - 1) < 0.05
     assert abs(value["material.hysteresis_d1_gf_cm_per_cm"] / 0.05 - 1) < 0.02
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.9])
+def test_the_block_bootstrap_covers_the_truth_where_gauss_newton_does_not(phi):
+    # A linear least-squares problem shaped like a damped swing, with AR(1) noise: the
+    # share of trials whose 95 % interval holds the truth. Measured (200 trials): white
+    # noise, bootstrap 0.94/0.93, Gauss–Newton 0.95/0.94; φ = 0.9, bootstrap 0.82/0.87,
+    # Gauss–Newton 0.37/0.42 (docs: warpcloth.calibrate.bootstrap).
+    from warpcloth.calibrate.bootstrap import block_bootstrap_sigma
+
+    rng = np.random.default_rng(5)
+    n = 450
+    t = np.linspace(0, 1.5, n)
+    jac = np.column_stack([np.cos(12 * t) * np.exp(-0.3 * t), t * np.sin(12 * t)])
+    truth = np.array([1.0, 0.5])
+    covered = {"bootstrap": np.zeros(2), "gauss_newton": np.zeros(2)}
+    trials = 200
+    for _ in range(trials):
+        e = np.zeros(n)
+        w = rng.normal(0, 0.01, n)
+        for i in range(1, n):
+            e[i] = phi * e[i - 1] + w[i]
+        y = jac @ truth + e
+        p, *_ = np.linalg.lstsq(jac, y, rcond=None)
+        r = y - jac @ p
+        gn = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)) * (r @ r) / (n - 2))
+        bs, _ = block_bootstrap_sigma(jac, r, 300, rng)
+        covered["bootstrap"] += np.abs(p - truth) < 1.96 * bs
+        covered["gauss_newton"] += np.abs(p - truth) < 1.96 * gn
+    rate = {k: v / trials for k, v in covered.items()}
+    print(f"φ = {phi}: coverage of 95 % intervals", rate)
+    if phi == 0.0:
+        assert np.all((rate["bootstrap"] > 0.9) & (rate["bootstrap"] < 0.99))
+    else:
+        assert np.all(rate["bootstrap"] > 0.72) and np.all(rate["gauss_newton"] < 0.5)

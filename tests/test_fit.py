@@ -129,11 +129,14 @@ def test_cli_fits_the_bundled_examples(tmp_path):
     assert second.theta_coefficients_si[1] == pytest.approx(16.0, rel=0.01)
     assert second.t_end_s == pytest.approx(0.12, abs=2e-3)
     done = cli("fit", "impulsive_rotation", "--measured", "impulsive_rotation_shapes", "--free",
-               "gamma,rotation_centre_dy_mm", "--align-start", "0.01", "--out", "fit", "--no-progress")
+               "gamma,rotation_centre_dy_mm", "--align-start", "0.01", "--out", "fit", "--no-progress",
+               "--bootstrap", "300")
     assert done.returncode == 0, done.stderr
     result = json.loads((tmp_path / "fit" / "fit.json").read_text())
     assert result["status"] == "converged" and result["problems"] == []
-    dy, sigma = (result["parameters"]["clamp.rotation_centre_dy_mm"][k] for k in ("value", "sigma"))
+    dy, sigma, boot = (result["parameters"]["clamp.rotation_centre_dy_mm"][k] for k in ("value", "sigma",
+                                                                                     "sigma_bootstrap"))
+    assert 0.6 < boot / sigma < 1.6  # white marker noise: the bootstrap agrees with Gauss–Newton
     assert result["inputs"]["measured"]["sha256"] and result["provenance"]["warp"] == wp.__version__
     assert abs(dy - 4.0) < 3 * sigma
     for name in ("best.toml", "history.csv", "residuals.csv", "overlay.png"):

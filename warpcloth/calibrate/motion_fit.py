@@ -52,6 +52,7 @@ from warpcloth.scene import Scene, batch_fields, clamp_edge, scene_from_dict, se
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.sim import RunResult
 
+from .bootstrap import block_bootstrap_sigma
 from .noise import difference_noise
 
 ALIASES = {
@@ -277,6 +278,8 @@ class FitResult:
     converged: bool = False  # the search met its convergence test (not the iteration limit)
     at_bound: list[str] = field(default_factory=list)  # fields within 0.1 % of the range of a bound
     bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+    sigma_bootstrap: dict[str, float] = field(default_factory=dict)  # block bootstrap (``bootstrap`` > 0)
+    bootstrap_block: int = 0  # residuals per bootstrap block
     noise: float = float("nan")  # measurement noise σ the RMS is judged against, SI
     noise_source: str = ""
     status: str = "failed"
@@ -293,7 +296,9 @@ class FitResult:
             "noise_source": self.noise_source,
             "parameters": {name: {"value": value, "sigma": self.sigma[name], "at_bound": name in self.at_bound,
                                   "bounds": list(self.bounds.get(name, ()))}
+                           | ({"sigma_bootstrap": self.sigma_bootstrap[name]} if self.sigma_bootstrap else {})
                            for name, value in self.parameters.items()},
+            "bootstrap_block": self.bootstrap_block,
             "correlation": {"names": list(self.parameters), "matrix": self.correlation},
             "n_residuals": self.n_residuals,
             "search_converged": self.converged,
@@ -352,11 +357,12 @@ def _stencil(point: np.ndarray, d: int) -> tuple[list[np.ndarray], list[tuple[in
 def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[FreeParameter], *,
                align_start_s: float = 0.0, space_filling: int | None = None, max_iterations: int = 25,
                seed: int = 0, device: str | None = None, progress: bool = True,
-               noise: float | None = None) -> FitResult:
+               noise: float | None = None, bootstrap: int = 0) -> FitResult:
     """Fit ``free`` parameters of raw scene ``base`` to ``measurement`` (see the module doc).
 
     ``noise`` is the measurement's σ (m) the RMS is judged against; by default it is
-    estimated from the measurement (:func:`measurement_noise`)."""
+    estimated from the measurement (:func:`measurement_noise`). ``bootstrap`` > 0 adds a
+    moving-block bootstrap σ from that many resamples (:mod:`.bootstrap`)."""
     started = time.perf_counter()
     objective = Objective(base, measurement, free, align_start_s, device)
     d = len(free)
@@ -421,6 +427,10 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
         jac = objective.jacobian(result, pairs, 0, shift)
         residual = objective.residuals(result, 0, shift)
     fit = _summarise(objective, u, shift, jac, residual, history, converged, time.perf_counter() - started)
+    if bootstrap > 0:
+        ranges = np.array([p.upper - p.lower for p in free] + ([1.0] if objective.align else []))
+        sigma, fit.bootstrap_block = block_bootstrap_sigma(jac / ranges, residual, bootstrap, rng)
+        fit.sigma_bootstrap = dict(zip(fit.parameters, sigma.tolist(), strict=True))
     # A parameter on its bound is not a fitted value (the optimum lies beyond), and its
     # σ from the local Jacobian means nothing: say so rather than report it as a fit.
     fit.at_bound = [p.field for p, ui in zip(free, u, strict=True) if min(ui, 1.0 - ui) <= AT_BOUND]

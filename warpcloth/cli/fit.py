@@ -31,6 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="variants in the first, space-filling batch")
     fit_p.add_argument("--max-iterations", type=at_least(0), default=25, help="local refinement launches at most")
     fit_p.add_argument("--seed", type=int, default=0, help="seed of the space-filling sample")
+    fit_p.add_argument("--bootstrap", type=at_least(0), default=0, metavar="N",
+                       help="also a moving-block bootstrap σ from N resamples (for time-correlated errors)")
     fit_p.add_argument("--noise", type=positive, default=None, metavar="MM",
                        help="measurement noise σ in mm the RMS is judged against (default: estimated from the data)")
     fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda")
@@ -64,15 +66,19 @@ def fit_command(args: argparse.Namespace) -> int:
     out = new_result(args.out or Path("runs") / f"fit-{Path(args.scene).stem}", args.overwrite, "--out")
     fit = fit_motion(base, measurement, free, align_start_s=args.align_start, space_filling=args.space_filling,
                      max_iterations=args.max_iterations, seed=args.seed, device=args.device,
-                     progress=not args.no_progress, noise=None if args.noise is None else args.noise * 1e-3)
+                     progress=not args.no_progress, noise=None if args.noise is None else args.noise * 1e-3,
+                     bootstrap=args.bootstrap)
     inputs = {"scene": str(args.scene), "overrides": args.overrides, "measured": file_checksum(
         bundled_data(args.measured)), "free": [p.field for p in free], "align_start_s": args.align_start,
-        "space_filling": args.space_filling, "max_iterations": args.max_iterations, "seed": args.seed}
+        "space_filling": args.space_filling, "max_iterations": args.max_iterations, "seed": args.seed,
+        "bootstrap": args.bootstrap}
     write_fit(fit, base, measurement, out, args.device, inputs)
     print(f"RMS {fit.rms * 1e3:.4g} mm over {fit.n_residuals} residuals (noise {fit.noise * 1e3:.3g} mm, "
           f"{fit.noise_source}); {fit.launches} launches, {fit.variants} variants, {fit.wall_time_s:.1f} s")
     for name, value in fit.parameters.items():
-        print(f"  {name} = {value:.6g} ± {fit.sigma[name]:.2g}{'  (on a bound)' if name in fit.at_bound else ''}")
+        boot = (f" (block bootstrap ± {fit.sigma_bootstrap[name]:.2g}, blocks of {fit.bootstrap_block})"
+                if fit.sigma_bootstrap else "")
+        print(f"  {name} = {value:.6g} ± {fit.sigma[name]:.2g}{boot}{'  (on a bound)' if name in fit.at_bound else ''}")
     print(f"status: {fit.status}")
     print(f"wrote {out}/ (best.toml reruns the best fit: warpcloth run {out / 'best.toml'})")
     if fit.status != "converged":
