@@ -197,3 +197,39 @@ def test_the_block_bootstrap_covers_the_truth_where_gauss_newton_does_not(phi):
         assert np.all((rate["bootstrap"] > 0.9) & (rate["bootstrap"] < 0.99))
     else:
         assert np.all(rate["bootstrap"] > 0.72) and np.all(rate["gauss_newton"] < 0.5)
+
+
+class WellObjective:
+    """A stand-in for the fit's Objective with an analytic cost over the unit box (what
+    the basin logic sees of a batch of runs), so its decisions can be checked exactly."""
+
+    def __init__(self, cost):
+        self.cost = cost
+        self.launches = 0
+
+    def run(self, points):
+        self.launches += 1
+        return np.asarray(points)
+
+    def best_shift(self, result, j):
+        return 0.0
+
+    def residuals(self, result, j, shift):
+        return np.array([np.sqrt(self.cost(result[j]))])
+
+    def values(self, u):
+        return {"x": float(u[0])}
+
+
+@pytest.mark.parametrize("name, cost, expected", [
+    ("two wells", lambda u: min((u[0] - 0.2) ** 2, (u[0] - 0.8) ** 2 + 1e-4) + 1e-6, [0.8]),
+    ("one well", lambda u: (u[0] - 0.3) ** 2 + 1e-6, []),
+    ("a flat valley", lambda u: 1e-3 + 1e-5 * u[0], []),
+])
+def test_separate_basins_of_the_space_filling_stage_are_reported(name, cost, expected):
+    from warpcloth.calibrate.motion_fit import _other_minima
+
+    points = np.linspace(0.01, 0.99, 40)[:, None]
+    costs = np.array([cost(p) for p in points])
+    found = _other_minima(WellObjective(cost), points, costs, int(np.argmin(costs)))
+    assert [round(f["x"], 1) for f in found] == expected, name

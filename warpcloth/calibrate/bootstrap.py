@@ -11,8 +11,9 @@ Jacobian at the optimum is already there.
 
 Measured on a linear model with AR(1) noise (tests/test_calibration_path.py): for
 white noise its 95 % intervals cover the truth in 93–94 % of trials (Gauss–Newton's in
-94–95 %); for φ = 0.9 in 82–87 %, where Gauss–Newton's cover in 37–42 %: residuals lack the part of the noise that looks like the model's own response, so
-any residual-based σ stays somewhat low when the noise is strongly correlated.
+94–95 %); for φ = 0.9 in 82–87 %, where Gauss–Newton's cover in 37–42 %: residuals
+lack the part of the noise that looks like the model's own response, so any
+residual-based σ stays somewhat low when the noise is strongly correlated.
 """
 
 from __future__ import annotations

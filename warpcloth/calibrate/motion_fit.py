@@ -279,6 +279,7 @@ class FitResult:
     at_bound: list[str] = field(default_factory=list)  # fields within 0.1 % of the range of a bound
     bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
     sigma_bootstrap: dict[str, float] = field(default_factory=dict)  # block bootstrap (``bootstrap`` > 0)
+    other_minima: list[dict] = field(default_factory=list)  # separate basins of the space-filling stage, not refined
     bootstrap_block: int = 0  # residuals per bootstrap block
     noise: float = float("nan")  # measurement noise σ the RMS is judged against, SI
     noise_source: str = ""
@@ -299,6 +300,7 @@ class FitResult:
                            | ({"sigma_bootstrap": self.sigma_bootstrap[name]} if self.sigma_bootstrap else {})
                            for name, value in self.parameters.items()},
             "bootstrap_block": self.bootstrap_block,
+            "other_minima": self.other_minima,
             "correlation": {"names": list(self.parameters), "matrix": self.correlation},
             "n_residuals": self.n_residuals,
             "search_converged": self.converged,
@@ -385,6 +387,7 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
     best = int(np.argmin(costs))
     u, shift, cost = points[best], shifts[best], costs[best]
     record("space filling", u, shift, math.sqrt(cost))
+    other_minima = _other_minima(objective, points, np.array(costs), best)
 
     # 2. speculative Levenberg–Marquardt on q = (u, δ if aligning)
     q = np.append(u, shift) if objective.align else u.copy()
@@ -440,9 +443,42 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
         fit.noise, fit.noise_source = measurement_noise(measurement), "estimated from the data's 4th differences"
     else:
         fit.noise, fit.noise_source = float(noise), "given"
+    fit.other_minima = other_minima
     # result row 0 is the reported point (accepted last, or re-run above)
     fit.judge(int(np.isnan(objective.residuals(result, 0, shift, penalise=False)).sum()))
     return fit
+
+
+MINIMA_SEPARATION = 0.25  # unit-box distance beyond which two low points may be different basins
+MINIMA_FACTOR = 2.0  # a basin counts if its cost is within this factor of the best one's
+
+
+def _other_minima(objective: Objective, points: np.ndarray, costs: np.ndarray, best: int) -> list[dict]:
+    """Low points of the space-filling sample in basins other than the best one's.
+
+    Candidates are sample points within :data:`MINIMA_FACTOR` of the best cost and
+    :data:`MINIMA_SEPARATION` away from it and from each other; one launch evaluates the
+    midpoint of each with the best, and a candidate is a separate basin when that
+    midpoint is higher than both ends (a ridge between them)."""
+    chosen: list[int] = [best]
+    for j in np.argsort(costs):
+        if costs[j] > MINIMA_FACTOR * costs[best] or len(chosen) > 4:
+            break
+        if all(np.linalg.norm(points[j] - points[c]) > MINIMA_SEPARATION for c in chosen):
+            chosen.append(int(j))
+    candidates = chosen[1:]
+    if not candidates:
+        return []
+    midpoints = np.array([(points[best] + points[j]) / 2 for j in candidates])
+    result = objective.run(midpoints)
+    out = []
+    for k, j in enumerate(candidates):
+        shift = objective.best_shift(result, k)
+        ridge = float(np.mean(objective.residuals(result, k, shift) ** 2))
+        if ridge > max(costs[best], costs[j]):
+            out.append({"rms_mm": math.sqrt(costs[j]) * 1e3, "ridge_rms_mm": math.sqrt(ridge) * 1e3}
+                       | objective.values(points[j]))
+    return out
 
 
 def measurement_noise(measurement: LaserTrace | TrackedShapes) -> float:

@@ -79,6 +79,10 @@ def fit_command(args: argparse.Namespace) -> int:
         boot = (f" (block bootstrap ± {fit.sigma_bootstrap[name]:.2g}, blocks of {fit.bootstrap_block})"
                 if fit.sigma_bootstrap else "")
         print(f"  {name} = {value:.6g} ± {fit.sigma[name]:.2g}{boot}{'  (on a bound)' if name in fit.at_bound else ''}")
+    for other in fit.other_minima:
+        where = ", ".join(f"{k} = {v:.5g}" for k, v in other.items() if not k.endswith("rms_mm"))
+        print(f"note: the space-filling stage also found a separate basin at {where} (RMS {other['rms_mm']:.4g} mm "
+              f"there, a ridge of {other['ridge_rms_mm']:.4g} mm between); the result above refined the lowest")
     print(f"status: {fit.status}")
     print(f"wrote {out}/ (best.toml reruns the best fit: warpcloth run {out / 'best.toml'})")
     if fit.status != "converged":
