@@ -92,10 +92,16 @@ def test_a_run_killed_while_streaming_reads_back_its_committed_part(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set", "run.duration_s=60",
                              "--no-progress", "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE)
+    def committed(key):
+        try:
+            return json.loads((out / "meta.json").read_text())["committed"][key]
+        except (OSError, ValueError, KeyError):
+            return 0
+
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and not ((out / "probes.csv").is_file()
-                                               and (out / "probes.csv").stat().st_size > 200_000):
+    while time.monotonic() < deadline and committed("frames") < 20:  # some chunks are committed, more stream
         time.sleep(0.05)
+    time.sleep(0.3)
     proc.send_signal(signal.SIGKILL)  # no handler, no cleanup: wherever it was
     proc.communicate(timeout=60)
     meta = json.loads((out / "meta.json").read_text())
@@ -169,3 +175,49 @@ def test_two_runs_started_into_one_directory_never_interleave(tmp_path):
     alone = wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=1"]))
     assert recording.complete and len(recording.probes) == len(alone.t)
     np.testing.assert_array_equal(recording.probes["tip_x"].to_numpy(), alone.probe("tip_x", 0))
+
+
+def test_an_overwrite_never_pulls_a_directory_from_under_a_running_writer(tmp_path):
+    out = tmp_path / "r"
+    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set", "run.duration_s=60",
+                             "--no-progress", "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (out / ".writing").is_file():
+        time.sleep(0.05)
+    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set", "run.duration_s=0.1",
+                           "--no-progress", "--out", str(out), "--overwrite"], capture_output=True, text=True,
+                          timeout=300)
+    proc.send_signal(signal.SIGINT)
+    proc.communicate(timeout=60)
+    assert done.returncode == 2 and f"is being written by another warpcloth process (pid {proc.pid})" in done.stderr
+    assert json.loads((out / "meta.json").read_text())["n_variants"] == 1 and not load_recording(out).complete
+
+
+@pytest.mark.parametrize("damage", ["a digit changed to a letter", "frames.npy truncated", "rows miscounted",
+                                    "complete is a string", "frames of another shape"])
+def test_a_damaged_complete_run_is_refused_by_name(tmp_path, damage):
+    out = tmp_path / "r"
+    wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.1", "release.settle_time_s=0.1"]), out=out)
+    meta = json.loads((out / "meta.json").read_text())
+    if damage == "a digit changed to a letter":
+        text = (out / "probes.csv").read_text().splitlines()
+        text[5] = "X" + text[5][1:]
+        (out / "probes.csv").write_text("\n".join(text) + "\n")
+        expected = r"probes.csv, line 6: t is 'X.*', not a number"
+    elif damage == "frames.npy truncated":
+        data = (out / "frames.npy").read_bytes()
+        (out / "frames.npy").write_bytes(data[:1000])
+        expected = "frames.npy: cannot be read as the run's frames"
+    elif damage == "rows miscounted":
+        meta["committed"]["probe_rows"] += 5
+        expected = "probes.csv: holds 61 rows but meta.json records 66"
+    elif damage == "complete is a string":
+        meta["complete"] = "yes"
+        expected = "meta.json: complete must be true or false"
+    else:
+        meta["n_nodes"] = 99
+        expected = r"frames.npy: holds frames of shape \(7, 1, 25, 2\), but the run recorded \(7, 1, 99, 2\)"
+    (out / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(wc.DataFileError, match=expected):
+        load_recording(out)

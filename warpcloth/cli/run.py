@@ -10,7 +10,7 @@ from warpcloth.errors import DivergenceError
 from warpcloth.runs import simulate
 from warpcloth.scene import bundled_scenes, load_scene
 
-from .options import device
+from .options import device, new_result
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,6 +34,7 @@ def run_scene(args: argparse.Namespace) -> int:
         from warpcloth.viz.usd import check_stage_path
 
         check_stage_path(args.usd, "--usd")  # before the run, not after it
+        new_result(args.usd, args.overwrite, "--usd")
     scene = load_scene(args.scene, args.overrides)
     out = Path(args.out or Path("runs") / Path(args.scene).stem)
     try:

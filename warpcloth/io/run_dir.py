@@ -53,6 +53,24 @@ def write_scene(path: Path, scene: Scene) -> None:
     path.write_text(tomli_w.dumps(scene.to_dict()))
 
 
+def live_writer(directory: Path) -> int | None:
+    """The pid of a running process streaming into ``directory`` (its marker names it),
+    or None (no marker, or one left by a process that no longer runs)."""
+    try:
+        pid = int((directory / WRITING).read_text() or 0)
+    except (OSError, ValueError):
+        return None
+    if pid <= 0 or pid == os.getpid():
+        return None
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return None
+    except PermissionError:
+        return pid
+    return pid
+
+
 def reserve(file: io.BufferedWriter, size: int) -> None:
     """Give ``file`` its final ``size`` now: allocated on disk where the file system can
     (a full disk fails here, before the run), else a sparse extension."""
@@ -93,7 +111,11 @@ class RunWriter:
     def __init__(self, out_dir: str | Path, scenes: list[Scene], n_nodes: int, frame_times: np.ndarray,
                  overwrite: bool = False) -> None:
         check_output_directory(out_dir, overwrite)
-        self.target = Path(out_dir)
+        self.target = Path(out_dir).absolute()
+        writer = live_writer(self.target)
+        if writer is not None:
+            raise OptionError("--out", f"{out_dir} is being written by another warpcloth process (pid {writer}); "
+                              "wait for it, or choose another --out")
         replacing = self.target.is_dir() and any(self.target.iterdir())
         self.dir = self.target.with_name(f".{self.target.name}.new-{os.getpid()}") if replacing else self.target
         if replacing and self.dir.exists():
@@ -107,10 +129,17 @@ class RunWriter:
         # One writer per directory: a second process that passed the emptiness check at
         # the same moment finds the marker and stops instead of interleaving its rows.
         try:
-            os.close(os.open(self.dir / WRITING, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+            marker = os.open(self.dir / WRITING, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+            os.write(marker, str(os.getpid()).encode())
+            os.close(marker)
         except FileExistsError:
             raise OptionError("--out", f"{self.target} is being written by another warpcloth process; "
                               "choose another --out") from None
+        if any(p.name != WRITING for p in self.dir.iterdir()):
+            # another writer finished here between the emptiness check and the marker
+            (self.dir / WRITING).unlink()
+            raise OptionError("--out", f"{self.target} already holds a run (written meanwhile by another process); "
+                              "choose another --out, or pass --overwrite")
         if len(scenes) == 1:
             write_scene(self.dir / "scene.toml", scenes[0])
         else:
@@ -204,7 +233,7 @@ class RunWriter:
             old = self.target.with_name(f".{self.target.name}.old-{os.getpid()}")
             os.replace(self.target, old)
             os.replace(self.dir, self.target)
-            shutil.rmtree(old)
+            shutil.rmtree(old, ignore_errors=True)  # the new result is in place; the old copy goes if it can
             self.dir = self.target
 
 
@@ -228,18 +257,50 @@ def read_probes(path: Path, meta: dict) -> pd.DataFrame:
                             f"({committed['probe_bytes']} bytes): the file was truncated")
     text = data[: committed["probe_bytes"]].decode("utf-8", errors="replace")
     try:
-        table = pd.read_csv(io.StringIO(text))
+        table = pd.read_csv(io.StringIO(text), dtype=str, keep_default_na=False)
     except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
         raise DataFileError(file, f"is not a probe table: {exc}") from None
     if list(table.columns) != list(PROBE_COLUMNS):
         raise DataFileError(file, f"has columns {', '.join(map(str, table.columns))}; a run writes "
                             f"{', '.join(PROBE_COLUMNS)}")
-    return table
+    numbers = table.apply(pd.to_numeric, errors="coerce")
+    bad = numbers.isna().to_numpy() & (table.apply(lambda c: c.str.strip().str.lower()).to_numpy() != "nan")
+    if bad.any():
+        row, column = np.argwhere(bad)[0]
+        raise DataFileError(file, f"{PROBE_COLUMNS[column]} is {table.iat[row, column]!r}, not a number: the file "
+                            "was changed after the run", int(row) + 2)
+    if meta["complete"] and len(numbers) != committed["probe_rows"]:
+        raise DataFileError(file, f"holds {len(numbers)} rows but meta.json records {committed['probe_rows']} for "
+                            "the complete run")
+    numbers["variant"] = numbers["variant"].astype(int)
+    return numbers
+
+
+def _check_meta(path: Path, meta: dict) -> None:
+    # meta.json says what the other files must be; a run whose files disagree is damaged
+    file = path / "meta.json"
+    if "committed" not in meta:
+        raise DataFileError(file, "has no record of the committed rows and frames (written by an older "
+                            "warpcloth); rerun the scene to read it")
+    committed = meta["committed"]
+    checks = [
+        (isinstance(meta.get("complete"), bool), "complete must be true or false"),
+        (isinstance(meta.get("n_variants"), int) and meta["n_variants"] >= 1, "n_variants must be a count ≥ 1"),
+        (isinstance(meta.get("n_nodes"), int) and meta["n_nodes"] >= 3, "n_nodes must be a count ≥ 3"),
+        (meta.get("probe_columns") == list(PROBE_COLUMNS), "probe_columns differ from what a run writes"),
+        (isinstance(committed, dict) and all(isinstance(committed.get(k), int) and committed[k] >= 0
+                                             for k in ("probe_rows", "probe_bytes", "frames")),
+         "committed must give probe_rows, probe_bytes and frames as counts ≥ 0"),
+    ]
+    for ok, why in checks:
+        if not ok:
+            raise DataFileError(file, f"{why}: the run directory is damaged")
 
 
 def read_run(path: Path, variants: str | None = None, where: str | None = None) -> Recording:
     """Selected variants of a run directory as a Recording (an interrupted run: the frames it reached)."""
     meta = read_json(path / "meta.json")
+    _check_meta(path, meta)
     if meta["n_variants"] == 1:
         scenes = [scene_from_dict(read_scene_file(path / "scene.toml"))]
     else:
@@ -248,14 +309,21 @@ def read_run(path: Path, variants: str | None = None, where: str | None = None) 
     parameters = per_strip_parameters(scenes)
     parameters.insert(0, "variant", np.arange(len(scenes)))
     chosen = select_variants(parameters, variants, where)
-    if "committed" not in meta:
-        raise DataFileError(path / "meta.json", "has no record of the committed rows and frames (written by a "
-                            "older warpcloth); rerun the scene to read it")
     # An interrupted run: the frames it committed.
     reached = meta["committed"]["frames"]
     if not reached:
         raise DataFileError(path, "the run was interrupted before its first frame")
-    frames = np.asarray(np.load(path / "frames.npy", mmap_mode="r")[:reached, chosen])
+    try:
+        stored = np.load(path / "frames.npy", mmap_mode="r")
+        recorded = len(np.load(path / "frame_times.npy"))
+    except (ValueError, OSError, EOFError) as exc:
+        raise DataFileError(path / "frames.npy", f"cannot be read as the run's frames ({exc}): the run directory "
+                            "is damaged") from None
+    expected = (recorded, meta["n_variants"], meta["n_nodes"], 2)
+    if stored.shape != expected or reached > expected[0]:
+        raise DataFileError(path / "frames.npy", f"holds frames of shape {stored.shape}, but the run recorded "
+                            f"{expected} ({reached} committed): the run directory is damaged")
+    frames = np.asarray(stored[:reached, chosen])
     times = np.load(path / "frame_times.npy")[:reached]
     probes = read_probes(path, meta)
     return Recording(path, chosen, [scenes[i] for i in chosen], times, frames, probes[probes["variant"].isin(chosen)],

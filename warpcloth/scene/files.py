@@ -44,7 +44,9 @@ def is_path(name_or_path: str | Path) -> bool:
     """Whether a scene or material reference is a file path: it has a directory part or
     ends in ``.toml``. Anything else is a bare name, looked up among the bundled files."""
     path = Path(name_or_path)
-    return path.suffix == ".toml" or len(path.parts) > 1 or path.is_absolute()
+    # the raw text too: Path("./damped_swing") normalises its "./" away
+    written = str(name_or_path)
+    return path.suffix == ".toml" or len(path.parts) > 1 or path.is_absolute() or "/" in written or "\\" in written
 
 
 def read_scene_file(name_or_path: str | Path) -> dict:
@@ -55,11 +57,13 @@ def read_scene_file(name_or_path: str | Path) -> dict:
     made absolute against the scene file's directory.
     """
     path = Path(name_or_path)
-    if is_path(path):
+    given_as_path = is_path(name_or_path)
+    if given_as_path:
         if not path.is_file():
-            why = "ends in .toml" if path.suffix == ".toml" else "names a directory"
-            raise DataFileError(path, f"no such scene file (a path, because it {why}; a bundled scene is named "
-                                f"without either: {', '.join(bundled_scenes())})")
+            why = ("is a directory" if path.is_dir() else "ends in .toml" if path.suffix == ".toml"
+                   else "has a directory part")
+            raise DataFileError(str(name_or_path), f"no such scene file (a path, because it {why}; a bundled "
+                                f"scene is named without either: {', '.join(bundled_scenes())})")
         text = read_toml_text(path)
         where = str(path)
     else:
@@ -70,7 +74,7 @@ def read_scene_file(name_or_path: str | Path) -> dict:
         text = resource.read_text()
         where = f"bundled scene {path.name}"
     data = parse_toml(text, where, "scene")
-    if is_path(path):
+    if given_as_path:
         _rebase_material_file(data, path.parent)
     return data
 

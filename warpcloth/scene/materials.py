@@ -126,7 +126,10 @@ def with_material_file(data: dict) -> dict:
         return data
     ref = coerce_value(material["from_file"], str, MATERIAL_FILE_KEY, {})
     missing = [k for k in material_fields() if k not in material]
-    if not ref or not missing:
+    if not missing:
         return data
+    if not ref.strip():
+        raise SceneError(MATERIAL_FILE_KEY, f"{ref!r} names no material file, and the scene leaves "
+                         f"{', '.join(missing)} to it; give a bundled material name or a path ending in .toml")
     values = read_material_file(ref)["material"]
     return {**data, "material": {**{k: values[k] for k in missing}, **material}}

@@ -45,7 +45,7 @@ def _field(default: Any, doc: str, *, gt: float | None = None, ge: float | None 
     return field(default=default, metadata=meta)
 
 
-@dataclass
+@dataclass(frozen=True)
 class StripSection:
     """Geometry of the strip (paper §3.1)."""
 
@@ -56,7 +56,7 @@ class StripSection:
     spacing_mm: float = _field(5.0, "node spacing h; must divide both lengths", gt=0)
 
 
-@dataclass
+@dataclass(frozen=True)
 class MaterialSection:
     """Fabric in KES units; converted to SI once, by warpcloth.scene.to_si."""
 
@@ -83,14 +83,14 @@ class MaterialSection:
                             per_strip=True)
 
 
-@dataclass
+@dataclass(frozen=True)
 class DampingSection:
     """Viscous damping F = −γ m v (residual air and internal viscosity, tuned)."""
 
     gamma_per_s: float = _field(0.0, "γ after release", ge=0, per_strip=True)
 
 
-@dataclass
+@dataclass(frozen=True)
 class ClampSegment:
     """One piece of θ(t) = Σ c_k (t − t_start)^k on [t_start, t_end]."""
 
@@ -100,7 +100,7 @@ class ClampSegment:
                                                 per_strip=True)
 
 
-@dataclass
+@dataclass(frozen=True)
 class ClampSection:
     """Kinematic clamp: rigid rotation θ(t) about a rotation centre."""
 
@@ -121,7 +121,7 @@ class ClampSection:
                              "h/2 inside the clamp, first order)", choices=EDGE_HINGES, per_strip=True)
 
 
-@dataclass
+@dataclass(frozen=True)
 class ReleaseSection:
     """Hold-and-release start of the damped swing: the free end is carried to a held
     position, held while the strip settles, then released at t = 0."""
@@ -136,7 +136,7 @@ class ReleaseSection:
                                          per_strip=True)
 
 
-@dataclass
+@dataclass(frozen=True)
 class IntegratorSection:
     """Explicit time integration (paper §2.3)."""
 
@@ -148,7 +148,7 @@ class IntegratorSection:
                                       "tensile curve must increase up to it", gt=0)
 
 
-@dataclass
+@dataclass(frozen=True)
 class RunSection:
     """Length of the recorded run and the environment."""
 
@@ -156,7 +156,7 @@ class RunSection:
     gravity_m_per_s2: float = _field(9.80665, "g (0 for the beam test)", ge=0)
 
 
-@dataclass
+@dataclass(frozen=True)
 class OutputSection:
     """What is recorded and how often."""
 
@@ -167,7 +167,7 @@ class OutputSection:
                                   "moment are probed (the moment–curvature loop); 0 = the clamp-edge hinge", ge=0)
 
 
-@dataclass
+@dataclass(frozen=True)
 class Scene:
     """A complete, validated description of one strip experiment."""
 
