@@ -36,6 +36,10 @@ def simulate(
     and then replaced only once the new run is complete.
     """
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
+    wrong = next((s for s in scenes if not isinstance(s, Scene)), None)
+    if wrong is not None or not scenes:
+        raise TypeError(f"simulate takes Scene objects (wc.load_scene(name_or_path) makes one), got {wrong!r}"
+                        if scenes else "simulate needs at least one scene")
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
     if out is not None:
         check_output_directory(out, overwrite)

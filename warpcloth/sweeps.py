@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import re
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -26,6 +27,7 @@ from warpcloth.runs import simulate
 from warpcloth.scene import Scene, Sweep, scene_from_dict
 
 WORKER_MEMORY_BYTES = 1 << 30  # per-batch result memory a worker may hold
+MAX_WORKERS_PER_CORE = 4
 BATCHES_PER_WORKER = 8  # enough batches for balance, progress and resume granularity
 SUMMARY_SCALARS = ("first_period_s", "first_amplitude_m", "mean_log_decrement", "n_half_cycles",
                    "peak_tip_speed_m_per_s", "hysteresis_work_J", "damping_work_J", "diverged",
@@ -126,6 +128,13 @@ def run_sweep(
     """
     if workers is not None and workers < 0:
         raise OptionError("--workers", f"must be ≥ 0 (0 runs the batches in this process), got {workers}")
+    cores = os.cpu_count() or 1
+    if workers is not None and workers > MAX_WORKERS_PER_CORE * cores:
+        raise OptionError("--workers", f"{workers} worker processes on {cores} cores would only wait on each other "
+                          f"(at most {MAX_WORKERS_PER_CORE * cores}); a cluster is reached with --scheduler")
+    if scheduler is not None and not re.match(r"^(\w+://)?[\w.\-\[\]:]+:\d+$", scheduler):
+        raise OptionError("--scheduler", f"{scheduler!r} is not a scheduler address (host:port or "
+                          "tcp://host:port)")
     if max_batch is not None and max_batch < 1:
         raise OptionError("--max-batch", f"must be ≥ 1, got {max_batch}")
     out = Path(out)

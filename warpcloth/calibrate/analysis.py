@@ -7,11 +7,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import pandas as pd
-
 from warpcloth.errors import DataFileError
 from warpcloth.io.load import load_recording
 from warpcloth.io.measured import LaserTrace, bundled_data, read_measurement
+from warpcloth.io.sweep_dir import read_parquet
 
 from .metrics import swing_summary
 
@@ -36,7 +35,7 @@ def analyse(source: str | Path, starts_at_rest: bool = True) -> list[dict]:
         summary = path / "summary.parquet"
         if not summary.is_file():
             raise DataFileError(path, "the sweep has not finished (no summary.parquet); rerun it to complete it")
-        table = pd.read_parquet(summary)
+        table = read_parquet(summary)
         return [_row(str(path), int(r["variant"]), {**r, "log_decrement": list(r["log_decrement"])})
                 for _, r in table.iterrows()]
     if (path / "meta.json").is_file():

@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import OptionError, SceneError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, batch_fields, clamp_edge, scene_from_dict, set_field
@@ -73,6 +73,7 @@ SHIFT = "time_shift_s"
 STENCIL_STEP = 2e-3  # central-difference step, as a fraction of each parameter's range
 MAX_LAMBDA = 1e8
 AT_BOUND = 1e-3  # a parameter this close to a bound, as a fraction of its range, ended on it
+MAX_SPACE_FILLING = 10_000
 POOR_FIT_FACTOR = 3.0  # an RMS above this many times the noise is not explained by the model
 NOT_IDENTIFIABLE_CORRELATION = 0.95
 STATUSES = ("converged", "at_bound", "poor_fit", "not_identifiable", "failed")
@@ -133,6 +134,15 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
                               f"--bounds {name}=LOW:HIGH")
         if not lower < upper:
             raise OptionError("--bounds", f"{name}: lower bound {lower:g} must be below upper bound {upper:g}")
+        if any(p.field == dotted for p in out):
+            raise OptionError("--free", f"{name} ({dotted}) is named twice")
+        for bound in (lower, upper):  # every point of the box must be a valid scene
+            data = base.to_dict()
+            set_field(data, dotted, float(bound))
+            try:
+                scene_from_dict(data)
+            except SceneError as exc:
+                raise OptionError("--bounds", f"{name} = {bound:g} is not a valid scene: {exc}") from None
         out.append(FreeParameter(name, dotted, float(lower), float(upper), float(min(max(value, lower), upper))))
     if given:
         raise OptionError("--bounds", f"{next(iter(given))!r} is not among the --free parameters")
@@ -169,6 +179,9 @@ class Objective:
         self.base = copy.deepcopy(base)
         self.base.pop("sweep", None)
         scene = scene_from_dict(copy.deepcopy(self.base))
+        span = float(measurement.t[-1] - measurement.t[0])
+        if self.align > span:
+            raise OptionError("--align-start", f"{self.align:g} s is longer than the measured record ({span:g} s)")
         t_end = float(measurement.t[-1]) + self.align
         if measurement.t[0] + self.align < 0:
             raise OptionError("--measured", f"measured times start at {measurement.t[0]:g} s, before the scene's "
@@ -370,6 +383,9 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
     d = len(free)
     rng = np.random.default_rng(seed)
     n0 = space_filling or max(16, 8 * d)
+    if n0 > MAX_SPACE_FILLING:
+        raise OptionError("--space-filling", f"{n0} variants in one launch is more than {MAX_SPACE_FILLING}; a "
+                          "Latin hypercube of a few dozen per parameter finds the basin")
     bar = tqdm(total=max_iterations + 1, desc="fit", unit="launch", disable=not progress)
     history: list[dict] = []
 

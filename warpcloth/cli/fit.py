@@ -30,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     fit_p.add_argument("--space-filling", type=at_least(0), default=None,
                        help="variants in the first, space-filling batch")
     fit_p.add_argument("--max-iterations", type=at_least(0), default=25, help="local refinement launches at most")
-    fit_p.add_argument("--seed", type=int, default=0, help="seed of the space-filling sample")
+    fit_p.add_argument("--seed", type=at_least(0), default=0, help="seed of the space-filling sample")
     fit_p.add_argument("--bootstrap", type=at_least(0), default=0, metavar="N",
                        help="also a moving-block bootstrap σ from N resamples (for time-correlated errors)")
     fit_p.add_argument("--noise", type=positive, default=None, metavar="MM",

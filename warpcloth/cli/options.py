@@ -8,8 +8,6 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
-import warp as wp
-
 from warpcloth.errors import OptionError
 
 EXIT_FIT_STATUS = {"converged": 0, "at_bound": 4, "poor_fit": 6, "not_identifiable": 7, "failed": 8}
@@ -19,12 +17,12 @@ written (to look at) but must not be read as a fit."""
 
 def device(value: str) -> str:
     """``--device``: a Warp device of this machine (checked before anything runs)."""
+    from warpcloth.sim.model import machine_device
+
     try:
-        wp.get_device(value)
-    except (RuntimeError, ValueError) as exc:
-        known = ", ".join(d.alias for d in wp.get_devices())
-        raise argparse.ArgumentTypeError(f"{value!r} is not a device of this machine ({exc}); it has: {known}") \
-            from None
+        machine_device(value)
+    except OptionError as exc:
+        raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[1]) from None
     return value
 
 

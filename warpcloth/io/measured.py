@@ -160,6 +160,10 @@ def read_encoder(path: str | Path, angle_unit: str | None = None,
     data = _scaled(table, _ENCODER)
     _increasing(table, data[:, 0])
     if angle_unit is not None:
+        said = _UNIT.search(table.header[1]) if table.header and len(table.header) > 1 else None
+        if said and said.group(1).lower() in units.MEASURED_UNITS["angle"] and said.group(1).lower() != angle_unit:
+            raise OptionError("--angle-unit", f"{angle_unit} contradicts the header of {table.path}, whose column 2 "
+                              f"is {table.header[1]!r}; drop --angle-unit or fix the header")
         data[:, 1] = table.values[:, 1] * units.MEASURED_UNITS["angle"][angle_unit]
     return data[:, 0], data[:, 1]
 

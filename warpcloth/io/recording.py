@@ -111,6 +111,8 @@ def parse_variants(text: str | None, n_variants: int) -> np.ndarray:
         raise OptionError("--variants", f"{text!r} is not a variant number, list (1,4,9) or range (0:50)") from None
     if len(chosen) == 0:
         raise OptionError("--variants", f"{text!r} selects no variant of {n_variants}")
+    if len(np.unique(chosen)) != len(chosen):
+        raise OptionError("--variants", f"{text!r} names a variant twice")
     bad = chosen[(chosen < 0) | (chosen >= n_variants)]
     if len(bad):
         raise OptionError("--variants", f"variant {bad[0]} does not exist (there are {n_variants})")

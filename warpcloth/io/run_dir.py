@@ -93,10 +93,14 @@ def check_output_directory(out_dir: str | Path, overwrite: bool = False) -> None
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise OptionError("--out", f"{out} is a file, not a run directory")
-    if out.is_dir() and any(out.iterdir()) and not overwrite:
+    if out.is_dir() and any(out.iterdir()):
         what = "a run" if (out / "meta.json").is_file() else "a sweep" if (out / "sweep.json").is_file() else "files"
-        raise OptionError("--out", f"{out} already holds {what}; choose another --out, or pass --overwrite "
-                          "(the old one is replaced only once the new run is complete)")
+        if not overwrite:
+            raise OptionError("--out", f"{out} already holds {what}; choose another --out, or pass --overwrite "
+                              "(the old one is replaced only once the new run is complete)")
+        if what != "a run":
+            raise OptionError("--out", f"{out} holds {what} that are not a warpcloth run; --overwrite replaces only "
+                              "a run directory, never other files: choose another --out")
 
 
 class RunWriter:

@@ -41,6 +41,27 @@ LIST_COLUMNS = ("half_cycle_amplitude_m", "log_decrement")
 """Summary columns holding a list per variant: in summary.parquet, not summary.csv."""
 
 
+def read_parquet(path: Path, **options: object) -> pd.DataFrame:
+    """A sweep's Parquet file, or a DataFileError saying it is damaged (a resumed sweep
+    recomputes a batch whose files do not read)."""
+    try:
+        return pd.read_parquet(path, **options)
+    except (OSError, pa.ArrowException, ValueError) as exc:
+        raise DataFileError(path, f"cannot be read ({exc}); it is damaged: run the sweep again into its "
+                            "directory to recompute that batch") from None
+
+
+def _readable(path: Path, frames: bool = False) -> bool:
+    try:
+        if frames:
+            np.load(path, mmap_mode="r")
+        else:
+            pq.read_metadata(path)
+    except (OSError, pa.ArrowException, ValueError, EOFError):
+        return False
+    return True
+
+
 def _cell(value: object) -> object:
     return json.dumps(value) if isinstance(value, list) else value
 
@@ -56,8 +77,12 @@ class SweepDirectory:
         return self.path / "summary" / f"batch-{batch:04d}.parquet"
 
     def is_done(self, batch: int) -> bool:
-        """Whether ``batch`` has been written completely."""
-        return self.summary_path(batch).exists()
+        """Whether ``batch`` has been written completely and its files still read (a
+        damaged batch counts as not done, so a resumed sweep recomputes it)."""
+        summary, probes = self.summary_path(batch), self.path / "probes" / f"batch-{batch:04d}.parquet"
+        frames = self.path / "frames" / f"batch-{batch:04d}.npy"
+        return (summary.exists() and _readable(summary) and _readable(probes)
+                and (not frames.exists() or _readable(frames, frames=True)))
 
     def prepare(self, sweep: Sweep, plan: Callable[[], list[list[int]]]) -> list[list[int]]:
         """The batch layout: the stored one when this directory holds the same sweep
@@ -94,7 +119,7 @@ class SweepDirectory:
     def finish(self, n_batches: int) -> pd.DataFrame:
         """Merge every batch's summary into summary.parquet and summary.csv, mark the
         sweep complete, and return the merged summary (sorted by variant)."""
-        summary = pd.concat([pd.read_parquet(self.summary_path(b)) for b in range(n_batches)])
+        summary = pd.concat([read_parquet(self.summary_path(b)) for b in range(n_batches)])
         summary = summary.sort_values("variant").reset_index(drop=True)
         write_atomically(self.path / "summary.parquet", lambda p: summary.to_parquet(p, index=False))
         scalar = [c for c in summary.columns if c not in LIST_COLUMNS]
@@ -122,11 +147,15 @@ def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording
         raise DataFileError(path, f"has no shape frames for batch {missing[0]}: that batch ran without --frames "
                             "(or has not finished); a resumed sweep keeps finished batches, so run it with "
                             "--frames into a new --out directory")
-    stores = {b: np.load(path / "frames" / f"batch-{b:04d}.npy", mmap_mode="r") for b in needed}
+    try:
+        stores = {b: np.load(path / "frames" / f"batch-{b:04d}.npy", mmap_mode="r") for b in needed}
+    except (OSError, ValueError, EOFError) as exc:
+        raise DataFileError(path / "frames", f"a batch's frames cannot be read ({exc}); run the sweep again into "
+                            "its directory to recompute it") from None
     n_frames = min(len(s) for s in stores.values())
     frames = np.stack([stores[where_is[v][0]][:n_frames, where_is[v][1]] for v in chosen], axis=1)
-    probes = pd.concat([pd.read_parquet(path / "probes" / f"batch-{b:04d}.parquet",
-                                        filters=[("variant", "in", [int(v) for v in chosen])]) for b in needed])
+    probes = pd.concat([read_parquet(path / "probes" / f"batch-{b:04d}.parquet",
+                                     filters=[("variant", "in", [int(v) for v in chosen])]) for b in needed])
     probes = probes[["t", "variant", *PROBE_FIELDS]]
     frame_times = np.arange(n_frames) / sweep.scenes[0].output.frame_rate_hz
     return Recording(path, chosen, [sweep.scenes[i] for i in chosen], frame_times, frames, probes,

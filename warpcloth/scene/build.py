@@ -15,6 +15,7 @@ import numpy as np
 from warpcloth import units
 from warpcloth.errors import SceneError
 from warpcloth.sim import SOLVERS, ClampMotion, Control, Model, Recorder, Solver, StripBuilder
+from warpcloth.sim.resources import check_memory
 
 from .clamp_motion import clamp_pieces
 from .geometry import clamp_edge, rest_positions
@@ -50,6 +51,10 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
     """A :class:`StripBuilder` holding one strip per scene, in SI."""
     check_batch(scenes)
     first = scenes[0]
+    # the model's per-node arrays (positions, velocities, three force parts, rest
+    # positions, hinge memory: ~20 numbers of 8 B per node and strip), before any exists
+    check_memory(160 * first.n_nodes * len(scenes), f"the state of {len(scenes)} strip(s) of {first.n_nodes} nodes",
+                 "use a coarser strip.spacing_mm or fewer strips per batch")
     builder = StripBuilder(rest_positions(first), first.n_clamped, first.spacing, first.run.gravity_m_per_s2,
                            release_time=first.preroll, move_time=first.release.move_time_s)
     edge = clamp_edge(first)

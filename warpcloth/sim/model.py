@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import warp as wp
 
+from warpcloth.errors import OptionError
 from warpcloth.kernels import DEFAULT_BENDING_LAW, structs
 from warpcloth.kernels import precision as precision_types
 
@@ -18,6 +19,17 @@ if TYPE_CHECKING:
 PRECISIONS = {"float64": wp.float64, "float32": wp.float32}
 
 
+
+def machine_device(device: str | None) -> wp.context.Device:
+    """The Warp device ``device`` names (None: the default), or an OptionError naming the
+    devices this machine has (a GPU asked for on a machine without one)."""
+    try:
+        return wp.get_device(device)
+    except (RuntimeError, ValueError) as exc:
+        known = ", ".join(d.alias for d in wp.get_devices())
+        raise OptionError("--device", f"{device!r} is not a device of this machine ({exc}); it has: {known}") \
+            from None
+
 class Model:
     """Static description of B strips sharing node count, spacing and gravity.
 
@@ -28,7 +40,7 @@ class Model:
 
     def __init__(self, builder: StripBuilder, device: str | None = None, precision: str = "float64",
                  bending_law: str = DEFAULT_BENDING_LAW) -> None:
-        self.device = wp.get_device(device)
+        self.device = machine_device(device)
         self.precision = precision
         self.scalar = PRECISIONS[precision]
         self.types = precision_types(self.scalar)

@@ -165,14 +165,19 @@ def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path 
 
 def read_sweep_summary(sweep_dir: str | Path) -> pd.DataFrame:
     """Per-variant summary of a sweep (the merged file, or the finished batches so far)."""
+    from warpcloth.io.sweep_dir import read_parquet
+
     sweep_dir = Path(sweep_dir)
+    if not (sweep_dir / "sweep.json").is_file():
+        raise DataFileError(sweep_dir, "is not a sweep directory (no sweep.json); --metric and --x plot a sweep's "
+                            "summary")
     merged = sweep_dir / "summary.parquet"
     if merged.is_file():
-        return pd.read_parquet(merged)
+        return read_parquet(merged)
     parts = sorted((sweep_dir / "summary").glob("batch-*.parquet"))
     if not parts:
         raise DataFileError(sweep_dir, "the sweep has no finished batch yet")
-    return pd.concat([pd.read_parquet(p) for p in parts]).sort_values("variant")
+    return pd.concat([read_parquet(p) for p in parts]).sort_values("variant")
 
 
 def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: str | None = None) -> Path:
@@ -182,6 +187,11 @@ def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: 
         if name is not None and name not in summary:
             raise OptionError(flag, f"{name!r} is not a column of the sweep summary; "
                              f"known: {', '.join(c for c in summary.columns if c not in ('variant', 'batch'))}")
+    if y is not None and y == x:
+        raise OptionError("--y", f"{y!r} is already on the x axis; a heat map needs two different parameters")
+    if summary[metric].map(lambda v: isinstance(v, (list, np.ndarray))).any():
+        raise OptionError("--metric", f"{metric!r} holds a list per variant (one value per half-cycle); plot one "
+                          "number per variant, e.g. mean_log_decrement or first_amplitude_m")
     data = summary[~summary["diverged"]] if "diverged" in summary else summary
     fig, ax = plt.subplots(figsize=(6.5, 4.8))
     if y is None:

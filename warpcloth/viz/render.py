@@ -124,6 +124,8 @@ def render_run(recording: Recording, out_dir: str | Path, *, times: np.ndarray |
                movie: str | None = "motion.gif", stride: int = 1) -> list[Path]:
     """PNGs of the frames at ``times`` (default: six spread over the run) and, unless
     ``movie`` is None, an animation of every ``stride``-th frame at real speed."""
+    if stride > len(recording.frame_times):
+        raise OptionError("--stride", f"{stride} is more than the {len(recording.frame_times)} frames recorded")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     if times is None:
