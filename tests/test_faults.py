@@ -221,3 +221,33 @@ def test_a_damaged_complete_run_is_refused_by_name(tmp_path, damage):
     (out / "meta.json").write_text(json.dumps(meta))
     with pytest.raises(wc.DataFileError, match=expected):
         load_recording(out)
+
+
+@pytest.mark.parametrize("args, message", [
+    (("run", "./damped_swing"), "damped_swing: no such scene file (a path, because it has a directory part"),
+    (("run", "damped_swing", "--set", "strip.spacing_mm=1e-9"), "too large: the state of 1 strip(s) of"),
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--bounds", "gamma=-5:1"),
+     "--bounds: gamma = -5 is not a valid scene: damping.gamma_per_s: must be ≥ 0"),
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma,gamma"), "is named twice"),
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--align-start", "1e9"),
+     "--align-start: 1e+09 s is longer than the measured record"),
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--space-filling", "100000000"),
+     "--space-filling: 100000000 variants in one launch is more than 10000"),
+    (("sweep", "damped_swing_sweep", "--workers", "100000"), "--workers: 100000 worker processes on"),
+    (("sweep", "damped_swing_sweep", "--scheduler", "notanaddress"), "--scheduler: 'notanaddress' is not a"),
+])
+def test_inputs_that_once_crashed_hung_or_misled_are_named(tmp_path, args, message):
+    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", *args, "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert done.returncode == 2 and message in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr and not (tmp_path / "o").exists()
+
+
+def test_overwrite_replaces_a_run_never_other_files(tmp_path):
+    keep = tmp_path / "notes"
+    keep.mkdir()
+    (keep / "thesis.tex").write_text("months of work")
+    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--out", str(keep),
+                           "--overwrite"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "--overwrite replaces only a run directory, never other files" in done.stderr
+    assert (keep / "thesis.tex").read_text() == "months of work"
