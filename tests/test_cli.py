@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+import warp as wp
 from warpcloth.kernels import PROBE_FIELDS
 
 import warpcloth as wc
@@ -256,3 +257,19 @@ def test_a_damaged_run_directory_is_named_not_a_traceback(tmp_path, damage):
         (out / "probes.csv").touch()
     done = warpcloth_cli("plot", str(out), cwd=tmp_path)
     assert done.returncode == 2 and "Traceback" not in done.stderr and str(out) in done.stderr, done.stderr
+
+
+def test_version_provenance_and_dict_overrides(tmp_path):
+    done = warpcloth_cli("--version", cwd=tmp_path)
+    assert done.returncode == 0 and done.stdout.startswith("warpcloth ")
+    result = wc.run("damped_swing", {"damping.gamma_per_s": 0.5, "run.duration_s": 0.05,
+                                     "release.settle_time_s": 0.05, "clamp.edge_hinge": "paper"},
+                    out=tmp_path / "r")
+    assert result.scenes[0].damping.gamma_per_s == 0.5 and result.scenes[0].clamp.edge_hinge == "paper"
+    provenance = json.loads((tmp_path / "r" / "meta.json").read_text())["provenance"]
+    assert provenance["warp"] == wp.__version__ and provenance["device"] == "cpu" and provenance["date_utc"]
+    with pytest.raises(TypeError, match="not one string"):
+        wc.run("damped_swing", "run.duration_s=0.1")
+    sweep = wc.expand({"run": {"duration_s": 0.02}, "sweep": {"grid": {"damping.gamma_per_s": [0.1]}}})
+    wc.run_sweep(sweep, tmp_path / "s", workers=0, progress=False)
+    assert json.loads((tmp_path / "s" / "sweep.json").read_text())["provenance"]["numpy"] == np.__version__

@@ -219,6 +219,22 @@ def test_render_draws_the_strip_where_it_is(swing_run, tmp_path):
     assert end < start - 50  # moved left on screen, as x decreased
     gif = Image.open(paths[2])
     assert gif.n_frames == len(range(0, len(recording.frame_times), 3))
+    durations = []
+    for k in range(gif.n_frames):
+        gif.seek(k)
+        durations.append(gif.info["duration"])
+    # real time: 3 frames of 1/60 s each in a whole 5 cs (browsers slow anything under 2 cs to 10 cs)
+    assert set(durations) == {50} and sum(durations) / 1e3 == pytest.approx(gif.n_frames * 3 / 60)
+
+
+def test_gif_strides_play_in_real_time():
+    from warpcloth.viz.render import gif_stride
+
+    for rate in (60.0, 50.0, 30.0, 600.0, 24.0, 100.0):
+        k = gif_stride(rate)
+        delay = 100 * k / rate
+        assert delay >= 2 and delay == pytest.approx(round(delay)), rate
+    assert gif_stride(60.0) == 3 and gif_stride(60.0, stride=4) == 6
 
 
 def test_cli_export_plot_and_render(swing_run, tmp_path):

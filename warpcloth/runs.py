@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -56,11 +56,28 @@ def simulate(
                           progress=progress, on_divergence=on_divergence, keep_frames=keep_frames, labels=scenes)
 
 
-def run(scene: str | Path | Scene, overrides: Sequence[str] = (), **kwargs: object) -> RunResult:
-    """Load a scene (path or bundled name), apply ``key=value`` overrides, simulate it.
+def run(scene: str | Path | Scene, overrides: Sequence[str] | Mapping[str, object] = (),
+        **kwargs: object) -> RunResult:
+    """Load a scene (path or bundled name), apply overrides, simulate it.
 
-    Keyword arguments go to :func:`simulate` (``out``, ``device``, ``progress``, ...).
+    ``overrides`` are ``"key=value"`` strings or a mapping ``{"damping.gamma_per_s": 0.5}``
+    (values as Python numbers, strings, booleans or lists). Keyword arguments go to
+    :func:`simulate` (``out``, ``device``, ``progress``, ...).
     """
-    if not isinstance(scene, Scene):
+    if isinstance(overrides, str):
+        raise TypeError(f"overrides must be a list of 'key=value' strings or a dict, not one string {overrides!r}")
+    if isinstance(overrides, Mapping):
+        overrides = [f"{key}={_toml_value(value)}" for key, value in overrides.items()]
+    if isinstance(scene, Scene):
+        if overrides:
+            raise TypeError("overrides apply to a scene being loaded; a Scene is immutable (load it with them)")
+    else:
         scene = load_scene(scene, overrides)
     return simulate(scene, **kwargs)
+
+
+def _toml_value(value: object) -> str:
+    """A Python value as the TOML text ``--set`` parses."""
+    import tomli_w
+
+    return tomli_w.dumps({"v": value}).split("=", 1)[1].strip()

@@ -25,6 +25,7 @@ from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, Sweep, scene_from_dict
+from warpcloth.sim.model import init_warp_quietly
 
 WORKER_MEMORY_BYTES = 1 << 30  # per-batch result memory a worker may hold
 MAX_WORKERS_PER_CORE = 4
@@ -58,6 +59,7 @@ def _peak(series: np.ndarray) -> float:
 def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[dict],
               assignments: list[dict], device: str | None, frames: bool) -> dict:
     """Simulate one batch and write its files (runs in a Dask worker or in-process)."""
+    init_warp_quietly()  # a worker process starts Warp afresh: no banner or notices in the results
     scenes = [scene_from_dict(d) for d in scene_dicts]
     started = time.perf_counter()
     result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames)

@@ -12,14 +12,11 @@ from __future__ import annotations
 
 import argparse
 import errno
-import logging
-import os
 import sys
 from collections.abc import Sequence
 
-import warp as wp
-
 from warpcloth.errors import DataFileError, DivergenceError, OptionError, ResourceError, SceneError, WarpclothError
+from warpcloth.sim.model import init_warp_quietly
 
 from . import analyse, fit, material, run, sweep, view
 
@@ -35,32 +32,25 @@ EXIT_INTERRUPTED = 130  # the shell's convention for SIGINT
 FULL = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)
 
 
+def _version() -> str:
+    import importlib.metadata
+
+    try:
+        return importlib.metadata.version("warpcloth")
+    except importlib.metadata.PackageNotFoundError:
+        return "(not installed)"
+
+
 def parser() -> argparse.ArgumentParser:
     """The argument parser of every command."""
     top = argparse.ArgumentParser(
         prog="warpcloth", description="Batched Warp simulation of hanging fabric strips: "
         "run | sweep | export-usd | plot | render | fit | clamp | material | analyse (--help on each).")
+    top.add_argument("--version", action="version", version=f"warpcloth {_version()}")
     sub = top.add_subparsers(dest="command", required=True)
     for group in COMMAND_GROUPS:
         group.register(sub)
     return top
-
-
-def init_warp_quietly() -> None:
-    """Initialise Warp without its native notice that a machine has no CUDA driver: on a
-    CPU machine every command would print it. (A --device cuda there is refused with
-    its own message.)"""
-    wp.config.log_level = logging.WARNING  # no init banner or module-load lines
-    sys.stderr.flush()
-    saved = os.dup(2)
-    silent = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(silent, 2)
-        wp.init()
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-        os.close(silent)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

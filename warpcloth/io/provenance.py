@@ -36,6 +36,12 @@ def _git_commit() -> str | None:
     return done.stdout.strip() + ("-dirty" if dirty else "")
 
 
+def _default_device() -> str:
+    import warp as wp
+
+    return wp.get_device().alias
+
+
 def file_checksum(path: str | Path) -> dict:
     """A file's path and SHA-256, to name the exact data a result was computed from."""
     path = Path(path)
@@ -53,5 +59,5 @@ def provenance(device: str | None = None, **extra: object) -> dict:
         "command": [Path(sys.argv[0]).name, *sys.argv[1:]],
         "date_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "host": platform.node(),
-        "device": device or "cpu",
+        "device": device or _default_device(),
     } | extra

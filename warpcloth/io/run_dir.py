@@ -41,6 +41,7 @@ from warpcloth.sim.resources import check_disk
 
 from .atomic import naming, write_npy_atomically, write_text_atomically
 from .json_file import read_json
+from .provenance import provenance
 from .recording import Recording, per_strip_parameters, select_variants
 
 PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
@@ -228,6 +229,7 @@ class RunWriter:
         self.frames.close()
         self.meta["diverged"] = diverged
         self.meta.update(extra)
+        self.meta["provenance"] = provenance(extra.get("device"))
         self.meta["complete"] = True
         self._write_meta()
         (self.dir / WRITING).unlink()

@@ -35,6 +35,7 @@ from warpcloth.scene import Sweep, expand
 
 from .atomic import write_atomically, write_npy_atomically
 from .json_file import read_json
+from .provenance import provenance
 from .recording import Recording, per_strip_parameters, select_variants
 
 LIST_COLUMNS = ("half_cycle_amplitude_m", "log_decrement")
@@ -102,7 +103,8 @@ class SweepDirectory:
                               for i, a in enumerate(sweep.assignments)])
         write_atomically(self.path / "variants.csv", lambda p: table.to_csv(p, index=False))
         info = {"fingerprint": sweep.fingerprint, "n_variants": len(sweep.scenes), "keys": sweep.keys,
-                "batches": batches, "sweep": sweep.spec, "base_scene": sweep.base, "complete": False}
+                "batches": batches, "sweep": sweep.spec, "base_scene": sweep.base, "complete": False,
+                "provenance": provenance()}
         write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
         return batches
 

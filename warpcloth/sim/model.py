@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import logging
+import os
+import sys
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -18,6 +21,24 @@ if TYPE_CHECKING:
 
 PRECISIONS = {"float64": wp.float64, "float32": wp.float32}
 
+
+
+
+def init_warp_quietly() -> None:
+    """Initialise Warp without its banner, module-load lines and native notice that a
+    machine has no CUDA driver (on a CPU machine every command and every sweep worker
+    would print them); a --device cuda there is refused with its own message."""
+    wp.config.log_level = logging.WARNING  # no init banner or module-load lines
+    sys.stderr.flush()
+    saved = os.dup(2)
+    silent = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(silent, 2)
+        wp.init()
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(silent)
 
 
 def machine_device(device: str | None) -> wp.context.Device:

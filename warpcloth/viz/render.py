@@ -120,6 +120,22 @@ class StripRenderer:
         self.plotter.close()
 
 
+def gif_stride(frame_rate: float, stride: int = 1) -> int:
+    """The smallest stride ≥ ``stride`` at which a GIF plays in real time.
+
+    A GIF frame lasts a whole number of centiseconds, and browsers show anything under
+    2 cs as 10 cs: 60 frames/s (1.67 cs) would play 6× slow. So take every k-th frame,
+    with k·100/frame_rate a whole number of centiseconds, at least 2 (60 Hz: k = 3, 5 cs).
+    """
+    k = max(1, stride)
+    while k < 10_000:
+        delay = 100.0 * k / frame_rate
+        if delay >= 2 - 1e-9 and abs(delay - round(delay)) < 1e-6 * max(delay, 1):
+            return k
+        k += 1
+    return max(1, stride)
+
+
 def render_run(recording: Recording, out_dir: str | Path, *, times: np.ndarray | None = None,
                movie: str | None = "motion.gif", stride: int = 1) -> list[Path]:
     """PNGs of the frames at ``times`` (default: six spread over the run) and, unless
@@ -138,6 +154,8 @@ def render_run(recording: Recording, out_dir: str | Path, *, times: np.ndarray |
             renderer.screenshot(int(f), path)
             written.append(path)
         if movie:
+            if Path(movie).suffix == ".gif":
+                stride = gif_stride(recording.frame_rate, stride)
             frames = np.arange(0, len(recording.frame_times), max(1, stride))
             written.append(renderer.animate(out / movie, frames, recording.frame_rate / max(1, stride)))
     finally:

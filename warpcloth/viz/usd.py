@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import json
 import os
 import shutil
 import tempfile
@@ -29,6 +30,7 @@ import numpy as np
 from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdUtils, Vt
 
 from warpcloth.errors import OptionError
+from warpcloth.io.provenance import provenance
 from warpcloth.io.recording import Recording
 from warpcloth.viz.geometry import (
     BOX_QUADS,
@@ -172,6 +174,9 @@ def _set_stage_metadata(stage: Usd.Stage, n_frames: int, fps: float) -> None:
     stage.SetFramesPerSecond(fps)
     stage.SetStartTimeCode(0)
     stage.SetEndTimeCode(max(n_frames - 1, 0))
+    # where the stage came from, as strings (USD layer metadata holds plain values)
+    stage.GetRootLayer().customLayerData = {"warpcloth_provenance": {
+        k: json.dumps(v) if not isinstance(v, str) else v for k, v in provenance().items()}}
 
 
 @contextlib.contextmanager
