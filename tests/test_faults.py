@@ -233,7 +233,7 @@ def test_a_damaged_complete_run_is_refused_by_name(tmp_path, damage):
      "--align-start: 1e+09 s is longer than the measured record"),
     (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--space-filling", "100000000"),
      "--space-filling: 100000000 variants in one launch is more than 10000"),
-    (("sweep", "damped_swing_sweep", "--workers", "100000"), "--workers: 100000 worker processes on"),
+    (("sweep", "damped_swing_sweep", "--workers", "100000"), "--workers: 100000 threads on"),
     (("sweep", "damped_swing_sweep", "--scheduler", "notanaddress"), "--scheduler: 'notanaddress' is not a"),
 ])
 def test_inputs_that_once_crashed_hung_or_misled_are_named(tmp_path, args, message):

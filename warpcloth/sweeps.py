@@ -8,11 +8,11 @@ final results are identical however often the sweep was interrupted.
 from __future__ import annotations
 
 import json
-import logging
 import os
 import re
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
@@ -124,15 +124,16 @@ def run_sweep(
 ) -> pd.DataFrame:
     """Run (or resume) a sweep into ``out`` and return the merged per-variant summary.
 
-    ``workers=0`` runs the batches in this process; otherwise they are Dask tasks on a
-    LocalCluster of ``workers`` single-threaded worker processes (default: one per
-    core), or on the running cluster at ``scheduler``.
+    The batches run in this process on ``workers`` threads (default: one per core; 0:
+    one after another), each batch one launch sequence of its own (Warp releases the GIL
+    during a CPU launch, so the threads fill the cores); with ``scheduler`` they are Dask
+    tasks on that running cluster instead. Results do not depend on either.
     """
     if workers is not None and workers < 0:
         raise OptionError("--workers", f"must be ≥ 0 (0 runs the batches in this process), got {workers}")
     cores = os.cpu_count() or 1
     if workers is not None and workers > MAX_WORKERS_PER_CORE * cores:
-        raise OptionError("--workers", f"{workers} worker processes on {cores} cores would only wait on each other "
+        raise OptionError("--workers", f"{workers} threads on {cores} cores would only wait on each other "
                           f"(at most {MAX_WORKERS_PER_CORE * cores}); a cluster is reached with --scheduler")
     if scheduler is not None and not re.match(r"^(\w+://)?[\w.\-\[\]:]+:\d+$", scheduler):
         raise OptionError("--scheduler", f"{scheduler!r} is not a scheduler address (host:port or "
@@ -171,28 +172,27 @@ def run_sweep(
     try:
         if pending:
             warm_kernel_cache([sweep.scenes[batches[b][0]] for b in pending], device)
-            if scheduler is None and n_workers == 0:
+            if scheduler is not None:
+                _run_on_dask(pending, task, finished, scheduler, sweep.fingerprint)
+            elif n_workers == 0:
                 for b in pending:
                     finished(run_batch(*task(b)))
             else:
-                _run_on_dask(pending, task, finished, n_workers, scheduler, sweep.fingerprint)
+                # Threads, not processes: Warp releases the GIL for a CPU launch, so one
+                # thread per core runs batches side by side in this one process.
+                with ThreadPoolExecutor(n_workers) as pool:
+                    for future in as_completed([pool.submit(run_batch, *task(b)) for b in pending]):
+                        finished(future.result())
     finally:
         bar.close()
     return directory.finish(len(batches))
 
 
 def _run_on_dask(pending: list[int], task: Callable[[int], tuple], finished: Callable[[dict], None],
-                 n_workers: int, scheduler: str | None, fingerprint: str) -> None:
-    from dask.distributed import Client, LocalCluster, as_completed
+                 scheduler: str, fingerprint: str) -> None:
+    from dask.distributed import Client, as_completed
 
-    if scheduler is not None:
-        client = Client(scheduler)
-        cluster = None
-    else:
-        # One single-threaded process per core: Warp's CPU backend runs a launch on one thread.
-        cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
-        client = Client(cluster)
+    client = Client(scheduler)
     try:
         futures = [client.submit(run_batch, *task(b), key=f"warpcloth-{fingerprint[:12]}-batch-{b:04d}",
                                  pure=False, retries=2) for b in pending]
@@ -200,5 +200,3 @@ def _run_on_dask(pending: list[int], task: Callable[[int], tuple], finished: Cal
             finished(future.result())
     finally:
         client.close()
-        if cluster is not None:
-            cluster.close()

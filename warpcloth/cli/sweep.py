@@ -18,7 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p.add_argument("--max-batch", type=at_least(1), default=None,
                          help="strips per batch (default: from the memory per strip and the worker count)")
     sweep_p.add_argument("--workers", type=at_least(0), default=None,
-                         help="local Dask worker processes (default: one per core; 0 = run in this process)")
+                         help="threads running batches side by side in this process (default: one per core; 0 = one "
+                              "batch after another)")
     sweep_p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler to use instead")
     sweep_p.add_argument("--device", type=device, default=None, help="cpu or cuda, on every worker")
     sweep_p.add_argument("--frames", action="store_true", help="also store shape frames (large)")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import os
 import sys
+import threading
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -24,21 +25,31 @@ PRECISIONS = {"float64": wp.float64, "float32": wp.float32}
 
 
 
+_INIT_LOCK = threading.Lock()
+_INITIALISED: list[bool] = []
+
+
 def init_warp_quietly() -> None:
     """Initialise Warp without its banner, module-load lines and native notice that a
     machine has no CUDA driver (on a CPU machine every command and every sweep worker
     would print them); a --device cuda there is refused with its own message."""
     wp.config.log_level = logging.WARNING  # no init banner or module-load lines
-    sys.stderr.flush()
-    saved = os.dup(2)
-    silent = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(silent, 2)
-        wp.init()
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-        os.close(silent)
+    with _INIT_LOCK:
+        # once per process: redirecting the process's stderr is not something two threads
+        # may do at once (the second would save and later restore the redirection)
+        if _INITIALISED:
+            return
+        sys.stderr.flush()
+        saved = os.dup(2)
+        silent = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(silent, 2)
+            wp.init()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            os.close(silent)
+        _INITIALISED.append(True)
 
 
 def machine_device(device: str | None) -> wp.context.Device:
