@@ -162,12 +162,15 @@ def test_resume_after_the_process_is_killed(tmp_path):
         pd.testing.assert_frame_equal(mine, theirs)
 
 
-def test_local_dask_cluster_gives_the_in_process_results(tmp_path):
+def test_threads_give_the_serial_results_bit_for_bit(tmp_path):
+    # batches on 1, 2 and 3 threads of this process against one after another
     sweep = small_sweep()
     run_sweep(sweep, tmp_path / "serial", max_batch=2, workers=0)
-    run_sweep(sweep, tmp_path / "dask", max_batch=2, workers=2)
-    for mine, theirs in zip(read_results(tmp_path / "dask"), read_results(tmp_path / "serial"), strict=True):
-        pd.testing.assert_frame_equal(mine, theirs)
+    for threads in (1, 2, 3):
+        run_sweep(sweep, tmp_path / f"t{threads}", max_batch=2, workers=threads)
+        for mine, theirs in zip(read_results(tmp_path / f"t{threads}"), read_results(tmp_path / "serial"),
+                                strict=True):
+            pd.testing.assert_frame_equal(mine, theirs, check_exact=True)
 
 
 def test_scheduler_and_workers_as_processes_survive_a_killed_worker(tmp_path):
