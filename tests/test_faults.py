@@ -251,3 +251,47 @@ def test_overwrite_replaces_a_run_never_other_files(tmp_path):
                            "--overwrite"], capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and "--overwrite replaces only a run directory, never other files" in done.stderr
     assert (keep / "thesis.tex").read_text() == "months of work"
+
+
+def test_ctrl_c_stops_a_threaded_sweep_promptly_and_it_resumes(tmp_path):
+    # Batches on two threads: Ctrl-C drops the batches not started (the running ones
+    # finish their files), exits 130 within a batch's time, and a rerun completes the rest.
+    args = [sys.executable, "-m", "warpcloth.cli", "sweep", "damped_swing_sweep", "--set", "sweep.random.samples=120",
+            "--set", "run.duration_s=3", "--max-batch", "4", "--workers", "2", "--no-progress", "--out", "s"]
+    proc = subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and len(list((tmp_path / "s" / "summary").glob("*.parquet"))) < 2:
+        time.sleep(0.1)
+    proc.send_signal(signal.SIGINT)
+    signalled = time.monotonic()
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "interrupted" in stderr and "Traceback" not in stderr, stderr
+    assert time.monotonic() - signalled < 20  # not the rest of the sweep first
+    assert len(list((tmp_path / "s" / "summary").glob("*.parquet"))) < 30
+    done = subprocess.run(args, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0 and "120 variants" in done.stdout, done.stderr
+
+
+def test_figures_are_results_too(tmp_path):
+    # plot and render into a directory that holds figures, and --plot onto an existing
+    # file, are refused without --overwrite; figures are written atomically.
+    wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.2", "release.settle_time_s=0.1"]), out=tmp_path / "r")
+
+    def cli(*args):
+        return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True,
+                              cwd=tmp_path, timeout=300)
+
+    assert cli("plot", "r").returncode == 0
+    before = {p.name: p.read_bytes() for p in (tmp_path / "r" / "figures").iterdir()}
+    again = cli("plot", "r")
+    assert again.returncode == 2 and "--out" in again.stderr and "--overwrite" in again.stderr
+    assert {p.name: p.read_bytes() for p in (tmp_path / "r" / "figures").iterdir()} == before
+    assert cli("plot", "r", "--overwrite").returncode == 0
+    (tmp_path / "c.png").write_bytes(b"an existing figure")
+    done = cli("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation", "-o", "m.toml",
+               "--plot", "c.png")
+    assert done.returncode == 2 and (tmp_path / "c.png").read_bytes() == b"an existing figure"
+    done = cli("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation", "-o", "m.toml",
+               "--plot", "figure")
+    assert done.returncode == 2 and "--plot: figure must be a file ending in .png" in done.stderr
+    assert not list(tmp_path.rglob(".*.tmp*"))

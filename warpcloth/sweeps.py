@@ -180,9 +180,14 @@ def run_sweep(
             else:
                 # Threads, not processes: Warp releases the GIL for a CPU launch, so one
                 # thread per core runs batches side by side in this one process.
-                with ThreadPoolExecutor(n_workers) as pool:
+                pool = ThreadPoolExecutor(n_workers)
+                try:
                     for future in as_completed([pool.submit(run_batch, *task(b)) for b in pending]):
                         finished(future.result())
+                finally:
+                    # on Ctrl-C (or a failed batch) the batches not yet started are dropped;
+                    # the ones running finish their files (a thread cannot be stopped)
+                    pool.shutdown(wait=True, cancel_futures=True)
     finally:
         bar.close()
     return directory.finish(len(batches))

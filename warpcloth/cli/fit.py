@@ -8,7 +8,7 @@ from pathlib import Path
 
 from warpcloth.scene import scene_from_dict
 
-from .options import EXIT_FIT_STATUS, add_overwrite, at_least, device, new_result, non_negative, positive
+from .options import EXIT_FIT_STATUS, add_overwrite, at_least, device, figure_path, new_result, non_negative, positive
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -101,6 +101,7 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
     from warpcloth.scene import read_scene_file
 
     out = new_result(args.output, args.overwrite, "-o")
+    plot = figure_path(args.plot, args.overwrite) if args.plot else None
     t, theta = read_encoder(args.encoder, args.angle_unit)
     fit = fit_clamp_motion(t, theta)
     raw = read_scene_file(args.scene)
@@ -123,7 +124,7 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
     if args.plot:
         from warpcloth.viz.plots import plot_clamp_fit
 
-        print(f"wrote {plot_clamp_fit(t, theta, fit, Path(args.plot))}")
+        print(f"wrote {plot_clamp_fit(t, theta, fit, plot)}")
     if fit.status != "converged":
         print(f"warpcloth clamp fit-angle: not a fit ({fit.status}): " + "; ".join(fit.problems)
               + (" (accepted with --accept)" if args.accept else "; a scene driven by it is wrong for the whole "

@@ -7,7 +7,7 @@ import sys
 
 from warpcloth.errors import OptionError
 
-from .options import EXIT_FIT_STATUS, add_overwrite, new_result, positive
+from .options import EXIT_FIT_STATUS, add_overwrite, figure_path, new_result, positive
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -51,6 +51,7 @@ def material_command(args: argparse.Namespace) -> int:
         raise OptionError("--density-g-per-cm2", "the mass per area is not part of KES-FB1/FB2 data; weigh a "
                          "sample and give it in g/cm² (e.g. 2.03e-2 for the illustrative wool/nylon)")
     out = new_result(args.output, args.overwrite, "--output")
+    plot = figure_path(args.plot, args.overwrite) if args.plot else None
     if out.suffix != ".toml":
         raise OptionError("--output", f"{out} must end in .toml (scenes refer to material files by such a path)")
     max_strain = kes.DIVERGENCE_STRAIN if args.divergence_strain is None else args.divergence_strain
@@ -85,7 +86,7 @@ def material_command(args: argparse.Namespace) -> int:
     if args.plot:
         from warpcloth.viz.plots import plot_kes_fit
 
-        print(f"wrote {plot_kes_fit(fit, args.plot)}")
+        print(f"wrote {plot_kes_fit(fit, plot)}")
     status, problems = fit.verdict()
     print(f"status: {status}")
     if status != "converged":

@@ -72,6 +72,14 @@ def add_overwrite(parser: argparse.ArgumentParser, what: str) -> None:
     parser.add_argument("--overwrite", action="store_true", help=f"replace an existing {what} (default: refuse)")
 
 
+def figure_path(path: str | Path, overwrite: bool, option: str = "--plot") -> Path:
+    """``--plot FILE``: a PNG that does not exist yet (unless ``overwrite``)."""
+    out = Path(path)
+    if out.suffix.lower() != ".png" or out.is_dir():
+        raise OptionError(option, f"{out} must be a file ending in .png")
+    return new_result(out, overwrite, option)
+
+
 def new_result(path: str | Path, overwrite: bool, option: str) -> Path:
     """``path`` for a result about to be written: refused when something is there already,
     unless ``overwrite`` (the writers replace it atomically, only once the new one is whole)."""

@@ -29,6 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     selection(plot_p)
     plot_p.set_defaults(handler=plot_command)
     plot_p.add_argument("--out", help="figure directory (default: RUN_DIR/figures)")
+    add_overwrite(plot_p, "figure directory --out")
     plot_p.add_argument("--measured", help="CSV of a measured displacement: t (s), x (mm); overlaid on amplitude.png")
     plot_p.add_argument("--times", type=finite, nargs="+", help="shape-overlay times, s after release")
     plot_p.add_argument("--metric", help="sweep: summary column to plot (e.g. first_period_s)")
@@ -38,6 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     selection(render_p)
     render_p.set_defaults(handler=render_command)
     render_p.add_argument("--out", help="image directory (default: RUN_DIR/render)")
+    add_overwrite(render_p, "image directory --out")
     render_p.add_argument("--times", type=finite, nargs="+", help="times of the PNG frames, s after release")
     render_p.add_argument("--movie", default="motion.gif", help="animation file name, .gif or .mp4; 'none' for none")
     render_p.add_argument("--stride", type=at_least(1), default=1, help="animate every n-th frame (at real speed)")
@@ -60,7 +62,7 @@ def plot_command(args: argparse.Namespace) -> int:
     from warpcloth.io.load import load_recording
     from warpcloth.viz.plots import plot_run, plot_sweep, read_sweep_summary
 
-    out = Path(args.out or Path(args.run_dir) / "figures")
+    out = new_result(args.out or Path(args.run_dir) / "figures", args.overwrite, "--out")
     if args.metric or args.x:
         if not (args.metric and args.x):
             raise OptionError("--metric", "a sweep plot needs both --metric and --x")
@@ -82,7 +84,7 @@ def render_command(args: argparse.Namespace) -> int:
 
     recording = load_recording(args.run_dir, args.variants, args.where)
     movie = None if args.movie == "none" else args.movie
-    out = Path(args.out or Path(args.run_dir) / "render")
+    out = new_result(args.out or Path(args.run_dir) / "render", args.overwrite, "--out")
     for path in render_run(recording, out, times=args.times, movie=movie, stride=args.stride):
         print(f"wrote {path}")
     return 0

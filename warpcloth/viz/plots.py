@@ -20,6 +20,7 @@ import pandas as pd  # noqa: E402
 
 from warpcloth import units  # noqa: E402
 from warpcloth.errors import DataFileError, OptionError  # noqa: E402
+from warpcloth.io.atomic import write_atomically  # noqa: E402
 from warpcloth.io.measured import LaserTrace, TrackedShapes, read_laser_trace  # noqa: E402
 from warpcloth.io.recording import Recording  # noqa: E402
 from warpcloth.scene import to_si  # noqa: E402
@@ -38,7 +39,7 @@ def _label(recording: Recording, j: int) -> str:
 
 def _save(fig: plt.Figure, path: Path) -> Path:
     fig.tight_layout()
-    fig.savefig(path, dpi=DPI)
+    write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=DPI))
     plt.close(fig)
     return path
 
@@ -311,5 +312,5 @@ def plot_kes_fit(fit: object, path: str | Path) -> Path:
                transform=right.transAxes, va="top", fontsize=8, bbox={"fc": "white", "alpha": 0.8})
     right.legend(loc="lower right", fontsize=8)
     path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path)
+    write_atomically(path, figure.savefig)
     return path

@@ -12,9 +12,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import imageio.v3 as imageio
 import numpy as np
 
 from warpcloth.errors import OptionError
+from warpcloth.io.atomic import write_atomically
 from warpcloth.io.recording import Recording
 
 if not os.environ.get("DISPLAY"):
@@ -93,27 +95,32 @@ class StripRenderer:
     def screenshot(self, frame: int, path: str | Path) -> np.ndarray:
         """Render ``frame`` to a PNG; returns the image [row, column, rgb]."""
         self.show_frame(frame)
-        return self.plotter.screenshot(str(path), return_img=True)
+        image = self.plotter.screenshot(None, return_img=True)
+        write_atomically(path, lambda tmp: imageio.imwrite(tmp, image))
+        return image
 
     def animate(self, path: str | Path, frames: np.ndarray, fps: float) -> Path:
         """Write an animation of ``frames`` (GIF, or MP4 with imageio-ffmpeg)."""
         path = Path(path)
-        if path.suffix == ".gif":
-            self.plotter.open_gif(str(path), fps=fps)
-        elif path.suffix == ".mp4":
+        if path.suffix == ".mp4":
             try:
                 import imageio_ffmpeg  # noqa: F401
             except ImportError:
                 raise OptionError("--movie", "MP4 needs the imageio-ffmpeg package (pip install imageio-ffmpeg); "
                                  "a .gif needs nothing more") from None
-            self.plotter.open_movie(str(path), framerate=fps)
-        else:
+        elif path.suffix != ".gif":
             raise OptionError("--movie", f"{path} must end in .gif or .mp4")
-        for f in frames:
-            self.show_frame(int(f))
-            self.plotter.write_frame()
-        self.plotter.mwriter.close()
-        return path
+
+        def write(tmp: Path) -> None:
+            if tmp.suffix == ".gif":
+                self.plotter.open_gif(str(tmp), fps=fps)
+            else:
+                self.plotter.open_movie(str(tmp), framerate=fps)
+            for f in frames:
+                self.show_frame(int(f))
+                self.plotter.write_frame()
+            self.plotter.mwriter.close()
+        return write_atomically(path, write)
 
     def close(self) -> None:
         """Release the render window."""
