@@ -233,3 +233,14 @@ def test_separate_basins_of_the_space_filling_stage_are_reported(name, cost, exp
     costs = np.array([cost(p) for p in points])
     found = _other_minima(WellObjective(cost), points, costs, int(np.argmin(costs)))
     assert [round(f["x"], 1) for f in found] == expected, name
+
+
+def test_a_wrong_clamp_motion_is_not_reported_as_a_fit(tmp_path):
+    # The bundled markers (rotation at 16 rad/s) fitted with the clamp's speed set 25 %
+    # low: the best γ, dy (6.98 mm against the truth 4.0) leave an RMS 2.0× the noise.
+    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "fit", "impulsive_rotation", "--measured",
+                           "impulsive_rotation_shapes", "--free", "gamma,rotation_centre_dy_mm", "--align-start",
+                           "0.01", "--set", "clamp.segments.1.theta_coefficients_si.1=12.0", "--out", "wrong",
+                           "--no-progress"], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert done.returncode == 6 and "not a fit (poor_fit)" in done.stderr, done.stdout + done.stderr
+    assert json.loads((tmp_path / "wrong" / "fit.json").read_text())["status"] == "poor_fit"
