@@ -132,3 +132,11 @@ def test_a_scene_file_that_is_not_utf8_text_is_named(tmp_path, content, message)
     material.write_bytes(content)
     with pytest.raises(wc.DataFileError, match=message):
         wc.load_scene("damped_swing", [f"material.from_file={str(material)!r}"])
+
+
+def test_a_motion_given_to_a_fixed_clamp_is_refused():
+    import warpcloth as wc
+
+    segment = "[{t_start_s = 0.0, t_end_s = 0.1, theta_coefficients_si = [0.0, 1.0]}]"
+    with pytest.raises(wc.SceneError, match="clamp.segments: is given but clamp.motion = 'fixed' ignores it"):
+        wc.load_scene("damped_swing", [f"clamp.segments={segment}"])

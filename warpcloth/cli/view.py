@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 from warpcloth.errors import OptionError
@@ -68,8 +69,13 @@ def plot_command(args: argparse.Namespace) -> int:
             raise OptionError("--metric", "a sweep plot needs both --metric and --x")
         out.mkdir(parents=True, exist_ok=True)
         name = f"{args.metric}_vs_{args.x}" + (f"_{args.y}" if args.y else "")
-        path = plot_sweep(read_sweep_summary(args.run_dir), out / f"{name}.png", args.metric, args.x, args.y)
+        summary = read_sweep_summary(args.run_dir)
+        path = plot_sweep(summary, out / f"{name}.png", args.metric, args.x, args.y)
         print(f"wrote {path}")
+        total = json.loads((Path(args.run_dir) / "sweep.json").read_text())["n_variants"]
+        if len(summary) < total:
+            print(f"note: the sweep has not finished: the figure shows the {len(summary)} of its {total} variants "
+                  "done so far (run the sweep again to complete it)")
         return 0
     recording = load_recording(args.run_dir, args.variants, args.where)
     for path in plot_run(recording, out, measured=args.measured, times=args.times):

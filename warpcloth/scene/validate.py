@@ -50,6 +50,13 @@ def validate_scene(scene: Scene) -> None:
 
 
 def _validate_clamp(clamp: ClampSection) -> None:
+    # a motion given to a clamp that stays fixed would be ignored in silence (motion
+    # forgotten); switching between piecewise and table may leave the other's fields
+    if clamp.motion == "fixed":
+        for name, needs in (("segments", "piecewise"), ("table_t_s", "table"), ("table_theta_rad", "table")):
+            if getattr(clamp, name):
+                raise SceneError(f"clamp.{name}", f"is given but clamp.motion = 'fixed' ignores it; set "
+                                 f"motion = \"{needs}\" or remove it")
     if clamp.motion == "piecewise":
         if not clamp.segments:
             raise SceneError("clamp.segments", "motion = 'piecewise' needs at least one segment")
