@@ -273,3 +273,15 @@ def test_version_provenance_and_dict_overrides(tmp_path):
     sweep = wc.expand({"run": {"duration_s": 0.02}, "sweep": {"grid": {"damping.gamma_per_s": [0.1]}}})
     wc.run_sweep(sweep, tmp_path / "s", workers=0, progress=False)
     assert json.loads((tmp_path / "s" / "sweep.json").read_text())["provenance"]["numpy"] == np.__version__
+
+
+def test_scene_list_and_show_give_templates_that_run(tmp_path):
+    listed = warpcloth_cli("scene", "list", cwd=tmp_path)
+    assert listed.returncode == 0 and "damped_swing: Paper §3.1 experiment (a)" in listed.stdout
+    shown = warpcloth_cli("scene", "show", "impulsive_rotation", cwd=tmp_path)
+    assert shown.returncode == 0 and shown.stdout.startswith("# Paper §3.1 experiment (b)")
+    assert warpcloth_cli("scene", "show", "damped_swing", "-o", "mine.toml", cwd=tmp_path).returncode == 0
+    assert wc.load_scene(tmp_path / "mine.toml") == wc.load_scene("damped_swing")
+    again = warpcloth_cli("scene", "show", "damped_swing", "-o", "mine.toml", cwd=tmp_path)
+    assert again.returncode == 2 and "already exists" in again.stderr
+    assert "no bundled scene 'nope'" in warpcloth_cli("scene", "show", "nope", cwd=tmp_path).stderr

@@ -18,9 +18,9 @@ from collections.abc import Sequence
 from warpcloth.errors import DataFileError, DivergenceError, OptionError, ResourceError, SceneError, WarpclothError
 from warpcloth.sim.model import init_warp_quietly
 
-from . import analyse, fit, material, run, sweep, view
+from . import analyse, fit, material, run, scene, sweep, view
 
-COMMAND_GROUPS = (run, sweep, view, fit, material, analyse)
+COMMAND_GROUPS = (run, sweep, view, fit, material, analyse, scene)
 """Each registers its subcommands with a ``handler`` (see :func:`main`)."""
 
 WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (OptionError, "error in option"),
@@ -45,7 +45,7 @@ def parser() -> argparse.ArgumentParser:
     """The argument parser of every command."""
     top = argparse.ArgumentParser(
         prog="warpcloth", description="Batched Warp simulation of hanging fabric strips: "
-        "run | sweep | export-usd | plot | render | fit | clamp | material | analyse (--help on each).")
+        "run | sweep | export-usd | plot | render | fit | clamp | material | analyse | scene (--help on each).")
     top.add_argument("--version", action="version", version=f"warpcloth {_version()}")
     sub = top.add_subparsers(dest="command", required=True)
     for group in COMMAND_GROUPS:
