@@ -285,3 +285,16 @@ def test_scene_list_and_show_give_templates_that_run(tmp_path):
     again = warpcloth_cli("scene", "show", "damped_swing", "-o", "mine.toml", cwd=tmp_path)
     assert again.returncode == 2 and "already exists" in again.stderr
     assert "no bundled scene 'nope'" in warpcloth_cli("scene", "show", "nope", cwd=tmp_path).stderr
+
+
+def test_results_as_xarray_and_dataframe(tmp_path):
+    sweep = wc.expand({"run": {"duration_s": 0.05}, "sweep": {"grid": {"damping.gamma_per_s": [0.1, 0.3]}}})
+    wc.run_sweep(sweep, tmp_path / "s", workers=0, frames=True, progress=False)
+    recording = wc.load_recording(tmp_path / "s")
+    ds = recording.to_xarray()
+    assert list(ds["damping.gamma_per_s"].values) == [0.1, 0.3] and ds["tip_x"].attrs["units"] == "m"
+    probes = recording.probes[recording.probes["variant"] == 1].sort_values("t")
+    np.testing.assert_array_equal(ds["tip_x"].sel(variant=1).values, probes["tip_x"].to_numpy())
+    np.testing.assert_array_equal(ds["frames"].values, recording.frames)
+    table = recording.to_dataframe()
+    assert set(table.groupby("damping.gamma_per_s")["variant"].first()) == {0, 1}

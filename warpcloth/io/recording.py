@@ -80,6 +80,39 @@ class Recording:
         rows = self.probes[self.probes["variant"] == self.variants[j]]
         return rows["t"].to_numpy(), rows[name].to_numpy()
 
+    def to_dataframe(self) -> pd.DataFrame:
+        """The probes in long form (t, variant, one column per probe, SI) joined with each
+        variant's parameters: ready for groupby and plotting."""
+        return self.probes.merge(self.parameters, on="variant", how="left")
+
+    def to_xarray(self) -> object:
+        """An ``xarray.Dataset``: every probe as a variable over (t, variant), the frames
+        over (frame_time, variant, node, xy), the per-variant parameters as coordinates
+        along ``variant``, units in ``attrs`` (needs ``pip install warpcloth[xarray]``)."""
+        try:
+            import xarray as xr
+        except ImportError:
+            raise ImportError("to_xarray needs xarray: pip install 'warpcloth[xarray]' (or pip install xarray)") \
+                from None
+        from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
+
+        table = self.probes.set_index(["t", "variant"]).sort_index()
+        dataset = xr.Dataset.from_dataframe(table[list(PROBE_FIELDS)])
+        for name in PROBE_FIELDS:
+            dataset[name].attrs["units"] = PROBE_UNITS[name]
+        dataset["t"].attrs["units"] = "s"
+        dataset["frames"] = xr.DataArray(self.frames, dims=("frame_time", "variant", "node", "xy"),
+                                         coords={"frame_time": self.frame_times, "variant": self.variants,
+                                                 "xy": ["x", "y"]}, attrs={"units": "m"})
+        dataset["frame_time"].attrs["units"] = "s"
+        parameters = self.parameters.set_index("variant")
+        for column in parameters.columns:
+            dataset = dataset.assign_coords({column: ("variant", parameters.loc[dataset["variant"].values,
+                                                                                column].to_numpy())})
+        dataset.attrs.update({"source": str(self.source), "complete": int(self.complete),
+                              "coordinates": "x right, y up, from the clamp's top; t = 0 at the release"})
+        return dataset
+
     def clamp_pose(self, j: int) -> tuple[np.ndarray, np.ndarray]:
         """Per frame, the clamp's rotation angle (rad) and translation (m) that carry its
         rest nodes onto the recorded ones (a rigid motion, least squares)."""
