@@ -27,6 +27,8 @@ WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (
         (ResourceError, "too large"))
 EXIT_UNUSABLE_INPUT = 2
 EXIT_DIVERGED = 3
+STREAMING = ("run", "sweep")
+"""Commands whose results stream to disk (the rest write each file whole, atomically)."""
 EXIT_IO = 5
 EXIT_INTERRUPTED = 130  # the shell's convention for SIGINT
 FULL = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)
@@ -69,10 +71,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         # Everything finished so far is on disk; an interrupted run directory says
         # "complete": false in its meta.json, a sweep resumes from its finished batches.
-        out = getattr(args, "out", None)
-        where = f" in {out}" if out else ""
-        print(f"warpcloth {args.command}: interrupted; what was written so far is kept{where} and marked incomplete",
-              file=sys.stderr)
+        if args.command in STREAMING:
+            out = getattr(args, "out", None)
+            where = f" in {out}" if out else ""
+            print(f"warpcloth {args.command}: interrupted; what was written so far is kept{where} and marked "
+                  "incomplete", file=sys.stderr)
+        else:
+            print(f"warpcloth {args.command}: interrupted; its files are written whole or not at all, so nothing "
+                  "was replaced or left half-written", file=sys.stderr)
         return EXIT_INTERRUPTED
     except OSError as exc:
         # a file that cannot be read or written (missing directory, no permission, full disk)
