@@ -298,3 +298,9 @@ def test_results_as_xarray_and_dataframe(tmp_path):
     np.testing.assert_array_equal(ds["frames"].values, recording.frames)
     table = recording.to_dataframe()
     assert set(table.groupby("damping.gamma_per_s")["variant"].first()) == {0, 1}
+
+
+def test_an_empty_output_path_is_refused_not_defaulted(tmp_path):
+    done = warpcloth_cli("run", "damped_swing", "--out", "", cwd=tmp_path)
+    assert done.returncode == 2 and "argument --out: an empty path" in done.stderr
+    assert not (tmp_path / "runs").exists()

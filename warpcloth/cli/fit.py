@@ -8,7 +8,17 @@ from pathlib import Path
 
 from warpcloth.scene import scene_from_dict
 
-from .options import EXIT_FIT_STATUS, add_overwrite, at_least, device, figure_path, new_result, non_negative, positive
+from .options import (
+    EXIT_FIT_STATUS,
+    add_overwrite,
+    at_least,
+    device,
+    figure_path,
+    new_result,
+    non_negative,
+    path_text,
+    positive,
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -26,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="also fit a clock offset between measurement and simulation, within ± this")
     fit_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                        help="override a field of the scene first")
-    fit_p.add_argument("--out", help="fit directory (default: runs/fit-<scene name>)")
+    fit_p.add_argument("--out", type=path_text, help="fit directory (default: runs/fit-<scene name>)")
     fit_p.add_argument("--space-filling", type=at_least(0), default=None,
                        help="variants in the first, space-filling batch")
     fit_p.add_argument("--max-iterations", type=at_least(0), default=25, help="local refinement launches at most")
@@ -44,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     angle_p.set_defaults(handler=clamp_fit_angle_command)
     angle_p.add_argument("encoder", metavar="ENCODER", help="CSV 't_s, theta' (rad, or the header's unit: theta_deg)")
     angle_p.add_argument("--scene", required=True, help="scene to write the fitted motion into")
-    angle_p.add_argument("-o", "--output", required=True, help="the new scene file (TOML)")
+    angle_p.add_argument("-o", "--output", type=path_text, required=True, help="the new scene file (TOML)")
     angle_p.add_argument("--angle-unit", choices=("rad", "deg"), default=None, help="override the header's unit")
     angle_p.add_argument("--plot", help="also write a PNG of the encoder data and the fit")
     angle_p.add_argument("--accept", action="store_true",

@@ -7,7 +7,7 @@ import sys
 
 from warpcloth.errors import OptionError
 
-from .options import EXIT_FIT_STATUS, add_overwrite, figure_path, new_result, positive
+from .options import EXIT_FIT_STATUS, add_overwrite, figure_path, new_result, path_text, positive
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,7 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="KES-FB1 loop: strain (%% or fraction) or extension (mm), force per width (gf/cm)")
     kes_p.add_argument("--bending", required=True, metavar="FB2.csv",
                        help="KES-FB2 loop: curvature (1/cm), moment per width (gf·cm/cm)")
-    kes_p.add_argument("-o", "--output", required=True, help="the material file to write (.toml)")
+    kes_p.add_argument("-o", "--output", type=path_text, required=True, help="the material file to write (.toml)")
     kes_p.add_argument("--density-g-per-cm2", type=positive, default=None,
                        help="mass per area ρ_A (required: KES-FB1/FB2 data do not contain it)")
     kes_p.add_argument("--name", help="material name (default: the output file's stem)")

@@ -26,6 +26,13 @@ def device(value: str) -> str:
     return value
 
 
+def path_text(value: str) -> str:
+    """A path option: not empty (an empty --out would silently mean the default)."""
+    if not value.strip():
+        raise argparse.ArgumentTypeError("an empty path; name a file or directory, or leave the option out")
+    return value
+
+
 def finite(value: str) -> float:
     """A number option that must be finite (NaN or infinity would silently mean something else)."""
     try:

@@ -10,14 +10,14 @@ from warpcloth.errors import DivergenceError
 from warpcloth.runs import simulate
 from warpcloth.scene import bundled_scenes, load_scene
 
-from .options import device, new_result
+from .options import device, new_result, path_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``run``."""
     run_p = sub.add_parser("run", help="simulate a scene and write a run directory")
     run_p.add_argument("scene", help=f"scene file, or a bundled scene: {', '.join(bundled_scenes())}")
-    run_p.add_argument("--out", help="run directory (default: runs/<scene name>)")
+    run_p.add_argument("--out", type=path_text, help="run directory (default: runs/<scene name>)")
     run_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                        help="override a scene field by dotted name, e.g. integrator.dt_s=1e-7")
     run_p.add_argument("--device", type=device, default=None, help="cpu or cuda (default: Warp's preferred device)")

@@ -7,7 +7,7 @@ import importlib.resources
 
 from warpcloth.errors import OptionError
 
-from .options import add_overwrite, new_result
+from .options import add_overwrite, new_result, path_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -17,7 +17,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     scene_sub.add_parser("list", help="bundled scene names and what each is").set_defaults(handler=list_command)
     show_p = scene_sub.add_parser("show", help="print a bundled scene file, ready to copy and edit")
     show_p.add_argument("name", metavar="NAME", help="a bundled scene (warpcloth scene list)")
-    show_p.add_argument("-o", "--output", help="write it to this .toml file instead of printing it")
+    show_p.add_argument("-o", "--output", type=path_text, help="write it to this .toml file instead of printing it")
     add_overwrite(show_p, "file -o")
     show_p.set_defaults(handler=show_command)
 

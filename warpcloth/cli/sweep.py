@@ -5,14 +5,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .options import at_least, device
+from .options import at_least, device, path_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``sweep``."""
     sweep_p = sub.add_parser("sweep", help="run (or resume) the [sweep] of a scene into a sweep directory")
     sweep_p.add_argument("scene", help="scene file with a [sweep] section, or a bundled one")
-    sweep_p.add_argument("--out", help="sweep directory (default: runs/<scene name>); rerun to resume")
+    sweep_p.add_argument("--out", type=path_text, help="sweep directory (default: runs/<scene name>); rerun to resume")
     sweep_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                          help="override a field of the base scene")
     sweep_p.add_argument("--max-batch", type=at_least(1), default=None,

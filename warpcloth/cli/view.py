@@ -8,7 +8,7 @@ from pathlib import Path
 
 from warpcloth.errors import OptionError
 
-from .options import add_overwrite, at_least, finite, new_result
+from .options import add_overwrite, at_least, finite, new_result, path_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,7 +20,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     usd_p = sub.add_parser("export-usd", help="write a run (or sweep variants) as an animated USD stage")
     selection(usd_p)
-    usd_p.add_argument("-o", "--output", required=True, help="stage file: .usd or .usdc (binary), .usda (text)")
+    usd_p.add_argument("-o", "--output", type=path_text, required=True,
+                       help="stage file: .usd or .usdc (binary), .usda (text)")
     usd_p.add_argument("--ribbon", action="store_true", help="also write each strip as a mesh of its real width")
     usd_p.set_defaults(handler=export_usd_command)
     add_overwrite(usd_p, "stage -o")
@@ -29,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     plot_p = sub.add_parser("plot", help="PNG figures of a run, or a sweep metric against parameters")
     selection(plot_p)
     plot_p.set_defaults(handler=plot_command)
-    plot_p.add_argument("--out", help="figure directory (default: RUN_DIR/figures)")
+    plot_p.add_argument("--out", type=path_text, help="figure directory (default: RUN_DIR/figures)")
     add_overwrite(plot_p, "figure directory --out")
     plot_p.add_argument("--measured", help="CSV of a measured displacement: t (s), x (mm); overlaid on amplitude.png")
     plot_p.add_argument("--times", type=finite, nargs="+", help="shape-overlay times, s after release")
@@ -39,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     render_p = sub.add_parser("render", help="3D PNG frames and an animation of a run (pyvista, off screen)")
     selection(render_p)
     render_p.set_defaults(handler=render_command)
-    render_p.add_argument("--out", help="image directory (default: RUN_DIR/render)")
+    render_p.add_argument("--out", type=path_text, help="image directory (default: RUN_DIR/render)")
     add_overwrite(render_p, "image directory --out")
     render_p.add_argument("--times", type=finite, nargs="+", help="times of the PNG frames, s after release")
     render_p.add_argument("--movie", default="motion.gif", help="animation file name, .gif or .mp4; 'none' for none")
