@@ -255,3 +255,26 @@ def test_cli_export_plot_and_render(swing_run, tmp_path):
     assert done.returncode == 2 and "-o" in done.stderr and "x.obj" in done.stderr
     done = cli("render", str(swing_run), "--times", "9")
     assert done.returncode == 2 and "--times" in done.stderr
+
+
+def test_a_sampled_sweep_is_plotted_as_points_not_a_zigzag():
+    # Latin-hypercube samples: every x value is unique while other fields vary, so the
+    # points are scattered (coloured by another swept field), never joined in x order.
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from warpcloth.viz.plots import sweep_figure
+
+    rng = np.random.default_rng(0)
+    summary = pd.DataFrame({"variant": range(30), "damping.gamma_per_s": rng.random(30),
+                            "material.hysteresis_d1_gf_cm_per_cm": rng.random(30), "first_period_s": rng.random(30),
+                            "diverged": False})
+    figure = sweep_figure(summary, "first_period_s", "damping.gamma_per_s")
+    axes = figure.axes
+    assert not any(len(line.get_xdata()) > 1 for line in axes[0].get_lines())  # nothing joined
+    assert len(axes) == 2 and axes[1].get_ylabel() == "material.hysteresis_d1_gf_cm_per_cm"  # the colourbar
+    plt.close(figure)
+    one_d = sweep_figure(summary[["variant", "damping.gamma_per_s", "first_period_s", "diverged"]], "first_period_s",
+                         "damping.gamma_per_s")
+    assert len(one_d.axes[0].get_lines()[0].get_xdata()) == 30  # a 1-D sweep is still a curve
+    plt.close(one_d)

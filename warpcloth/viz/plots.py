@@ -182,8 +182,14 @@ def read_sweep_summary(sweep_dir: str | Path) -> pd.DataFrame:
 
 
 def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: str | None = None) -> Path:
-    """A metric against one swept parameter (line, or points when others vary too) or
-    two (heat map on a grid, coloured points otherwise)."""
+    """PNG of :func:`sweep_figure`."""
+    return _save(sweep_figure(summary, metric, x, y), Path(path))
+
+
+def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = None) -> plt.Figure:
+    """A metric against one swept parameter (a line for a 1-D sweep; points coloured by
+    another swept field for a sampled one; points and their mean when others are gridded)
+    or two (heat map on a grid, coloured points otherwise)."""
     for name, flag in ((metric, "--metric"), (x, "--x"), (y, "--y")):
         if name is not None and name not in summary:
             raise OptionError(flag, f"{name!r} is not a column of the sweep summary; "
@@ -197,9 +203,16 @@ def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: 
     fig, ax = plt.subplots(figsize=(6.5, 4.8))
     if y is None:
         grouped = data.groupby(x)[metric]
-        if grouped.size().max() == 1:
+        # swept fields are dotted scene names; others that vary make this a sample, not a curve
+        others = [c for c in data.columns if "." in c and c != x and data[c].nunique() > 1]
+        if grouped.size().max() == 1 and not others:
             ordered = data.sort_values(x)
             ax.plot(ordered[x], ordered[metric], "o-", ms=3)
+        elif grouped.size().max() == 1:
+            # a sampled sweep (Latin hypercube): points coloured by another swept field,
+            # never joined in x order (that draws a zigzag through unrelated variants)
+            points = ax.scatter(data[x], data[metric], c=data[others[0]], s=12, cmap="viridis")
+            fig.colorbar(points, ax=ax, label=others[0])
         else:
             ax.plot(data[x], data[metric], ".", ms=3, alpha=0.6, label="variants (other parameters vary)")
             ax.plot(grouped.mean().index, grouped.mean().to_numpy(), "k-", lw=1, label="mean")
@@ -218,7 +231,7 @@ def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: 
         ax.set(xlabel=x, ylabel=y)
     ax.set_title(f"{metric} over {len(data)} variants" + (f" ({len(summary) - len(data)} diverged)"
                                                            if len(data) < len(summary) else ""))
-    return _save(fig, Path(path))
+    return fig
 
 
 
