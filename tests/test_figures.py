@@ -272,7 +272,8 @@ def test_a_sampled_sweep_is_plotted_as_points_not_a_zigzag():
     figure = sweep_figure(summary, "first_period_s", "damping.gamma_per_s")
     axes = figure.axes
     assert not any(len(line.get_xdata()) > 1 for line in axes[0].get_lines())  # nothing joined
-    assert len(axes) == 2 and axes[1].get_ylabel() == "material.hysteresis_d1_gf_cm_per_cm"  # the colourbar
+    assert len(axes) == 2 and axes[1].get_ylabel() == "D1 (gf·cm/cm)"  # the colourbar, symbol and unit
+    assert axes[0].get_xlabel() == "γ (s⁻¹)" and axes[0].get_ylabel() == "first period (s)"
     plt.close(figure)
     one_d = sweep_figure(summary[["variant", "damping.gamma_per_s", "first_period_s", "diverged"]], "first_period_s",
                          "damping.gamma_per_s")

@@ -37,6 +37,40 @@ def _label(recording: Recording, j: int) -> str:
     return f"variant {recording.variants[j]}" + (f" ({', '.join(parts)})" if parts else "")
 
 
+FIELD_LABELS = {
+    "damping.gamma_per_s": ("γ", "s⁻¹"),
+    "material.bending_rigidity_gf_cm2_per_cm": ("B = D", "gf·cm²/cm"),
+    "material.hysteresis_d1_gf_cm_per_cm": ("D1", "gf·cm/cm"),
+    "material.hysteresis_alpha_cm": ("α", "cm"),
+    "material.hysteresis_k0_per_cm": ("K0", "cm⁻¹"),
+    "material.density_g_per_cm2": ("ρ_A", "g/cm²"),
+    "clamp.rotation_centre_dx_mm": ("rotation centre dx", "mm"),
+    "clamp.rotation_centre_dy_mm": ("rotation centre dy", "mm"),
+    "release.hold_x_mm": ("hold x", "mm"),
+    "release.hold_y_mm": ("hold y", "mm"),
+    "time_shift_s": ("clock offset δ", "s"),
+    "first_period_s": ("first period", "s"),
+    "first_amplitude_m": ("first amplitude", "m"),
+    "mean_log_decrement": ("mean log decrement per half-cycle", ""),
+    "n_half_cycles": ("half-cycles", ""),
+    "peak_tip_speed_m_per_s": ("peak tip speed", "m/s"),
+    "hysteresis_work_J": ("hysteresis work", "J"),
+    "damping_work_J": ("damping work", "J"),
+}
+"""Symbols and units for the fields figures name; anything else shows its own name."""
+
+
+def field_unit(name: str) -> str:
+    """The unit a figure writes for ``name`` ("" if none is known)."""
+    return FIELD_LABELS.get(name, (name, ""))[1]
+
+
+def field_label(name: str, units: bool = True) -> str:
+    """An axis label: the field's symbol and unit (``γ (s⁻¹)``), else its dotted name."""
+    symbol, unit = FIELD_LABELS.get(name, (name, ""))
+    return f"{symbol} ({unit})" if units and unit else symbol
+
+
 def _save(fig: plt.Figure, path: Path) -> Path:
     fig.tight_layout()
     write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=DPI))
@@ -212,12 +246,12 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
             # a sampled sweep (Latin hypercube): points coloured by another swept field,
             # never joined in x order (that draws a zigzag through unrelated variants)
             points = ax.scatter(data[x], data[metric], c=data[others[0]], s=12, cmap="viridis")
-            fig.colorbar(points, ax=ax, label=others[0])
+            fig.colorbar(points, ax=ax, label=field_label(others[0]))
         else:
             ax.plot(data[x], data[metric], ".", ms=3, alpha=0.6, label="variants (other parameters vary)")
             ax.plot(grouped.mean().index, grouped.mean().to_numpy(), "k-", lw=1, label="mean")
             ax.legend(fontsize=7)
-        ax.set(xlabel=x, ylabel=metric)
+        ax.set(xlabel=field_label(x), ylabel=field_label(metric))
     else:
         table = data.pivot_table(index=y, columns=x, values=metric, aggfunc="mean")
         # Colours span the 2nd–98th percentile, so one outlier does not flatten the map.
@@ -227,8 +261,8 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
             mesh = ax.pcolormesh(table.columns, table.index, table.to_numpy(), shading="nearest", **scale)
         else:
             mesh = ax.scatter(data[x], data[y], c=data[metric], s=14, **scale)
-        fig.colorbar(mesh, ax=ax, label=metric, extend="both")
-        ax.set(xlabel=x, ylabel=y)
+        fig.colorbar(mesh, ax=ax, label=field_label(metric), extend="both")
+        ax.set(xlabel=field_label(x), ylabel=field_label(y))
     ax.set_title(f"{metric} over {len(data)} variants" + (f" ({len(summary) - len(data)} diverged)"
                                                            if len(data) < len(summary) else ""))
     return fig
@@ -240,7 +274,8 @@ def plot_fit_overlay(result: object, objective: object, measurement: LaserTrace 
     """Measured against the best fit: the laser trace and its residual, or tracked
     markers over the simulated strip at six of the measured frames (on the measured clock)."""
     shift = fit.shift_s
-    title = ", ".join(f"{k.split('.')[-1]} = {v:.4g} ± {fit.sigma[k]:.2g}" for k, v in fit.parameters.items())
+    title = ", ".join(f"{field_label(k, units=False)} = {v:.4g} ± {fit.sigma[k]:.2g} {field_unit(k)}".rstrip()
+                      for k, v in fit.parameters.items())
     if isinstance(measurement, LaserTrace):
         fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, height_ratios=[3, 1])
         top.plot(measurement.t, measurement.x * MM, "k.", ms=2.5, label="measured")
