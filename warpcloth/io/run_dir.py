@@ -263,18 +263,20 @@ def read_probes(path: Path, meta: dict) -> pd.DataFrame:
                             f"({committed['probe_bytes']} bytes): the file was truncated")
     text = data[: committed["probe_bytes"]].decode("utf-8", errors="replace")
     try:
-        table = pd.read_csv(io.StringIO(text), dtype=str, keep_default_na=False)
+        numbers = pd.read_csv(io.StringIO(text))
     except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
         raise DataFileError(file, f"is not a probe table: {exc}") from None
-    if list(table.columns) != list(PROBE_COLUMNS):
-        raise DataFileError(file, f"has columns {', '.join(map(str, table.columns))}; a run writes "
+    if list(numbers.columns) != list(PROBE_COLUMNS):
+        raise DataFileError(file, f"has columns {', '.join(map(str, numbers.columns))}; a run writes "
                             f"{', '.join(PROBE_COLUMNS)}")
-    numbers = table.apply(pd.to_numeric, errors="coerce")
-    bad = numbers.isna().to_numpy() & (table.apply(lambda c: c.str.strip().str.lower()).to_numpy() != "nan")
-    if bad.any():
-        row, column = np.argwhere(bad)[0]
-        raise DataFileError(file, f"{PROBE_COLUMNS[column]} is {table.iat[row, column]!r}, not a number: the file "
-                            "was changed after the run", int(row) + 2)
+    damaged = [c for c in numbers.columns if not pd.api.types.is_numeric_dtype(numbers[c])]
+    if damaged:
+        # only a changed file gets here: find its first cell that is not a number
+        column = PROBE_COLUMNS.index(damaged[0])
+        row = int(np.flatnonzero(pd.to_numeric(numbers[damaged[0]], errors="coerce").isna()
+                                 & numbers[damaged[0]].notna())[0])
+        raise DataFileError(file, f"{damaged[0]} is {numbers.iat[row, column]!r}, not a number: the file was "
+                            "changed after the run", row + 2)
     if meta["complete"] and len(numbers) != committed["probe_rows"]:
         raise DataFileError(file, f"holds {len(numbers)} rows but meta.json records {committed['probe_rows']} for "
                             "the complete run")
