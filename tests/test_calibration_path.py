@@ -244,3 +244,16 @@ def test_a_wrong_clamp_motion_is_not_reported_as_a_fit(tmp_path):
                            "--no-progress"], capture_output=True, text=True, cwd=tmp_path, timeout=300)
     assert done.returncode == 6 and "not a fit (poor_fit)" in done.stderr, done.stdout + done.stderr
     assert json.loads((tmp_path / "wrong" / "fit.json").read_text())["status"] == "poor_fit"
+
+
+def test_a_quantised_encoder_and_a_named_trace_column_are_read_right(tmp_path):
+    # An encoder that reads whole milliradians is flat at rest (scatter 0): its noise is
+    # the count's rounding, not zero; a trace headed with a probe name is not a unit.
+    truth = motion(T, quartic=(0.0, 0.0, 0.0, 3.2e4), stop=0.12)
+    fit = fit_clamp_motion(T, np.round(truth / 1e-3) * 1e-3)
+    assert fit.status == "converged" and fit.noise_rad == pytest.approx(1e-3 / np.sqrt(12), rel=1e-6)
+    never = fit_clamp_motion(T, motion(T))
+    assert never.stop_s is None and never.segments()[-1]["t_end_s"] > never.segments()[-1]["t_start_s"]
+    trace = tmp_path / "trace.csv"
+    trace.write_text("t_s,laser_x\n0,1\n0.1,2\n")
+    np.testing.assert_allclose(read_measurement(trace).x, [0.001, 0.002])

@@ -36,7 +36,8 @@ def analyse(source: str | Path, starts_at_rest: bool = True) -> list[dict]:
         if not summary.is_file():
             raise DataFileError(path, "the sweep has not finished (no summary.parquet); rerun it to complete it")
         table = read_parquet(summary)
-        return [_row(str(path), int(r["variant"]), {**r, "log_decrement": list(r["log_decrement"])})
+        return [_row(str(path), int(r["variant"]), {**r, "signal": "sweep summary",
+                                                    "log_decrement": list(r["log_decrement"])})
                 for _, r in table.iterrows()]
     if (path / "meta.json").is_file():
         recording = load_recording(path)

@@ -42,8 +42,9 @@ def block_bootstrap_sigma(jacobian: np.ndarray, residual: np.ndarray, replicates
     n, _ = jacobian.shape
     if block is None:
         block = max(4 * correlation_length(residual), math.ceil(n ** (1 / 3)))
-    block = int(min(max(block, 1), n))
-    estimator = np.linalg.solve(jacobian.T @ jacobian, jacobian.T)  # (JᵀJ)⁻¹ Jᵀ
+    # at most a third of the record, so resamples still differ (σ from one block is 0)
+    block = int(min(max(block, 1), max(1, n // 3)))
+    estimator = np.linalg.pinv(jacobian)  # (JᵀJ)⁻¹ Jᵀ, and defined for a singular Jacobian
     centred = residual - residual.mean()
     n_blocks = math.ceil(n / block)
     starts = rng.integers(0, n - block + 1, size=(replicates, n_blocks))

@@ -36,7 +36,7 @@ import numpy as np
 
 from warpcloth.errors import OptionError
 
-from .noise import difference_noise
+from .noise import difference_noise, quantisation_floor
 
 FORMS = {
     "quartic, line, rest": (1, True),
@@ -72,6 +72,7 @@ class ClampMotionFit:
     status: str = "converged"
     problems: list[str] = field(default_factory=list)
     candidates: dict[str, float] = field(default_factory=dict)  # form → RMS (rad) of its best fit
+    record_end_s: float = 0.0  # the encoder's last sample: a motion still going continues at least to here
 
     def theta(self, t: np.ndarray) -> np.ndarray:
         """The fitted θ(t)."""
@@ -83,7 +84,7 @@ class ClampMotionFit:
         from the rest reading θ0: a scene's θ turns the clamp away from the hanging rest
         shape, so an encoder offset must not become a jump at t = 0. A motion that does
         not stop in the record continues its last line to ``until_s`` (then holds)."""
-        ends = [*self.breaks_s[1:], self.stop_s if self.stop_s is not None else max(until_s or 0.0, self.end_s)]
+        ends = [*self.breaks_s[1:], self.stop_s if self.stop_s is not None else max(until_s or 0.0, self.record_end_s)]
         pieces = [{"t_start_s": self.onset_s, "t_end_s": self.breaks_s[0],
                    "theta_coefficients_si": [0.0, *self.quartic_si]}]
         for start, end, speed in zip(self.breaks_s, ends, self.speeds_rad_per_s, strict=True):
@@ -240,17 +241,18 @@ def fit_clamp_motion(t: np.ndarray, theta: np.ndarray) -> ClampMotionFit:
     at_rest = theta[t < t0]
     estimates = {"the encoder's 4th differences": difference_noise([theta])}
     if len(at_rest) >= 8:
-        estimates[f"the scatter of the {len(at_rest)} samples at rest"] = float(np.std(at_rest, ddof=1))
+        estimates[f"the scatter of the {len(at_rest)} samples at rest"] = max(float(np.std(at_rest, ddof=1)),
+                                                                            quantisation_floor([theta]))
     source = min(estimates, key=estimates.get)
     noise = estimates[source]
     rms = math.sqrt(cost / n)
     problems = []
-    if rms > POOR_FIT_FACTOR * noise:
+    if noise > 0 and rms > POOR_FIT_FACTOR * noise:
         problems.append(f"the RMS {rms:.3g} rad is {rms / noise:.1f}× the encoder's noise {noise:.2g} rad "
                         f"({source}): no form of rest, quartic, lines and stop describes this encoder")
     return ClampMotionFit(form, t0, breaks, stop, rest, tuple(float(v) for v in x[:4]), speeds, rms, noise, source,
                           n, bic, "poor_fit" if problems else "converged", problems,
-                          {f: math.sqrt(v[1] / n) for f, v in found.items()})
+                          {f: math.sqrt(v[1] / n) for f, v in found.items()}, float(t[-1]))
 
 
 def scene_with_clamp_motion(raw_scene: dict, fit: ClampMotionFit, until_s: float | None = None) -> dict:

@@ -329,7 +329,10 @@ class FitResult:
 
     def judge(self, missing: int) -> None:
         """Set :attr:`status` and :attr:`problems` (``missing``: measured points the best
-        run has no value for). Problems are listed worst first; the status is the worst's."""
+        run has no value for). Problems are listed in order of precedence and the status is
+        the first's: a result that is not an estimate (failed, at_bound) before one whose
+        parameters are not separated or whose model does not fit, and the iteration limit
+        last (a fit at a bound that also ran out of iterations is reported at_bound)."""
         names = list(self.parameters)
         corr = np.asarray(self.correlation, dtype=float)
         found: list[tuple[str, str]] = []
@@ -350,7 +353,7 @@ class FitResult:
                     found.append(("not_identifiable", f"{names[i]} and {names[j]} are correlated {corr[i, j]:+.3f}: "
                                                       "the data do not separate them; fix one, or measure what "
                                                       "distinguishes them"))
-        if math.isfinite(self.noise) and self.rms > POOR_FIT_FACTOR * self.noise:
+        if math.isfinite(self.noise) and self.noise > 0 and self.rms > POOR_FIT_FACTOR * self.noise:
             found.append(("poor_fit", f"the RMS {self.rms * 1e3:.4g} mm is {self.rms / self.noise:.1f}× the "
                                       f"measurement noise {self.noise * 1e3:.3g} mm ({self.noise_source}): the "
                                       "model with these free parameters does not explain the data"))

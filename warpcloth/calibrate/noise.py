@@ -20,8 +20,19 @@ FOURTH_DIFFERENCE_VARIANCE = 70.0  # Σ binomial(4, k)² = 70
 MAD_TO_SIGMA = 1.482602218505602  # 1 / Φ⁻¹(3/4)
 
 
+def quantisation_floor(series: Iterable[np.ndarray]) -> float:
+    """σ of rounding to the data's resolution (the smallest step between samples) / √12:
+    an instrument that reads in counts is never quieter than its count (0 if unresolved)."""
+    steps = [np.abs(np.diff(np.asarray(s, dtype=float))) for s in series if len(s) >= 2]
+    steps = np.concatenate(steps) if steps else np.zeros(0)
+    steps = steps[np.isfinite(steps) & (steps > 0)]
+    return float(steps.min() / math.sqrt(12.0)) if len(steps) else 0.0
+
+
 def difference_noise(series: Iterable[np.ndarray]) -> float:
-    """σ of white noise on smooth, evenly sampled ``series`` (NaN when too short)."""
+    """σ of white noise on smooth, evenly sampled ``series`` (NaN when too short), never
+    below the data's :func:`quantisation_floor` (a quantised flat record has MAD 0)."""
+    series = list(series)
     parts = [np.diff(np.asarray(s, dtype=float), 4) for s in series if len(s) >= 5]
     if not parts:
         return float("nan")
@@ -29,4 +40,5 @@ def difference_noise(series: Iterable[np.ndarray]) -> float:
     d = d[np.isfinite(d)]
     if not len(d):
         return float("nan")
-    return float(MAD_TO_SIGMA * np.median(np.abs(d - np.median(d))) / math.sqrt(FOURTH_DIFFERENCE_VARIANCE))
+    estimate = MAD_TO_SIGMA * np.median(np.abs(d - np.median(d))) / math.sqrt(FOURTH_DIFFERENCE_VARIANCE)
+    return float(max(estimate, quantisation_floor(series)))

@@ -60,8 +60,8 @@ def bundled_data(name: str | Path) -> Path:
     """``name`` itself if it is a file, else the bundled example of that name
     (``damped_swing_laser`` or ``damped_swing_laser.csv``, from scenes/data/)."""
     path = Path(name)
-    if path.is_file():
-        return path
+    if path.is_file() or "/" in str(name) or "\\" in str(name):
+        return path  # a path is a path (./laser.csv that is missing is an error, not the bundled one)
     resource = importlib.resources.files("warpcloth.scenes") / "data" / (path.stem + ".csv")
     return Path(str(resource)) if path.parent == Path(".") and resource.is_file() else path
 

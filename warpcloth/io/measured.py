@@ -60,6 +60,12 @@ _QUANTITY = {"t_s": ("time", "s"), "x_mm": ("length", "mm"), "y_mm": ("length", 
 _UNIT = re.compile(r"(?:_|\s*[\[(]\s*)([A-Za-zµ]+)\s*[\])]?\s*$")
 
 
+UNIT_WORDS = {u.lower() for units_of in units.MEASURED_UNITS.values() for u in units_of} | {
+    "min", "h", "hr", "ns", "ps", "km", "dm", "nm", "in", "inch", "ft", "grad", "gon", "rev", "turn", "turns",
+    "degree", "degrees", "radian", "radians", "sec", "msec", "usec"}
+"""Header endings read as a unit (those warpcloth converts, and common ones it refuses)."""
+
+
 def header_unit(table: Table, column: int, role: str) -> float:
     """Factor to SI of ``column`` (0-based) for its ``role`` (a name of the form, e.g.
     ``x_mm``), from the unit its header names, else the role's own unit."""
@@ -74,6 +80,8 @@ def header_unit(table: Table, column: int, role: str) -> float:
     if match is None:
         return known[default]
     unit = match.group(1)
+    if unit.lower() not in UNIT_WORDS:
+        return known[default]  # "laser_x", "tip_x": the end of a name, not a unit
     if unit not in known and unit.lower() not in known:
         raise DataFileError(table.path, f"column {column + 1} is headed {name!r}: {unit!r} is not a {quantity} "
                             f"unit (known: {', '.join(known)}); write e.g. {role.split('_')[0]}_{default}, or a "

@@ -31,8 +31,11 @@ def _git_commit() -> str | None:
         return None
     if done.returncode != 0:
         return None
-    dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
-                           capture_output=True, text=True, timeout=5).stdout.strip()
+    try:
+        dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, timeout=5).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return done.stdout.strip() + "-unknown-state"
     return done.stdout.strip() + ("-dirty" if dirty else "")
 
 

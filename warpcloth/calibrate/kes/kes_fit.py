@@ -55,7 +55,7 @@ class KesFit:
         for what, rms, unit, samples in (("tensile", t.rms_gf_per_cm, "gf/cm", self.tensile_loop.force),
                                          ("bending", b.rms_gf_cm_per_cm, "gf·cm/cm", self.bending_loop.moment)):
             noise = difference_noise([samples])
-            if math.isfinite(noise) and rms > POOR_FIT_FACTOR * noise:
+            if math.isfinite(noise) and noise > 0 and rms > POOR_FIT_FACTOR * noise:
                 found.append(("poor_fit", f"the {what} RMS {rms:.4g} {unit} is {rms / noise:.1f}× the noise of the "
                                           f"data ({noise:.3g} {unit}, from its 4th differences): the model does not "
                                           "describe this loop"))
