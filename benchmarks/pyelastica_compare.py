@@ -45,8 +45,8 @@ import warp as wp
 from elastica.version import VERSION as ELASTICA_VERSION
 
 import warpcloth as wc
-from warpcloth.calibrate.metrics import first_period
 from warpcloth.calibrate.references import hanging_beam_mode
+from warpcloth.metrics import first_period
 from warpcloth.scene import rest_positions, to_si
 
 AMPLITUDE = 1e-3  # m, tip amplitude of the initial mode shape
@@ -103,7 +103,7 @@ def wc_scene(spacing_mm: float, dt: float, span: float) -> wc.Scene:
 def wc_start(scene: wc.Scene, problem: Problem, batch: int) -> np.ndarray:
     """Straight strip displaced sideways by the mode shape below the clamp edge, [node, strip, xy]."""
     x = rest_positions(scene)
-    s_free = np.maximum(0.0, -x[:, 1] - scene.strip.clamp_length_mm * 1e-3)
+    s_free = np.maximum(0.0, -x[:, 1])
     x[:, 0] = AMPLITUDE * problem.shape(s_free / problem.length) * (s_free > 0)
     return np.repeat(x[:, None, :], batch, axis=1)
 

@@ -24,7 +24,7 @@ def bessel_j0(x):
 def mode_start(scene, shape, amplitude):
     """Straight strip displaced sideways by amplitude·shape(s) below the clamp edge."""
     x = rest_positions(scene)
-    s_free = np.maximum(0.0, -x[:, 1] - scene.strip.clamp_length_mm * 1e-3)
+    s_free = np.maximum(0.0, -x[:, 1])
     x[:, 0] = amplitude * shape(s_free)
     return x[:, None, :]
 

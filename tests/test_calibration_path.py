@@ -15,7 +15,7 @@ import warpcloth as wc
 from warpcloth.calibrate.clamp_fit import fit_clamp_motion, scene_with_clamp_motion
 from warpcloth.calibrate.motion_fit import measurement_noise
 from warpcloth.io.measured import LaserTrace, read_encoder, read_measurement
-from warpcloth.scene import clamp_edge, read_scene_file
+from warpcloth.scene import read_scene_file
 
 T = np.round(np.arange(-0.02, 0.2, 1e-3), 6)
 QUARTIC = (2.0, 30.0, 900.0, 2e4)  # a1 … a4 (rad/s^k), the general start of issue 12
@@ -135,10 +135,10 @@ def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path):
         *(f"{k}={v}" for k, v in truth.items())])
     result = wc.simulate(measured_scene)
     rng = np.random.default_rng(12)
-    edge, nc, h = clamp_edge(measured_scene), measured_scene.n_clamped, measured_scene.spacing
+    nc, h = measured_scene.n_clamped, measured_scene.spacing
     rows = [f"{f},{t:.6f},{s:g},{x:.5f},{y:.5f}" for f, t in enumerate(result.frame_times)
             for s in range(0, 101, 10)
-            for x, y in [((result.frames[f, 0, nc - 1 + round(s * 1e-3 / h)] - edge) * 1e3 + rng.normal(0, 0.1, 2))]]
+            for x, y in [(result.frames[f, 0, nc - 1 + round(s * 1e-3 / h)] * 1e3 + rng.normal(0, 0.1, 2))]]
     (tmp_path / "markers.csv").write_text("frame,t_s,s_mm,x_mm,y_mm\n" + "\n".join(rows) + "\n")
     encoder_t = np.round(np.arange(-0.02, 0.2, 1e-3), 6)
     reading = motion(encoder_t) - 0.0004 + rng.normal(0, 1e-3, len(encoder_t))

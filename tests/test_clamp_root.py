@@ -11,8 +11,8 @@ from conftest import overrides
 from test_analytic import mode_start
 
 import warpcloth as wc
-from warpcloth.calibrate.metrics import crossing_times
 from warpcloth.calibrate.references import hanging_beam_eigenvalue, hanging_beam_mode
+from warpcloth.metrics import crossing_times
 from warpcloth.scene import to_si
 
 EDGES = ("paper", "second_order")

@@ -300,6 +300,21 @@ def test_results_as_xarray_and_dataframe(tmp_path):
     assert set(table.groupby("damping.gamma_per_s")["variant"].first()) == {0, 1}
 
 
+def test_a_result_in_memory_and_its_run_directory_give_the_same_dataset(tmp_path):
+    # RunResult.to_xarray (in memory) and Recording.to_xarray (read back) share one layout
+    scenes = [wc.load_scene("damped_swing", {"run.duration_s": 0.1, "damping.gamma_per_s": g}) for g in (0.2, 0.7)]
+    result = wc.simulate(scenes, out=tmp_path / "run")
+    memory, disk = result.to_xarray(), wc.load_recording(tmp_path / "run").to_xarray()
+    assert list(memory["damping.gamma_per_s"].values) == [0.2, 0.7]
+    for name in ("tip_x", "laser_x", "kinetic", "frames"):
+        np.testing.assert_allclose(memory[name].values, disk[name].values, rtol=1e-15, atol=0)
+    np.testing.assert_allclose(memory["t"].values, disk["t"].values, rtol=1e-15)
+    assert memory.attrs["coordinates"] == disk.attrs["coordinates"] and "clamp edge" in disk.attrs["coordinates"]
+    table = result.to_dataframe()
+    assert len(table) == result.probes.shape[0] * 2 and set(table["damping.gamma_per_s"]) == {0.2, 0.7}
+    np.testing.assert_array_equal(table[table["variant"] == 1]["tip_x"].to_numpy(), result.probe("tip_x", 1))
+
+
 def test_an_empty_output_path_is_refused_not_defaulted(tmp_path):
     done = warpcloth_cli("run", "damped_swing", "--out", "", cwd=tmp_path)
     assert done.returncode == 2 and "argument --out: an empty path" in done.stderr

@@ -279,3 +279,187 @@ def test_a_sampled_sweep_is_plotted_as_points_not_a_zigzag():
                          "damping.gamma_per_s")
     assert len(one_d.axes[0].get_lines()[0].get_xdata()) == 30  # a 1-D sweep is still a curve
     plt.close(one_d)
+
+
+@pytest.fixture()
+def figures(monkeypatch):
+    """The figures the plot functions save, by file name, kept open for inspection."""
+    import warpcloth.viz.plots as plots
+
+    saved = {}
+
+    def keep(fig, path, dpi=plots.DPI):
+        saved[path.name] = fig
+        return path
+
+    monkeypatch.setattr(plots, "_save", keep)
+    yield saved
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
+def test_measured_files_go_onto_the_figure_of_their_kind(swing_run, tmp_path, figures):
+    recording = load_recording(swing_run)
+    t, x = recording.probe("laser_x", 0)
+    laser, encoder, shapes = tmp_path / "laser.csv", tmp_path / "encoder.csv", tmp_path / "markers.csv"
+    laser.write_text("t_s,x_mm\n" + "".join(f"{a:.5f},{b * 1e3:.4f}\n" for a, b in zip(t[::20], x[::20],
+                                                                                           strict=True)))
+    encoder.write_text("t_s,theta_deg\n0,0\n0.1,0.5\n0.2,1.0\n")
+    frames = recording.frames
+    nc = recording.n_clamped
+    rows = [f"{f},{recording.frame_times[f]:.5f},{10 * k},{frames[f, 0, nc - 1 + 2 * k, 0] * 1e3:.4f},"
+            f"{frames[f, 0, nc - 1 + 2 * k, 1] * 1e3:.4f}\n" for f in (3, 9, 15) for k in range(1, 4)]
+    shapes.write_text("frame,t_s,s_mm,x_mm,y_mm\n" + "".join(rows))
+
+    def labels(name):
+        return [line.get_label() for ax in figures[name].axes for line in ax.get_lines()]
+
+    plot_run(recording, tmp_path / "a", measured=laser)
+    assert "measured" in labels("amplitude.png") and "encoder (measured)" not in labels("clamp_angle.png")
+    plot_run(recording, tmp_path / "b", measured=encoder)
+    assert "encoder (measured)" in labels("clamp_angle.png") and "measured" not in labels("amplitude.png")
+    drawn = figures["clamp_angle.png"].axes[0].get_lines()[-1]
+    np.testing.assert_allclose(drawn.get_ydata(), [0, 0.5, 1.0])  # degrees, as the file says
+    plot_run(recording, tmp_path / "c", measured=shapes)
+    ax = figures["shapes.png"].axes[0]
+    markers = [line for line in ax.get_lines() if line.get_marker() == "o"]
+    assert len(markers) == 3  # one set per measured frame, over the strip at that frame
+    for line, f in zip(markers, (3, 9, 15), strict=True):
+        np.testing.assert_allclose(line.get_xdata(), frames[f, 0, nc + 1 : nc + 6 : 2, 0] * 1e3, atol=1e-3)
+    # The simulated shapes are drawn at the measured frames (origin: the clamp edge, as the markers)
+    drawn_at = [line.get_label() for line in ax.get_lines() if line.get_label().endswith(" s")]
+    assert drawn_at == [f"{recording.frame_times[f]:.3f} s" for f in (3, 9, 15)]
+
+
+def test_an_encoder_is_refused_where_a_motion_of_the_strip_is_expected(tmp_path):
+    from warpcloth.errors import DataFileError
+
+    path = tmp_path / "enc.csv"
+    path.write_text("t_s,theta_deg\n0,0\n0.1,0.5\n")
+    with pytest.raises(DataFileError, match=r"enc.csv, line 1: is a clamp encoder .*'theta_deg'.*clamp fit-angle"):
+        read_measurement(path)
+    assert read_measurement(path, encoder=True).theta[1] == pytest.approx(np.radians(0.5))
+    path.write_text("t (s), angle [rad]\n0, 0\n0.1, 0.5\n")
+    assert read_measurement(path, encoder=True).theta[1] == pytest.approx(0.5)
+    path.write_text("t_s,x_mm\n0,0\n0.1,0.5\n")  # a laser trace stays one
+    assert read_measurement(path, encoder=True).x[1] == pytest.approx(0.5e-3)
+
+
+def test_default_shapes_show_the_first_half_swing_with_the_laser_line(swing_run, figures, tmp_path):
+    from warpcloth.metrics import extrema
+    from warpcloth.viz.plots import default_shape_times
+
+    recording = load_recording(swing_run)
+    times = default_shape_times(recording)
+    t, tip = recording.probe("tip_x", 0)
+    # released at rest on one side (t = 0), it reaches the far side half a period later
+    assert times[0] == 0.0 and len(times) == 9
+    far_side = t[np.argmin(tip[t < 0.4])]
+    assert abs(times[-1] - far_side) < 2 / 600 and 0.2 < times[-1] < 0.32
+    assert extrema(t, tip, starts_at_rest=True)[0][1] == pytest.approx(times[-1], abs=2e-3)
+    plot_run(recording, tmp_path / "f")
+    ax = figures["shapes.png"].axes[0]
+    laser = [line for line in ax.get_lines() if line.get_label().startswith("laser line")]
+    assert len(laser) == 1 and laser[0].get_ydata()[0] == recording.scenes[0].output.laser_height_mm
+    assert ax.get_xlabel() == "x from the clamp edge (mm)"
+
+
+def test_the_bending_loop_is_zoomed_to_the_path_and_marks_kes_b_and_2hb(swing_run, figures, tmp_path):
+    from warpcloth import units
+    from warpcloth.calibrate.kes import BendingLoop, bending_summary
+    from warpcloth.cli.view import material_kes_values
+    from warpcloth.viz.plots import kes_loop
+
+    recording = load_recording(swing_run)
+    kes = material_kes_values(recording)
+    plot_run(recording, tmp_path / "f", kes=kes)
+    chart, zoom = figures["bending_loop.png"].axes
+    legend = [text.get_text() for text in chart.get_legend().get_texts()]
+    assert f"B = {kes.b_gf_cm2_per_cm:.4g} gf·cm²/cm (slope, 0.5–1.5)" in legend
+    assert f"2HB = {kes.hb2_gf_cm_per_cm:.4g} gf·cm/cm (width at K = 1)" in legend
+    # B and 2HB are the KES reading of the material's own loop; for the centred loop of
+    # the paper's law 2HB = 2 M0 − D1 (e^{−α(K0+1)} + e^{−α(K0−1)}), M0 = ½ D1 (1 + e^{−2αK0})
+    # (docs/model.md §4.2, K in 1/cm), and B is D up to the branches' curvature there
+    material = recording.scenes[0].material
+    d1, alpha, k0 = (material.hysteresis_d1_gf_cm_per_cm, material.hysteresis_alpha_cm,
+                     material.hysteresis_k0_per_cm)
+    m0 = 0.5 * d1 * (1 + np.exp(-2 * alpha * k0))
+    assert kes.hb2_gf_cm_per_cm == pytest.approx(2 * m0 - d1 * (np.exp(-alpha * (k0 + 1)) + np.exp(-alpha * (k0 - 1))),
+                                                 rel=2e-3)
+    assert kes.b_gf_cm2_per_cm == pytest.approx(material.bending_rigidity_gf_cm2_per_cm, rel=0.01)
+    k, m = kes_loop(recording)
+    assert kes == bending_summary(BendingLoop(k / units.CURVATURE_PER_CM, m / units.MOMENT_GF_CM_PER_CM,
+                                              np.arange(1, len(k) + 1), "x"))
+    _, curvature = recording.probe("loop_curvature", 0)
+    path = curvature / units.CURVATURE_PER_CM
+    lo, hi = zoom.get_xlim()
+    assert lo <= path.min() and hi >= path.max()  # the whole path shows
+    assert hi - lo < 1.2 * np.ptp(path)  # and fills the axes, not the ±K0 frame
+    assert chart.get_xlim()[1] > k.max() / units.CURVATURE_PER_CM  # the chart shows the whole loop
+
+
+def test_the_energy_figure_shows_the_drift_in_percent_of_peak_kinetic(swing_run, figures, tmp_path):
+    recording = load_recording(swing_run)
+    plot_run(recording, tmp_path / "f")
+    top, drift = figures["energy.png"].axes
+    assert drift.get_ylabel() == "sum − start\n(% of peak kinetic)"
+    total = top.get_lines()[-1].get_ydata() * 1e-6
+    peak = recording.probe("kinetic", 0)[1].max()
+    np.testing.assert_allclose(drift.get_lines()[0].get_ydata(), 100 * (total - total[0]) / peak, atol=1e-9)
+    assert np.abs(drift.get_lines()[0].get_ydata()).max() < 1.0  # the budget closes to < 1 % of peak KE
+
+
+def test_formats_and_dpi(swing_run, tmp_path):
+    recording = load_recording(swing_run)
+    small = plot_run(recording, tmp_path / "small", dpi=60)
+    large = plot_run(recording, tmp_path / "large", dpi=120)
+    for a, b in zip(small, large, strict=True):
+        assert Image.open(b).size[0] == pytest.approx(2 * Image.open(a).size[0], abs=2)
+    svg = plot_run(recording, tmp_path / "svg", fmt="svg")
+    assert [p.suffix for p in svg] == [".svg"] * 5 and svg[0].read_text().lstrip().startswith("<?xml")
+    pdf = plot_run(recording, tmp_path / "pdf", fmt="pdf")
+    assert all(p.read_bytes().startswith(b"%PDF") for p in pdf)
+    from warpcloth.errors import OptionError
+
+    with pytest.raises(OptionError, match="--format: must be one of png, pdf, svg, got 'jpg'"):
+        plot_run(recording, tmp_path / "x", fmt="jpg")
+    with pytest.raises(OptionError, match="--dpi: must be between 10 and 2400, got 1"):
+        plot_run(recording, tmp_path / "x", dpi=1)
+
+
+def test_many_variants_are_coloured_by_a_parameter_not_listed_in_a_legend(tmp_path, figures):
+    gammas = np.linspace(0.1, 1.2, 12)
+    scenes = [wc.load_scene("damped_swing", {"run.duration_s": 0.05, "release.settle_time_s": 0.05,
+                                             "damping.gamma_per_s": g}) for g in gammas]
+    wc.simulate(scenes, out=tmp_path / "run")
+    plot_run(load_recording(tmp_path / "run"), tmp_path / "f")
+    for name in ("amplitude.png", "clamp_angle.png"):
+        ax, colourbar = figures[name].axes
+        assert ax.get_legend() is None and colourbar.get_ylabel() == "γ (s⁻¹)"
+        lines = ax.get_lines()[:12]
+        # the variant with the largest γ is drawn in viridis' last colour
+        assert np.allclose(lines[-1].get_color(), plt_viridis(1.0)) and np.allclose(lines[0].get_color(),
+                                                                                      plt_viridis(0.0))
+
+
+def plt_viridis(x):
+    import matplotlib.pyplot as plt
+
+    return plt.cm.viridis(x)
+
+
+def test_a_metric_no_variant_has_is_refused_not_drawn_empty():
+    import pandas as pd
+
+    from warpcloth.errors import OptionError
+    from warpcloth.viz.plots import sweep_figure
+
+    summary = pd.DataFrame({"variant": range(4), "damping.gamma_per_s": [0.1, 0.2, 0.1, 0.2],
+                            "material.bending_rigidity_gf_cm2_per_cm": [0.1, 0.1, 0.2, 0.2],
+                            "first_period_s": np.nan, "mean_log_decrement": [0.1, np.nan, 0.3, 0.4],
+                            "diverged": False})
+    with pytest.raises(OptionError, match="--metric: no variant has a value of 'first_period_s'"):
+        sweep_figure(summary, "first_period_s", "damping.gamma_per_s", "material.bending_rigidity_gf_cm2_per_cm")
+    figure = sweep_figure(summary, "mean_log_decrement", "damping.gamma_per_s")
+    assert figure.axes[0].get_title() == "mean_log_decrement over 3 variants (1 without a value)"

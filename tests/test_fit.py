@@ -15,7 +15,7 @@ from conftest import overrides  # noqa: F401  (keeps Warp quiet)
 import warpcloth as wc
 from warpcloth.calibrate.motion_fit import SHIFT, fit_motion, free_parameters
 from warpcloth.io.measured import LaserTrace, TrackedShapes
-from warpcloth.scene import clamp_edge, read_scene_file, set_field
+from warpcloth.scene import read_scene_file, set_field
 from warpcloth.scene.clamp_motion import clamp_pieces, evaluate
 
 
@@ -56,13 +56,13 @@ def test_damped_swing_gamma_and_d1_are_recovered():
 
 
 def tracked_markers(result, scene, offset, noise, rng):
-    edge, nc, h = clamp_edge(scene), scene.n_clamped, scene.spacing
+    nc, h = scene.n_clamped, scene.spacing
     rows = []
     for f, t in enumerate(result.frame_times):
         if t < offset:
             continue
         for s in np.arange(0.0, 0.1001, 0.01):
-            x, y = result.frames[f, 0, nc - 1 + round(s / h)] - edge + rng.normal(0, noise, 2)
+            x, y = result.frames[f, 0, nc - 1 + round(s / h)] + rng.normal(0, noise, 2)
             rows.append((f, t - offset, s, x, y))
     d = np.array(rows)
     return TrackedShapes(d[:, 0].astype(int), d[:, 1], d[:, 2], d[:, 3], d[:, 4])

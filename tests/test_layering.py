@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = {"warpcloth": ROOT / "warpcloth", "warpcloth.kernels": ROOT / "kernels"}
 
 # The layers, lowest first: kernels < sim < scene < io < viz < runs < calibrate < sweeps < cli
-# (errors and units sit beside all of them).
+# (errors, units and metrics, the one ruler, sit beside all of them).
 ORDER = ("warpcloth.kernels", "warpcloth.sim", "warpcloth.scene", "warpcloth.io", "warpcloth.viz",
          "warpcloth.runs", "warpcloth.calibrate", "warpcloth.sweeps", "warpcloth.cli")
 FORBIDDEN = {layer: ORDER[i + 1:] for i, layer in enumerate(ORDER) if layer != "warpcloth.kernels"}

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from warpcloth.calibrate.metrics import swing_metrics
+from warpcloth.metrics import swing_metrics
 
 
 @pytest.mark.parametrize("zeta", [0.005, 0.02, 0.08])
@@ -88,7 +88,7 @@ def test_one_ruler_for_runs_sweeps_and_measured_traces(tmp_path):
 def test_a_strip_at_rest_has_no_swing():
     # a hanging strip's laser signal is rounding (1e-22 m): no half-cycles, no period
     import warpcloth as wc
-    from warpcloth.calibrate.metrics import swing_summary
+    from warpcloth.metrics import swing_summary
 
     still = wc.simulate(wc.load_scene("damped_swing", ["release.enabled=false", "run.duration_s=0.5"]))
     metrics = swing_summary(still.t, still.probe("laser_x", 0), still.probe("tip_x", 0))

@@ -12,10 +12,10 @@ The namespaces :mod:`warpcloth.sim` (the SI simulation core), :mod:`warpcloth.sc
 """
 
 from . import calibrate, io, scene, sim, viz
-from .calibrate.metrics import first_period
 from .errors import DataFileError, DivergenceError, OptionError, ResourceError, SceneError, WarpclothError
 from .io.load import load_recording
 from .io.recording import Recording
+from .metrics import first_period
 from .runs import run, simulate
 from .scene import Scene, Sweep, bundled_scenes, expand, load_scene, load_sweep, scene_from_dict
 from .sim import RunResult

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
-from .scene import Scene, build_batch, load_scene
+from .scene import COORDINATES, Scene, build_batch, load_scene
+from .scene.overrides import Overrides, override_pairs
 from .sim import RunResult, simulate_batch
 from .sim.runner import check_divergence_policy, check_recording_fits
 
@@ -52,32 +54,22 @@ def simulate(
     if out is not None:
         frame_times = batch.recorder.schedule(batch.control, batch.solver).frame_times
         sink = RunWriter(out, scenes, batch.model.n_nodes, frame_times, overwrite=overwrite)
+    parameters = {name: column.to_numpy() for name, column in per_strip_parameters(scenes).items()}
     return simulate_batch(batch.model, batch.control, batch.solver, batch.recorder, state, sink=sink,
-                          progress=progress, on_divergence=on_divergence, keep_frames=keep_frames, labels=scenes)
+                          progress=progress, on_divergence=on_divergence, keep_frames=keep_frames, labels=scenes,
+                          parameters=parameters, attrs={"coordinates": f"{COORDINATES}; t = 0 at the release"})
 
 
-def run(scene: str | Path | Scene, overrides: Sequence[str] | Mapping[str, object] = (),
-        **kwargs: object) -> RunResult:
+def run(scene: str | Path | Scene, overrides: Overrides = (), **kwargs: object) -> RunResult:
     """Load a scene (path or bundled name), apply overrides, simulate it.
 
     ``overrides`` are ``"key=value"`` strings or a mapping ``{"damping.gamma_per_s": 0.5}``
     (values as Python numbers, strings, booleans or lists). Keyword arguments go to
     :func:`simulate` (``out``, ``device``, ``progress``, ...).
     """
-    if isinstance(overrides, str):
-        raise TypeError(f"overrides must be a list of 'key=value' strings or a dict, not one string {overrides!r}")
-    if isinstance(overrides, Mapping):
-        overrides = [f"{key}={_toml_value(value)}" for key, value in overrides.items()]
     if isinstance(scene, Scene):
-        if overrides:
+        if override_pairs(overrides):
             raise TypeError("overrides apply to a scene being loaded; a Scene is immutable (load it with them)")
     else:
         scene = load_scene(scene, overrides)
     return simulate(scene, **kwargs)
-
-
-def _toml_value(value: object) -> str:
-    """A Python value as the TOML text ``--set`` parses."""
-    import tomli_w
-
-    return tomli_w.dumps({"v": value}).split("=", 1)[1].strip()

@@ -19,10 +19,10 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from warpcloth.calibrate.metrics import swing_summary
 from warpcloth.errors import OptionError
 from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.kernels import PROBE_FIELDS
+from warpcloth.metrics import swing_summary
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, Sweep, scene_from_dict
 from warpcloth.sim.model import init_warp_quietly

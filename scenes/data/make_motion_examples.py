@@ -30,7 +30,7 @@ import numpy as np
 import warp as wp
 
 import warpcloth as wc
-from warpcloth.scene import clamp_edge, read_scene_file, set_field
+from warpcloth.scene import read_scene_file, set_field
 
 HERE = Path(__file__).parent
 SWING_TRUTH = {"damping.gamma_per_s": 0.55, "material.hysteresis_d1_gf_cm_per_cm": 0.025}
@@ -58,13 +58,13 @@ def tracked_shapes(rng: np.random.Generator) -> str:
     """Markers every 10 mm on the rotating strip at 60 frames/s, σ = 0.3 mm, clock 4 ms late."""
     scene = scene_with("impulsive_rotation", ROTATION_TRUTH | {"run.duration_s": 0.3})
     result = wc.simulate(scene)
-    edge, nc, h = clamp_edge(scene), scene.n_clamped, scene.strip.spacing_mm
+    nc, h = scene.n_clamped, scene.strip.spacing_mm
     rows = []
     for f, t in enumerate(result.frame_times):
         if t < 0.004:
             continue
         for s_mm in range(0, 101, 10):
-            x, y = (result.frames[f, 0, nc - 1 + round(s_mm / h)] - edge) * 1e3 + rng.normal(0, 0.3, 2)
+            x, y = result.frames[f, 0, nc - 1 + round(s_mm / h)] * 1e3 + rng.normal(0, 0.3, 2)
             rows.append(f"{f},{t - 0.004:.6f},{s_mm},{x:.4f},{y:.4f}")
     return (f"# synthetic: {ROTATION_TRUTH}, noise 0.3 mm, camera clock 4 ms late "
             "(scenes/data/make_motion_examples.py)\nframe,t_s,s_mm,x_mm,y_mm\n" + "\n".join(rows) + "\n")

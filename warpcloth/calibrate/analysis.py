@@ -1,5 +1,5 @@
 """The swing metrics of anything that swings, measured by the one ruler
-(:func:`~warpcloth.calibrate.metrics.swing_summary`): measured traces, run directories
+(:func:`~warpcloth.metrics.swing_summary`): measured traces, run directories
 and sweep directories, so a table of lab against simulation is one call."""
 
 from __future__ import annotations
@@ -11,8 +11,7 @@ from warpcloth.errors import DataFileError
 from warpcloth.io.load import load_recording
 from warpcloth.io.measured import LaserTrace, bundled_data, read_measurement
 from warpcloth.io.sweep_dir import read_parquet
-
-from .metrics import swing_summary
+from warpcloth.metrics import swing_summary
 
 
 def _row(source: str, variant: int | None, metrics: dict) -> dict:

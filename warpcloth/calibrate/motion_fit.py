@@ -48,7 +48,7 @@ from tqdm import tqdm
 from warpcloth.errors import OptionError, SceneError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
 from warpcloth.runs import simulate
-from warpcloth.scene import Scene, batch_fields, clamp_edge, scene_from_dict, set_field
+from warpcloth.scene import Scene, batch_fields, scene_from_dict, set_field
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.sim import RunResult
 
@@ -204,7 +204,6 @@ class Objective:
                 raise OptionError("--measured", f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond "
                                   f"the free end ({free_length * 1e3:g} mm below the clamp's lowest point); s is the "
                                   "arc length from the clamp's lowest point, not from the clamp's top")
-        self.edge = clamp_edge(self.scene)
         self.shift_step = 0.5 * self.scene.output_interval
         self.launches = 0
         self.variants = 0
@@ -241,7 +240,7 @@ class Objective:
             # Where the strip misses the laser line the signal is undefined: count the
             # whole measured swing as missed there, so the search moves away.
             return np.where(np.isfinite(sim) | (not penalise), sim - m.x, np.ptp(m.x))
-        frames = result.frames[:, j] - self.edge  # [time, node, xy] from the clamp's lowest point
+        frames = result.frames[:, j]  # [time, node, xy], from the clamp's lowest point like the markers
         nc = self.scene.n_clamped
         arc = m.s / self.scene.spacing + (nc - 1)  # fractional node index of each marker
         node = np.clip(np.floor(arc).astype(int), 0, self.scene.n_nodes - 2)

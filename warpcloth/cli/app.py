@@ -49,6 +49,7 @@ def parser() -> argparse.ArgumentParser:
         prog="warpcloth", description="Batched Warp simulation of hanging fabric strips: "
         "run | sweep | export-usd | plot | render | fit | clamp | material | analyse | scene (--help on each).")
     top.add_argument("--version", action="version", version=f"warpcloth {_version()}")
+    top.add_argument("--verbose", action="store_true", help="let Warp print its banner, module loads and CUDA notices")
     sub = top.add_subparsers(dest="command", required=True)
     for group in COMMAND_GROUPS:
         group.register(sub)
@@ -57,7 +58,8 @@ def parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``warpcloth`` command; returns the exit status."""
-    init_warp_quietly()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    init_warp_quietly(verbose="--verbose" in argv)  # before parsing: a --device option starts Warp
     args = parser().parse_args(argv)
     try:
         return args.handler(args)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from warpcloth.calibrate.metrics import swing_summary
 from warpcloth.errors import DivergenceError
+from warpcloth.metrics import swing_summary
 from warpcloth.runs import simulate
 from warpcloth.scene import bundled_scenes, load_scene
 

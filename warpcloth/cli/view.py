@@ -7,8 +7,9 @@ import json
 from pathlib import Path
 
 from warpcloth.errors import OptionError
+from warpcloth.viz import DPI, FORMATS
 
-from .options import add_overwrite, at_least, finite, new_result, path_text
+from .options import add_overwrite, at_least, finite, new_result, path_text, positive
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -27,12 +28,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_overwrite(usd_p, "stage -o")
     usd_p.add_argument("--frames-per-clip", type=at_least(1), default=None,
                        help="split frames into value-clip layers of this many frames (default: only when large)")
-    plot_p = sub.add_parser("plot", help="PNG figures of a run, or a sweep metric against parameters")
+    plot_p = sub.add_parser("plot", help="figures of a run, or a sweep metric against parameters")
     selection(plot_p)
     plot_p.set_defaults(handler=plot_command)
     plot_p.add_argument("--out", type=path_text, help="figure directory (default: RUN_DIR/figures)")
     add_overwrite(plot_p, "figure directory --out")
-    plot_p.add_argument("--measured", help="CSV of a measured displacement: t (s), x (mm); overlaid on amplitude.png")
+    plot_p.add_argument("--measured", help="a measured CSV, drawn on the figure of its kind: a laser trace (t, x) on "
+                        "amplitude, a clamp encoder (t, theta: column 2 headed theta/angle) on clamp_angle, tracked "
+                        "markers (frame, t, s, x, y) on shapes")
+    plot_p.add_argument("--format", choices=FORMATS, default="png", help="figure file format (default: png)")
+    plot_p.add_argument("--dpi", type=positive, default=DPI, help=f"resolution of raster output (default: {DPI})")
     plot_p.add_argument("--times", type=finite, nargs="+", help="shape-overlay times, s after release")
     plot_p.add_argument("--metric", help="sweep: summary column to plot (e.g. first_period_s)")
     plot_p.add_argument("--x", help="sweep: parameter on the x axis (a swept field, e.g. damping.gamma_per_s)")
@@ -71,7 +76,7 @@ def plot_command(args: argparse.Namespace) -> int:
         out.mkdir(parents=True, exist_ok=True)
         name = f"{args.metric}_vs_{args.x}" + (f"_{args.y}" if args.y else "")
         summary = read_sweep_summary(args.run_dir)
-        path = plot_sweep(summary, out / f"{name}.png", args.metric, args.x, args.y)
+        path = plot_sweep(summary, out / f"{name}.{args.format}", args.metric, args.x, args.y, dpi=args.dpi)
         print(f"wrote {path}")
         total = json.loads((Path(args.run_dir) / "sweep.json").read_text())["n_variants"]
         if len(summary) < total:
@@ -79,9 +84,23 @@ def plot_command(args: argparse.Namespace) -> int:
                   "done so far (run the sweep again to complete it)")
         return 0
     recording = load_recording(args.run_dir, args.variants, args.where)
-    for path in plot_run(recording, out, measured=args.measured, times=args.times):
+    for path in plot_run(recording, out, measured=args.measured, times=args.times, kes=material_kes_values(recording),
+                         fmt=args.format, dpi=args.dpi):
         print(f"wrote {path}")
     return 0
+
+
+def material_kes_values(recording: object, variant: int = 0) -> object:
+    """B and 2HB a KES-FB2 would read off the first variant's material loop (±K0)."""
+    import numpy as np
+
+    from warpcloth import units
+    from warpcloth.calibrate.kes import BendingLoop, bending_summary
+    from warpcloth.viz.plots import kes_loop
+
+    k, m = kes_loop(recording, variant)
+    return bending_summary(BendingLoop(k / units.CURVATURE_PER_CM, m / units.MOMENT_GF_CM_PER_CM,
+                                       np.arange(1, len(k) + 1), "the material's KES-FB2 loop"))
 
 
 def render_command(args: argparse.Namespace) -> int:

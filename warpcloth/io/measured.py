@@ -36,8 +36,8 @@ from warpcloth.errors import DataFileError, OptionError
 
 from .csv import Table, bundled_data, read_csv, read_text
 
-__all__ = ["LaserTrace", "TrackedShapes", "bundled_data", "read_encoder", "read_laser_trace", "read_measurement",
-           "read_table", "read_text", "read_tracked_shapes"]
+__all__ = ["ClampAngleTrace", "LaserTrace", "TrackedShapes", "bundled_data", "read_encoder", "read_laser_trace",
+           "read_measurement", "read_table", "read_text", "read_tracked_shapes"]
 
 _LASER = ("t_s", "x_mm")
 _SHAPES = ("frame", "t_s", "s_mm", "x_mm", "y_mm")
@@ -158,13 +158,38 @@ def _tracked_shapes(table: Table) -> TrackedShapes:
     return TrackedShapes(frame.astype(int), t, data[:, 2], data[:, 3], data[:, 4])
 
 
+@dataclass(frozen=True)
+class ClampAngleTrace:
+    """A clamp encoder's rotation angle against time, SI."""
+
+    t: np.ndarray  # s
+    theta: np.ndarray  # rad
+
+
+_ANGLE_NAME = re.compile(r"^\s*(theta|angle|phi|encoder|clamp)", re.IGNORECASE)
+
+
+def is_angle_column(table: Table, column: int) -> bool:
+    """Whether ``column``'s header names an angle: ``theta``, ``angle``, ``phi``, ``encoder``
+    or ``clamp...`` at its start, or an angle unit at its end (``theta_deg``, ``(rad)``)."""
+    if not table.header or column >= len(table.header):
+        return False
+    name = table.header[column]
+    unit = _UNIT.search(name)
+    return bool(_ANGLE_NAME.match(name)) or (unit is not None and unit.group(1) in units.MEASURED_UNITS["angle"])
+
+
 def read_encoder(path: str | Path, angle_unit: str | None = None,
                  flag: str = "ENCODER") -> tuple[np.ndarray, np.ndarray]:
     """Read a clamp encoder series ``t (s), theta``; returns (t, θ in rad). The angle
     unit comes from ``angle_unit`` ("rad" or "deg"), else from the header, else rad."""
     if angle_unit not in (None, "rad", "deg"):
         raise OptionError("--angle-unit", f"must be rad or deg, got {angle_unit!r}")
-    table = read_table(path, 2, "encoder", flag, _ENCODER)
+    trace = _clamp_angle(read_table(path, 2, "encoder", flag, _ENCODER), angle_unit)
+    return trace.t, trace.theta
+
+
+def _clamp_angle(table: Table, angle_unit: str | None = None) -> ClampAngleTrace:
     data = _scaled(table, _ENCODER)
     _increasing(table, data[:, 0])
     if angle_unit is not None:
@@ -173,13 +198,23 @@ def read_encoder(path: str | Path, angle_unit: str | None = None,
             raise OptionError("--angle-unit", f"{angle_unit} contradicts the header of {table.path}, whose column 2 "
                               f"is {table.header[1]!r}; drop --angle-unit or fix the header")
         data[:, 1] = table.values[:, 1] * units.MEASURED_UNITS["angle"][angle_unit]
-    return data[:, 0], data[:, 1]
+    return ClampAngleTrace(data[:, 0], data[:, 1])
 
 
-def read_measurement(path: str | Path, flag: str = "--measured") -> LaserTrace | TrackedShapes:
-    """A laser trace (2 columns) or tracked shapes (5 columns), told apart by the column count."""
+def read_measurement(path: str | Path, flag: str = "--measured",
+                     encoder: bool = False) -> LaserTrace | TrackedShapes | ClampAngleTrace:
+    """A laser trace (2 columns), tracked shapes (5 columns), told apart by the column
+    count, or, with ``encoder``, a clamp encoder (2 columns, the second headed as an angle:
+    :func:`is_angle_column`). An encoder where none is expected is refused: read as a
+    laser trace its angles would pass for millimetres."""
     table = read_table(path, None, "measured motion", flag)
     n = table.values.shape[1]
+    if n == 2 and is_angle_column(table, 1):
+        if encoder:
+            return _clamp_angle(table)
+        raise DataFileError(table.path, f"is a clamp encoder (column 2 is headed {table.header[1]!r}), not a "
+                            "motion of the strip; fit the clamp's motion with `warpcloth clamp fit-angle`",
+                            table.header_line)
     if n == 2:
         return _laser_trace(table)
     if n == 5:

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from warpcloth.errors import OptionError
-from warpcloth.scene import Scene, batch_fields, rest_positions
+from warpcloth.scene import COORDINATES, Scene, batch_fields, rest_positions
 
 
 @dataclass
@@ -88,30 +88,20 @@ class Recording:
     def to_xarray(self) -> object:
         """An ``xarray.Dataset``: every probe as a variable over (t, variant), the frames
         over (frame_time, variant, node, xy), the per-variant parameters as coordinates
-        along ``variant``, units in ``attrs`` (needs ``pip install warpcloth[xarray]``)."""
-        try:
-            import xarray as xr
-        except ImportError:
-            raise ImportError("to_xarray needs xarray: pip install 'warpcloth[xarray]' (or pip install xarray)") \
-                from None
-        from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
+        along ``variant``, units in ``attrs`` (needs ``pip install 'warpcloth[xarray]'``);
+        the layout of :meth:`warpcloth.sim.RunResult.to_xarray`."""
+        from warpcloth.kernels import PROBE_FIELDS
+        from warpcloth.sim.labelled import probes_dataset
 
-        table = self.probes.set_index(["t", "variant"]).sort_index()
-        dataset = xr.Dataset.from_dataframe(table[list(PROBE_FIELDS)])
-        for name in PROBE_FIELDS:
-            dataset[name].attrs["units"] = PROBE_UNITS[name]
-        dataset["t"].attrs["units"] = "s"
-        dataset["frames"] = xr.DataArray(self.frames, dims=("frame_time", "variant", "node", "xy"),
-                                         coords={"frame_time": self.frame_times, "variant": self.variants,
-                                                 "xy": ["x", "y"]}, attrs={"units": "m"})
-        dataset["frame_time"].attrs["units"] = "s"
-        parameters = self.parameters.set_index("variant")
-        for column in parameters.columns:
-            dataset = dataset.assign_coords({column: ("variant", parameters.loc[dataset["variant"].values,
-                                                                                column].to_numpy())})
-        dataset.attrs.update({"source": str(self.source), "complete": int(self.complete),
-                              "coordinates": "x right, y up, from the clamp's top; t = 0 at the release"})
-        return dataset
+        # samples a strip never reached (after its divergence) are NaN, as in memory
+        table = self.probes.pivot_table(index="t", columns="variant", values=list(PROBE_FIELDS), dropna=False)
+        table = table.reindex(columns=pd.MultiIndex.from_product([PROBE_FIELDS, self.variants]))
+        probes = table.to_numpy().reshape(len(table), len(PROBE_FIELDS), len(self.variants))
+        parameters = self.parameters.set_index("variant").loc[self.variants]
+        return probes_dataset(table.index.to_numpy(), probes, self.frame_times, self.frames, self.variants,
+                              {name: parameters[name].to_numpy() for name in parameters.columns},
+                              {"source": str(self.source), "complete": int(self.complete),
+                               "coordinates": f"{COORDINATES}; t = 0 at the release"})
 
     def clamp_pose(self, j: int) -> tuple[np.ndarray, np.ndarray]:
         """Per frame, the clamp's rotation angle (rad) and translation (m) that carry its

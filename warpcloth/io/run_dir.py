@@ -36,7 +36,7 @@ import tomli_w
 
 from warpcloth.errors import DataFileError, OptionError
 from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
-from warpcloth.scene import Scene, read_scene_file, scene_from_dict
+from warpcloth.scene import COORDINATES, Scene, read_scene_file, scene_from_dict
 from warpcloth.sim.resources import check_disk
 
 from .atomic import naming, write_npy_atomically, write_text_atomically
@@ -159,6 +159,7 @@ class RunWriter:
             "spacing_m": scenes[0].spacing,
             "probe_columns": list(PROBE_COLUMNS),
             "probe_units": {"t": "s", "variant": "index", **PROBE_UNITS},
+            "coordinates": COORDINATES,
             "frames": {"file": "frames.npy", "shape": [len(frame_times), len(scenes), n_nodes, 2],
                        "axes": ["frame", "variant", "node", "xy"], "unit": "m",
                        "times_file": "frame_times.npy"},
@@ -290,6 +291,9 @@ def _check_meta(path: Path, meta: dict) -> None:
     if "committed" not in meta:
         raise DataFileError(file, "has no record of the committed rows and frames (written by an older "
                             "warpcloth); rerun the scene to read it")
+    if meta.get("coordinates") != COORDINATES:
+        raise DataFileError(file, "does not say its positions are from the clamp edge (an older warpcloth measured "
+                            "them from the clamp's top); rerun the scene to read it")
     committed = meta["committed"]
     checks = [
         (isinstance(meta.get("complete"), bool), "complete must be true or false"),

@@ -31,7 +31,7 @@ import pyarrow.parquet as pq
 
 from warpcloth.errors import DataFileError, OptionError
 from warpcloth.kernels import PROBE_FIELDS
-from warpcloth.scene import Sweep, expand
+from warpcloth.scene import COORDINATES, Sweep, expand
 
 from .atomic import write_atomically, write_npy_atomically
 from .json_file import read_json
@@ -91,6 +91,7 @@ class SweepDirectory:
         manifest = self.path / "sweep.json"
         if manifest.exists():
             stored = read_json(manifest)
+            check_coordinates(manifest, stored)
             if stored["fingerprint"] != sweep.fingerprint:
                 raise OptionError("--out", f"{self.path} holds a different sweep (its scenes or sweep spec "
                                   "changed); choose a new --out directory to start this one")
@@ -104,6 +105,7 @@ class SweepDirectory:
         write_atomically(self.path / "variants.csv", lambda p: table.to_csv(p, index=False))
         info = {"fingerprint": sweep.fingerprint, "n_variants": len(sweep.scenes), "keys": sweep.keys,
                 "batches": batches, "sweep": sweep.spec, "base_scene": sweep.base, "complete": False,
+                "coordinates": COORDINATES,
                 "provenance": provenance()}
         write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
         return batches
@@ -132,9 +134,17 @@ class SweepDirectory:
         return summary
 
 
+def check_coordinates(manifest: Path, info: dict) -> None:
+    """Refuse a sweep whose positions are not from the clamp edge (an older warpcloth's)."""
+    if info.get("coordinates") != COORDINATES:
+        raise DataFileError(manifest, "does not say its positions are from the clamp edge (an older warpcloth "
+                            "measured them from the clamp's top); run the sweep again into a new --out directory")
+
+
 def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording:
     """Selected variants of a sweep directory run with ``--frames``, as a Recording."""
     info = read_json(path / "sweep.json")
+    check_coordinates(path / "sweep.json", info)
     sweep = expand(info["base_scene"] | {"sweep": info["sweep"]}, max_variants=info["n_variants"])
     if sweep.fingerprint != info["fingerprint"]:
         raise DataFileError(path, "its variants no longer resolve to the scenes that were simulated "

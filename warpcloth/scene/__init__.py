@@ -3,7 +3,7 @@
 
 from .build import Batch, build_batch, builder_for, check_batch
 from .files import bundled_scenes, load_scene, read_scene_file, scene_from_dict
-from .geometry import clamp_edge, rest_positions
+from .geometry import COORDINATES, rest_positions
 from .materials import (
     MATERIAL_FILE_KEY,
     bundled_materials,
@@ -26,6 +26,7 @@ from .schema import (
 from .sweep import Sweep, expand, load_sweep
 
 __all__ = [
+    "COORDINATES",
     "DEFAULT_MATERIAL",
     "DEFAULT_MATERIAL_NAME",
     "MATERIAL_FILE_KEY",
@@ -42,7 +43,6 @@ __all__ = [
     "bundled_materials",
     "bundled_scenes",
     "check_batch",
-    "clamp_edge",
     "expand",
     "load_scene",
     "load_sweep",

@@ -18,7 +18,7 @@ from warpcloth.sim import SOLVERS, ClampMotion, Control, Model, Recorder, Solver
 from warpcloth.sim.resources import check_memory
 
 from .clamp_motion import clamp_pieces
-from .geometry import clamp_edge, rest_positions
+from .geometry import rest_positions
 from .materials import to_si
 from .schema import Scene, batch_fields
 
@@ -57,7 +57,6 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
                  "use a coarser strip.spacing_mm or fewer strips per batch")
     builder = StripBuilder(rest_positions(first), first.n_clamped, first.spacing, first.run.gravity_m_per_s2,
                            release_time=first.preroll, move_time=first.release.move_time_s)
-    edge = clamp_edge(first)
     for scene in scenes:
         start, end, coefficients = clamp_pieces(scene.clamp)
         builder.add_strip(
@@ -65,9 +64,9 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
             width=scene.strip.width_mm * units.LENGTH_MM,
             damping=scene.damping.gamma_per_s,
             clamp=ClampMotion(start, end, coefficients),
-            rotation_centre=edge + units.LENGTH_MM * np.array([scene.clamp.rotation_centre_dx_mm,
-                                                               scene.clamp.rotation_centre_dy_mm]),
-            hold_target=edge + units.LENGTH_MM * np.array([scene.release.hold_x_mm, scene.release.hold_y_mm]),
+            rotation_centre=units.LENGTH_MM * np.array([scene.clamp.rotation_centre_dx_mm,
+                                                        scene.clamp.rotation_centre_dy_mm]),
+            hold_target=units.LENGTH_MM * np.array([scene.release.hold_x_mm, scene.release.hold_y_mm]),
             settle_damping=scene.release.settle_damping_per_s,
             edge_hinge_length=first.spacing * (0.5 if scene.clamp.edge_hinge == "second_order" else 1.0),
         )
@@ -85,7 +84,7 @@ def build_batch(scenes: Sequence[Scene], device: str | None = None) -> Batch:
         interval=first.output_interval,
         probes_per_frame=first.output.probes_per_frame,
         duration=first.run.duration_s,
-        laser_height=float(clamp_edge(first)[1] + first.output.laser_height_mm * units.LENGTH_MM),
+        laser_height=first.output.laser_height_mm * units.LENGTH_MM,
         loop_hinge=first.loop_hinge,
     )
     return Batch(model, model.control(), solver, recorder)

@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import importlib.resources
-import typing
 from pathlib import Path
 from typing import Any
 
 from warpcloth.errors import DataFileError, OptionError
 
 from .materials import MATERIAL_FILE_KEY, with_material_file
-from .overrides import apply_overrides
+from .overrides import Overrides, apply_overrides
 from .parse import parse_section, parse_toml, read_toml_text
 from .schema import Scene
 from .validate import validate_scene
@@ -91,8 +90,9 @@ def scene_from_dict(data: dict) -> Scene:
     return scene
 
 
-def load_scene(name_or_path: str | Path, overrides: typing.Iterable[str] = ()) -> Scene:
-    """Read a scene by path or bundled name, apply ``--set`` overrides, validate it.
+def load_scene(name_or_path: str | Path, overrides: Overrides = ()) -> Scene:
+    """Read a scene by path or bundled name, apply overrides (``"key=value"`` strings as
+    ``--set`` takes them, or a dict ``{"damping.gamma_per_s": 0.5}``), validate it.
 
     A ``[sweep]`` section is ignored here: this is the sweep's base scene.
     """

@@ -56,20 +56,39 @@ def set_field(data: dict, key: str, value: Any) -> None:
                 raise SceneError(".".join(parts[: i + 1]), "is a value, not a section")
 
 
-def apply_overrides(data: dict, overrides: typing.Iterable[str]) -> dict:
-    """Return a copy of raw scene ``data`` with ``key=value`` overrides applied.
+Overrides = typing.Iterable[str] | typing.Mapping[str, Any]
+"""``"key=value"`` strings (as ``--set`` takes them) or a mapping ``{"damping.gamma_per_s": 0.5}``."""
 
-    Keys are dotted field names (``integrator.dt_s``); list items are addressed by
-    index (``clamp.segments.1.t_end_s``). Values are TOML literals; a bare word is a
-    string. Unknown keys are reported when the result is parsed. A ``material.from_file``
-    override replaces the scene's own material values by the file's; the other
-    ``material.*`` overrides apply on top of it, wherever they stand in the list.
-    """
-    data = copy.deepcopy(data)
-    # stable sort: the material file first, so that it cannot undo a field override
-    for item in sorted(overrides, key=lambda o: o.split("=", 1)[0].strip() != MATERIAL_FILE_KEY):
+
+def override_pairs(overrides: Overrides) -> list[tuple[str, Any]]:
+    """``(key, value)`` of each override: strings parsed as ``--set`` parses them, a
+    mapping's values taken as they are (Python numbers, strings, booleans, lists)."""
+    if isinstance(overrides, str):
+        raise TypeError(f"overrides must be a list of 'key=value' strings or a dict, not one string {overrides!r}")
+    if isinstance(overrides, typing.Mapping):
+        return [(str(key), value) for key, value in overrides.items()]
+    pairs = []
+    for item in overrides:
+        if not isinstance(item, str):
+            raise TypeError(f"an override must be a 'key=value' string, got {item!r}; pass a dict for Python values")
         if "=" not in item:
             raise SceneError(item, "an override must look like section.field=value")
         key, text = item.split("=", 1)
-        set_field(data, key, _parse_value(text.strip()))
+        pairs.append((key.strip(), _parse_value(text.strip())))
+    return pairs
+
+
+def apply_overrides(data: dict, overrides: Overrides) -> dict:
+    """Return a copy of raw scene ``data`` with overrides applied (:data:`Overrides`).
+
+    Keys are dotted field names (``integrator.dt_s``); list items are addressed by
+    index (``clamp.segments.1.t_end_s``). String values are TOML literals; a bare word is
+    a string. Unknown keys are reported when the result is parsed. A
+    ``material.from_file`` override replaces the scene's own material values by the
+    file's; the other ``material.*`` overrides apply on top of it, wherever they stand.
+    """
+    data = copy.deepcopy(data)
+    # stable sort: the material file first, so that it cannot undo a field override
+    for key, value in sorted(override_pairs(overrides), key=lambda pair: pair[0] != MATERIAL_FILE_KEY):
+        set_field(data, key, value)
     return data

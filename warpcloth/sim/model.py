@@ -29,16 +29,22 @@ _INIT_LOCK = threading.Lock()
 _INITIALISED: list[bool] = []
 
 
-def init_warp_quietly() -> None:
-    """Initialise Warp without its banner, module-load lines and native notice that a
-    machine has no CUDA driver (on a CPU machine every command and every sweep worker
-    would print them); a --device cuda there is refused with its own message."""
-    wp.config.log_level = logging.WARNING  # no init banner or module-load lines
+def init_warp_quietly(verbose: bool = False) -> None:
+    """Initialise Warp (once per process) without its banner, module-load lines and native
+    notice that a machine has no CUDA driver (on a CPU machine every command, sweep worker
+    and script would print them); a --device cuda there is refused with its own message.
+    ``verbose`` (``warpcloth --verbose``) lets Warp say everything instead."""
     with _INIT_LOCK:
         # once per process: redirecting the process's stderr is not something two threads
         # may do at once (the second would save and later restore the redirection)
         if _INITIALISED:
             return
+        if verbose:
+            wp.config.verbose = True
+            wp.init()
+            _INITIALISED.append(True)
+            return
+        wp.config.log_level = logging.WARNING  # no init banner or module-load lines
         sys.stderr.flush()
         saved = os.dup(2)
         silent = os.open(os.devnull, os.O_WRONLY)
@@ -55,6 +61,7 @@ def init_warp_quietly() -> None:
 def machine_device(device: str | None) -> wp.context.Device:
     """The Warp device ``device`` names (None: the default), or an OptionError naming the
     devices this machine has (a GPU asked for on a machine without one)."""
+    init_warp_quietly()  # scripts are as quiet as the CLI, unless Warp was started before
     try:
         return wp.get_device(device)
     except (RuntimeError, ValueError) as exc:

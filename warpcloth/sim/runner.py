@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
+import pandas as pd
 import warp as wp
 from tqdm import tqdm
 
@@ -15,6 +16,7 @@ from warpcloth.errors import DivergenceError
 from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, STATUS_NONFINITE_ENERGY
 
 from .control import Control
+from .labelled import probes_dataset, probes_frame
 from .model import Model
 from .recorder import Recorder, Schedule
 from .resources import check_memory
@@ -63,6 +65,23 @@ class RunResult:
     diverged: list[dict] = field(default_factory=list)
     wall_time_s: float = 0.0
     strip_steps: int = 0
+    parameters: dict[str, np.ndarray] = field(default_factory=dict)
+    """Each strip's value of every per-strip scalar scene field, by dotted name (filled
+    when the batch was built from scenes): the coordinates of :meth:`to_xarray`."""
+    attrs: dict[str, object] = field(default_factory=dict)
+    """What :meth:`to_xarray` says about the whole result (e.g. its coordinate frame)."""
+
+    def to_xarray(self) -> object:
+        """An ``xarray.Dataset`` of the probes over (t, variant), the frames over
+        (frame_time, variant, node, xy) and :attr:`parameters` as coordinates along
+        ``variant``, units in ``attrs`` (needs ``pip install 'warpcloth[xarray]'``)."""
+        return probes_dataset(self.t, self.probes, self.frame_times, self.frames, np.arange(self.probes.shape[2]),
+                              self.parameters, self.attrs)
+
+    def to_dataframe(self) -> pd.DataFrame:
+        """The probes in long form (t, variant, one column per probe, SI) joined with
+        :attr:`parameters`: ready for groupby and plotting."""
+        return probes_frame(self.t, self.probes, np.arange(self.probes.shape[2]), self.parameters)
 
     def probe(self, name: str, variant: int | None = None) -> np.ndarray:
         """Time series of one probe: ``[sample, variant]``, or ``[sample]`` for one variant."""
@@ -102,13 +121,15 @@ def simulate_batch(
     on_divergence: str = "raise",
     keep_frames: bool = True,
     labels: list[Any] | None = None,
+    parameters: dict[str, np.ndarray] | None = None,
+    attrs: dict[str, object] | None = None,
 ) -> RunResult:
     """Run a built batch to the end of the recorder's schedule and return what it recorded.
 
     ``sink`` receives each finished chunk (see :class:`Sink`). ``on_divergence="raise"``
     stops at the first diverged strip with a DivergenceError (its ``result`` holds what
     was recorded); ``"record"`` lets the other strips go on. ``labels`` become
-    ``RunResult.scenes``.
+    ``RunResult.scenes``; ``parameters`` and ``attrs``, the result's (see there).
     """
     check_divergence_policy(on_divergence)
     check_recording_fits(model, control, recorder, keep_frames)
@@ -161,7 +182,8 @@ def simulate_batch(
         bar.close()
     wall_time = time.perf_counter() - started
     strip_steps = b * int(schedule.steps[i - 1])  # up to where the run stopped
-    result = RunResult(list(labels or []), t, probes_all, frame_times, frames_all, diverged, wall_time, strip_steps)
+    result = RunResult(list(labels or []), t, probes_all, frame_times, frames_all, diverged, wall_time, strip_steps,
+                       dict(parameters or {}), dict(attrs or {}))
     if sink is not None:
         sink.close(diverged, {"wall_time_s": wall_time, "strip_steps": strip_steps, "device": str(model.device)})
     if diverged and on_divergence == "raise":

@@ -57,9 +57,9 @@ def ribbon_quads(n_nodes: int) -> tuple[list[int], list[int]]:
 
 
 def clamp_box(recording: Recording, j: int) -> np.ndarray:
-    """The 8 corners of the clamp's jaws at rest (clamp top at the origin)."""
+    """The 8 corners of the clamp's jaws at rest (from the clamp edge up to its top)."""
     scene = recording.scenes[j]
     length = scene.strip.clamp_length_mm * 1e-3
     half_w = scene.strip.width_mm * 1e-3 / 2
     x = (-CLAMP_JAW_M, CLAMP_JAW_M)
-    return np.array([[xx, yy, zz] for xx in x for yy in (-length, 0.0) for zz in (-half_w, half_w)], dtype=float)
+    return np.array([[xx, yy, zz] for xx in x for yy in (0.0, length) for zz in (-half_w, half_w)], dtype=float)

@@ -1,6 +1,6 @@
 """2D figures of a run (the paper's Figs. 3b/8b, 9/11, 10, 12 and the energy budget), of
 a sweep (a metric against one or two parameters) and of fits (the motion, the clamp
-angle, a KES material), as PNG files, headless.
+angle, a KES material), headless, as PNG (or PDF, SVG: :data:`warpcloth.viz.FORMATS`).
 
 Axes are in the units a textile lab reads: mm, degrees, and KES units for the bending
 loop (curvature in 1/cm, moment per width in gf·cm/cm), converted via ``units``.
@@ -21,13 +21,14 @@ import pandas as pd  # noqa: E402
 from warpcloth import units  # noqa: E402
 from warpcloth.errors import DataFileError, OptionError  # noqa: E402
 from warpcloth.io.atomic import write_atomically  # noqa: E402
-from warpcloth.io.measured import LaserTrace, TrackedShapes, read_laser_trace  # noqa: E402
+from warpcloth.io.measured import ClampAngleTrace, LaserTrace, TrackedShapes, read_measurement  # noqa: E402
 from warpcloth.io.recording import Recording  # noqa: E402
+from warpcloth.metrics import extrema  # noqa: E402
 from warpcloth.scene import to_si  # noqa: E402
 from warpcloth.sim import moment_along_path  # noqa: E402
+from warpcloth.viz import DPI, FORMATS  # noqa: E402
 
 MM = 1 / units.LENGTH_MM
-DPI = 120
 
 
 def _label(recording: Recording, j: int) -> str:
@@ -35,6 +36,30 @@ def _label(recording: Recording, j: int) -> str:
                if c != "variant" and recording.parameters[c].nunique() > 1][:2]
     parts = [f"{c.split('.')[-1]}={recording.parameters[c].iloc[j]:.3g}" for c in varying]
     return f"variant {recording.variants[j]}" + (f" ({', '.join(parts)})" if parts else "")
+
+
+LEGEND_VARIANTS = 8
+"""Up to this many variants get a legend entry each; more are coloured by a parameter."""
+
+
+def _variant_colours(recording: Recording, fig: plt.Figure, ax: plt.Axes) -> list[tuple[object, str | None]]:
+    """A colour and a legend label per variant: its own entry for a few variants; for
+    many, viridis keyed to the first parameter that varies, with a colourbar, and no
+    legend entries (a 100-entry legend would cover the axes)."""
+    n = len(recording.variants)
+    if n <= LEGEND_VARIANTS:
+        return [(f"C{j}", _label(recording, j)) for j in range(n)]
+    varying = [c for c in recording.parameters.columns if c != "variant" and recording.parameters[c].nunique() > 1]
+    key = varying[0] if varying else "variant"
+    values = recording.parameters[key].to_numpy(dtype=float)
+    norm = matplotlib.colors.Normalize(values.min(), values.max() if values.max() > values.min() else None)
+    fig.colorbar(matplotlib.cm.ScalarMappable(norm, "viridis"), ax=ax, label=field_label(key))
+    return [(plt.cm.viridis(norm(v)), None) for v in values]
+
+
+def _legend(ax: plt.Axes, **style: object) -> None:
+    if ax.get_legend_handles_labels()[0]:  # many variants are labelled by a colourbar instead
+        ax.legend(**style)
 
 
 FIELD_LABELS = {
@@ -71,51 +96,72 @@ def field_label(name: str, units: bool = True) -> str:
     return f"{symbol} ({unit})" if units and unit else symbol
 
 
-def _save(fig: plt.Figure, path: Path) -> Path:
+def _save(fig: plt.Figure, path: Path, dpi: float = DPI) -> Path:
     fig.tight_layout()
-    write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=DPI))
+    write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".") or "png"))
     plt.close(fig)
     return path
 
 
-def plot_amplitude(recording: Recording, path: Path, measured: LaserTrace | None = None) -> Path:
+def plot_amplitude(recording: Recording, path: Path, measured: LaserTrace | None = None, *,
+                   dpi: float = DPI) -> Path:
     """Laser-line displacement (and free-end x) against time, as in the paper's Fig. 10."""
     fig, ax = plt.subplots(figsize=(8, 4))
     laser_mm = recording.scenes[0].output.laser_height_mm
-    for j in range(len(recording.variants)):
+    for j, (colour, label) in enumerate(_variant_colours(recording, fig, ax)):
         t, laser = recording.probe("laser_x", j)
-        line, = ax.plot(t, laser * MM, lw=1.2, label=f"{_label(recording, j)}: laser line")
+        ax.plot(t, laser * MM, lw=1.2, color=colour, label=label and f"{label}: laser line")
         if len(recording.variants) == 1:
             t, tip = recording.probe("tip_x", j)
-            ax.plot(t, tip * MM, lw=0.8, ls="--", color=line.get_color(), alpha=0.6, label="free end x")
+            ax.plot(t, tip * MM, lw=0.8, ls="--", color=colour, alpha=0.6, label="free end x")
     if measured is not None:
         ax.plot(measured.t, measured.x * MM, "k.", ms=2.5, label="measured")
     ax.axhline(0, color="0.6", lw=0.6)
     ax.set(xlabel="time after release t (s)", ylabel="x (mm)",
-           title=f"Displacement at the laser line ({laser_mm:g} mm below the clamp)")
-    ax.legend(fontsize=7, loc="upper right")
-    return _save(fig, path)
+           title=f"Displacement at the laser line (y = {laser_mm:g} mm from the clamp edge)")
+    _legend(ax, fontsize=7, loc="upper right")
+    return _save(fig, path, dpi)
 
 
-def plot_clamp_angle(recording: Recording, path: Path) -> Path:
-    """Clamp rotation angle against time, as in the paper's Fig. 12."""
+def plot_clamp_angle(recording: Recording, path: Path, measured: ClampAngleTrace | None = None, *,
+                     dpi: float = DPI) -> Path:
+    """Clamp rotation angle against time, as in the paper's Fig. 12, over an encoder's."""
     fig, ax = plt.subplots(figsize=(6, 4))
-    for j in range(len(recording.variants)):
+    for j, (colour, label) in enumerate(_variant_colours(recording, fig, ax)):
         t, theta = recording.probe("clamp_angle", j)
-        ax.plot(t, np.degrees(theta), lw=1.2, label=_label(recording, j))
+        ax.plot(t, np.degrees(theta), lw=1.2, color=colour, label=label)
+    if measured is not None:
+        ax.plot(measured.t, np.degrees(measured.theta), "k.", ms=2.5, label="encoder (measured)")
     ax.set(xlabel="t (s)", ylabel="clamp angle θ (deg)", title="Clamp rotation")
-    ax.legend(fontsize=7)
-    return _save(fig, path)
+    _legend(ax, fontsize=7)
+    return _save(fig, path, dpi)
 
 
-def default_shape_times(recording: Recording, count: int = 10) -> np.ndarray:
-    """``count`` frame times spread evenly over the run."""
-    return np.linspace(recording.frame_times[0], recording.frame_times[-1], count)
+def default_shape_times(recording: Recording, count: int = 9, variant: int = 0) -> np.ndarray:
+    """``count`` times evenly over the first half swing: from the release to the free end's
+    first turning point after it (the far side for a released swing, the end's largest
+    excursion for a driven clamp), so a stroboscopic figure shows one phase of the motion,
+    as the paper's Figs. 9 and 11 do; turning points as :func:`warpcloth.metrics.extrema`
+    finds them, ripples below 10 % of the swing ignored. The whole run when the end never
+    turns back."""
+    t, x = recording.probe("tip_x", variant)
+    after = t >= 0
+    times, _ = extrema(t[after], x[after], starts_at_rest=True, prominence=0.1)
+    if len(times) < 2:
+        return np.linspace(recording.frame_times[0], recording.frame_times[-1], count)
+    return np.linspace(times[0], times[1], count)
 
 
-def plot_shapes(recording: Recording, path: Path, times: np.ndarray, variant: int = 0) -> Path:
-    """Stroboscopic overlay of the strip's shape at ``times`` (Figs. 9, 11)."""
+def plot_shapes(recording: Recording, path: Path, times: np.ndarray, variant: int = 0,
+                measured: TrackedShapes | None = None, *, dpi: float = DPI) -> Path:
+    """Stroboscopic overlay of the strip's shape at ``times`` (Figs. 9, 11), the laser line
+    dashed; with ``measured`` markers, the shapes at the measured frames (up to eight)
+    with the markers over them."""
     fig, ax = plt.subplots(figsize=(6.5, 6))
+    if measured is not None:
+        frames = np.unique(measured.frame)
+        chosen = frames[np.linspace(0, len(frames) - 1, min(8, len(frames))).round().astype(int)]
+        times = np.array([measured.t[measured.frame == f][0] for f in chosen])
     frames = np.unique(recording.nearest_frames(times))
     colours = plt.cm.viridis(np.linspace(0, 1, len(frames)))
     nc = recording.n_clamped
@@ -123,10 +169,17 @@ def plot_shapes(recording: Recording, path: Path, times: np.ndarray, variant: in
         xy = recording.frames[f, variant] * MM
         ax.plot(xy[nc - 1 :, 0], xy[nc - 1 :, 1], color=colour, lw=1.4, label=f"{recording.frame_times[f]:.3f} s")
         ax.plot(xy[:nc, 0], xy[:nc, 1], color="0.25", lw=4, solid_capstyle="butt")
+        if measured is not None:
+            rows = measured.frame == measured.frame[np.abs(measured.t - recording.frame_times[f]).argmin()]
+            ax.plot(measured.x[rows] * MM, measured.y[rows] * MM, "o", color=colour, ms=3.5, mfc="none")
+    laser_mm = recording.scenes[variant].output.laser_height_mm
+    ax.axhline(laser_mm, color="C3", lw=0.8, ls="--", label=f"laser line, y = {laser_mm:g} mm")
     ax.set_aspect("equal")
-    ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"Strip shapes, {_label(recording, variant)}")
+    ax.set(xlabel="x from the clamp edge (mm)", ylabel="y from the clamp edge (mm)",
+           title=f"Strip shapes{' and measured markers (o)' if measured is not None else ''}, "
+                 f"{_label(recording, variant)}")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title="t after release", title_fontsize=7)
-    return _save(fig, path)
+    return _save(fig, path, dpi)
 
 
 def kes_loop(recording: Recording, variant: int = 0, samples: int = 400) -> tuple[np.ndarray, np.ndarray]:
@@ -139,24 +192,66 @@ def kes_loop(recording: Recording, variant: int = 0, samples: int = 400) -> tupl
     return path, moment
 
 
-def plot_bending_loop(recording: Recording, path: Path, variant: int = 0) -> Path:
-    """Moment–curvature path of the probed hinge over the run, over the material's KES
-    loop (Figs. 3b, 8b), in KES units."""
-    fig, ax = plt.subplots(figsize=(6, 5))
+KES_B_RANGE_PER_CM = (0.5, 1.5)
+"""Where KES-FB2 reads B (the slope) and 2HB (the loop's width, at the middle: K = ±1 1/cm)."""
+
+
+def _mark_kes_values(ax: plt.Axes, k: np.ndarray, m: np.ndarray, kes: object) -> None:
+    # B as a line of its slope through the loop's centre line over 0.5–1.5 1/cm, 2HB as
+    # the width at K = 1 1/cm between the branches, as a KES-FB2 chart is read
+    lo, hi = KES_B_RANGE_PER_CM
+    k1 = 0.5 * (lo + hi)
+    rising, falling = np.gradient(k) > 0, np.gradient(k) < 0
+    at_k1 = [float(np.interp(k1, *_sorted(k[leg], m[leg]))) for leg in (rising & (k > 0), falling & (k > 0))]
+    centre = 0.5 * sum(at_k1)
+    b, hb2 = kes.b_gf_cm2_per_cm, kes.hb2_gf_cm_per_cm
+    if b is not None:
+        span = np.array([lo, hi])
+        ax.plot(span, centre + b * (span - k1), color="C0", lw=2, label=f"B = {b:.4g} gf·cm²/cm (slope, 0.5–1.5)")
+    if hb2 is not None:
+        ax.annotate("", xy=(k1, max(at_k1)), xytext=(k1, min(at_k1)),
+                    arrowprops={"arrowstyle": "<->", "color": "C1", "lw": 1.5})
+        ax.plot([], [], color="C1", lw=1.5, label=f"2HB = {hb2:.4g} gf·cm/cm (width at K = 1)")
+
+
+def _sorted(k: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    order = np.argsort(k, kind="stable")
+    return k[order], m[order]
+
+
+def plot_bending_loop(recording: Recording, path: Path, variant: int = 0, kes: object | None = None, *,
+                      dpi: float = DPI) -> Path:
+    """The material's KES-FB2 loop ±K0 as the instrument charts it, B and 2HB marked when
+    ``kes`` (an object with ``b_gf_cm2_per_cm`` and ``hb2_gf_cm_per_cm``, e.g. a
+    :class:`warpcloth.calibrate.kes.BendingSummary`) is given (left), and the probed
+    hinge's moment–curvature path over the run, zoomed to the path (right; Figs. 3b, 8b);
+    KES units."""
+    fig, (chart, zoom) = plt.subplots(1, 2, figsize=(11, 4.8))
     k, m = kes_loop(recording, variant)
-    ax.plot(k / units.CURVATURE_PER_CM, m / units.MOMENT_GF_CM_PER_CM, color="0.7", lw=3,
-            label="material (KES-FB2 loop, ±K0)")
+    k, m = k / units.CURVATURE_PER_CM, m / units.MOMENT_GF_CM_PER_CM
     _, curvature = recording.probe("loop_curvature", variant)
     _, moment = recording.probe("loop_moment", variant)
-    ax.plot(curvature / units.CURVATURE_PER_CM, moment / units.MOMENT_GF_CM_PER_CM, lw=0.8, color="C3",
-            label="hinge over the run")
+    curvature, moment = curvature / units.CURVATURE_PER_CM, moment / units.MOMENT_GF_CM_PER_CM
+    for ax in (chart, zoom):
+        ax.plot(k, m, color="0.7", lw=3, label="material, KES-FB2 loop (±K0)")
+        ax.axhline(0, color="0.8", lw=0.5)
+        ax.axvline(0, color="0.8", lw=0.5)
+        ax.set(xlabel="curvature K (cm⁻¹)", ylabel="moment per width M (gf·cm/cm)")
+    if kes is not None:
+        _mark_kes_values(chart, k, m, kes)
+    chart.set_title("Material: the loop a KES-FB2 would chart", fontsize=9)
+    chart.legend(fontsize=7, loc="upper left")
+    zoom.plot(curvature, moment, lw=0.8, color="C3", label="hinge over the run")
+    finite = np.isfinite(curvature) & np.isfinite(moment)
+    if finite.any():
+        (k_lo, k_hi), (m_lo, m_hi) = ((float(np.min(v[finite])), float(np.max(v[finite]))) for v in (curvature, moment))
+        pad_k, pad_m = 0.08 * (k_hi - k_lo) or 0.01, 0.08 * (m_hi - m_lo) or 0.001
+        zoom.set(xlim=(k_lo - pad_k, k_hi + pad_k), ylim=(m_lo - pad_m, m_hi + pad_m))
     hinge = recording.scenes[variant].output.loop_hinge_mm
-    ax.axhline(0, color="0.8", lw=0.5)
-    ax.axvline(0, color="0.8", lw=0.5)
-    ax.set(xlabel="curvature K (1/cm)", ylabel="moment M (gf·cm/cm)",
-           title=f"Bending loop, hinge {hinge:g} mm below the clamp, {_label(recording, variant)}")
-    ax.legend(fontsize=7)
-    return _save(fig, path)
+    zoom.set_title(f"Hinge {hinge:g} mm below the clamp edge, {_label(recording, variant)} (zoomed to its path)",
+                   fontsize=9)
+    zoom.legend(fontsize=7)
+    return _save(fig, path, dpi)
 
 
 ENERGY_TERMS = (("kinetic", "kinetic"), ("gravitational", "gravitational (rel. to t=0)"), ("tensile", "tensile"),
@@ -164,9 +259,11 @@ ENERGY_TERMS = (("kinetic", "kinetic"), ("gravitational", "gravitational (rel. t
                 ("damping_work", "dissipated by damping"), ("drive_work", "done by the clamp (−)"))
 
 
-def plot_energy(recording: Recording, path: Path, variant: int = 0) -> Path:
-    """Energy budget against time: each term and their sum, which should stay constant."""
-    fig, ax = plt.subplots(figsize=(9.5, 4.5))
+def plot_energy(recording: Recording, path: Path, variant: int = 0, *, dpi: float = DPI) -> Path:
+    """Energy budget against time: each term and their sum (top), and the sum's drift
+    from its start in % of the peak kinetic energy (bottom), which shows how well the
+    step conserves it."""
+    fig, (ax, drift) = plt.subplots(2, 1, figsize=(9.5, 6), sharex=True, height_ratios=[3, 1])
     total = 0.0
     for name, label in ENERGY_TERMS:
         t, value = recording.probe(name, variant)
@@ -177,24 +274,41 @@ def plot_energy(recording: Recording, path: Path, variant: int = 0) -> Path:
         total = total + value
         ax.plot(t, value * 1e6, lw=1, label=label)
     ax.plot(t, total * 1e6, "k", lw=1.8, label="sum (conserved)")
-    ax.set(xlabel="t (s)", ylabel="energy (µJ)", title=f"Energy budget, {_label(recording, variant)}")
+    ax.set(ylabel="energy (µJ)", title=f"Energy budget, {_label(recording, variant)}")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1))
-    return _save(fig, path)
+    peak = float(np.nanmax(recording.probe("kinetic", variant)[1]))
+    if peak > 0:
+        drift.plot(t, 100 * (total - total[0]) / peak, "k", lw=1)
+    drift.axhline(0, color="0.6", lw=0.6)
+    drift.set(xlabel="t (s)", ylabel="sum − start\n(% of peak kinetic)")
+    return _save(fig, path, dpi)
 
 
 def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path | None = None,
-             times: np.ndarray | None = None, variant: int = 0) -> list[Path]:
-    """Write every run figure into ``out_dir``; returns the PNG paths."""
+             times: np.ndarray | None = None, variant: int = 0, kes: object | None = None,
+             fmt: str = "png", dpi: float = DPI) -> list[Path]:
+    """Write every run figure into ``out_dir`` as ``fmt`` (png, pdf or svg); returns the
+    paths. A ``measured`` file goes onto the figure of its kind: a laser trace onto the
+    amplitude, a clamp encoder onto the clamp angle, tracked markers onto the shapes
+    (:func:`warpcloth.io.measured.read_measurement`). ``kes`` marks B and 2HB on the
+    bending loop (:func:`plot_bending_loop`)."""
+    if fmt not in FORMATS:
+        raise OptionError("--format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
+    if not (np.isfinite(dpi) and 10 <= dpi <= 2400):
+        raise OptionError("--dpi", f"must be between 10 and 2400, got {dpi!r}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    series = read_laser_trace(measured) if measured else None
+    data = read_measurement(measured, encoder=True) if measured else None
+    shapes = data if isinstance(data, TrackedShapes) else None
     return [
-        plot_amplitude(recording, out / "amplitude.png", series),
-        plot_clamp_angle(recording, out / "clamp_angle.png"),
-        plot_shapes(recording, out / "shapes.png", default_shape_times(recording) if times is None else times,
-                    variant),
-        plot_bending_loop(recording, out / "bending_loop.png", variant),
-        plot_energy(recording, out / "energy.png", variant),
+        plot_amplitude(recording, out / f"amplitude.{fmt}", data if isinstance(data, LaserTrace) else None, dpi=dpi),
+        plot_clamp_angle(recording, out / f"clamp_angle.{fmt}", data if isinstance(data, ClampAngleTrace) else None,
+                         dpi=dpi),
+        plot_shapes(recording, out / f"shapes.{fmt}",
+                    default_shape_times(recording, variant=variant) if times is None else times, variant, shapes,
+                    dpi=dpi),
+        plot_bending_loop(recording, out / f"bending_loop.{fmt}", variant, kes, dpi=dpi),
+        plot_energy(recording, out / f"energy.{fmt}", variant, dpi=dpi),
     ]
 
 
@@ -215,9 +329,10 @@ def read_sweep_summary(sweep_dir: str | Path) -> pd.DataFrame:
     return pd.concat([read_parquet(p) for p in parts]).sort_values("variant")
 
 
-def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: str | None = None) -> Path:
-    """PNG of :func:`sweep_figure`."""
-    return _save(sweep_figure(summary, metric, x, y), Path(path))
+def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: str | None = None, *,
+               dpi: float = DPI) -> Path:
+    """:func:`sweep_figure` written to ``path`` (its suffix chooses the format)."""
+    return _save(sweep_figure(summary, metric, x, y), Path(path), dpi)
 
 
 def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = None) -> plt.Figure:
@@ -234,6 +349,12 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
         raise OptionError("--metric", f"{metric!r} holds a list per variant (one value per half-cycle); plot one "
                           "number per variant, e.g. mean_log_decrement or first_amplitude_m")
     data = summary[~summary["diverged"]] if "diverged" in summary else summary
+    valued = data[np.isfinite(data[metric].to_numpy(dtype=float))]
+    if valued.empty:
+        raise OptionError("--metric", f"no variant has a value of "
+                          f"{metric!r} (every one is NaN: for a period or decrement, the record may be shorter "
+                          "than the swing needs, or the strip does not swing); plot another metric or run longer")
+    missing, data = len(data) - len(valued), valued
     fig, ax = plt.subplots(figsize=(6.5, 4.8))
     if y is None:
         grouped = data.groupby(x)[metric]
@@ -263,8 +384,9 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
             mesh = ax.scatter(data[x], data[y], c=data[metric], s=14, **scale)
         fig.colorbar(mesh, ax=ax, label=field_label(metric), extend="both")
         ax.set(xlabel=field_label(x), ylabel=field_label(y))
-    ax.set_title(f"{metric} over {len(data)} variants" + (f" ({len(summary) - len(data)} diverged)"
-                                                           if len(data) < len(summary) else ""))
+    diverged = len(summary) - len(data) - missing
+    notes = [f"{diverged} diverged"] * bool(diverged) + [f"{missing} without a value"] * bool(missing)
+    ax.set_title(f"{metric} over {len(data)} variants" + (f" ({', '.join(notes)})" if notes else ""))
     return fig
 
 
@@ -291,12 +413,11 @@ def plot_fit_overlay(result: object, objective: object, measurement: LaserTrace 
     fig, ax = plt.subplots(figsize=(6.5, 6))
     frames = np.unique(measurement.frame)
     chosen = frames[np.linspace(0, len(frames) - 1, min(6, len(frames))).round().astype(int)]
-    edge = objective.edge
     for colour, f in zip(plt.cm.viridis(np.linspace(0, 1, len(chosen))), chosen, strict=True):
         rows = measurement.frame == f
         t = measurement.t[rows][0]
         k = int(np.abs(result.frame_times - (t + shift)).argmin())
-        xy = (result.frames[k, 0] - edge) * MM
+        xy = result.frames[k, 0] * MM
         nc = objective.scene.n_clamped
         ax.plot(xy[nc - 1 :, 0], xy[nc - 1 :, 1], color=colour, lw=1.2, label=f"{t:.3f} s")
         ax.plot(xy[:nc, 0], xy[:nc, 1], color="0.25", lw=3)
