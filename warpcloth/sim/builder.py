@@ -1,4 +1,4 @@
-"""Building a batch of strips from Python, in SI: geometry, per-strip materials and drives.
+"""Building a batch of strips from Python, in SI: geometry, per-strip materials and drives::
 
     builder = StripBuilder(rest_positions, n_clamped=5, spacing=5e-3)
     for material in materials:

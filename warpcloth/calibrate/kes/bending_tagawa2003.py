@@ -3,7 +3,7 @@ KES-FB2 loop (docs/model.md §13.3).
 
 The model M = D K + h (the hinge starts fresh at the first sample: rising branch, no
 offset) is run along the measured curvature path by the kernel's own hinge logic. K0 is
-the loop's largest |K|. For a fixed α the hysteretic offset is proportional to D1 (the
+the loop's largest ``|K|``. For a fixed α the hysteretic offset is proportional to D1 (the
 branch functions are, and the loop centre after a reversal depends on the offset only
 through (M0 ∓ H)/D1), so M = D K + D1 h₁(α; path) with h₁ the offset for D1 = 1 gf·cm/cm:
 for each α, (D, D1) is a linear least-squares problem (with D, D1 ≥ 0). α is searched on
@@ -69,7 +69,7 @@ def _linear_part(curvature: np.ndarray, moment: np.ndarray, offset: np.ndarray) 
 
 
 def fit_bending(loop: BendingLoop, device: str | None = "cpu") -> BendingFit:
-    """Fit D, D1 and α of M = D K + h to the whole loop (K0 = the loop's largest |K|).
+    """Fit D, D1 and α of M = D K + h to the whole loop (K0 = the loop's largest ``|K|``).
 
     For each α, (D, D1) is a linear least-squares problem; α comes from a log grid of
     α K0 (one kernel launch) refined by golden-section search on log α.

@@ -47,10 +47,10 @@ MIN_BENDING_POINTS = 12
 """At least 3 parameters on 3 legs (0 → +K0, +K0 → −K0, −K0 → 0) of a few points each."""
 
 LOOP_CLOSURE = 0.1
-"""A loop closes if it ends within this fraction of its largest |K| of its start."""
+"""A loop closes if it ends within this fraction of its largest ``|K|`` of its start."""
 
 LOOP_REACH = 0.5
-"""Each sign of curvature must reach this fraction of the loop's largest |K|."""
+"""Each sign of curvature must reach this fraction of the loop's largest ``|K|``."""
 
 STRAIN_UNITS = ("percent", "fraction", "mm")
 """The units a KES-FB1 file's first column may be given in (``strain_unit``)."""
@@ -98,7 +98,7 @@ class BendingLoop:
 
     @property
     def k0(self) -> float:
-        """The loop's largest |K| (1/cm), where the model's loop closes."""
+        """The loop's largest ``|K|`` (1/cm), where the model's loop closes."""
         return float(np.max(np.abs(self.curvature)))
 
     def legs(self) -> list[slice]:
@@ -260,7 +260,7 @@ def bending_loop(curvature: np.ndarray, moment: np.ndarray, source: str = "bendi
     """A validated bending loop from arrays: curvature in 1/cm, moment per width in gf·cm/cm.
 
     One cycle from rest: it must reach both signs of curvature (each at least half the
-    largest |K|) and end within 10 % of the largest |K| of where it started. ``rows`` as
+    largest ``|K|``) and end within 10 % of the largest ``|K|`` of where it started. ``rows`` as
     for :func:`tensile_loop`.
     """
     curvature, moment, rows, label = _paired(curvature, moment, rows, source, ("curvature", "moment"))
