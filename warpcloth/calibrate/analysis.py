@@ -1,6 +1,9 @@
 """The swing metrics of anything that swings, measured by the one ruler
 (:func:`~warpcloth.metrics.swing_summary`): measured traces, run directories
-and sweep directories, so a table of lab against simulation is one call."""
+and sweep directories, so a table of lab against simulation is one call. A measured
+trace's first period comes with its standard uncertainty (``first_period_u_s``) from the
+noise the trace shows (:func:`~warpcloth.calibrate.noise.difference_noise`); a
+simulation's has none (NaN)."""
 
 from __future__ import annotations
 
@@ -13,10 +16,14 @@ from warpcloth.io.measured import LaserTrace, bundled_data, read_measurement
 from warpcloth.io.sweep_dir import read_parquet
 from warpcloth.metrics import swing_summary
 
+from .noise import difference_noise
+
 
 def _row(source: str, variant: int | None, metrics: dict) -> dict:
     return {"source": source, "variant": variant, "signal": metrics.get("signal", "laser_x"),
-            "first_period_s": metrics["first_period_s"], "first_amplitude_mm": metrics["first_amplitude_m"] * 1e3,
+            "first_period_s": metrics["first_period_s"],
+            "first_period_u_s": metrics.get("first_period_u_s", float("nan")),
+            "first_amplitude_mm": metrics["first_amplitude_m"] * 1e3,
             "mean_log_decrement": metrics["mean_log_decrement"], "n_half_cycles": metrics["n_half_cycles"],
             "log_decrement": json.dumps(metrics["log_decrement"]) if isinstance(metrics["log_decrement"], list)
             else metrics["log_decrement"]}
@@ -50,7 +57,7 @@ def analyse(source: str | Path, starts_at_rest: bool = True) -> list[dict]:
     measured = read_measurement(bundled_data(source), flag="INPUT")
     if not isinstance(measured, LaserTrace):
         raise DataFileError(str(source), "holds tracked shapes; analyse needs a displacement trace (t_s, x_mm)")
-    metrics = swing_summary(measured.t, measured.x, None, starts_at_rest)
+    metrics = swing_summary(measured.t, measured.x, None, starts_at_rest, noise=difference_noise([measured.x]))
     return [_row(str(source), None, metrics | {"signal": "measured x"})]
 
 

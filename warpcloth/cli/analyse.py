@@ -7,14 +7,14 @@ from pathlib import Path
 
 from .options import add_overwrite, new_result
 
-COLUMNS = ("source", "variant", "signal", "first_period_s", "first_amplitude_mm", "mean_log_decrement",
-           "n_half_cycles", "log_decrement")
+COLUMNS = ("source", "variant", "signal", "first_period_s", "first_period_u_s", "first_amplitude_mm",
+           "mean_log_decrement", "n_half_cycles", "log_decrement")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``analyse``."""
-    p = sub.add_parser("analyse", help="first period, amplitudes and decrements of measured traces, runs and "
-                       "sweeps, measured one way (the sweep summary's)")
+    p = sub.add_parser("analyse", help="first period (± its standard uncertainty for measured traces), amplitudes "
+                       "and decrements of measured traces, runs and sweeps, measured one way (the sweep summary's)")
     p.add_argument("inputs", nargs="+", metavar="INPUT",
                    help="a measured laser trace 't_s, x_mm' (or a bundled one by name), a run directory or a "
                         "sweep directory")
@@ -35,8 +35,11 @@ def analyse_command(args: argparse.Namespace) -> int:
     rows = [row for source in args.inputs for row in analyse(source, starts_at_rest=not args.in_motion)]
     table = pd.DataFrame(rows, columns=list(COLUMNS))
     table["variant"] = table["variant"].astype("Int64")  # empty for a measured trace
+    shown = table.drop(columns="log_decrement")
+    # a simulation's period has no uncertainty: blank, not NaN
+    shown["first_period_u_s"] = [f"{u:.2g}" if pd.notna(u) else "" for u in shown["first_period_u_s"]]
     with pd.option_context("display.max_columns", None, "display.width", 160, "display.max_colwidth", 48):
-        print(table.drop(columns="log_decrement").to_string(index=False, float_format=lambda v: f"{v:.5g}"))
+        print(shown.to_string(index=False, float_format=lambda v: f"{v:.5g}"))
     if out is not None:
         from warpcloth.io.atomic import write_atomically
 
