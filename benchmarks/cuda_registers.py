@@ -23,20 +23,19 @@ import tempfile
 from pathlib import Path
 
 import warp as wp
-from warpcloth.kernels import BENDING_LAWS, bending_law, build_strip, hinge_kernels
+from warpcloth.kernels import build_strip, hinge_kernels, laws
 
 from warpcloth.sim import PRECISIONS, SOLVERS
 
 
 def variants() -> dict[str, wp.Kernel]:
-    """Every kernel the project can load, by ``name-precision[-scheme]-law`` (as tests/test_cuda_build.py)."""
+    """Every kernel the project can load, by ``name-precision[-scheme]`` (as tests/test_cuda_build.py)."""
     out = {}
     for precision, scalar in PRECISIONS.items():
-        for law in BENDING_LAWS:
-            for scheme in SOLVERS:
-                out[f"advance-{precision}-{scheme}-{law}"] = build_strip(scalar, scheme, law).advance
-            out[f"initialise_hinges-{precision}-{law}"] = hinge_kernels(scalar, law).initialise_hinges
-            out[f"moment_along_path-{precision}-{law}"] = bending_law(law).build(scalar).moment_along_path
+        for scheme in SOLVERS:
+            out[f"advance-{precision}-{scheme}"] = build_strip(scalar, scheme).advance
+        out[f"initialise_hinges-{precision}"] = hinge_kernels(scalar).initialise_hinges
+        out[f"moment_along_path-{precision}"] = laws.build(scalar).moment_along_path
     return out
 
 

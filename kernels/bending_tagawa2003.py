@@ -5,10 +5,15 @@ branch (h₊ while curvature rises, h₋ while it falls) of a KES loop of amplit
 steepness α and closing curvature K0, and c is the loop centre. At every reversal the
 loop is translated along M = D K so that the moment stays continuous.
 
-A law is one file: its per-strip parameters packed in one vector, its per-hinge memory
-packed in one vector, and wp.funcs for a fresh hinge, the branch logic, the moment and
-its tangent dM/dK. The strip kernel and :data:`moment_along_path` (the law alone, on
-prescribed curvature paths) use exactly these functions.
+A law is one file (kernels/laws.py lists them and says what each provides): its
+per-strip parameters packed in one vector, its per-hinge memory packed in one vector,
+and wp.funcs for a fresh hinge, the branch logic, the hysteretic moment and its tangent
+dM/dK. The strip kernel and ``moment_along_path`` (the law alone, on prescribed
+curvature paths) use exactly these functions.
+
+On a branch the offset obeys dh/dK = α (M0 − s h) (s = ±1 the direction), and at a
+reversal h stays continuous while s flips: the Dahl model with exponent 1, saturation
+moment M0 and curvature scale 1/α (kernels/bending_dahl.py; docs/model.md §4.8).
 """
 
 import functools
@@ -24,6 +29,9 @@ NAME = "tagawa2003"
 
 PARAMETERS = ("bending_rigidity", "hysteresis_d1", "hysteresis_alpha", "hysteresis_k0", "hysteresis_m0")
 """Layout of the packed per-strip parameter vector: D (N·m), D1 (N), α (m), K0 (1/m), M0 (N)."""
+
+MATERIAL_FIELDS = ("bending_rigidity", "hysteresis_d1", "hysteresis_alpha", "hysteresis_k0")
+"""The :class:`warpcloth.sim.MaterialSI` fields :func:`packed_parameters` takes, in order."""
 
 MEMORY = ("branch", "loop_centre", "previous_curvature")
 """Layout of the packed per-hinge memory: +1 rising / −1 falling, c (1/m), K at the last
@@ -48,15 +56,15 @@ def packed_parameters(bending_rigidity: float, d1: float, alpha: float, k0: floa
 
 @functools.cache
 def build(scalar: Any) -> SimpleNamespace:
-    """The law's Warp types, functions and path kernel for ``scalar``."""
+    """The law's Warp functions for ``scalar``, on the shared parameter and memory types."""
     types = precision(scalar)
-    vec3, vec5 = types.vec3, types.vec5
+    Memory, Parameters = types.law_memory, types.law_parameters  # this law uses 5 of the 6 parameter slots
     zero = scalar(0.0)
     one = scalar(1.0)
     margin = scalar(HYSTERESIS_MARGIN[scalar])
 
     @wp.func
-    def hysteretic_offset(u: scalar, branch: scalar, p: vec5):
+    def hysteretic_offset(u: scalar, branch: scalar, p: Parameters):
         # h₊ / h₋ with u = K − c measured from the loop centre. Without hysteresis
         # (D1 = 0, so M0 = 0) both branches are exactly 0: skip the exponential, the
         # largest single cost of a hinge (elastic sweep variants run ~25 % faster).
@@ -71,7 +79,7 @@ def build(scalar: Any) -> SimpleNamespace:
         return -m0 + d1 * wp.exp(-alpha * (k0 - u))
 
     @wp.func
-    def loop_centre_through(curvature: scalar, offset: scalar, branch: scalar, p: vec5):
+    def loop_centre_through(curvature: scalar, offset: scalar, branch: scalar, p: Parameters):
         # Centre c that puts the point (curvature, offset) on the given branch, so the
         # moment stays continuous when the branch is entered there.
         d1 = p[1]
@@ -88,12 +96,12 @@ def build(scalar: Any) -> SimpleNamespace:
         return curvature - k0 - wp.log((h + m0) / d1) / alpha
 
     @wp.func
-    def fresh_memory(curvature: scalar, p: vec5):
+    def fresh_memory(curvature: scalar, p: Parameters):
         # A hinge that has never bent back: rising branch, no offset at its curvature.
-        return vec3(one, loop_centre_through(curvature, zero, one, p), curvature)
+        return Memory(one, loop_centre_through(curvature, zero, one, p), curvature)
 
     @wp.func
-    def follow(curvature: scalar, memory: vec3, p: vec5):
+    def follow(curvature: scalar, memory: Memory, p: Parameters):
         # A reversal happens at the previous curvature; the loop is translated along
         # M = D K so that the offset there is unchanged on the new branch.
         b = memory[0]
@@ -103,23 +111,14 @@ def build(scalar: Any) -> SimpleNamespace:
             offset = hysteretic_offset(previous - c, b, p)
             b = -b
             c = loop_centre_through(previous, offset, b, p)
-        return vec3(b, c, curvature)
+        return Memory(b, c, curvature)
 
     @wp.func
-    def last_curvature(memory: vec3):
-        # The curvature the hinge saw at its last force evaluation.
-        return memory[2]
-
-    @wp.func
-    def elastic_moment(curvature: scalar, p: vec5):
-        return p[0] * curvature
-
-    @wp.func
-    def hysteretic_moment(curvature: scalar, memory: vec3, p: vec5):
+    def hysteretic_moment(curvature: scalar, memory: Memory, p: Parameters):
         return hysteretic_offset(curvature - memory[1], memory[0], p)
 
     @wp.func
-    def tangent(curvature: scalar, memory: vec3, p: vec5):
+    def tangent(curvature: scalar, memory: Memory, p: Parameters):
         # dM/dK on the current branch: D plus the slope of h, α D1 e^{−α(K0 ± u)} > 0.
         d1 = p[1]
         if d1 == zero:
@@ -131,42 +130,10 @@ def build(scalar: Any) -> SimpleNamespace:
             return p[0] + alpha * d1 * wp.exp(-alpha * (k0 + u))
         return p[0] + alpha * d1 * wp.exp(-alpha * (k0 - u))
 
-    @wp.kernel(module="unique", enable_backward=False)
-    def moment_along_path(
-        curvature_path: wp.array2d(dtype=scalar),
-        parameters: wp.array(dtype=vec5),
-        moment: wp.array2d(dtype=scalar),
-        slope: wp.array2d(dtype=scalar),
-        work: wp.array(dtype=scalar),
-    ):
-        """Moment per width M and tangent dM/dK along curvature paths ``[sample, hinge]``.
-
-        Each hinge starts fresh at its first sample; ``work`` accumulates
-        Σ M_n (K_{n+1} − K_n), the bending work per width with a left-point rule.
-        """
-        s = wp.tid()
-        p = parameters[s]
-        memory = fresh_memory(curvature_path[0, s], p)
-        w = zero
-        for n in range(curvature_path.shape[0]):
-            k = curvature_path[n, s]
-            memory = follow(k, memory, p)
-            m = elastic_moment(k, p) + hysteretic_moment(k, memory, p)
-            moment[n, s] = m
-            slope[n, s] = tangent(k, memory, p)
-            if n + 1 < curvature_path.shape[0]:
-                w = w + m * (curvature_path[n + 1, s] - k)
-        work[s] = w
-
     return SimpleNamespace(
         name=NAME,
-        Parameters=vec5,
-        Memory=vec3,
         fresh_memory=fresh_memory,
         follow=follow,
-        last_curvature=last_curvature,
-        elastic_moment=elastic_moment,
         hysteretic_moment=hysteretic_moment,
         tangent=tangent,
-        moment_along_path=moment_along_path,
     )

@@ -14,11 +14,11 @@ from .types import precision
 
 
 @functools.cache
-def build(scalar: Any, law_name: str) -> SimpleNamespace:
-    """``accumulate_internal_forces`` for ``scalar`` and the bending law ``law_name``."""
+def build(scalar: Any) -> SimpleNamespace:
+    """``accumulate_internal_forces`` for ``scalar``."""
     vec2 = precision(scalar).vec2
     zero = scalar(0.0)
-    strip = structs.build(scalar, law_name)
+    strip = structs.build(scalar)
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
     Stepping = integrators.build(scalar).Stepping
     tension = tensile.build(scalar).force_per_width

@@ -45,11 +45,11 @@ PROBE_UNITS = {
 
 
 @functools.cache
-def build(scalar: Any, law_name: str) -> SimpleNamespace:
-    """The ``ProbeSettings`` struct and ``record_probes`` for ``scalar`` and ``law_name``."""
+def build(scalar: Any) -> SimpleNamespace:
+    """The ``ProbeSettings`` struct and ``record_probes`` for ``scalar``."""
     zero = scalar(0.0)
     half = scalar(0.5)
-    strip = structs.build(scalar, law_name)
+    strip = structs.build(scalar)
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
     drive = drives.build(scalar)
     StripControl, clamp_angle = drive.StripControl, drive.clamp_angle

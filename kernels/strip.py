@@ -5,7 +5,8 @@ One GPU thread (or CPU task) advances one strip: internal forces (:mod:`.forces`
 the node update of the chosen scheme (:mod:`.integrators`), the drives
 (:mod:`.drives`), the work done (§10), and the probes and frames at each output step
 (:mod:`.probes`). A batch therefore costs one launch per output chunk, not one per
-substep. Kernels are generated per (precision, scheme, bending law) by :func:`build`.
+substep. Kernels are generated per (precision, scheme) by :func:`build`; every strip
+runs its own bending law (kernels/laws.py).
 """
 
 import functools
@@ -26,21 +27,21 @@ wp.set_module_options({"enable_backward": False})
 
 
 @functools.cache
-def build(scalar: Any, scheme: str, law_name: str) -> SimpleNamespace:
+def build(scalar: Any, scheme: str) -> SimpleNamespace:
     """Types and the ``advance`` kernel of one configuration."""
     types = precision(scalar)
     vec2, vec4, mat22 = types.vec2, types.vec4, types.mat22
     zero = scalar(0.0)
     half = scalar(0.5)
-    strip = structs.build(scalar, law_name)
+    strip = structs.build(scalar)
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
     drive = drives.build(scalar)
     StripControl, clamp_angle, held_free_end = drive.StripControl, drive.clamp_angle, drive.held_free_end
     stepping_types = integrators.build(scalar)
     Stepping = stepping_types.Stepping
     update_node = stepping_types.schemes[scheme]
-    accumulate_internal_forces = forces.build(scalar, law_name).accumulate_internal_forces
-    recorder = probes.build(scalar, law_name)
+    accumulate_internal_forces = forces.build(scalar).accumulate_internal_forces
+    recorder = probes.build(scalar)
     ProbeSettings, record_probes = recorder.ProbeSettings, recorder.record_probes
     perp = geometry.build(scalar).perp
 
@@ -188,15 +189,15 @@ def build(scalar: Any, scheme: str, law_name: str) -> SimpleNamespace:
 
 
 @functools.cache
-def hinge_kernels(scalar: Any, law_name: str) -> SimpleNamespace:
-    """The ``initialise_hinges`` kernel for ``scalar`` and the bending law ``law_name``."""
-    strip = structs.build(scalar, law_name)
+def hinge_kernels(scalar: Any) -> SimpleNamespace:
+    """The ``initialise_hinges`` kernel for ``scalar``."""
+    strip = structs.build(scalar)
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
     signed_curvature = geometry.build(scalar).signed_curvature
 
     @wp.kernel(module="unique", enable_backward=False)
     def initialise_hinges(model: StripModel, state: StripState):
-        """Start every hinge fresh at its current curvature (for tagawa2003: rising, no offset)."""
+        """Start every hinge fresh at its current curvature (no hysteretic moment, loading up)."""
         s = wp.tid()
         first = model.n_clamped - 2
         p = model.bending[s]

@@ -1,5 +1,5 @@
 """What a batch of strips *is* (``StripModel``) and *is doing* (``StripState``), as Warp
-structs for one precision and bending law.
+structs for one precision.
 
 Per-node arrays are laid out ``[node, strip]``: at a given node index the threads of a
 GPU warp read neighbouring strips, i.e. consecutive addresses (coalesced).
@@ -11,16 +11,16 @@ from typing import Any
 
 import warp as wp
 
-from .laws import bending_law
+from . import laws
 from .types import precision
 
 
 @functools.cache
-def build(scalar: Any, law_name: str) -> SimpleNamespace:
-    """``StripModel`` and ``StripState`` for ``scalar`` and the bending law ``law_name``."""
+def build(scalar: Any) -> SimpleNamespace:
+    """``StripModel`` and ``StripState`` for ``scalar`` (every bending law: kernels/laws.py)."""
     types = precision(scalar)
     vec2, vec4 = types.vec2, types.vec4
-    law = bending_law(law_name).build(scalar)
+    law = laws.build(scalar)
 
     @wp.struct
     class StripModel:
@@ -32,7 +32,7 @@ def build(scalar: Any, law_name: str) -> SimpleNamespace:
         gravity: scalar
         rest_position: wp.array2d(dtype=vec2)  # [node, strip]; clamp nodes rotate rigidly from these
         tensile: wp.array(dtype=vec4)  # a1..a4 of T(ε), N/m
-        bending: wp.array(dtype=law.Parameters)  # the bending law's packed parameters
+        bending: wp.array(dtype=law.Parameters)  # each strip's bending law and its packed parameters
         width: wp.array(dtype=scalar)  # W, m
         node_mass: wp.array(dtype=scalar)  # ρ_A W h, kg (half at the free end)
         damping: wp.array(dtype=scalar)  # γ after release, 1/s

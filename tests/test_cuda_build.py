@@ -7,9 +7,9 @@ anything under ``__CUDA_ARCH__``) would otherwise be found only when someone run
 GPU. Warp ships NVRTC inside its own library and compiles ahead of time without a driver
 (``wp.compile_aot_module(module, arch=...)``), so this test does the CUDA build here.
 
-Every kernel is a Warp module of its own (``module="unique"``), generated per precision,
-integrator scheme and bending law; :data:`VARIANTS` builds each from the registries the
-project uses (``PRECISIONS``, ``SOLVERS``, ``BENDING_LAWS``), and
+Every kernel is a Warp module of its own (``module="unique"``), generated per precision
+and integrator scheme (every bending law is in each: kernels/laws.py); :data:`VARIANTS`
+builds each from the registries the project uses (``PRECISIONS``, ``SOLVERS``), and
 :func:`test_every_kernel_is_built_here` reads kernels/ and warpcloth/ for ``@wp.kernel``
 so a new kernel cannot be left out. Each compiles to CUBIN, what Warp loads on an sm_80 or
 sm_90 device: NVRTC's front end, PTX generation and ptxas, about 8 s for all of them on
@@ -25,7 +25,7 @@ from pathlib import Path
 
 import pytest
 import warp as wp
-from warpcloth.kernels import BENDING_LAWS, bending_law, build_strip, hinge_kernels
+from warpcloth.kernels import build_strip, hinge_kernels, laws
 
 from warpcloth.sim import PRECISIONS, SOLVERS
 
@@ -39,16 +39,15 @@ def _kernels(namespace: object) -> dict[str, wp.Kernel]:
 
 
 def variants() -> dict[str, wp.Kernel]:
-    """Every kernel the project can load, by ``name-precision[-scheme]-law``."""
+    """Every kernel the project can load, by ``name-precision[-scheme]``."""
     out = {}
     for precision, scalar in PRECISIONS.items():
-        for law in BENDING_LAWS:
-            for scheme in SOLVERS:
-                for name, kernel in _kernels(build_strip(scalar, scheme, law)).items():
-                    out[f"{name}-{precision}-{scheme}-{law}"] = kernel
-            for namespace in (hinge_kernels(scalar, law), bending_law(law).build(scalar)):
-                for name, kernel in _kernels(namespace).items():
-                    out[f"{name}-{precision}-{law}"] = kernel
+        for scheme in SOLVERS:
+            for name, kernel in _kernels(build_strip(scalar, scheme)).items():
+                out[f"{name}-{precision}-{scheme}"] = kernel
+        for namespace in (hinge_kernels(scalar), laws.build(scalar)):
+            for name, kernel in _kernels(namespace).items():
+                out[f"{name}-{precision}"] = kernel
     return out
 
 

@@ -40,9 +40,9 @@ def _git_commit() -> str | None:
 
 
 def _default_device() -> str:
-    import warp as wp
+    from warpcloth.sim.model import machine_device  # starts Warp quietly, as a run does
 
-    return wp.get_device().alias
+    return machine_device(None).alias
 
 
 def file_checksum(path: str | Path) -> dict:

@@ -7,6 +7,7 @@ from .geometry import COORDINATES, rest_positions
 from .materials import (
     MATERIAL_FILE_KEY,
     bundled_materials,
+    law_fields,
     material_fields,
     read_material_file,
     tensile_slope_minimum,
@@ -46,6 +47,7 @@ __all__ = [
     "expand",
     "load_scene",
     "load_sweep",
+    "law_fields",
     "material_fields",
     "read_material_file",
     "read_scene_file",

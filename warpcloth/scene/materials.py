@@ -11,6 +11,7 @@ import numpy as np
 
 from warpcloth import units
 from warpcloth.errors import SceneError
+from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
 from warpcloth.sim import MaterialSI
 
 from .parse import coerce_value, parse_section, parse_toml, read_toml_text
@@ -27,7 +28,18 @@ def to_si(section: MaterialSection) -> MaterialSI:
         hysteresis_d1=section.hysteresis_d1_gf_cm_per_cm * units.MOMENT_GF_CM_PER_CM,
         hysteresis_alpha=section.hysteresis_alpha_cm * units.LENGTH_CM,
         hysteresis_k0=section.hysteresis_k0_per_cm * units.CURVATURE_PER_CM,
+        bending_law=section.bending_law,
+        dahl_moment=section.dahl_moment_gf_cm_per_cm * units.MOMENT_GF_CM_PER_CM,
+        dahl_curvature=section.dahl_curvature_per_cm * units.CURVATURE_PER_CM,
+        dahl_exponent=section.dahl_exponent,
+        friction_moment=section.friction_moment_gf_cm_per_cm * units.MOMENT_GF_CM_PER_CM,
+        friction_width=section.friction_width_per_cm * units.CURVATURE_PER_CM,
     )
+
+
+def law_fields(law: str) -> list[str]:
+    """The [material] fields that are parameters of the bending law ``law`` alone."""
+    return [f.name for f in dataclasses.fields(MaterialSection) if f.metadata.get("law") == law]
 
 
 def tensile_slope_minimum(coefficients: list[float], max_strain: float) -> tuple[float, float]:
@@ -45,6 +57,13 @@ def tensile_slope_minimum(coefficients: list[float], max_strain: float) -> tuple
 
 def validate_material(section: MaterialSection, max_strain: float, prefix: str) -> None:
     """Raise SceneError unless the material is physically usable up to ``max_strain``."""
+    for f in dataclasses.fields(MaterialSection):
+        law = f.metadata.get("law")
+        if law not in (None, section.bending_law) and getattr(section, f.name) != f.default:
+            raise SceneError(f"{prefix}.{f.name}", f"= {getattr(section, f.name)!r} is a parameter of the "
+                             f"{law} bending law, but {prefix}.bending_law is {section.bending_law!r} (whose "
+                             f"parameters are {', '.join(law_fields(section.bending_law))}); set "
+                             f"{prefix}.bending_law = \"{law}\" or leave the field out")
     a = section.tensile_gf_per_cm
     if len(a) != 4:
         raise SceneError(f"{prefix}.tensile_gf_per_cm", f"needs the 4 coefficients a1..a4, got {len(a)}")
@@ -61,9 +80,11 @@ def bundled_materials() -> list[str]:
     return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
-def material_fields() -> list[str]:
-    """The [material] fields a material file must give (every one but ``from_file``)."""
-    return [f.name for f in dataclasses.fields(MaterialSection) if f.name != "from_file"]
+def material_fields(law: str | None = None) -> list[str]:
+    """The [material] fields a material file gives (every one but ``from_file``); for
+    ``law``, only those that law reads (the common ones and its own parameters)."""
+    return [f.name for f in dataclasses.fields(MaterialSection)
+            if f.name not in ("from_file", "bending_law") and (law is None or f.metadata.get("law") in (None, law))]
 
 
 def read_material_file(ref: str | Path) -> dict:
@@ -99,10 +120,16 @@ def read_material_file(ref: str | Path) -> dict:
     material = data.get("material")
     if not isinstance(material, dict) or not isinstance(data.get("fit", {}), dict):
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: needs a [material] table (and [fit], if any, a table)")
-    missing = [k for k in [*material_fields(), "source"] if k not in material]
+    # a file without bending_law predates the other laws: the paper's
+    law = material.get("bending_law", DEFAULT_BENDING_LAW)
+    if law not in BENDING_LAWS:
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}: material.bending_law must be one of "
+                         f"{', '.join(BENDING_LAWS)}; got {law!r}")
+    missing = [k for k in [*material_fields(law), "source"] if k not in material]
     if missing:
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: [material] lacks {', '.join(missing)}; a material file "
-                         "gives every field, so that nothing silently comes from the default material")
+                         f"gives every field its bending law ({law}) reads, so that nothing silently comes from "
+                         "the default material")
     source = material["source"]
     if not isinstance(source, str) or not source.strip():
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: material.source must say where the numbers come from, "
@@ -125,11 +152,12 @@ def with_material_file(data: dict) -> dict:
     if not isinstance(material, dict) or "from_file" not in material:
         return data
     ref = coerce_value(material["from_file"], str, MATERIAL_FILE_KEY, {})
-    missing = [k for k in material_fields() if k not in material]
+    missing = [k for k in [*material_fields(), "bending_law"] if k not in material]
     if not missing:
         return data
     if not ref.strip():
         raise SceneError(MATERIAL_FILE_KEY, f"{ref!r} names no material file, and the scene leaves "
                          f"{', '.join(missing)} to it; give a bundled material name or a path ending in .toml")
     values = read_material_file(ref)["material"]
-    return {**data, "material": {**{k: values[k] for k in missing}, **material}}
+    values = {"bending_law": DEFAULT_BENDING_LAW, **values}
+    return {**data, "material": {**{k: values[k] for k in [*missing, "bending_law"] if k in values}, **material}}

@@ -34,7 +34,8 @@ def set_field(data: dict, key: str, value: Any) -> None:
         if value.endswith(".toml") and not Path(value).is_absolute():
             value = str(Path(value).resolve())  # relative to where the command runs, recorded absolute
         if isinstance(data.get("material"), dict):
-            data["material"] = {k: v for k, v in data["material"].items() if k not in material_fields()}
+            data["material"] = {k: v for k, v in data["material"].items()
+                                if k not in [*material_fields(), "bending_law"]}
     elif parts[0] == "material" and len(parts) > 2:
         # A list item of a material that comes from a file: the file's list first.
         data.update(with_material_file(data))

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from warpcloth import units
+from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_tagawa2003
 from warpcloth.sim import SOLVERS
 
 EDGE_HINGES = ("second_order", "paper")
@@ -37,9 +38,19 @@ DEFAULT_MATERIAL = _bundled_default_material()
 docs/model.md's illustrative wool 90 % / nylon 10 % (warp direction). The paper's measured
 Fig. 8 curves are not in its text, so these numbers are plausible, not measured."""
 
+# The Dahl and frictional-couple defaults are the default material's own loop: Dahl with
+# n = 1 is the paper's law with M_s = M0, K_s = 1/α (docs/model.md §4.8), so switching the
+# law alone keeps the material; the frictional couple takes the same moment and width.
+_DEFAULT_M0 = bending_tagawa2003.loop_asymptote(DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"],
+                                               DEFAULT_MATERIAL["hysteresis_alpha_cm"],
+                                               DEFAULT_MATERIAL["hysteresis_k0_per_cm"])
+_DEFAULT_SCALE = 1.0 / DEFAULT_MATERIAL["hysteresis_alpha_cm"]
+
+
 def _field(default: Any, doc: str, *, gt: float | None = None, ge: float | None = None,
-           choices: tuple[str, ...] | None = None, per_strip: bool = False) -> Any:
-    meta = {"doc": doc, "gt": gt, "ge": ge, "choices": choices, "per_strip": per_strip}
+           choices: tuple[str, ...] | None = None, per_strip: bool = False, law: str | None = None) -> Any:
+    # ``law``: the field is a parameter of that bending law only (material fields)
+    meta = {"doc": doc, "gt": gt, "ge": ge, "choices": choices, "per_strip": per_strip, "law": law}
     if isinstance(default, list):
         return field(default_factory=lambda: list(default), metadata=meta)
     return field(default=default, metadata=meta)
@@ -69,15 +80,39 @@ class MaterialSection:
         "a1..a4 of T(ε) = a1 ε + a2 ε² + a3 ε³ + a4 ε⁴ (force per width, KES-FB1 upper loop)",
         per_strip=True)
     bending_rigidity_gf_cm2_per_cm: float = _field(
-        DEFAULT_MATERIAL["bending_rigidity_gf_cm2_per_cm"], "D, slope of the centre line M = D K",
+        DEFAULT_MATERIAL["bending_rigidity_gf_cm2_per_cm"], "D, slope of the centre line M = D K (every law)",
         ge=0, per_strip=True)
+    bending_law: str = _field(DEFAULT_MATERIAL.get("bending_law", DEFAULT_BENDING_LAW),
+                              "hysteretic bending law (docs/model.md §4): tagawa2003 (the paper's), dahl, "
+                              "frictional_couple; each reads only its own fields below", choices=tuple(BENDING_LAWS),
+                              per_strip=True)
     hysteresis_d1_gf_cm_per_cm: float = _field(
-        DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"], "D1, hysteresis amplitude (0 = elastic)",
-        ge=0, per_strip=True)
+        DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"], "tagawa2003: D1, hysteresis amplitude (0 = elastic)",
+        ge=0, per_strip=True, law="tagawa2003")
     hysteresis_alpha_cm: float = _field(DEFAULT_MATERIAL["hysteresis_alpha_cm"],
-                                        "α, steepness of the hysteresis branches", gt=0, per_strip=True)
+                                        "tagawa2003: α, steepness of the hysteresis branches", gt=0, per_strip=True,
+                                        law="tagawa2003")
     hysteresis_k0_per_cm: float = _field(DEFAULT_MATERIAL["hysteresis_k0_per_cm"],
-                                         "K0, curvature where the KES loop closes", gt=0, per_strip=True)
+                                         "tagawa2003: K0, curvature where the KES loop closes", gt=0, per_strip=True,
+                                         law="tagawa2003")
+    dahl_moment_gf_cm_per_cm: float = _field(
+        DEFAULT_MATERIAL.get("dahl_moment_gf_cm_per_cm", _DEFAULT_M0),
+        "dahl: M_s, saturation of the hysteretic moment (0 = elastic; 2HB → 2 M_s for K_s ≪ 1 1/cm)", ge=0,
+        per_strip=True, law="dahl")
+    dahl_curvature_per_cm: float = _field(
+        DEFAULT_MATERIAL.get("dahl_curvature_per_cm", _DEFAULT_SCALE),
+        "dahl: K_s, curvature scale over which the hysteretic moment saturates", gt=0, per_strip=True, law="dahl")
+    dahl_exponent: float = _field(DEFAULT_MATERIAL.get("dahl_exponent", 1.0),
+                                  "dahl: n, shape of the branches (1: the paper's exponential branches; "
+                                  "→ 0: a frictional couple)", ge=0, per_strip=True, law="dahl")
+    friction_moment_gf_cm_per_cm: float = _field(
+        DEFAULT_MATERIAL.get("friction_moment_gf_cm_per_cm", _DEFAULT_M0),
+        "frictional_couple: M_f, the frictional couple (0 = elastic; 2HB = 2 M_f)", ge=0, per_strip=True,
+        law="frictional_couple")
+    friction_width_per_cm: float = _field(
+        DEFAULT_MATERIAL.get("friction_width_per_cm", _DEFAULT_SCALE),
+        "frictional_couple: K_w, curvature change over which the couple reverses (half of it each way; "
+        "→ 0: Grosberg's M_f sign(dK/dt))", gt=0, per_strip=True, law="frictional_couple")
     from_file: str = _field("", "a material file (path ending in .toml, relative to the scene file) or a bundled "
                             "material name; its values fill every [material] field the scene does not set itself",
                             per_strip=True)

@@ -11,30 +11,34 @@ from collections.abc import Sequence
 import numpy as np
 import warp as wp
 
-from warpcloth.kernels import bending_tagawa2003
+from warpcloth.kernels import laws
 
 from .material import MaterialSI
+from .model import machine_device
 
 
 def moment_along_path(materials: MaterialSI | Sequence[MaterialSI], curvature: np.ndarray,
                       device: str | None = "cpu", with_tangent: bool = False) -> tuple[np.ndarray, ...]:
     """Moment per width M (N·m/m) along curvature paths (1/m), one column per material.
 
-    ``curvature`` is ``[sample]`` or ``[sample, path]``; each hinge starts fresh at its
-    first sample (rising branch, no hysteretic offset). Returns ``(M, work)`` where
+    ``curvature`` is ``[sample]`` (one path for every material) or ``[sample, path]``; M is
+    ``[sample, material]``, or ``[sample]`` for one material on one path. Each hinge starts fresh at its
+    first sample (no hysteretic moment, loading up), and follows each material's own
+    bending law. Returns ``(M, work)`` where
     ``work[path]`` = Σ M_n (K_{n+1} − K_n), the bending work per width (N), accumulated
     with a left-point rule; with ``with_tangent`` also the law's dM/dK (N·m), shaped as M.
     """
     materials = [materials] if isinstance(materials, MaterialSI) else list(materials)
     k = np.asarray(curvature, dtype=np.float64)
-    single = k.ndim == 1
-    if single:
+    single = k.ndim == 1 and len(materials) == 1  # one path, one material: M as [sample]
+    if k.ndim == 1:
         k = k[:, None]
     if k.shape[1] == 1 and len(materials) > 1:
         k = np.repeat(k, len(materials), axis=1)
     if k.shape[1] != len(materials):
         raise ValueError(f"{k.shape[1]} curvature paths for {len(materials)} materials")
-    law = bending_tagawa2003.build(wp.float64)
+    device = machine_device(device)  # Warp started quietly, as for a run
+    law = laws.build(wp.float64)
     parameters = wp.array(np.array([m.bending_parameters() for m in materials]), dtype=law.Parameters,
                           device=device)
     moment = wp.zeros(k.shape, dtype=wp.float64, device=device)

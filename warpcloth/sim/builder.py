@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from warpcloth.kernels import DEFAULT_BENDING_LAW, MAX_DEGREE
+from warpcloth.kernels import MAX_DEGREE
 
 from .material import MaterialSI
 from .model import Model
@@ -103,9 +103,8 @@ class StripBuilder:
             settle_damping=settle_damping, edge_hinge_length=edge))
         return len(self.strips) - 1
 
-    def finalize(self, device: str | None = None, precision: str = "float64",
-                 bending_law: str = DEFAULT_BENDING_LAW) -> Model:
+    def finalize(self, device: str | None = None, precision: str = "float64") -> Model:
         """The :class:`Model` of every strip added, on ``device`` in ``precision``."""
         if not self.strips:
             raise ValueError("a batch needs at least one strip")
-        return Model(self, device=device, precision=precision, bending_law=bending_law)
+        return Model(self, device=device, precision=precision)

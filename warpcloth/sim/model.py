@@ -12,8 +12,8 @@ import numpy as np
 import warp as wp
 
 from warpcloth.errors import OptionError
-from warpcloth.kernels import DEFAULT_BENDING_LAW, structs
 from warpcloth.kernels import precision as precision_types
+from warpcloth.kernels import structs
 
 if TYPE_CHECKING:
     from .builder import StripBuilder
@@ -77,14 +77,12 @@ class Model:
     and drives.
     """
 
-    def __init__(self, builder: StripBuilder, device: str | None = None, precision: str = "float64",
-                 bending_law: str = DEFAULT_BENDING_LAW) -> None:
+    def __init__(self, builder: StripBuilder, device: str | None = None, precision: str = "float64") -> None:
         self.device = machine_device(device)
         self.precision = precision
         self.scalar = PRECISIONS[precision]
         self.types = precision_types(self.scalar)
-        self.bending_law = bending_law
-        self.structs = structs.build(self.scalar, bending_law)
+        self.structs = structs.build(self.scalar)
         # A copy of what was built: adding strips to the builder afterwards does not
         # change this model.
         self.strips = tuple(builder.strips)

@@ -62,7 +62,7 @@ class ExplicitEulerSolver:
         self.model = model
         self.dt = dt
         self.divergence_strain = divergence_strain
-        self.kernels = build_strip(model.scalar, self.scheme, model.bending_law)
+        self.kernels = build_strip(model.scalar, self.scheme)
 
     def step_of(self, time: float) -> int:
         """The step count nearest ``time`` seconds."""

@@ -59,5 +59,5 @@ class State:
 
     def reset_hinges(self) -> None:
         """Make every hinge fresh at its current curvature (no memory of past bending)."""
-        kernel = hinge_kernels(self.model.scalar, self.model.bending_law).initialise_hinges
+        kernel = hinge_kernels(self.model.scalar).initialise_hinges
         wp.launch(kernel, dim=self.model.n_strips, inputs=[self.model.struct, self.struct], device=self.model.device)

@@ -35,6 +35,7 @@ class KesFit:
             "density_g_per_cm2": float(density_g_per_cm2),
             "tensile_gf_per_cm": [float(a) for a in self.tensile.coefficients],
             "bending_rigidity_gf_cm2_per_cm": float(self.bending.rigidity_gf_cm2_per_cm),
+            "bending_law": "tagawa2003",
             "hysteresis_d1_gf_cm_per_cm": float(self.bending.d1_gf_cm_per_cm),
             "hysteresis_alpha_cm": float(self.bending.alpha_cm),
             "hysteresis_k0_per_cm": float(self.bending.k0_per_cm),

@@ -25,7 +25,9 @@ def material_file_data(fit: KesFit, name: str, density_g_per_cm2: float, source:
                           f"{density_g_per_cm2!r}")
     material = fit.material(name, density_g_per_cm2)
     validate_material(MaterialSection(**material), max_strain, "material")
-    ordered = {"name": name, "source": source, **{k: material[k] for k in material_fields() if k != "name"}}
+    law = material["bending_law"]
+    ordered = {"name": name, "source": source, "bending_law": law,
+               **{k: material[k] for k in material_fields(law) if k != "name"}}
     return {"material": ordered, "fit": fit.summary_table()}
 
 

@@ -1,0 +1,102 @@
+"""The Dahl bending law, ``"dahl"`` (Dahl 1968, as Miguel et al. 2013 used it for cloth
+bending; docs/model.md §4.8).
+
+Moment per width M = D K + h, with a hysteretic moment h that follows the curvature as
+
+    dh/dK = (M_s / K_s) · (1 − s h / M_s)^n,      s = sign(dK/dt),
+
+so h approaches ±M_s (the saturation moment) over the curvature scale K_s, with a branch
+shape set by the exponent n. h is the state, continuous through every reversal. On each
+step of monotone curvature the equation is integrated exactly (y = 1 − s h / M_s):
+
+    y = y₀ · exp(−|ΔK| / K_s)                              n = 1
+    y = (y₀^(1−n) + (n − 1) |ΔK| / K_s)^(1/(1−n))          n ≠ 1 (y = 0 once it reaches 0, n < 1)
+
+so the moment does not depend on how the curvature path is sampled. n = 1 is exactly the
+paper's law with M0 = M_s and α = 1/K_s (kernels/bending_tagawa2003.py); n → 0 is a
+frictional couple regularised by a spring of stiffness M_s / K_s
+(kernels/bending_frictional_couple.py). M_s = 0 is the elastic law M = D K.
+"""
+
+import functools
+from types import SimpleNamespace
+from typing import Any
+
+import warp as wp
+
+from .types import precision
+
+NAME = "dahl"
+
+PARAMETERS = ("bending_rigidity", "dahl_moment", "dahl_curvature", "dahl_exponent")
+"""Layout of the packed per-strip parameter vector: D (N·m), M_s (N), K_s (1/m), n."""
+
+MATERIAL_FIELDS = PARAMETERS
+"""The :class:`warpcloth.sim.MaterialSI` fields :func:`packed_parameters` takes, in order."""
+
+MEMORY = ("hysteretic_moment", "direction", "previous_curvature")
+"""Layout of the packed per-hinge memory: h (N), the direction of the last change of
+curvature (+1 / −1), K at the last force evaluation (1/m)."""
+
+wp.set_module_options({"enable_backward": False})
+
+
+def packed_parameters(bending_rigidity: float, moment: float, curvature: float, exponent: float) -> tuple[float, ...]:
+    """The per-strip parameter vector (layout :data:`PARAMETERS`) from D, M_s, K_s, n in SI."""
+    return (bending_rigidity, moment, curvature, exponent)
+
+
+@functools.cache
+def build(scalar: Any) -> SimpleNamespace:
+    """The law's Warp functions for ``scalar``, on the shared parameter and memory types."""
+    types = precision(scalar)
+    Memory, Parameters = types.law_memory, types.law_parameters  # this law uses 4 of the 6 parameter slots
+    zero = scalar(0.0)
+    one = scalar(1.0)
+
+    @wp.func
+    def remaining(y0: scalar, run: scalar, n: scalar):
+        # y after a monotone run of |ΔK| / K_s = run, from y0 (exact for dy/dK ∝ −y^n)
+        if y0 <= zero:
+            return zero
+        if n == one:
+            return y0 * wp.exp(-run)
+        q = wp.pow(y0, one - n) + (n - one) * run
+        if q <= zero:
+            return zero  # n < 1: saturated within the step
+        return wp.pow(q, one / (one - n))
+
+    @wp.func
+    def fresh_memory(curvature: scalar, p: Parameters):
+        # A hinge that has never bent: no hysteretic moment, loading upward.
+        return Memory(zero, one, curvature)
+
+    @wp.func
+    def follow(curvature: scalar, memory: Memory, p: Parameters):
+        h = memory[0]
+        direction = memory[1]
+        change = curvature - memory[2]
+        m_s = p[1]
+        if change == zero or m_s == zero:
+            return Memory(h, direction, curvature)
+        direction = wp.sign(change)
+        y = remaining(one - direction * h / m_s, wp.abs(change) / p[2], p[3])
+        return Memory(direction * m_s * (one - y), direction, curvature)
+
+    @wp.func
+    def hysteretic_moment(curvature: scalar, memory: Memory, p: Parameters):
+        return memory[0]
+
+    @wp.func
+    def tangent(curvature: scalar, memory: Memory, p: Parameters):
+        # dM/dK on the current direction: D + (M_s / K_s) y^n
+        m_s = p[1]
+        if m_s == zero:
+            return p[0]
+        y = one - memory[1] * memory[0] / m_s
+        if y <= zero:
+            return p[0]  # saturated: the hysteretic moment no longer grows (0^0 is not 1 here)
+        return p[0] + m_s / p[2] * wp.pow(y, p[3])
+
+    return SimpleNamespace(name=NAME, fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment,
+                           tangent=tangent)
