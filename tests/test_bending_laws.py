@@ -193,3 +193,20 @@ def test_the_energy_budget_closes_with_each_law(law):
     scale = result.probe("kinetic", 0).max()
     assert np.ptp(total) / scale < 5e-4
     assert result.probe("hysteresis_work", 0)[-1] > 0.1 * scale
+
+
+def test_a_laws_parameters_are_fitted_only_for_that_law():
+    from warpcloth.calibrate.motion_fit import free_parameters
+    from warpcloth.errors import OptionError
+
+    dahl = wc.load_scene("damped_swing", {"material.bending_law": "dahl"})
+    fitted = free_parameters("gamma,Ms,n", dahl)
+    assert [p.field for p in fitted] == ["damping.gamma_per_s", "material.dahl_moment_gf_cm_per_cm",
+                                         "material.dahl_exponent"]
+    assert fitted[1].lower == 0.0 and fitted[1].upper == pytest.approx(4 * dahl.material.dahl_moment_gf_cm_per_cm)
+    with pytest.raises(OptionError, match=r"--free: D1 \(material.hysteresis_d1_gf_cm_per_cm\) is a parameter of "
+                                          r"the tagawa2003 bending law, but the scene's material uses dahl"):
+        free_parameters("gamma,D1", dahl)
+    with pytest.raises(OptionError, match="Mf .* frictional_couple bending law, but the scene's material uses "
+                                          "tagawa2003"):
+        free_parameters("Mf", wc.load_scene("damped_swing"))

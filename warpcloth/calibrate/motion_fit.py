@@ -48,7 +48,7 @@ from tqdm import tqdm
 from warpcloth.errors import OptionError, SceneError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
 from warpcloth.runs import simulate
-from warpcloth.scene import Scene, batch_fields, scene_from_dict, set_field
+from warpcloth.scene import Scene, batch_fields, field_law, law_fields, scene_from_dict, set_field
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.sim import RunResult
 
@@ -61,13 +61,23 @@ ALIASES = {
     "D1": "material.hysteresis_d1_gf_cm_per_cm",
     "alpha": "material.hysteresis_alpha_cm",
     "K0": "material.hysteresis_k0_per_cm",
+    "Ms": "material.dahl_moment_gf_cm_per_cm",
+    "Ks": "material.dahl_curvature_per_cm",
+    "n": "material.dahl_exponent",
+    "Mf": "material.friction_moment_gf_cm_per_cm",
+    "Kw": "material.friction_width_per_cm",
     "density": "material.density_g_per_cm2",
     "rotation_centre_dx_mm": "clamp.rotation_centre_dx_mm",
     "rotation_centre_dy_mm": "clamp.rotation_centre_dy_mm",
     "hold_x_mm": "release.hold_x_mm",
     "hold_y_mm": "release.hold_y_mm",
 }
-"""Short names accepted by ``--free`` (any per-strip numeric field also works by its dotted name)."""
+"""Short names accepted by ``--free`` (any per-strip numeric field also works by its dotted name);
+a bending law's parameters only for a scene whose material uses that law."""
+
+HYSTERESIS_AMPLITUDES = ("material.hysteresis_d1_gf_cm_per_cm", "material.dahl_moment_gf_cm_per_cm",
+                         "material.friction_moment_gf_cm_per_cm")
+"""Fitted from 0 (no hysteresis) to 4× the scene's value by default."""
 
 SHIFT = "time_shift_s"
 STENCIL_STEP = 2e-3  # central-difference step, as a fraction of each parameter's range
@@ -104,8 +114,8 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
     """Resolve ``--free`` names (aliases or dotted fields) and ``--bounds name=lo:hi,...``.
 
     Default bounds: a rotation centre or held position ± 10 mm around the scene's value;
-    γ from 0 to 4× the scene's value (at least 2 /s); D1 from 0 to 4×; any other
-    positive field from ¼× to 4×.
+    γ from 0 to 4× the scene's value (at least 2 /s); a hysteresis amplitude (D1, M_s,
+    M_f) from 0 to 4×; any other positive field from ¼× to 4×.
     """
     names = [n.strip() for n in (names.split(",") if isinstance(names, str) else names) if n.strip()]
     if not names:
@@ -122,6 +132,12 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
         if dotted in fixed or isinstance(value, (bool, str, list)):
             raise OptionError("--free", f"{name} ({dotted}) cannot vary between the strips of one batch or is not "
                               "a number; only per-strip numeric fields can be fitted")
+        law = field_law(dotted)
+        if law not in (None, base.material.bending_law):
+            raise OptionError("--free", f"{name} ({dotted}) is a parameter of the {law} bending law, but the scene's "
+                              f"material uses {base.material.bending_law} (whose parameters are "
+                              f"{', '.join(law_fields(base.material.bending_law))}); set material.bending_law to "
+                              "fit it")
         key = name if name in given else dotted if dotted in given else None
         if key is not None:
             lower, upper = given.pop(key)
@@ -129,7 +145,7 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
             lower, upper = value - 10.0, value + 10.0
         elif dotted == "damping.gamma_per_s":
             lower, upper = 0.0, max(4 * value, 2.0)
-        elif dotted == "material.hysteresis_d1_gf_cm_per_cm" and value > 0:
+        elif dotted in HYSTERESIS_AMPLITUDES and value > 0:
             lower, upper = 0.0, 4 * value
         elif value > 0:
             lower, upper = value / 4, value * 4

@@ -37,6 +37,14 @@ def to_si(section: MaterialSection) -> MaterialSI:
     )
 
 
+def field_law(dotted: str) -> str | None:
+    """The bending law whose parameter the scene field ``dotted`` (``material.dahl_exponent``)
+    is; None for a field every law reads, or one outside [material]."""
+    section, _, key = dotted.partition(".")
+    spec = MaterialSection.__dataclass_fields__.get(key) if section == "material" else None
+    return spec.metadata.get("law") if spec is not None else None
+
+
 def law_fields(law: str) -> list[str]:
     """The [material] fields that are parameters of the bending law ``law`` alone."""
     return [f.name for f in dataclasses.fields(MaterialSection) if f.metadata.get("law") == law]
