@@ -18,6 +18,7 @@ def build(scalar: Any) -> SimpleNamespace:
     """``accumulate_internal_forces`` for ``scalar``."""
     vec2 = precision(scalar).vec2
     zero = scalar(0.0)
+    one = scalar(1.0)
     strip = structs.build(scalar)
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
     Stepping = integrators.build(scalar).Stepping
@@ -47,21 +48,25 @@ def build(scalar: Any) -> SimpleNamespace:
         # inside the clamp move rigidly: only the edge segment and below strain.
         node = state.position[first + 1, s]
         e1 = node - state.position[first, s]
-        l1 = wp.length(e1)
+        # Reciprocal lengths, each taken once and carried down the chain: a hinge costs one
+        # division for its segment's length and one for its chord (docs/model.md §5.1).
+        inverse_l1 = one / wp.length(e1)
+        inverse_l0 = one / l0
         for i in range(first + 1, n - 1):
             following = state.position[i + 1, s]
             e2 = following - node
             l2 = wp.length(e2)
-            strain = (l2 - l0) / l0
+            inverse_l2 = one / l2
+            strain = (l2 - l0) * inverse_l0  # l2 - l0 is exact near rest (Sterbenz)
             if not (wp.abs(strain) <= stepping.max_strain):  # also catches NaN
                 return STATUS_STRAIN, i, strain
-            f = tension(strain, a) * width / l2 * e2
+            f = tension(strain, a) * width * inverse_l2 * e2
             state.force_tensile[i, s] = state.force_tensile[i, s] + f
             state.force_tensile[i + 1, s] = vec2() - f
             h = i - first - 1
-            curvature, chord = signed_curvature(e1, e2, l1, l2)
+            curvature, chord = signed_curvature(e1, e2, inverse_l1, inverse_l2)
             if not (chord > scalar(1e-3) * l0):
-                return STATUS_FOLDED, i, chord / l0
+                return STATUS_FOLDED, i, chord * inverse_l0
             if h == 0:
                 # The clamp-edge hinge bends only the half segment below the built-in end
                 # (docs/model.md §5.3): its curvature is the turning angle over h/2, twice
@@ -70,8 +75,8 @@ def build(scalar: Any) -> SimpleNamespace:
             memory = law.follow(curvature, state.hinge[h, s], p)
             state.hinge[h, s] = memory
             # τ = M·W acts on the turning angle φ; F = -τ ∇φ with ∇φ as below.
-            grad_i = perp(e1) / (l1 * l1)
-            grad_k = perp(e2) / (l2 * l2)
+            grad_i = perp(e1) * (inverse_l1 * inverse_l1)
+            grad_k = perp(e2) * (inverse_l2 * inverse_l2)
             tau_elastic = law.elastic_moment(curvature, p) * width
             tau_hysteretic = law.hysteretic_moment(curvature, memory, p) * width
             state.force_elastic[i - 1, s] = state.force_elastic[i - 1, s] - tau_elastic * grad_i
@@ -82,7 +87,7 @@ def build(scalar: Any) -> SimpleNamespace:
             state.force_hysteretic[i, s] = state.force_hysteretic[i, s] + tau_hysteretic * (grad_i + grad_k)
             node = following
             e1 = e2
-            l1 = l2
+            inverse_l1 = inverse_l2
         return STATUS_OK, 0, zero
 
     return SimpleNamespace(accumulate_internal_forces=accumulate_internal_forces)

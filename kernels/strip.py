@@ -194,6 +194,7 @@ def hinge_kernels(scalar: Any) -> SimpleNamespace:
     strip = structs.build(scalar)
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
     signed_curvature = geometry.build(scalar).signed_curvature
+    one = scalar(1.0)
 
     @wp.kernel(module="unique", enable_backward=False)
     def initialise_hinges(model: StripModel, state: StripState):
@@ -204,7 +205,7 @@ def hinge_kernels(scalar: Any) -> SimpleNamespace:
         for j in range(first + 1, model.n_nodes - 1):
             e1 = state.position[j, s] - state.position[j - 1, s]
             e2 = state.position[j + 1, s] - state.position[j, s]
-            curvature, chord = signed_curvature(e1, e2, wp.length(e1), wp.length(e2))
+            curvature, chord = signed_curvature(e1, e2, one / wp.length(e1), one / wp.length(e2))
             if j == first + 1:
                 curvature = curvature * model.edge_curvature_scale[s]  # as the force pass sees it
             state.hinge[j - first - 1, s] = law.fresh_memory(curvature, p)
