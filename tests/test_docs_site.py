@@ -45,9 +45,10 @@ def site(tmp_path_factory):
     return work / "html"
 
 
-def test_there_are_the_six_examples():
-    # the issue's six; docs/conf.py orders them (sphinx-gallery refuses a file it does not list)
-    wanted = ["plot_damped_swing", "plot_impulsive_rotation", "plot_kes_fit", "plot_calibration",
+def test_there_are_the_seven_examples():
+    # issue 14's six and issue 15's bending-law comparison; docs/conf.py orders them
+    # (sphinx-gallery refuses a file it does not list)
+    wanted = ["plot_damped_swing", "plot_impulsive_rotation", "plot_kes_fit", "plot_bending_laws", "plot_calibration",
               "plot_sweep_heatmap", "plot_usd_export"]
     assert sorted(wanted) == EXAMPLES
 

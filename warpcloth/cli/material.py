@@ -1,25 +1,37 @@
-"""``warpcloth material fit-kes | list``: material files from KES-FB data."""
+"""``warpcloth material fit-kes | compare | list``: material files from KES-FB data, and
+the bending laws compared on a KES-FB2 loop."""
 
 from __future__ import annotations
 
 import argparse
+import csv
+import io
 import sys
+from typing import TYPE_CHECKING
 
 from warpcloth.errors import OptionError
 
 from .options import EXIT_FIT_STATUS, add_overwrite, figure_path, new_result, path_text, positive
 
+if TYPE_CHECKING:
+    from warpcloth.calibrate.kes import LawComparison
+
+BENDING_HELP = "KES-FB2 loop: curvature (1/cm), moment per width (gf·cm/cm)"
+
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add ``material fit-kes`` and ``material list``."""
+    """Add ``material fit-kes``, ``material compare`` and ``material list``."""
     material_p = sub.add_parser("material", help="material files: fit one to KES-FB data, list the bundled ones")
     material_sub = material_p.add_subparsers(dest="material_command", required=True)
     kes_p = material_sub.add_parser("fit-kes", help="fit a material file to a KES-FB1 tensile and a KES-FB2 "
                                     "bending loop (CSV, KES units)")
     kes_p.add_argument("--tensile", required=True, metavar="FB1.csv",
                        help="KES-FB1 loop: strain (%% or fraction) or extension (mm), force per width (gf/cm)")
-    kes_p.add_argument("--bending", required=True, metavar="FB2.csv",
-                       help="KES-FB2 loop: curvature (1/cm), moment per width (gf·cm/cm)")
+    kes_p.add_argument("--bending", required=True, metavar="FB2.csv", help=BENDING_HELP)
+    kes_p.add_argument("--law", default="tagawa2003", metavar="NAME|all",
+                       help="the bending law to fit: tagawa2003 (the paper's, default), dahl, frictional_couple, or "
+                       "all: fit every one, print their comparison and write the material of the one with the "
+                       "lowest AIC")
     kes_p.add_argument("-o", "--output", type=path_text, required=True, help="the material file to write (.toml)")
     kes_p.add_argument("--density-g-per-cm2", type=positive, default=None,
                        help="mass per area ρ_A (required: KES-FB1/FB2 data do not contain it)")
@@ -31,22 +43,92 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="gauge length for extension in mm (default: 50, the KES-FB1 standard)")
     kes_p.add_argument("--divergence-strain", type=positive, default=None,
                        help="T(ε) must increase up to this strain (default: the scenes' default, 0.25)")
-    kes_p.add_argument("--plot", help="also write a PNG of the data against the fit")
+    kes_p.add_argument("--plot", help="also write a PNG of the data against the fit (tagawa2003: tensile and "
+                       "bending; another law or all: the bending laws' comparison figure)")
     kes_p.add_argument("--accept", action="store_true", help="exit 0 even when the fit is not trusted")
     add_overwrite(kes_p, "material file")
+    compare_p = material_sub.add_parser("compare", help="fit every bending law to a KES-FB2 loop and compare them "
+                                        "by information criterion (writes no material)")
+    compare_p.add_argument("--bending", required=True, metavar="FB2.csv", help=BENDING_HELP)
+    compare_p.add_argument("--plot", metavar="FIG.png", help="write a PNG of each law's fit over the loop and its "
+                           "residuals")
+    compare_p.add_argument("--csv", type=path_text, metavar="TABLE.csv", help="write the comparison table as CSV")
+    compare_p.add_argument("--accept", action="store_true", help="exit 0 even when the recommended law's fit is not "
+                           "trusted")
+    add_overwrite(compare_p, "figure or table")
     material_sub.add_parser("list", help="list the bundled materials and where their numbers come from")
     material_p.set_defaults(handler=material_command)
 
 
 def material_command(args: argparse.Namespace) -> int:
-    """Fit a material file to KES-FB data, or list the bundled materials."""
-    from warpcloth.calibrate import kes
+    """Fit a material file to KES-FB data, compare the bending laws on a loop, or list the bundled materials."""
     from warpcloth.scene import bundled_materials, read_material_file
 
     if args.material_command == "list":
         for name in bundled_materials():
             print(f"{name}: {read_material_file(name)['material']['source']}")
         return 0
+    if args.material_command == "compare":
+        return _compare(args)
+    return _fit_kes(args)
+
+
+def _print_comparison(comparison: LawComparison, source: str) -> None:
+    # the table and the recommendation with its caveats
+    n = len(comparison.loop.curvature)
+    print(f"bending laws fitted to {source} ({n} points); AIC = n ln(SSE/n) + 2k, BIC = n ln(SSE/n) + k ln n "
+          f"(n = {n} points, k free parameters); B and 2HB of each law along 0 → +K0 → −K0 → 0:")
+    print(comparison.table())
+    for line in comparison.caveats():
+        print(f"  {line}")
+
+
+def _kes_value(value: float | None, unit: str) -> str:
+    return "n/a" if value is None else f"{value:.4g} {unit}"
+
+
+def _finish(command: str, status: str, problems: list[str], accept: bool, what: str) -> int:
+    # the status line, and the exit status of a fit that is not trusted
+    print(f"status: {status}")
+    if status == "converged":
+        return 0
+    print(f"warpcloth material {command}: not a fit ({status}): " + "; ".join(problems)
+          + (" (accepted with --accept)" if accept else f" ({what}; --accept to exit 0 anyway)"), file=sys.stderr)
+    return 0 if accept else EXIT_FIT_STATUS[status]
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from warpcloth.calibrate import kes
+    from warpcloth.io.atomic import write_text_atomically
+
+    plot = figure_path(args.plot, args.overwrite) if args.plot else None
+    table = new_result(args.csv, args.overwrite, "--csv") if args.csv else None
+    if table is not None and (table.suffix.lower() != ".csv" or table.is_dir()):
+        raise OptionError("--csv", f"{table} must be a file ending in .csv")
+    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, flag="--bending"))
+    _print_comparison(comparison, args.bending)
+    if plot is not None:
+        from warpcloth.viz.plots import plot_bending_law_comparison
+
+        print(f"wrote {plot_bending_law_comparison(comparison, plot)}")
+    if table is not None:
+        rows = comparison.rows()
+        text = io.StringIO()
+        writer = csv.DictWriter(text, fieldnames=list(rows[0]), restval="", lineterminator="\n")
+        writer.writeheader()
+        writer.writerows({k: "" if v is None else v for k, v in row.items()} for row in rows)
+        table.parent.mkdir(parents=True, exist_ok=True)
+        write_text_atomically(table, text.getvalue())
+        print(f"wrote {table}")
+    status, problems = comparison.status(comparison.recommended)
+    return _finish("compare", status, [f"the recommended {comparison.recommended} fit: {p}" for p in problems],
+                   args.accept, "the table shows it")
+
+
+def _fit_kes(args: argparse.Namespace) -> int:
+    from warpcloth.calibrate import kes
+
+    laws = kes.selected_laws(args.law)
     if args.density_g_per_cm2 is None:
         raise OptionError("--density-g-per-cm2", "the mass per area is not part of KES-FB1/FB2 data; weigh a "
                          "sample and give it in g/cm² (e.g. 2.03e-2 for the illustrative wool/nylon)")
@@ -58,11 +140,16 @@ def material_command(args: argparse.Namespace) -> int:
     if not max_strain > 0:
         raise OptionError("--divergence-strain", f"must be > 0, got {max_strain:g}")
     gauge = kes.KES_FB1_GAUGE_MM if args.gauge_length_mm is None else args.gauge_length_mm
-    fit = kes.fit_kes(kes.read_tensile_csv(args.tensile, args.strain_unit, gauge, flag="--tensile"),
-                      kes.read_bending_csv(args.bending, flag="--bending"), max_strain)
-    source = (f"fitted by warpcloth material fit-kes to {args.tensile} (KES-FB1) and {args.bending} (KES-FB2); "
-              f"density {args.density_g_per_cm2:g} g/cm² given on the command line")
+    tensile = kes.read_tensile_csv(args.tensile, args.strain_unit, gauge, flag="--tensile")
+    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, flag="--bending"), laws)
+    law = comparison.recommended
+    fit = kes.fit_kes(tensile, comparison.loop, max_strain, bending_fit=comparison.fits[law])
+    chosen = f"; bending law {law}, the lowest AIC of {', '.join(laws)}" if len(laws) > 1 else ""
+    source = (f"fitted by warpcloth material fit-kes to {args.tensile} (KES-FB1) and {args.bending} (KES-FB2)"
+              f"{chosen}; density {args.density_g_per_cm2:g} g/cm² given on the command line")
     data = kes.material_file_data(fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain)
+    if len(laws) > 1:
+        data["fit"] |= comparison.fit_table()
     print(f"tensile file's first column read as {fit.tensile_loop.strain_unit}")
     t, tk, b, bk = fit.tensile, fit.tensile_kes, fit.bending, fit.bending_kes
     rt = f", RT {tk.rt_percent:.1f} %" if tk.rt_percent is not None else " (no unloading branch: no RT)"
@@ -73,25 +160,25 @@ def material_command(args: argparse.Namespace) -> int:
         print(f"  note: {t.note}")
     print(f"  KES: EMT {tk.emt_percent:.4g} %, WT {tk.wt_gf_cm_per_cm2:.4g} gf·cm/cm², LT {tk.lt:.4g}{rt} "
           f"(Fm {tk.fm_gf_per_cm:.4g} gf/cm)")
-    print(f"bending ({args.bending}, {len(fit.bending_loop.curvature)} points): D {b.rigidity_gf_cm2_per_cm:.6g} "
-          f"gf·cm²/cm, D1 {b.d1_gf_cm_per_cm:.6g} gf·cm/cm, α {b.alpha_cm:.6g} cm, K0 {b.k0_per_cm:.6g} 1/cm")
-    print(f"  RMS {b.rms_gf_cm_per_cm:.4g} gf·cm/cm ({b.rms_relative:.3%} of the moment range)")
+    if len(laws) > 1:
+        _print_comparison(comparison, args.bending)
+    print(f"bending ({args.bending}, {len(fit.bending_loop.curvature)} points), law {law}: "
+          f"{kes.LAW_FITTERS[law].describe(b)}")
+    print(f"  RMS {b.rms_gf_cm_per_cm:.4g} gf·cm/cm ({b.rms_relative:.3%} of the moment range), AIC {b.aic():.2f}, "
+          f"BIC {b.bic():.2f} ({b.free_parameters} free parameters)")
     if b.note:
         print(f"  note: {b.note}")
-    kes_b = "n/a" if bk.b_gf_cm2_per_cm is None else f"{bk.b_gf_cm2_per_cm:.4g} gf·cm²/cm"
-    kes_hb = "n/a" if bk.hb2_gf_cm_per_cm is None else f"{bk.hb2_gf_cm_per_cm:.4g} gf·cm/cm"
-    print(f"  KES: B {kes_b}, 2HB {kes_hb}")
-    print(f"wrote {kes.write_material_file(out, data)} (a scene uses it with from_file = \"{out}\" in its "
+    model = comparison.reproduced[law]
+    print(f"  KES: B {_kes_value(bk.b_gf_cm2_per_cm, 'gf·cm²/cm')}, 2HB {_kes_value(bk.hb2_gf_cm_per_cm, 'gf·cm/cm')} "
+          f"(the data's; the fitted law along 0 → +K0 → −K0 → 0: B {_kes_value(model.b_gf_cm2_per_cm, 'gf·cm²/cm')}, "
+          f"2HB {_kes_value(model.hb2_gf_cm_per_cm, 'gf·cm/cm')})")
+    which = f" with the {law} bending law, the one AIC recommends" if len(laws) > 1 else ""
+    print(f"wrote {kes.write_material_file(out, data)}{which} (a scene uses it with from_file = \"{out}\" in its "
           f"[material], or --set material.from_file={out})")
-    if args.plot:
-        from warpcloth.viz.plots import plot_kes_fit
+    if plot is not None:
+        from warpcloth.viz.plots import plot_bending_law_comparison, plot_kes_fit
 
-        print(f"wrote {plot_kes_fit(fit, plot)}")
+        figure = plot_kes_fit(fit, plot) if laws == ["tagawa2003"] else plot_bending_law_comparison(comparison, plot)
+        print(f"wrote {figure}")
     status, problems = fit.verdict()
-    print(f"status: {status}")
-    if status != "converged":
-        print(f"warpcloth material fit-kes: not a fit ({status}): " + "; ".join(problems)
-              + (" (accepted with --accept)" if args.accept else " (the material file records it; --accept to "
-                 "exit 0 anyway)"), file=sys.stderr)
-        return 0 if args.accept else EXIT_FIT_STATUS[status]
-    return 0
+    return _finish("fit-kes", status, problems, args.accept, "the material file records it")

@@ -483,3 +483,63 @@ def plot_kes_fit(fit: object, path: str | Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     write_atomically(path, figure.savefig)
     return path
+
+
+RESIDUAL_MEAN_POINTS = 15
+"""The bending-law comparison's residual panel: running mean over this many points."""
+
+
+def bending_law_comparison_figure(comparison: object) -> plt.Figure:
+    """Each bending law fitted to one KES-FB2 loop (a
+    :class:`warpcloth.calibrate.kes.LawComparison`): the fits over the measured loop (top
+    left; the legend gives each law's RMS and ΔAIC), the same with the data's centre line
+    B K taken away so the loops' shapes show (top right), and the residuals along the
+    cycle (bottom: each point thin, a running mean thick, so a law's systematic misfit
+    stands out of the noise); the title gives the recommendation and the data's B and 2HB."""
+    loop, delta, measured = comparison.loop, comparison.delta_aic(), comparison.measured
+    fig, axes = plt.subplot_mosaic([["loop", "shape"], ["residual", "residual"]], figsize=(11.0, 7.6),
+                                   height_ratios=(1.6, 1.0))
+    slope = measured.b_gf_cm2_per_cm if measured.b_gf_cm2_per_cm is not None else 0.0
+    k, index = loop.curvature, np.arange(len(loop.curvature))
+    window = np.ones(min(RESIDUAL_MEAN_POINTS, len(index)))
+    counts = np.convolve(np.ones(len(index)), window, mode="same")  # fewer points near the ends
+    for name, centre in (("loop", 0.0), ("shape", slope)):
+        axes[name].plot(k, loop.moment - centre * k, ".", ms=2.5, color="0.6", label="KES-FB2 data", zorder=1)
+    for j, (law, fit) in enumerate(comparison.fits.items()):
+        axes["loop"].plot(k, fit.moment, color=f"C{j}", lw=1.2, zorder=2,
+                          label=f"{law} (k = {fit.free_parameters}): RMS {fit.rms_gf_cm_per_cm:.3g} gf·cm/cm, "
+                          f"ΔAIC {delta[law]:.1f}")
+        axes["shape"].plot(k, fit.moment - slope * k, color=f"C{j}", lw=1.2, zorder=2, label=law)
+        residual = fit.moment - loop.moment
+        axes["residual"].plot(index, residual, color=f"C{j}", lw=0.5, alpha=0.2)
+        axes["residual"].plot(index, np.convolve(residual, window, mode="same") / counts, color=f"C{j}", lw=1.5,
+                              label=law)
+    for leg in loop.legs()[1:]:
+        axes["residual"].axvline(leg.start, color="0.7", lw=0.6, ls=":")
+    for ax in axes.values():
+        ax.axhline(0.0, color="0.8", lw=0.5)
+    kes = ", ".join(f"{name} {value:.4g} {unit}" for name, value, unit in
+                    (("B", measured.b_gf_cm2_per_cm, "gf·cm²/cm"), ("2HB", measured.hb2_gf_cm_per_cm, "gf·cm/cm"))
+                    if value is not None)
+    axes["loop"].set(xlabel="curvature K (1/cm)", ylabel="moment per width M (gf·cm/cm)",
+                     title=f"{Path(loop.source).name}: AIC recommends {comparison.recommended}"
+                     + (f"\ndata: {kes}" if kes else ""))
+    axes["loop"].legend(fontsize=7, loc="lower right")
+    axes["shape"].set(xlabel="curvature K (1/cm)", ylabel=f"M − {slope:.4g} K (gf·cm/cm)",
+                      title="the loops without the data's centre line B K")
+    axes["shape"].legend(fontsize=7, loc="center", bbox_to_anchor=(0.27, 0.5))
+    axes["residual"].set(xlabel="point along the cycle (dotted: the turns at +K0 and −K0)",
+                         ylabel="model − data (gf·cm/cm)",
+                         title=f"residuals (thin: each point; thick: running mean over {len(window)} points)")
+    axes["residual"].legend(fontsize=7, ncols=len(comparison.fits))
+    for ax in axes.values():
+        ax.title.set_fontsize(9)
+    fig.tight_layout()
+    return fig
+
+
+def plot_bending_law_comparison(comparison: object, path: str | Path, *, dpi: float = DPI) -> Path:
+    """:func:`bending_law_comparison_figure` written to ``path`` (its suffix chooses the format)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return _save(bending_law_comparison_figure(comparison), path, dpi)

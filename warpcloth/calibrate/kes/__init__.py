@@ -8,23 +8,45 @@ One module per concern:
   the strain unit inferred, the loops validated (§13.1);
 - :mod:`.least_squares`: non-negative and inequality-constrained least squares;
 - :mod:`.tensile_fit`: the tensile quartic (§13.2);
-- :mod:`.bending_tagawa2003`: the paper's bending law (§4) fitted to a loop (§13.3);
-  another bending law would be one more module beside it;
+- :mod:`.bending_fit`: what every bending law's fit shares (the NNLS in D and the law's
+  amplitude, the grid search in one launch, the refinement, :class:`BendingFit`);
+- :mod:`.bending_tagawa2003`, :mod:`.bending_dahl`, :mod:`.bending_frictional_couple`: each
+  law's fitter (§13.3, §13.5);
+- :mod:`.laws`: the registry of fitters (:data:`LAW_FITTERS`) and every law fitted to one
+  loop and compared by information criterion (:func:`compare_laws`);
 - :mod:`.kes_values`: EMT, WT, LT, RT, B, 2HB (§13.4);
-- :mod:`.kes_fit`: both loops fitted together (:func:`fit_kes`);
+- :mod:`.kes_fit`: both loops fitted together, with one bending law (:func:`fit_kes`);
 - :mod:`.material_file`: the material file of a fit.
 """
 
-from .bending_tagawa2003 import ALPHA_K0_GRID, BendingFit, fit_bending, hysteretic_offsets
+from .bending_dahl import DAHL, EXPONENT_GRID, SCALE_K0_GRID, fit_dahl
+from .bending_fit import POOR_FIT_FACTOR, BendingFit, LawFitter, Parameter, ShapeParameter, bending_problems
+from .bending_frictional_couple import FRICTIONAL_COUPLE, WIDTH_K0_GRID, fit_frictional_couple
+from .bending_tagawa2003 import ALPHA_K0_GRID, TAGAWA2003, Tagawa2003Fit, fit_bending, hysteretic_offsets
 from .kes_fit import KesFit, fit_kes
 from .kes_values import (
     B_RANGE_PER_CM,
     HB_CURVATURE_PER_CM,
     HB_WINDOW_PER_CM,
+    KES_CYCLE_STEP_PER_CM,
     BendingSummary,
     TensileSummary,
     bending_summary,
+    standard_cycle,
     tensile_summary,
+)
+from .laws import (
+    AIC_TIE,
+    ALL_LAWS,
+    DEFAULT_LAW,
+    LAW_FITTERS,
+    LIKELIHOOD_RATIO_95,
+    SAME_EXPONENT,
+    LawComparison,
+    compare_laws,
+    law_fitter,
+    reproduced_kes_values,
+    selected_laws,
 )
 from .material_file import material_file_data, write_material_file
 from .readers import (
@@ -45,35 +67,62 @@ from .readers import (
 from .tensile_fit import DIVERGENCE_STRAIN, SLOPE_FLOOR, TensileFit, fit_tensile
 
 __all__ = [
+    "AIC_TIE",
+    "ALL_LAWS",
     "ALPHA_K0_GRID",
     "B_RANGE_PER_CM",
-    "DIVERGENCE_STRAIN",
-    "HB_CURVATURE_PER_CM",
-    "HB_WINDOW_PER_CM",
-    "KES_FB1_GAUGE_MM",
-    "LOOP_CLOSURE",
-    "LOOP_REACH",
-    "MIN_BENDING_POINTS",
-    "MIN_LOADING_POINTS",
-    "PERCENT",
-    "SLOPE_FLOOR",
-    "STRAIN_UNITS",
     "BendingFit",
     "BendingLoop",
     "BendingSummary",
+    "DAHL",
+    "DEFAULT_LAW",
+    "DIVERGENCE_STRAIN",
+    "EXPONENT_GRID",
+    "FRICTIONAL_COUPLE",
+    "HB_CURVATURE_PER_CM",
+    "HB_WINDOW_PER_CM",
+    "KES_CYCLE_STEP_PER_CM",
+    "KES_FB1_GAUGE_MM",
     "KesFit",
+    "LAW_FITTERS",
+    "LIKELIHOOD_RATIO_95",
+    "LOOP_CLOSURE",
+    "LOOP_REACH",
+    "LawComparison",
+    "LawFitter",
+    "MIN_BENDING_POINTS",
+    "MIN_LOADING_POINTS",
+    "PERCENT",
+    "POOR_FIT_FACTOR",
+    "Parameter",
+    "SAME_EXPONENT",
+    "SCALE_K0_GRID",
+    "SLOPE_FLOOR",
+    "STRAIN_UNITS",
+    "ShapeParameter",
+    "TAGAWA2003",
+    "Tagawa2003Fit",
     "TensileFit",
     "TensileLoop",
     "TensileSummary",
+    "WIDTH_K0_GRID",
     "bending_loop",
+    "bending_problems",
     "bending_summary",
+    "compare_laws",
     "fit_bending",
+    "fit_dahl",
+    "fit_frictional_couple",
     "fit_kes",
     "fit_tensile",
     "hysteretic_offsets",
+    "law_fitter",
     "material_file_data",
     "read_bending_csv",
     "read_tensile_csv",
+    "reproduced_kes_values",
+    "selected_laws",
+    "standard_cycle",
     "tensile_loop",
     "tensile_summary",
     "write_material_file",

@@ -8,13 +8,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..noise import difference_noise
-from .bending_tagawa2003 import BendingFit, fit_bending
+from .bending_fit import BendingFit, bending_problems, poor_fit
 from .kes_values import BendingSummary, TensileSummary, bending_summary, tensile_summary
+from .laws import DEFAULT_LAW, law_fitter
 from .readers import BendingLoop, TensileLoop
 from .tensile_fit import DIVERGENCE_STRAIN, TensileFit, fit_tensile
 
-POOR_FIT_FACTOR = 3.0  # an RMS above this many times the data's noise is not described by the model
+STATUS_ORDER = ("failed", "at_bound", "poor_fit")
+"""A fit's status is the first of these any of its problems has (else ``converged``)."""
 
 
 @dataclass(frozen=True)
@@ -34,32 +35,24 @@ class KesFit:
             "name": name,
             "density_g_per_cm2": float(density_g_per_cm2),
             "tensile_gf_per_cm": [float(a) for a in self.tensile.coefficients],
-            "bending_rigidity_gf_cm2_per_cm": float(self.bending.rigidity_gf_cm2_per_cm),
-            "bending_law": "tagawa2003",
-            "hysteresis_d1_gf_cm_per_cm": float(self.bending.d1_gf_cm_per_cm),
-            "hysteresis_alpha_cm": float(self.bending.alpha_cm),
-            "hysteresis_k0_per_cm": float(self.bending.k0_per_cm),
+            "bending_law": self.bending.law,
+            **{k: float(v) for k, v in self.bending.parameters.items()},
         }
 
     def verdict(self) -> tuple[str, list[str]]:
         """Status and problems, as a motion fit's (``converged``, ``at_bound``,
         ``poor_fit``, ``failed``): each curve's RMS is judged against the noise estimated
-        from its own samples (4th differences), α against the edges of its search."""
-        t, b = self.tensile, self.bending
+        from its own samples (4th differences), the bending law's shape parameters against
+        the edges of their search."""
+        t = self.tensile
         found = []
-        numbers = [*t.coefficients, t.rms_gf_per_cm, b.rigidity_gf_cm2_per_cm, b.d1_gf_cm_per_cm, b.alpha_cm,
-                   b.rms_gf_cm_per_cm]
-        if not all(math.isfinite(float(v)) for v in numbers):
-            found.append(("failed", "a fitted value is not finite"))
-        if "edge of its search range" in b.note:
-            found.append(("at_bound", b.note))
-        for what, rms, unit, samples in (("tensile", t.rms_gf_per_cm, "gf/cm", self.tensile_loop.force),
-                                         ("bending", b.rms_gf_cm_per_cm, "gf·cm/cm", self.bending_loop.moment)):
-            noise = difference_noise([samples])
-            if math.isfinite(noise) and noise > 0 and rms > POOR_FIT_FACTOR * noise:
-                found.append(("poor_fit", f"the {what} RMS {rms:.4g} {unit} is {rms / noise:.1f}× the noise of the "
-                                          f"data ({noise:.3g} {unit}, from its 4th differences): the model does not "
-                                          "describe this loop"))
+        if not all(math.isfinite(float(v)) for v in [*t.coefficients, t.rms_gf_per_cm]):
+            found.append(("failed", "a fitted tensile value is not finite"))
+        why = poor_fit("tensile", t.rms_gf_per_cm, "gf/cm", self.tensile_loop.force)
+        if why is not None:
+            found.append(("poor_fit", why))
+        found += bending_problems(self.bending, self.bending_loop)
+        found.sort(key=lambda problem: STATUS_ORDER.index(problem[0]))
         return (found[0][0] if found else "converged"), [message for _, message in found]
 
     def summary_table(self) -> dict:
@@ -77,8 +70,12 @@ class KesFit:
             "tensile_constrained": t.constrained,
             "bending_file": self.bending_loop.source,
             "bending_points": len(self.bending_loop.curvature),
+            "bending_law": self.bending.law,
+            "bending_free_parameters": self.bending.free_parameters,
             "bending_rms_gf_cm_per_cm": b.rms_gf_cm_per_cm,
             "bending_rms_relative": b.rms_relative,
+            "bending_aic": b.aic(),
+            "bending_bic": b.bic(),
             "emt_percent": tk.emt_percent,
             "fm_gf_per_cm": tk.fm_gf_per_cm,
             "wt_gf_cm_per_cm2": tk.wt_gf_cm_per_cm2,
@@ -91,7 +88,14 @@ class KesFit:
 
 
 def fit_kes(tensile: TensileLoop, bending: BendingLoop, max_strain: float = DIVERGENCE_STRAIN,
-            device: str | None = "cpu") -> KesFit:
-    """Fit the tensile quartic and the bending law, and compute the KES values of both loops."""
-    return KesFit(tensile, bending, fit_tensile(tensile, max_strain), fit_bending(bending, device),
-                  tensile_summary(tensile), bending_summary(bending))
+            device: str | None = "cpu", law: str = DEFAULT_LAW, bending_fit: BendingFit | None = None) -> KesFit:
+    """Fit the tensile quartic and the bending law ``law`` (a name in ``LAW_FITTERS``:
+    tagawa2003, dahl, frictional_couple), and compute the KES values of both loops.
+
+    ``bending_fit``: the bending law already fitted to ``bending`` (e.g. by
+    :func:`~warpcloth.calibrate.kes.compare_laws`), used instead of fitting ``law``.
+    """
+    if bending_fit is None:
+        bending_fit = law_fitter(law).fit(bending, device)
+    return KesFit(tensile, bending, fit_tensile(tensile, max_strain), bending_fit, tensile_summary(tensile),
+                  bending_summary(bending))

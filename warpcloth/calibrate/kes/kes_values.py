@@ -104,3 +104,15 @@ def bending_summary(loop: BendingLoop) -> BendingSummary:
             widths.append(np.mean(values[1.0]) - np.mean(values[-1.0]))
     hb2 = float(np.mean(widths)) if len(widths) == 2 else None
     return BendingSummary(b, hb2)
+
+
+KES_CYCLE_STEP_PER_CM = 0.02
+"""Curvature step of :func:`standard_cycle` (the bundled KES-FB2 example's)."""
+
+
+def standard_cycle(k0_per_cm: float, step_per_cm: float = KES_CYCLE_STEP_PER_CM) -> np.ndarray:
+    """The KES-FB2 curvature cycle 0 → +K0 → −K0 → 0 (1/cm), in steps of about ``step_per_cm``."""
+    n = max(round(k0_per_cm / step_per_cm), 2)
+    return np.concatenate([np.linspace(0.0, k0_per_cm, n, endpoint=False),
+                           np.linspace(k0_per_cm, -k0_per_cm, 2 * n, endpoint=False),
+                           np.linspace(-k0_per_cm, 0.0, n + 1)])

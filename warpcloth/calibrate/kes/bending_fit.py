@@ -1,0 +1,287 @@
+"""What every bending law's fit to a KES-FB2 loop shares (docs/model.md §13.3, §13.5).
+
+Each law's moment is M = D K + A g(K; θ): an elastic centre line plus a hysteretic
+moment that is proportional to the law's amplitude A (tagawa2003: D1, dahl: M_s,
+frictional_couple: M_f) at fixed shape parameters θ (α; K_s, n; K_w), the hinge starting
+fresh at the first sample. g is run along the *measured* curvature path by the kernels'
+own hinge logic (:func:`warpcloth.sim.moment_along_path`) for A = 1 gf·cm/cm and D = 0, so
+for each θ, (D, A) is a linear least-squares problem with D, A ≥ 0 (NNLS). θ is searched
+on a logarithmic grid (every grid point in one kernel launch), then refined from the
+best grid point: by golden-section search on ln θ between its neighbours for one shape
+parameter, by Nelder–Mead on ln θ inside the grid's box for more. A law is a
+:class:`LawFitter`: its amplitude, its shape parameters and their grids; the modules
+``bending_<law>.py`` each define one.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from warpcloth import units
+from warpcloth.scene import MaterialSection, to_si
+from warpcloth.sim import moment_along_path
+
+from ..noise import difference_noise
+from .least_squares import nnls
+from .readers import BendingLoop
+
+POOR_FIT_FACTOR = 3.0
+"""An RMS above this many times the data's noise is not described by the model."""
+
+GOLDEN_BRACKET = 1e-10
+"""Golden-section search (one shape parameter) ends when the bracket on ln θ is this narrow."""
+
+SIMPLEX_SIZE = 1e-10
+"""Nelder–Mead (several shape parameters) ends when the simplex spans less than this in every ln θ."""
+
+SIMPLEX_ITERATIONS = 2000
+"""…or after this many iterations."""
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A bending-law parameter as the scene names it: [material] field (KES units), symbol, unit."""
+
+    field: str
+    symbol: str
+    unit: str  # "" for a pure number
+
+
+@dataclass(frozen=True)
+class ShapeParameter(Parameter):
+    """A shape parameter θ and its log-spaced search grid.
+
+    The grid runs over the scaled value θ K0^(−k0_power) (``scaled`` names it, e.g. "α K0")
+    from ``low`` to ``high`` in ``count`` points, so it follows the loop's size.
+    """
+
+    low: float = 1.0
+    high: float = 1.0
+    count: int = 1
+    k0_power: int = 0
+    scaled: str = ""
+
+    def grid(self, k0: float) -> np.ndarray:
+        """The grid of θ (its KES unit) for a loop whose largest ``|K|`` is ``k0`` (1/cm)."""
+        scaled = np.geomspace(self.low, self.high, self.count)
+        return scaled / k0**-self.k0_power if self.k0_power < 0 else scaled * k0**self.k0_power
+
+
+RIGIDITY = Parameter("bending_rigidity_gf_cm2_per_cm", "D", "gf·cm²/cm")
+"""The centre line's slope D, every law's first parameter."""
+
+
+@dataclass(frozen=True)
+class BendingFit:
+    """A bending law fitted to a loop; the same shape for every law."""
+
+    law: str  # the name in kernels/laws.py, as [material] bending_law gives it
+    parameters: dict[str, float]  # [material] field (KES units) → value, in the law's order
+    rms_gf_cm_per_cm: float
+    rms_relative: float  # RMS / range of the measured moment
+    moment: np.ndarray  # the model's moment along the measured path, gf·cm/cm
+    free_parameters: int  # what the information criteria count (K0, fixed by the data, is not one)
+    note: str  # e.g. a parameter at the edge of its search range; "" otherwise
+
+    @property
+    def rigidity_gf_cm2_per_cm(self) -> float:
+        """D, the slope of the centre line M = D K."""
+        return self.parameters[RIGIDITY.field]
+
+    @property
+    def points(self) -> int:
+        """The number of samples fitted (n of the information criteria)."""
+        return len(self.moment)
+
+    def _log_likelihood_term(self) -> float:
+        # n ln(SSE / n), SSE = n RMS² (an exact fit would be −∞: floored)
+        return self.points * math.log(max(self.rms_gf_cm_per_cm**2, 1e-300))
+
+    def aic(self) -> float:
+        """Akaike's criterion n ln(SSE/n) + 2k (Gaussian residuals of one unknown variance)."""
+        return self._log_likelihood_term() + 2 * self.free_parameters
+
+    def bic(self) -> float:
+        """The Bayesian (Schwarz) criterion n ln(SSE/n) + k ln n."""
+        return self._log_likelihood_term() + self.free_parameters * math.log(self.points)
+
+    def material_section(self) -> MaterialSection:
+        """A [material] with the fitted law and its parameters (every other field the default)."""
+        return MaterialSection(bending_law=self.law, **self.parameters)
+
+
+def poor_fit(what: str, rms: float, unit: str, samples: np.ndarray) -> str | None:
+    """Why a fit whose RMS is above :data:`POOR_FIT_FACTOR` × the noise of its data (from
+    their 4th differences) is not a fit; None when it is not that far."""
+    noise = difference_noise([samples])
+    if math.isfinite(noise) and noise > 0 and rms > POOR_FIT_FACTOR * noise:
+        return (f"the {what} RMS {rms:.4g} {unit} is {rms / noise:.1f}× the noise of the data ({noise:.3g} {unit}, "
+                "from its 4th differences): the model does not describe this loop")
+    return None
+
+
+def bending_problems(fit: BendingFit, loop: BendingLoop) -> list[tuple[str, str]]:
+    """(status, why) of each reason a bending fit is not trusted: ``failed`` (a value not
+    finite), ``at_bound`` (a parameter at the edge of its search), ``poor_fit``."""
+    found = []
+    if not all(math.isfinite(float(v)) for v in [*fit.parameters.values(), fit.rms_gf_cm_per_cm]):
+        found.append(("failed", f"a fitted {fit.law} value is not finite"))
+    if "edge of its search range" in fit.note:
+        found.append(("at_bound", fit.note))
+    why = poor_fit("bending", fit.rms_gf_cm_per_cm, "gf·cm/cm", loop.moment)
+    if why is not None:
+        found.append(("poor_fit", why))
+    return found
+
+
+def _linear_part(curvature: np.ndarray, moment: np.ndarray, offset: np.ndarray) -> tuple[float, float, float]:
+    # D, A ≥ 0 of M = D K + A g for one shape, and the sum of squared residuals.
+    d, a = nnls(np.column_stack([curvature, offset]), moment)
+    return float(d), float(a), float(np.sum((d * curvature + a * offset - moment) ** 2))
+
+
+def _golden(objective: Callable[[float], float], a: float, b: float) -> tuple[float, float]:
+    # Golden-section search on [a, b]: the bracket's midpoint and the best value seen inside.
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    c, d = b - ratio * (b - a), a + ratio * (b - a)
+    fc, fd = objective(c), objective(d)
+    while b - a > GOLDEN_BRACKET:
+        if fc < fd:
+            b, d, fd = d, c, fc
+            c = b - ratio * (b - a)
+            fc = objective(c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + ratio * (b - a)
+            fd = objective(d)
+    return 0.5 * (a + b), min(fc, fd)
+
+
+def _nelder_mead(objective: Callable[[np.ndarray], float], start: np.ndarray, steps: np.ndarray,
+                 lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, float]:
+    # Nelder–Mead (reflect 1, expand 2, contract ½, shrink ½) inside the box [lower, upper]
+    # (points outside are projected onto it); the best vertex and its value.
+    def f(x: np.ndarray) -> float:
+        return objective(np.clip(x, lower, upper))
+
+    simplex = np.vstack([start, start + np.diag(steps)])
+    values = np.array([f(x) for x in simplex])
+    for _ in range(SIMPLEX_ITERATIONS):
+        order = np.argsort(values, kind="stable")
+        simplex, values = simplex[order], values[order]
+        if np.all(np.ptp(np.clip(simplex, lower, upper), axis=0) < SIMPLEX_SIZE):
+            break
+        centre = simplex[:-1].mean(axis=0)
+        reflected = centre + (centre - simplex[-1])
+        fr = f(reflected)
+        if fr < values[0]:
+            expanded = centre + 2.0 * (centre - simplex[-1])
+            fe = f(expanded)
+            simplex[-1], values[-1] = (expanded, fe) if fe < fr else (reflected, fr)
+        elif fr < values[-2]:
+            simplex[-1], values[-1] = reflected, fr
+        else:
+            inside = fr >= values[-1]
+            contracted = centre + (0.5 if not inside else -0.5) * (centre - simplex[-1])
+            fk = f(contracted)
+            if fk < min(fr, values[-1]):
+                simplex[-1], values[-1] = contracted, fk
+            else:
+                simplex[1:] = simplex[0] + 0.5 * (simplex[1:] - simplex[0])
+                values[1:] = [f(x) for x in simplex[1:]]
+    best = int(np.argmin(values))
+    return np.clip(simplex[best], lower, upper), float(values[best])
+
+
+@dataclass(frozen=True)
+class LawFitter:
+    """How one bending law is fitted: its amplitude A, its shape parameters θ (with their
+    grids) and, for tagawa2003, the parameter the data fix (K0 = the loop's largest ``|K|``)."""
+
+    law: str
+    amplitude: Parameter
+    shape: tuple[ShapeParameter, ...]
+    k0: Parameter | None = None
+    result: type[BendingFit] = BendingFit
+
+    @property
+    def parameters(self) -> tuple[Parameter, ...]:
+        """Every parameter of the law, in the order fits report them."""
+        return (RIGIDITY, self.amplitude, *self.shape, *((self.k0,) if self.k0 else ()))
+
+    @property
+    def free_parameters(self) -> int:
+        """D, A and the shape parameters (K0 comes from the data)."""
+        return 2 + len(self.shape)
+
+    def describe(self, fit: BendingFit, digits: int = 6) -> str:
+        """The fit's parameters as text with their units, e.g. ``D 0.1 gf·cm²/cm, …``."""
+        return ", ".join(f"{p.symbol} {fit.parameters[p.field]:.{digits}g}" + (f" {p.unit}" if p.unit else "")
+                         for p in self.parameters)
+
+    def _fixed(self, k0: float) -> dict[str, float]:
+        return {self.k0.field: k0} if self.k0 else {}
+
+    def unit_offsets(self, curvature_per_cm: np.ndarray, shapes: np.ndarray, k0_per_cm: float,
+                     device: str | None = "cpu") -> np.ndarray:
+        """Hysteretic moment g(θ; path) per gf·cm/cm of the amplitude along a curvature
+        path (1/cm), one column per row of ``shapes`` (``[point, shape parameter]``, KES
+        units), all in one kernel launch with D = 0; the hinge starts fresh at the path's
+        first sample. Returns ``[sample, point]``."""
+        fixed = self._fixed(k0_per_cm)
+        materials = [to_si(MaterialSection(bending_law=self.law, bending_rigidity_gf_cm2_per_cm=0.0,
+                                           **{self.amplitude.field: 1.0}, **fixed,
+                                           **{p.field: float(v) for p, v in zip(self.shape, row, strict=True)}))
+                     for row in np.atleast_2d(shapes)]
+        k = np.asarray(curvature_per_cm, dtype=np.float64) * units.CURVATURE_PER_CM
+        moment, _ = moment_along_path(materials, k[:, None], device=device)
+        return moment / units.MOMENT_GF_CM_PER_CM
+
+    def fit(self, loop: BendingLoop, device: str | None = "cpu") -> BendingFit:
+        """Fit D, A and θ to the whole loop (see the module docstring)."""
+        k, m, k0 = loop.curvature, loop.moment, loop.k0
+        grids = [p.grid(k0) for p in self.shape]
+        points = np.array(list(itertools.product(*grids)))
+        offsets = self.unit_offsets(k, points, k0, device)
+        sse = np.array([_linear_part(k, m, offsets[:, i])[2] for i in range(len(points))])
+        best = int(np.argmin(sse))
+        index = np.unravel_index(best, [p.count for p in self.shape])
+        logs = [np.log(g) for g in grids]
+
+        def objective(log_shape: np.ndarray) -> float:
+            return _linear_part(k, m, self.unit_offsets(k, np.exp(log_shape)[None, :], k0, device)[:, 0])[2]
+
+        if len(self.shape) == 1:
+            (i,) = index
+            x, refined = _golden(lambda v: objective(np.array([v])), logs[0][max(i - 1, 0)],
+                                 logs[0][min(i + 1, len(logs[0]) - 1)])
+            x = np.array([x])
+        else:
+            steps = np.array([lg[1] - lg[0] for lg in logs])
+            x, refined = _nelder_mead(objective, np.log(points[best]), steps, np.array([lg[0] for lg in logs]),
+                                      np.array([lg[-1] for lg in logs]))
+        shape = np.exp(x)
+        if sse[best] < refined:  # a flat objective (no hysteresis): keep the grid's point
+            shape = points[best]
+        edges = [(p, v) for p, i, v, lg in zip(self.shape, index, shape, logs, strict=True)
+                 if i in (0, p.count - 1) or min(abs(math.log(v) - lg[0]), abs(math.log(v) - lg[-1])) < SIMPLEX_SIZE]
+        note = ""
+        if edges:
+            note = "; ".join(f"{p.symbol} at the edge of its search range ({p.scaled} = {v / k0**p.k0_power:g})"
+                             for p, v in edges) + "; the loop may not have the model's shape"
+        offset = self.unit_offsets(k, shape[None, :], k0, device)[:, 0]
+        d_fit, a_fit, total = _linear_part(k, m, offset)
+        if a_fit == 0.0:
+            symbols = [p.symbol for p in self.shape]
+            note = (f"the loop shows no hysteresis ({self.amplitude.symbol} = 0): {', '.join(symbols)} "
+                    f"{'has' if len(symbols) == 1 else 'have'} no effect")
+        rms = math.sqrt(total / len(k))
+        parameters = {RIGIDITY.field: d_fit, self.amplitude.field: a_fit,
+                      **{p.field: float(v) for p, v in zip(self.shape, shape, strict=True)}, **self._fixed(k0)}
+        return self.result(self.law, parameters, rms, rms / (float(np.ptp(m)) or 1.0), d_fit * k + a_fit * offset,
+                           self.free_parameters, note)

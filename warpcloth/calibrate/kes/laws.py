@@ -1,0 +1,203 @@
+"""The bending laws' fitters, and every law fitted to one KES-FB2 loop and compared
+(docs/model.md §13.5).
+
+:data:`LAW_FITTERS` has one :class:`~.bending_fit.LawFitter` per law of
+``kernels/laws.py``. :func:`compare_laws` fits each to the loop and ranks them by Akaike's
+information criterion, AIC = n ln(SSE/n) + 2k (and shows the Bayesian BIC = n ln(SSE/n)
++ k ln n), for Gaussian residuals of one unknown variance, k the law's free parameters
+(tagawa2003 3: D, D1, α, its K0 being fixed by the data; dahl 4: D, M_s, K_s, n;
+frictional_couple 3: D, M_f, K_w), n the loop's points. It also gives the KES values B and
+2HB each fitted law reproduces along the standard cycle 0 → +K0 → −K0 → 0, beside the
+data's own.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from warpcloth import units
+from warpcloth.errors import OptionError
+from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
+from warpcloth.scene import to_si
+from warpcloth.sim import moment_along_path
+
+from .bending_dahl import DAHL
+from .bending_fit import BendingFit, LawFitter, bending_problems
+from .bending_frictional_couple import FRICTIONAL_COUPLE
+from .bending_tagawa2003 import TAGAWA2003
+from .kes_values import BendingSummary, bending_summary, standard_cycle
+from .readers import BendingLoop, bending_loop
+
+LAW_FITTERS: dict[str, LawFitter] = {f.law: f for f in (TAGAWA2003, DAHL, FRICTIONAL_COUPLE)}
+"""The fitter of each bending law, in the kernels' order."""
+
+if tuple(LAW_FITTERS) != tuple(BENDING_LAWS):  # pragma: no cover - a law added to the kernels needs a fitter
+    raise ImportError(f"bending laws {tuple(BENDING_LAWS)} but fitters for {tuple(LAW_FITTERS)}")
+
+DEFAULT_LAW = DEFAULT_BENDING_LAW
+"""What ``fit-kes`` fits without ``--law``: the paper's law."""
+
+ALL_LAWS = "all"
+"""``--law all``: fit every law and compare them."""
+
+AIC_TIE = 2.0
+"""A ΔAIC below this is no preference between two laws."""
+
+SAME_EXPONENT = 0.05
+"""A dahl fit with ``|n − 1|`` below this is the paper's law."""
+
+LIKELIHOOD_RATIO_95 = 3.841
+"""The 95 % point of χ² with one degree of freedom: dahl (n free) against tagawa2003 (n = 1)."""
+
+
+def law_fitter(name: str) -> LawFitter:
+    """The fitter of the bending law ``name``; an OptionError (``--law``) names the known ones."""
+    if name not in LAW_FITTERS:
+        raise OptionError("--law", f"unknown bending law {name!r}; known: {', '.join(LAW_FITTERS)}")
+    return LAW_FITTERS[name]
+
+
+def selected_laws(value: str) -> list[str]:
+    """The laws ``--law VALUE`` asks for: one by name, or every one for ``all``."""
+    if value == ALL_LAWS:
+        return list(LAW_FITTERS)
+    if value not in LAW_FITTERS:
+        raise OptionError("--law", f"unknown bending law {value!r}; known: {', '.join(LAW_FITTERS)}, or "
+                          f"{ALL_LAWS} (fit every one and compare them)")
+    return [value]
+
+
+def reproduced_kes_values(fits: list[BendingFit], k0_per_cm: float,
+                          device: str | None = "cpu") -> list[BendingSummary]:
+    """B and 2HB of each fitted law along the standard cycle 0 → +K0 → −K0 → 0 (one launch)."""
+    k = standard_cycle(k0_per_cm)
+    moment, _ = moment_along_path([to_si(f.material_section()) for f in fits], (k * units.CURVATURE_PER_CM)[:, None],
+                                  device=device)
+    return [bending_summary(bending_loop(k, moment[:, j] / units.MOMENT_GF_CM_PER_CM, "the fitted law"))
+            for j in range(len(fits))]
+
+
+def _number(value: float | None, spec: str) -> str:
+    return "n/a" if value is None else format(value, spec)
+
+
+@dataclass(frozen=True)
+class LawComparison:
+    """Several bending laws fitted to one loop (see the module docstring)."""
+
+    loop: BendingLoop
+    fits: dict[str, BendingFit]  # law → its fit, in LAW_FITTERS order
+    reproduced: dict[str, BendingSummary]  # law → B, 2HB of the fitted law along the standard cycle
+    measured: BendingSummary  # the data's own B, 2HB
+
+    def delta_aic(self) -> dict[str, float]:
+        """AIC of each law minus the lowest."""
+        best = min(f.aic() for f in self.fits.values())
+        return {law: f.aic() - best for law, f in self.fits.items()}
+
+    def delta_bic(self) -> dict[str, float]:
+        """BIC of each law minus the lowest."""
+        best = min(f.bic() for f in self.fits.values())
+        return {law: f.bic() - best for law, f in self.fits.items()}
+
+    def ranking(self) -> list[str]:
+        """The laws from the lowest AIC up (a tie goes to fewer free parameters)."""
+        return sorted(self.fits, key=lambda law: (self.fits[law].aic(), self.fits[law].free_parameters))
+
+    @property
+    def recommended(self) -> str:
+        """The law with the lowest AIC."""
+        return self.ranking()[0]
+
+    def status(self, law: str) -> tuple[str, list[str]]:
+        """The verdict of one law's fit to the loop (``converged``, ``at_bound``, ``poor_fit``, ``failed``)."""
+        found = bending_problems(self.fits[law], self.loop)
+        return (found[0][0] if found else "converged"), [message for _, message in found]
+
+    def same_as_tagawa2003(self) -> str | None:
+        """Why the dahl fit is the paper's law (n within 0.05 of 1, or not significantly
+        different from 1 by the likelihood ratio against the tagawa2003 fit); None if not
+        (or either law was not fitted)."""
+        if "dahl" not in self.fits or "tagawa2003" not in self.fits:
+            return None
+        dahl, paper = self.fits["dahl"], self.fits["tagawa2003"]
+        n = dahl.parameters["dahl_exponent"]
+        ratio = max(dahl.points * 2 * math.log(paper.rms_gf_cm_per_cm / max(dahl.rms_gf_cm_per_cm, 1e-300)), 0.0)
+        if abs(n - 1) < SAME_EXPONENT:
+            return f"dahl's n = {n:.3g} is within {SAME_EXPONENT:g} of 1"
+        if ratio < LIKELIHOOD_RATIO_95:
+            return (f"dahl's n = {n:.3g} is within its uncertainty of 1 (the likelihood ratio of dahl over tagawa2003, "
+                    f"n ln(SSE_tagawa2003 / SSE_dahl) = {ratio:.2f}, is below {LIKELIHOOD_RATIO_95}, the 95 % point "
+                    "of χ² with 1 degree of freedom)")
+        return None
+
+    def caveats(self) -> list[str]:
+        """The recommendation and what it does not say."""
+        ranking, delta = self.ranking(), self.delta_aic()
+        best = ranking[0]
+        lines = [f"recommended by AIC: {best}" + (f" (next: {ranking[1]}, ΔAIC {delta[ranking[1]]:.2f})"
+                                                   if len(ranking) > 1 else " (the only law fitted)")]
+        ties = [law for law in ranking[1:] if delta[law] < AIC_TIE]
+        if ties:
+            lines.append(f"{', '.join(ties)} {'is' if len(ties) == 1 else 'are'} within ΔAIC < {AIC_TIE:g} of {best}: "
+                         "not a preference; the loop does not tell these laws apart")
+        same = self.same_as_tagawa2003()
+        if same:
+            lines.append(f"{same}: dahl with n = 1 is tagawa2003 (M_s = M0, K_s = 1/α), so on this loop the two are "
+                         "the same law")
+        lines.append("a quasi-static KES-FB2 loop says nothing about rate effects, nor about how a law treats small "
+                     "curvature reversals in motion: check the choice against a measured swing (warpcloth fit)")
+        return lines
+
+    def rows(self) -> list[dict]:
+        """One row per law (and one of the measured KES values), for a CSV table."""
+        fields = list(dict.fromkeys(p.field for law in self.fits for p in LAW_FITTERS[law].parameters))
+        delta_aic, delta_bic = self.delta_aic(), self.delta_bic()
+        rows = []
+        for law, fit in self.fits.items():
+            rows.append({"law": law, "recommended": law == self.recommended, "status": self.status(law)[0],
+                         "free_parameters": fit.free_parameters, "points": fit.points,
+                         "rms_gf_cm_per_cm": fit.rms_gf_cm_per_cm, "rms_relative": fit.rms_relative,
+                         "aic": fit.aic(), "bic": fit.bic(), "delta_aic": delta_aic[law], "delta_bic": delta_bic[law],
+                         "b_gf_cm2_per_cm": self.reproduced[law].b_gf_cm2_per_cm,
+                         "2hb_gf_cm_per_cm": self.reproduced[law].hb2_gf_cm_per_cm,
+                         **{name: fit.parameters.get(name) for name in fields}})
+        rows.append({"law": "measured", "b_gf_cm2_per_cm": self.measured.b_gf_cm2_per_cm,
+                     "2hb_gf_cm_per_cm": self.measured.hb2_gf_cm_per_cm})
+        return rows
+
+    def table(self) -> str:
+        """The comparison as printed text: one line per law, then the measured KES values."""
+        delta_aic, delta_bic = self.delta_aic(), self.delta_bic()
+        width = max(len(law) for law in [*self.fits, "measured"])
+        head = (f"{'law':<{width}}  k  {'RMS gf·cm/cm':>12}  {'AIC':>9}  {'BIC':>9}  {'ΔAIC':>7}  {'ΔBIC':>7}  "
+                f"{'B gf·cm²/cm':>11}  {'2HB gf·cm/cm':>12}  {'status':<9}  parameters")
+        lines = [head]
+        for law, fit in self.fits.items():
+            kes = self.reproduced[law]
+            lines.append(f"{law:<{width}}  {fit.free_parameters}  {fit.rms_gf_cm_per_cm:>12.5g}  {fit.aic():>9.2f}  "
+                         f"{fit.bic():>9.2f}  {delta_aic[law]:>7.2f}  {delta_bic[law]:>7.2f}  "
+                         f"{_number(kes.b_gf_cm2_per_cm, '>11.5g')}  {_number(kes.hb2_gf_cm_per_cm, '>12.5g')}  "
+                         f"{self.status(law)[0]:<9}  {LAW_FITTERS[law].describe(fit)}")
+        lines.append(f"{'measured':<{width}}  {'':>1}  {'':>12}  {'':>9}  {'':>9}  {'':>7}  {'':>7}  "
+                     f"{_number(self.measured.b_gf_cm2_per_cm, '>11.5g')}  "
+                     f"{_number(self.measured.hb2_gf_cm_per_cm, '>12.5g')}  (the data's own KES values)")
+        return "\n".join(lines)
+
+    def fit_table(self) -> dict:
+        """What a material file's [fit] table records of the comparison."""
+        delta = self.delta_aic()
+        return {"bending_law_chosen_by": f"lowest AIC among {', '.join(self.fits)}",
+                "bending_comparison": {law: {"aic": f.aic(), "bic": f.bic(), "delta_aic": delta[law],
+                                             "rms_gf_cm_per_cm": f.rms_gf_cm_per_cm, "status": self.status(law)[0]}
+                                       for law, f in self.fits.items()}}
+
+
+def compare_laws(loop: BendingLoop, laws: list[str] | None = None, device: str | None = "cpu") -> LawComparison:
+    """Fit each of ``laws`` (default: every one) to the loop and compare them."""
+    laws = list(LAW_FITTERS) if laws is None else laws
+    fits = {law: law_fitter(law).fit(loop, device) for law in laws}
+    reproduced = reproduced_kes_values(list(fits.values()), loop.k0, device)
+    return LawComparison(loop, fits, dict(zip(fits, reproduced, strict=True)), bending_summary(loop))
+
