@@ -56,6 +56,7 @@ sphinx_gallery_conf = {
         "plot_damped_swing.py",
         "plot_impulsive_rotation.py",
         "plot_kes_fit.py",
+        "plot_bending_laws.py",
         "plot_calibration.py",
         "plot_sweep_heatmap.py",
         "plot_usd_export.py",

@@ -463,3 +463,50 @@ def test_a_metric_no_variant_has_is_refused_not_drawn_empty():
         sweep_figure(summary, "first_period_s", "damping.gamma_per_s", "material.bending_rigidity_gf_cm2_per_cm")
     figure = sweep_figure(summary, "mean_log_decrement", "damping.gamma_per_s")
     assert figure.axes[0].get_title() == "mean_log_decrement over 3 variants (1 without a value)"
+
+
+def test_a_grid_over_the_bending_law_draws_a_line_per_law():
+    import pandas as pd
+
+    from warpcloth.viz.plots import sweep_figure
+
+    laws = ["tagawa2003", "dahl", "frictional_couple"]
+    summary = pd.DataFrame({"variant": range(9), "material.bending_law": np.repeat(laws, 3),
+                            "damping.gamma_per_s": np.tile([0.2, 0.5, 0.8], 3),
+                            "mean_log_decrement": np.arange(9) / 10, "diverged": False})
+    ax = sweep_figure(summary, "mean_log_decrement", "damping.gamma_per_s").axes[0]
+    lines = ax.get_lines()
+    assert [line.get_label() for line in lines] == [f"bending law = {law}" for law in laws]
+    np.testing.assert_array_equal(lines[2].get_ydata(), [0.6, 0.7, 0.8])
+    heat = sweep_figure(summary, "mean_log_decrement", "damping.gamma_per_s", "material.bending_law")
+    assert heat.axes[0].get_ylabel() == "bending law"
+
+
+def test_one_origin_the_clamp_edge_in_scenes_results_and_files(swing_run, tmp_path):
+    import json
+    import shutil
+
+    from warpcloth.errors import DataFileError
+
+    recording = load_recording(swing_run)
+    scene, nc = recording.scenes[0], recording.n_clamped
+    # at rest (the first frame holds the clamp still) the clamp-edge node is the origin and
+    # the clamp reaches up to y = L_c; the laser line is where the scene's offset says
+    assert np.array_equal(recording.frames[0, 0, nc - 1], [0.0, 0.0])
+    assert recording.frames[0, 0, 0, 1] == pytest.approx(scene.strip.clamp_length_mm * 1e-3)
+    t, laser = recording.probe("laser_x", 0)
+    frames_at = recording.nearest_frames(t[:1])
+    xy = recording.frames[frames_at[0], 0]
+    below = np.flatnonzero(xy[:, 1] <= scene.output.laser_height_mm * 1e-3)[0]
+    a, b = xy[below - 1], xy[below]
+    crossing = a[0] + (b[0] - a[0]) * (scene.output.laser_height_mm * 1e-3 - a[1]) / (b[1] - a[1])
+    assert laser[0] == pytest.approx(crossing, abs=1e-9)
+    meta = json.loads((swing_run / "meta.json").read_text())
+    assert "clamp edge" in meta["coordinates"]
+    # a run from before (positions from the clamp's top) is refused, not shown 20 mm off
+    old = tmp_path / "old"
+    shutil.copytree(swing_run, old)
+    meta.pop("coordinates")
+    (old / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(DataFileError, match="does not say its positions are from the clamp edge"):
+        load_recording(old)

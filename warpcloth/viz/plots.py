@@ -69,6 +69,12 @@ FIELD_LABELS = {
     "material.hysteresis_alpha_cm": ("α", "cm"),
     "material.hysteresis_k0_per_cm": ("K0", "cm⁻¹"),
     "material.density_g_per_cm2": ("ρ_A", "g/cm²"),
+    "material.bending_law": ("bending law", ""),
+    "material.dahl_moment_gf_cm_per_cm": ("M_s", "gf·cm/cm"),
+    "material.dahl_curvature_per_cm": ("K_s", "cm⁻¹"),
+    "material.dahl_exponent": ("Dahl exponent n", ""),
+    "material.friction_moment_gf_cm_per_cm": ("M_f", "gf·cm/cm"),
+    "material.friction_width_per_cm": ("K_w", "cm⁻¹"),
     "clamp.rotation_centre_dx_mm": ("rotation centre dx", "mm"),
     "clamp.rotation_centre_dy_mm": ("rotation centre dy", "mm"),
     "release.hold_x_mm": ("hold x", "mm"),
@@ -337,8 +343,10 @@ def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: 
 
 def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = None) -> plt.Figure:
     """A metric against one swept parameter (a line for a 1-D sweep; points coloured by
-    another swept field for a sampled one; points and their mean when others are gridded)
-    or two (heat map on a grid, coloured points otherwise)."""
+    another swept field for a sampled one; a line per value of one other gridded field
+    with few values, e.g. the bending law; points and their mean when more are gridded)
+    or two (heat map on a grid, categories such as the law included; coloured points
+    otherwise)."""
     for name, flag in ((metric, "--metric"), (x, "--x"), (y, "--y")):
         if name is not None and name not in summary:
             raise OptionError(flag, f"{name!r} is not a column of the sweep summary; "
@@ -368,6 +376,14 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
             # never joined in x order (that draws a zigzag through unrelated variants)
             points = ax.scatter(data[x], data[metric], c=data[others[0]], s=12, cmap="viridis")
             fig.colorbar(points, ax=ax, label=field_label(others[0]))
+        elif len(others) == 1 and data[others[0]].nunique() <= LEGEND_VARIANTS:
+            # one other gridded field with few values (e.g. the bending law): a line each
+            for value, part in data.groupby(others[0], sort=False):
+                ordered = part.sort_values(x)
+                shown = f"{value:g}" if isinstance(value, float) else str(value)
+                label = f"{field_label(others[0], units=False)} = {shown}"
+                ax.plot(ordered[x], ordered[metric], "o-", ms=3, label=label)
+            ax.legend(fontsize=7)
         else:
             ax.plot(data[x], data[metric], ".", ms=3, alpha=0.6, label="variants (other parameters vary)")
             ax.plot(grouped.mean().index, grouped.mean().to_numpy(), "k-", lw=1, label="mean")
