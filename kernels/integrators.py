@@ -2,7 +2,9 @@
 (docs/model.md §9).
 
 A scheme is a wp.func ``(x, v, f, m, dt) -> (x_new, v_new)``; the strip kernel is
-generated per scheme, so the choice costs no branch inside the substep loop.
+generated per scheme, so the choice costs no branch inside the substep loop. ``imex``
+updates nodes as semi-implicit Euler does, with the implicit tension of
+:mod:`.implicit_stretching` added to the forces (:data:`IMPLICIT_STRETCHING`).
 """
 
 import functools
@@ -12,6 +14,9 @@ from typing import Any
 import warp as wp
 
 from .types import precision
+
+IMPLICIT_STRETCHING = ("imex",)
+"""Schemes whose substep takes the segments' stretching implicitly (kernels/implicit_stretching.py)."""
 
 
 @functools.cache
@@ -41,4 +46,5 @@ def build(scalar: Any) -> SimpleNamespace:
         return x + v * dt, v_new
 
     return SimpleNamespace(Stepping=Stepping,
-                           schemes={"semi_implicit": semi_implicit_euler, "forward": forward_euler})
+                           schemes={"semi_implicit": semi_implicit_euler, "forward": forward_euler,
+                                    "imex": semi_implicit_euler})

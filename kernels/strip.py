@@ -15,7 +15,7 @@ from typing import Any
 
 import warp as wp
 
-from . import drives, forces, geometry, integrators, probes, structs
+from . import drives, forces, geometry, implicit_stretching, integrators, probes, structs
 from .status import STATUS_NONFINITE_ENERGY, STATUS_OK
 from .types import precision
 
@@ -44,6 +44,8 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
     recorder = probes.build(scalar)
     ProbeSettings, record_probes = recorder.ProbeSettings, recorder.record_probes
     perp = geometry.build(scalar).perp
+    implicit = scheme in integrators.IMPLICIT_STRETCHING  # resolved when the kernel is generated (wp.static)
+    stretching_corrections = implicit_stretching.build(scalar).stretching_corrections
 
     @wp.func
     def work_on(state: StripState, i: int, s: int, displacement: vec2):
@@ -74,6 +76,8 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
         g = vec2(zero, -model.gravity)
         m_node = model.node_mass[s]
         work = state.work[s]
+        if wp.static(implicit):
+            stretching_corrections(model, control, stepping, state, s, step, held, gamma, t_next)
         for i in range(model.n_clamped, n):
             x = state.position[i, s]
             if held and i == n - 1:
@@ -83,6 +87,8 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
                 )
                 sweep = (state.velocity[i, s] + v_new) * (half * dt)
                 f_int = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
+                if wp.static(implicit):
+                    f_int = f_int + state.correction[i, s]
                 work = work + work_on(state, i, s, sweep) + vec4(zero, zero, zero, -wp.dot(f_int, sweep))
                 state.position[i, s] = x_new
                 state.velocity[i, s] = v_new
@@ -94,6 +100,8 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
                 f_damp = -gamma * m * v
                 f = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
                 f = f + f_damp + m * g
+                if wp.static(implicit):
+                    f = f + state.correction[i, s]
                 x_new, v_new = update_node(x, v, f, m, dt)
                 sweep = (v + v_new) * (half * dt)
                 work = work + work_on(state, i, s, sweep) + vec4(zero, zero, -wp.dot(f_damp, sweep), zero)
@@ -119,6 +127,8 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
                 before = rotation_before * (model.rest_position[i, s] - centre)
                 sweep = (arm - before) * half
                 f_int = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
+                if wp.static(implicit) and i == model.n_clamped - 1:
+                    f_int = f_int + state.correction[i, s]  # the implicit tension on the clamp-edge node
                 work = work + work_on(state, i, s, sweep) + vec4(zero, zero, zero, -wp.dot(f_int, sweep))
             if theta == zero:
                 # A clamp at rest sits exactly on its rest positions, wherever its rotation

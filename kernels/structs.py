@@ -47,6 +47,8 @@ def build(scalar: Any) -> SimpleNamespace:
         force_tensile: wp.array2d(dtype=vec2)  # scratch, per substep
         force_elastic: wp.array2d(dtype=vec2)
         force_hysteretic: wp.array2d(dtype=vec2)
+        correction: wp.array2d(dtype=vec2)  # scratch, imex: the implicit tension's force on each node
+        elimination: wp.array2d(dtype=vec2)  # scratch, imex: [segment, strip] (c', d') of the tridiagonal solve
         hinge: wp.array2d(dtype=law.Memory)  # [hinge, strip], the bending law's memory
         work: wp.array(dtype=vec4)  # (bending elastic, hysteresis, damping, drive), J
         step: wp.array(dtype=int)  # substeps done so far

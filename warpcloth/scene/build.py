@@ -51,9 +51,10 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
     """A :class:`StripBuilder` holding one strip per scene, in SI."""
     check_batch(scenes)
     first = scenes[0]
-    # the model's per-node arrays (positions, velocities, three force parts, rest
-    # positions, hinge memory: ~20 numbers of 8 B per node and strip), before any exists
-    check_memory(160 * first.n_nodes * len(scenes), f"the state of {len(scenes)} strip(s) of {first.n_nodes} nodes",
+    # the model's per-node arrays (positions, velocities, three force parts, imex's two
+    # scratch arrays, rest positions, hinge memory: ~24 numbers of 8 B per node and
+    # strip), before any exists
+    check_memory(192 * first.n_nodes * len(scenes), f"the state of {len(scenes)} strip(s) of {first.n_nodes} nodes",
                  "use a coarser strip.spacing_mm or fewer strips per batch")
     builder = StripBuilder(rest_positions(first), first.n_clamped, first.spacing, first.run.gravity_m_per_s2,
                            release_time=first.preroll, move_time=first.release.move_time_s)

@@ -133,9 +133,20 @@ class ForwardEulerSolver(ExplicitEulerSolver):
               " oscillation, docs/model.md §9)")
 
 
+class ImexSolver(ExplicitEulerSolver):
+    """Symplectic Euler with the segments' axial stretching implicit (linearised backward
+    Euler, one tridiagonal solve per strip and step; kernels/implicit_stretching.py): the
+    stretching mode no longer limits dt, bending and the rest stay explicit."""
+
+    scheme = "imex"
+    label = "stretching implicit, the rest symplectic Euler"
+    advice = " (with imex, explicit bending limits dt: ∝ h², docs/model.md §9.5)"
+
+
 SOLVERS: dict[str, type[ExplicitEulerSolver]] = {
     SemiImplicitEulerSolver.scheme: SemiImplicitEulerSolver,
     ForwardEulerSolver.scheme: ForwardEulerSolver,
+    ImexSolver.scheme: ImexSolver,
 }
 """Solver class of each ``integrator.scheme``."""
 

@@ -39,6 +39,8 @@ class State:
         s.force_tensile = nodes()
         s.force_elastic = nodes()
         s.force_hysteretic = nodes()
+        s.correction = nodes()
+        s.elimination = nodes()
         s.hinge = wp.zeros((n_hinges, b), dtype=model.structs.law.Memory, device=model.device)
         s.work = per_strip(t.vec4)
         s.step = per_strip(int)
