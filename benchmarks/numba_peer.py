@@ -1,0 +1,636 @@
+"""The strongest CPU peer a user could write: an expert Numba port of warpcloth's explicit
+model, checked against warpcloth and timed beside it (issue 11, item 7).
+
+    python benchmarks/numba_peer.py [--quick] [--samples 200] [--record 1.0]
+
+The port is the semi-implicit scheme of docs/model.md §2-§10 with the paper's hysteretic
+law (tagawa2003, parameters from ``MaterialSI.bending_parameters()``), the second-order
+clamp-edge hinge (``edge_curvature_scale``), mass-proportional damping, gravity, the half
+mass at the free end and the whole hold-and-release of §8 (the free end carried along its
+polar smootherstep path, held with the settle damping, released at t = 0). It handles the
+fixed clamp only, which is what the damped swing and its sweep use, and skips the energy
+budget warpcloth books every substep (which favours Numba). Every per-strip number
+(masses, widths, tensile and bending parameters, damping, edge scale, hold target) and
+the stepping (dt, release and move steps, output steps) is read from the batch warpcloth
+itself builds for the same scenes, so both run the same inputs.
+
+How it is fast: strips are the innermost, contiguous axis ([node, strip]); a block of
+LANES strips is copied into one local array whose inner dimensions are compile-time
+constants, so LLVM can prove its loops over the lanes free of aliasing and vectorises them
+(AVX-512, 8 float64 a register); ``numba.prange`` hands the blocks to the cores, and each
+block runs every substep while its state stays in cache. The hinge does two divisions (a
+reciprocal length per segment, the chord) as warpcloth's does since issue 11 item 5. The
+one transcendental per hinge and substep, the branch's exponential, is glibc's 8-wide
+libmvec exp called directly (Numba's LLVM from PyPI has no vector math library); the
+reversal's logarithm runs only in the lanes that reverse, in a scalar loop of its own.
+The offset at a reversal is the previous substep's offset (same branch, centre and
+curvature: bitwise the value warpcloth recomputes), so it is kept instead of recomputed.
+No fastmath: reassociation would change the rounding and with it the agreement with
+warpcloth below. Lengths are sqrt(fma(x, x, y·y)), as clang contracts Warp's ``length``.
+Bitwise equality is not expected: libmvec's exp differs from glibc's scalar exp (which
+Warp calls) in the last bit for ~40 % of arguments (``--libm-exp`` uses the scalar one,
+2× slower), and LLVM contracts Warp's C++ in places Numba's IR does not.
+
+What it prints, all measured in this one run (compile time excluded: every code path is
+run once before timing):
+1. agreement: the 200-variant damped-swing sweep (scenes/damped_swing_sweep.toml, its
+   Latin hypercube of D, D1, α, γ; 1 s record after the 1.3 s hold), warpcloth's tip
+   trajectories (600 Hz probes) against the Numba port's, both from the straight hanging
+   strip through the same hold and release;
+2. strip-steps/s and wall per simulated second for B = 1, 16, 200, 1024 strips: warpcloth
+   on 1 thread (one launch) and 2 threads (two half-batches launched from two Python
+   threads; Warp releases the GIL during a CPU launch), NumPy (benchmarks/numpy_baseline.py),
+   Numba on 1 and 2 threads; ratios against warpcloth on 1 thread;
+3. the sweep's wall time: ``wc.run_sweep`` on 2 threads against the Numba port on 2 threads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import llvmlite.binding as llvm
+import numba
+import numpy as np
+import pandas as pd
+import warp as wp
+from llvmlite import ir
+from numba import njit, prange, types
+from numba.core import cgutils
+from numba.extending import intrinsic
+from warpcloth.kernels import bending_law
+
+import warpcloth as wc
+from warpcloth.scene import build_batch
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from numpy_baseline import NumpyStrips, displaced_start  # noqa: E402
+
+HYSTERESIS_MARGIN = 1e-12  # float64 margin of docs/model.md §4.4 (kernels/bending_tagawa2003.py)
+
+
+@intrinsic
+def fma(typingctx, a, b, c):
+    """a·b + c rounded once (llvm.fma), which Numba does not expose; it vectorises."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        return builder.fma(*args)
+
+    return sig, codegen
+
+
+def _libmvec() -> bool:
+    """Load glibc's vector math library if this CPU can run its AVX-512 exp."""
+    try:
+        flags = Path("/proc/cpuinfo").read_text()
+        if " avx512f" not in flags:
+            return False
+        llvm.load_library_permanently("libmvec.so.1")
+        return True
+    except (OSError, RuntimeError):
+        return False
+
+
+# The branch's exponential is the one transcendental per hinge and substep. Numba's PyPI
+# LLVM has no vector exp (no SVML), so a loop calling math.exp runs glibc's scalar exp,
+# ~3 ns a call, about half of the whole substep. glibc's libmvec has an 8-wide AVX-512
+# exp (0.7 ns an element, within 4 ulp; it differs from the scalar one in the last bit
+# for ~40 % of arguments): called directly below. --libm-exp selects the scalar call.
+VECTOR_EXP = _libmvec()
+
+
+@intrinsic
+def exp8(typingctx, array, start):
+    """array[start : start + 8] ← exp(…) in place, by libmvec's ``_ZGVeN8v_exp``."""
+    sig = types.void(array, start)
+
+    def codegen(context, builder, signature, args):
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        vector = ir.VectorType(ir.DoubleType(), 8)
+        pointer = builder.bitcast(builder.gep(data, [args[1]]), vector.as_pointer())
+        function = cgutils.get_or_insert_function(builder.module, ir.FunctionType(vector, [vector]), "_ZGVeN8v_exp")
+        builder.store(builder.call(function, [builder.load(pointer, align=8)]), pointer, align=8)
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@njit(inline="always")
+def norm(x, y):
+    """|(x, y)| as Warp's compiled ``wp.length`` rounds it: sqrt(fma(x, x, y·y))."""
+    return math.sqrt(fma(x, x, y * y))
+
+
+@njit(inline="always")
+def offset(u, branch, d1, alpha, k0, m0):
+    """Hysteretic offset h₊(u) or h₋(u) (docs/model.md §4.2); 0 without hysteresis.
+
+    Written without branches (selects) so the loop over strips stays a SIMD loop."""
+    w = k0 + u if branch > 0.0 else k0 - u
+    e = math.exp(-alpha * w)
+    h = m0 - d1 * e if branch > 0.0 else -m0 + d1 * e
+    return 0.0 if d1 == 0.0 else h
+
+
+@njit(inline="always")
+def centre_through(curvature, h_offset, branch, d1, alpha, k0, m0):
+    """Loop centre putting (curvature, offset) on ``branch`` (docs/model.md §4.3-4.4)."""
+    if d1 <= 0.0:
+        return curvature
+    limit = m0 * (1.0 - HYSTERESIS_MARGIN)
+    h = min(max(h_offset, -limit), limit)
+    if branch > 0.0:
+        return curvature + k0 + math.log((m0 - h) / d1) / alpha
+    return curvature - k0 - math.log((h + m0) / d1) / alpha
+
+
+@njit(error_model="numpy")
+def fresh_hinges(px, py, nc, edge_scale, law, branch, centre, kprev, hprev):
+    """Every hinge fresh at its current curvature: rising branch, no offset (§4.5)."""
+    n, b = px.shape
+    for j in range(n - nc):
+        i = nc - 1 + j
+        for s in range(b):
+            e1x, e1y = px[i, s] - px[i - 1, s], py[i, s] - py[i - 1, s]
+            e2x, e2y = px[i + 1, s] - px[i, s], py[i + 1, s] - py[i, s]
+            k = (2.0 * (e1x * e2y - e1y * e2x) * (1.0 / norm(e1x, e1y)) * (1.0 / norm(e2x, e2y))
+                 / norm(e1x + e2x, e1y + e2y))
+            if j == 0:
+                k = k * edge_scale[s]
+            d1, alpha, k0, m0 = law[1, s], law[2, s], law[3, s], law[4, s]
+            c = centre_through(k, 0.0, 1.0, d1, alpha, k0, m0)
+            branch[j, s], centre[j, s], kprev[j, s] = 1.0, c, k
+            hprev[j, s] = offset(k - c, 1.0, d1, alpha, k0, m0)
+
+
+# A block's whole working set is ONE local array W[row, plane, lane] whose two inner
+# dimensions are compile-time constants. LLVM then sees every access as one base pointer
+# plus offsets that differ by constants, proves the loops over lanes free of aliasing and
+# vectorises them with no runtime checks; with the arrays apart (Numba tells LLVM nothing
+# about their aliasing) it needs a check per pair of arrays, gives up, and runs them
+# scalar. Rows 0 … NMAX−1 are nodes (hinge h lives in row h), row NMAX holds the per-lane
+# temporaries, row NMAX + 1 the per-strip parameters.
+LANES = 16  # two AVX-512 registers of float64 (LLVM treats loops under 16 trips as tiny: scalar)
+NMAX = 64  # most nodes a strip may have (h = 2.5 mm has 49)
+X, Y, U, V, FTX, FTY, FEX, FEY, FHX, FHY, HB, HC, HK, HH = range(14)  # node / hinge planes
+E1X, E1Y, IL1, E2X, E2Y, IL2, KK, EX, BAD, R0, R1, A0, TURN = range(13)  # row NMAX
+A1, A2, A3, A4, RIGIDITY, D1, ALPHA, K0, M0, WIDTH, SCALE, MASS, GAMMA, SETTLE = range(14)  # row NMAX + 1
+PLANES = 14
+
+
+@njit(error_model="numpy")
+def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centre, kprev, hprev, tensile, law,
+                  width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt, max_strain,
+                  release_step, move_steps, tip_x, tip_y, failed):
+    """Strips s0 … s1−1 (at most LANES) from step0 to step1 (semi-implicit Euler,
+    docs/model.md §9.1), in the block array W described above.
+
+    Node indices are cast to unsigned (``np.uintp``) so Numba emits no wrap-around test
+    for negative indices, which would hide from LLVM that rows i−1, i, i+1 are adjacent.
+    ``tip_x/tip_y[k, s]`` take the free end after output step ``out_steps[k]``;
+    ``failed[s]`` the first step whose strain or fold check failed (−1: healthy).
+    """
+    n = px.shape[0]
+    used = s1 - s0
+    first = nc - 2  # the clamped node above the clamp-edge hinge
+    W = np.zeros((NMAX + 2, PLANES, LANES))
+    T, P = np.uintp(NMAX), np.uintp(NMAX + 1)
+    flat = W.reshape(W.size)  # the same memory, for exp8
+    exp_row = (NMAX * PLANES + EX) * LANES
+    for lane in range(LANES):
+        s = s0 + min(lane, used - 1)
+        for i in range(n):
+            ii = np.uintp(i)
+            W[ii, X, lane], W[ii, Y, lane], W[ii, U, lane], W[ii, V, lane] = px[i, s], py[i, s], vx[i, s], vy[i, s]
+        for h in range(n - nc):
+            hh = np.uintp(h)
+            W[hh, HB, lane], W[hh, HC, lane] = branch[h, s], centre[h, s]
+            W[hh, HK, lane], W[hh, HH, lane] = kprev[h, s], hprev[h, s]
+        W[P, A1, lane], W[P, A2, lane], W[P, A3, lane], W[P, A4, lane] = (tensile[0, s], tensile[1, s],
+                                                                          tensile[2, s], tensile[3, s])
+        W[P, RIGIDITY, lane], W[P, D1, lane], W[P, ALPHA, lane] = law[0, s], law[1, s], law[2, s]
+        W[P, K0, lane], W[P, M0, lane], W[P, WIDTH, lane], W[P, SCALE, lane] = (law[3, s], law[4, s], width[s],
+                                                                                edge_scale[s])
+        W[P, MASS, lane], W[P, GAMMA, lane], W[P, SETTLE, lane] = node_mass[s], gamma[s], settle_gamma[s]
+        # The held end's polar path (§8) is fixed per strip: its ends once, as warpcloth's
+        # held_free_end computes them every substep (same operations, same values).
+        sx, sy = hold[2, s] - hold[0, s], hold[3, s] - hold[1, s]
+        gx, gy = hold[4, s] - hold[0, s], hold[5, s] - hold[1, s]
+        W[T, R0, lane], W[T, R1, lane] = norm(sx, sy), norm(gx, gy)
+        W[T, A0, lane] = math.atan2(sy, sx)
+        t = math.atan2(gy, gx) - W[T, A0, lane]
+        if t > math.pi:
+            t = t - 2.0 * math.pi
+        elif t < -math.pi:
+            t = t + 2.0 * math.pi
+        W[T, TURN, lane] = t
+    rootx, rooty = hold[0, s0], hold[1, s0]
+    il0 = 1.0 / l0
+    tip = np.uintp(n - 1)
+    k_out = 0
+    while k_out < out_steps.shape[0] and out_steps[k_out] < step0:
+        k_out += 1
+    if k_out < out_steps.shape[0] and out_steps[k_out] == step0:
+        for lane in range(used):
+            tip_x[k_out, s0 + lane], tip_y[k_out, s0 + lane] = W[tip, X, lane], W[tip, Y, lane]
+        k_out += 1
+    for step in range(step0, step1):
+        # ---- internal forces at x^n, one pass down the chain (kernels/forces.py) ----
+        for i in range(first, first + 2):
+            ii = np.uintp(i)
+            for lane in range(LANES):
+                W[ii, FTX, lane] = W[ii, FTY, lane] = W[ii, FEX, lane] = 0.0
+                W[ii, FEY, lane] = W[ii, FHX, lane] = W[ii, FHY, lane] = 0.0
+        a, b = np.uintp(first), np.uintp(first + 1)
+        for lane in range(LANES):
+            W[T, E1X, lane] = W[b, X, lane] - W[a, X, lane]
+            W[T, E1Y, lane] = W[b, Y, lane] - W[a, Y, lane]
+            W[T, IL1, lane] = 1.0 / norm(W[T, E1X, lane], W[T, E1Y, lane])
+        for i in range(first + 1, n - 1):
+            im, ii, ip = np.uintp(i - 1), np.uintp(i), np.uintp(i + 1)
+            h = np.uintp(i - first - 1)
+            reversals = 0  # an integer OR: a float sum would not vectorise without fastmath
+            # SIMD loop 1: tension of segment i, curvature at hinge i, the reversal test.
+            # Divisions are the slowest SIMD operation: one per segment (its reciprocal
+            # length, used by strain, tension, curvature and the angle gradient) and one
+            # per hinge (the chord), as in warpcloth's hinge of issue 11 item 5.
+            for lane in range(LANES):
+                dx = W[ip, X, lane] - W[ii, X, lane]
+                dy = W[ip, Y, lane] - W[ii, Y, lane]
+                l2 = norm(dx, dy)
+                r2 = 1.0 / l2
+                strain = (l2 - l0) * il0
+                e = abs(strain)
+                t = e * (W[P, A1, lane] + e * (W[P, A2, lane] + e * (W[P, A3, lane] + e * W[P, A4, lane])))
+                t = t if not strain < 0.0 else -t  # wp.sign: −1 below 0, else +1
+                c = t * W[P, WIDTH, lane] * r2
+                fx, fy = c * dx, c * dy
+                W[ii, FTX, lane] += fx
+                W[ii, FTY, lane] += fy
+                W[ip, FTX, lane] = 0.0 - fx
+                W[ip, FTY, lane] = 0.0 - fy
+                e1x, e1y = W[T, E1X, lane], W[T, E1Y, lane]
+                chord = norm(e1x + dx, e1y + dy)
+                k = 2.0 * (e1x * dy - e1y * dx) * W[T, IL1, lane] * r2 / chord
+                k = k * W[P, SCALE, lane] if i == first + 1 else k  # the clamp-edge hinge: §5.3
+                W[T, KK, lane] = k
+                W[T, E2X, lane], W[T, E2Y, lane], W[T, IL2, lane] = dx, dy, r2
+                healthy = (e <= max_strain) & (chord > 1e-3 * l0)  # False for NaN too
+                W[T, BAD, lane] = W[T, BAD, lane] if healthy else 1.0
+                reversals |= 1 if (k - W[h, HK, lane]) * W[h, HB, lane] < 0.0 else 0
+            # Scalar loop, rare: the lanes whose curvature turned against their branch
+            # flip it and move the loop centre through the offset they had (§4.3).
+            if reversals:
+                for lane in range(LANES):
+                    hb = W[h, HB, lane]
+                    if (W[T, KK, lane] - W[h, HK, lane]) * hb < 0.0:
+                        hb = -hb
+                        W[h, HB, lane] = hb
+                        W[h, HC, lane] = centre_through(W[h, HK, lane], W[h, HH, lane], hb, W[P, D1, lane],
+                                                        W[P, ALPHA, lane], W[P, K0, lane], W[P, M0, lane])
+            # The branch's exponential (§4.2), alone in its loop (see VECTOR_EXP).
+            for lane in range(LANES):
+                u_ = W[T, KK, lane] - W[h, HC, lane]
+                w = W[P, K0, lane] + u_ if W[h, HB, lane] > 0.0 else W[P, K0, lane] - u_
+                W[T, EX, lane] = -W[P, ALPHA, lane] * w
+            if VECTOR_EXP:
+                for j in range(0, LANES, 8):
+                    exp8(flat, exp_row + j)
+            else:
+                for lane in range(LANES):
+                    W[T, EX, lane] = math.exp(W[T, EX, lane])
+            # SIMD loop 2: the hinge's moment and its forces on nodes i−1, i, i+1 (§5.1).
+            for lane in range(LANES):
+                k = W[T, KK, lane]
+                d1, m0, ex = W[P, D1, lane], W[P, M0, lane], W[T, EX, lane]
+                ho = m0 - d1 * ex if W[h, HB, lane] > 0.0 else -m0 + d1 * ex
+                ho = 0.0 if d1 == 0.0 else ho
+                W[h, HK, lane] = k
+                W[h, HH, lane] = ho
+                q1 = W[T, IL1, lane] * W[T, IL1, lane]
+                q2 = W[T, IL2, lane] * W[T, IL2, lane]
+                gix, giy = -W[T, E1Y, lane] * q1, W[T, E1X, lane] * q1
+                gkx, gky = -W[T, E2Y, lane] * q2, W[T, E2X, lane] * q2
+                te = W[P, RIGIDITY, lane] * k * W[P, WIDTH, lane]
+                th = ho * W[P, WIDTH, lane]
+                W[im, FEX, lane] = W[im, FEX, lane] - te * gix
+                W[im, FEY, lane] = W[im, FEY, lane] - te * giy
+                W[ip, FEX, lane] = 0.0 - te * gkx
+                W[ip, FEY, lane] = 0.0 - te * gky
+                W[ii, FEX, lane] = W[ii, FEX, lane] + te * (gix + gkx)
+                W[ii, FEY, lane] = W[ii, FEY, lane] + te * (giy + gky)
+                W[im, FHX, lane] = W[im, FHX, lane] - th * gix
+                W[im, FHY, lane] = W[im, FHY, lane] - th * giy
+                W[ip, FHX, lane] = 0.0 - th * gkx
+                W[ip, FHY, lane] = 0.0 - th * gky
+                W[ii, FHX, lane] = W[ii, FHX, lane] + th * (gix + gkx)
+                W[ii, FHY, lane] = W[ii, FHY, lane] + th * (giy + gky)
+                W[T, E1X, lane], W[T, E1Y, lane], W[T, IL1, lane] = W[T, E2X, lane], W[T, E2Y, lane], W[T, IL2, lane]
+        # ---- free nodes: damping, gravity, semi-implicit Euler (kernels/strip.py) ----
+        held = step < release_step
+        last = n - 1 if held else n
+        for i in range(nc, last):
+            ii = np.uintp(i)
+            half = 0.5 if i == n - 1 else 1.0  # the free end carries half a node's mass
+            for lane in range(LANES):
+                m = half * W[P, MASS, lane]
+                g = W[P, SETTLE, lane] if held else W[P, GAMMA, lane]
+                fx = W[ii, FTX, lane] + W[ii, FEX, lane] + W[ii, FHX, lane]
+                fy = W[ii, FTY, lane] + W[ii, FEY, lane] + W[ii, FHY, lane]
+                fx = fx + -g * m * W[ii, U, lane] + m * 0.0
+                fy = fy + -g * m * W[ii, V, lane] + m * -gravity
+                w = dt / m
+                un = W[ii, U, lane] + fx * w
+                vn = W[ii, V, lane] + fy * w
+                W[ii, X, lane] = W[ii, X, lane] + un * dt
+                W[ii, Y, lane] = W[ii, Y, lane] + vn * dt
+                W[ii, U, lane], W[ii, V, lane] = un, vn
+        if held:
+            # The held free end on its path at level step + 1 (kernels/drives.py).
+            p, dp = 1.0, 0.0
+            if step + 1 < move_steps:
+                xs = float(step + 1) / float(move_steps)
+                p = xs * xs * xs * (xs * (xs * 6.0 - 15.0) + 10.0)
+                dp = 30.0 * xs * xs * (xs - 1.0) * (xs - 1.0) / (float(move_steps) * dt)
+            for lane in range(LANES):
+                r0, r1 = W[T, R0, lane], W[T, R1, lane]
+                r = r0 + (r1 - r0) * p
+                a = W[T, A0, lane] + W[T, TURN, lane] * p
+                cx, cy = math.cos(a), math.sin(a)
+                W[tip, X, lane], W[tip, Y, lane] = rootx + r * cx, rooty + r * cy
+                rt = r * W[T, TURN, lane]
+                W[tip, U, lane] = dp * ((r1 - r0) * cx + rt * -cy)
+                W[tip, V, lane] = dp * ((r1 - r0) * cy + rt * cx)
+        if k_out < out_steps.shape[0] and out_steps[k_out] == step + 1:
+            for lane in range(used):
+                tip_x[k_out, s0 + lane], tip_y[k_out, s0 + lane] = W[tip, X, lane], W[tip, Y, lane]
+            k_out += 1
+        for lane in range(used):
+            if W[T, BAD, lane] != 0.0 and failed[s0 + lane] < 0:
+                failed[s0 + lane] = step
+    for lane in range(used):
+        s = s0 + lane
+        for i in range(n):
+            ii = np.uintp(i)
+            px[i, s], py[i, s], vx[i, s], vy[i, s] = W[ii, X, lane], W[ii, Y, lane], W[ii, U, lane], W[ii, V, lane]
+        for h in range(n - nc):
+            hh = np.uintp(h)
+            branch[h, s], centre[h, s] = W[hh, HB, lane], W[hh, HC, lane]
+            kprev[h, s], hprev[h, s] = W[hh, HK, lane], W[hh, HH, lane]
+
+
+@njit(parallel=True, error_model="numpy")
+def advance(blocks, step0, step1, out_steps, px, py, vx, vy, branch, centre, kprev, hprev, tensile, law, width,
+            node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt, max_strain, release_step,
+            move_steps, tip_x, tip_y, failed):
+    """Every block of strips (``blocks[b]`` … ``blocks[b + 1]``) on the cores: prange."""
+    for b in prange(blocks.shape[0] - 1):
+        advance_block(blocks[b], blocks[b + 1], step0, step1, out_steps, px, py, vx, vy, branch, centre, kprev,
+                      hprev, tensile, law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0,
+                      gravity, dt, max_strain, release_step, move_steps, tip_x, tip_y, failed)
+
+
+class NumbaStrips:
+    """A batch of scenes as the Numba port runs them, its inputs read from warpcloth's own
+    batch of the same scenes (so both get bitwise the same parameters)."""
+
+    def __init__(self, scenes: list[wc.Scene], initial_positions: np.ndarray | None = None) -> None:
+        batch = build_batch(scenes)
+        model, control, solver, recorder = batch.model, batch.control, batch.solver, batch.recorder
+        if any(bending_law(s.material.bending_law).NAME != "tagawa2003" for s in model.strips):
+            raise ValueError("the Numba peer implements the paper's bending law (tagawa2003) only")
+        if any(len(s.clamp.start) for s in model.strips) or model.precision != "float64":
+            raise ValueError("the Numba peer implements the fixed clamp in float64 only")
+        if solver.scheme != "semi_implicit":
+            raise ValueError("the Numba peer implements integrator.scheme = semi_implicit only")
+        b, n = model.n_strips, model.n_nodes
+        self.n_strips, self.nc, self.l0, self.gravity = b, model.n_clamped, model.spacing, model.gravity
+        self.dt, self.max_strain = solver.dt, solver.divergence_strain
+        self.release_step = solver.release_step(control)
+        self.move_steps = max(1, solver.step_of(control.move_time))
+        self.out_steps = recorder.schedule(control, solver).steps.astype(np.int64)
+        self.kept = len(recorder.schedule(control, solver).kept)
+        self.tensile = np.ascontiguousarray(model.tensile.T)
+        self.law = np.ascontiguousarray(model.bending.T)
+        self.width, self.node_mass = model.width.copy(), model.node_mass.copy()
+        self.gamma = model.damping.copy()
+        self.settle_gamma = np.array([s.settle_damping for s in model.strips])
+        self.edge_scale = model.edge_curvature_scale.copy()
+        rest = model.rest_positions
+        self.hold = np.empty((6, b))
+        self.hold[0:2] = rest[self.nc - 1][:, None]  # the clamp edge: root of the held end's path
+        self.hold[2:4] = rest[n - 1][:, None]
+        self.hold[4:6] = control.hold_target.T
+        x = np.repeat(rest[:, None, :], b, axis=1) if initial_positions is None else initial_positions
+        self.px, self.py = np.ascontiguousarray(x[..., 0]), np.ascontiguousarray(x[..., 1])
+        self.vx, self.vy = np.zeros((n, b)), np.zeros((n, b))
+        hinges = n - self.nc
+        self.branch, self.centre = np.empty((hinges, b)), np.empty((hinges, b))
+        self.kprev, self.hprev = np.empty((hinges, b)), np.empty((hinges, b))
+        fresh_hinges(self.px, self.py, self.nc, self.edge_scale, self.law, self.branch, self.centre, self.kprev,
+                     self.hprev)
+        self.step = 0
+        self.tip_x = np.full((len(self.out_steps), b), np.nan)
+        self.tip_y = np.full((len(self.out_steps), b), np.nan)
+        self.failed = np.full(b, -1, dtype=np.int64)
+
+    def blocks(self, threads: int) -> np.ndarray:
+        """Block boundaries: LANES strips each (the last may be short); ``threads`` is
+        unused, prange deals the blocks to the threads."""
+        return np.append(np.arange(0, self.n_strips, LANES), self.n_strips).astype(np.int64)
+
+    def run(self, steps: int | None = None) -> None:
+        """Advance ``steps`` substeps (default: to the last output step)."""
+        end = int(self.out_steps[-1]) if steps is None else self.step + steps
+        advance(self.blocks(numba.get_num_threads()), self.step, end, self.out_steps, self.px, self.py, self.vx,
+                self.vy, self.branch, self.centre, self.kprev, self.hprev, self.tensile, self.law, self.width,
+                self.node_mass, self.gamma, self.settle_gamma, self.edge_scale, self.hold, self.nc, self.l0,
+                self.gravity, self.dt, self.max_strain, self.release_step, self.move_steps, self.tip_x,
+                self.tip_y, self.failed)
+        self.step = end
+
+    def kept_tips(self) -> tuple[np.ndarray, np.ndarray]:
+        """Tip x and y ``[sample, strip]`` at the recorded samples t ≥ 0."""
+        first = len(self.out_steps) - self.kept
+        return self.tip_x[first:], self.tip_y[first:]
+
+
+def sweep_scenes(samples: int, record: float, overrides: list[str] = ()) -> tuple[object, list[wc.Scene]]:
+    """The bundled damped-swing sweep cut to ``samples`` variants and a ``record`` s record."""
+    sweep = wc.load_sweep("damped_swing_sweep", [f"sweep.random.samples={samples}", f"run.duration_s={record}",
+                                                 *overrides])
+    return sweep, list(sweep.scenes)
+
+
+def free_runs(samples: int, duration: float, count: int) -> list[wc.Scene]:
+    """``count`` sweep variants (cycled) without the hold, for the throughput tables."""
+    _sweep, scenes = sweep_scenes(samples, duration, ["release.enabled=false"])
+    return [scenes[i % len(scenes)] for i in range(count)]
+
+
+def warpcloth_wall(scenes: list[wc.Scene], x0: np.ndarray, threads: int) -> tuple[float, int]:
+    """Wall seconds and strip-steps of warpcloth on ``scenes`` from ``x0``: one launch
+    sequence, or the batch split in ``threads`` parts launched from as many Python threads."""
+    parts = [list(range(len(scenes)))[t::threads] for t in range(threads)]
+    parts = [p for p in parts if p]
+    done = []
+
+    def one(part: list[int]) -> None:
+        result = wc.simulate([scenes[i] for i in part], initial_positions=np.repeat(x0[:, None, :], len(part), axis=1),
+                             keep_frames=False, on_divergence="record")
+        done.append(result.strip_steps)
+
+    start = time.perf_counter()
+    workers = [threading.Thread(target=one, args=(p,)) for p in parts]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    return time.perf_counter() - start, sum(done)
+
+
+def warpcloth_rate(samples: int, b: int, steps: int, dt: float, x0: np.ndarray, threads: int) -> float:
+    """warpcloth's stepping rate (strip-steps/s) on ``b`` strips: the wall of a run of
+    about ``steps`` steps less that of a one-sample run, so building the batch (about
+    0.1 ms a strip, in the sweep's wall below) is left out as it is for the others."""
+    interval = free_runs(samples, 1.0, 1)[0].output_interval
+    long_wall, long_steps = warpcloth_wall(free_runs(samples, max(2, round(steps * dt / interval)) * interval, b),
+                                           x0, threads)
+    short_wall, short_steps = warpcloth_wall(free_runs(samples, interval, b), x0, threads)
+    return (long_steps - short_steps) / (long_wall - short_wall)
+
+
+def machine() -> str:
+    """The CPU as lscpu names it, with its core count."""
+    try:
+        info = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout
+        name = next(line.split(":", 1)[1].strip() for line in info.splitlines() if line.startswith("Model name"))
+    except (OSError, subprocess.CalledProcessError, StopIteration):
+        name = platform.processor() or platform.machine()
+    return f"{name}, {os.cpu_count()} cores"
+
+
+def agreement(sweep_dir: Path, peer: NumbaStrips) -> tuple[float, float]:
+    """Largest tip-position gap (m) between warpcloth's sweep probes and the peer's, over
+    every variant and sample, and the largest tip excursion (m) for scale."""
+    probes = pd.read_parquet(sweep_dir / "probes").sort_values(["variant", "t"])
+    tx, ty = peer.kept_tips()
+    gap, excursion = 0.0, 0.0
+    for variant, rows in probes.groupby("variant"):
+        wx, wy = rows["tip_x"].to_numpy(), rows["tip_y"].to_numpy()
+        if len(wx) != tx.shape[0]:
+            return math.inf, math.nan
+        gap = max(gap, np.abs(wx - tx[:, variant]).max(), np.abs(wy - ty[:, variant]).max())
+        excursion = max(excursion, np.abs(wx).max())
+    return gap, excursion
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="smaller run: 40 variants, short timings")
+    parser.add_argument("--samples", type=int, default=200, help="sweep variants (default 200)")
+    parser.add_argument("--record", type=float, default=1.0, help="sweep record after the release, s")
+    parser.add_argument("--sizes", type=int, nargs="+", default=[1, 16, 200, 1024])
+    parser.add_argument("--libm-exp", action="store_true", help="glibc's scalar exp (Warp's) instead of libmvec's")
+    args = parser.parse_args()
+    global VECTOR_EXP
+    VECTOR_EXP = VECTOR_EXP and not args.libm_exp  # read when Numba compiles, i.e. at the first call
+    samples = 40 if args.quick else args.samples
+    budget = 0.25 if args.quick else 1.0  # target wall seconds per table cell
+    wp.config.log_level = logging.WARNING
+    wp.init()
+    print(f"load average at start: {os.getloadavg()[0]:.2f}")
+    cores = os.cpu_count() or 1
+
+    # ---- warm-up: compile every path (Numba's and Warp's) before anything is timed ----
+    _s, warm = sweep_scenes(4, 0.01)
+    peer = NumbaStrips(warm)
+    for threads in (1, min(2, cores)):
+        numba.set_num_threads(threads)
+        peer = NumbaStrips(warm)
+        peer.run()
+    x0 = displaced_start(warm[0])
+    warpcloth_wall(free_runs(4, 0.002, 2), x0, 1)
+    print(f"machine: {machine()}; warp {wp.__version__} (cpu), numba {numba.__version__} "
+          f"(threading layer {numba.threading_layer()}), numpy {np.__version__}; exp: "
+          f"{'libmvec AVX-512' if VECTOR_EXP else 'glibc scalar'}; compile excluded (everything warmed up first)")
+    with tempfile.TemporaryDirectory() as tmp:
+        wc.run_sweep(sweep_scenes(4, 0.01)[0], Path(tmp) / "warm", workers=min(2, cores))
+
+    # ---- 1. the sweep: agreement and wall time, warpcloth on 2 threads vs Numba on 2 ----
+    sweep, scenes = sweep_scenes(samples, args.record)
+    with tempfile.TemporaryDirectory() as tmp:
+        start = time.perf_counter()
+        wc.run_sweep(sweep, Path(tmp) / "sweep", workers=min(2, cores))
+        warp_sweep = time.perf_counter() - start
+        numba.set_num_threads(min(2, cores))
+        start = time.perf_counter()
+        peer = NumbaStrips(scenes)
+        peer.run()
+        numba_sweep = time.perf_counter() - start
+        gap, excursion = agreement(Path(tmp) / "sweep", peer)
+    steps = int(peer.out_steps[-1])
+    print(f"\nagreement: {samples} variants of damped_swing_sweep (D, D1, α, γ varied), hold and release "
+          f"replicated, {args.record:g} s record, tip x and y at {peer.kept} samples each: largest gap "
+          f"{gap:.2e} m (tip excursion {excursion * 1e3:.0f} mm); Numba strips failing the strain/fold "
+          f"check: {(peer.failed >= 0).sum()}")
+    print(f"sweep wall ({samples} variants, {steps} steps each = {steps * scenes[0].integrator.dt_s:.2f} s "
+          f"simulated incl. the hold): warpcloth run_sweep 2 threads {warp_sweep:.2f} s, "
+          f"Numba 2 threads {numba_sweep:.2f} s: Numba {warp_sweep / numba_sweep:.2f}× faster")
+
+    # The cores may be shared: a busy core shows as 2-thread rows no faster than 1-thread ones.
+    print(f"load average before the tables: {os.getloadavg()[0]:.2f} (this run uses up to 2)")
+
+    # ---- 2. throughput tables ----
+    dt = scenes[0].integrator.dt_s
+    print(f"\n{'B':>5} {'implementation':<22} {'strip-steps/s':>14} {'wall per sim s':>15} {'vs warpcloth 1T':>16}")
+    rows = []
+    for b in args.sizes:
+        base = None
+        results = []
+        # Steps per cell sized from a rough rate so each cell takes about `budget` s.
+        guess = {"warpcloth 1 thread": 1e6, "warpcloth 2 threads": 2e6, "numpy": min(3e5, 1e4 * b),
+                 "numba 1 thread": 3e6, "numba 2 threads": 6e6}
+        for name, rate in guess.items():
+            threads = 2 if "2" in name else 1
+            if threads > min(b, cores):
+                results.append((name, math.nan))
+                continue
+            n_steps = max(200, int(budget * rate / b))
+            if name.startswith("warpcloth"):
+                results.append((name, warpcloth_rate(samples, b, n_steps, dt, x0, threads)))
+                continue
+            if name == "numpy":
+                strips = NumpyStrips(free_runs(samples, n_steps * dt, 1)[0], b, x0)
+                start = time.perf_counter()
+                for _ in range(n_steps):
+                    strips.step()
+                wall = time.perf_counter() - start
+            else:
+                numba.set_num_threads(threads)
+                strips = NumbaStrips(free_runs(samples, n_steps * dt, b), np.repeat(x0[:, None, :], b, axis=1))
+                start = time.perf_counter()
+                strips.run(n_steps)
+                wall = time.perf_counter() - start
+            results.append((name, b * n_steps / wall))
+        base = results[0][1]
+        for name, rate in results:
+            if math.isnan(rate):
+                print(f"{b:>5} {name:<22} {'—':>14} {'—':>15} {'—':>16}")
+            else:
+                print(f"{b:>5} {name:<22} {rate:>14.3e} {b / (rate * dt):>13.3g} s {rate / base:>15.2f}×")
+            rows.append((b, name, rate))
+
+
+if __name__ == "__main__":
+    main()
