@@ -43,6 +43,10 @@ class NumpyStrips:
         self.mass[-1] *= 0.5
         self.x = np.repeat(x0[None], batch, axis=0)
         self.v = np.zeros_like(self.x)
+        # the clamp-edge hinge bends the half segment below the built-in end by default
+        # (clamp.edge_hinge = "second_order", docs/model.md §5.3): twice the chain's curvature
+        self.edge_scale = np.ones(n - self.nc)
+        self.edge_scale[0] = 2.0 if scene.clamp.edge_hinge == "second_order" else 1.0
         k = self.curvature()
         self.branch = np.ones_like(k)
         self.centre = self.centre_through(k, np.zeros_like(k), self.branch)
@@ -52,8 +56,8 @@ class NumpyStrips:
         e = np.diff(self.x[:, self.nc - 2 :], axis=1)
         e1, e2 = e[:, :-1], e[:, 1:]
         cross = e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0]
-        return 2 * cross / (np.linalg.norm(e1, axis=-1) * np.linalg.norm(e2, axis=-1)
-                            * np.linalg.norm(e1 + e2, axis=-1))
+        return self.edge_scale * 2 * cross / (np.linalg.norm(e1, axis=-1) * np.linalg.norm(e2, axis=-1)
+                                              * np.linalg.norm(e1 + e2, axis=-1))
 
     def offset(self, u: np.ndarray, branch: np.ndarray) -> np.ndarray:
         rising = self.m0 - self.d1 * np.exp(-self.alpha * (self.k0 + u))
@@ -84,7 +88,7 @@ class NumpyStrips:
         e1, e2 = e[:, :-1], e[:, 1:]
         l1, l2 = length[:, :-1], length[:, 1:]
         cross = e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0]
-        k = 2 * cross / (l1 * l2 * np.linalg.norm(e1 + e2, axis=-1))
+        k = self.edge_scale * 2 * cross / (l1 * l2 * np.linalg.norm(e1 + e2, axis=-1))
         reverse = (k - self.k_prev) * self.branch < 0
         if reverse.any():
             held = self.offset(self.k_prev - self.centre, self.branch)
