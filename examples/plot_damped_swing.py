@@ -59,7 +59,8 @@ laser = result.probe("laser_x", 0)
 summary = swing_summary(result.t, laser, result.probe("tip_x", 0))
 print(f"first period     {summary['first_period_s']:.4f} s")
 print(f"first amplitude  {summary['first_amplitude_m'] * 1e3:.2f} mm")
-print(f"mean log decrement {summary['mean_log_decrement']:.4f} per half-cycle over {summary['n_half_cycles']}")
+print(f"mean log decrement {summary['mean_log_decrement']:.4f} per half-cycle over "
+      f"{summary['n_half_cycles'] - 1} ratios of {summary['n_half_cycles']} half-cycles")
 viscous = scene.damping.gamma_per_s * summary["first_period_s"] / 4
 print(f"viscous part alone: γT/4 = {viscous:.4f} per half-cycle")
 for i, (a, d) in enumerate(zip(summary["half_cycle_amplitude_m"], summary["log_decrement"], strict=False)):

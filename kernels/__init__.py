@@ -22,7 +22,7 @@ from . import bending_dahl, bending_frictional_couple, bending_tagawa2003, drive
 from .drives import MAX_DEGREE
 from .laws import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_law, packed_parameters
 from .probes import PROBE_FIELDS, PROBE_INDEX, PROBE_UNITS
-from .status import STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
+from .status import STATUS_BUDGET, STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
 from .strip import build as build_strip
 from .strip import hinge_kernels
 from .types import Precision, precision
@@ -35,6 +35,7 @@ __all__ = [
     "PROBE_FIELDS",
     "PROBE_INDEX",
     "PROBE_UNITS",
+    "STATUS_BUDGET",
     "STATUS_FOLDED",
     "STATUS_NONFINITE_ENERGY",
     "STATUS_OK",

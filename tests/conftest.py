@@ -1,6 +1,7 @@
 """Shared helpers: every test runs on the CPU device (CI has no GPU)."""
 
 import logging
+import signal
 
 import warp as wp
 
@@ -19,3 +20,11 @@ def overrides(**fields):
             text = repr(value)
         out.append(f"{key.replace('__', '.')}={text}")
     return out
+
+
+def interruptible() -> None:
+    """``preexec_fn`` for a CLI process a test will Ctrl-C: start it with SIGINT's default
+    disposition, as a terminal's foreground process has. A suite launched in the
+    background (``cmd &`` in a script) ignores SIGINT, and its children inherit that, so
+    the interrupt would never arrive."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

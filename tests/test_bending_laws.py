@@ -210,3 +210,23 @@ def test_a_laws_parameters_are_fitted_only_for_that_law():
     with pytest.raises(OptionError, match="Mf .* frictional_couple bending law, but the scene's material uses "
                                           "tagawa2003"):
         free_parameters("Mf", wc.load_scene("damped_swing"))
+
+
+def test_a_sweep_over_the_law_keeps_the_law_in_every_result(tmp_path):
+    from warpcloth.scene import read_scene_file
+
+    base = read_scene_file("damped_swing")
+    base["run"]["duration_s"] = 0.1
+    sweep = wc.expand(base | {"sweep": {"grid": {"material.bending_law": ["tagawa2003", "dahl", "frictional_couple"]}}})
+    wc.run_sweep(sweep, tmp_path / "s", workers=0, frames=True, progress=False)
+    recording = wc.load_recording(tmp_path / "s")
+    assert list(recording.to_xarray()["material.bending_law"].values) == ["tagawa2003", "dahl", "frictional_couple"]
+    assert set(recording.to_dataframe()["material.bending_law"]) == {"tagawa2003", "dahl", "frictional_couple"}
+    only = wc.load_recording(tmp_path / "s", where="material.bending_law==dahl")
+    assert only.variants.tolist() == [1]
+    from warpcloth.errors import OptionError
+
+    with pytest.raises(OptionError, match="--where: material.bending_law is a choice .* compare it with == or !="):
+        wc.load_recording(tmp_path / "s", where="material.bending_law<dahl")
+    out = wc.export_usd(recording, tmp_path / "laws.usda")
+    assert 'string[] primvars:warpcloth:material:bending_law = ["dahl"]' in out.read_text()

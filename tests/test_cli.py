@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import warp as wp
+from conftest import interruptible
 from warpcloth.kernels import PROBE_FIELDS
 
 import warpcloth as wc
@@ -226,7 +227,7 @@ def test_ctrl_c_is_one_line_and_keeps_what_was_written(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set",
                              "run.duration_s=600",  # interrupted long before its end, on however loaded a machine
                              "--no-progress", "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=interruptible)
     def committed_frames():
         try:
             return json.loads((out / "meta.json").read_text())["committed"]["frames"]

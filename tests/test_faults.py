@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 import pytest
+from conftest import interruptible
 
 import warpcloth as wc
 from warpcloth.io.load import load_recording
@@ -183,7 +184,7 @@ def test_an_overwrite_never_pulls_a_directory_from_under_a_running_writer(tmp_pa
     proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set",
                              "run.duration_s=600",  # interrupted long before its end, on however loaded a machine
                              "--no-progress", "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
+                            stderr=subprocess.PIPE, preexec_fn=interruptible)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and not (out / ".writing").is_file():
         time.sleep(0.05)
@@ -260,7 +261,8 @@ def test_ctrl_c_stops_a_threaded_sweep_promptly_and_it_resumes(tmp_path):
     # finish their files), exits 130 within a batch's time, and a rerun completes the rest.
     args = [sys.executable, "-m", "warpcloth.cli", "sweep", "damped_swing_sweep", "--set", "sweep.random.samples=120",
             "--set", "run.duration_s=3", "--max-batch", "4", "--workers", "2", "--no-progress", "--out", "s"]
-    proc = subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=interruptible)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and len(list((tmp_path / "s" / "summary").glob("*.parquet"))) < 2:
         time.sleep(0.1)

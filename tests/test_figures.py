@@ -510,3 +510,15 @@ def test_one_origin_the_clamp_edge_in_scenes_results_and_files(swing_run, tmp_pa
     (old / "meta.json").write_text(json.dumps(meta))
     with pytest.raises(DataFileError, match="does not say its positions are from the clamp edge"):
         load_recording(old)
+
+
+def test_a_text_column_is_refused_as_a_metric():
+    import pandas as pd
+
+    from warpcloth.errors import OptionError
+    from warpcloth.viz.plots import sweep_figure
+
+    summary = pd.DataFrame({"variant": range(3), "damping.gamma_per_s": [0.1, 0.2, 0.3],
+                            "diverged_phase": ["", "", ""], "first_period_s": [0.5, 0.5, 0.5], "diverged": False})
+    with pytest.raises(OptionError, match="--metric: 'diverged_phase' is not a number per variant"):
+        sweep_figure(summary, "diverged_phase", "damping.gamma_per_s")

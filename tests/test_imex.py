@@ -107,3 +107,13 @@ def test_imex_sweeps_are_independent_of_the_thread_count(tmp_path):
         if "t" in a:
             a, b = (x.sort_values(["variant", "t"]).reset_index(drop=True) for x in (a, b))
         pd.testing.assert_frame_equal(a, b, check_exact=True)
+
+
+def test_an_unstable_step_whose_segments_keep_their_length_is_reported_not_measured():
+    # beyond its bending limit imex grows a zig-zag that no strain check sees (the
+    # stretching is implicit); the energy budget stops closing, and the run says so
+    # instead of printing a period (docs/model.md §11)
+    with pytest.raises(DivergenceError, match=r"strip 0 diverged after t = 0.*energy budget residual.*unstable"):
+        run("damped_swing", "imex", 1.6e-3, run__duration_s=0.5)
+    stable = run("damped_swing", "imex", 8e-4, run__duration_s=0.5)
+    assert not stable.diverged

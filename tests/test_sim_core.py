@@ -67,11 +67,12 @@ def test_a_model_keeps_what_was_built():
 
 
 def test_each_scheme_has_its_solver_and_they_differ_by_order_dt():
-    assert set(sim.SOLVERS) == {"semi_implicit", "forward"} == set(integrators.build(wp.float64).schemes)
+    assert set(sim.SOLVERS) == {"semi_implicit", "forward", "imex"} == set(integrators.build(wp.float64).schemes)
 
     def gap(dt):
         runs = {scheme: wc.simulate(wc.load_scene("impulsive_rotation", overrides(
-            run__duration_s=0.002, integrator__scheme=scheme, integrator__dt_s=dt))) for scheme in sim.SOLVERS}
+            run__duration_s=0.002, integrator__scheme=scheme, integrator__dt_s=dt)))
+            for scheme in ("semi_implicit", "forward")}
         return np.nanmax(np.abs(runs["forward"].probe("tip_speed", 0) - runs["semi_implicit"].probe("tip_speed", 0)))
 
     # two first-order schemes: their difference halves with dt (and is not zero)

@@ -51,7 +51,8 @@ def run_scene(args: argparse.Namespace) -> int:
     if scene.release.enabled and summary["n_half_cycles"] >= 2:  # a released swing
         print(f"first period {summary['first_period_s']:.4f} s, first amplitude "
               f"{summary['first_amplitude_m'] * 1e3:.2f} mm, mean log decrement {summary['mean_log_decrement']:.4f} "
-              f"per half-cycle over {summary['n_half_cycles']} ({summary['signal']}, turning points; the sweep "
+              f"per half-cycle over {summary['n_half_cycles'] - 1} ratios of {summary['n_half_cycles']} "
+              f"half-cycles ({summary['signal']}, turning points; the sweep "
               "summary and `warpcloth analyse` measure the same way)")
     if args.usd:
         from warpcloth.io.load import load_recording

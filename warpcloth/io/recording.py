@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from warpcloth.errors import OptionError
-from warpcloth.scene import COORDINATES, Scene, batch_fields, rest_positions
+from warpcloth.scene import COORDINATES, Scene, batch_fields, choice_fields, rest_positions
 
 
 @dataclass
@@ -158,6 +158,13 @@ def filter_variants(parameters: pd.DataFrame, where: str) -> np.ndarray:
             raise OptionError("--where", f"{name!r} is not a parameter of these variants; "
                              f"known: {', '.join(c for c in parameters.columns if c != 'variant')}")
         column = parameters[name]
+        if not pd.api.types.is_numeric_dtype(column):  # a choice, e.g. material.bending_law==dahl
+            if op not in ("==", "!="):
+                raise OptionError("--where", f"{name} is a choice ({', '.join(sorted(set(column)))}): compare it "
+                                  f"with == or !=, not {op}")
+            same = (column == value.strip("\"'")).to_numpy()
+            keep &= same if op == "==" else ~same
+            continue
         try:
             number = float(value)
         except ValueError:
@@ -171,8 +178,11 @@ def filter_variants(parameters: pd.DataFrame, where: str) -> np.ndarray:
 
 
 def per_strip_parameters(scenes: list[Scene]) -> pd.DataFrame:
-    """One row per scene: every scalar field that may vary per strip (dotted names)."""
+    """One row per scene: every scalar field that may vary per strip (dotted names), and
+    every per-strip choice (a string field with a fixed set of values, e.g.
+    ``material.bending_law``), so variants that differ only in a choice can be told apart."""
     fixed = set(batch_fields())
+    choices = set(choice_fields())
     rows = []
     for scene in scenes:
         row = {}
@@ -181,6 +191,8 @@ def per_strip_parameters(scenes: list[Scene]) -> pd.DataFrame:
                 name = f"{section}.{key}"
                 if name not in fixed and isinstance(value, (int, float)) and not isinstance(value, bool):
                     row[name] = float(value)
+                elif name in choices and name not in fixed:
+                    row[name] = value
         rows.append(row)
     return pd.DataFrame(rows)
 

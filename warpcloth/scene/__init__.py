@@ -24,6 +24,7 @@ from .schema import (
     MaterialSection,
     Scene,
     batch_fields,
+    choice_fields,
 )
 from .sweep import Sweep, expand, load_sweep
 
@@ -40,6 +41,7 @@ __all__ = [
     "Sweep",
     "apply_overrides",
     "batch_fields",
+    "choice_fields",
     "build_batch",
     "builder_for",
     "bundled_materials",

@@ -68,10 +68,12 @@ def validate_material(section: MaterialSection, max_strain: float, prefix: str) 
     for f in dataclasses.fields(MaterialSection):
         law = f.metadata.get("law")
         if law not in (None, section.bending_law) and getattr(section, f.name) != f.default:
+            origin = (f" (set by the scene or by its material file {section.from_file!r}: a material file "
+                      "gives the fields of its own law)") if section.from_file else ""
             raise SceneError(f"{prefix}.{f.name}", f"= {getattr(section, f.name)!r} is a parameter of the "
                              f"{law} bending law, but {prefix}.bending_law is {section.bending_law!r} (whose "
-                             f"parameters are {', '.join(law_fields(section.bending_law))}); set "
-                             f"{prefix}.bending_law = \"{law}\" or leave the field out")
+                             f"parameters are {', '.join(law_fields(section.bending_law))}){origin}; set "
+                             f"{prefix}.bending_law = \"{law}\", use a material of that law, or leave the field out")
     a = section.tensile_gf_per_cm
     if len(a) != 4:
         raise SceneError(f"{prefix}.tensile_gf_per_cm", f"needs the 4 coefficients a1..a4, got {len(a)}")

@@ -257,6 +257,13 @@ def batch_fields() -> list[str]:
             for f in dataclasses.fields(tp) if not f.metadata["per_strip"]]
 
 
+def choice_fields() -> list[str]:
+    """Dotted names of the per-strip fields that are a choice among named values
+    (``material.bending_law``, ...)."""
+    return [f"{section}.{f.name}" for section, tp in field_types(Scene).items()
+            for f in dataclasses.fields(tp) if f.metadata["per_strip"] and f.metadata.get("choices")]
+
+
 def field_types(cls: type) -> dict[str, Any]:
     """The resolved type of every field of the dataclass ``cls``."""
     return typing.get_type_hints(cls)

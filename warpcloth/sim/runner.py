@@ -13,7 +13,7 @@ import warp as wp
 from tqdm import tqdm
 
 from warpcloth.errors import DivergenceError
-from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, STATUS_NONFINITE_ENERGY
+from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, STATUS_BUDGET, STATUS_NONFINITE_ENERGY
 
 from .control import Control
 from .labelled import probes_dataset, probes_frame
@@ -26,6 +26,46 @@ from .state import State
 TARGET_LAUNCH_SECONDS = 0.5  # long enough to amortise launch cost, short enough for progress
 BUFFER_BYTES = 64 * 2**20  # cap on the per-chunk probe and frame buffers
 DIVERGENCE_POLICIES = ("raise", "record")
+BUDGET_TOLERANCE = 0.1
+"""A strip whose energy budget (docs/model.md §10) has moved from its value at the release by
+more than this fraction of its energy scale has diverged, even if no strain or fold check
+fired: an unstable step (imex beyond its bending limit, forward Euler) can grow a zig-zag
+or an oscillation long before a segment overstretches. The scale is the peak kinetic
+energy up to that sample, and at least 1e-3 of the strip's weight times its free length
+(just after a release the kinetic energy is still near 0, and rounding is not). A healthy
+run's budget stays within 1e-2 of its peak kinetic energy (imex at its largest stable dt),
+usually 1e-4. The check reads the recorded samples, so where it fires does not depend on
+how the run is cut into launches."""
+BUDGET_TERMS = ("kinetic", "gravitational", "tensile", "bending_elastic_work", "hysteresis_work", "damping_work")
+
+
+class BudgetWatch:
+    """Each strip's energy budget at the release and its peak kinetic energy so far, to
+    stop a strip whose budget no longer closes (:data:`BUDGET_TOLERANCE`)."""
+
+    def __init__(self, model: Model) -> None:
+        self.reference = np.full(model.n_strips, np.nan)
+        self.peak_kinetic = np.zeros(model.n_strips)
+        free = model.n_nodes - model.n_clamped
+        self.floor = 1e-3 * model.node_mass * (free - 0.5) * model.gravity * free * model.spacing
+
+    def first_violation(self, values: np.ndarray, usable: np.ndarray) -> dict[int, tuple[int, float]]:
+        """``strip → (sample index, residual / scale)`` of the first failing sample of
+        each strip in the chunk ``values[sample, field, strip]`` (samples from the release
+        on), looking only where ``usable[sample, strip]``."""
+        total = sum(values[:, PROBE_INDEX[name], :] for name in BUDGET_TERMS) - values[:, PROBE_INDEX["drive_work"], :]
+        kinetic = np.where(usable, values[:, PROBE_INDEX["kinetic"], :], 0.0)
+        self.reference = np.where(np.isnan(self.reference), total[0], self.reference)
+        peak = np.maximum(self.peak_kinetic, np.fmax.accumulate(np.nan_to_num(kinetic, nan=0.0), axis=0))
+        self.peak_kinetic = peak[-1]
+        with np.errstate(invalid="ignore"):
+            bad = usable & (np.abs(total - self.reference) > BUDGET_TOLERANCE * np.maximum(peak, self.floor))
+        out = {}
+        for strip in np.flatnonzero(bad.any(axis=0)):
+            n = int(np.argmax(bad[:, strip]))
+            out[int(strip)] = (n, float(np.abs(total[n, strip] - self.reference[strip])
+                                        / max(peak[n, strip], self.floor[strip])))
+        return out
 
 
 def check_divergence_policy(on_divergence: str) -> None:
@@ -150,6 +190,7 @@ def simulate_batch(
     frames_buf = wp.zeros((cap // ppf + 1, n, b), dtype=model.types.vec2, device=model.device)
 
     diverged: list[dict] = []
+    budget = BudgetWatch(model)
     total_steps = int(schedule.steps[-1])
     bar = tqdm(total=float(schedule.times(schedule.k_min + len(schedule.steps) - 1)
                            - schedule.times(schedule.k_min)),
@@ -168,7 +209,7 @@ def simulate_batch(
             wp.synchronize_device(model.device)
             wall = time.perf_counter() - tic
             new = _collect(solver, state, control, schedule, i, j, probes_buf, frames_buf, probes_all, frames_all,
-                           sink, diverged)
+                           sink, diverged, budget)
             steps_done = int(schedule.steps[j - 1] - (schedule.steps[i - 1] if i else 0))
             bar.set_postfix_str(f"{b * steps_done / max(wall, 1e-9):.3g} strip-steps/s")
             bar.update(float(schedule.times(schedule.k_min + j - 1) - schedule.times(schedule.k_min)) - bar.n)
@@ -191,22 +232,46 @@ def simulate_batch(
     return result
 
 
+def _stop_unbalanced(state: State, budget: BudgetWatch, values: np.ndarray, steps: np.ndarray,
+                     known: set[int]) -> None:
+    # A strip whose budget fails stops at that sample, unless the kernel stopped it
+    # earlier; the first of the two events is the one reported, however the run is cut
+    # into launches (the samples from it on are dropped like others').
+    fields = {name: getattr(state.struct, name).numpy() for name in ("status", "status_step", "status_index",
+                                                                     "status_value")}
+    stopped = (fields["status"] != 0)
+    usable = ~stopped[None, :] | (steps[:, None] < fields["status_step"][None, :])
+    failed = {s: v for s, v in budget.first_violation(values, usable).items() if s not in known}
+    if not failed:
+        return
+    for strip, (sample, residual) in failed.items():
+        fields["status"][strip] = STATUS_BUDGET
+        fields["status_step"][strip] = int(steps[sample])
+        fields["status_index"][strip] = -1
+        fields["status_value"][strip] = residual
+    for name, value in fields.items():
+        getattr(state.struct, name).assign(value)
+
+
 def _collect(solver: Solver, state: State, control: Control, schedule: Schedule, i: int, j: int,
              probes_buf: wp.array, frames_buf: wp.array, probes_all: np.ndarray, frames_all: np.ndarray | None,
-             sink: Sink | None, diverged: list[dict]) -> bool:
+             sink: Sink | None, diverged: list[dict], budget: BudgetWatch) -> bool:
     """Copy a finished chunk out, drop samples after a divergence, stream it to the sink."""
-    status = state.struct.status.numpy()
+    k = schedule.k_min + np.arange(i, j)
+    keep = k >= 0
     known = {d["strip"] for d in diverged}
+    if keep.any():
+        _stop_unbalanced(state, budget, probes_buf[: j - i].numpy()[keep], schedule.steps[i:j][keep], known)
+    status = state.struct.status.numpy()
     new_reports = [solver.divergence_report(state, control, int(s)) for s in np.nonzero(status)[0]
                    if s not in known]
     diverged.extend(new_reports)
     steps = schedule.steps[i:j]
     valid = np.ones((j - i, probes_all.shape[2]), dtype=bool)
     for d in diverged:
-        last_ok = steps < d["step"] if d["code"] == STATUS_NONFINITE_ENERGY else steps <= d["step"]
+        before = d["code"] in (STATUS_NONFINITE_ENERGY, STATUS_BUDGET)  # the sample that failed is not kept
+        last_ok = steps < d["step"] if before else steps <= d["step"]
         valid[:, d["strip"]] &= last_ok
-    k = schedule.k_min + np.arange(i, j)
-    keep = k >= 0
     if not keep.any():
         return bool(new_reports)
     values = probes_buf[: j - i].numpy()[keep]  # copy out only this chunk's samples

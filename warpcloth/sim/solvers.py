@@ -13,7 +13,14 @@ from typing import Protocol
 import numpy as np
 import warp as wp
 
-from warpcloth.kernels import STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN, build_strip
+from warpcloth.kernels import (
+    STATUS_BUDGET,
+    STATUS_FOLDED,
+    STATUS_NONFINITE_ENERGY,
+    STATUS_OK,
+    STATUS_STRAIN,
+    build_strip,
+)
 
 from .control import Control
 from .model import Model
@@ -24,6 +31,8 @@ QUANTITY = {
     STATUS_STRAIN: "tensile strain",
     STATUS_FOLDED: "hinge chord |e1+e2|/h (the strip folded onto itself)",
     STATUS_NONFINITE_ENERGY: "total energy (not finite)",
+    STATUS_BUDGET: ("energy budget residual, in units of the peak kinetic energy (at least 1e-3 of the strip's "
+                    "weight times its free length): the step is unstable"),
 }
 
 

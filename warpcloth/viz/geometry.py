@@ -4,6 +4,7 @@ real width, the clamp's box, and colours per variant (all SI metres)."""
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from warpcloth.io.recording import Recording
 
@@ -26,8 +27,11 @@ def colour_values(recording: Recording) -> np.ndarray:
     """What colours the variants: the first parameter that differs between them, else
     the variant number."""
     for name in recording.parameters.columns:
-        if name != "variant" and recording.parameters[name].nunique() > 1:
-            return recording.parameters[name].to_numpy()
+        column = recording.parameters[name]
+        if name != "variant" and column.nunique() > 1:
+            # a choice (e.g. the bending law) colours by its values' order of appearance
+            return column.to_numpy(dtype=float) if pd.api.types.is_numeric_dtype(column) else \
+                pd.factorize(column)[0].astype(float)
     return recording.variants.astype(float)
 
 

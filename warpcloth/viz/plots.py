@@ -34,7 +34,9 @@ MM = 1 / units.LENGTH_MM
 def _label(recording: Recording, j: int) -> str:
     varying = [c for c in recording.parameters.columns
                if c != "variant" and recording.parameters[c].nunique() > 1][:2]
-    parts = [f"{c.split('.')[-1]}={recording.parameters[c].iloc[j]:.3g}" for c in varying]
+    values = [recording.parameters[c].iloc[j] for c in varying]
+    parts = [f"{c.split('.')[-1]}={v:.3g}" if isinstance(v, float) else f"{c.split('.')[-1]}={v}"
+             for c, v in zip(varying, values, strict=True)]
     return f"variant {recording.variants[j]}" + (f" ({', '.join(parts)})" if parts else "")
 
 
@@ -302,9 +304,11 @@ def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path 
         raise OptionError("--format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
     if not (np.isfinite(dpi) and 10 <= dpi <= 2400):
         raise OptionError("--dpi", f"must be between 10 and 2400, got {dpi!r}")
+    if times is not None:
+        recording.nearest_frames(times)  # an out-of-range time is refused before any figure is written
+    data = read_measurement(measured, encoder=True) if measured else None
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    data = read_measurement(measured, encoder=True) if measured else None
     shapes = data if isinstance(data, TrackedShapes) else None
     return [
         plot_amplitude(recording, out / f"amplitude.{fmt}", data if isinstance(data, LaserTrace) else None, dpi=dpi),
@@ -356,6 +360,9 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
     if summary[metric].map(lambda v: isinstance(v, (list, np.ndarray))).any():
         raise OptionError("--metric", f"{metric!r} holds a list per variant (one value per half-cycle); plot one "
                           "number per variant, e.g. mean_log_decrement or first_amplitude_m")
+    if not pd.api.types.is_numeric_dtype(summary[metric]) or pd.api.types.is_bool_dtype(summary[metric]):
+        raise OptionError("--metric", f"{metric!r} is not a number per variant (it holds "
+                          f"{summary[metric].dtype}); plot a numeric column, e.g. first_period_s or mean_log_decrement")
     data = summary[~summary["diverged"]] if "diverged" in summary else summary
     valued = data[np.isfinite(data[metric].to_numpy(dtype=float))]
     if valued.empty:
@@ -374,8 +381,14 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
         elif grouped.size().max() == 1:
             # a sampled sweep (Latin hypercube): points coloured by another swept field,
             # never joined in x order (that draws a zigzag through unrelated variants)
-            points = ax.scatter(data[x], data[metric], c=data[others[0]], s=12, cmap="viridis")
-            fig.colorbar(points, ax=ax, label=field_label(others[0]))
+            colour = data[others[0]]
+            if not pd.api.types.is_numeric_dtype(colour):  # a choice: one colour per value, in a legend
+                for value, part in data.groupby(others[0], sort=False):
+                    ax.scatter(part[x], part[metric], s=12, label=f"{field_label(others[0], units=False)} = {value}")
+                ax.legend(fontsize=7)
+            else:
+                points = ax.scatter(data[x], data[metric], c=colour, s=12, cmap="viridis")
+                fig.colorbar(points, ax=ax, label=field_label(others[0]))
         elif len(others) == 1 and data[others[0]].nunique() <= LEGEND_VARIANTS:
             # one other gridded field with few values (e.g. the bending law): a line each
             for value, part in data.groupby(others[0], sort=False):
@@ -538,7 +551,9 @@ def bending_law_comparison_figure(comparison: object) -> plt.Figure:
                     (("B", measured.b_gf_cm2_per_cm, "gf·cm²/cm"), ("2HB", measured.hb2_gf_cm_per_cm, "gf·cm/cm"))
                     if value is not None)
     axes["loop"].set(xlabel="curvature K (1/cm)", ylabel="moment per width M (gf·cm/cm)",
-                     title=f"{Path(loop.source).name}: AIC recommends {comparison.recommended}"
+                     title=f"{Path(loop.source).name}: "
+                     + (f"AIC recommends {comparison.recommended}" if len(comparison.fits) > 1
+                        else f"{comparison.recommended} fitted (one law: no comparison)")
                      + (f"\ndata: {kes}" if kes else ""))
     axes["loop"].legend(fontsize=7, loc="lower right")
     axes["shape"].set(xlabel="curvature K (1/cm)", ylabel=f"M − {slope:.4g} K (gf·cm/cm)",

@@ -27,6 +27,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdUtils, Vt
 
 from warpcloth.errors import OptionError
@@ -126,9 +127,14 @@ def _write_primvars(prim: UsdGeom.Gprim, recording: Recording, rows: slice, inte
     api.CreatePrimvar("warpcloth:variant", Sdf.ValueTypeNames.IntArray, interpolation).Set(
         Vt.IntArray([int(v) for v in table["variant"]]))
     for name in table.columns:
-        if name != "variant":
+        if name == "variant":
+            continue
+        if pd.api.types.is_numeric_dtype(table[name]):
             api.CreatePrimvar(_primvar_name(name), Sdf.ValueTypeNames.DoubleArray, interpolation).Set(
                 Vt.DoubleArray([float(v) for v in table[name]]))
+        else:  # a choice, e.g. the bending law
+            api.CreatePrimvar(_primvar_name(name), Sdf.ValueTypeNames.StringArray, interpolation).Set(
+                Vt.StringArray([str(v) for v in table[name]]))
     prim.CreateDisplayColorPrimvar(interpolation).Set(Vt.Vec3fArray([Gf.Vec3f(*map(float, c)) for c in colours]))
 
 
