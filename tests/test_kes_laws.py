@@ -324,3 +324,21 @@ def test_cli_wrong_inputs_are_one_line_naming_the_culprit(args, message, monkeyp
     assert status == 2
     assert len(err.strip().splitlines()) == 1 and message in err, err
     assert not any(tmp_path.iterdir())
+
+
+def test_a_loop_without_hysteresis_is_not_identifiable_for_any_law():
+    # M = D K plus noise: every law fits, none of their hysteresis parameters is determined
+    # by the data (the elastic line's AIC is as good), and the comparison says so
+    import warpcloth.calibrate.kes as kes
+    from warpcloth.calibrate.kes.readers import BendingLoop
+
+    rng = np.random.default_rng(0)
+    k = np.concatenate([np.linspace(0, 2.5, 126), np.linspace(2.5, -2.5, 251)[1:], np.linspace(-2.5, 2.5, 251)[1:],
+                        np.linspace(2.5, 0, 126)[1:]])
+    loop = BendingLoop(k, 0.1 * k + rng.normal(0, 0.002, len(k)), np.arange(1, len(k) + 1), "elastic")
+    comparison = kes.compare_laws(loop)
+    for law in comparison.fits:
+        status, problems = comparison.status(law)
+        assert status == "not_identifiable" and "elastic line M = D K fits it as well" in problems[0]
+    assert any("no law's hysteresis is determined" in line for line in comparison.caveats())
+    assert not any("same law" in line for line in comparison.caveats())

@@ -125,18 +125,44 @@ def poor_fit(what: str, rms: float, unit: str, samples: np.ndarray) -> str | Non
     return None
 
 
+AIC_TIE = 2.0
+"""A ΔAIC below this is no preference between two models of a loop."""
+
+STATUS_ORDER = ("failed", "poor_fit", "not_identifiable", "at_bound")
+"""A KES fit's status is the first of these any of its problems has (else ``converged``): the
+cause before its symptoms (a loop without hysteresis sends the shape parameters to bounds)."""
+
+
+def elastic_aic(loop: BendingLoop) -> float:
+    """AIC of the elastic line M = D K (one parameter) on the loop: the baseline a
+    hysteretic law must beat for its hysteresis to be told by the data."""
+    k, m = loop.curvature, loop.moment
+    d = max(0.0, float(np.dot(k, m) / np.dot(k, k)))
+    sse = float(np.sum((d * k - m) ** 2))
+    return len(k) * math.log(max(sse / len(k), 1e-300)) + 2
+
+
 def bending_problems(fit: BendingFit, loop: BendingLoop) -> list[tuple[str, str]]:
-    """(status, why) of each reason a bending fit is not trusted: ``failed`` (a value not
-    finite), ``at_bound`` (a parameter at the edge of its search), ``poor_fit``."""
+    """(status, why) of each reason a bending fit is not trusted, in :data:`STATUS_ORDER`:
+    ``failed`` (a value not finite), ``poor_fit`` (the law does not describe the loop),
+    ``not_identifiable`` (the elastic line fits the loop as well: no hysteresis for the
+    law's parameters to describe, which also sends them to the edges of their search),
+    ``at_bound`` (a parameter at the edge of its search)."""
     found = []
     if not all(math.isfinite(float(v)) for v in [*fit.parameters.values(), fit.rms_gf_cm_per_cm]):
         found.append(("failed", f"a fitted {fit.law} value is not finite"))
+    gain = elastic_aic(loop) - fit.aic()
+    if gain < AIC_TIE:
+        found.append(("not_identifiable", f"the loop shows no hysteresis the {fit.law} law can tell: the elastic line "
+                      f"M = D K fits it as well (AIC better by {gain:.1f} < {AIC_TIE:g} for "
+                      f"{fit.free_parameters - 1} more parameters), so its hysteresis parameters are not determined "
+                      "by these data"))
     if "edge of its search range" in fit.note:
         found.append(("at_bound", fit.note))
     why = poor_fit("bending", fit.rms_gf_cm_per_cm, "gf·cm/cm", loop.moment)
     if why is not None:
         found.append(("poor_fit", why))
-    return found
+    return sorted(found, key=lambda problem: STATUS_ORDER.index(problem[0]))
 
 
 def _linear_part(curvature: np.ndarray, moment: np.ndarray, offset: np.ndarray) -> tuple[float, float, float]:

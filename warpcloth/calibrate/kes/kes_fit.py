@@ -8,14 +8,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .bending_fit import BendingFit, bending_problems, poor_fit
+from .bending_fit import STATUS_ORDER, BendingFit, bending_problems, poor_fit
 from .kes_values import BendingSummary, TensileSummary, bending_summary, tensile_summary
 from .laws import DEFAULT_LAW, law_fitter
 from .readers import BendingLoop, TensileLoop
 from .tensile_fit import DIVERGENCE_STRAIN, TensileFit, fit_tensile
-
-STATUS_ORDER = ("failed", "at_bound", "poor_fit")
-"""A fit's status is the first of these any of its problems has (else ``converged``)."""
 
 
 @dataclass(frozen=True)

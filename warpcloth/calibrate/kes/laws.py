@@ -23,7 +23,7 @@ from warpcloth.scene import to_si
 from warpcloth.sim import moment_along_path
 
 from .bending_dahl import DAHL
-from .bending_fit import BendingFit, LawFitter, bending_problems
+from .bending_fit import AIC_TIE, BendingFit, LawFitter, bending_problems
 from .bending_frictional_couple import FRICTIONAL_COUPLE
 from .bending_tagawa2003 import TAGAWA2003
 from .kes_values import BendingSummary, bending_summary, standard_cycle
@@ -41,8 +41,6 @@ DEFAULT_LAW = DEFAULT_BENDING_LAW
 ALL_LAWS = "all"
 """``--law all``: fit every law and compare them."""
 
-AIC_TIE = 2.0
-"""A ΔAIC below this is no preference between two laws."""
 
 SAME_EXPONENT = 0.05
 """A dahl fit with ``|n − 1|`` below this is the paper's law."""
@@ -111,7 +109,8 @@ class LawComparison:
         return self.ranking()[0]
 
     def status(self, law: str) -> tuple[str, list[str]]:
-        """The verdict of one law's fit to the loop (``converged``, ``at_bound``, ``poor_fit``, ``failed``)."""
+        """The verdict of one law's fit to the loop (``converged``, ``not_identifiable``,
+        ``at_bound``, ``poor_fit``, ``failed``)."""
         found = bending_problems(self.fits[law], self.loop)
         return (found[0][0] if found else "converged"), [message for _, message in found]
 
@@ -119,8 +118,8 @@ class LawComparison:
         """Why the dahl fit is the paper's law (n within 0.05 of 1, or not significantly
         different from 1 by the likelihood ratio against the tagawa2003 fit); None if not
         (or either law was not fitted)."""
-        if "dahl" not in self.fits or "tagawa2003" not in self.fits:
-            return None
+        if "dahl" not in self.fits or "tagawa2003" not in self.fits or self.status("dahl")[0] == "not_identifiable":
+            return None  # without hysteresis in the loop, n means nothing
         dahl, paper = self.fits["dahl"], self.fits["tagawa2003"]
         n = dahl.parameters["dahl_exponent"]
         ratio = max(dahl.points * 2 * math.log(paper.rms_gf_cm_per_cm / max(dahl.rms_gf_cm_per_cm, 1e-300)), 0.0)
@@ -146,6 +145,9 @@ class LawComparison:
         if same:
             lines.append(f"{same}: dahl with n = 1 is tagawa2003 (M_s = M0, K_s = 1/α), so on this loop the two are "
                          "the same law")
+        if all(self.status(law)[0] == "not_identifiable" for law in self.fits):
+            lines.append("no law's hysteresis is determined by this loop: the elastic line M = D K fits it as well, "
+                         "so the ranking says nothing; measure a loop with a visible width (2HB above the noise)")
         lines.append("a quasi-static KES-FB2 loop says nothing about rate effects, nor about how a law treats small "
                      "curvature reversals in motion: check the choice against a measured swing (warpcloth fit)")
         return lines
