@@ -1,0 +1,109 @@
+"""The GPU checks and throughput tables in one script, for a machine with an NVIDIA GPU
+(issue 11, item 6; run by hand, under 5 minutes):
+
+    python benchmarks/gpu.py [--device cuda:0] [--quick]
+
+1. Agreement: the GPU's float64 trajectories against the CPU's (tests/test_gpu.py, run by
+   pytest), and each scheme (semi_implicit, imex) and bending law on both devices.
+2. Throughput: strip-steps/s and node-steps/s of the damped swing for B = 1e3, 1e4, 1e5
+   strips, float64 and float32, both schemes, against the CPU at B = 1e3 measured in the
+   same run; the issue's target is ≥ 2e10 node-steps/s in float64 at B = 1e4–1e5.
+3. Paper-faithful work: 10 000 strip-seconds of the damped swing at dt = 1e-7 s (the
+   paper took 210 s for one), timed on a short record and scaled, and stated as such.
+
+Kernels are compiled (and cached) before timing. Without a CUDA device it says so and
+exits 2 (nothing to measure).
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import warp as wp
+
+import warpcloth as wc
+from warpcloth.sim.model import init_warp_quietly
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def swing(scheme: str, precision: str, duration: float, dt: float | None = None, law: str = "tagawa2003") -> wc.Scene:
+    fields = {"run.duration_s": duration, "integrator.scheme": scheme, "integrator.precision": precision,
+              "release.move_time_s": 0.1, "release.settle_time_s": 0.0, "material.bending_law": law}
+    if dt is not None:
+        fields["integrator.dt_s"] = dt
+    elif scheme == "imex":
+        fields["integrator.dt_s"] = 2e-4
+    return wc.load_scene("damped_swing", fields)
+
+
+def rate(scene: wc.Scene, batch: int, device: str) -> tuple[float, float, float]:
+    """Strip-steps/s, node-steps/s and wall (s) of ``batch`` copies, after a warm-up run."""
+    wc.simulate([scene], device=device, keep_frames=False)
+    started = time.perf_counter()
+    result = wc.simulate([scene] * batch, device=device, keep_frames=False)
+    wall = time.perf_counter() - started
+    return result.strip_steps / wall, result.strip_steps * scene.n_nodes / wall, wall
+
+
+def agreement(device: str) -> None:
+    print("\n1. agreement, GPU against CPU (float64)")
+    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(ROOT / "tests" /
+                           "test_gpu.py")], capture_output=True, text=True)
+    print("   tests/test_gpu.py:", done.stdout.strip().splitlines()[-1] if done.stdout.strip() else done.stderr[-300:])
+    for scheme in ("semi_implicit", "imex"):
+        for law in ("tagawa2003", "dahl", "frictional_couple"):
+            scene = swing(scheme, "float64", 0.3, law=law)
+            cpu, gpu = (wc.simulate([scene] * 4, device=d) for d in ("cpu", device))
+            gap = np.nanmax(np.abs(gpu.frames - cpu.frames))
+            print(f"   {scheme:13s} {law:17s} largest |Δx| over 0.3 s: {gap:.2e} m")
+
+
+def throughput(device: str, sizes: list[int], duration: float) -> None:
+    print(f"\n2. throughput, damped swing, {duration} s simulated per run")
+    header = ("scheme", "precision", "B", "strip-steps/s", "node-steps/s", "vs CPU B=1e3")
+    print("   {:13s} {:9s} {:>7} {:>14} {:>13} {:>13}".format(*header))
+    for scheme in ("semi_implicit", "imex"):
+        for precision in ("float64", "float32"):
+            scene = swing(scheme, precision, duration)
+            cpu, _, _ = rate(scene, 1000, "cpu")
+            print(f"   {scheme:13s} {precision:9s} {'cpu 1e3':>7} {cpu:14.3e} {cpu * scene.n_nodes:13.3e} {1.0:12.2f}x")
+            for b in sizes:
+                strips, nodes, _ = rate(scene, b, device)
+                print(f"   {scheme:13s} {precision:9s} {b:>7} {strips:14.3e} {nodes:13.3e} {strips / cpu:12.2f}x")
+
+
+def paper_faithful(device: str, batch: int) -> None:
+    print("\n3. paper-faithful work: dt = 1e-7 s, float64, semi_implicit")
+    duration = 0.01
+    scene = swing("semi_implicit", "float64", duration, dt=1e-7)
+    strips, _, wall = rate(scene, batch, device)
+    strip_seconds = batch * duration
+    print(f"   {batch} strips × {duration} s in {wall:.2f} s: 10 000 strip-seconds would take "
+          f"{wall * 1e4 / strip_seconds:.0f} s (scaled from this run; the paper: 210 s for one)")
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--device", default="cuda:0")
+    parser.add_argument("--quick", action="store_true", help="B up to 1e4 and shorter records")
+    args = parser.parse_args()
+    init_warp_quietly()
+    if not wp.is_cuda_available():
+        print("no CUDA device here: run this on a machine with an NVIDIA GPU", file=sys.stderr)
+        return 2
+    print(f"{platform.node()}: {wp.get_device(args.device).name}, Warp {wp.__version__}")
+    agreement(args.device)
+    throughput(args.device, [1000, 10000] if args.quick else [1000, 10000, 100000], 0.02 if args.quick else 0.05)
+    paper_faithful(args.device, 10000 if args.quick else 100000)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
