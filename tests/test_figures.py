@@ -462,7 +462,7 @@ def test_a_metric_no_variant_has_is_refused_not_drawn_empty():
     with pytest.raises(OptionError, match="--metric: no variant has a value of 'first_period_s'"):
         sweep_figure(summary, "first_period_s", "damping.gamma_per_s", "material.bending_rigidity_gf_cm2_per_cm")
     figure = sweep_figure(summary, "mean_log_decrement", "damping.gamma_per_s")
-    assert figure.axes[0].get_title() == "mean_log_decrement over 3 variants (1 without a value)"
+    assert figure.axes[0].get_title() == "mean log decrement per half-cycle over 3 variants (1 without a value)"
 
 
 def test_a_grid_over_the_bending_law_draws_a_line_per_law():

@@ -54,6 +54,10 @@ def run_scene(args: argparse.Namespace) -> int:
               f"per half-cycle over {summary['n_half_cycles'] - 1} ratios of {summary['n_half_cycles']} "
               f"half-cycles ({summary['signal']}, turning points; the sweep "
               "summary and `warpcloth analyse` measure the same way)")
+    elif scene.release.enabled:
+        print(f"no first period: the record ({scene.run.duration_s:g} s after the release) holds "
+              f"{summary['n_half_cycles']} half-cycle(s) of the {summary['signal']} signal; a period needs two "
+              "(run longer: run.duration_s)")
     if args.usd:
         from warpcloth.io.load import load_recording
         from warpcloth.viz.usd import export_usd

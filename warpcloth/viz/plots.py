@@ -415,7 +415,8 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
         ax.set(xlabel=field_label(x), ylabel=field_label(y))
     diverged = len(summary) - len(data) - missing
     notes = [f"{diverged} diverged"] * bool(diverged) + [f"{missing} without a value"] * bool(missing)
-    ax.set_title(f"{metric} over {len(data)} variants" + (f" ({', '.join(notes)})" if notes else ""))
+    ax.set_title(f"{field_label(metric, units=False)} over {len(data)} variants" + (f" ({', '.join(notes)})"
+                                                                                   if notes else ""))
     return fig
 
 
