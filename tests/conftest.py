@@ -28,3 +28,22 @@ def interruptible() -> None:
     background (``cmd &`` in a script) ignores SIGINT, and its children inherit that, so
     the interrupt would never arrive."""
     signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def kes_cycle(k0: float = 2.5, step: float = 0.02):
+    """The standard KES-FB2 path 0 → +K0 → −K0 → 0 (1/cm), sampled like the bundled example."""
+    from warpcloth.calibrate.kes.kes_values import standard_cycle
+
+    return standard_cycle(k0, step)
+
+
+def kes_moment(material, k):
+    """The kernel's moment (gf·cm/cm) of a [material] section's own law along a KES-unit path."""
+    import numpy as np
+
+    from warpcloth import units
+    from warpcloth.scene import to_si
+    from warpcloth.sim import moment_along_path
+
+    m, _ = moment_along_path(to_si(material), np.asarray(k) * units.CURVATURE_PER_CM)
+    return m / units.MOMENT_GF_CM_PER_CM

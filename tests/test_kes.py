@@ -12,10 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import tomli_w
-from conftest import overrides  # noqa: F401  (keeps Warp quiet)
+from conftest import kes_cycle, kes_moment
 
 import warpcloth as wc
-from warpcloth import units
 from warpcloth.calibrate import kes
 from warpcloth.calibrate.kes.least_squares import least_squares_above
 from warpcloth.errors import DataFileError, OptionError, SceneError
@@ -28,27 +27,12 @@ from warpcloth.scene import (
     read_scene_file,
     scene_from_dict,
     tensile_slope_minimum,
-    to_si,
 )
-from warpcloth.sim import moment_along_path
 
 ROOT = Path(__file__).resolve().parents[1]
 FB1 = ROOT / "scenes" / "data" / "kes_fb1_example.csv"
 FB2 = ROOT / "scenes" / "data" / "kes_fb2_example.csv"
 TRUE = MaterialSection()  # the examples are made from the default material (make_kes_examples.py)
-
-
-def kes_cycle(k0=2.5, step=0.02):
-    """The standard KES-FB2 curvature path 0 → +K0 → −K0 → 0 (1/cm)."""
-    n = round(k0 / step)
-    return np.concatenate([np.linspace(0, k0, n, endpoint=False), np.linspace(k0, -k0, 2 * n, endpoint=False),
-                           np.linspace(-k0, 0, n + 1)])
-
-
-def model_moment(material: MaterialSection, k):
-    """The kernel's moment (gf·cm/cm) along a KES-unit curvature path."""
-    m, _ = moment_along_path(to_si(material), np.asarray(k) * units.CURVATURE_PER_CM)
-    return m / units.MOMENT_GF_CM_PER_CM
 
 
 def write(path, text):
@@ -69,7 +53,7 @@ def test_bending_fit_recovers_a_loop_made_by_the_model(fields):
     # RMS ≤ 2e-13 of the moment range; bound 1e-9 on each.
     material = MaterialSection(**fields)
     k = kes_cycle(material.hysteresis_k0_per_cm)
-    fit = kes.fit_bending(kes.bending_loop(k, model_moment(material, k)))
+    fit = kes.fit_bending(kes.bending_loop(k, kes_moment(material, k)))
     assert fit.rigidity_gf_cm2_per_cm == pytest.approx(material.bending_rigidity_gf_cm2_per_cm, rel=1e-9)
     assert fit.d1_gf_cm_per_cm == pytest.approx(material.hysteresis_d1_gf_cm_per_cm, rel=1e-9)
     assert fit.alpha_cm == pytest.approx(material.hysteresis_alpha_cm, rel=1e-9)
@@ -89,7 +73,7 @@ def test_hysteretic_offset_is_linear_in_d1():
         for d, d1 in ((0.0, 0.04), (0.1, 0.5), (0.02, 3e-4)):
             material = MaterialSection(bending_rigidity_gf_cm2_per_cm=d, hysteresis_d1_gf_cm_per_cm=d1,
                                        hysteresis_alpha_cm=alpha)
-            assert np.max(np.abs(model_moment(material, k) - (d * k + d1 * h1[:, j]))) < 1e-12 * d1
+            assert np.max(np.abs(kes_moment(material, k) - (d * k + d1 * h1[:, j]))) < 1e-12 * d1
     # one launch for many α gives what single launches give
     single = kes.hysteretic_offsets(k, [alphas[2]], 2.5)[:, 0]
     np.testing.assert_array_equal(single, h1[:, 2])
@@ -145,7 +129,7 @@ def test_noisy_example_data_are_fitted_sensibly():
     # global minimum cannot do worse) and not far below (3 parameters absorb little).
     # Measured: 0.0021346 vs the noise's 0.0021380 gf·cm/cm.
     k = fit.bending_loop.curvature
-    noise = fit.bending_loop.moment - model_moment(TRUE, k)
+    noise = fit.bending_loop.moment - kes_moment(TRUE, k)
     noise_rms = np.sqrt(np.mean(noise**2))
     assert 0.99 * noise_rms <= b.rms_gf_cm_per_cm <= noise_rms * (1 + 1e-9)
     e = fit.tensile_loop.strain[fit.tensile_loop.loading]
@@ -157,7 +141,7 @@ def test_noisy_example_data_are_fitted_sensibly():
     # KES values of the noisy data against those of the noise-free data (B 0.10041,
     # 2HB 0.039907, LT 0.54406, RT 52.58 %). Measured: B −0.9 %, 2HB −4.2 %, LT −0.4 %,
     # RT +0.2 %; 40-seed std 0.5 %, 1.3 %, 0.45 %, 0.3 %.
-    clean = kes.bending_summary(kes.bending_loop(k, model_moment(TRUE, k)))
+    clean = kes.bending_summary(kes.bending_loop(k, kes_moment(TRUE, k)))
     assert fit.bending_kes.b_gf_cm2_per_cm == pytest.approx(clean.b_gf_cm2_per_cm, rel=0.03)
     assert fit.bending_kes.hb2_gf_cm_per_cm == pytest.approx(clean.hb2_gf_cm_per_cm, rel=0.07)
     assert fit.tensile_kes.lt == pytest.approx(0.54406, rel=0.025)

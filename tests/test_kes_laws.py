@@ -9,16 +9,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import overrides  # noqa: F401  (keeps Warp quiet)
+from conftest import kes_cycle, kes_moment
 from warpcloth.kernels import BENDING_LAWS, bending_tagawa2003
 
 import warpcloth as wc
-from warpcloth import units
 from warpcloth.calibrate import kes
 from warpcloth.cli import main
 from warpcloth.errors import OptionError
-from warpcloth.scene import MaterialSection, material_fields, read_material_file, to_si
-from warpcloth.sim import moment_along_path
+from warpcloth.scene import MaterialSection, material_fields, read_material_file
 
 ROOT = Path(__file__).resolve().parents[1]
 FB1 = ROOT / "scenes" / "data" / "kes_fb1_example.csv"
@@ -34,22 +32,9 @@ FRICTION = MaterialSection(bending_law="frictional_couple", bending_rigidity_gf_
                            friction_moment_gf_cm_per_cm=0.02, friction_width_per_cm=0.1)
 
 
-def kes_cycle(k0=2.5, step=0.02):
-    """The standard KES-FB2 path 0 → +K0 → −K0 → 0 (1/cm), sampled like the bundled example."""
-    n = round(k0 / step)
-    return np.concatenate([np.linspace(0, k0, n, endpoint=False), np.linspace(k0, -k0, 2 * n, endpoint=False),
-                           np.linspace(-k0, 0, n + 1)])
-
-
-def law_moment(material: MaterialSection, k):
-    """The kernel's moment (gf·cm/cm) of a material's own law along a KES-unit curvature path."""
-    m, _ = moment_along_path(to_si(material), np.asarray(k) * units.CURVATURE_PER_CM)
-    return m / units.MOMENT_GF_CM_PER_CM
-
-
 def law_loop(material: MaterialSection, seed=None, k0=2.5):
     k = kes_cycle(k0)
-    m = law_moment(material, k)
+    m = kes_moment(material, k)
     if seed is not None:
         m = m + np.random.default_rng(seed).normal(0.0, NOISE, len(m))
     return kes.bending_loop(k, m)
@@ -108,7 +93,7 @@ def test_fit_kes_recovers_each_law_from_a_loop_it_made(material, tmp_path):
     scene = wc.load_scene("damped_swing", [f"material.from_file={path}"])
     assert scene.material.bending_law == law
     k = kes_cycle()
-    assert np.max(np.abs(law_moment(scene.material, k) - law_moment(material, k))) < 1e-9 * np.ptp(b.moment)
+    assert np.max(np.abs(kes_moment(scene.material, k) - kes_moment(material, k))) < 1e-9 * np.ptp(b.moment)
 
 
 def test_dahl_fitted_to_the_papers_loop_is_the_papers_law():
