@@ -18,7 +18,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -87,6 +87,7 @@ class BendingFit:
     moment: np.ndarray  # the model's moment along the measured path, gf·cm/cm
     free_parameters: int  # what the information criteria count (K0, fixed by the data, is not one)
     note: str  # e.g. a parameter at the edge of its search range; "" otherwise
+    sigma: dict[str, float] = field(default_factory=dict)  # standard uncertainty of each free parameter
 
     @property
     def rigidity_gf_cm2_per_cm(self) -> float:
@@ -246,9 +247,42 @@ class LawFitter:
         return 2 + len(self.shape)
 
     def describe(self, fit: BendingFit, digits: int = 6) -> str:
-        """The fit's parameters as text with their units, e.g. ``D 0.1 gf·cm²/cm, …``."""
-        return ", ".join(f"{p.symbol} {fit.parameters[p.field]:.{digits}g}" + (f" {p.unit}" if p.unit else "")
-                         for p in self.parameters)
+        """The fit's parameters as text with their units and standard uncertainties, e.g.
+        ``D 0.1 ± 0.0003 gf·cm²/cm, …`` (no ± for K0, which the data fix)."""
+        def one(p: Parameter) -> str:
+            sigma = fit.sigma.get(p.field)
+            spread = f" ± {sigma:.2g}" if sigma is not None and math.isfinite(sigma) else ""
+            return f"{p.symbol} {fit.parameters[p.field]:.{digits}g}{spread}" + (f" {p.unit}" if p.unit else "")
+
+        return ", ".join(one(p) for p in self.parameters)
+
+    def uncertainties(self, loop: BendingLoop, d: float, a: float, shape: np.ndarray, sse: float,
+                      device: str | None = "cpu") -> dict[str, float]:
+        """Standard uncertainties of D, A and the shape parameters at the optimum, from the
+        linearised model: cov = s² (JᵀJ)⁻¹, s² = SSE / (n − k), J = ∂M/∂(D, A, θ) with the
+        θ columns by central differences (one launch); NaN where the amplitude is 0 (the
+        shape parameters then have no effect) or the Jacobian is singular."""
+        k, k0 = loop.curvature, loop.k0
+        step = 1e-4
+        probes = np.concatenate([shape[None, :] * np.exp(step * np.eye(len(shape))),
+                                 shape[None, :] * np.exp(-step * np.eye(len(shape)))])
+        offsets = self.unit_offsets(k, np.vstack([shape[None, :], probes]), k0, device)
+        columns = [k, offsets[:, 0]]
+        n_shape = len(shape)
+        for j in range(n_shape):
+            # ∂M/∂θ_j = A ∂g/∂ln θ_j / θ_j
+            columns.append(a * (offsets[:, 1 + j] - offsets[:, 1 + n_shape + j]) / (2 * step * shape[j]))
+        jacobian = np.column_stack(columns)
+        names = [RIGIDITY.field, self.amplitude.field, *(p.field for p in self.shape)]
+        dof = len(k) - len(names)
+        if a == 0.0 or dof <= 0:
+            return {name: math.nan for name in names}
+        try:
+            covariance = sse / dof * np.linalg.inv(jacobian.T @ jacobian)
+        except np.linalg.LinAlgError:
+            return {name: math.nan for name in names}
+        return {name: float(math.sqrt(v)) if v >= 0 else math.nan for name, v in zip(names, np.diag(covariance),
+                                                                                     strict=True)}
 
     def _fixed(self, k0: float) -> dict[str, float]:
         return {self.k0.field: k0} if self.k0 else {}
@@ -309,5 +343,6 @@ class LawFitter:
         rms = math.sqrt(total / len(k))
         parameters = {RIGIDITY.field: d_fit, self.amplitude.field: a_fit,
                       **{p.field: float(v) for p, v in zip(self.shape, shape, strict=True)}, **self._fixed(k0)}
+        sigma = self.uncertainties(loop, d_fit, a_fit, shape, total, device)
         return self.result(self.law, parameters, rms, rms / (float(np.ptp(m)) or 1.0), d_fit * k + a_fit * offset,
-                           self.free_parameters, note)
+                           self.free_parameters, note, sigma)
