@@ -412,7 +412,7 @@ def test_cli_fit_kes_on_the_example_data(tmp_path):
                          "-o", "wool.toml", "--density-g-per-cm2", "2.03e-2", "--plot", "fit.png", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     out = done.stdout
-    assert "D 0.100093 gf·cm²/cm, D1 0.0398362 gf·cm/cm, α 5.05015 cm, K0 2.5 1/cm" in out
+    assert "D 0.100093 ± 8.2e-05 gf·cm²/cm, D1 0.0398362 ± 0.00022 gf·cm/cm, α 5.05015 ± 0.15 cm, K0 2.5 1/cm" in out
     assert "KES: EMT 6.001 %, WT 8.169 gf·cm/cm², LT 0.5421, RT 52.7 %" in out
     assert "KES: B 0.09949 gf·cm²/cm, 2HB 0.03825 gf·cm/cm" in out
     assert (tmp_path / "fit.png").stat().st_size > 10_000

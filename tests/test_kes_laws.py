@@ -222,7 +222,7 @@ def test_cli_fit_kes_law_all_on_the_bundled_example(monkeypatch, tmp_path, capsy
     assert "recommended by AIC: tagawa2003" in out
     assert "wrote wool.toml with the tagawa2003 bending law, the one AIC recommends" in out
     # unchanged from --law tagawa2003 (tests/test_kes.py) where the law is the same
-    assert "D 0.100093 gf·cm²/cm, D1 0.0398362 gf·cm/cm, α 5.05015 cm, K0 2.5 1/cm" in out
+    assert "D 0.100093 ± 8.2e-05 gf·cm²/cm, D1 0.0398362 ± 0.00022 gf·cm/cm, α 5.05015 ± 0.15 cm, K0 2.5 1/cm" in out
     data = tomllib.loads((tmp_path / "wool.toml").read_text())
     assert data["material"]["bending_law"] == "tagawa2003"
     assert "the lowest AIC of tagawa2003, dahl, frictional_couple" in data["material"]["source"]
@@ -251,7 +251,8 @@ def test_cli_fit_kes_one_other_law(monkeypatch, tmp_path, capsys):
                            "kes_fb2_example", "-o", "dahl.toml", "--density-g-per-cm2", "2.03e-2", "--law", "dahl",
                            "--plot", "dahl.png")
     assert status == 0, err
-    assert "law dahl: D 0.100114 gf·cm²/cm, M_s 0.019848 gf·cm/cm, K_s 0.197751 1/cm, n 0.936558" in out
+    assert ("law dahl: D 0.100114 ± 8.2e-05 gf·cm²/cm, M_s 0.019848 ± 0.00012 gf·cm/cm, K_s 0.197751 ± 0.0056 1/cm, "
+            "n 0.936558 ± 0.053") in out
     assert "AIC -6155.14, BIC -6138.27 (4 free parameters)" in out
     assert "law  " not in out  # one law: no comparison table
     material = read_material_file(tmp_path / "dahl.toml")["material"]
