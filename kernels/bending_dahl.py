@@ -12,6 +12,9 @@ step of monotone curvature the equation is integrated exactly (y = 1 − s h / M
     y = y₀ · exp(−|ΔK| / K_s)                              n = 1
     y = (y₀^(1−n) + (n − 1) |ΔK| / K_s)^(1/(1−n))          n ≠ 1 (y = 0 once it reaches 0, n < 1)
 
+(evaluated as y₀ exp(−ln(1 + x)/(n − 1)), x = (n − 1)(|ΔK|/K_s) y₀^(n−1), which does not
+cancel as n → 1)
+
 so the moment does not depend on how the curvature path is sampled. n = 1 is exactly the
 paper's law with M0 = M_s and α = 1/K_s (kernels/bending_tagawa2003.py); n → 0 is a
 frictional couple regularised by a spring of stiffness M_s / K_s
@@ -55,16 +58,27 @@ def build(scalar: Any) -> SimpleNamespace:
     one = scalar(1.0)
 
     @wp.func
+    def log1p(x: scalar):
+        # ln(1 + x) to full precision for small x (Goldberg: the rounding of 1 + x cancels)
+        w = one + x
+        if w == one:
+            return x
+        return wp.log(w) * x / (w - one)
+
+    @wp.func
     def remaining(y0: scalar, run: scalar, n: scalar):
-        # y after a monotone run of |ΔK| / K_s = run, from y0 (exact for dy/dK ∝ −y^n)
+        # y after a monotone run of |ΔK| / K_s = run, from y0 (exact for dy/dK ∝ −y^n):
+        # y^(1−n) = y0^(1−n) + (n − 1) run, written as y0 exp(−ln(1 + x)/(n − 1)) with
+        # x = (n − 1) run y0^(n−1), which stays accurate as n → 1 (the difference of two
+        # powers would cancel) and tends to the exponential branch there
         if y0 <= zero:
             return zero
         if n == one:
             return y0 * wp.exp(-run)
-        q = wp.pow(y0, one - n) + (n - one) * run
-        if q <= zero:
+        x = (n - one) * run * wp.pow(y0, n - one)
+        if x <= -one:
             return zero  # n < 1: saturated within the step
-        return wp.pow(q, one / (one - n))
+        return y0 * wp.exp(-log1p(x) / (n - one))
 
     @wp.func
     def fresh_memory(curvature: scalar, p: Parameters):

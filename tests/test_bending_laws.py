@@ -230,3 +230,25 @@ def test_a_sweep_over_the_law_keeps_the_law_in_every_result(tmp_path):
         wc.load_recording(tmp_path / "s", where="material.bending_law<dahl")
     out = wc.export_usd(recording, tmp_path / "laws.usda")
     assert 'string[] primvars:warpcloth:material:bending_law = ["dahl"]' in out.read_text()
+
+
+@pytest.mark.parametrize("offset", [1e-3, 1e-7, 1e-10, 1e-13])
+def test_dahl_is_continuous_in_its_exponent_through_one(offset):
+    # the update must not cancel as n → 1: n = 1 ± δ differs from n = 1 by O(δ), not by
+    # rounding amplified 1/δ times (measured 0.13 M_s at δ = 1e-14 before the fix)
+    path = kes_path()
+    exact = material("dahl", dahl_exponent=1.0)
+    m1, _ = moment_along_path(exact, path)
+    for n in (1 + offset, 1 - offset):
+        m, _ = moment_along_path(material("dahl", dahl_exponent=n), path)
+        assert np.abs(m - m1).max() < max(10 * offset, 1e-13) * exact.dahl_moment, n
+
+
+def test_a_material_files_law_must_be_a_law_name(tmp_path):
+    from warpcloth.errors import SceneError
+
+    path = tmp_path / "m.toml"
+    path.write_text('[material]\nname = "x"\nsource = "test"\nbending_law = ["dahl"]\ndensity_g_per_cm2 = 0.02\n'
+                    'tensile_gf_per_cm = [2000.0, 0.0, 0.0, 2.93e7]\nbending_rigidity_gf_cm2_per_cm = 0.1\n')
+    with pytest.raises(SceneError, match=r"m.toml: material.bending_law must be one of .*; got \['dahl'\]"):
+        wc.load_scene("damped_swing", {"material.from_file": str(path)})

@@ -132,7 +132,7 @@ def read_material_file(ref: str | Path) -> dict:
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: needs a [material] table (and [fit], if any, a table)")
     # a file without bending_law predates the other laws: the paper's
     law = material.get("bending_law", DEFAULT_BENDING_LAW)
-    if law not in BENDING_LAWS:
+    if not isinstance(law, str) or law not in BENDING_LAWS:
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: material.bending_law must be one of "
                          f"{', '.join(BENDING_LAWS)}; got {law!r}")
     missing = [k for k in [*material_fields(law), "source"] if k not in material]

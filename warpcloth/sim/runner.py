@@ -20,22 +20,12 @@ from .labelled import probes_dataset, probes_frame
 from .model import Model
 from .recorder import Recorder, Schedule
 from .resources import check_memory
-from .solvers import Solver, describe_divergence
+from .solvers import BUDGET_TOLERANCE, Solver, describe_divergence
 from .state import State
 
 TARGET_LAUNCH_SECONDS = 0.5  # long enough to amortise launch cost, short enough for progress
 BUFFER_BYTES = 64 * 2**20  # cap on the per-chunk probe and frame buffers
 DIVERGENCE_POLICIES = ("raise", "record")
-BUDGET_TOLERANCE = 0.1
-"""A strip whose energy budget (docs/model.md §10) has moved from its value at the release by
-more than this fraction of its energy scale has diverged, even if no strain or fold check
-fired: an unstable step (imex beyond its bending limit, forward Euler) can grow a zig-zag
-or an oscillation long before a segment overstretches. The scale is the peak kinetic
-energy up to that sample, and at least 1e-3 of the strip's weight times its free length
-(just after a release the kinetic energy is still near 0, and rounding is not). A healthy
-run's budget stays within 1e-2 of its peak kinetic energy (imex at its largest stable dt),
-usually 1e-4. The check reads the recorded samples, so where it fires does not depend on
-how the run is cut into launches."""
 BUDGET_TERMS = ("kinetic", "gravitational", "tensile", "bending_elastic_work", "hysteresis_work", "damping_work")
 
 
@@ -59,11 +49,11 @@ class BudgetWatch:
         peak = np.maximum(self.peak_kinetic, np.fmax.accumulate(np.nan_to_num(kinetic, nan=0.0), axis=0))
         self.peak_kinetic = peak[-1]
         with np.errstate(invalid="ignore"):
-            bad = usable & (np.abs(total - self.reference) > BUDGET_TOLERANCE * np.maximum(peak, self.floor))
+            bad = usable & (total - self.reference > BUDGET_TOLERANCE * np.maximum(peak, self.floor))
         out = {}
         for strip in np.flatnonzero(bad.any(axis=0)):
             n = int(np.argmax(bad[:, strip]))
-            out[int(strip)] = (n, float(np.abs(total[n, strip] - self.reference[strip])
+            out[int(strip)] = (n, float((total[n, strip] - self.reference[strip])
                                         / max(peak[n, strip], self.floor[strip])))
         return out
 
@@ -239,8 +229,11 @@ def _stop_unbalanced(state: State, budget: BudgetWatch, values: np.ndarray, step
     # into launches (the samples from it on are dropped like others').
     fields = {name: getattr(state.struct, name).numpy() for name in ("status", "status_step", "status_index",
                                                                      "status_value")}
-    stopped = (fields["status"] != 0)
-    usable = ~stopped[None, :] | (steps[:, None] < fields["status_step"][None, :])
+    # a kernel stop keeps the sample of its step for strain and fold (1, 2), not for a
+    # non-finite energy (3); only kept samples are checked
+    stopped = fields["status"] != 0
+    through = np.where(fields["status"] == STATUS_NONFINITE_ENERGY, fields["status_step"] - 1, fields["status_step"])
+    usable = ~stopped[None, :] | (steps[:, None] <= through[None, :])
     failed = {s: v for s, v in budget.first_violation(values, usable).items() if s not in known}
     if not failed:
         return

@@ -193,12 +193,16 @@ def plot_shapes(recording: Recording, path: Path, times: np.ndarray, variant: in
 def kes_loop(recording: Recording, variant: int = 0, samples: int = 400) -> tuple[np.ndarray, np.ndarray]:
     """The material's KES-FB2 loop (0 → K0 → −K0 → K0): curvature (1/m), moment (N·m/m)."""
     material = to_si(recording.scenes[variant].material)
-    k0 = material.hysteresis_k0
+    # the paper's law closes its loop at its K0; the others are charted on the standard cycle
+    k0 = material.hysteresis_k0 if material.bending_law == "tagawa2003" else KES_K0_PER_CM * units.CURVATURE_PER_CM
     path = np.concatenate([np.linspace(0, k0, samples), np.linspace(k0, -k0, 2 * samples)[1:],
                            np.linspace(-k0, k0, 2 * samples)[1:]])
     moment, _ = moment_along_path(material, path)
     return path, moment
 
+
+KES_K0_PER_CM = 2.5
+"""The standard KES-FB2 cycle's largest curvature (1/cm)."""
 
 KES_B_RANGE_PER_CM = (0.5, 1.5)
 """Where KES-FB2 reads B (the slope) and 2HB (the loop's width, at the middle: K = ±1 1/cm)."""
