@@ -162,9 +162,12 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
         first_frame: int,
         probes: wp.array3d(dtype=scalar),
         frames: wp.array3d(dtype=vec2),
+        first_strip: int,
     ):
-        """Advance every strip to each output step in turn, recording probes (and frames)."""
-        s = wp.tid()
+        """Advance strips ``first_strip`` … ``first_strip + dim − 1`` to each output step in
+        turn, recording probes (and frames); a batch may be split into such ranges, each
+        launched from its own CPU thread (every strip is independent)."""
+        s = first_strip + wp.tid()
         if state.status[s] != STATUS_OK:
             return
         step = state.step[s]

@@ -26,6 +26,7 @@ def simulate(
     initial_positions: np.ndarray | None = None,
     initial_velocities: np.ndarray | None = None,
     overwrite: bool = False,
+    threads: int | None = None,
 ) -> RunResult:
     """Run one batch of strips (one scene per strip) and return what it recorded.
 
@@ -35,7 +36,9 @@ def simulate(
     strips go on. ``initial_positions`` / ``initial_velocities`` (``[node, variant, xy]``,
     m and m/s) replace the straight hanging start, e.g. with a mode shape; hinges start
     fresh there. An ``out`` that already holds something is refused unless ``overwrite``,
-    and then replaced only once the new run is complete.
+    and then replaced only once the new run is complete. On a CPU the batch's strips are
+    shared among ``threads`` threads (default: every core this process may use; the
+    results are bitwise the same for any count).
     """
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
     wrong = next((s for s in scenes if not isinstance(s, Scene)), None)
@@ -57,7 +60,8 @@ def simulate(
     parameters = {name: column.to_numpy() for name, column in per_strip_parameters(scenes).items()}
     return simulate_batch(batch.model, batch.control, batch.solver, batch.recorder, state, sink=sink,
                           progress=progress, on_divergence=on_divergence, keep_frames=keep_frames, labels=scenes,
-                          parameters=parameters, attrs={"coordinates": f"{COORDINATES}; t = 0 at the release"})
+                          parameters=parameters, attrs={"coordinates": f"{COORDINATES}; t = 0 at the release"},
+                          threads=threads)
 
 
 def run(scene: str | Path | Scene, overrides: Overrides = (), **kwargs: object) -> RunResult:

@@ -62,7 +62,8 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
     init_warp_quietly()  # a worker process starts Warp afresh: no banner or notices in the results
     scenes = [scene_from_dict(d) for d in scene_dicts]
     started = time.perf_counter()
-    result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames)
+    # one thread per batch: the sweep already runs its batches on the cores
+    result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
     wall = time.perf_counter() - started
     diverged = {d["strip"]: d for d in result.diverged}
 
@@ -108,7 +109,7 @@ def warm_kernel_cache(scenes: list[Scene], device: str | None) -> None:
         data = scene.to_dict()
         data["release"]["enabled"] = False
         data["run"]["duration_s"] = scene.output_interval
-        simulate(scene_from_dict(data), device=device, keep_frames=False, on_divergence="record")
+        simulate(scene_from_dict(data), device=device, keep_frames=False, on_divergence="record", threads=1)
 
 
 def run_sweep(

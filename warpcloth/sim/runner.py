@@ -3,6 +3,7 @@ policy, and streaming each finished chunk to a sink (e.g. a run directory writer
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -56,6 +57,14 @@ class BudgetWatch:
             out[int(strip)] = (n, float((total[n, strip] - self.reference[strip])
                                         / max(peak[n, strip], self.floor[strip])))
         return out
+
+
+def available_cores() -> int:
+    """The CPU cores this process may run on (its affinity, else the machine's count)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
 
 
 def check_divergence_policy(on_divergence: str) -> None:
@@ -153,6 +162,7 @@ def simulate_batch(
     labels: list[Any] | None = None,
     parameters: dict[str, np.ndarray] | None = None,
     attrs: dict[str, object] | None = None,
+    threads: int | None = None,
 ) -> RunResult:
     """Run a built batch to the end of the recorder's schedule and return what it recorded.
 
@@ -160,9 +170,14 @@ def simulate_batch(
     stops at the first diverged strip with a DivergenceError (its ``result`` holds what
     was recorded); ``"record"`` lets the other strips go on. ``labels`` become
     ``RunResult.scenes``; ``parameters`` and ``attrs``, the result's (see there).
+    ``threads`` CPU threads share each launch's strips (default: the cores this process
+    may use); results are bitwise the same for any count.
     """
     check_divergence_policy(on_divergence)
     check_recording_fits(model, control, recorder, keep_frames)
+    threads = available_cores() if threads is None else threads
+    if threads < 1:
+        raise ValueError(f"threads must be at least 1, got {threads}")
     state = state or model.state()
     schedule = recorder.schedule(control, solver)
     b, n, nq = model.n_strips, model.n_nodes, len(PROBE_FIELDS)
@@ -195,7 +210,8 @@ def simulate_batch(
             k0 = schedule.k_min + i
             first_frame = -(-max(k0, 0) // ppf)
             tic = time.perf_counter()
-            solver.advance(state, control, recorder, schedule.steps[i:j], k0, first_frame, probes_buf, frames_buf)
+            solver.advance(state, control, recorder, schedule.steps[i:j], k0, first_frame, probes_buf, frames_buf,
+                           threads)
             wp.synchronize_device(model.device)
             wall = time.perf_counter() - tic
             new = _collect(solver, state, control, schedule, i, j, probes_buf, frames_buf, probes_all, frames_all,

@@ -8,6 +8,7 @@ solver class here registered in :data:`SOLVERS`.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from typing import Protocol
 
 import numpy as np
@@ -59,8 +60,9 @@ class Solver(Protocol):
         """Step index of t = 0 under ``control``."""
 
     def advance(self, state: State, control: Control, recorder: Recorder, output_steps: np.ndarray,
-                first_output: int, first_frame: int, probes: wp.array, frames: wp.array) -> None:
-        """Advance every healthy strip to each of ``output_steps``, recording probes and frames."""
+                first_output: int, first_frame: int, probes: wp.array, frames: wp.array, threads: int = 1) -> None:
+        """Advance every healthy strip to each of ``output_steps``, recording probes and
+        frames, on up to ``threads`` CPU threads."""
 
     def divergence_report(self, state: State, control: Control, strip: int) -> dict | None:
         """Where and how ``strip`` diverged, or None while it is healthy."""
@@ -103,8 +105,11 @@ class ExplicitEulerSolver:
         return s
 
     def advance(self, state: State, control: Control, recorder: Recorder, output_steps: np.ndarray,
-                first_output: int, first_frame: int, probes: wp.array, frames: wp.array) -> None:
-        """Advance every healthy strip to each step in ``output_steps`` in one launch.
+                first_output: int, first_frame: int, probes: wp.array, frames: wp.array, threads: int = 1) -> None:
+        """Advance every healthy strip to each step in ``output_steps``: one launch, or on
+        a CPU one launch per thread over contiguous ranges of strips (Warp runs a CPU
+        launch on one thread and releases the GIL, so ``threads`` launches fill that many
+        cores); every strip's arithmetic is the same either way, bit for bit.
 
         Probe k of the chunk goes to ``probes[k, :, strip]``; outputs that are frames
         (index ≥ 0, a multiple of probes_per_frame) go to ``frames[index // ppf −
@@ -112,10 +117,21 @@ class ExplicitEulerSolver:
         """
         model = self.model
         steps = wp.array(np.asarray(output_steps, dtype=np.int32), dtype=int, device=model.device)
-        wp.launch(self.kernels.advance, dim=model.n_strips, device=model.device,
-                  inputs=[model.struct, control.struct, self._stepping(control), state.struct,
-                          recorder.settings(self.kernels.ProbeSettings, model.scalar), steps, int(first_output),
-                          int(first_frame), probes, frames])
+        inputs = [model.struct, control.struct, self._stepping(control), state.struct,
+                  recorder.settings(self.kernels.ProbeSettings, model.scalar), steps, int(first_output),
+                  int(first_frame), probes, frames]
+        parts = min(threads, model.n_strips) if model.device.is_cpu else 1
+        bounds = np.linspace(0, model.n_strips, parts + 1).round().astype(int)
+
+        def launch(part: int) -> None:
+            wp.launch(self.kernels.advance, dim=int(bounds[part + 1] - bounds[part]), device=model.device,
+                      inputs=[*inputs, int(bounds[part])])
+
+        if parts == 1:
+            launch(0)
+            return
+        with ThreadPoolExecutor(parts) as pool:
+            list(pool.map(launch, range(parts)))
 
     def divergence_report(self, state: State, control: Control, strip: int) -> dict | None:
         """Where and how ``strip`` diverged, or None while it is healthy."""
