@@ -88,9 +88,11 @@ def build(scalar: Any) -> SimpleNamespace:
         return v + f * (dt / m)
 
     @wp.func
-    def direction_of(state: StripState, i: int, s: int):
+    def segment(state: StripState, i: int, s: int):
+        # segment i's unit direction and length
         e = state.position[i + 1, s] - state.position[i, s]
-        return e / wp.length(e)
+        length = wp.length(e)
+        return e / length, length
 
     @wp.func
     def stretching_corrections(model: StripModel, control: StripControl, stepping: Stepping, state: StripState,
@@ -103,7 +105,7 @@ def build(scalar: Any) -> SimpleNamespace:
         axial = model.width[s] / l0
         a = model.tensile[s]
         # Forward elimination, segment by segment down the chain; row i couples ΔT_{i-1}, ΔT_i, ΔT_{i+1}.
-        u = direction_of(state, first, s)
+        u, length = segment(state, first, s)
         w_start = end_velocity(model, control, stepping, state, s, first, step, held, gamma, t_next)
         inv_start = inverse_mass(model, first, s, held)
         previous_c = zero  # c'_{i-1}
@@ -112,12 +114,12 @@ def build(scalar: Any) -> SimpleNamespace:
         for i in range(first, n - 1):
             w_end = end_velocity(model, control, stepping, state, s, i + 1, step, held, gamma, t_next)
             inv_end = inverse_mass(model, i + 1, s, held)
-            length = wp.length(state.position[i + 1, s] - state.position[i, s])
             k = axial * stiffness((length - l0) / l0, a)
             upper = zero
             u_next = u
+            length_next = length
             if i + 1 < n - 1:
-                u_next = direction_of(state, i + 1, s)
+                u_next, length_next = segment(state, i + 1, s)  # each segment measured once per pass
                 upper = -wp.dot(u, u_next) * inv_end
             diagonal = one / (k * dt * dt) + inv_start + inv_end
             rhs = wp.dot(u, w_end - w_start) / dt
@@ -127,6 +129,7 @@ def build(scalar: Any) -> SimpleNamespace:
             state.elimination[i, s] = vec2(previous_c, previous_d)
             lower = upper  # the matrix is symmetric: row i+1's lower is row i's upper
             u = u_next
+            length = length_next
             w_start = w_end
             inv_start = inv_end
         # Back substitution up the chain, turning each ΔT into forces on its two nodes.
@@ -136,7 +139,7 @@ def build(scalar: Any) -> SimpleNamespace:
             i = n - 2 - step_up
             row = state.elimination[i, s]
             tension = row[1] - row[0] * tension_below
-            u = direction_of(state, i, s)
+            u, _length = segment(state, i, s)
             state.correction[i + 1, s] = tension_below * u_below - tension * u
             tension_below = tension
             u_below = u

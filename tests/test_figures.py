@@ -522,3 +522,17 @@ def test_a_text_column_is_refused_as_a_metric():
                             "diverged_phase": ["", "", ""], "first_period_s": [0.5, 0.5, 0.5], "diverged": False})
     with pytest.raises(OptionError, match="--metric: 'diverged_phase' is not a number per variant"):
         sweep_figure(summary, "diverged_phase", "damping.gamma_per_s")
+
+
+def test_many_variants_differing_by_a_choice_are_coloured_by_it(tmp_path, figures):
+    # 9 variants whose only difference is the bending law: colours follow the laws'
+    # order (as renders and USD colour them), no legend, and no float conversion of a name
+    laws = ["tagawa2003", "dahl", "frictional_couple"] * 3
+    scenes = [wc.load_scene("damped_swing", {"run.duration_s": 0.05, "release.settle_time_s": 0.05,
+                                             "material.bending_law": law}) for law in laws]
+    wc.simulate(scenes, out=tmp_path / "run")
+    plot_run(load_recording(tmp_path / "run"), tmp_path / "f")
+    ax, colourbar = figures["amplitude.png"].axes
+    assert ax.get_legend() is None and colourbar.get_ylabel() == "bending law"
+    colours = [tuple(line.get_color()) for line in ax.get_lines()[:9]]
+    assert colours[0] == colours[3] == colours[6] != colours[1]

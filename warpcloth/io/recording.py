@@ -66,6 +66,11 @@ class Recording:
         return np.abs(self.frame_times[None, :] - times[:, None]).argmin(axis=1)
 
     @property
+    def varying(self) -> list[str]:
+        """The parameters that differ between the selected variants, in column order."""
+        return [c for c in self.parameters.columns if c != "variant" and self.parameters[c].nunique() > 1]
+
+    @property
     def frame_rate(self) -> float:
         """Shape frames per second."""
         return self.scenes[0].output.frame_rate_hz

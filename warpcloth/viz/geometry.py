@@ -26,13 +26,12 @@ def variant_colours(values: np.ndarray) -> np.ndarray:
 def colour_values(recording: Recording) -> np.ndarray:
     """What colours the variants: the first parameter that differs between them, else
     the variant number."""
-    for name in recording.parameters.columns:
-        column = recording.parameters[name]
-        if name != "variant" and column.nunique() > 1:
-            # a choice (e.g. the bending law) colours by its values' order of appearance
-            return column.to_numpy(dtype=float) if pd.api.types.is_numeric_dtype(column) else \
-                pd.factorize(column)[0].astype(float)
-    return recording.variants.astype(float)
+    if not recording.varying:
+        return recording.variants.astype(float)
+    column = recording.parameters[recording.varying[0]]
+    # a choice (e.g. the bending law) colours by its values' order of appearance
+    return column.to_numpy(dtype=float) if pd.api.types.is_numeric_dtype(column) else \
+        pd.factorize(column)[0].astype(float)
 
 
 def points3(xy: np.ndarray) -> np.ndarray:

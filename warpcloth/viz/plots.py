@@ -27,13 +27,13 @@ from warpcloth.metrics import extrema  # noqa: E402
 from warpcloth.scene import to_si  # noqa: E402
 from warpcloth.sim import moment_along_path  # noqa: E402
 from warpcloth.viz import DPI, FORMATS  # noqa: E402
+from warpcloth.viz.geometry import colour_values  # noqa: E402
 
 MM = 1 / units.LENGTH_MM
 
 
 def _label(recording: Recording, j: int) -> str:
-    varying = [c for c in recording.parameters.columns
-               if c != "variant" and recording.parameters[c].nunique() > 1][:2]
+    varying = recording.varying[:2]
     values = [recording.parameters[c].iloc[j] for c in varying]
     parts = [f"{c.split('.')[-1]}={v:.3g}" if isinstance(v, float) else f"{c.split('.')[-1]}={v}"
              for c, v in zip(varying, values, strict=True)]
@@ -51,9 +51,8 @@ def _variant_colours(recording: Recording, fig: plt.Figure, ax: plt.Axes) -> lis
     n = len(recording.variants)
     if n <= LEGEND_VARIANTS:
         return [(f"C{j}", _label(recording, j)) for j in range(n)]
-    varying = [c for c in recording.parameters.columns if c != "variant" and recording.parameters[c].nunique() > 1]
-    key = varying[0] if varying else "variant"
-    values = recording.parameters[key].to_numpy(dtype=float)
+    key = recording.varying[0] if recording.varying else "variant"
+    values = colour_values(recording)  # as renders and USD colour them (a choice by its values' order)
     norm = matplotlib.colors.Normalize(values.min(), values.max() if values.max() > values.min() else None)
     fig.colorbar(matplotlib.cm.ScalarMappable(norm, "viridis"), ax=ax, label=field_label(key))
     return [(plt.cm.viridis(norm(v)), None) for v in values]
