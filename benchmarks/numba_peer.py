@@ -472,9 +472,10 @@ def sweep_scenes(samples: int, record: float, overrides: list[str] = ()) -> tupl
     return sweep, list(sweep.scenes)
 
 
-def free_runs(samples: int, duration: float, count: int) -> list[wc.Scene]:
-    """``count`` sweep variants (cycled) without the hold, for the throughput tables."""
-    _sweep, scenes = sweep_scenes(samples, duration, ["release.enabled=false"])
+def free_runs(samples: int, duration: float, count: int, extra: list[str] = ()) -> list[wc.Scene]:
+    """``count`` sweep variants (cycled) without the hold, for the throughput tables
+    (``extra``: more overrides, e.g. the scheme and dt)."""
+    _sweep, scenes = sweep_scenes(samples, duration, ["release.enabled=false", *extra])
     return [scenes[i % len(scenes)] for i in range(count)]
 
 
@@ -486,8 +487,9 @@ def warpcloth_wall(scenes: list[wc.Scene], x0: np.ndarray, threads: int) -> tupl
     done = []
 
     def one(part: list[int]) -> None:
+        # one launch a Python thread: the threads here are the ones being measured
         result = wc.simulate([scenes[i] for i in part], initial_positions=np.repeat(x0[:, None, :], len(part), axis=1),
-                             keep_frames=False, on_divergence="record")
+                             keep_frames=False, on_divergence="record", threads=1)
         done.append(result.strip_steps)
 
     start = time.perf_counter()
@@ -499,14 +501,15 @@ def warpcloth_wall(scenes: list[wc.Scene], x0: np.ndarray, threads: int) -> tupl
     return time.perf_counter() - start, sum(done)
 
 
-def warpcloth_rate(samples: int, b: int, steps: int, dt: float, x0: np.ndarray, threads: int) -> float:
+def warpcloth_rate(samples: int, b: int, steps: int, dt: float, x0: np.ndarray, threads: int,
+                   extra: list[str] = ()) -> float:
     """warpcloth's stepping rate (strip-steps/s) on ``b`` strips: the wall of a run of
     about ``steps`` steps less that of a one-sample run, so building the batch (about
     0.1 ms a strip, in the sweep's wall below) is left out as it is for the others."""
-    interval = free_runs(samples, 1.0, 1)[0].output_interval
-    long_wall, long_steps = warpcloth_wall(free_runs(samples, max(2, round(steps * dt / interval)) * interval, b),
-                                           x0, threads)
-    short_wall, short_steps = warpcloth_wall(free_runs(samples, interval, b), x0, threads)
+    interval = free_runs(samples, 1.0, 1, extra)[0].output_interval
+    long_wall, long_steps = warpcloth_wall(
+        free_runs(samples, max(2, round(steps * dt / interval)) * interval, b, extra), x0, threads)
+    short_wall, short_steps = warpcloth_wall(free_runs(samples, interval, b, extra), x0, threads)
     return (long_steps - short_steps) / (long_wall - short_wall)
 
 

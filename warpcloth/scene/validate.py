@@ -5,8 +5,9 @@ from __future__ import annotations
 import math
 
 from warpcloth.errors import SceneError
+from warpcloth.sim.solvers import SOLVERS
 
-from .materials import validate_material
+from .materials import to_si, validate_material
 from .schema import ClampSection, Scene
 
 MAX_STEPS = 2**31 - 1
@@ -43,6 +44,14 @@ def validate_scene(scene: Scene) -> None:
     if dt > scene.output_interval:
         raise SceneError("integrator.dt_s", f"{dt:g} s is longer than the probe interval "
                          f"{scene.output_interval:g} s (output.frame_rate_hz × output.probes_per_frame)")
+    limit = SOLVERS[scene.integrator.scheme].step_limit(to_si(scene.material), scene.spacing)
+    if limit is not None and dt > limit:
+        m = scene.material
+        raise SceneError("integrator.dt_s", f"{dt:g} s is above the {scene.integrator.scheme} scheme's stability "
+                         f"limit {limit:.4g} s for this strip: the stretching mode h·√(ρ_A/a1) with strip.spacing_mm "
+                         f"= {st.spacing_mm:g}, material.density_g_per_cm2 = {m.density_g_per_cm2:g}, "
+                         f"material.tensile_gf_per_cm[0] = {m.tensile_gf_per_cm[0]:g}; use a dt_s below {limit:.4g} s "
+                         "or integrator.scheme = \"imex\" (stretching implicit)")
     steps = (scene.preroll + scene.run.duration_s) / dt
     if steps > MAX_STEPS:
         raise SceneError("run.duration_s", f"{scene.preroll + scene.run.duration_s:g} s at dt {dt:g} s is "
