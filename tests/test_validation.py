@@ -140,3 +140,44 @@ def test_a_motion_given_to_a_fixed_clamp_is_refused():
     segment = "[{t_start_s = 0.0, t_end_s = 0.1, theta_coefficients_si = [0.0, 1.0]}]"
     with pytest.raises(wc.SceneError, match="clamp.segments: is given but clamp.motion = 'fixed' ignores it"):
         wc.load_scene("damped_swing", [f"clamp.segments={segment}"])
+
+
+def test_scene_errors_say_where_the_value_was_set(tmp_path):
+    import re
+
+    from warpcloth.scene.files import scene_source
+    from warpcloth.scene.locate import field_line
+
+    text, _ = scene_source("damped_swing")
+    scene = tmp_path / "swing.toml"
+    scene.write_text(text.replace("dt_s = 1e-5 ", "dt_s = 0.01 "))
+    line = 1 + next(i for i, row in enumerate(text.splitlines()) if row.startswith("dt_s"))
+    with pytest.raises(wc.SceneError, match=rf"^integrator.dt_s: 0.01 s is longer than the probe interval .* "
+                                            rf"\({re.escape(str(scene))}, line {line}\)$"):
+        wc.load_scene(scene)
+    with pytest.raises(wc.SceneError, match=r"\(set by the override integrator.dt_s=1e-4\)$"):
+        wc.load_scene("damped_swing", ["integrator.dt_s=1e-4"])
+    with pytest.raises(wc.SceneError, match=r"\(set by the override damping.gamma_per_s=-1.0\)$"):
+        wc.load_scene("damped_swing", {"damping.gamma_per_s": -1.0})
+    # an array of tables: the second [[clamp.segments]]'s key, not the first's
+    rotation, _ = scene_source("impulsive_rotation")
+    bad = tmp_path / "rotation.toml"
+    bad.write_text(rotation.replace("t_start_s = 0.05", "t_start_s = 0.06"))
+    second = 1 + next(i for i, row in enumerate(rotation.splitlines()) if row.startswith("t_start_s = 0.05"))
+    with pytest.raises(wc.SceneError, match=rf"clamp.segments\[1\].t_start_s: .*, line {second}\)$"):
+        wc.load_scene(bad)
+    # a sweep variant's bad value: the line that sweeps it
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(text + '\n[sweep.grid]\n"damping.gamma_per_s" = [0.5, -1.0]\n')
+    swept = len(sweep.read_text().splitlines())
+    with pytest.raises(wc.SceneError, match=rf"in sweep variant 1 .*, line {swept}\)$"):
+        wc.load_sweep(sweep)
+    # dotted keys, quoted keys and comments
+    assert field_line('# dt_s = 1\nintegrator.dt_s = 2  # x = 3\n[strip]\n"spacing_mm" = 5\n', "integrator.dt_s") == 2
+    assert field_line('[strip]\n"spacing_mm" = 5\n', "strip.spacing_mm") == 2
+    # a value nobody set (a default) is not located
+    empty = tmp_path / "empty.toml"
+    empty.write_text("")
+    with pytest.raises(wc.SceneError) as info:
+        wc.load_scene(empty, ["strip.spacing_mm=1e-9"])
+    assert info.value.message.endswith("(stretching implicit)")

@@ -11,11 +11,13 @@ class WarpclothError(Exception):
 class SceneError(WarpclothError, ValueError):
     """A scene or material field is missing, unknown, mistyped or out of range.
 
-    ``field`` is the dotted name of the offending field (e.g. ``strip.spacing_mm``).
+    ``field`` is the dotted name of the offending field (e.g. ``strip.spacing_mm``),
+    ``message`` what is wrong with it (and, once located, where it was set).
     """
 
     def __init__(self, field: str, message: str) -> None:
         self.field = field
+        self.message = message
         super().__init__(f"{field}: {message}")
 
 

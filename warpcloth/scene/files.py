@@ -6,8 +6,9 @@ import importlib.resources
 from pathlib import Path
 from typing import Any
 
-from warpcloth.errors import DataFileError, OptionError
+from warpcloth.errors import DataFileError, OptionError, SceneError
 
+from .locate import located
 from .materials import MATERIAL_FILE_KEY, with_material_file
 from .overrides import Overrides, apply_overrides
 from .parse import parse_section, parse_toml, read_toml_text
@@ -48,33 +49,37 @@ def is_path(name_or_path: str | Path) -> bool:
     return path.suffix == ".toml" or len(path.parts) > 1 or path.is_absolute() or "/" in written or "\\" in written
 
 
-def read_scene_file(name_or_path: str | Path) -> dict:
-    """Raw TOML data of a scene given by path or by bundled name (``damped_swing``).
+def scene_source(name_or_path: str | Path) -> tuple[str, str]:
+    """The TOML text of a scene given by path or by bundled name, and how to name it in a
+    message (the path, or ``bundled scene NAME``).
 
     A path (see :func:`is_path`) must name an existing file: it never falls back on the
-    bundled scene of the same stem. A relative ``material.from_file`` path in the file is
-    made absolute against the scene file's directory.
+    bundled scene of the same stem.
     """
     path = Path(name_or_path)
-    given_as_path = is_path(name_or_path)
-    if given_as_path:
+    if is_path(name_or_path):
         if not path.is_file():
             why = ("is a directory" if path.is_dir() else "ends in .toml" if path.suffix == ".toml"
                    else "has a directory part")
             raise DataFileError(str(name_or_path), f"no such scene file (a path, because it {why}; a bundled "
                                 f"scene is named without either: {', '.join(bundled_scenes())})")
-        text = read_toml_text(path)
-        where = str(path)
-    else:
-        resource = importlib.resources.files("warpcloth.scenes") / f"{path.name}.toml"
-        if not resource.is_file():
-            raise OptionError("SCENE", f"no bundled scene {str(name_or_path)!r} (bundled: "
-                             f"{', '.join(bundled_scenes())}; a scene file is a path ending in .toml)")
-        text = resource.read_text()
-        where = f"bundled scene {path.name}"
+        return read_toml_text(path), str(path)
+    resource = importlib.resources.files("warpcloth.scenes") / f"{path.name}.toml"
+    if not resource.is_file():
+        raise OptionError("SCENE", f"no bundled scene {str(name_or_path)!r} (bundled: "
+                         f"{', '.join(bundled_scenes())}; a scene file is a path ending in .toml)")
+    return resource.read_text(), f"bundled scene {path.name}"
+
+
+def read_scene_file(name_or_path: str | Path) -> dict:
+    """Raw TOML data of a scene given by path or by bundled name (``damped_swing``), see
+    :func:`scene_source`. A relative ``material.from_file`` path in the file is made
+    absolute against the scene file's directory.
+    """
+    text, where = scene_source(name_or_path)
     data = parse_toml(text, where, "scene")
-    if given_as_path:
-        _rebase_material_file(data, path.parent)
+    if is_path(name_or_path):
+        _rebase_material_file(data, Path(name_or_path).parent)
     return data
 
 
@@ -98,4 +103,7 @@ def load_scene(name_or_path: str | Path, overrides: Overrides = ()) -> Scene:
     """
     data = read_scene_file(name_or_path)
     data.pop("sweep", None)
-    return scene_from_dict(apply_overrides(data, overrides))
+    try:
+        return scene_from_dict(apply_overrides(data, overrides))
+    except SceneError as exc:
+        raise located(exc, *scene_source(name_or_path), overrides) from None

@@ -36,7 +36,8 @@ from tqdm import tqdm
 
 from warpcloth.errors import OptionError, SceneError
 
-from .files import read_scene_file, scene_from_dict
+from .files import read_scene_file, scene_from_dict, scene_source
+from .locate import located
 from .overrides import apply_overrides, set_field
 from .sampling import latin_hypercube
 from .schema import Scene, batch_fields
@@ -219,7 +220,11 @@ def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] 
     raw = read_scene_file(name_or_path)
     spec = {"sweep": raw.pop("sweep", None) or {}}
     own = [o for o in overrides if o.split("=", 1)[0].strip().startswith("sweep.")]
-    spec = apply_overrides(spec, own)
-    raw = apply_overrides(raw, [o for o in overrides if o not in own])
-    raw["sweep"] = spec["sweep"]
-    return expand(raw, max_variants, progress)
+    try:
+        spec = apply_overrides(spec, own)
+        raw = apply_overrides(raw, [o for o in overrides if o not in own])
+        raw["sweep"] = spec["sweep"]
+        return expand(raw, max_variants, progress)
+    except SceneError as exc:
+        # a variant's error names its swept value; the line that sweeps it is where to look
+        raise located(exc, *scene_source(name_or_path), overrides, swept="in sweep variant" in exc.message) from None
