@@ -1,4 +1,5 @@
-"""Registers, stack and spills per CUDA kernel, compiled ahead of time (run by hand; no GPU needed).
+"""Registers, stack and spills per CUDA kernel, compiled ahead of time, and the occupancy
+they imply (run by hand; no GPU needed).
 
     python benchmarks/cuda_registers.py [--archs 80 90] [--cuobjdump PATH] [--ptxas PATH]
 
@@ -10,12 +11,21 @@ PTX for the same architecture (its register count is checked against the CUBIN's
 tools are looked for on PATH and in NVIDIA's pip packages: ``pip install
 nvidia-cuda-cuobjdump`` (cuobjdump) and ``nvidia-cuda-nvcc`` (ptxas); neither is a project
 dependency, and a column whose tool is missing prints "-".
+
+The occupancy table takes each ``advance`` kernel's registers (one thread per strip) to
+an A100 (sm_80, 108 SMs) and an H100/H200 (sm_90, 132 SMs): 65 536 registers and 64
+resident warps per SM, registers allocated per warp in units of 256, at most 32 blocks
+per SM (NVIDIA's occupancy calculator rules). For B = 1e3, 1e4, 1e5 strips it prints how
+many blocks the launch has, how many SMs they can occupy, the waves, and the resident
+warps as a share of the GPU's warp slots, for Warp's default 256 threads a block and for
+64. An estimate from the rules, not a measurement: benchmarks/gpu.py measures.
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import math
 import re
 import shutil
 import subprocess
@@ -99,6 +109,34 @@ def ptxas_usage(tool: str, ptx: Path, arch: int, scratch: Path) -> dict[str, dic
     return usage
 
 
+SMS = {80: ("A100", 108), 90: ("H100/H200", 132)}
+REGISTERS_PER_SM, WARP_SLOTS, MAX_BLOCKS, ALLOCATION_UNIT = 65536, 64, 32, 256
+BATCHES = (1000, 10000, 100000)
+
+
+def blocks_per_sm(registers: int, block_dim: int) -> int:
+    """Resident blocks of ``block_dim`` threads per SM at ``registers`` per thread."""
+    warps = math.ceil(block_dim / 32)
+    per_warp = math.ceil(registers * 32 / ALLOCATION_UNIT) * ALLOCATION_UNIT
+    return min(MAX_BLOCKS, WARP_SLOTS // warps, REGISTERS_PER_SM // (per_warp * warps))
+
+
+def occupancy_rows(name: str, arch: int, registers: int) -> list[str]:
+    """Table rows: the launch of B strips at 256 and 64 threads a block."""
+    gpu, sms = SMS[arch]
+    rows = []
+    for block_dim in (256, 64):
+        resident = blocks_per_sm(registers, block_dim)
+        for b in BATCHES:
+            blocks = math.ceil(b / block_dim)
+            busy = min(sms, blocks)
+            warps = min(math.ceil(b / 32), resident * sms * math.ceil(block_dim / 32))
+            rows.append(f"| {name:<30} | {gpu:<9} | {registers:>4} | {block_dim:>5} | {resident:>10} | {b:>6} | "
+                        f"{blocks:>6} | {busy:>4}/{sms} | {blocks / (resident * sms):5.2f} | "
+                        f"{warps / (sms * WARP_SLOTS):10.1%} |")
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--archs", type=int, nargs="+", default=[80, 90])
@@ -125,6 +163,7 @@ def main() -> None:
              f"{'spill stores':>12} | {'spill loads':>11} |"
     print(header)
     print("|" + "|".join("-" * len(cell) for cell in header.split("|")[1:-1]) + "|")
+    occupancy = []
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         for name, kernel in variants().items():
@@ -145,6 +184,15 @@ def main() -> None:
                 print(f"| {name:<42} | sm_{arch:<2} | {cell(registers, 9)} | "
                       f"{cell(binary.get('STACK', assembled.get('stack')), 5)} | {cell(binary.get('LOCAL'), 5)} | "
                       f"{cell(assembled.get('spill_stores'), 12)} | {cell(assembled.get('spill_loads'), 11)} |")
+                count = binary.get("REG", assembled.get("registers"))
+                if name.startswith("advance") and arch in SMS and count is not None:
+                    occupancy += occupancy_rows(name, arch, count)
+    print("\noccupancy of the strip kernel (one thread per strip), from the registers above")
+    print(f"| {'kernel':<30} | {'GPU':<9} | {'regs':>4} | {'block':>5} | {'blocks/SM':>10} | {'B':>6} | "
+          f"{'blocks':>6} | {'SMs busy':>8} | {'waves':>5} | {'warp slots':>10} |")
+    print("|" + "|".join(["---"] * 10) + "|")
+    for row in occupancy:
+        print(row)
 
 
 if __name__ == "__main__":
