@@ -54,12 +54,12 @@ def stepping(scheme: str, dt: float) -> list[str]:
     return [f'integrator.scheme="{scheme}"', f"integrator.dt_s={dt!r}"]
 
 
-def test_strips(samples: int, record: float, elastic: bool) -> list[list[str]]:
+def strips_to_check(samples: int, record: float, elastic: bool) -> list[list[str]]:
     """Overrides of the strips the dt must keep within the tolerance: the bundled material,
     then (hysteretic case) the sweep variants with the largest D1 and the smallest D."""
     if elastic:
         return [ELASTIC]
-    sweep, scenes = sweep_scenes(samples, record)
+    _sweep, scenes = sweep_scenes(samples, record)
     d1 = [s.material.hysteresis_d1_gf_cm_per_cm for s in scenes]
     d = [s.material.bending_rigidity_gf_cm2_per_cm for s in scenes]
     picks = [int(np.argmax(d1)), int(np.argmin(d))]
@@ -78,7 +78,12 @@ def equal_accuracy_dt(strips: list[list[str]], record: float) -> dict[str, tuple
     chosen = {}
     for scheme, ladder in LADDERS.items():
         for dt in ladder:
-            runs = in_parallel([wc.load_scene("damped_swing", [*base, *stepping(scheme, dt), *s]) for s in strips])
+            try:
+                runs = in_parallel([wc.load_scene("damped_swing", [*base, *stepping(scheme, dt), *s])
+                                    for s in strips])
+            except wc.SceneError:
+                print(f"  {scheme:>13} dt = {dt:8.2g} s: refused (above the scheme's stability limit)")
+                break
             if any(r.diverged for r in runs):
                 print(f"  {scheme:>13} dt = {dt:8.2g} s: diverged")
                 break
@@ -90,7 +95,8 @@ def equal_accuracy_dt(strips: list[list[str]], record: float) -> dict[str, tuple
 
 
 def same_arithmetic(samples: int, dt: float, x0: np.ndarray) -> tuple[float, float]:
-    """Largest tip gap (m) over 0.2 s from the displaced start: NumPy and Numba against warpcloth."""
+    """Largest tip gap (m) over 0.2 s from the displaced start against warpcloth: NumPy's
+    final tip (it records none before), Numba's at every probe."""
     scenes = free_runs(samples, 0.2, 2, stepping("semi_implicit", dt))
     ours = wc.simulate(scenes, initial_positions=np.repeat(x0[:, None, :], 2, axis=1), keep_frames=False)
     steps = round(0.2 / dt)
@@ -131,7 +137,7 @@ def main() -> None:
     for label, elastic in (("hysteretic (bundled)", False), ("elastic (D1 = 0)", True)):
         print(f"\n1. equal-accuracy dt, damped swing, {label} material, {record:g} s record; "
               f"reference semi_implicit at dt = {REFERENCE_DT:g} s")
-        chosen[elastic] = equal_accuracy_dt(test_strips(samples, record, elastic), record)
+        chosen[elastic] = equal_accuracy_dt(strips_to_check(samples, record, elastic), record)
         for scheme in LADDERS:
             if scheme in chosen[elastic]:
                 dt, worst = chosen[elastic][scheme]
@@ -148,8 +154,8 @@ def main() -> None:
     for scheme in LADDERS:
         warpcloth_wall(free_runs(4, 0.002, 2, stepping(scheme, dt_semi)), x0, 1)
     gap_numpy, gap_numba = same_arithmetic(samples, dt_semi, x0)
-    print(f"\nsame arithmetic at dt = {dt_semi:g} s, 0.2 s from a displaced start: NumPy {gap_numpy:.1e} m, "
-          f"Numba {gap_numba:.1e} m from warpcloth's tip")
+    print(f"\nsame arithmetic at dt = {dt_semi:g} s, 0.2 s from a displaced start: NumPy's final tip "
+          f"{gap_numpy:.1e} m, Numba's at every probe {gap_numba:.1e} m from warpcloth's")
 
     # ---- 2. throughput at equal accuracy ----
     rows = []
@@ -197,15 +203,14 @@ def main() -> None:
     today = sweep_scenes(samples, record)[1][0].integrator.dt_s
     for label, scheme, dt in (("scene default", "semi_implicit", today),
                               *((scheme, scheme, dt) for scheme, (dt, _w) in chosen[False].items())):
-        sweep, scenes = sweep_scenes(samples, record, stepping(scheme, dt))
+        sweep, _scenes = sweep_scenes(samples, record, stepping(scheme, dt))
         with tempfile.TemporaryDirectory() as tmp:
             start = time.perf_counter()
             wc.run_sweep(sweep, Path(tmp) / "sweep", workers=cores)
             walls[label] = time.perf_counter() - start
-        steps = round((scenes[0].run.duration_s + scenes[0].preroll) / dt)
         print(f"   warpcloth {label:<14} dt = {dt:8.2g} s: {walls[label]:7.2f} s "
               f"({walls['scene default'] / walls[label]:.2f}× less than the scene default)")
-    sweep, scenes = sweep_scenes(samples, record, stepping("semi_implicit", dt_semi))
+    _sweep, scenes = sweep_scenes(samples, record, stepping("semi_implicit", dt_semi))
     numba.set_num_threads(cores)
     start = time.perf_counter()
     NumbaStrips(scenes).run()

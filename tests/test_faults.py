@@ -234,6 +234,8 @@ def test_a_damaged_complete_run_is_refused_by_name(tmp_path, damage):
      "too large: the state of 1 strip(s) of"),
     (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--bounds", "gamma=-5:1"),
      "--bounds: gamma = -5 is not a valid scene: damping.gamma_per_s: must be ≥ 0"),
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--set", "damping.gamma_per_s=-1"),
+     "damping.gamma_per_s: must be ≥ 0, got -1 (set by the override damping.gamma_per_s=-1)"),
     (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma,gamma"), "is named twice"),
     (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--align-start", "1e9"),
      "--align-start: 1e+09 s is longer than the measured record"),

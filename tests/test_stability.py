@@ -1,5 +1,7 @@
 """Forward Euler (the paper's eqs. 5-6) vs semi-implicit Euler at the paper's dt."""
 
+import re
+
 import pytest
 from conftest import overrides
 
@@ -38,31 +40,53 @@ def test_semi_implicit_stays_bounded_at_paper_dt():
     assert abs(result.probe("tip_x", 0)).max() < 1e-9
 
 
-@pytest.mark.parametrize("material", ["wool90-nylon10", "polyester-taffeta"])
-def test_the_refused_step_is_the_stretching_stability_limit(material):
-    # h·√(ρ_A/a1) (the default 5.09e-5 s, polyester-taffeta 1.34e-5 s at h = 5 mm) is where
-    # the undamped hanging strip stops being stable: a run at 0.98 of it stays at the
-    # static sag, one at 1.02 of it (built past the check) diverges within 0.2 s.
-    import dataclasses
+def past_the_check(scene, dt):
+    """Run ``scene`` at ``dt`` through the simulation core, which takes any dt (the scene
+    layer is what refuses an unstable one)."""
+    from warpcloth.scene import build_batch
+    from warpcloth.sim import SemiImplicitEulerSolver, simulate_batch
 
+    batch = build_batch([scene])
+    solver = SemiImplicitEulerSolver(batch.model, dt=dt, divergence_strain=scene.integrator.divergence_strain)
+    return simulate_batch(batch.model, batch.control, solver, batch.recorder, on_divergence="record",
+                          keep_frames=False, threads=1)
+
+
+@pytest.mark.parametrize("material, free_length_mm", [("wool90-nylon10", 100.0), ("polyester-taffeta", 100.0),
+                                                      ("wool90-nylon10", 10.0)])
+def test_the_refused_step_is_the_stretching_stability_limit(material, free_length_mm):
+    # h·√(ρ_A/a1)/cos(π/4N) (5.091e-5 s for the default material at h = 5 mm and N = 20 free
+    # nodes, 1.337e-5 s for polyester-taffeta; 5.50e-5 s at N = 2, where the cosine is
+    # 8 % from 1) is where the undamped hanging strip stops being stable: a run at 0.98
+    # of it stays at the static sag, one at 1.02 of it diverges within 0.2 s.
     from warpcloth.scene import to_si
     from warpcloth.sim.solvers import SemiImplicitEulerSolver
 
-    def hanging_at(fraction):
-        base = wc.load_scene("damped_swing", overrides(release__enabled=False, damping__gamma_per_s=0.0,
-                                                        run__duration_s=0.2,
-                                                        material__from_file=f"{material}"))
-        limit = SemiImplicitEulerSolver.step_limit(to_si(base.material), base.spacing)
-        integrator = dataclasses.replace(base.integrator, dt_s=fraction * limit)
-        return dataclasses.replace(base, integrator=integrator), limit
-
-    below, limit = hanging_at(0.98)
-    assert abs(wc.simulate(below).probe("tip_x", 0)).max() < 1e-9
-    above, _ = hanging_at(1.02)
-    assert wc.simulate(above, on_divergence="record").diverged
-    with pytest.raises(wc.SceneError, match=rf"integrator.dt_s: .* above the semi_implicit scheme's stability "
-                                            rf"limit {limit:.4g} s .*integrator.scheme = \"imex\""):
-        wc.load_scene("damped_swing", overrides(integrator__dt_s=1.02 * limit, material__from_file=material))
+    strip = dict(release__enabled=False, strip__free_length_mm=free_length_mm, material__from_file=material)
+    scene = wc.load_scene("damped_swing", overrides(damping__gamma_per_s=0.0, run__duration_s=0.2, **strip))
+    limit = SemiImplicitEulerSolver.step_limit(to_si(scene.material), scene.spacing,
+                                               scene.n_nodes - scene.n_clamped)
+    assert not past_the_check(scene, 0.98 * limit).diverged
+    assert past_the_check(scene, 1.02 * limit).diverged
+    with pytest.raises(wc.SceneError, match=r"integrator.dt_s: .* above the semi_implicit scheme's stability "
+                                            r"limit .*integrator.scheme = \"imex\"") as info:
+        wc.load_scene("damped_swing", overrides(integrator__dt_s=1.02 * limit, **strip))
+    # the advice is rounded down: a step of what it says runs
+    advised = float(re.search(r"a dt_s of at most (\S+) s", str(info.value)).group(1))
+    assert 0.999 * limit < advised <= limit
+    wc.load_scene("damped_swing", overrides(integrator__dt_s=advised, **strip))
     # imex takes the stretching implicitly: no such bound
-    wc.load_scene("damped_swing", overrides(integrator__dt_s=1.02 * limit, integrator__scheme="imex",
-                                            material__from_file=material))
+    wc.load_scene("damped_swing", overrides(integrator__dt_s=1.02 * limit, integrator__scheme="imex", **strip))
+
+
+def test_a_recorded_run_past_the_limit_stays_readable(tmp_path):
+    # the step check is for runs about to start: a stored scene is read back as it ran
+
+    run = tmp_path / "run"
+    wc.simulate(wc.load_scene("damped_swing", overrides(integrator__scheme="imex", integrator__dt_s=1e-4,
+                                                        run__duration_s=0.05, release__enabled=False)), out=run)
+    stored = run / "scene.toml"
+    stored.write_text(re.sub(r'scheme = "imex"', 'scheme = "semi_implicit"', stored.read_text()))
+    assert wc.load_recording(run).scenes[0].integrator.scheme == "semi_implicit"
+    with pytest.raises(wc.SceneError, match=rf"above the semi_implicit .*\({re.escape(str(stored))}, line \d+\)"):
+        wc.load_scene(stored)

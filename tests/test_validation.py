@@ -1,5 +1,7 @@
 """Bad input is refused before any kernel runs, with the field and value named."""
 
+import re
+
 import pytest
 from conftest import overrides
 
@@ -143,10 +145,8 @@ def test_a_motion_given_to_a_fixed_clamp_is_refused():
 
 
 def test_scene_errors_say_where_the_value_was_set(tmp_path):
-    import re
-
     from warpcloth.scene.files import scene_source
-    from warpcloth.scene.locate import field_line
+    from warpcloth.scene.locate import field_line, where_set
 
     text, _ = scene_source("damped_swing")
     scene = tmp_path / "swing.toml"
@@ -175,9 +175,27 @@ def test_scene_errors_say_where_the_value_was_set(tmp_path):
     # dotted keys, quoted keys and comments
     assert field_line('# dt_s = 1\nintegrator.dt_s = 2  # x = 3\n[strip]\n"spacing_mm" = 5\n', "integrator.dt_s") == 2
     assert field_line('[strip]\n"spacing_mm" = 5\n', "strip.spacing_mm") == 2
+    # the override that won (the last), one that replaced the list holding the field, the
+    # material file that replaced the material, a cross-field check's other field
+    with pytest.raises(wc.SceneError, match=r"got -2 \(set by the override damping.gamma_per_s=-2.0\)$"):
+        wc.load_scene("damped_swing", ["damping.gamma_per_s=-1.0", "damping.gamma_per_s=-2.0"])
+    segments = 'clamp.segments=[{t_start_s = 0.0, t_end_s = 0.1, theta_coefficients_si = [0.0, 1.0]}, ' \
+               '{t_start_s = 0.2, t_end_s = 0.3, theta_coefficients_si = [0.1]}]'
+    with pytest.raises(wc.SceneError, match=r"clamp.segments\[1\].t_start_s: .*\(set by the override clamp.segments="):
+        wc.load_scene("impulsive_rotation", [segments])
+    soft = tmp_path / "soft.toml"
+    soft.write_text('[material]\ndensity_g_per_cm2 = 0.0203\ntensile_gf_per_cm = [2000.0, -1e6, 0.0, 0.0]\n'
+                    'bending_rigidity_gf_cm2_per_cm = 0.1\n')
+    with pytest.raises(wc.SceneError, match=rf"\(set by the override material.from_file=\"{re.escape(str(soft))}\"\)$"):
+        wc.load_scene("damped_swing", [f'material.from_file="{soft}"'])
+    with pytest.raises(wc.SceneError, match=r"^release.hold_x_mm: .*\(set by the override release.hold_y_mm=-500\)$"):
+        wc.load_scene("damped_swing", ["release.hold_y_mm=-500"])
+    # a sweep variant's value comes from its sweep line even when the base field is overridden too
+    with pytest.raises(wc.SceneError, match=rf"in sweep variant 1 .*, line {swept}\)$"):
+        wc.load_sweep(sweep, ["damping.gamma_per_s=0.4"])
+    # multi-line strings, nested arrays of tables, a U+2028 in a comment
+    assert field_line('note = """\n[integrator]\ndt_s = 1\n"""\n[integrator]\ndt_s = 2\n', "integrator.dt_s") == 6
+    assert field_line("[[a]]\n[[a.b]]\nx = 1\n[[a]]\n[[a.b]]\nx = 2\n", "a[1].b[0].x") == 6
+    assert field_line("# \u2028 comment\n[integrator]\ndt_s = 1\n", "integrator.dt_s") == 3
     # a value nobody set (a default) is not located
-    empty = tmp_path / "empty.toml"
-    empty.write_text("")
-    with pytest.raises(wc.SceneError) as info:
-        wc.load_scene(empty, ["strip.spacing_mm=1e-9"])
-    assert info.value.message.endswith("(stretching implicit)")
+    assert where_set(wc.SceneError("integrator.dt_s", "x"), "[strip]\nspacing_mm = 5\n", "f.toml") is None

@@ -12,12 +12,16 @@ class SceneError(WarpclothError, ValueError):
     """A scene or material field is missing, unknown, mistyped or out of range.
 
     ``field`` is the dotted name of the offending field (e.g. ``strip.spacing_mm``),
-    ``message`` what is wrong with it (and, once located, where it was set).
+    ``message`` what is wrong with it (and, once located, where it was set); ``related``
+    the other fields a cross-field check read (one of them may be the one to change), and
+    ``variant`` the sweep variant whose values failed.
     """
 
-    def __init__(self, field: str, message: str) -> None:
+    def __init__(self, field: str, message: str, related: tuple[str, ...] = (), variant: int | None = None) -> None:
         self.field = field
         self.message = message
+        self.related = related
+        self.variant = variant
         super().__init__(f"{field}: {message}")
 
 

@@ -48,7 +48,7 @@ from tqdm import tqdm
 from warpcloth.errors import OptionError, SceneError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
 from warpcloth.runs import simulate
-from warpcloth.scene import Scene, batch_fields, field_law, law_fields, scene_from_dict, set_field
+from warpcloth.scene import Scene, batch_fields, check_step, field_law, law_fields, scene_from_dict, set_field
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.sim import RunResult
 
@@ -160,7 +160,7 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
             data = base.to_dict()
             set_field(data, dotted, float(bound))
             try:
-                scene_from_dict(data)
+                check_step(scene_from_dict(data))
             except SceneError as exc:
                 raise OptionError("--bounds", f"{name} = {bound:g} is not a valid scene: {exc}") from None
         out.append(FreeParameter(name, dotted, float(lower), float(upper), float(min(max(value, lower), upper))))

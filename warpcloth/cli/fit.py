@@ -67,12 +67,13 @@ def fit_command(args: argparse.Namespace) -> int:
     from warpcloth.calibrate.motion_fit import fit_motion, free_parameters, write_fit
     from warpcloth.io.measured import bundled_data, read_measurement
     from warpcloth.io.provenance import file_checksum
-    from warpcloth.scene import apply_overrides, read_scene_file
+    from warpcloth.scene import apply_overrides, load_scene, read_scene_file
 
+    scene = load_scene(args.scene, args.overrides)  # a bad field is named with its file and line, or --set
     base = apply_overrides(read_scene_file(args.scene), args.overrides)
     base.pop("sweep", None)
     measurement = read_measurement(args.measured)
-    free = free_parameters(args.free, scene_from_dict(base), args.bounds)
+    free = free_parameters(args.free, scene, args.bounds)
     out = new_result(args.out or Path("runs") / f"fit-{Path(args.scene).stem}", args.overwrite, "--out")
     fit = fit_motion(base, measurement, free, align_start_s=args.align_start, space_filling=args.space_filling,
                      max_iterations=args.max_iterations, seed=args.seed, device=args.device,
@@ -108,14 +109,15 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
     from warpcloth.calibrate.clamp_fit import fit_clamp_motion, scene_with_clamp_motion
     from warpcloth.io.atomic import write_text_atomically
     from warpcloth.io.measured import read_encoder
-    from warpcloth.scene import read_scene_file
+    from warpcloth.scene import load_scene, read_scene_file
 
+    until = load_scene(args.scene).run.duration_s  # a bad field is named with its file and line
     out = new_result(args.output, args.overwrite, "-o")
     plot = figure_path(args.plot, args.overwrite) if args.plot else None
     t, theta = read_encoder(args.encoder, args.angle_unit)
     fit = fit_clamp_motion(t, theta)
     raw = read_scene_file(args.scene)
-    data = scene_with_clamp_motion(raw, fit, until_s=scene_from_dict(raw).run.duration_s)
+    data = scene_with_clamp_motion(raw, fit, until_s=until)
     data.pop("sweep", None)
     scene = scene_from_dict(data)  # validates before anything is written
     write_text_atomically(out, tomli_w.dumps(scene.to_dict()))

@@ -27,6 +27,7 @@ from .schema import (
     choice_fields,
 )
 from .sweep import Sweep, expand, load_sweep
+from .validate import check_step
 
 __all__ = [
     "COORDINATES",
@@ -47,6 +48,7 @@ __all__ = [
     "bundled_materials",
     "bundled_scenes",
     "check_batch",
+    "check_step",
     "expand",
     "load_scene",
     "load_sweep",

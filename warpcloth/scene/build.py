@@ -21,6 +21,7 @@ from .clamp_motion import clamp_pieces
 from .geometry import rest_positions
 from .materials import to_si
 from .schema import Scene, batch_fields
+from .validate import check_step
 
 
 @dataclass
@@ -34,9 +35,17 @@ class Batch:
 
 
 def check_batch(scenes: Sequence[Scene]) -> None:
-    """Raise SceneError unless every batch-level field agrees across ``scenes``."""
+    """Raise SceneError unless every batch-level field agrees across ``scenes`` and every
+    scene's step can run (:func:`check_step`; load_scene and load_sweep check it earlier,
+    where they can say which line to change)."""
     if not scenes:
         raise SceneError("scenes", "a batch needs at least one scene")
+    for i, scene in enumerate(scenes):
+        try:
+            check_step(scene)
+        except SceneError as exc:
+            raise SceneError(exc.field, f"variant {i}: {exc.message}" if len(scenes) > 1 else exc.message,
+                             exc.related, i) from None
     first = scenes[0].to_dict()
     for i, scene in enumerate(scenes[1:], start=1):
         other = scene.to_dict()

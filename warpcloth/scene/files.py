@@ -13,7 +13,7 @@ from .materials import MATERIAL_FILE_KEY, with_material_file
 from .overrides import Overrides, apply_overrides
 from .parse import parse_section, parse_toml, read_toml_text
 from .schema import Scene
-from .validate import validate_scene
+from .validate import check_step, validate_scene
 
 
 def bundled_scenes() -> list[str]:
@@ -71,16 +71,20 @@ def scene_source(name_or_path: str | Path) -> tuple[str, str]:
     return resource.read_text(), f"bundled scene {path.name}"
 
 
+def _read_scene(name_or_path: str | Path) -> tuple[dict, str, str]:
+    text, where = scene_source(name_or_path)
+    data = parse_toml(text, where, "scene")
+    if is_path(name_or_path):
+        _rebase_material_file(data, Path(name_or_path).parent)
+    return data, text, where
+
+
 def read_scene_file(name_or_path: str | Path) -> dict:
     """Raw TOML data of a scene given by path or by bundled name (``damped_swing``), see
     :func:`scene_source`. A relative ``material.from_file`` path in the file is made
     absolute against the scene file's directory.
     """
-    text, where = scene_source(name_or_path)
-    data = parse_toml(text, where, "scene")
-    if is_path(name_or_path):
-        _rebase_material_file(data, Path(name_or_path).parent)
-    return data
+    return _read_scene(name_or_path)[0]
 
 
 def scene_from_dict(data: dict) -> Scene:
@@ -101,9 +105,11 @@ def load_scene(name_or_path: str | Path, overrides: Overrides = ()) -> Scene:
 
     A ``[sweep]`` section is ignored here: this is the sweep's base scene.
     """
-    data = read_scene_file(name_or_path)
+    data, text, where = _read_scene(name_or_path)
     data.pop("sweep", None)
     try:
-        return scene_from_dict(apply_overrides(data, overrides))
+        scene = scene_from_dict(apply_overrides(data, overrides))
+        check_step(scene)
     except SceneError as exc:
-        raise located(exc, *scene_source(name_or_path), overrides) from None
+        raise located(exc, text, where, overrides) from None
+    return scene

@@ -178,7 +178,7 @@ class IntegratorSection:
     scheme: str = _field("semi_implicit", " | ".join(f"{name} ({solver.label})" for name, solver in SOLVERS.items()),
                          choices=tuple(SOLVERS))
     dt_s: float = _field(1e-5, "time step (the paper used 1e-7); with semi_implicit below the stretching limit "
-                         "h·√(ρ_A/a1), docs/model.md §9.3", gt=0)
+                         "h·√(ρ_A/a1)/cos(π/4N), docs/model.md §9.3", gt=0)
     precision: str = _field("float64", "float64 | float32", choices=("float64", "float32"))
     divergence_strain: float = _field(0.25, "|ε| beyond which a strip counts as diverged; the "
                                       "tensile curve must increase up to it", gt=0)

@@ -41,6 +41,7 @@ from .locate import located
 from .overrides import apply_overrides, set_field
 from .sampling import latin_hypercube
 from .schema import Scene, batch_fields
+from .validate import check_step
 
 MAX_VARIANTS = 100_000
 """Default cap on a sweep's variants: each is a validated scene held in memory (a few kB,
@@ -150,6 +151,12 @@ def _random_block(spec: dict) -> tuple[list[str], np.ndarray]:
     return list(ranges), low + unit * (high - low)
 
 
+def variant_error(error: SceneError, variant: int, assignment: dict) -> SceneError:
+    """``error`` of sweep variant ``variant``, saying which values it was given."""
+    what = ", ".join(f"{k}={v!r}" for k, v in assignment.items())
+    return SceneError(error.field, f"in sweep variant {variant} ({what}): {error.message}", error.related, variant)
+
+
 def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) -> Sweep:
     """Expand a raw scene with a ``[sweep]`` section into validated variant scenes.
 
@@ -202,8 +209,7 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
                 set_field(data, key, value)
             scenes.append(scene_from_dict(data))
         except SceneError as exc:
-            what = ", ".join(f"{k}={v!r}" for k, v in assignment.items())
-            raise SceneError(exc.field, f"in sweep variant {i} ({what}): {str(exc).split(': ', 1)[1]}") from exc
+            raise variant_error(exc, i, assignment) from exc
         bar.update()
     bar.close()
     return Sweep(base, spec, keys, assignments, scenes)
@@ -217,6 +223,7 @@ def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] 
     the sweep's own options: ``sweep.seed``, ``sweep.random.samples``, ``sweep.random.method``.
     ``max_variants`` and ``progress`` are :func:`expand`'s.
     """
+    text, where = scene_source(name_or_path)
     raw = read_scene_file(name_or_path)
     spec = {"sweep": raw.pop("sweep", None) or {}}
     own = [o for o in overrides if o.split("=", 1)[0].strip().startswith("sweep.")]
@@ -224,7 +231,12 @@ def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] 
         spec = apply_overrides(spec, own)
         raw = apply_overrides(raw, [o for o in overrides if o not in own])
         raw["sweep"] = spec["sweep"]
-        return expand(raw, max_variants, progress)
+        sweep = expand(raw, max_variants, progress)
+        for i, scene in enumerate(sweep.scenes):  # every variant's step, before any runs
+            try:
+                check_step(scene)
+            except SceneError as exc:
+                raise variant_error(exc, i, sweep.assignments[i]) from exc
+        return sweep
     except SceneError as exc:
-        # a variant's error names its swept value; the line that sweeps it is where to look
-        raise located(exc, *scene_source(name_or_path), overrides, swept="in sweep variant" in exc.message) from None
+        raise located(exc, text, where, overrides) from None

@@ -24,9 +24,10 @@ def validate_scene(scene: Scene) -> None:
     for name in ("free_length_mm", "clamp_length_mm"):
         if not _multiple(getattr(st, name), st.spacing_mm):
             raise SceneError("strip.spacing_mm", f"{st.spacing_mm:g} mm does not divide strip.{name} = "
-                             f"{getattr(st, name):g} mm into whole segments")
+                             f"{getattr(st, name):g} mm into whole segments", related=(f"strip.{name}",))
     if scene.n_nodes - scene.n_clamped < 2:
-        raise SceneError("strip.spacing_mm", f"{st.spacing_mm:g} mm leaves fewer than 2 free nodes")
+        raise SceneError("strip.spacing_mm", f"{st.spacing_mm:g} mm leaves fewer than 2 free nodes",
+                         related=("strip.free_length_mm",))
     validate_material(scene.material, scene.integrator.divergence_strain, "material")
     _validate_clamp(scene.clamp)
     if scene.release.enabled:
@@ -34,28 +35,51 @@ def validate_scene(scene: Scene) -> None:
         if not st.spacing_mm <= r <= st.free_length_mm:
             raise SceneError("release.hold_x_mm", f"held position ({scene.release.hold_x_mm:g}, "
                              f"{scene.release.hold_y_mm:g}) mm is {r:g} mm from the clamp's lowest point; "
-                             f"the free end reaches between {st.spacing_mm:g} and {st.free_length_mm:g} mm")
+                             f"the free end reaches between {st.spacing_mm:g} and {st.free_length_mm:g} mm",
+                             related=("release.hold_y_mm", "strip.free_length_mm", "strip.spacing_mm"))
     n_hinges = scene.n_nodes - scene.n_clamped
     if not _multiple(scene.output.loop_hinge_mm, st.spacing_mm) or scene.loop_hinge >= n_hinges:
         raise SceneError("output.loop_hinge_mm", f"{scene.output.loop_hinge_mm:g} mm is not a hinge: hinges lie "
                          f"every strip.spacing_mm = {st.spacing_mm:g} mm from 0 to "
-                         f"{st.free_length_mm - st.spacing_mm:g} mm below the clamp")
+                         f"{st.free_length_mm - st.spacing_mm:g} mm below the clamp",
+                         related=("strip.spacing_mm", "strip.free_length_mm"))
     dt = scene.integrator.dt_s
     if dt > scene.output_interval:
         raise SceneError("integrator.dt_s", f"{dt:g} s is longer than the probe interval "
-                         f"{scene.output_interval:g} s (output.frame_rate_hz × output.probes_per_frame)")
-    limit = SOLVERS[scene.integrator.scheme].step_limit(to_si(scene.material), scene.spacing)
-    if limit is not None and dt > limit:
-        m = scene.material
-        raise SceneError("integrator.dt_s", f"{dt:g} s is above the {scene.integrator.scheme} scheme's stability "
-                         f"limit {limit:.4g} s for this strip: the stretching mode h·√(ρ_A/a1) with strip.spacing_mm "
-                         f"= {st.spacing_mm:g}, material.density_g_per_cm2 = {m.density_g_per_cm2:g}, "
-                         f"material.tensile_gf_per_cm[0] = {m.tensile_gf_per_cm[0]:g}; use a dt_s below {limit:.4g} s "
-                         "or integrator.scheme = \"imex\" (stretching implicit)")
+                         f"{scene.output_interval:g} s (output.frame_rate_hz × output.probes_per_frame)",
+                         related=("output.frame_rate_hz", "output.probes_per_frame"))
     steps = (scene.preroll + scene.run.duration_s) / dt
     if steps > MAX_STEPS:
         raise SceneError("run.duration_s", f"{scene.preroll + scene.run.duration_s:g} s at dt {dt:g} s is "
-                         f"{steps:.3g} steps, more than {MAX_STEPS}")
+                         f"{steps:.3g} steps, more than {MAX_STEPS}",
+                         related=("integrator.dt_s", "release.settle_time_s", "release.move_time_s"))
+
+
+STEP_LIMIT_SLACK = 1e-3
+"""A step is refused only this far (relative) above the scheme's limit: a softening
+tensile law (a2 < 0) strained by the hang can raise the true limit by up to ~5e-4."""
+
+
+def check_step(scene: Scene) -> None:
+    """Refuse a time step the scene's scheme cannot run stably (docs/model.md §9.3).
+
+    Not part of :func:`validate_scene`: a recorded scene is read back as it was run (a
+    diverged run stays readable); this check is for scenes about to run.
+    """
+    dt, scheme = scene.integrator.dt_s, scene.integrator.scheme
+    limit = SOLVERS[scheme].step_limit(to_si(scene.material), scene.spacing, scene.n_nodes - scene.n_clamped)
+    if limit is None or dt <= limit * (1 + STEP_LIMIT_SLACK):
+        return
+    m, st = scene.material, scene.strip
+    below = math.floor(limit / 10 ** (math.floor(math.log10(limit)) - 3)) * 10 ** (math.floor(math.log10(limit)) - 3)
+    raise SceneError("integrator.dt_s", f"{dt:g} s is above the {scheme} scheme's stability limit {below:.3e} s "
+                     f"for this strip: the stretching mode, h·√(ρ_A/a1)/cos(π/4N) with strip.spacing_mm = "
+                     f"{st.spacing_mm:g} (N = {scene.n_nodes - scene.n_clamped} free nodes), "
+                     f"material.density_g_per_cm2 = {m.density_g_per_cm2:g}, material.tensile_gf_per_cm[0] = "
+                     f"{m.tensile_gf_per_cm[0]:g}; use a dt_s of at most {below:.3e} s or integrator.scheme = "
+                     "\"imex\" (stretching implicit)",
+                     related=("strip.spacing_mm", "strip.free_length_mm", "material.density_g_per_cm2",
+                              "material.tensile_gf_per_cm", "material.from_file", "integrator.scheme"))
 
 
 def _validate_clamp(clamp: ClampSection) -> None:

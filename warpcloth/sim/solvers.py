@@ -93,9 +93,10 @@ class ExplicitEulerSolver:
         self.kernels = build_strip(model.scalar, self.scheme)
 
     @staticmethod
-    def step_limit(material: MaterialSI, spacing: float) -> float | None:
-        """The dt (s) beyond which this scheme is certainly unstable for ``material`` at
-        segment length ``spacing`` (m), or None where no such bound is known."""
+    def step_limit(material: MaterialSI, spacing: float, free_nodes: int) -> float | None:
+        """The dt (s) beyond which this scheme is unstable for ``material`` on a chain of
+        ``free_nodes`` nodes below the clamp at segment length ``spacing`` (m), or None
+        where no such bound is known."""
         return None
 
     def step_of(self, time: float) -> int:
@@ -176,14 +177,17 @@ class SemiImplicitEulerSolver(ExplicitEulerSolver):
     label = "symplectic Euler"
 
     @staticmethod
-    def step_limit(material: MaterialSI, spacing: float) -> float | None:
-        """h·√(ρ_A/a1): the stretching mode of the chain (ω_max = 2√(k/m), k = a1·W/h,
-        m = ρ_A·W·h) is stable while ω_max·dt < 2. Measured limits are 0.2 % below it at
-        h = 5, 2.5 and 1.25 mm (benchmarks/RESULTS.md, PyElastica section); a strain
-        stiffens the quartic law only where a2..a4 > 0, and the free end stays unstrained,
-        so no strip runs stably above it. None for a law with no initial stiffness."""
+    def step_limit(material: MaterialSI, spacing: float, free_nodes: int) -> float | None:
+        """h·√(ρ_A/a1) / cos(π/4N): symplectic Euler is stable while ω_max·dt < 2, and the
+        stiffest mode of the unstrained chain (N free nodes of mass m = ρ_A·W·h, the last
+        m/2, the clamp edge fixed, springs k = a1·W/h) has ω_max = 2√(k/m)·cos(π/4N)
+        (modes 2√(k/m)·sin((2j − 1)π/4N), j = 1…N). tests/test_stability.py runs 0.98 and
+        1.02 of it at N = 2 and 20. Strain (a2..a4 > 0) and damping only lower the limit;
+        the hold (free end fixed) raises it. None for a law with no initial stiffness."""
         a1 = material.tensile[0]
-        return spacing * float(np.sqrt(material.density / a1)) if a1 > 0 else None
+        if a1 <= 0:
+            return None
+        return spacing * float(np.sqrt(material.density / a1)) / float(np.cos(np.pi / (4 * free_nodes)))
 
 
 class ForwardEulerSolver(ExplicitEulerSolver):
