@@ -1,5 +1,6 @@
 """Bad input is refused before any kernel runs, with the field and value named."""
 
+import importlib.resources
 import re
 
 import pytest
@@ -183,10 +184,11 @@ def test_scene_errors_say_where_the_value_was_set(tmp_path):
                '{t_start_s = 0.2, t_end_s = 0.3, theta_coefficients_si = [0.1]}]'
     with pytest.raises(wc.SceneError, match=r"clamp.segments\[1\].t_start_s: .*\(set by the override clamp.segments="):
         wc.load_scene("impulsive_rotation", [segments])
-    soft = tmp_path / "soft.toml"
-    soft.write_text('[material]\ndensity_g_per_cm2 = 0.0203\ntensile_gf_per_cm = [2000.0, -1e6, 0.0, 0.0]\n'
-                    'bending_rigidity_gf_cm2_per_cm = 0.1\n')
-    with pytest.raises(wc.SceneError, match=rf"\(set by the override material.from_file=\"{re.escape(str(soft))}\"\)$"):
+    wool_text = (importlib.resources.files("warpcloth.scenes") / "materials" / "wool90-nylon10.toml").read_text()
+    soft = tmp_path / "soft.toml"  # a2 so negative that T' < 0 within the strain range: the scene check refuses
+    soft.write_text(wool_text.replace("[2000.0, 0.0, 0.0, 2.93e7]", "[2000.0, -1e6, 0.0, 0.0]"))
+    with pytest.raises(wc.SceneError, match=rf"^material.tensile_gf_per_cm: .*\(set by the override "
+                                            rf"material.from_file=\"{re.escape(str(soft))}\"\)$"):
         wc.load_scene("damped_swing", [f'material.from_file="{soft}"'])
     with pytest.raises(wc.SceneError, match=r"^release.hold_x_mm: .*\(set by the override release.hold_y_mm=-500\)$"):
         wc.load_scene("damped_swing", ["release.hold_y_mm=-500"])
@@ -199,3 +201,24 @@ def test_scene_errors_say_where_the_value_was_set(tmp_path):
     assert field_line("# \u2028 comment\n[integrator]\ndt_s = 1\n", "integrator.dt_s") == 3
     # a value nobody set (a default) is not located
     assert where_set(wc.SceneError("integrator.dt_s", "x"), "[strip]\nspacing_mm = 5\n", "f.toml") is None
+    # an inline table, a table written with dotted keys
+    assert field_line("damping = { gamma_per_s = -3 }\n", "damping.gamma_per_s") == 1
+    assert field_line("[release]\nenabled = true\ndamping.gamma_per_s = 1\n", "release.damping") == 3
+    # a bad value in a material file: its own line
+    material = tmp_path / "mat.toml"
+    material.write_text(wool_text.replace("density_g_per_cm2 = 2.03e-2", "density_g_per_cm2 = -0.007"))
+    line = 1 + wool_text.split("\n").index("density_g_per_cm2 = 2.03e-2")
+    with pytest.raises(wc.SceneError, match=rf"{re.escape(str(material))}, line {line}: material.density_g_per_cm2: "):
+        wc.load_scene("damped_swing", [f'material.from_file="{material}"'])
+
+
+def test_override_keys_index_lists_and_quote_dotted_names():
+    # list items by [i] as by .i; a quoted key keeps its dots (a swept field's range)
+    rotation = wc.load_scene("impulsive_rotation", ["clamp.segments[1].t_end_s=0.13"])
+    assert rotation.clamp.segments[1].t_end_s == 0.13
+    sweep = wc.load_sweep("damped_swing_sweep", ["sweep.random.samples=5",
+                                                 'sweep.random.ranges."damping.gamma_per_s"=[0.1, 0.2]'])
+    assert all(0.1 <= s.damping.gamma_per_s <= 0.2 for s in sweep.scenes)
+    # an item of a list the scene does not have
+    with pytest.raises(wc.SceneError, match=r"clamp.table_t_s: has no list item '0': it is not set here"):
+        wc.load_scene("damped_swing", ["clamp.table_t_s.0=1.0"])

@@ -18,20 +18,12 @@ from typing import Any
 from warpcloth.errors import SceneError
 
 from .materials import MATERIAL_FILE_KEY
-from .overrides import Overrides, override_pairs
+from .overrides import Overrides, key_path, override_pairs
 
 _BARE_OR_QUOTED = r"""(?:[A-Za-z0-9_-]+|"[^"]*"|'[^']*')"""
 _DOTTED = rf"{_BARE_OR_QUOTED}(?:\s*\.\s*{_BARE_OR_QUOTED})*"
 _HEADER = re.compile(rf"^\s*(\[\[|\[)\s*({_DOTTED})\s*\]")
 _KEY = re.compile(rf"^\s*({_DOTTED})\s*=\s*(.*)$")
-_PART = re.compile(r""""([^"]*)"|'([^']*)'|([A-Za-z0-9_-]+)""")
-
-
-def key_path(dotted: str) -> tuple[str, ...]:
-    """``clamp.segments[1].t_end_s``, ``clamp.segments.1.t_end_s`` and
-    ``sweep.grid."damping.gamma_per_s"`` as tuples of keys (list items by index)."""
-    dotted = re.sub(r"\[(\d+)\]", r".\1", dotted)
-    return tuple(a or b or c for a, b, c in _PART.findall(dotted))
 
 
 def _opens_multiline_string(value: str) -> str | None:
@@ -72,14 +64,14 @@ def field_line(text: str, field: str, swept: bool = False) -> int | None:
     """The line of ``text`` that sets scene ``field`` (or the array or table it is an item
     of); with ``swept``, the line of a ``[sweep...]`` table that varies it instead."""
     target = key_path(field)
-    best, best_length = None, 1
+    best, best_length = None, 0
     for path, number in toml_keys(text):
         if swept:
             if path[0] == "sweep" and key_path(path[-1]) == target:
                 return number
             continue
-        if path == target:
-            return number
+        if path[:len(target)] == target:
+            return number  # the field itself, or a table of it written with dotted keys
         if len(path) > best_length and target[:len(path)] == path:
             best, best_length = number, len(path)  # the value sits inside this key's array or inline table
     return best

@@ -149,7 +149,10 @@ def read_material_file(ref: str | Path) -> dict:
     try:
         parse_section(MaterialSection, {k: v for k, v in material.items() if k != "source"}, "material")
     except SceneError as exc:
-        raise SceneError(MATERIAL_FILE_KEY, f"{where}: {exc}") from None
+        from .locate import field_line  # locate reads this module's MATERIAL_FILE_KEY
+
+        line = field_line(text, exc.field)
+        raise SceneError(MATERIAL_FILE_KEY, f"{where}{f', line {line}' if line else ''}: {exc}") from None
     return data
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import re
 import tomllib
 import typing
 from pathlib import Path
@@ -20,13 +21,26 @@ def _parse_value(text: str) -> Any:
         return text  # a bare word such as forward or float32
 
 
+_KEY_PART = re.compile(r""""([^"]*)"|'([^']*)'|([A-Za-z0-9_-]+)""")
+
+
+def key_path(dotted: str) -> tuple[str, ...]:
+    """A dotted field name as its keys: ``clamp.segments[1].t_end_s`` and
+    ``clamp.segments.1.t_end_s`` alike (list items by index), and a quoted key whole
+    (``sweep.grid."damping.gamma_per_s"``)."""
+    dotted = re.sub(r"\[(\d+)\]", r".\1", dotted)
+    return tuple(a or b or c for a, b, c in _KEY_PART.findall(dotted))
+
+
 def set_field(data: dict, key: str, value: Any) -> None:
     """Set the field ``key`` (dotted; list items by index) of raw scene ``data`` in place.
 
     Setting ``material.from_file`` selects that material: the [material] values already in
     ``data`` are dropped so that the file supplies them (set other material fields after it).
     """
-    parts = key.strip().split(".")
+    parts = list(key_path(key))
+    if not parts:
+        raise SceneError(key, "is not a field name (dotted, e.g. damping.gamma_per_s)")
     if parts == MATERIAL_FILE_KEY.split("."):
         if not isinstance(value, str) or not value.strip():
             raise SceneError(MATERIAL_FILE_KEY, f"{value!r} names no material file; give a bundled material name "
@@ -52,6 +66,9 @@ def set_field(data: dict, key: str, value: Any) -> None:
         elif last:
             node[part] = value
         else:
+            if part not in node and parts[i + 1].isdigit():
+                raise SceneError(".".join(parts[: i + 1]), f"has no list item {parts[i + 1]!r}: it is not set here "
+                                 "(set the whole list, e.g. key=[...])")
             node = node.setdefault(part, {})
             if not isinstance(node, (dict, list)):
                 raise SceneError(".".join(parts[: i + 1]), "is a value, not a section")

@@ -46,7 +46,7 @@ def validate_scene(scene: Scene) -> None:
     dt = scene.integrator.dt_s
     if dt > scene.output_interval:
         raise SceneError("integrator.dt_s", f"{dt:g} s is longer than the probe interval "
-                         f"{scene.output_interval:g} s (output.frame_rate_hz × output.probes_per_frame)",
+                         f"{scene.output_interval:g} s (1 / (output.frame_rate_hz × output.probes_per_frame))",
                          related=("output.frame_rate_hz", "output.probes_per_frame"))
     steps = (scene.preroll + scene.run.duration_s) / dt
     if steps > MAX_STEPS:
@@ -56,8 +56,10 @@ def validate_scene(scene: Scene) -> None:
 
 
 STEP_LIMIT_SLACK = 1e-3
-"""A step is refused only this far (relative) above the scheme's limit: a softening
-tensile law (a2 < 0) strained by the hang can raise the true limit by up to ~5e-4."""
+"""With a softening tensile law (a negative a2..a4), a step is refused only this far
+(relative) above the scheme's limit: strained by the hang, such a law can raise the
+true limit by up to ~5e-4. Without one, the limit is exact and a step above it is
+refused."""
 
 
 def check_step(scene: Scene) -> None:
@@ -68,7 +70,8 @@ def check_step(scene: Scene) -> None:
     """
     dt, scheme = scene.integrator.dt_s, scene.integrator.scheme
     limit = SOLVERS[scheme].step_limit(to_si(scene.material), scene.spacing, scene.n_nodes - scene.n_clamped)
-    if limit is None or dt <= limit * (1 + STEP_LIMIT_SLACK):
+    softening = any(a < 0 for a in scene.material.tensile_gf_per_cm[1:])
+    if limit is None or dt <= limit * (1 + (STEP_LIMIT_SLACK if softening else 0.0)):
         return
     m, st = scene.material, scene.strip
     below = math.floor(limit / 10 ** (math.floor(math.log10(limit)) - 3)) * 10 ** (math.floor(math.log10(limit)) - 3)

@@ -49,8 +49,8 @@ QUANTITY = {
     STATUS_STRAIN: "tensile strain",
     STATUS_FOLDED: "hinge chord |e1+e2|/h (the strip folded onto itself)",
     STATUS_NONFINITE_ENERGY: "total energy (not finite)",
-    STATUS_BUDGET: ("energy budget residual, in units of the peak kinetic energy (at least 1e-3 of the strip's "
-                    "weight times its free length): the step is unstable"),
+    STATUS_BUDGET: ("energy budget residual (in units of the peak kinetic energy, at least 1e-3 of the strip's "
+                    "weight times its free length)"),
 }
 
 
@@ -195,8 +195,8 @@ class ForwardEulerSolver(ExplicitEulerSolver):
 
     scheme = "forward"
     label = "paper eqs. 5–6"
-    advice = (" or integrator.scheme = semi_implicit (forward Euler amplifies every undamped"
-              " oscillation, docs/model.md §9)")
+    advice = (" or integrator.scheme = semi_implicit with a dt below its stretching limit (forward Euler"
+              " amplifies every undamped oscillation, docs/model.md §9)")
 
 
 class ImexSolver(ExplicitEulerSolver):
@@ -234,7 +234,7 @@ def describe_divergence(report: dict) -> str:
     where = f" at segment {report['where']}" if report["code"] == STATUS_STRAIN else (
         f" at hinge node {report['where']}" if report["code"] == STATUS_FOLDED else "")
     limit = {STATUS_STRAIN: f", beyond integrator.divergence_strain = {report['limit']:g}",
-             STATUS_BUDGET: f", above {report['limit']:g}"}.get(report["code"], "")
+             STATUS_BUDGET: f", above {report['limit']:g}: the step is unstable"}.get(report["code"], "")
     advice = f"try a smaller integrator.dt_s (now {report['dt_s']:g} s, e.g. {report['dt_s'] / 4:g})"
     advice += SOLVERS[report["scheme"]].advice
     if report["code"] == STATUS_BUDGET and report.get("precision") == "float32":
