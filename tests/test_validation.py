@@ -190,7 +190,8 @@ def test_scene_errors_say_where_the_value_was_set(tmp_path):
     with pytest.raises(wc.SceneError, match=rf"^material.tensile_gf_per_cm: .*\(set by the override "
                                             rf"material.from_file=\"{re.escape(str(soft))}\"\)$"):
         wc.load_scene("damped_swing", [f'material.from_file="{soft}"'])
-    with pytest.raises(wc.SceneError, match=r"^release.hold_x_mm: .*\(set by the override release.hold_y_mm=-500\)$"):
+    with pytest.raises(wc.SceneError, match=r"^release.hold_x_mm: .*\(bundled scene damped_swing, line 24; and the "
+                                            r"override release.hold_y_mm=-500\)$"):
         wc.load_scene("damped_swing", ["release.hold_y_mm=-500"])
     # a sweep variant's value comes from its sweep line even when the base field is overridden too
     with pytest.raises(wc.SceneError, match=rf"in sweep variant 1 .*, line {swept}\)$"):
@@ -219,6 +220,32 @@ def test_override_keys_index_lists_and_quote_dotted_names():
     sweep = wc.load_sweep("damped_swing_sweep", ["sweep.random.samples=5",
                                                  'sweep.random.ranges."damping.gamma_per_s"=[0.1, 0.2]'])
     assert all(0.1 <= s.damping.gamma_per_s <= 0.2 for s in sweep.scenes)
-    # an item of a list the scene does not have
+    # an item of a list the scene does not have; a list item that is a number
     with pytest.raises(wc.SceneError, match=r"clamp.table_t_s: has no list item '0': it is not set here"):
         wc.load_scene("damped_swing", ["clamp.table_t_s.0=1.0"])
+    with pytest.raises(wc.SceneError, match=r"^material.tensile_gf_per_cm.1: is a value, not a section"):
+        wc.load_scene("damped_swing", ["material.tensile_gf_per_cm.1.0.0=3"])
+    # a typo is an error naming it as written, never another field
+    for typo in ("damping:gamma_per_s", "damping..gamma_per_s", "damping.gamma_per_s,", ".damping.gamma_per_s",
+                 "damping.gamma_per_s.", "dämping.gamma_per_s", "damping.gamma per_s"):
+        with pytest.raises(wc.SceneError, match=rf"^{re.escape(typo)}: is not a field name"):
+            wc.load_scene("damped_swing", [f"{typo}=1"])
+    with pytest.raises(wc.SceneError, match=r"^sweep.random..samples: is not a field name"):
+        wc.load_sweep("damped_swing_sweep", ["sweep.random..samples=5"])
+    # a quoted dotted name is a swept field's, nowhere else
+    with pytest.raises(wc.SceneError, match=r"in quotes is a swept field's name, which only sweep.grid"):
+        wc.load_scene("damped_swing", ['"integrator.dt_s"=1e-4'])
+    # material.from_file however spelled goes first, so that it cannot undo a field override
+    scene = wc.load_scene("damped_swing", ["material.density_g_per_cm2=0.05", 'material."from_file"=cotton-broadcloth'])
+    assert scene.material.density_g_per_cm2 == 0.05
+    assert scene.material.tensile_gf_per_cm[0] == 5000.0
+    # a sweep variant's value from an override of its sweep entry; a base scene's step for every variant
+    with pytest.raises(wc.SceneError, match=r"in sweep variant 0 .*\(set by the override sweep.random.ranges."):
+        wc.load_sweep("damped_swing_sweep", ["sweep.random.samples=5",
+                                             'sweep.random.ranges."damping.gamma_per_s"=[-2.0, -1.0]'])
+    with pytest.raises(wc.SceneError, match=r"^integrator.dt_s: .*\(the base scene: every variant\) \(set by the "
+                                            r"override integrator.dt_s=1e-4\)$"):
+        wc.load_sweep("damped_swing_sweep", ["sweep.random.samples=5", "integrator.dt_s=1e-4"])
+    # a dict with a key that is not a string: an error, not a traceback
+    with pytest.raises(wc.SceneError, match=r"^1: unknown field"):
+        wc.load_scene("damped_swing", {1: 2})

@@ -69,7 +69,8 @@ def fit_command(args: argparse.Namespace) -> int:
     from warpcloth.io.provenance import file_checksum
     from warpcloth.scene import apply_overrides, load_scene, read_scene_file
 
-    scene = load_scene(args.scene, args.overrides)  # a bad field is named with its file and line, or --set
+    # a bad field is named with its file and line, or --set (a sweep's own options do not apply to a fit)
+    scene = load_scene(args.scene, [o for o in args.overrides if not o.strip().startswith("sweep.")])
     base = apply_overrides(read_scene_file(args.scene), args.overrides)
     base.pop("sweep", None)
     measurement = read_measurement(args.measured)

@@ -14,6 +14,7 @@ from warpcloth.errors import SceneError
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
 from warpcloth.sim import MaterialSI
 
+from .keys import field_line
 from .parse import coerce_value, parse_section, parse_toml, read_toml_text
 from .schema import MaterialSection
 
@@ -149,8 +150,6 @@ def read_material_file(ref: str | Path) -> dict:
     try:
         parse_section(MaterialSection, {k: v for k, v in material.items() if k != "source"}, "material")
     except SceneError as exc:
-        from .locate import field_line  # locate reads this module's MATERIAL_FILE_KEY
-
         line = field_line(text, exc.field)
         raise SceneError(MATERIAL_FILE_KEY, f"{where}{f', line {line}' if line else ''}: {exc}") from None
     return data

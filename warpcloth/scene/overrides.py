@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import copy
-import re
 import tomllib
 import typing
 from pathlib import Path
@@ -11,6 +10,7 @@ from typing import Any
 
 from warpcloth.errors import SceneError
 
+from .keys import MATERIAL_FILE, SWEPT_NAME_TABLES, is_material_file_key, key_path
 from .materials import MATERIAL_FILE_KEY, bundled_materials, material_fields, with_material_file
 
 
@@ -21,17 +21,6 @@ def _parse_value(text: str) -> Any:
         return text  # a bare word such as forward or float32
 
 
-_KEY_PART = re.compile(r""""([^"]*)"|'([^']*)'|([A-Za-z0-9_-]+)""")
-
-
-def key_path(dotted: str) -> tuple[str, ...]:
-    """A dotted field name as its keys: ``clamp.segments[1].t_end_s`` and
-    ``clamp.segments.1.t_end_s`` alike (list items by index), and a quoted key whole
-    (``sweep.grid."damping.gamma_per_s"``)."""
-    dotted = re.sub(r"\[(\d+)\]", r".\1", dotted)
-    return tuple(a or b or c for a, b, c in _KEY_PART.findall(dotted))
-
-
 def set_field(data: dict, key: str, value: Any) -> None:
     """Set the field ``key`` (dotted; list items by index) of raw scene ``data`` in place.
 
@@ -39,9 +28,11 @@ def set_field(data: dict, key: str, value: Any) -> None:
     ``data`` are dropped so that the file supplies them (set other material fields after it).
     """
     parts = list(key_path(key))
-    if not parts:
-        raise SceneError(key, "is not a field name (dotted, e.g. damping.gamma_per_s)")
-    if parts == MATERIAL_FILE_KEY.split("."):
+    for i, part in enumerate(parts):
+        if "." in part and tuple(parts[:i]) not in SWEPT_NAME_TABLES:
+            raise SceneError(key.strip(), f"{part!r} in quotes is a swept field's name, which only "
+                             f"{', '.join('.'.join(t) for t in SWEPT_NAME_TABLES)} take; elsewhere write it unquoted")
+    if tuple(parts) == MATERIAL_FILE:
         if not isinstance(value, str) or not value.strip():
             raise SceneError(MATERIAL_FILE_KEY, f"{value!r} names no material file; give a bundled material name "
                              f"({', '.join(bundled_materials())}) or a path ending in .toml")
@@ -63,6 +54,8 @@ def set_field(data: dict, key: str, value: Any) -> None:
                 node[int(part)] = value
             else:
                 node = node[int(part)]
+                if not isinstance(node, (dict, list)):
+                    raise SceneError(".".join(parts[: i + 1]), "is a value, not a section")
         elif last:
             node[part] = value
         else:
@@ -107,6 +100,6 @@ def apply_overrides(data: dict, overrides: Overrides) -> dict:
     """
     data = copy.deepcopy(data)
     # stable sort: the material file first, so that it cannot undo a field override
-    for key, value in sorted(override_pairs(overrides), key=lambda pair: pair[0] != MATERIAL_FILE_KEY):
+    for key, value in sorted(override_pairs(overrides), key=lambda pair: not is_material_file_key(pair[0])):
         set_field(data, key, value)
     return data

@@ -37,6 +37,7 @@ from tqdm import tqdm
 from warpcloth.errors import OptionError, SceneError
 
 from .files import read_scene_file, scene_from_dict, scene_source
+from .keys import is_material_file_key, key_path
 from .locate import located
 from .overrides import apply_overrides, set_field
 from .sampling import latin_hypercube
@@ -83,7 +84,11 @@ class Sweep:
 
 def _field_exists(resolved: dict, key: str) -> bool:
     node: Any = resolved
-    for part in key.split("."):
+    try:
+        parts = key_path(key)
+    except SceneError:
+        return False
+    for part in parts:
         if isinstance(node, dict) and part in node:
             node = node[part]
         elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
@@ -205,7 +210,7 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
         try:
             # A material file replaces the material, so it goes first and the other
             # swept material fields land on top of it, whatever their order in [sweep].
-            for key, value in sorted(assignment.items(), key=lambda kv: not kv[0].endswith("from_file")):
+            for key, value in sorted(assignment.items(), key=lambda kv: not is_material_file_key(kv[0])):
                 set_field(data, key, value)
             scenes.append(scene_from_dict(data))
         except SceneError as exc:
@@ -232,11 +237,15 @@ def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] 
         raw = apply_overrides(raw, [o for o in overrides if o not in own])
         raw["sweep"] = spec["sweep"]
         sweep = expand(raw, max_variants, progress)
+        swept = [key_path(k) for k in sweep.keys]
         for i, scene in enumerate(sweep.scenes):  # every variant's step, before any runs
             try:
                 check_step(scene)
             except SceneError as exc:
-                raise variant_error(exc, i, sweep.assignments[i]) from exc
+                read = [key_path(f) for f in (exc.field, *exc.related)]
+                if any(k[:len(f)] == f or f[:len(k)] == k for k in swept for f in read):
+                    raise variant_error(exc, i, sweep.assignments[i]) from exc
+                raise SceneError(exc.field, f"{exc.message} (the base scene: every variant)", exc.related) from exc
         return sweep
     except SceneError as exc:
         raise located(exc, text, where, overrides) from None
