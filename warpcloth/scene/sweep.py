@@ -203,20 +203,20 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     for g, z, r in itertools.product(grid_rows, zip_rows, random_values):
         assignments.append(dict(zip(keys, [*g, *z, *(float(x) for x in r)], strict=True)))
     scenes = []
-    bar = tqdm(total=len(assignments), desc="expanding sweep", unit=" variants", disable=not progress,
-               dynamic_ncols=True)
-    for i, assignment in enumerate(assignments):
-        data = copy.deepcopy(base)
-        try:
-            # A material file replaces the material, so it goes first and the other
-            # swept material fields land on top of it, whatever their order in [sweep].
-            for key, value in sorted(assignment.items(), key=lambda kv: not is_material_file_key(kv[0])):
-                set_field(data, key, value)
-            scenes.append(scene_from_dict(data))
-        except SceneError as exc:
-            raise variant_error(exc, i, assignment) from exc
-        bar.update()
-    bar.close()
+    # leave=False: a refused variant's message then starts on a clean line
+    with tqdm(total=len(assignments), desc="expanding sweep", unit=" variants", disable=not progress,
+              dynamic_ncols=True, leave=False) as bar:
+        for i, assignment in enumerate(assignments):
+            data = copy.deepcopy(base)
+            try:
+                # A material file replaces the material, so it goes first and the other
+                # swept material fields land on top of it, whatever their order in [sweep].
+                for key, value in sorted(assignment.items(), key=lambda kv: not is_material_file_key(kv[0])):
+                    set_field(data, key, value)
+                scenes.append(scene_from_dict(data))
+            except SceneError as exc:
+                raise variant_error(exc, i, assignment) from exc
+            bar.update()
     return Sweep(base, spec, keys, assignments, scenes)
 
 
