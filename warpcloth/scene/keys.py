@@ -40,12 +40,24 @@ def key_path(dotted: str) -> tuple[str, ...]:
     return tuple(quoted[1:-1] if quoted else index or bare for quoted, index, bare in _TOKEN.findall(text))
 
 
+def key_path_or_none(dotted: object) -> tuple[str, ...]:
+    """:func:`key_path` of ``str(dotted)``, or ``()`` where it is not a field name (for
+    looking a name up, where a malformed one simply matches nothing)."""
+    try:
+        return key_path(str(dotted))
+    except SceneError:
+        return ()
+
+
+def overlaps(a: tuple[str, ...], b: tuple[str, ...]) -> bool:
+    """Whether one key path is the other or lies inside it (a list and one of its items)."""
+    shorter = min(len(a), len(b))
+    return shorter > 0 and a[:shorter] == b[:shorter]
+
+
 def is_material_file_key(dotted: str) -> bool:
     """Whether ``dotted`` names ``material.from_file`` (however it is spelled)."""
-    try:
-        return key_path(dotted) == MATERIAL_FILE
-    except SceneError:
-        return False
+    return key_path_or_none(dotted) == MATERIAL_FILE
 
 
 def _opens_multiline_string(value: str) -> str | None:
@@ -86,14 +98,13 @@ def field_line(text: str, field: str, swept: bool = False) -> int | None:
     """The line of ``text`` that sets scene ``field`` (or the array or table it is an item
     of); with ``swept``, the line of a ``[sweep...]`` table that varies it instead. None
     where no line does (or ``field`` is not a field name)."""
-    try:
-        target = key_path(field)
-    except SceneError:
+    target = key_path_or_none(field)
+    if not target:
         return None
     best, best_length = None, 0
     for path, number in toml_keys(text):
         if swept:
-            if path[0] == "sweep" and _swept_name(path[-1]) == target:
+            if path[0] == "sweep" and key_path_or_none(path[-1]) == target:
                 return number
             continue
         if path[:len(target)] == target:
@@ -102,9 +113,3 @@ def field_line(text: str, field: str, swept: bool = False) -> int | None:
             best, best_length = number, len(path)  # the value sits inside this key's array or inline table
     return best
 
-
-def _swept_name(name: str) -> tuple[str, ...]:
-    try:
-        return key_path(name)
-    except SceneError:
-        return ()

@@ -14,7 +14,7 @@ from typing import Any
 
 from warpcloth.errors import SceneError
 
-from .keys import field_line, is_material_file_key, key_path
+from .keys import field_line, is_material_file_key, key_path_or_none, overlaps
 from .overrides import Overrides, override_pairs
 
 
@@ -27,18 +27,6 @@ def _written(value: Any) -> str:
     if isinstance(value, list | tuple):
         return "[" + ", ".join(_written(v) for v in value) + "]"
     return repr(float(value)) if isinstance(value, float) else str(value)
-
-
-def _overlaps(a: tuple[str, ...], b: tuple[str, ...]) -> bool:
-    shorter = min(len(a), len(b))
-    return shorter > 0 and a[:shorter] == b[:shorter]
-
-
-def _path(dotted: object) -> tuple[str, ...]:
-    try:
-        return key_path(str(dotted))
-    except SceneError:
-        return ()
 
 
 def where_set(error: SceneError, text: str | None, source: str, overrides: Overrides = ()) -> str | None:
@@ -56,25 +44,25 @@ def where_set(error: SceneError, text: str | None, source: str, overrides: Overr
         written = [(key, item.strip()) for (key, _value), item in zip(override_pairs(items), items, strict=True)]
     # the order apply_overrides applies them in: the material file first, then as given
     written.sort(key=lambda pair: not is_material_file_key(pair[0]))
-    own, others = _path(error.field), [_path(f) for f in error.related]
+    own, others = key_path_or_none(error.field), [key_path_or_none(f) for f in error.related]
 
     def last(matches: object) -> str | None:
-        found = [item for key, item in written if matches(_path(key), key)]
+        found = [item for key, item in written if matches(key_path_or_none(key), key)]
         return found[-1] if found else None
 
     if error.variant is not None:
         for name in (error.field, *error.related):
-            field = _path(name)
+            field = key_path_or_none(name)
             swept = last(lambda path, _key, field=field: len(path) > 2 and path[0] == "sweep" and
-                         _path(path[-1]) == field)
+                         key_path_or_none(path[-1]) == field)
             if swept:
                 return f"set by the override {swept}"
             line = field_line(text, name, swept=True) if text is not None else None
             if line:
                 return f"{source}, line {line}"
-    related = last(lambda path, key: any(_overlaps(path, f) for f in others) or (
+    related = last(lambda path, key: any(overlaps(path, f) for f in others) or (
         is_material_file_key(key) and any(f[:1] == ("material",) for f in others)))
-    mine = last(lambda path, key: _overlaps(path, own) or (is_material_file_key(key) and own[:1] == ("material",)))
+    mine = last(lambda path, key: overlaps(path, own) or (is_material_file_key(key) and own[:1] == ("material",)))
     if mine:
         return f"set by the override {mine}"
     line = field_line(text, error.field) if text is not None else None

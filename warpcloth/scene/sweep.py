@@ -37,7 +37,7 @@ from tqdm import tqdm
 from warpcloth.errors import OptionError, SceneError
 
 from .files import read_scene_file, scene_from_dict, scene_source
-from .keys import is_material_file_key, key_path
+from .keys import is_material_file_key, key_path, key_path_or_none, overlaps
 from .locate import located
 from .overrides import apply_overrides, set_field
 from .sampling import latin_hypercube
@@ -242,8 +242,8 @@ def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] 
             try:
                 check_step(scene)
             except SceneError as exc:
-                read = [key_path(f) for f in (exc.field, *exc.related)]
-                if any(k[:len(f)] == f or f[:len(k)] == k for k in swept for f in read):
+                read = [key_path_or_none(f) for f in (exc.field, *exc.related)]
+                if any(overlaps(k, f) for k in swept for f in read):
                     raise variant_error(exc, i, sweep.assignments[i]) from exc
                 raise SceneError(exc.field, f"{exc.message} (the base scene: every variant)", exc.related) from exc
         return sweep

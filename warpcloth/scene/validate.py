@@ -74,7 +74,8 @@ def check_step(scene: Scene) -> None:
     if limit is None or dt <= limit * (1 + (STEP_LIMIT_SLACK if softening else 0.0)):
         return
     m, st = scene.material, scene.strip
-    below = math.floor(limit / 10 ** (math.floor(math.log10(limit)) - 3)) * 10 ** (math.floor(math.log10(limit)) - 3)
+    unit = 10.0 ** (math.floor(math.log10(limit)) - 3)
+    below = math.floor(limit / unit) * unit  # 4 digits, rounded down: the advice itself runs
     raise SceneError("integrator.dt_s", f"{dt:g} s is above the {scheme} scheme's stability limit {below:.3e} s "
                      f"for this strip: the stretching mode, h·√(ρ_A/a1)/cos(π/4N) with strip.spacing_mm = "
                      f"{st.spacing_mm:g} (N = {scene.n_nodes - scene.n_clamped} free nodes), "
