@@ -72,7 +72,7 @@ def build(scalar: Any) -> SimpleNamespace:
                 # (docs/model.md §5.3): its curvature is the turning angle over h/2, twice
                 # the chain's; the paper's model keeps h (scale 1, bitwise the same).
                 curvature = curvature * edge_scale
-            memory = law.follow(curvature, state.hinge[h, s], p)
+            memory = law.follow(curvature, state.hinge[h, s], p, state.history, h, s)
             state.hinge[h, s] = memory
             # τ = M·W acts on the turning angle φ; F = -τ ∇φ with ∇φ as below.
             grad_i = perp(e1) * (inverse_l1 * inverse_l1)

@@ -22,10 +22,10 @@ from typing import Any
 
 import warp as wp
 
-from . import bending_dahl, bending_frictional_couple, bending_tagawa2003
+from . import bending_dahl, bending_frictional_couple, bending_masing, bending_tagawa2003
 from .types import LAW_PARAMETER_SLOTS, precision
 
-LAWS: tuple[ModuleType, ...] = (bending_tagawa2003, bending_dahl, bending_frictional_couple)
+LAWS: tuple[ModuleType, ...] = (bending_tagawa2003, bending_dahl, bending_frictional_couple, bending_masing)
 """Every bending law, by its index in the packed parameters."""
 
 BENDING_LAWS: dict[str, ModuleType] = {law.NAME: law for law in LAWS}
@@ -57,29 +57,36 @@ def build(scalar: Any) -> SimpleNamespace:
     """The laws' Warp types, dispatching functions and path kernel for ``scalar``."""
     types = precision(scalar)
     Parameters, Memory = types.law_parameters, types.law_memory
-    tagawa, dahl, friction = (law.build(scalar) for law in LAWS)
+    tagawa, dahl, friction, masing = (law.build(scalar) for law in LAWS)
+    History = masing.ReversalMemory
     zero = scalar(0.0)
 
     @wp.func
     def law_of(p: Parameters):
         return int(p[LAW_SLOT])
 
+    # ``history`` (the reversal points, [level, hinge, strip]) is read only by a law with
+    # return-point memory; the others keep everything in their memory vector.
     @wp.func
-    def fresh_memory(curvature: scalar, p: Parameters):
+    def fresh_memory(curvature: scalar, p: Parameters, history: History, hinge: int, strip: int):
         law = law_of(p)
         if law == 1:
             return dahl.fresh_memory(curvature, p)
         if law == 2:
             return friction.fresh_memory(curvature, p)
+        if law == 3:
+            return masing.fresh_memory(curvature, p, history, hinge, strip)
         return tagawa.fresh_memory(curvature, p)
 
     @wp.func
-    def follow(curvature: scalar, memory: Memory, p: Parameters):
+    def follow(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         law = law_of(p)
         if law == 1:
             return dahl.follow(curvature, memory, p)
         if law == 2:
             return friction.follow(curvature, memory, p)
+        if law == 3:
+            return masing.follow(curvature, memory, p, history, hinge, strip)
         return tagawa.follow(curvature, memory, p)
 
     @wp.func
@@ -89,15 +96,19 @@ def build(scalar: Any) -> SimpleNamespace:
             return dahl.hysteretic_moment(curvature, memory, p)
         if law == 2:
             return friction.hysteretic_moment(curvature, memory, p)
+        if law == 3:
+            return masing.hysteretic_moment(curvature, memory, p)
         return tagawa.hysteretic_moment(curvature, memory, p)
 
     @wp.func
-    def tangent(curvature: scalar, memory: Memory, p: Parameters):
+    def tangent(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         law = law_of(p)
         if law == 1:
             return dahl.tangent(curvature, memory, p)
         if law == 2:
             return friction.tangent(curvature, memory, p)
+        if law == 3:
+            return masing.tangent(curvature, memory, p, history, hinge, strip)
         return tagawa.tangent(curvature, memory, p)
 
     @wp.func
@@ -113,25 +124,27 @@ def build(scalar: Any) -> SimpleNamespace:
     def moment_along_path(
         curvature_path: wp.array2d(dtype=scalar),
         parameters: wp.array(dtype=Parameters),
+        history: History,
         moment: wp.array2d(dtype=scalar),
         slope: wp.array2d(dtype=scalar),
         work: wp.array(dtype=scalar),
     ):
         """Moment per width M and tangent dM/dK along curvature paths ``[sample, hinge]``.
 
-        Each hinge starts fresh at its first sample; ``work`` accumulates
+        Each hinge starts fresh at its first sample (path s is hinge 0 of strip s in
+        ``history``); ``work`` accumulates
         Σ M_n (K_{n+1} − K_n), the bending work per width with a left-point rule.
         """
         s = wp.tid()
         p = parameters[s]
-        memory = fresh_memory(curvature_path[0, s], p)
+        memory = fresh_memory(curvature_path[0, s], p, history, 0, s)
         w = zero
         for n in range(curvature_path.shape[0]):
             k = curvature_path[n, s]
-            memory = follow(k, memory, p)
+            memory = follow(k, memory, p, history, 0, s)
             m = elastic_moment(k, p) + hysteretic_moment(k, memory, p)
             moment[n, s] = m
-            slope[n, s] = tangent(k, memory, p)
+            slope[n, s] = tangent(k, memory, p, history, 0, s)
             if n + 1 < curvature_path.shape[0]:
                 w = w + m * (curvature_path[n + 1, s] - k)
         work[s] = w
@@ -139,6 +152,7 @@ def build(scalar: Any) -> SimpleNamespace:
     return SimpleNamespace(
         Parameters=Parameters,
         Memory=Memory,
+        History=History,
         fresh_memory=fresh_memory,
         follow=follow,
         last_curvature=last_curvature,

@@ -221,6 +221,6 @@ def hinge_kernels(scalar: Any) -> SimpleNamespace:
             curvature, chord = signed_curvature(e1, e2, one / wp.length(e1), one / wp.length(e2))
             if j == first + 1:
                 curvature = curvature * model.edge_curvature_scale[s]  # as the force pass sees it
-            state.hinge[j - first - 1, s] = law.fresh_memory(curvature, p)
+            state.hinge[j - first - 1, s] = law.fresh_memory(curvature, p, state.history, j - first - 1, s)
 
     return SimpleNamespace(initialise_hinges=initialise_hinges)

@@ -50,6 +50,7 @@ def build(scalar: Any) -> SimpleNamespace:
         correction: wp.array2d(dtype=vec2)  # scratch, imex: the implicit tension's force on each node
         elimination: wp.array2d(dtype=vec2)  # scratch, imex: [segment, strip] (c', d') of the tridiagonal solve
         hinge: wp.array2d(dtype=law.Memory)  # [hinge, strip], the bending law's memory
+        history: law.History  # the open reversal points of a law with return-point memory
         work: wp.array(dtype=vec4)  # (bending elastic, hysteresis, damping, drive), J
         step: wp.array(dtype=int)  # substeps done so far
         status: wp.array(dtype=int)

@@ -48,7 +48,7 @@ from tqdm import tqdm
 from warpcloth.errors import OptionError, SceneError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
 from warpcloth.runs import simulate
-from warpcloth.scene import Scene, batch_fields, check_step, field_law, law_fields, scene_from_dict, set_field
+from warpcloth.scene import Scene, batch_fields, check_step, field_laws, law_fields, scene_from_dict, set_field
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.sim import RunResult
 
@@ -132,9 +132,10 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
         if dotted in fixed or isinstance(value, (bool, str, list)):
             raise OptionError("--free", f"{name} ({dotted}) cannot vary between the strips of one batch or is not "
                               "a number; only per-strip numeric fields can be fitted")
-        law = field_law(dotted)
-        if law not in (None, base.material.bending_law):
-            raise OptionError("--free", f"{name} ({dotted}) is a parameter of the {law} bending law, but the scene's "
+        laws = field_laws(dotted)
+        if laws and base.material.bending_law not in laws:
+            raise OptionError("--free", f"{name} ({dotted}) is a parameter of the {' or '.join(laws)} bending law, "
+                              "but the scene's "
                               f"material uses {base.material.bending_law} (whose parameters are "
                               f"{', '.join(law_fields(base.material.bending_law))}); set material.bending_law to "
                               "fit it")

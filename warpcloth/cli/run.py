@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from warpcloth.errors import DivergenceError
@@ -58,6 +59,9 @@ def run_scene(args: argparse.Namespace) -> int:
         print(f"no first period: the record ({scene.run.duration_s:g} s after the release) holds "
               f"{summary['n_half_cycles']} half-cycle(s) of the {summary['signal']} signal; a period needs two "
               "(run longer: run.duration_s)")
+    warning = result.memory_warning()
+    if warning:
+        print(f"warpcloth run: warning: {warning}", file=sys.stderr)
     if args.usd:
         from warpcloth.io.load import load_recording
         from warpcloth.viz.usd import export_usd

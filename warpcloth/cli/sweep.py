@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from .options import at_least, device, path_text
@@ -42,4 +43,9 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     n_div = int(summary["diverged"].sum())
     print(f"wrote {out}/ ({len(summary)} variants: summary.csv, summary.parquet, probes/, variants.csv); "
           f"{n_div} diverged")
+    if "reversal_overflows" in summary and summary["reversal_overflows"].fillna(0).any():
+        full = summary.loc[summary["reversal_overflows"].fillna(0) > 0, "variant"].tolist()
+        print(f"warpcloth sweep: warning: the masing reversal memory was full in {len(full)} variant(s) "
+              f"({', '.join(map(str, full[:8]))}{' …' if len(full) > 8 else ''}; summary column reversal_overflows): "
+              "their inner loops were traced without hysteresis; raise integrator.reversal_memory", file=sys.stderr)
     return 0

@@ -7,7 +7,7 @@ from .geometry import COORDINATES, rest_positions
 from .materials import (
     MATERIAL_FILE_KEY,
     bundled_materials,
-    field_law,
+    field_laws,
     law_fields,
     material_fields,
     read_material_file,
@@ -52,7 +52,7 @@ __all__ = [
     "expand",
     "load_scene",
     "load_sweep",
-    "field_law",
+    "field_laws",
     "law_fields",
     "material_fields",
     "read_material_file",

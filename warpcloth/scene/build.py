@@ -14,6 +14,7 @@ import numpy as np
 
 from warpcloth import units
 from warpcloth.errors import SceneError
+from warpcloth.kernels import bending_masing
 from warpcloth.sim import SOLVERS, ClampMotion, Control, Model, Recorder, Solver, StripBuilder
 from warpcloth.sim.resources import check_memory
 
@@ -63,10 +64,15 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
     # the model's per-node arrays (positions, velocities, three force parts, imex's two
     # scratch arrays, rest positions, hinge memory: ~24 numbers of 8 B per node and
     # strip), before any exists
-    check_memory(192 * first.n_nodes * len(scenes), f"the state of {len(scenes)} strip(s) of {first.n_nodes} nodes",
-                 "use a coarser strip.spacing_mm or fewer strips per batch")
+    masing = any(scene.material.bending_law == bending_masing.NAME for scene in scenes)
+    history = 16 * (first.integrator.reversal_memory + 1) * first.n_nodes if masing else 0
+    check_memory((192 * first.n_nodes + history) * len(scenes),
+                 f"the state of {len(scenes)} strip(s) of {first.n_nodes} nodes",
+                 "use a coarser strip.spacing_mm, fewer strips per batch"
+                 + (" or a smaller integrator.reversal_memory" if masing else ""))
     builder = StripBuilder(rest_positions(first), first.n_clamped, first.spacing, first.run.gravity_m_per_s2,
-                           release_time=first.preroll, move_time=first.release.move_time_s)
+                           release_time=first.preroll, move_time=first.release.move_time_s,
+                           reversal_memory=first.integrator.reversal_memory)
     for scene in scenes:
         start, end, coefficients = clamp_pieces(scene.clamp)
         builder.add_strip(

@@ -38,17 +38,17 @@ def to_si(section: MaterialSection) -> MaterialSI:
     )
 
 
-def field_law(dotted: str) -> str | None:
-    """The bending law whose parameter the scene field ``dotted`` (``material.dahl_exponent``)
-    is; None for a field every law reads, or one outside [material]."""
+def field_laws(dotted: str) -> tuple[str, ...]:
+    """The bending laws whose parameter the scene field ``dotted`` (``material.dahl_exponent``)
+    is; empty for a field every law reads, or one outside [material]."""
     section, _, key = dotted.partition(".")
     spec = MaterialSection.__dataclass_fields__.get(key) if section == "material" else None
-    return spec.metadata.get("law") if spec is not None else None
+    return spec.metadata.get("laws", ()) if spec is not None else ()
 
 
 def law_fields(law: str) -> list[str]:
-    """The [material] fields that are parameters of the bending law ``law`` alone."""
-    return [f.name for f in dataclasses.fields(MaterialSection) if f.metadata.get("law") == law]
+    """The [material] fields that are parameters of the bending law ``law`` (not of every law)."""
+    return [f.name for f in dataclasses.fields(MaterialSection) if law in f.metadata.get("laws", ())]
 
 
 def tensile_slope_minimum(coefficients: list[float], max_strain: float) -> tuple[float, float]:
@@ -67,14 +67,16 @@ def tensile_slope_minimum(coefficients: list[float], max_strain: float) -> tuple
 def validate_material(section: MaterialSection, max_strain: float, prefix: str) -> None:
     """Raise SceneError unless the material is physically usable up to ``max_strain``."""
     for f in dataclasses.fields(MaterialSection):
-        law = f.metadata.get("law")
-        if law not in (None, section.bending_law) and getattr(section, f.name) != f.default:
+        laws = f.metadata.get("laws", ())
+        if laws and section.bending_law not in laws and getattr(section, f.name) != f.default:
+            law = " or ".join(laws)
             origin = (f" (set by the scene or by its material file {section.from_file!r}: a material file "
                       "gives the fields of its own law)") if section.from_file else ""
             raise SceneError(f"{prefix}.{f.name}", f"= {getattr(section, f.name)!r} is a parameter of the "
                              f"{law} bending law, but {prefix}.bending_law is {section.bending_law!r} (whose "
                              f"parameters are {', '.join(law_fields(section.bending_law))}){origin}; set "
-                             f"{prefix}.bending_law = \"{law}\", use a material of that law, or leave the field out")
+                             f"{prefix}.bending_law = \"{laws[0]}\", use a material of that law, or leave the field "
+                             "out")
     a = section.tensile_gf_per_cm
     if len(a) != 4:
         raise SceneError(f"{prefix}.tensile_gf_per_cm", f"needs the 4 coefficients a1..a4, got {len(a)}")
@@ -95,7 +97,8 @@ def material_fields(law: str | None = None) -> list[str]:
     """The [material] fields a material file gives (every one but ``from_file``); for
     ``law``, only those that law reads (the common ones and its own parameters)."""
     return [f.name for f in dataclasses.fields(MaterialSection)
-            if f.name not in ("from_file", "bending_law") and (law is None or f.metadata.get("law") in (None, law))]
+            if f.name not in ("from_file", "bending_law") and (law is None or not f.metadata.get("laws")
+                                                                or law in f.metadata["laws"])]
 
 
 def read_material_file(ref: str | Path) -> dict:

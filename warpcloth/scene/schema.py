@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from warpcloth import units
-from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_tagawa2003
+from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_masing, bending_tagawa2003
 from warpcloth.sim import SOLVERS
 
 EDGE_HINGES = ("second_order", "paper")
@@ -46,11 +46,14 @@ _DEFAULT_M0 = bending_tagawa2003.loop_asymptote(DEFAULT_MATERIAL["hysteresis_d1_
                                                DEFAULT_MATERIAL["hysteresis_k0_per_cm"])
 _DEFAULT_SCALE = 1.0 / DEFAULT_MATERIAL["hysteresis_alpha_cm"]
 
+PAPER_LAW_SHAPE = ("tagawa2003", "masing")
+"""The laws that read the paper's loop parameters D1, α, K0 (the same major loop)."""
+
 
 def _field(default: Any, doc: str, *, gt: float | None = None, ge: float | None = None,
-           choices: tuple[str, ...] | None = None, per_strip: bool = False, law: str | None = None) -> Any:
-    # ``law``: the field is a parameter of that bending law only (material fields)
-    meta = {"doc": doc, "gt": gt, "ge": ge, "choices": choices, "per_strip": per_strip, "law": law}
+           choices: tuple[str, ...] | None = None, per_strip: bool = False, laws: tuple[str, ...] = ()) -> Any:
+    # ``laws``: the field is a parameter of those bending laws only (material fields; none: every law's)
+    meta = {"doc": doc, "gt": gt, "ge": ge, "choices": choices, "per_strip": per_strip, "laws": laws}
     if isinstance(default, list):
         return field(default_factory=lambda: list(default), metadata=meta)
     return field(default=default, metadata=meta)
@@ -83,36 +86,38 @@ class MaterialSection:
         DEFAULT_MATERIAL["bending_rigidity_gf_cm2_per_cm"], "D, slope of the centre line M = D K (every law)",
         ge=0, per_strip=True)
     bending_law: str = _field(DEFAULT_MATERIAL.get("bending_law", DEFAULT_BENDING_LAW),
-                              "hysteretic bending law (docs/model.md §4): tagawa2003 (the paper's), dahl, "
+                              "hysteretic bending law (docs/model.md §4): tagawa2003 (the paper's), masing (the "
+                              "paper's loop with return-point memory: converges in h and dt), dahl, "
                               "frictional_couple; each reads only its own fields below", choices=tuple(BENDING_LAWS),
                               per_strip=True)
     hysteresis_d1_gf_cm_per_cm: float = _field(
-        DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"], "tagawa2003: D1, hysteresis amplitude (0 = elastic)",
-        ge=0, per_strip=True, law="tagawa2003")
+        DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"], "tagawa2003, masing: D1, hysteresis amplitude (0 = elastic)",
+        ge=0, per_strip=True, laws=PAPER_LAW_SHAPE)
     hysteresis_alpha_cm: float = _field(DEFAULT_MATERIAL["hysteresis_alpha_cm"],
-                                        "tagawa2003: α, steepness of the hysteresis branches", gt=0, per_strip=True,
-                                        law="tagawa2003")
+                                        "tagawa2003, masing: α, steepness of the hysteresis branches", gt=0,
+                                        per_strip=True, laws=PAPER_LAW_SHAPE)
     hysteresis_k0_per_cm: float = _field(DEFAULT_MATERIAL["hysteresis_k0_per_cm"],
-                                         "tagawa2003: K0, curvature where the KES loop closes", gt=0, per_strip=True,
-                                         law="tagawa2003")
+                                         "tagawa2003, masing: K0, curvature where the KES loop closes (masing: "
+                                         "only there, not in the dynamics)", gt=0, per_strip=True,
+                                         laws=PAPER_LAW_SHAPE)
     dahl_moment_gf_cm_per_cm: float = _field(
         DEFAULT_MATERIAL.get("dahl_moment_gf_cm_per_cm", _DEFAULT_M0),
         "dahl: M_s, saturation of the hysteretic moment (0 = elastic; 2HB → 2 M_s for K_s ≪ 1 1/cm)", ge=0,
-        per_strip=True, law="dahl")
+        per_strip=True, laws=("dahl",))
     dahl_curvature_per_cm: float = _field(
         DEFAULT_MATERIAL.get("dahl_curvature_per_cm", _DEFAULT_SCALE),
-        "dahl: K_s, curvature scale over which the hysteretic moment saturates", gt=0, per_strip=True, law="dahl")
+        "dahl: K_s, curvature scale over which the hysteretic moment saturates", gt=0, per_strip=True, laws=("dahl",))
     dahl_exponent: float = _field(DEFAULT_MATERIAL.get("dahl_exponent", 1.0),
                                   "dahl: n, shape of the branches (1: the paper's exponential branches; "
-                                  "→ 0: a frictional couple)", ge=0, per_strip=True, law="dahl")
+                                  "→ 0: a frictional couple)", ge=0, per_strip=True, laws=("dahl",))
     friction_moment_gf_cm_per_cm: float = _field(
         DEFAULT_MATERIAL.get("friction_moment_gf_cm_per_cm", _DEFAULT_M0),
         "frictional_couple: M_f, the frictional couple (0 = elastic; 2HB = 2 M_f)", ge=0, per_strip=True,
-        law="frictional_couple")
+        laws=("frictional_couple",))
     friction_width_per_cm: float = _field(
         DEFAULT_MATERIAL.get("friction_width_per_cm", _DEFAULT_SCALE),
         "frictional_couple: K_w, curvature change over which the couple reverses (half of it each way; "
-        "→ 0: Grosberg's M_f sign(dK/dt))", gt=0, per_strip=True, law="frictional_couple")
+        "→ 0: Grosberg's M_f sign(dK/dt))", gt=0, per_strip=True, laws=("frictional_couple",))
     from_file: str = _field("", "a material file (path ending in .toml, relative to the scene file) or a bundled "
                             "material name; its values fill every [material] field the scene does not set itself",
                             per_strip=True)
@@ -182,6 +187,9 @@ class IntegratorSection:
     precision: str = _field("float64", "float64 | float32", choices=("float64", "float32"))
     divergence_strain: float = _field(0.25, "|ε| beyond which a strip counts as diverged; the "
                                       "tensile curve must increase up to it", gt=0)
+    reversal_memory: int = _field(bending_masing.DEFAULT_CAPACITY,
+                                  "masing: open reversal points each hinge keeps (16 B each per hinge); a reversal "
+                                  "beyond it is counted and reported (docs/model.md §4.10)", ge=1)
 
 
 @dataclass(frozen=True)

@@ -11,10 +11,11 @@ from collections.abc import Sequence
 import numpy as np
 import warp as wp
 
-from warpcloth.kernels import laws
+from warpcloth.kernels import laws, precision
 
 from .material import MaterialSI
 from .model import machine_device
+from .state import allocate_reversal_memory
 
 
 def moment_along_path(materials: MaterialSI | Sequence[MaterialSI], curvature: np.ndarray,
@@ -41,12 +42,14 @@ def moment_along_path(materials: MaterialSI | Sequence[MaterialSI], curvature: n
     law = laws.build(wp.float64)
     parameters = wp.array(np.array([m.bending_parameters() for m in materials]), dtype=law.Parameters,
                           device=device)
+    capacity = max(1, int(np.abs(np.diff(np.sign(np.diff(k, axis=0)), axis=0)).sum(axis=0).max(initial=0)) // 2 + 1)
+    history = allocate_reversal_memory(law.History, capacity, 1, k.shape[1], precision(wp.float64).vec2, device)
     moment = wp.zeros(k.shape, dtype=wp.float64, device=device)
     slope = wp.zeros(k.shape, dtype=wp.float64, device=device)
     work = wp.zeros(k.shape[1], dtype=wp.float64, device=device)
     wp.launch(law.moment_along_path, dim=k.shape[1], device=device,
-              inputs=[wp.array(np.ascontiguousarray(k), dtype=wp.float64, device=device), parameters, moment, slope,
-                      work])
+              inputs=[wp.array(np.ascontiguousarray(k), dtype=wp.float64, device=device), parameters, history, moment,
+                      slope, work])
     m, dm = moment.numpy(), slope.numpy()
     if single:
         m, dm = m[:, 0], dm[:, 0]

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from warpcloth.kernels import MAX_DEGREE
+from warpcloth.kernels import MAX_DEGREE, bending_masing
 
 from .material import MaterialSI
 from .model import Model
@@ -54,10 +54,14 @@ class StripBuilder:
     from and the clamp nodes rotate rigidly from; its first ``n_clamped`` nodes are held
     by the clamp. ``release_time`` > 0 starts with the hold-and-release phase: the free
     end is carried to its hold target over ``move_time`` s and held until t = 0.
+    ``reversal_memory`` is how many open reversal points each hinge of a strip with
+    return-point memory (the masing law) keeps; a reversal beyond it is counted and
+    reported (:attr:`warpcloth.sim.RunResult.reversal_memory`).
     """
 
     def __init__(self, rest_positions: np.ndarray, n_clamped: int, spacing: float, gravity: float = 9.80665,
-                 release_time: float = 0.0, move_time: float = 0.0) -> None:
+                 release_time: float = 0.0, move_time: float = 0.0,
+                 reversal_memory: int = bending_masing.DEFAULT_CAPACITY) -> None:
         self.rest_positions = np.asarray(rest_positions, dtype=np.float64)
         if self.rest_positions.ndim != 2 or self.rest_positions.shape[1] != 2:
             raise ValueError(f"rest_positions must be [node, xy], got shape {self.rest_positions.shape}")
@@ -74,6 +78,9 @@ class StripBuilder:
         self.gravity = gravity
         self.release_time = release_time
         self.move_time = move_time
+        if not (isinstance(reversal_memory, int) and reversal_memory >= 1):
+            raise ValueError(f"reversal_memory must be a whole number of at least 1, got {reversal_memory!r}")
+        self.reversal_memory = reversal_memory
         self.strips: list[StripSpec] = []
 
     @property

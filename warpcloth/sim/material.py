@@ -18,9 +18,9 @@ class MaterialSI:
     density: float  # ρ_A, kg/m²
     tensile: tuple[float, float, float, float]  # a1..a4 of T(ε), N/m
     bending_rigidity: float  # D, N·m
-    hysteresis_d1: float = 0.0  # tagawa2003: D1, N
-    hysteresis_alpha: float = 0.05  # tagawa2003: α, m
-    hysteresis_k0: float = 250.0  # tagawa2003: K0, 1/m
+    hysteresis_d1: float = 0.0  # tagawa2003 and masing: D1, N
+    hysteresis_alpha: float = 0.05  # tagawa2003 and masing: α, m
+    hysteresis_k0: float = 250.0  # tagawa2003 and masing: K0, 1/m
     bending_law: str = DEFAULT_BENDING_LAW
     dahl_moment: float = 0.0  # dahl: M_s, N
     dahl_curvature: float = 20.0  # dahl: K_s, 1/m

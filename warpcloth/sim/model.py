@@ -12,8 +12,8 @@ import numpy as np
 import warp as wp
 
 from warpcloth.errors import OptionError
+from warpcloth.kernels import bending_masing, structs
 from warpcloth.kernels import precision as precision_types
-from warpcloth.kernels import structs
 
 if TYPE_CHECKING:
     from .builder import StripBuilder
@@ -102,6 +102,9 @@ class Model:
         self.bending = np.array([s.material.bending_parameters() for s in strips])
         self.damping = np.array([s.damping for s in strips])
         self.edge_curvature_scale = np.array([self.spacing / s.edge_hinge_length for s in strips])
+        # Reversal points are stored only when some strip's law has return-point memory.
+        uses_history = any(s.material.bending_law == bending_masing.NAME for s in strips)
+        self.reversal_memory = builder.reversal_memory if uses_history else 0
         self.struct = self._build_struct()
 
     def array(self, values: np.ndarray, dtype: object = None) -> wp.array:

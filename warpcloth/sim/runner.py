@@ -109,6 +109,15 @@ class RunResult:
     when the batch was built from scenes): the coordinates of :meth:`to_xarray`."""
     attrs: dict[str, object] = field(default_factory=dict)
     """What :meth:`to_xarray` says about the whole result (e.g. its coordinate frame)."""
+    reversal_memory: dict[str, object] = field(default_factory=dict)
+    """For a batch with return-point memory (the masing law): the points each hinge could
+    keep (``capacity``) and, per strip, the ``deepest`` any hinge went and the
+    ``overflows`` (reversals not stored: their inner loops were traced without
+    hysteresis, docs/model.md §4.10). Empty otherwise."""
+
+    def memory_warning(self) -> str | None:
+        """A sentence naming the strips whose reversal memory overflowed, or None."""
+        return reversal_memory_warning(self.reversal_memory)
 
     def to_xarray(self) -> object:
         """An ``xarray.Dataset`` of the probes over (t, variant), the frames over
@@ -133,6 +142,19 @@ class RunResult:
         p = self.probe
         return (p("kinetic") + p("gravitational") + p("tensile") + p("bending_elastic_work")
                 + p("hysteresis_work") + p("damping_work") - p("drive_work"))
+
+
+def reversal_memory_warning(report: dict[str, object]) -> str | None:
+    """The warning a run with overflowed reversal memory prints (see
+    :attr:`RunResult.reversal_memory`); None when nothing overflowed."""
+    overflows = np.asarray(report.get("overflows", []), dtype=int)
+    if not overflows.any():
+        return None
+    strips = np.flatnonzero(overflows)
+    named = ", ".join(f"{s} ({overflows[s]})" for s in strips[:8]) + (" …" if len(strips) > 8 else "")
+    return (f"the masing reversal memory ({report['capacity']} points per hinge) was full: {int(overflows.sum())} "
+            f"reversal(s) not stored in strip(s) {named}; their inner loops were traced without hysteresis, so the "
+            "hysteresis work is underestimated by their area; raise integrator.reversal_memory")
 
 
 def check_recording_fits(model: Model, control: Control, recorder: Recorder, keep_frames: bool = True) -> None:
@@ -229,10 +251,12 @@ def simulate_batch(
         bar.close()
     wall_time = time.perf_counter() - started
     strip_steps = b * int(schedule.steps[i - 1])  # up to where the run stopped
+    memory = state.reversal_report()
     result = RunResult(list(labels or []), t, probes_all, frame_times, frames_all, diverged, wall_time, strip_steps,
-                       dict(parameters or {}), dict(attrs or {}))
+                       dict(parameters or {}), dict(attrs or {}), memory)
     if sink is not None:
-        sink.close(diverged, {"wall_time_s": wall_time, "strip_steps": strip_steps, "device": str(model.device)})
+        extra = {"wall_time_s": wall_time, "strip_steps": strip_steps, "device": str(model.device)}
+        sink.close(diverged, extra | ({"reversal_memory": memory} if memory else {}))
     if diverged and on_divergence == "raise":
         raise DivergenceError("; ".join(describe_divergence(d) for d in diverged), diverged, result)
     return result

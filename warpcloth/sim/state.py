@@ -14,11 +14,25 @@ if TYPE_CHECKING:
     from .model import Model
 
 
+def allocate_reversal_memory(struct_type: type, capacity: int, n_hinges: int, n_strips: int, vec2: object,
+                    device: object) -> object:
+    """A law history struct with ``capacity`` reversal points per hinge above the origin
+    (capacity 0: no strip stores any, so the points array is a placeholder)."""
+    history = struct_type()
+    shape = (capacity + 1, n_hinges, n_strips) if capacity else (1, 1, 1)
+    history.points = wp.zeros(shape, dtype=vec2, device=device)
+    history.overflows = wp.zeros(n_strips, dtype=int, device=device)
+    history.deepest = wp.zeros(n_strips, dtype=int, device=device)
+    return history
+
+
 class State:
     """Dynamic state of B strips, laid out ``[node, strip]`` / ``[hinge, strip]``.
 
     Starts in the model's rest shape and at rest with fresh hinges; :meth:`set_positions`
     replaces the shape (and re-initialises the hinges there, so it carries no moment offset).
+    ``struct.history`` holds the open reversal points of strips whose law has return-point
+    memory, and per strip the reversals a full memory could not hold (:meth:`reversal_report`).
     """
 
     def __init__(self, model: Model) -> None:
@@ -42,6 +56,8 @@ class State:
         s.correction = nodes()
         s.elimination = nodes()
         s.hinge = wp.zeros((n_hinges, b), dtype=model.structs.law.Memory, device=model.device)
+        s.history = allocate_reversal_memory(model.structs.law.History, model.reversal_memory, n_hinges, b, t.vec2,
+                                    model.device)
         s.work = per_strip(t.vec4)
         s.step = per_strip(int)
         s.status = per_strip(int)
@@ -50,6 +66,16 @@ class State:
         s.status_value = per_strip(t.scalar)
         self.struct = s
         self.reset_hinges()
+
+    def reversal_report(self) -> dict[str, object]:
+        """The reversal memory's use so far: its ``capacity`` (points per hinge), and per
+        strip the ``deepest`` any hinge went and the ``overflows`` (reversals not stored,
+        their inner loops traced without hysteresis); empty when no strip stores any."""
+        capacity = self.model.reversal_memory
+        if not capacity:
+            return {}
+        h = self.struct.history
+        return {"capacity": capacity, "deepest": h.deepest.numpy().tolist(), "overflows": h.overflows.numpy().tolist()}
 
     def set_positions(self, positions: np.ndarray, velocities: np.ndarray | None = None) -> None:
         """Replace node positions ``[node, strip, 2]`` (and velocities), e.g. a mode shape."""
@@ -61,5 +87,7 @@ class State:
 
     def reset_hinges(self) -> None:
         """Make every hinge fresh at its current curvature (no memory of past bending)."""
+        self.struct.history.overflows.zero_()
+        self.struct.history.deepest.zero_()
         kernel = hinge_kernels(self.model.scalar).initialise_hinges
         wp.launch(kernel, dim=self.model.n_strips, inputs=[self.model.struct, self.struct], device=self.model.device)

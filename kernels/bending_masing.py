@@ -1,0 +1,200 @@
+"""The paper's hysteretic bending law with return-point memory, ``"masing"`` (Masing's
+rules; docs/model.md §4.10).
+
+Moment per width M = D K + H, where H follows Masing's rules on the paper's branch shape:
+
+- a hinge that has never reversed is on the virgin curve H = F(K − K_o) from the
+  curvature K_o it started at, F(y) = ½ D1 (1 − e^{−2α|y|}) sgn y;
+- after a reversal at (K_r, H_r) it follows the branch H = H_r + s D1 (1 − e^{−α s (K − K_r)})
+  (s = ±1 the new direction: twice the virgin curve, stretched twice, Masing's rule);
+- when the curvature passes the reversal point before the current one, the inner loop
+  has closed and the hinge goes on along the older branch as if the inner loop had never
+  happened (return-point memory); the first reversal's branch closes on the virgin curve
+  at the mirror point 2 K_o − K_r.
+
+The major loop between ±K0 is exactly the tagawa2003 loop (same D, D1, α, K0, so a
+material switches law by one line); inner loops differ. Unlike tagawa2003 and dahl, whose
+offset depends on the total variation of the curvature history, H here depends only on
+the reversal points still open, so it is continuous in the curvature path (sup norm) and
+converges as the mesh and the step are refined (docs/model.md §15.6). An Iwan model (a
+continuum of Jenkins elements with yield curvatures of density 2 α² D1 e^{−2ακ}) has
+exactly this response, which the tests use as the reference.
+
+Each hinge keeps its open reversal points in :class:`ReversalMemory` (``points[0]`` is
+the origin (K_o, 0), ``points[1..depth]`` the reversals). A reversal that finds the
+memory full is not stored: the hinge retraces its current branch elastically until the
+curvature passes the top point again (the smallest loop, the new one, dissipates
+nothing); each such reversal is counted per strip in ``overflows`` and reported by the
+runner, never silent. K0 sets only where the KES loop closes; it does not enter the
+dynamics.
+
+Per-hinge memory (the shared vector): H, the direction of the last change of curvature
+times (depth + 1), and the curvature at the last force evaluation.
+"""
+
+import functools
+from types import SimpleNamespace
+from typing import Any
+
+import warp as wp
+
+from .types import precision
+
+NAME = "masing"
+
+PARAMETERS = ("bending_rigidity", "hysteresis_d1", "hysteresis_alpha", "hysteresis_k0")
+"""Layout of the packed per-strip parameter vector: D (N·m), D1 (N), α (m), K0 (1/m)."""
+
+MATERIAL_FIELDS = PARAMETERS
+"""The :class:`warpcloth.sim.MaterialSI` fields :func:`packed_parameters` takes, in order."""
+
+MEMORY = ("hysteretic_moment", "direction_depth", "previous_curvature")
+"""Layout of the packed per-hinge memory: H (N), the direction of the last change of
+curvature (+1 / −1) times (the number of open reversal points + 1), K at the last force
+evaluation (1/m)."""
+
+DEFAULT_CAPACITY = 64
+"""Reversal points kept per hinge unless the run asks otherwise. The bundled experiments
+open at most ~20 (a decaying swing nests one loop per half-cycle; benchmarks/masing_memory.py
+measures it); a full memory is reported."""
+
+wp.set_module_options({"enable_backward": False})
+
+
+def packed_parameters(bending_rigidity: float, d1: float, alpha: float, k0: float) -> tuple[float, ...]:
+    """The per-strip parameter vector (layout :data:`PARAMETERS`) from D, D1, α, K0 in SI."""
+    return (bending_rigidity, d1, alpha, k0)
+
+
+@functools.cache
+def build(scalar: Any) -> SimpleNamespace:
+    """The law's Warp functions and its reversal memory struct for ``scalar``."""
+    types = precision(scalar)
+    Memory, Parameters, vec2 = types.law_memory, types.law_parameters, types.vec2
+    zero = scalar(0.0)
+    one = scalar(1.0)
+    half = scalar(0.5)
+    two = scalar(2.0)
+
+    @wp.struct
+    class ReversalMemory:
+        """Every hinge's open reversal points and, per strip, what did not fit."""
+
+        points: wp.array3d(dtype=vec2)  # [level, hinge, strip]: (K, H); level 0 is the origin (K_o, 0)
+        overflows: wp.array(dtype=int)  # [strip]: reversals not stored because the memory was full
+        deepest: wp.array(dtype=int)  # [strip]: the most reversal points any of its hinges held
+
+    @wp.func
+    def virgin(y: scalar, p: Parameters):
+        # F(y) = ½ D1 (1 − e^{−2α|y|}) sgn y
+        return wp.sign(y) * half * p[1] * (one - wp.exp(-two * p[2] * wp.abs(y)))
+
+    @wp.func
+    def branch(curvature: scalar, top: vec2, s: scalar, p: Parameters):
+        return top[1] + s * p[1] * (one - wp.exp(-p[2] * s * (curvature - top[0])))
+
+    @wp.func
+    def direction_from(top: scalar, below: scalar):
+        # A branch leaves its reversal point opposite to the way the curvature came to it.
+        if top > below:
+            return -one
+        return one
+
+    @wp.func
+    def fresh_memory(curvature: scalar, p: Parameters, history: ReversalMemory, hinge: int, strip: int):
+        # A hinge that has never bent: on the virgin curve from its own curvature.
+        if p[1] != zero:
+            history.points[0, hinge, strip] = vec2(curvature, zero)
+        return Memory(zero, one, curvature)
+
+    @wp.func
+    def follow(curvature: scalar, memory: Memory, p: Parameters, history: ReversalMemory, hinge: int, strip: int):
+        previous = memory[2]
+        change = curvature - previous
+        if change == zero or p[1] == zero:
+            return Memory(memory[0], memory[1], curvature)
+        d = wp.sign(change)
+        last = wp.sign(memory[1])
+        depth = int(wp.abs(memory[1])) - 1
+        capacity = history.points.shape[0] - 1
+        origin = history.points[0, hinge, strip][0]
+        top = vec2(origin, zero)
+        below = origin
+        s = d  # on the virgin curve at its origin every direction loads
+        if depth > 0:
+            top = history.points[depth, hinge, strip]
+            if depth > 1:
+                below = history.points[depth - 1, hinge, strip][0]
+            s = direction_from(top[0], below)
+        elif previous != origin:
+            s = wp.sign(previous - origin)
+        if d != s and last != d:
+            # The curvature reversed at the previous evaluation, against the current branch.
+            if depth < capacity:
+                below = top[0]
+                depth += 1
+                top = vec2(previous, memory[0])
+                history.points[depth, hinge, strip] = top
+                s = d
+                if depth > history.deepest[strip]:
+                    history.deepest[strip] = depth
+            else:
+                history.overflows[strip] = history.overflows[strip] + 1
+        # Retracing after a reversal the full memory could not hold: passing the top point
+        # closes that loop, and the hinge continues on the branch before it.
+        while d != s and depth > 0 and s * (curvature - top[0]) <= zero:
+            depth -= 1
+            s = d
+            top = vec2(origin, zero)
+            below = origin
+            if depth > 0:
+                top = history.points[depth, hinge, strip]
+                if depth > 1:
+                    below = history.points[depth - 1, hinge, strip][0]
+        # Return-point memory: reaching the point below the top closes the inner loop.
+        while d == s and depth > 0:
+            target = below
+            if depth == 1:
+                target = two * origin - top[0]  # the first branch meets the virgin curve mirrored
+            if s * (curvature - target) < zero:
+                break
+            depth = wp.max(depth - 2, 0)
+            top = vec2(origin, zero)
+            below = origin
+            if depth > 0:
+                top = history.points[depth, hinge, strip]
+                if depth > 1:
+                    below = history.points[depth - 1, hinge, strip][0]
+        h = virgin(curvature - origin, p)
+        if depth > 0:
+            h = branch(curvature, top, s, p)
+        return Memory(h, d * scalar(depth + 1), curvature)
+
+    @wp.func
+    def hysteretic_moment(curvature: scalar, memory: Memory, p: Parameters):
+        return memory[0]
+
+    @wp.func
+    def tangent(curvature: scalar, memory: Memory, p: Parameters, history: ReversalMemory, hinge: int, strip: int):
+        # dM/dK: D plus the slope of the virgin curve or of the current branch.
+        if p[1] == zero:
+            return p[0]
+        depth = int(wp.abs(memory[1])) - 1
+        origin = history.points[0, hinge, strip][0]
+        if depth == 0:
+            return p[0] + p[2] * p[1] * wp.exp(-two * p[2] * wp.abs(curvature - origin))
+        top = history.points[depth, hinge, strip]
+        below = origin
+        if depth > 1:
+            below = history.points[depth - 1, hinge, strip][0]
+        s = direction_from(top[0], below)
+        return p[0] + p[2] * p[1] * wp.exp(-p[2] * s * (curvature - top[0]))
+
+    return SimpleNamespace(
+        name=NAME,
+        ReversalMemory=ReversalMemory,
+        fresh_memory=fresh_memory,
+        follow=follow,
+        hysteretic_moment=hysteretic_moment,
+        tangent=tangent,
+    )
