@@ -1,4 +1,4 @@
-"""The three bending laws (kernels/bending_*.py) on prescribed curvature paths, against
+"""The bending laws (kernels/bending_*.py) on prescribed curvature paths, against
 their closed forms, each other where they coincide, a published update form, and in
 one batch (docs/model.md §4)."""
 
@@ -142,7 +142,8 @@ def test_frictional_couple_is_dahls_zero_exponent_limit():
 
 @pytest.mark.parametrize("law, field", [("tagawa2003", "hysteresis_d1_gf_cm_per_cm"),
                                         ("dahl", "dahl_moment_gf_cm_per_cm"),
-                                        ("frictional_couple", "friction_moment_gf_cm_per_cm")])
+                                        ("frictional_couple", "friction_moment_gf_cm_per_cm"),
+                                        ("masing", "hysteresis_d1_gf_cm_per_cm")])
 def test_each_law_is_elastic_without_its_hysteresis_and_continuous_with_it(law, field):
     path = wandering_path(4)
     elastic = material(law, **{field: 0.0})
@@ -152,10 +153,11 @@ def test_each_law_is_elastic_without_its_hysteresis_and_continuous_with_it(law, 
     hysteretic = material(law)
     m, _, slope = moment_along_path(hysteretic, path, with_tangent=True)
     # continuous: no step larger than the steepest branch allows (right after a reversal
-    # from saturation: D + 2 α M0, D + 2^n M_s / K_s, D + M_f / K_w)
+    # from saturation: D + 2 α M0, D + 2^n M_s / K_s, D + M_f / K_w, D + α D1)
     steepest = {"tagawa2003": 2 * hysteretic.hysteresis_m0 / hysteretic.hysteresis_alpha ** -1,
                 "dahl": 2 ** hysteretic.dahl_exponent * hysteretic.dahl_moment / hysteretic.dahl_curvature,
-                "frictional_couple": hysteretic.friction_moment / hysteretic.friction_width}[law]
+                "frictional_couple": hysteretic.friction_moment / hysteretic.friction_width,
+                "masing": hysteretic.hysteresis_alpha * hysteretic.hysteresis_d1}[law]
     bound = (hysteretic.bending_rigidity + steepest) * np.abs(np.diff(path))
     assert np.all(np.abs(np.diff(m)) <= 1.000001 * bound)
     # the tangent is the slope of the branch being followed
@@ -164,8 +166,8 @@ def test_each_law_is_elastic_without_its_hysteresis_and_continuous_with_it(law, 
     assert np.median(np.abs(secant - slope[1:][smooth]) / slope.max()) < 0.05
 
 
-def test_the_three_laws_run_in_one_batch_as_each_alone():
-    laws = ["tagawa2003", "dahl", "frictional_couple"]
+def test_the_laws_run_in_one_batch_as_each_alone():
+    laws = ["tagawa2003", "dahl", "frictional_couple", "masing"]
     scenes = [wc.load_scene("damped_swing", overrides(run__duration_s=0.3, material__bending_law=law,
                                                        material__dahl_exponent=2.0 if law == "dahl" else 1.0))
               for law in laws]
@@ -178,10 +180,10 @@ def test_the_three_laws_run_in_one_batch_as_each_alone():
     default_dahl = wc.simulate(wc.load_scene("damped_swing", overrides(run__duration_s=0.3,
                                                                         material__bending_law="dahl")))
     assert np.abs(default_dahl.probe("tip_x", 0) - together.probe("tip_x", 0)).max() < 1e-12
-    assert together.parameters["material.dahl_exponent"].tolist() == [1.0, 2.0, 1.0]
+    assert together.parameters["material.dahl_exponent"].tolist() == [1.0, 2.0, 1.0, 1.0]
 
 
-@pytest.mark.parametrize("law", ["dahl", "frictional_couple"])
+@pytest.mark.parametrize("law", ["dahl", "frictional_couple", "masing"])
 def test_the_energy_budget_closes_with_each_law(law):
     # as test_energy.py's hysteretic swing: the sum of every term stays within 0.05 % of
     # the peak kinetic energy, and the law really dissipates
@@ -205,7 +207,7 @@ def test_a_laws_parameters_are_fitted_only_for_that_law():
                                          "material.dahl_exponent"]
     assert fitted[1].lower == 0.0 and fitted[1].upper == pytest.approx(4 * dahl.material.dahl_moment_gf_cm_per_cm)
     with pytest.raises(OptionError, match=r"--free: D1 \(material.hysteresis_d1_gf_cm_per_cm\) is a parameter of "
-                                          r"the tagawa2003 bending law, but the scene's material uses dahl"):
+                                          r"the tagawa2003 or masing bending law, but the scene's material uses dahl"):
         free_parameters("gamma,D1", dahl)
     with pytest.raises(OptionError, match="Mf .* frictional_couple bending law, but the scene's material uses "
                                           "tagawa2003"):

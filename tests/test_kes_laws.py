@@ -16,11 +16,14 @@ import warpcloth as wc
 from warpcloth.calibrate import kes
 from warpcloth.cli import main
 from warpcloth.errors import OptionError
-from warpcloth.scene import MaterialSection, material_fields, read_material_file
+from warpcloth.scene import MaterialSection, material_fields, read_material_file, to_si
+from warpcloth.sim import moment_along_path
 
 ROOT = Path(__file__).resolve().parents[1]
 FB1 = ROOT / "scenes" / "data" / "kes_fb1_example.csv"
 FB2 = ROOT / "scenes" / "data" / "kes_fb2_example.csv"
+DATA = ROOT / "scenes" / "data"
+GF_CM = 9.80665e-3  # gf·cm/cm → N
 NOISE = 0.002  # gf·cm/cm: the bundled FB2 example's (scenes/data/make_kes_examples.py)
 
 PAPER = MaterialSection()  # the default material: the bundled examples' truth
@@ -59,7 +62,7 @@ def cli(monkeypatch, tmp_path, capsys, *args):
 def test_every_kernel_law_has_a_fitter_and_its_free_parameters():
     assert tuple(kes.LAW_FITTERS) == tuple(BENDING_LAWS)
     assert {law: f.free_parameters for law, f in kes.LAW_FITTERS.items()} == \
-        {"tagawa2003": 3, "dahl": 4, "frictional_couple": 3}  # K0 is fixed by the data
+        {"tagawa2003": 3, "dahl": 4, "frictional_couple": 3, "masing": 3}  # K0 is fixed by the data
     for law, fitter in kes.LAW_FITTERS.items():  # a fit gives exactly the fields its law reads
         assert sorted(p.field for p in fitter.parameters) == sorted(
             f for f in material_fields(law) if f not in ("name", "density_g_per_cm2", "tensile_gf_per_cm"))
@@ -201,7 +204,7 @@ def test_ties_and_caveats_are_said():
 
 def test_an_unknown_law_is_named():
     with pytest.raises(OptionError, match=r"--law: unknown bending law 'bao'; known: tagawa2003, dahl, "
-                                          r"frictional_couple$"):
+                                          r"frictional_couple, masing$"):
         kes.fit_kes(kes.read_tensile_csv(FB1), kes.read_bending_csv(FB2), law="bao")
 
 
@@ -270,10 +273,12 @@ def test_cli_compare_on_the_bundled_example(monkeypatch, tmp_path, capsys):
     with open(tmp_path / "cmp.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert [r["law"] for r in rows] == [*BENDING_LAWS, "measured"]
-    assert [r["recommended"] for r in rows[:3]] == ["True", "False", "False"]
+    assert [r["recommended"] for r in rows[:4]] == ["True", "False", "False", "False"]
     assert float(rows[1]["dahl_exponent"]) == pytest.approx(0.936558, rel=1e-5) and rows[0]["dahl_exponent"] == ""
     assert float(rows[2]["delta_aic"]) == pytest.approx(164.62, abs=0.01)
-    assert float(rows[3]["2hb_gf_cm_per_cm"]) == pytest.approx(0.038249, rel=1e-4)
+    assert float(rows[-1]["2hb_gf_cm_per_cm"]) == pytest.approx(0.038249, rel=1e-4)
+    assert rows[0]["inner_rms_gf_cm_per_cm"] == ""  # a major loop alone: no partial cycles
+    assert "this loop has no partial cycles, and a major loop does not determine" in out
     assert (tmp_path / "cmp.png").stat().st_size > 10_000
     status, _, err = cli(monkeypatch, tmp_path, capsys, "compare", "--bending", "kes_fb2_example", "--csv", "cmp.csv")
     assert status == 2 and "--csv: cmp.csv already exists" in err
@@ -296,7 +301,8 @@ def test_cli_exits_with_the_status_of_a_loop_no_law_describes(monkeypatch, tmp_p
 @pytest.mark.parametrize("args, message", [
     (["fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example", "-o", "m.toml",
       "--density-g-per-cm2", "0.02", "--law", "bao"],
-     "error in option: --law: unknown bending law 'bao'; known: tagawa2003, dahl, frictional_couple, or all"),
+     "error in option: --law: unknown bending law 'bao'; known: tagawa2003, dahl, frictional_couple, masing, or "
+     "all"),
     (["compare", "--bending", "kes_fb2_example", "--csv", "table.txt"], "error in option: --csv: table.txt must be "
      "a file ending in .csv"),
     (["compare", "--bending", "kes_fb2_example", "--plot", "figure.jpg"], "error in option: --plot: figure.jpg must "
@@ -350,3 +356,48 @@ def test_stated_uncertainties_match_the_scatter_over_noise_seeds(law, section):
         spread = np.std([f.parameters[name] for f in fits], ddof=1)
         stated = np.median([f.sigma[name] for f in fits])
         assert 0.7 < spread / stated < 1.4, (name, spread, stated)
+
+
+# ------------------------------------------------------------------------- partial (inner) cycles
+
+
+def test_a_record_with_partial_cycles_says_whose_inner_loops_they_are(monkeypatch, tmp_path, capsys):
+    # kes_fb2_inner_loops: the standard cycle then partial cycles, made by an Iwan model of
+    # fibre friction (scenes/data/make_kes_examples.py, not warpcloth's kernels) with the
+    # default material's loop; the major loop cannot tell tagawa2003 from masing, the
+    # partial cycles can (measured: masing 0, dahl +163.8, tagawa2003 +172.7)
+    loop = kes.read_bending_csv(DATA / "kes_fb2_inner_loops.csv")
+    assert loop.inner_start is not None and loop.rows[loop.inner_start] == 602
+    major = kes.read_bending_csv(FB2)
+    assert major.inner_start is None
+    # the KES values come from the major cycle only (the inner cycles are not legs of it)
+    assert kes.bending_summary(loop).b_gf_cm2_per_cm == pytest.approx(0.1, abs=0.002)
+    comparison = kes.compare_laws(loop)
+    delta = comparison.inner_delta()
+    assert delta["masing"] == 0.0 and min(delta["tagawa2003"], delta["dahl"], delta["frictional_couple"]) > 50
+    assert comparison.recommended == "masing"
+    masing = comparison.fits["masing"]
+    assert masing.parameters["hysteresis_d1_gf_cm_per_cm"] == pytest.approx(0.04, rel=0.02)
+    status, out, err = cli(monkeypatch, tmp_path, capsys, "compare", "--bending", "kes_fb2_inner_loops", "--csv",
+                           "inner.csv")
+    assert status == 0, err
+    assert "the inner loops are masing's" in out
+    with open(tmp_path / "inner.csv", newline="") as f:
+        rows = {r["law"]: r for r in csv.DictReader(f)}
+    assert float(rows["masing"]["inner_delta"]) == 0.0 and float(rows["tagawa2003"]["inner_delta"]) > 50
+
+
+def test_partial_cycles_of_the_papers_own_law_are_its_own():
+    # the verdict is not a preference built in: partial cycles made by tagawa2003 itself
+    # (noise-free, warpcloth's kernel) are tagawa2003's, and masing's are masing's
+    knots = (0.0, 2.5, -2.5, 2.0, 1.6, 2.0, 1.6, -0.8, -0.4, -0.8, 0.0)
+    k = np.concatenate([*(np.linspace(a, b, round(abs(b - a) / 0.02), endpoint=False)
+                          for a, b in zip(knots[:-1], knots[1:], strict=True)), [0.0]])
+    noise = np.random.default_rng(5).normal(0.0, 2e-4, len(k))
+    for law in ("tagawa2003", "masing"):
+        material = to_si(MaterialSection(bending_law=law))
+        moment = moment_along_path(material, k * 100.0)[0] / GF_CM + noise
+        comparison = kes.compare_laws(kes.bending_loop(k, moment), laws=["tagawa2003", "masing"])
+        assert comparison.inner_delta()[law] == 0.0, law
+        other = "masing" if law == "tagawa2003" else "tagawa2003"
+        assert comparison.inner_delta()[other] > 10, law

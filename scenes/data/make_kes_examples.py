@@ -22,7 +22,16 @@ the hinge starting fresh at K = 0; without noise B = 0.1004 gf·cm²/cm, 2HB = 0
 gf·cm/cm), plus Gaussian noise σ = 0.002 gf·cm/cm (seed 2027); curvature noise-free (the
 instruments' controlled variable).
 
-Run ``python scenes/data/make_kes_examples.py`` to rewrite both files next to this script.
+``kes_fb2_inner_loops.csv`` (same header): the standard cycle, then partial cycles inside
+it, 0 → +2.5 → −2.5, then three times +2.0 ↔ +1.6, then −0.8 ↔ −0.4 twice, and back to
+0 1/cm, in steps of 0.02 1/cm. Its
+moment is not warpcloth's: an Iwan model (4096 Jenkins elements in parallel, the textbook
+model of fibre friction, written out here in NumPy) whose virgin curve is the default
+material's ½ D1 (1 − e^{−2α|K|}), plus D K, plus the same noise (seed 2028). A record
+that shows which law's inner loops a fabric has: `warpcloth material compare --bending
+kes_fb2_inner_loops`.
+
+Run ``python scenes/data/make_kes_examples.py`` to rewrite the files next to this script.
 """
 
 from __future__ import annotations
@@ -71,11 +80,43 @@ def bending_example() -> np.ndarray:
     return np.column_stack([k, moment])
 
 
+INNER_KNOTS_PER_CM = (0.0, 2.5, -2.5, 2.0, 1.6, 2.0, 1.6, 2.0, 1.6, -0.8, -0.4, -0.8, -0.4, -0.8, 0.0)
+IWAN_ELEMENTS = 4096
+
+
+def iwan_moment(curvature_per_cm: np.ndarray, d1: float, alpha_cm: float, elements: int = IWAN_ELEMENTS) -> np.ndarray:
+    """Hysteretic moment (units of ``d1``) of an Iwan model along a curvature path from rest:
+    Jenkins elements of stiffness α D1 / N whose sliders slip at curvatures κ_i, the midpoint
+    quantiles of the density 2α e^{−2ακ} (virgin curve ½ D1 (1 − e^{−2α|K|}) as N → ∞)."""
+    q = (np.arange(elements) + 0.5) / elements
+    stiffness = alpha_cm * d1 / elements
+    slip = stiffness * -np.log1p(-q) / (2 * alpha_cm)
+    force = np.zeros(elements)
+    out = [0.0]
+    for a, b in zip(curvature_per_cm[:-1], curvature_per_cm[1:], strict=True):
+        force = np.clip(force + stiffness * (b - a), -slip, slip)
+        out.append(force.sum())
+    return np.array(out)
+
+
+def inner_loops_example() -> np.ndarray:
+    """Rows (curvature in 1/cm, moment per width in gf·cm/cm) of the cycle with partial cycles."""
+    legs = [np.linspace(a, b, max(round(abs(b - a) / CURVATURE_STEP_PER_CM), 1), endpoint=False)
+            for a, b in zip(INNER_KNOTS_PER_CM[:-1], INNER_KNOTS_PER_CM[1:], strict=True)]
+    k = np.concatenate([*legs, [INNER_KNOTS_PER_CM[-1]]])
+    moment = DEFAULT_MATERIAL["bending_rigidity_gf_cm2_per_cm"] * k + iwan_moment(
+        k, DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"], DEFAULT_MATERIAL["hysteresis_alpha_cm"])
+    moment += np.random.default_rng(2028).normal(0.0, BENDING_NOISE_GF_CM_PER_CM, len(moment))
+    return np.column_stack([k, moment])
+
+
 def main() -> None:
-    """Write both example files next to this script."""
+    """Write the example files next to this script."""
     np.savetxt(HERE / "kes_fb1_example.csv", tensile_example(), fmt=("%.4f", "%.3f"), delimiter=",",
                header="strain_percent,force_gf_per_cm", comments="")
     np.savetxt(HERE / "kes_fb2_example.csv", bending_example(), fmt=("%.3f", "%.5f"), delimiter=",",
+               header="curvature_per_cm,moment_gf_cm_per_cm", comments="")
+    np.savetxt(HERE / "kes_fb2_inner_loops.csv", inner_loops_example(), fmt=("%.3f", "%.5f"), delimiter=",",
                header="curvature_per_cm,moment_gf_cm_per_cm", comments="")
 
 

@@ -19,7 +19,8 @@ from .state import allocate_reversal_memory
 
 
 def moment_along_path(materials: MaterialSI | Sequence[MaterialSI], curvature: np.ndarray,
-                      device: str | None = "cpu", with_tangent: bool = False) -> tuple[np.ndarray, ...]:
+                      device: str | None = "cpu", with_tangent: bool = False,
+                      reversal_memory: int | None = None) -> tuple[np.ndarray, ...]:
     """Moment per width M (N·m/m) along curvature paths (1/m), one column per material.
 
     ``curvature`` is ``[sample]`` (one path for every material) or ``[sample, path]``; M is
@@ -28,6 +29,8 @@ def moment_along_path(materials: MaterialSI | Sequence[MaterialSI], curvature: n
     bending law. Returns ``(M, work)`` where
     ``work[path]`` = Σ M_n (K_{n+1} − K_n), the bending work per width (N), accumulated
     with a left-point rule; with ``with_tangent`` also the law's dM/dK (N·m), shaped as M.
+    ``reversal_memory`` caps the reversal points a masing hinge keeps (default: as many as
+    the path has reversals, so none is ever dropped).
     """
     materials = [materials] if isinstance(materials, MaterialSI) else list(materials)
     k = np.asarray(curvature, dtype=np.float64)
@@ -42,8 +45,11 @@ def moment_along_path(materials: MaterialSI | Sequence[MaterialSI], curvature: n
     law = laws.build(wp.float64)
     parameters = wp.array(np.array([m.bending_parameters() for m in materials]), dtype=law.Parameters,
                           device=device)
-    capacity = max(1, int(np.abs(np.diff(np.sign(np.diff(k, axis=0)), axis=0)).sum(axis=0).max(initial=0)) // 2 + 1)
-    history = allocate_reversal_memory(law.History, capacity, 1, k.shape[1], precision(wp.float64).vec2, device)
+    if reversal_memory is None:  # every sign change of dK can open a point
+        reversal_memory = int(np.abs(np.diff(np.sign(np.diff(k, axis=0)), axis=0)).sum(axis=0).max(initial=0)) // 2 + 1
+    if not (isinstance(reversal_memory, int) and reversal_memory >= 1):
+        raise ValueError(f"reversal_memory must be a whole number of at least 1, got {reversal_memory!r}")
+    history = allocate_reversal_memory(law.History, reversal_memory, 1, k.shape[1], precision(wp.float64).vec2, device)
     moment = wp.zeros(k.shape, dtype=wp.float64, device=device)
     slope = wp.zeros(k.shape, dtype=wp.float64, device=device)
     work = wp.zeros(k.shape[1], dtype=wp.float64, device=device)

@@ -10,8 +10,8 @@ One module per concern:
 - :mod:`.tensile_fit`: the tensile quartic (§13.2);
 - :mod:`.bending_fit`: what every bending law's fit shares (the NNLS in D and the law's
   amplitude, the grid search in one launch, the refinement, :class:`BendingFit`);
-- :mod:`.bending_tagawa2003`, :mod:`.bending_dahl`, :mod:`.bending_frictional_couple`: each
-  law's fitter (§13.3, §13.5);
+- :mod:`.bending_tagawa2003`, :mod:`.bending_dahl`, :mod:`.bending_frictional_couple`,
+  :mod:`.bending_masing`: each law's fitter (§13.3, §13.5);
 - :mod:`.laws`: the registry of fitters (:data:`LAW_FITTERS`) and every law fitted to one
   loop and compared by information criterion (:func:`compare_laws`);
 - :mod:`.kes_values`: EMT, WT, LT, RT, B, 2HB (§13.4);
@@ -22,6 +22,7 @@ One module per concern:
 from .bending_dahl import DAHL, EXPONENT_GRID, SCALE_K0_GRID, fit_dahl
 from .bending_fit import POOR_FIT_FACTOR, BendingFit, LawFitter, Parameter, ShapeParameter, bending_problems
 from .bending_frictional_couple import FRICTIONAL_COUPLE, WIDTH_K0_GRID, fit_frictional_couple
+from .bending_masing import MASING, fit_masing
 from .bending_tagawa2003 import ALPHA_K0_GRID, TAGAWA2003, Tagawa2003Fit, fit_bending, hysteretic_offsets
 from .kes_fit import KesFit, fit_kes
 from .kes_values import (
@@ -79,6 +80,7 @@ __all__ = [
     "DIVERGENCE_STRAIN",
     "EXPONENT_GRID",
     "FRICTIONAL_COUPLE",
+    "MASING",
     "HB_CURVATURE_PER_CM",
     "HB_WINDOW_PER_CM",
     "KES_CYCLE_STEP_PER_CM",
@@ -113,6 +115,7 @@ __all__ = [
     "fit_bending",
     "fit_dahl",
     "fit_frictional_couple",
+    "fit_masing",
     "fit_kes",
     "fit_tensile",
     "hysteretic_offsets",

@@ -6,7 +6,7 @@
 information criterion, AIC = n ln(SSE/n) + 2k (and shows the Bayesian BIC = n ln(SSE/n)
 + k ln n), for Gaussian residuals of one unknown variance, k the law's free parameters
 (tagawa2003 3: D, D1, α, its K0 being fixed by the data; dahl 4: D, M_s, K_s, n;
-frictional_couple 3: D, M_f, K_w), n the loop's points. It also gives the KES values B and
+frictional_couple 3: D, M_f, K_w; masing 3: D, D1, α), n the loop's points. It also gives the KES values B and
 2HB each fitted law reproduces along the standard cycle 0 → +K0 → −K0 → 0, beside the
 data's own.
 """
@@ -16,20 +16,24 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from warpcloth import units
 from warpcloth.errors import OptionError
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
 from warpcloth.scene import to_si
 from warpcloth.sim import moment_along_path
 
+from ..noise import difference_noise
 from .bending_dahl import DAHL
-from .bending_fit import AIC_TIE, BendingFit, LawFitter, bending_problems
+from .bending_fit import AIC_TIE, POOR_FIT_FACTOR, BendingFit, LawFitter, bending_problems
 from .bending_frictional_couple import FRICTIONAL_COUPLE
+from .bending_masing import MASING
 from .bending_tagawa2003 import TAGAWA2003
 from .kes_values import BendingSummary, bending_summary, standard_cycle
 from .readers import BendingLoop, bending_loop
 
-LAW_FITTERS: dict[str, LawFitter] = {f.law: f for f in (TAGAWA2003, DAHL, FRICTIONAL_COUPLE)}
+LAW_FITTERS: dict[str, LawFitter] = {f.law: f for f in (TAGAWA2003, DAHL, FRICTIONAL_COUPLE, MASING)}
 """The fitter of each bending law, in the kernels' order."""
 
 if tuple(LAW_FITTERS) != tuple(BENDING_LAWS):  # pragma: no cover - a law added to the kernels needs a fitter
@@ -114,6 +118,49 @@ class LawComparison:
         found = bending_problems(self.fits[law], self.loop)
         return (found[0][0] if found else "converged"), [message for _, message in found]
 
+    def inner_rms(self, law: str) -> float | None:
+        """RMS (gf·cm/cm) of the law's fit over the record's partial cycles; None without any."""
+        start = self.loop.inner_start
+        if start is None:
+            return None
+        residual = self.fits[law].moment[start:] - self.loop.moment[start:]
+        return float(np.sqrt(np.mean(residual**2)))
+
+    def inner_delta(self) -> dict[str, float]:
+        """Over the partial cycles alone, n ln(SSE_law / SSE_best) of each law's fit to the
+        whole record (the likelihood-ratio term of ΔAIC there; the fits' parameters are
+        the same ones, so no penalty); empty without partial cycles."""
+        start = self.loop.inner_start
+        if start is None:
+            return {}
+        n = len(self.loop.moment) - start
+        sse = {law: max(n * self.inner_rms(law) ** 2, 1e-300) for law in self.fits}
+        best = min(sse.values())
+        return {law: n * math.log(value / best) for law, value in sse.items()}
+
+    def inner_loop_verdict(self) -> str:
+        """Which laws' inner loops the record's partial cycles bear out, or why the loop
+        cannot say (it has none)."""
+        start = self.loop.inner_start
+        if start is None:
+            return ("this loop has no partial cycles, and a major loop does not determine how a law treats inner "
+                    "loops (tagawa2003 and masing share it exactly, a dahl of n = 1 too): which law's inner loops "
+                    "are the fabric's needs a KES-FB2 record with partial cycles (e.g. kes_fb2_inner_loops)")
+        delta = self.inner_delta()
+        noise = difference_noise([self.loop.moment])
+        best = min(delta, key=delta.get)
+        ties = [law for law, d in delta.items() if d < AIC_TIE]
+        listed = ", ".join(f"{law} {d:+.1f}" for law, d in sorted(delta.items(), key=lambda item: item[1]))
+        head = (f"partial cycles from {self.loop.row_label} {self.loop.rows[start]} on "
+                f"({len(self.loop.moment) - start} points), n ln(SSE/SSE_best) there: {listed}")
+        ratio = self.inner_rms(best) / noise
+        if math.isfinite(ratio) and ratio > POOR_FIT_FACTOR:
+            return f"{head}; no law describes them (the best, {best}, at {ratio:.1f}× the noise {noise:.3g} gf·cm/cm)"
+        if len(ties) == len(delta):
+            return f"{head}; they do not tell the laws' inner loops apart (every law within {AIC_TIE:g})"
+        return (f"{head}; the inner loops are {' and '.join(ties)}'s (RMS {ratio:.2f}× the noise there), the other "
+                f"law(s) worse by ≥ {AIC_TIE:g}")
+
     def same_as_tagawa2003(self) -> str | None:
         """Why the dahl fit is the paper's law (n within 0.05 of 1, or not significantly
         different from 1 by the likelihood ratio against the tagawa2003 fit); None if not
@@ -145,11 +192,12 @@ class LawComparison:
         if same:
             lines.append(f"{same}: dahl with n = 1 is tagawa2003 (M_s = M0, K_s = 1/α), so on this loop the two are "
                          "the same law")
+        lines.append(self.inner_loop_verdict())
         if all(self.status(law)[0] == "not_identifiable" for law in self.fits):
             lines.append("no law's hysteresis is determined by this loop: the elastic line M = D K fits it as well, "
                          "so the ranking says nothing; measure a loop with a visible width (2HB above the noise)")
-        lines.append("a quasi-static KES-FB2 loop says nothing about rate effects, nor about how a law treats small "
-                     "curvature reversals in motion: check the choice against a measured swing (warpcloth fit)")
+        lines.append("a quasi-static KES-FB2 loop says nothing about rate effects: check the choice against a "
+                     "measured swing (warpcloth fit)")
         return lines
 
     def rows(self) -> list[dict]:
@@ -162,6 +210,8 @@ class LawComparison:
                          "free_parameters": fit.free_parameters, "points": fit.points,
                          "rms_gf_cm_per_cm": fit.rms_gf_cm_per_cm, "rms_relative": fit.rms_relative,
                          "aic": fit.aic(), "bic": fit.bic(), "delta_aic": delta_aic[law], "delta_bic": delta_bic[law],
+                         "inner_rms_gf_cm_per_cm": self.inner_rms(law),
+                         "inner_delta": self.inner_delta().get(law),
                          "b_gf_cm2_per_cm": self.reproduced[law].b_gf_cm2_per_cm,
                          "2hb_gf_cm_per_cm": self.reproduced[law].hb2_gf_cm_per_cm,
                          **{name: fit.parameters.get(name) for name in fields}})
@@ -193,6 +243,9 @@ class LawComparison:
         return {"bending_law_chosen_by": f"lowest AIC among {', '.join(self.fits)}",
                 "bending_comparison": {law: {"aic": f.aic(), "bic": f.bic(), "delta_aic": delta[law],
                                              "rms_gf_cm_per_cm": f.rms_gf_cm_per_cm, "status": self.status(law)[0]}
+                                       | ({"inner_rms_gf_cm_per_cm": self.inner_rms(law),
+                                           "inner_delta": self.inner_delta()[law]}
+                                          if self.loop.inner_start is not None else {})
                                        for law, f in self.fits.items()}}
 
 

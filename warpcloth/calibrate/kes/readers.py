@@ -12,7 +12,9 @@ load below 1 % strain). Extension in mm is divided by the gauge length
 (``gauge_length_mm``, KES-FB1 standard 50 mm). Units as docs/model.md §1.
 
 **Bending (KES-FB2)**, a CSV of curvature K in 1/cm and moment per width M in
-gf·cm/cm: one cycle from rest, e.g. the standard 0 → +2.5 → −2.5 → 0 1/cm.
+gf·cm/cm: one cycle from rest, e.g. the standard 0 → +2.5 → −2.5 → 0 1/cm, which may go
+on with partial (inner) cycles inside ±K0 (:attr:`BendingLoop.inner_start`): the major
+loop does not determine how a law treats inner loops, and such a record does (§13.5).
 
 The files are read by :func:`warpcloth.io.csv.read_csv` (the one reader of instrument
 files: delimiter, decimal commas, header, comments). Anything wrong with the data is a
@@ -101,9 +103,22 @@ class BendingLoop:
         """The loop's largest ``|K|`` (1/cm), where the model's loop closes."""
         return float(np.max(np.abs(self.curvature)))
 
+    @property
+    def inner_start(self) -> int | None:
+        """Where the partial (inner) cycles begin: the first reversal of K after the major
+        cycle has been to both +K0 and −K0; None for a record of the major cycle alone."""
+        k = self.curvature
+        both = max(int(np.argmax(k)), int(np.argmin(k)))
+        step = np.sign(np.diff(k[both:]))
+        moving = np.flatnonzero(step)
+        turns = moving[1:][step[moving[1:]] != step[moving[:-1]]]
+        return both + int(turns[0]) if len(turns) else None
+
     def legs(self) -> list[slice]:
-        """The cycle's legs: split at its first maximum and first minimum of K."""
-        cuts = sorted({0, int(np.argmax(self.curvature)), int(np.argmin(self.curvature)), len(self.curvature) - 1})
+        """The major cycle's legs: split at its first maximum and first minimum of K, up
+        to where the inner cycles begin (the KES values B and 2HB are the major loop's)."""
+        end = len(self.curvature) - 1 if self.inner_start is None else self.inner_start
+        cuts = sorted({0, int(np.argmax(self.curvature)), int(np.argmin(self.curvature)), end})
         return [slice(a, b + 1) for a, b in zip(cuts[:-1], cuts[1:], strict=False)]
 
 
