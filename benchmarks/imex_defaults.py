@@ -4,6 +4,7 @@ time, and what an implicit bending step could still gain (issue 11, items 2 and 
 by hand, ~6 min on 2 cores):
 
     python benchmarks/imex_defaults.py [--reference-dt 1e-7] [--materials default elastic]
+        [--law masing] [--tolerance 2e-3] [--parts ladders library]
 
 1. For each scene (as bundled: the default, hysteretic material; and with D1 = 0) it runs
    the explicit reference, then ``semi_implicit`` and ``imex`` at a ladder of dt, and
@@ -73,13 +74,18 @@ def largest_stable(scene: wc.Scene, low: float, high: float, rel: float = 0.02) 
 def scheme_ladders(args: argparse.Namespace) -> None:
     for scene in ("damped_swing", "impulsive_rotation"):
         for material in args.materials:
-            extra = [] if material == "default" else ["material.hysteresis_d1_gf_cm_per_cm=0.0"]
+            extra = [f'material.bending_law="{args.law}"']
+            extra += [] if material == "default" else ["material.hysteresis_d1_gf_cm_per_cm=0.0"]
             reference, wall = simulate(at(scene, "semi_implicit", args.reference_dt, extra))
             duration = reference.t[-1]
             tip = reference.probe("tip_x", 0)
             print(f"\n{scene}, {material} material: reference dt = {args.reference_dt:g} s took {wall:.1f} s")
             print(f"{'scheme':>14} {'dt (s)':>8} {'max |Δtip| / excursion':>24} {'wall per sim s':>15}")
             best, stable = {}, {}
+            default, default_wall = simulate(at(scene, "semi_implicit", wc.load_scene(scene).integrator.dt_s, extra))
+            scene_wall = {scene: default_wall / duration}
+            print(f"{'(scene dt)':>14} {wc.load_scene(scene).integrator.dt_s:8.2g} {error_of(default, tip):24.3%} "
+                  f"{default_wall / duration:13.3f} s")
             for scheme in ("semi_implicit", "imex"):
                 for dt in LADDER:
                     try:
@@ -94,12 +100,16 @@ def scheme_ladders(args: argparse.Namespace) -> None:
                     error = error_of(result, tip)
                     stable.setdefault(scheme, []).append((dt, error))
                     print(f"{scheme:>14} {dt:8.2g} {error:24.3%} {wall / duration:13.3f} s")
-                    if error <= TOLERANCE:
+                    if error <= args.tolerance:
                         best[scheme] = (dt, wall / duration)
             for scheme, (dt, wall) in best.items():
-                print(f"  {scheme}: largest dt within {TOLERANCE:.1%}: {dt:g} s ({wall:.3f} s wall per simulated s)")
+                print(f"  {scheme}: largest dt within {args.tolerance:.1%}: {dt:g} s ({wall:.3f} s wall per "
+                      "simulated s)")
+            if "semi_implicit" in best and "imex" in best:
+                print(f"  imex at its dt against semi_implicit at the scene's dt: "
+                      f"{scene_wall[scene] / best['imex'][1]:.1f}x less wall per simulated s")
             if not best:
-                print(f"  no scheme within {TOLERANCE:.1%} on this ladder")
+                print(f"  no scheme within {args.tolerance:.1%} on this ladder")
             if "imex" in best:
                 implicit_bending_bound(at(scene, "imex", LADDER[0], extra), stable["imex"])
             else:
@@ -176,12 +186,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--reference-dt", type=float, default=1e-7)
     parser.add_argument("--materials", nargs="+", default=["default", "elastic"], choices=["default", "elastic"])
+    parser.add_argument("--law", default="tagawa2003", help="the bending law of every run (default tagawa2003)")
+    parser.add_argument("--tolerance", type=float, default=TOLERANCE,
+                        help=f"largest |Δ tip x| / excursion accepted (default {TOLERANCE:g})")
+    parser.add_argument("--parts", nargs="+", default=["ladders", "library"], choices=["ladders", "library"])
     args = parser.parse_args()
     version = importlib.metadata.version("warpcloth")
     print(f"{platform.processor() or platform.machine()}, warpcloth {version}, Warp {wp.__version__}, "
           "one strip, one thread")
-    scheme_ladders(args)
-    library_limits(args.reference_dt)
+    if "ladders" in args.parts:
+        scheme_ladders(args)
+    if "library" in args.parts:
+        library_limits(args.reference_dt)
 
 
 if __name__ == "__main__":

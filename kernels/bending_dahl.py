@@ -41,6 +41,11 @@ MEMORY = ("hysteretic_moment", "direction", "previous_curvature")
 """Layout of the packed per-hinge memory: h (N), the direction of the last change of
 curvature (+1 / −1), K at the last force evaluation (1/m)."""
 
+MESH_INDEPENDENT = False
+"""Whether the law's answers converge as the mesh is refined: its hysteretic moment depends
+on the total variation of the curvature history (no return-point memory), so fitted
+values depend on h (docs/model.md §15.6)."""
+
 wp.set_module_options({"enable_backward": False})
 
 

@@ -34,6 +34,10 @@ MEMORY = ("hysteretic_moment", "direction", "previous_curvature")
 """Layout of the packed per-hinge memory: h (N), the direction of the last change of
 curvature (+1 / −1), K at the last force evaluation (1/m)."""
 
+MESH_INDEPENDENT = True
+"""Whether the law's answers converge as the mesh is refined: a Jenkins element: continuous
+in the curvature path, with return-point memory."""
+
 wp.set_module_options({"enable_backward": False})
 
 

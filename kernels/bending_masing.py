@@ -58,6 +58,10 @@ DEFAULT_CAPACITY = 64
 open at most ~20 (a decaying swing nests one loop per half-cycle; benchmarks/masing_memory.py
 measures it); a full memory is reported."""
 
+MESH_INDEPENDENT = True
+"""Whether the law's answers converge as the mesh is refined: return-point memory:
+continuous in the curvature path, it converges in h and dt (docs/model.md §15.6)."""
+
 wp.set_module_options({"enable_backward": False})
 
 

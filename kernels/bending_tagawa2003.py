@@ -41,6 +41,11 @@ force evaluation (1/m)."""
 # branch takes a logarithm (docs/model.md §4.4: H is clamped to (−M0, M0) strictly).
 HYSTERESIS_MARGIN = {wp.float64: 1e-12, wp.float32: 1e-6}
 
+MESH_INDEPENDENT = False
+"""Whether the law's answers converge as the mesh is refined: its offset depends on the
+total variation of the curvature history (no return-point memory), so fitted values
+depend on h (docs/model.md §15.6)."""
+
 wp.set_module_options({"enable_backward": False})
 
 

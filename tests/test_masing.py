@@ -157,3 +157,45 @@ def test_a_run_reports_a_full_memory_and_the_default_is_enough(tmp_path, capsys)
 def test_a_reversal_memory_that_is_not_a_count_is_refused(value):
     with pytest.raises(wc.SceneError, match="integrator.reversal_memory"):
         wc.load_scene("damped_swing", [f"integrator.reversal_memory={value}"])
+
+
+def swing(h, duration, hold_x_mm=50.0, strips=1):
+    """The bundled damped swing with masing at spacing h (mm), dt ∝ h (the scene's 1e-5 s at 5 mm)."""
+    scenes = [wc.load_scene("damped_swing", overrides(
+        material__bending_law="masing", strip__spacing_mm=h, integrator__dt_s=1e-5 * h / 5.0,
+        run__duration_s=duration, release__hold_x_mm=hold_x_mm + 1e-9 * k)) for k in range(strips)]
+    return wc.simulate(scenes, threads=1)
+
+
+def test_the_hysteretic_swing_converges_in_h_and_is_not_chaotic():
+    # docs/model.md §15.6. Over the first second after release (benchmarks/masing_convergence.py
+    # has 3 s and tagawa2003): mean log decrement 0.16087, 0.15766, 0.15679, 0.15653 and
+    # hysteresis work 12.806, 12.609, 12.553, 12.541 µJ at h = 5, 2.5, 1.25, 0.625 mm,
+    # successive differences shrinking 3.7, 3.2 and 3.5, 4.8 times; tip path differences
+    # 1.31, 0.36, 0.10 mm (order 1.85, 1.89). tagawa2003's grow instead (test_convergence.py).
+    # And a twin released 1e-12 m further out stays within 1.6e-12 m over 3 s at 1.25 mm
+    # (tagawa2003: 1.8e-5 m): the motion does not amplify round-off.
+    from concurrent.futures import ThreadPoolExecutor
+
+    from warpcloth.metrics import swing_summary
+
+    spacings = (5.0, 2.5, 1.25, 0.625)
+    with ThreadPoolExecutor(2) as pool:  # Warp releases the GIL: the spacings share the cores
+        twin = pool.submit(swing, 1.25, 3.0, strips=2)
+        runs = list(pool.map(lambda h: swing(h, 1.0), spacings[::-1]))[::-1]
+        twin = twin.result()
+    decrement = np.array([swing_summary(r.t, r.probe("laser_x", 0), r.probe("tip_x", 0))["mean_log_decrement"]
+                          for r in runs])
+    work = np.array([r.probe("hysteresis_work", 0)[-1] for r in runs])
+    tip = [np.stack([r.probe("tip_x", 0), r.probe("tip_y", 0)], axis=-1) for r in runs]
+    path = np.array([np.nanmax(np.linalg.norm(a - b, axis=-1)) for a, b in zip(tip[:-1], tip[1:], strict=True)])
+    print(f"masing decrement {decrement}, work {work * 1e6} µJ, tip differences {path * 1e3} mm")
+    for values in (decrement, work):
+        differences = np.abs(np.diff(values))
+        assert np.all(differences[:-1] / differences[1:] >= 3.0), differences
+    orders = np.log2(path[:-1] / path[1:])
+    assert np.all(orders >= 1.8), orders
+    assert all(max(r.reversal_memory["overflows"]) == 0 for r in runs)
+    drift = np.nanmax(np.abs(twin.probe("tip_x", 0) - twin.probe("tip_x", 1)))
+    print(f"1e-12 m twin at 1.25 mm over 3 s: {drift:.3g} m")
+    assert drift < 1e-9

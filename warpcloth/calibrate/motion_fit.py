@@ -47,6 +47,7 @@ from tqdm import tqdm
 
 from warpcloth.errors import OptionError, SceneError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.kernels import bending_law
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, batch_fields, check_step, field_laws, law_fields, scene_from_dict, set_field
 from warpcloth.scene.sampling import latin_hypercube
@@ -318,6 +319,7 @@ class FitResult:
     noise_source: str = ""
     status: str = "failed"
     problems: list[str] = field(default_factory=list)  # why the status is not "converged"
+    mesh_note: str = ""  # why the values hold at the fitted spacing only (a law whose answers depend on h)
 
     def to_json(self) -> dict:
         """The verdict, each parameter with its 1σ and bounds, and how the search went;
@@ -325,6 +327,7 @@ class FitResult:
         return {
             "status": self.status,
             "problems": self.problems,
+            "mesh_note": self.mesh_note,
             "rms_mm": self.rms * 1e3,
             "noise_mm": self.noise * 1e3,
             "noise_source": self.noise_source,
@@ -485,7 +488,20 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
     fit.other_minima = other_minima
     # result row 0 is the reported point (accepted last, or re-run above)
     fit.judge(int(np.isnan(objective.residuals(result, 0, shift, penalise=False)).sum()))
+    fit.mesh_note = mesh_note(base)
     return fit
+
+
+def mesh_note(base: dict) -> str:
+    """Why a fit of the scene ``base`` (as a dict) holds at its spacing only, when its bending
+    law's answers depend on the mesh; "" for a law that converges in h."""
+    scene = scene_from_dict(base)
+    law = scene.material.bending_law
+    if bending_law(law).MESH_INDEPENDENT:
+        return ""
+    return (f"the {law} law's hysteresis depends on the mesh (no return-point memory, docs/model.md §15.6): these "
+            f"values hold at strip.spacing_mm = {scene.strip.spacing_mm:g} only, and refining h moves them (its "
+            "decrement grows without converging); the masing law takes the same parameters and converges in h")
 
 
 MINIMA_SEPARATION = 0.25  # unit-box distance beyond which two low points may be different basins

@@ -95,6 +95,8 @@ def fit_command(args: argparse.Namespace) -> int:
         where = ", ".join(f"{k} = {v:.5g}" for k, v in other.items() if not k.endswith("rms_mm"))
         print(f"note: the space-filling stage also found a separate basin at {where} (RMS {other['rms_mm']:.4g} mm "
               f"there, a ridge of {other['ridge_rms_mm']:.4g} mm between); the result above refined the lowest")
+    if fit.mesh_note:
+        print(f"note: {fit.mesh_note}")
     print(f"status: {fit.status}")
     print(f"wrote {out}/ (best.toml reruns the best fit: warpcloth run {out / 'best.toml'})")
     if fit.status != "converged":
