@@ -199,3 +199,17 @@ def test_the_hysteretic_swing_converges_in_h_and_is_not_chaotic():
     drift = np.nanmax(np.abs(twin.probe("tip_x", 0) - twin.probe("tip_x", 1)))
     print(f"1e-12 m twin at 1.25 mm over 3 s: {drift:.3g} m")
     assert drift < 1e-9
+
+
+def test_a_fit_says_when_its_law_depends_on_the_mesh():
+    from warpcloth.calibrate.motion_fit import mesh_note
+    from warpcloth.scene import read_scene_file
+
+    paper = mesh_note(read_scene_file("damped_swing"))
+    assert "the tagawa2003 law's hysteresis depends on the mesh" in paper and "strip.spacing_mm = 5 only" in paper
+    dahl = read_scene_file("damped_swing")
+    dahl["material"]["bending_law"] = "dahl"
+    assert "the dahl law's" in mesh_note(dahl)
+    masing = read_scene_file("damped_swing")
+    masing["material"]["bending_law"] = "masing"
+    assert mesh_note(masing) == ""
