@@ -91,9 +91,9 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
             "diverged_time_s": report["time_s"] if report else float("nan"),
             "diverged_phase": report["phase"] if report else "",
             "diverged_quantity": report["quantity"] if report else "",
-            # reversals a full masing memory could not store (their inner loops had no hysteresis)
-            "reversal_overflows": int(result.reversal_memory["overflows"][local]) if result.reversal_memory else 0,
         }
+        if result.reversal_memory:  # reversals a full masing memory could not store (no hysteresis in their loops)
+            row["reversal_overflows"] = int(result.reversal_memory["overflows"][local])
         rows.append(row)
     SweepDirectory(out_dir).write_batch(batch, {k: np.concatenate(v) for k, v in columns.items()}, rows,
                                         result.frames if frames else None)
