@@ -40,6 +40,8 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     summary = run_sweep(sweep, out, max_batch=args.max_batch, workers=args.workers, scheduler=args.scheduler,
                         device=args.device, frames=args.frames, progress=not args.no_progress)
     n_div = int(summary["diverged"].sum())
+    evenness = "" if sweep.discrepancy is None else \
+        f"; its random sample's centred L2 discrepancy is {sweep.discrepancy:.3g} (lower is more even)"
     print(f"wrote {out}/ ({len(summary)} variants: summary.csv, summary.parquet, probes/, variants.csv); "
-          f"{n_div} diverged")
+          f"{n_div} diverged{evenness}")
     return 0
