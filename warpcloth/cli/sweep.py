@@ -20,8 +20,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p.add_argument("--workers", type=at_least(0), default=None,
                          help="threads running batches side by side in this process (default: one per core; 0 = one "
                               "batch after another)")
-    sweep_p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler to use instead")
-    sweep_p.add_argument("--device", type=device, default=None, help="cpu or cuda, on every worker")
+    sweep_p.add_argument("--scheduler", default=None,
+                         help="address of a running Dask scheduler to use instead (default: none, threads in this "
+                              "process)")
+    sweep_p.add_argument("--device", type=device, default=None,
+                         help="cpu or cuda, on every worker (default: Warp's preferred device)")
     sweep_p.add_argument("--frames", action="store_true", help="also store shape frames (large)")
     sweep_p.add_argument("--max-variants", type=at_least(1), default=None,
                          help="refuse a sweep of more variants than this (default: 100000)")
