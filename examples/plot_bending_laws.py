@@ -20,8 +20,8 @@ D1 = 0.04 gf·cm/cm, α = 5 cm, K0 = 2.5 1/cm plus 0.002 gf·cm/cm of noise
 # -------------------------
 # :func:`~warpcloth.calibrate.kes.compare_laws` fits each law along the measured curvature
 # path with the kernels' own hinge logic: (D, amplitude) by non-negative least squares
-# for each shape, the shape on a log grid (one kernel launch) refined by golden section
-# (one shape parameter) or Nelder–Mead (Dahl's K_s and n). AIC = n ln(SSE/n) + 2k counts
+# for each shape, the shape on a log grid (one kernel launch) refined by SciPy's bounded
+# Nelder–Mead (on α, K_w, or Dahl's K_s and n together). AIC = n ln(SSE/n) + 2k counts
 # k free parameters: 3 for tagawa2003 (K0 is fixed by the data) and frictional_couple,
 # 4 for dahl. B and 2HB are what each fitted law gives along the standard KES cycle,
 # beside the data's own.

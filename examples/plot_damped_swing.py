@@ -93,7 +93,7 @@ for ax, frames, title in ((axes[0], first_swing, "first swing, every 1/60 s"),
     ax.annotate("laser line", (-45, laser_y + 2), color="C3", fontsize=8)
     ax.set(title=title, xlabel="x from the clamp edge (mm)", aspect="equal")
     fig.colorbar(plt.cm.ScalarMappable(colour, "viridis"), ax=ax, label="t after release (s)", shrink=0.8)
-axes[0].set_ylabel("y (mm)")
+axes[0].set_ylabel("y from the clamp edge (mm)")
 fig.tight_layout()
 
 # %%

@@ -78,7 +78,7 @@ for ax, chosen, title in ((axes[0], result.frame_times <= t_stop + 1e-9, "while 
     ax.plot(*centre, "k+", ms=10)
     ax.set(title=title, xlabel="x from the clamp edge (mm)", aspect="equal")
     fig.colorbar(plt.cm.ScalarMappable(colour, "viridis"), ax=ax, label="t (s)", shrink=0.8)
-axes[0].set_ylabel("y (mm)")
+axes[0].set_ylabel("y from the clamp edge (mm)")
 fig.tight_layout()
 
 # %%

@@ -321,3 +321,51 @@ def test_an_empty_output_path_is_refused_not_defaulted(tmp_path):
     done = warpcloth_cli("run", "damped_swing", "--out", "", cwd=tmp_path)
     assert done.returncode == 2 and "argument --out: an empty path" in done.stderr
     assert not (tmp_path / "runs").exists()
+
+
+def cli_options(parser=None, command=()):
+    """(command, option, action) of every option of every ``warpcloth`` command."""
+    import argparse
+
+    from warpcloth.cli.app import parser as top
+
+    parser = parser or top()
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield from cli_options(sub, (*command, name))
+        elif action.option_strings:
+            yield " ".join(command), action.option_strings[-1], action
+
+
+def test_every_option_with_a_default_states_it_in_its_help():
+    # flags (store_true) default to off, which needs no saying; an option whose default is
+    # None or empty is either an input or says what its absence means (checked by hand)
+    import argparse
+
+    silent = [f"{command} {option} (default {action.default!r})" for command, option, action in cli_options()
+              if not isinstance(action, (argparse._HelpAction, argparse._VersionAction, argparse._StoreTrueAction))
+              and action.default not in (None, [], False) and "(default" not in (action.help or "")]
+    assert not silent, f"options whose help does not state their default: {silent}"
+
+
+def test_fit_help_states_the_default_bounds(capsys):
+    from warpcloth.calibrate.motion_fit import free_parameters
+    from warpcloth.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["fit", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "see README" not in text
+    assert ("--bounds BOUNDS name=LOW:HIGH,... (default: a rotation centre or hold position ± 10 mm around the "
+            "scene's value; gamma 0 to max(4× the scene's, 2 /s); a hysteresis amplitude D1, Ms or Mf 0 to 4×; any "
+            "other ¼× to 4×") in text
+    # and they are the bounds the fit takes
+    scene = wc.load_scene("impulsive_rotation", {"material.hysteresis_d1_gf_cm_per_cm": 0.04,
+                                                 "damping.gamma_per_s": 0.3})
+    bounds = {p.field: (p.lower, p.upper) for p in free_parameters("rotation_centre_dy_mm,gamma,D1,D", scene)}
+    dy = scene.clamp.rotation_centre_dy_mm
+    d = scene.material.bending_rigidity_gf_cm2_per_cm
+    assert bounds == {"clamp.rotation_centre_dy_mm": (dy - 10, dy + 10), "damping.gamma_per_s": (0.0, 2.0),
+                      "material.hysteresis_d1_gf_cm_per_cm": (0.0, 0.16),
+                      "material.bending_rigidity_gf_cm2_per_cm": (d / 4, 4 * d)}

@@ -536,3 +536,104 @@ def test_many_variants_differing_by_a_choice_are_coloured_by_it(tmp_path, figure
     assert ax.get_legend() is None and colourbar.get_ylabel() == "bending law"
     colours = [tuple(line.get_color()) for line in ax.get_lines()[:9]]
     assert colours[0] == colours[3] == colours[6] != colours[1]
+
+
+def test_heat_map_ticks_sit_at_the_centres_of_the_grid_cells():
+    # One cell per grid value, each tick at its cell's centre and labelled with the value;
+    # before, the locator's round numbers (0.25, 0.5, ...) fell anywhere across the cells,
+    # and on an uneven grid (0.1, 0.4, 0.7, 1.3) a cell's centre was not its value.
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from warpcloth.viz.plots import HEAT_MAP_TICKS, sweep_figure
+
+    gammas, d1s = [0.1, 0.4, 0.7, 1.3], [0.0, 0.025, 0.08]
+    grid = pd.DataFrame([(g, d) for d in d1s for g in gammas], columns=["damping.gamma_per_s", D1_FIELD])
+    summary = grid.assign(variant=range(len(grid)), first_period_s=np.arange(len(grid)) / 10, diverged=False)
+    ax = sweep_figure(summary, "first_period_s", "damping.gamma_per_s", D1_FIELD).axes[0]
+    coordinates = ax.collections[0].get_coordinates()
+    for axis, values, k in ((ax.xaxis, gammas, 0), (ax.yaxis, d1s, 1)):
+        edges = np.unique(coordinates[..., k])
+        np.testing.assert_allclose(axis.get_ticklocs(), 0.5 * (edges[:-1] + edges[1:]))  # the cells' centres
+        assert [t.get_text() for t in axis.get_ticklabels()] == [f"{v:.4g}" for v in values]
+    cells = ax.collections[0].get_array().reshape(len(d1s), len(gammas))
+    assert cells[1, 2] == summary.query(f"`damping.gamma_per_s` == 0.7 and `{D1_FIELD}` == 0.025")[
+        "first_period_s"].item()  # the cell labelled (0.7, 0.025) holds that variant
+    plt.close("all")
+    # a long grid labels every k-th cell, still at cell centres
+    many = np.round(np.linspace(0.0, 2.9, 30), 3)
+    wide = pd.DataFrame([(g, d) for d in d1s for g in many], columns=["damping.gamma_per_s", D1_FIELD])
+    wide = wide.assign(variant=range(len(wide)), first_period_s=0.5, diverged=False)
+    axis = sweep_figure(wide, "first_period_s", "damping.gamma_per_s", D1_FIELD).axes[0].xaxis
+    ticks = axis.get_ticklocs()
+    assert len(ticks) <= HEAT_MAP_TICKS and np.all(ticks == np.round(ticks)) and ticks[0] == 0
+    assert [t.get_text() for t in axis.get_ticklabels()] == [f"{many[int(i)]:.4g}" for i in ticks]
+    plt.close("all")
+
+
+D1_FIELD = "material.hysteresis_d1_gf_cm_per_cm"
+
+
+def test_a_driven_clamp_has_no_release_on_its_time_axes(swing_run, tmp_path, figures):
+    # The impulsive rotation starts its clamp at t = 0 and has no release: its figures say t.
+    wc.simulate(wc.load_scene("impulsive_rotation", {"run.duration_s": 0.1}), out=tmp_path / "rotation")
+    plot_run(load_recording(tmp_path / "rotation"), tmp_path / "f")
+    rotation = {name: fig for name, fig in figures.items()}
+    texts = [t for fig in rotation.values() for ax in fig.axes for t in (ax.get_xlabel(), ax.get_ylabel())]
+    texts += [ax.get_legend().get_title().get_text() for fig in rotation.values() for ax in fig.axes
+              if ax.get_legend() is not None]
+    assert not [t for t in texts if "release" in t]
+    assert rotation["amplitude.png"].axes[0].get_xlabel() == "t (s)"
+    assert rotation["shapes.png"].axes[0].get_legend().get_title().get_text() == "t"
+    figures.clear()
+    plot_run(load_recording(swing_run), tmp_path / "g")  # the released swing keeps its release
+    assert figures["amplitude.png"].axes[0].get_xlabel() == "t after release (s)"
+    assert figures["shapes.png"].axes[0].get_legend().get_title().get_text() == "t after release"
+    assert figures["energy.png"].axes[1].get_xlabel() == "t after release (s)"
+
+
+def test_the_1_and_2_sigma_ellipses_have_their_own_legend_entries():
+    from types import SimpleNamespace
+
+    import matplotlib.pyplot as plt
+
+    from warpcloth.viz.plots import fit_search_figure
+
+    names = ["damping.gamma_per_s", D1_FIELD]
+    fit = SimpleNamespace(parameters=dict(zip(names, [0.55, 0.025], strict=True)),
+                          sigma=dict(zip(names, [0.002, 0.0002], strict=True)), correlation=[[1.0, 0.4], [0.4, 1.0]],
+                          history=[{names[0]: 0.3, names[1]: 0.04}, {names[0]: 0.55, names[1]: 0.025}])
+    figure = fit_search_figure(fit, dict(zip(names, [0.551, 0.0251], strict=True)))
+    ax = figure.axes[0]
+    entries = dict(zip(*reversed(ax.get_legend_handles_labels()), strict=True))
+    assert {"1σ", "2σ"} <= set(entries)
+    one, two = entries["1σ"], entries["2σ"]
+    assert one.get_linestyle() != two.get_linestyle()  # told apart in the legend, not two identical lines
+    # each ellipse reaches k σ along each parameter (its projection), so the 2σ one is twice the 1σ one
+    for k, line in ((1, one), (2, two)):
+        assert np.max(np.abs(line.get_xdata() - 0.55)) == pytest.approx(k * 0.002, rel=1e-3)
+        assert np.max(np.abs(line.get_ydata() - 0.025)) == pytest.approx(k * 0.0002, rel=1e-3)
+    assert ax.get_xlabel() == "γ (s⁻¹)" and ax.get_ylabel() == "D1 (gf·cm/cm)"
+    plt.close(figure)
+
+
+def test_the_marker_overlay_axes_read_as_the_shape_figures(swing_run, tmp_path, figures):
+    from types import SimpleNamespace
+
+    from warpcloth.viz.plots import plot_fit_overlay
+
+    recording = load_recording(swing_run)
+    nc = recording.n_clamped
+    path = tmp_path / "markers.csv"
+    path.write_text("frame,t_s,s_mm,x_mm,y_mm\n" + "".join(
+        f"{f},{recording.frame_times[f]:.5f},{10 * k},{recording.frames[f, 0, nc - 1 + 2 * k, 0] * 1e3:.4f},"
+        f"{recording.frames[f, 0, nc - 1 + 2 * k, 1] * 1e3:.4f}\n" for f in (3, 9) for k in (1, 2)))
+    result = SimpleNamespace(frames=recording.frames, frame_times=recording.frame_times)
+    fit = SimpleNamespace(shift_s=0.0, parameters={"damping.gamma_per_s": 0.3}, sigma={"damping.gamma_per_s": 0.01},
+                          rms=1e-4)
+    plot_fit_overlay(result, SimpleNamespace(scene=recording.scenes[0]), read_tracked_shapes(path), fit,
+                     tmp_path / "overlay.png")
+    plot_run(recording, tmp_path / "f", measured=path)
+    overlay, shapes = figures["overlay.png"].axes[0], figures["shapes.png"].axes[0]
+    assert (overlay.get_xlabel(), overlay.get_ylabel()) == (shapes.get_xlabel(), shapes.get_ylabel()) == (
+        "x from the clamp edge (mm)", "y from the clamp edge (mm)")

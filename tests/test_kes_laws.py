@@ -81,7 +81,7 @@ def test_every_kernel_law_has_a_fitter_and_its_free_parameters():
 ], ids=["paper", "paper-soft", "dahl-0.4", "dahl-2.5", "dahl-2.5-unsaturated", "friction", "friction-wide"])
 def test_fit_kes_recovers_each_law_from_a_loop_it_made(material, tmp_path):
     # Noise-free loops made by each law along the KES cycle. Measured: every parameter to
-    # ≤ 3.7e-11 relative (dahl's n 3.0e-11), RMS ≤ 5e-13 of the moment range; bound 1e-9.
+    # ≤ 3.7e-11 relative (dahl's n), RMS ≤ 1.8e-12 of the moment range; bound 1e-9.
     law = material.bending_law
     fit = kes.fit_kes(kes.read_tensile_csv(FB1), law_loop(material), law=law)
     b = fit.bending
@@ -101,9 +101,9 @@ def test_fit_kes_recovers_each_law_from_a_loop_it_made(material, tmp_path):
 
 def test_dahl_fitted_to_the_papers_loop_is_the_papers_law():
     # Dahl with n = 1 is tagawa2003 (M_s = M0, K_s = 1/α, docs/model.md §4.8), so on the
-    # paper's own loop the 2-D search must end there. Measured: n − 1 = 3.3e-8,
-    # K_s α − 1 = 1.6e-9, M_s / M0 − 1 = 1.0e-9 (Nelder–Mead stops on a loop fitted to
-    # 5e-11 of its range); bound 1e-6.
+    # paper's own loop the 2-D search must end there. Measured: n − 1 = −3.3e-11,
+    # K_s α − 1 = −2.9e-11, M_s / M0 − 1 = −4.2e-12 (Nelder–Mead stops on a loop fitted to
+    # 2.1e-13 of its range); bound 1e-6.
     comparison = kes.compare_laws(law_loop(PAPER))
     dahl = comparison.fits["dahl"].parameters
     m0 = bending_tagawa2003.loop_asymptote(PAPER.hysteresis_d1_gf_cm_per_cm, PAPER.hysteresis_alpha_cm,

@@ -21,6 +21,8 @@ ADDS = re.compile(r"README test adds (.+)$")
 BLOCK = re.compile(r"^```(\w+)\n(.*?)^```$", re.MULTILINE | re.DOTALL)
 TIMEOUT_S = 180
 TAIL_CHARS = 3000
+SEARCH = re.compile(r"(\d+) launches, (\d+) variants")  # what `warpcloth fit` prints
+QUOTED = "{} launches ({} variants)"  # how the README quotes it
 
 
 @dataclass
@@ -114,7 +116,9 @@ def test_readme_conventions_are_parsed():
 
 
 def test_readme_runs_as_written(tmp_path):
-    steps = readme_steps(README.read_text(encoding="utf-8"))
+    text = README.read_text(encoding="utf-8")
+    steps = readme_steps(text)
+    searches = []
     shutil.copytree(ROOT / "scenes", tmp_path / "scenes", ignore=shutil.ignore_patterns("__pycache__"))
     env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
     for step in steps:
@@ -124,3 +128,8 @@ def test_readme_runs_as_written(tmp_path):
         assert done.returncode == step.exit_code and "Traceback (most recent call last)" not in output, (
             f"README command:\n{step.shown}\nexited {done.returncode} (the README says {step.exit_code}); "
             f"output tail:\n{output[-TAIL_CHARS:]}")
+        searches += [(step.shown, QUOTED.format(*m.groups())) for m in SEARCH.finditer(output)]
+    # the numbers the README quotes for its fits are the ones its fit commands print now
+    assert len(searches) >= 2, "the README's fit commands printed no launch and variant counts"
+    for shown, quoted in searches:
+        assert quoted in text, f"README command:\n{shown}\nprinted {quoted!r}, which the README does not quote"

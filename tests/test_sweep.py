@@ -59,6 +59,46 @@ def test_latin_hypercube_puts_one_sample_in_every_stratum():
     assert sorted(np.floor((gamma - 1.0) / 2.0 * n).astype(int)) == list(range(n))
 
 
+def test_the_latin_hypercube_is_scipys_and_fills_the_box_more_evenly_than_uniform():
+    from scipy.stats import qmc
+
+    spec = {"method": "latin_hypercube", "samples": 40, "ranges": {D1: [0.0, 0.1], GAMMA: [1.0, 3.0]}}
+    sweep = expand(with_sweep(base(), seed=5, random=spec))
+    expected = qmc.LatinHypercube(2, rng=np.random.default_rng(5)).random(40) * [0.1, 2.0] + [0.0, 1.0]
+    np.testing.assert_array_equal([[a[D1], a[GAMMA]] for a in sweep.assignments], expected)
+    uniform = expand(with_sweep(base(), seed=5, random=spec | {"method": "uniform"}))
+    assert sweep.discrepancy == pytest.approx(qmc.discrepancy((expected - [0.0, 1.0]) / [0.1, 2.0]), rel=1e-12)
+    assert sweep.discrepancy < uniform.discrepancy
+    assert small_sweep().discrepancy is None  # no random block
+
+
+def test_a_format_1_latin_hypercube_sweep_is_read_by_its_stored_variants_and_not_resumed(tmp_path):
+    # Format 1 drew its Latin hypercube with warpcloth's own sampler; the same seed now
+    # draws others. Stand-in for such a directory: a format-2 one whose sweep.json loses
+    # its format and names another seed, so expanding it again gives other variants.
+    raw = with_sweep(base(run__duration_s=0.05), seed=11, random={"samples": 3, "ranges": {D1: [0.0, 0.08]}})
+    out = tmp_path / "old"
+    run_sweep(expand(raw), out, workers=0, frames=True)
+    manifest = out / "sweep.json"
+    info = json.loads(manifest.read_text())
+    assert info["format"] == 2 and info["discrepancy"] == expand(raw).discrepancy
+    info.pop("format")
+    info["sweep"]["seed"] = 12
+    manifest.write_text(json.dumps(info))
+    recording = wc.load_recording(out)
+    stored = pd.read_csv(out / "variants.csv")
+    np.testing.assert_array_equal(recording.parameters[D1], stored[D1])  # the variants that ran
+    assert [s.material.hysteresis_d1_gf_cm_per_cm for s in recording.scenes] == stored[D1].tolist()
+    renamed = with_sweep(raw, **(raw["sweep"] | {"seed": 12}))
+    with pytest.raises(wc.OptionError, match=r"^--out: .*old was written by an older warpcloth \(sweep format 1\), "
+                       r"whose Latin hypercube drew other variants from the same seed; choose a new --out"):
+        run_sweep(expand(renamed), out, workers=0)
+    info["format"] = 2  # a format-2 directory that no longer matches is refused, not relabelled
+    manifest.write_text(json.dumps(info))
+    with pytest.raises(wc.DataFileError, match="no longer resolve to the scenes that were simulated"):
+        wc.load_recording(out)
+
+
 def test_batch_level_fields_make_separate_batches():
     sweep = expand(with_sweep(base(), zip={"strip.spacing_mm": [5.0, 2.5, 5.0, 2.5, 5.0], GAMMA: [0, 1, 2, 3, 4]}))
     batches = sweep.batches(max_batch=2)

@@ -174,7 +174,16 @@ def _guided(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool) -> np.nda
 
 
 def _search(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool) -> tuple[float, np.ndarray, np.ndarray, float]:
-    # grid over the record, then coordinate scans around the best few (distinct) starts
+    """Cost, breakpoints, coefficients and rest angle of the best breakpoint set: a grid
+    over the record, then coordinate scans around the best few (distinct) starts.
+
+    Not :mod:`scipy.optimize`: the cost steps wherever a breakpoint crosses a sample
+    (the pieces' sample counts change), so ``minimize``'s simplex and gradient methods
+    stall on its flat steps; ``brute`` asks for one breakpoint set per call where
+    :func:`_solve` solves some thousand in one batch, and ``differential_evolution``
+    (even vectorised) is a stochastic search whose result depends on its seed, where this
+    one is deterministic.
+    """
     k = 1 + lines + (1 if stops else 0)
     grid = np.linspace(t[0], t[-1], GRID)
     points = np.vstack([np.array(list(itertools.combinations(grid[1:-1], k))), _guided(t, theta, lines, stops)])

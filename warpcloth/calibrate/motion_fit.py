@@ -16,7 +16,9 @@ Search, every step one batched launch of the strip kernel:
    proposal (so if it is accepted its Jacobian comes with it), and two more cautious
    steps (10× and 100× the damping) in case it is not. The start-time offset is a
    parameter too, but its Jacobian column comes from re-sampling the same runs, so it
-   costs no variants.
+   costs no variants. Not :func:`scipy.optimize.least_squares`: it asks for one residual
+   vector (or one Jacobian) per call, each a launch of its own, where one launch here
+   holds the step, its Jacobian's stencil and two fallback steps.
 
 The uncertainty is the Gauss–Newton covariance s²(JᵀJ)⁻¹ at the optimum with s² the
 residual variance. It assumes independent residuals; measured residuals are usually

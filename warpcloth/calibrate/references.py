@@ -6,6 +6,7 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+from scipy.optimize import brentq
 
 
 def hanging_beam_mode(gamma: float, mode: int = 0, n_basis: int = 24) -> tuple[float, Callable]:
@@ -51,7 +52,9 @@ def heavy_elastica(kappa: float, steps: int = 4000) -> dict[str, float]:
     θ(s), the tangent's angle below the horizontal at s = arc length / L, solves
     θ'' = −κ (1 − s) cos θ with θ(0) = 0 (built in) and θ'(1) = 0 (free end), κ = ρ_A g L³ / D.
     Shooting on θ'(0), bracketed by [0, κ/2] (the small-deflection value is κ/2 and the
-    weight's arm only shortens as the strip droops), bisected to rounding; RK4 in s.
+    weight's arm only shortens as the strip droops), solved by :func:`scipy.optimize.brentq` to
+    rounding; RK4 in s (fixed steps: the convergence tests need the integrator's order
+    known, which an adaptive ``solve_ivp`` would not state).
     Returns the tip's reach x/L and drop y/L (of ∫cos θ, ∫sin θ), the tip angle θ(1) in
     rad, and the root slope θ'(0).
     """
@@ -75,14 +78,7 @@ def heavy_elastica(kappa: float, steps: int = 4000) -> dict[str, float]:
             y += ds / 6 * (k1[3] + 2 * k2[3] + 2 * k3[3] + k4[3])
         return theta, omega, x, y
 
-    low, high = 0.0, 0.5 * kappa
-    for _ in range(60):
-        mid = 0.5 * (low + high)
-        if shoot(mid)[1] < 0.0:
-            low = mid
-        else:
-            high = mid
-    slope = 0.5 * (low + high)
+    slope = brentq(lambda s: shoot(s)[1], 0.0, 0.5 * kappa, xtol=1e-15, rtol=4 * np.finfo(float).eps)
     theta, _, x, y = shoot(slope)
     return {"tip_reach": x, "tip_drop": y, "tip_angle": theta, "root_slope": slope}
 
@@ -94,7 +90,8 @@ def hanging_beam_eigenvalue(gamma: float, steps: int = 2000, lambda_max: float =
     From the clamp (W = W′ = 0) two solutions start with (W″, W‴) = (1, 0) and (0, 1);
     the free end needs W″(1) = 0 and the shear W‴(1) − γ(1 − 1)W′(1) = W‴(1) = 0, so λ is
     the first zero of det[[W″_a, W″_b], [W‴_a, W‴_b]](ξ = 1), bracketed on a grid of λ
-    (all integrated at once, RK4 in ξ) and narrowed on finer grids inside the bracket.
+    (all integrated at once, RK4 in ξ) and solved inside the bracket by
+    :func:`scipy.optimize.brentq`.
     """
 
     def determinant(lam: np.ndarray) -> np.ndarray:
@@ -118,12 +115,10 @@ def hanging_beam_eigenvalue(gamma: float, steps: int = 2000, lambda_max: float =
             y = y + dxi / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         return y[:, 2, 0] * y[:, 3, 1] - y[:, 2, 1] * y[:, 3, 0]
 
-    low, high = 0.5, lambda_max
-    for _ in range(7):  # each round: the first sign change on 48 points of the bracket
-        grid = np.linspace(low, high, 48)
-        values = determinant(grid)
-        change = np.nonzero(np.sign(values[:-1]) != np.sign(values[1:]))[0]
-        if not len(change):
-            raise ValueError(f"no eigenvalue below λ = {lambda_max:g} for γ = {gamma:g}")
-        low, high = grid[change[0]], grid[change[0] + 1]
-    return 0.5 * (low + high)
+    grid = np.linspace(0.5, lambda_max, 48)  # the first sign change brackets the first mode
+    values = determinant(grid)
+    change = np.nonzero(np.sign(values[:-1]) != np.sign(values[1:]))[0]
+    if not len(change):
+        raise ValueError(f"no eigenvalue below λ = {lambda_max:g} for γ = {gamma:g}")
+    low, high = grid[change[0]], grid[change[0] + 1]
+    return brentq(lambda lam: float(determinant(lam)[0]), low, high, xtol=1e-15, rtol=4 * np.finfo(float).eps)

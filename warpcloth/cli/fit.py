@@ -31,21 +31,26 @@ def register(sub: argparse._SubParsersAction) -> None:
     fit_p.add_argument("--free", required=True, help="parameters to fit, e.g. gamma,rotation_centre_dy_mm,D1 "
                        "(aliases: gamma D D1 alpha K0 density rotation_centre_dx_mm rotation_centre_dy_mm "
                        "hold_x_mm hold_y_mm; or any per-strip field by dotted name)")
-    fit_p.add_argument("--bounds", help="name=LOW:HIGH,... (default: see README)")
+    fit_p.add_argument("--bounds", help="name=LOW:HIGH,... (default: a rotation centre or hold position ± 10 mm "
+                       "around the scene's value; gamma 0 to max(4× the scene's, 2 /s); a hysteresis amplitude D1, Ms "
+                       "or Mf 0 to 4×; any other ¼× to 4×; a parameter that is 0 in the scene needs its bounds)")
     fit_p.add_argument("--align-start", type=non_negative, default=0.0, metavar="SECONDS",
-                       help="also fit a clock offset between measurement and simulation, within ± this")
+                       help="also fit a clock offset between measurement and simulation, within ± this (default: 0, "
+                            "the clocks agree)")
     fit_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                        help="override a field of the scene first")
     fit_p.add_argument("--out", type=path_text, help="fit directory (default: runs/fit-<scene name>)")
     fit_p.add_argument("--space-filling", type=at_least(0), default=None,
-                       help="variants in the first, space-filling batch")
-    fit_p.add_argument("--max-iterations", type=at_least(0), default=25, help="local refinement launches at most")
-    fit_p.add_argument("--seed", type=at_least(0), default=0, help="seed of the space-filling sample")
+                       help="variants in the first, space-filling batch (default: max(16, 8 × the free parameters))")
+    fit_p.add_argument("--max-iterations", type=at_least(0), default=25,
+                       help="local refinement launches at most (default: 25)")
+    fit_p.add_argument("--seed", type=at_least(0), default=0, help="seed of the space-filling sample (default: 0)")
     fit_p.add_argument("--bootstrap", type=at_least(0), default=0, metavar="N",
-                       help="also a moving-block bootstrap σ from N resamples (for time-correlated errors)")
+                       help="also a moving-block bootstrap σ from N resamples, for time-correlated errors (default: 0, "
+                            "none)")
     fit_p.add_argument("--noise", type=positive, default=None, metavar="MM",
                        help="measurement noise σ in mm the RMS is judged against (default: estimated from the data)")
-    fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda")
+    fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda (default: Warp's preferred device)")
     fit_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_overwrite(fit_p, "fit directory --out")
     clamp_p = sub.add_parser("clamp", help="clamp motion tools")
@@ -55,7 +60,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     angle_p.add_argument("encoder", metavar="ENCODER", help="CSV 't_s, theta' (rad, or the header's unit: theta_deg)")
     angle_p.add_argument("--scene", required=True, help="scene to write the fitted motion into")
     angle_p.add_argument("-o", "--output", type=path_text, required=True, help="the new scene file (TOML)")
-    angle_p.add_argument("--angle-unit", choices=("rad", "deg"), default=None, help="override the header's unit")
+    angle_p.add_argument("--angle-unit", choices=("rad", "deg"), default=None,
+                         help="override the header's unit (default: the header's, else rad)")
     angle_p.add_argument("--plot", help="also write a PNG of the encoder data and the fit")
     angle_p.add_argument("--accept", action="store_true",
                          help="exit 0 even when the fit is poor (RMS above 3× the encoder's noise)")

@@ -29,9 +29,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="KES-FB1 loop: strain (%% or fraction) or extension (mm), force per width (gf/cm)")
     kes_p.add_argument("--bending", required=True, metavar="FB2.csv", help=BENDING_HELP)
     kes_p.add_argument("--law", default="tagawa2003", metavar="NAME|all",
-                       help="the bending law to fit: tagawa2003 (the paper's, default), dahl, frictional_couple, or "
-                       "all: fit every one, print their comparison and write the material of the one with the "
-                       "lowest AIC")
+                       help="the bending law to fit: tagawa2003 (the paper's), dahl, frictional_couple, or all: fit "
+                       "every one, print their comparison and write the material of the one with the lowest AIC "
+                       "(default: tagawa2003)")
     kes_p.add_argument("-o", "--output", type=path_text, required=True, help="the material file to write (.toml)")
     kes_p.add_argument("--density-g-per-cm2", type=positive, default=None,
                        help="mass per area ρ_A (required: KES-FB1/FB2 data do not contain it)")

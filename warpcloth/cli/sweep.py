@@ -21,8 +21,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p.add_argument("--workers", type=at_least(0), default=None,
                          help="threads running batches side by side in this process (default: one per core; 0 = one "
                               "batch after another)")
-    sweep_p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler to use instead")
-    sweep_p.add_argument("--device", type=device, default=None, help="cpu or cuda, on every worker")
+    sweep_p.add_argument("--scheduler", default=None,
+                         help="address of a running Dask scheduler to use instead (default: none, threads in this "
+                              "process)")
+    sweep_p.add_argument("--device", type=device, default=None,
+                         help="cpu or cuda, on every worker (default: Warp's preferred device)")
     sweep_p.add_argument("--frames", action="store_true", help="also store shape frames (large)")
     sweep_p.add_argument("--max-variants", type=at_least(1), default=None,
                          help="refuse a sweep of more variants than this (default: 100000)")
@@ -41,8 +44,10 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     summary = run_sweep(sweep, out, max_batch=args.max_batch, workers=args.workers, scheduler=args.scheduler,
                         device=args.device, frames=args.frames, progress=not args.no_progress)
     n_div = int(summary["diverged"].sum())
+    evenness = "" if sweep.discrepancy is None else \
+        f"; its random sample's centred L2 discrepancy is {sweep.discrepancy:.3g} (lower is more even)"
     print(f"wrote {out}/ ({len(summary)} variants: summary.csv, summary.parquet, probes/, variants.csv); "
-          f"{n_div} diverged")
+          f"{n_div} diverged{evenness}")
     if "reversal_overflows" in summary and summary["reversal_overflows"].fillna(0).any():
         full = summary.loc[summary["reversal_overflows"].fillna(0) > 0, "variant"].tolist()
         print(f"warpcloth sweep: warning: the masing reversal memory was full in {len(full)} variant(s) "

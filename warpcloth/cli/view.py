@@ -38,7 +38,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "markers (frame, t, s, x, y) on shapes")
     plot_p.add_argument("--format", choices=FORMATS, default="png", help="figure file format (default: png)")
     plot_p.add_argument("--dpi", type=positive, default=DPI, help=f"resolution of raster output (default: {DPI})")
-    plot_p.add_argument("--times", type=finite, nargs="+", help="shape-overlay times, s after release")
+    plot_p.add_argument("--times", type=finite, nargs="+", help="shape-overlay times, s from t = 0 (the release, "
+                        "or the start of the clamp motion) (default: nine over the first half swing)")
     plot_p.add_argument("--metric", help="sweep: summary column to plot (e.g. first_period_s)")
     plot_p.add_argument("--x", help="sweep: parameter on the x axis (a swept field, e.g. damping.gamma_per_s)")
     plot_p.add_argument("--y", help="sweep: second parameter (heat map)")
@@ -47,9 +48,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     render_p.set_defaults(handler=render_command)
     render_p.add_argument("--out", type=path_text, help="image directory (default: RUN_DIR/render)")
     add_overwrite(render_p, "image directory --out")
-    render_p.add_argument("--times", type=finite, nargs="+", help="times of the PNG frames, s after release")
-    render_p.add_argument("--movie", default="motion.gif", help="animation file name, .gif or .mp4; 'none' for none")
-    render_p.add_argument("--stride", type=at_least(1), default=1, help="animate every n-th frame (at real speed)")
+    render_p.add_argument("--times", type=finite, nargs="+", help="times of the PNG frames, s from t = 0 (the "
+                          "release, or the start of the clamp motion) (default: six spread over the run)")
+    render_p.add_argument("--movie", default="motion.gif", help="animation file name, .gif or .mp4; 'none' for none "
+                          "(default: motion.gif)")
+    render_p.add_argument("--stride", type=at_least(1), default=1, help="animate every n-th frame, at real speed "
+                          "(default: 1)")
 
 
 def export_usd_command(args: argparse.Namespace) -> int:

@@ -57,7 +57,7 @@ class Recording:
         return filled[latest, np.arange(len(self.scenes))[None, :]][1:]
 
     def nearest_frames(self, times: np.ndarray) -> np.ndarray:
-        """Indices of the frames nearest to ``times`` (s after release)."""
+        """Indices of the frames nearest to ``times`` (s from t = 0: the release, or the clamp motion's start)."""
         times = np.atleast_1d(np.asarray(times, dtype=float))
         late = times[(times < self.frame_times[0] - 1e-9) | (times > self.frame_times[-1] + 1e-9)]
         if len(late):

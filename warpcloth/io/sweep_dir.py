@@ -12,6 +12,11 @@ Layout of a sweep directory::
 ``pandas.read_parquet(DIR / "probes")`` opens the whole probe store (one file per batch,
 i.e. chunked by batch); ``xarray`` users convert with ``.set_index(["variant", "t"]).to_xarray()``.
 
+sweep.json says its ``format`` (:data:`FORMAT`). Format 1 (no ``format`` key) was written
+before the Latin hypercube became SciPy's, which draws other variants from the same seed:
+such a directory is read back with the variants its variants.csv stores, and is not
+resumed.
+
 A batch is complete when its summary file exists. Every file is written through
 :mod:`warpcloth.io.atomic`, so a killed process or a lost Dask worker leaves no
 half-written result, and the same sweep run again computes only the batches that are
@@ -32,11 +37,16 @@ import pyarrow.parquet as pq
 from warpcloth.errors import DataFileError, OptionError
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.scene import COORDINATES, Sweep, expand
+from warpcloth.scene.sweep import samples_latin_hypercube, variant_scenes
 
 from .atomic import write_atomically, write_npy_atomically
 from .json_file import read_json
 from .provenance import provenance
 from .recording import Recording, per_strip_parameters, select_variants
+
+FORMAT = 2
+"""The sweep directory format sweep.json states: 2 since the Latin hypercube became
+:class:`scipy.stats.qmc.LatinHypercube` (other draws from a seed than format 1's own)."""
 
 LIST_COLUMNS = ("half_cycle_amplitude_m", "log_decrement")
 """Summary columns holding a list per variant: in summary.parquet, not summary.csv."""
@@ -93,8 +103,10 @@ class SweepDirectory:
             stored = read_json(manifest)
             check_coordinates(manifest, stored)
             if stored["fingerprint"] != sweep.fingerprint:
-                raise OptionError("--out", f"{self.path} holds a different sweep (its scenes or sweep spec "
-                                  "changed); choose a new --out directory to start this one")
+                why = ("was written by an older warpcloth (sweep format 1), whose Latin hypercube drew other "
+                       "variants from the same seed" if _older_sample(stored) else
+                       "holds a different sweep (its scenes or sweep spec changed)")
+                raise OptionError("--out", f"{self.path} {why}; choose a new --out directory to start this one")
             return stored["batches"]
         batches = plan()
         for sub in ("summary", "probes", "frames"):
@@ -105,7 +117,7 @@ class SweepDirectory:
         write_atomically(self.path / "variants.csv", lambda p: table.to_csv(p, index=False))
         info = {"fingerprint": sweep.fingerprint, "n_variants": len(sweep.scenes), "keys": sweep.keys,
                 "batches": batches, "sweep": sweep.spec, "base_scene": sweep.base, "complete": False,
-                "coordinates": COORDINATES,
+                "coordinates": COORDINATES, "format": FORMAT, "discrepancy": sweep.discrepancy,
                 "provenance": provenance()}
         write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
         return batches
@@ -141,11 +153,38 @@ def check_coordinates(manifest: Path, info: dict) -> None:
                             "measured them from the clamp's top); run the sweep again into a new --out directory")
 
 
+def _older_sample(info: dict) -> bool:
+    """Whether a stored sweep drew its variants with format 1's own Latin hypercube."""
+    return info.get("format", 1) < FORMAT and samples_latin_hypercube(info["sweep"])
+
+
+def stored_sweep(path: Path, info: dict) -> Sweep:
+    """The sweep a directory's sweep.json describes, expanded again; a format-1 Latin
+    hypercube's sampled values are taken from its variants.csv instead (this SciPy
+    sampler draws others from the seed)."""
+    sweep = expand(info["base_scene"] | {"sweep": info["sweep"]}, max_variants=info["n_variants"])
+    if not _older_sample(info):
+        return sweep
+    sampled = list(info["sweep"]["random"]["ranges"])
+    try:
+        table = pd.read_csv(path / "variants.csv").sort_values("variant")
+        values = table[sampled].to_numpy(dtype=float)
+    except (OSError, KeyError, ValueError, pd.errors.ParserError) as exc:
+        raise DataFileError(path / "variants.csv", f"cannot be read ({exc}); a sweep of format 1 is labelled by "
+                            "the variants it stores there") from None
+    if len(values) != len(sweep.assignments):
+        raise DataFileError(path / "variants.csv", f"lists {len(values)} variants, sweep.json "
+                            f"{len(sweep.assignments)}; a sweep of format 1 is labelled by the variants it stores")
+    assignments = [a | dict(zip(sampled, map(float, row), strict=True))
+                   for a, row in zip(sweep.assignments, values, strict=True)]
+    return Sweep(sweep.base, sweep.spec, sweep.keys, assignments, variant_scenes(sweep.base, assignments))
+
+
 def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording:
     """Selected variants of a sweep directory run with ``--frames``, as a Recording."""
     info = read_json(path / "sweep.json")
     check_coordinates(path / "sweep.json", info)
-    sweep = expand(info["base_scene"] | {"sweep": info["sweep"]}, max_variants=info["n_variants"])
+    sweep = stored_sweep(path, info)
     if sweep.fingerprint != info["fingerprint"]:
         raise DataFileError(path, "its variants no longer resolve to the scenes that were simulated "
                             "(a material file it uses has changed?); the stored results cannot be labelled")

@@ -40,7 +40,7 @@ from .files import read_scene_file, scene_from_dict, scene_source
 from .keys import is_material_file_key, key_path, key_path_or_none, overlaps
 from .locate import located
 from .overrides import apply_overrides, set_field
-from .sampling import latin_hypercube
+from .sampling import discrepancy, latin_hypercube
 from .schema import Scene, batch_fields
 from .validate import check_step
 
@@ -62,6 +62,7 @@ class Sweep:
     keys: list[str]  # swept fields, in column order
     assignments: list[dict[str, Any]]  # per variant: field -> value
     scenes: list[Scene]
+    discrepancy: float | None = None  # centred L2 discrepancy of the random block's sample (sampling.discrepancy)
 
     @property
     def fingerprint(self) -> str:
@@ -118,10 +119,18 @@ def _value_lists(table: dict, where: str) -> dict[str, list]:
     return table
 
 
-def _random_block(spec: dict) -> tuple[list[str], np.ndarray]:
+def samples_latin_hypercube(spec: dict) -> bool:
+    """Whether a raw [sweep] section draws a Latin hypercube (its variants then depend on
+    the sampler's draws, not only on its seed)."""
+    block = spec.get("random")
+    return isinstance(block, dict) and bool(block) and block.get("method", "latin_hypercube") == "latin_hypercube"
+
+
+def _random_block(spec: dict) -> tuple[list[str], np.ndarray, np.ndarray]:
+    # the swept fields, their values [sample, field] and the sample in the unit box
     block = _table(spec, "random")
     if not block:
-        return [], np.zeros((1, 0))
+        return [], np.zeros((1, 0)), np.zeros((0, 0))
     unknown = set(block) - RANDOM_KEYS
     if unknown:
         raise SceneError(f"sweep.random.{sorted(unknown)[0]}",
@@ -153,7 +162,7 @@ def _random_block(spec: dict) -> tuple[list[str], np.ndarray]:
     unit = generator.random((samples, d)) if method == "uniform" else latin_hypercube(samples, d, generator)
     low = np.array([b[0] for b in bounds])
     high = np.array([b[1] for b in bounds])
-    return list(ranges), low + unit * (high - low)
+    return list(ranges), low + unit * (high - low), unit
 
 
 def variant_error(error: SceneError, variant: int, assignment: dict) -> SceneError:
@@ -181,7 +190,7 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     lengths = {len(v) for v in zipped.values()}
     if len(lengths) > 1:
         raise SceneError("sweep.zip", f"lists must have equal lengths, got {sorted(lengths)}")
-    random_keys, random_values = _random_block(spec)
+    random_keys, random_values, unit = _random_block(spec)
     keys = list(grid) + list(zipped) + random_keys
     for where, block in (("sweep.grid", grid), ("sweep.zip", zipped), ("sweep.random.ranges", random_keys)):
         for key in block:
@@ -202,6 +211,12 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     assignments = []
     for g, z, r in itertools.product(grid_rows, zip_rows, random_values):
         assignments.append(dict(zip(keys, [*g, *z, *(float(x) for x in r)], strict=True)))
+    return Sweep(base, spec, keys, assignments, variant_scenes(base, assignments, progress), discrepancy(unit))
+
+
+def variant_scenes(base: dict, assignments: list[dict[str, Any]], progress: bool = False) -> list[Scene]:
+    """The validated scene of each variant: the raw ``base`` scene with the variant's
+    fields set (``progress`` shows a bar); a refused one is a SceneError naming it."""
     scenes = []
     # leave=False: a refused variant's message then starts on a clean line
     with tqdm(total=len(assignments), desc="expanding sweep", unit=" variants", disable=not progress,
@@ -217,7 +232,7 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
             except SceneError as exc:
                 raise variant_error(exc, i, assignment) from exc
             bar.update()
-    return Sweep(base, spec, keys, assignments, scenes)
+    return scenes
 
 
 def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] = (),

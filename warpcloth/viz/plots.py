@@ -32,6 +32,18 @@ from warpcloth.viz.geometry import colour_values  # noqa: E402
 
 MM = 1 / units.LENGTH_MM
 
+X_LABEL = "x from the clamp edge (mm)"
+Y_LABEL = "y from the clamp edge (mm)"
+"""The axes of every figure of the strip's shape (positions from the clamp edge at rest)."""
+
+
+def time_label(recording: Recording, unit: bool = True) -> str:
+    """The time axis' name: "t after release" when every scene releases its strip at
+    t = 0, else plain "t" (a driven clamp, as in the impulsive rotation, has no release:
+    its t = 0 is the start of the motion); ``unit`` adds " (s)"."""
+    name = "t after release" if all(s.release.enabled for s in recording.scenes) else "t"
+    return f"{name} (s)" if unit else name
+
 
 def _label(recording: Recording, j: int) -> str:
     varying = recording.varying[:2]
@@ -125,7 +137,7 @@ def plot_amplitude(recording: Recording, path: Path, measured: LaserTrace | None
     if measured is not None:
         ax.plot(measured.t, measured.x * MM, "k.", ms=2.5, label="measured")
     ax.axhline(0, color="0.6", lw=0.6)
-    ax.set(xlabel="time after release t (s)", ylabel="x (mm)",
+    ax.set(xlabel=time_label(recording), ylabel="x (mm)",
            title=f"Displacement at the laser line (y = {laser_mm:g} mm from the clamp edge)")
     _legend(ax, fontsize=7, loc="upper right")
     return _save(fig, path, dpi)
@@ -140,7 +152,7 @@ def plot_clamp_angle(recording: Recording, path: Path, measured: ClampAngleTrace
         ax.plot(t, np.degrees(theta), lw=1.2, color=colour, label=label)
     if measured is not None:
         ax.plot(measured.t, np.degrees(measured.theta), "k.", ms=2.5, label="encoder (measured)")
-    ax.set(xlabel="t (s)", ylabel="clamp angle θ (deg)", title="Clamp rotation")
+    ax.set(xlabel=time_label(recording), ylabel="clamp angle θ (deg)", title="Clamp rotation")
     _legend(ax, fontsize=7)
     return _save(fig, path, dpi)
 
@@ -183,10 +195,11 @@ def plot_shapes(recording: Recording, path: Path, times: np.ndarray, variant: in
     laser_mm = recording.scenes[variant].output.laser_height_mm
     ax.axhline(laser_mm, color="C3", lw=0.8, ls="--", label=f"laser line, y = {laser_mm:g} mm")
     ax.set_aspect("equal")
-    ax.set(xlabel="x from the clamp edge (mm)", ylabel="y from the clamp edge (mm)",
+    ax.set(xlabel=X_LABEL, ylabel=Y_LABEL,
            title=f"Strip shapes{' and measured markers (o)' if measured is not None else ''}, "
                  f"{_label(recording, variant)}")
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title="t after release", title_fontsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title=time_label(recording, unit=False),
+              title_fontsize=7)
     return _save(fig, path, dpi)
 
 
@@ -292,7 +305,7 @@ def plot_energy(recording: Recording, path: Path, variant: int = 0, *, dpi: floa
     if peak > 0:
         drift.plot(t, 100 * (total - total[0]) / peak, "k", lw=1)
     drift.axhline(0, color="0.6", lw=0.6)
-    drift.set(xlabel="t (s)", ylabel="sum − start\n(% of peak kinetic)")
+    drift.set(xlabel=time_label(recording), ylabel="sum − start\n(% of peak kinetic)")
     return _save(fig, path, dpi)
 
 
@@ -412,7 +425,11 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
         lo, hi = np.nanpercentile(data[metric], [2, 98])
         scale = {"cmap": "viridis", "vmin": lo, "vmax": hi if hi > lo else None}
         if table.size == len(data) and not table.isna().any().any():
-            mesh = ax.pcolormesh(table.columns, table.index, table.to_numpy(), shading="nearest", **scale)
+            # one equal cell per grid value, at 0, 1, 2, ..., labelled at its centre
+            mesh = ax.pcolormesh(np.arange(table.shape[1]), np.arange(table.shape[0]), table.to_numpy(),
+                                 shading="nearest", **scale)
+            _cell_ticks(ax.xaxis, table.columns)
+            _cell_ticks(ax.yaxis, table.index)
         else:
             mesh = ax.scatter(data[x], data[y], c=data[metric], s=14, **scale)
         fig.colorbar(mesh, ax=ax, label=field_label(metric), extend="both")
@@ -423,6 +440,21 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
                                                                                    if notes else ""))
     return fig
 
+
+
+HEAT_MAP_TICKS = 12
+"""A heat-map axis labels at most this many of its cells (every k-th beyond)."""
+
+
+def _cell_ticks(axis: matplotlib.axis.Axis, values: pd.Index) -> None:
+    # The grid's cells are drawn one per value at 0, 1, 2, ...: a tick at the centre of
+    # each, labelled with the swept value it holds. On the values' own scale an uneven
+    # grid's cells would be uneven and a value's tick off its cell's centre (the cell
+    # edges lie halfway to the neighbours), and the locator's round numbers fell anywhere.
+    step = -(-len(values) // HEAT_MAP_TICKS)
+    shown = range(0, len(values), step)
+    axis.set_ticks(list(shown), [f"{values[i]:.4g}" if isinstance(values[i], float) else str(values[i])
+                                 for i in shown])
 
 
 def plot_fit_overlay(result: object, objective: object, measurement: LaserTrace | TrackedShapes, fit: object,
@@ -457,10 +489,45 @@ def plot_fit_overlay(result: object, objective: object, measurement: LaserTrace 
         ax.plot(xy[:nc, 0], xy[:nc, 1], color="0.25", lw=3)
         ax.plot(measurement.x[rows] * MM, measurement.y[rows] * MM, "o", color=colour, ms=3.5, mfc="none")
     ax.set_aspect("equal")
-    ax.set(xlabel="x from the clamp's lowest point (mm)", ylabel="y (mm)")
+    ax.set(xlabel=X_LABEL, ylabel=Y_LABEL)
     ax.set_title(f"markers (o) vs best fit (lines); RMS {fit.rms * MM:.3g} mm\n{title}", fontsize=8)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title="measured t", title_fontsize=7)
     return _save(fig, path)
+
+
+SIGMA_STYLES = {1: "-", 2: "--"}
+"""Each uncertainty ellipse of :func:`fit_search_figure` (k σ) and its line style, so the
+legend tells the 1σ and the 2σ region apart."""
+
+
+def fit_search_figure(fit: object, truth: dict[str, float] | None = None) -> plt.Figure:
+    """Where a two-parameter motion fit (a :class:`warpcloth.calibrate.motion_fit.FitResult`)
+    went: one point per launch from the space-filling start to the optimum, and the 1σ
+    and 2σ ellipses of its Gauss–Newton covariance (their tilt is the correlation), also
+    in an inset at their own scale; ``truth`` (field → value) is marked when known."""
+    names = list(fit.parameters)
+    if len(names) != 2:
+        raise OptionError("--free", f"the search figure shows two parameters; this fit has {len(names)}")
+    path = np.array([[h[n] for n in names] for h in fit.history])
+    sigma = np.array([fit.sigma[n] for n in names])
+    values, vectors = np.linalg.eigh(np.array(fit.correlation) * np.outer(sigma, sigma))
+    angle = np.linspace(0, 2 * np.pi, 200)
+    circle = np.stack([np.cos(angle), np.sin(angle)])
+    centre = np.array([fit.parameters[n] for n in names])[:, None]
+    fig, ax = plt.subplots(figsize=(6, 5))
+    ax.plot(path[:, 0], path[:, 1], "o-", color="0.5", ms=4, lw=0.8, label="search (one point per launch)")
+    inset = ax.inset_axes([0.1, 0.08, 0.38, 0.3])
+    for k, style in SIGMA_STYLES.items():
+        ellipse = centre + vectors @ (k * np.sqrt(np.clip(values, 0, None))[:, None] * circle)
+        ax.plot(*ellipse, color="C3", ls=style, lw=1, label=f"{k}σ")
+        inset.plot(*ellipse, color="C3", ls=style, lw=1)
+    if truth is not None:
+        ax.plot(*[truth[n] for n in names], "k*", ms=12, label="truth")
+        inset.plot(*[truth[n] for n in names], "k*", ms=8)
+    inset.tick_params(labelsize=6)
+    ax.set(xlabel=field_label(names[0]), ylabel=field_label(names[1]), title="the search and the uncertainty")
+    ax.legend(fontsize=7)
+    return fig
 
 
 def plot_clamp_fit(t: np.ndarray, theta: np.ndarray, fit: object, path: Path) -> Path:

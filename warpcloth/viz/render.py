@@ -2,9 +2,9 @@
 animation (GIF, or MP4 when imageio-ffmpeg is installed).
 
 Each strip is drawn as a ribbon of its real width (z), the clamp as a grey box moving
-rigidly with the clamp nodes, the time after release stamped in a corner. The camera
-looks along −z at the x–y plane of the motion with a parallel projection, framed once
-for the whole run so frames compare directly.
+rigidly with the clamp nodes, the time (from the release, or the start of the clamp
+motion) stamped in a corner. The camera looks along −z at the x–y plane of the motion
+with a parallel projection, framed once for the whole run so frames compare directly.
 """
 
 from __future__ import annotations

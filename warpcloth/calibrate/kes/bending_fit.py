@@ -5,10 +5,10 @@ moment that is proportional to the law's amplitude A (tagawa2003: D1, dahl: M_s,
 frictional_couple: M_f) at fixed shape parameters θ (α; K_s, n; K_w), the hinge starting
 fresh at the first sample. g is run along the *measured* curvature path by the kernels'
 own hinge logic (:func:`warpcloth.sim.moment_along_path`) for A = 1 gf·cm/cm and D = 0, so
-for each θ, (D, A) is a linear least-squares problem with D, A ≥ 0 (NNLS). θ is searched
-on a logarithmic grid (every grid point in one kernel launch), then refined from the
-best grid point: by golden-section search on ln θ between its neighbours for one shape
-parameter, by Nelder–Mead on ln θ inside the grid's box for more. A law is a
+for each θ, (D, A) is a linear least-squares problem with D, A ≥ 0 (NNLS,
+:func:`scipy.optimize.nnls`). θ is searched on a logarithmic grid (every grid point in
+one kernel launch), then refined from the best grid point by SciPy's bounded Nelder–Mead
+(:func:`scipy.optimize.minimize`) on ln θ inside the grid's box. A law is a
 :class:`LawFitter`: its amplitude, its shape parameters and their grids; the modules
 ``bending_<law>.py`` each define one.
 """
@@ -17,27 +17,23 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import minimize, nnls
 
 from warpcloth import units
 from warpcloth.scene import MaterialSection, to_si
 from warpcloth.sim import moment_along_path
 
 from ..noise import difference_noise
-from .least_squares import nnls
 from .readers import BendingLoop
 
 POOR_FIT_FACTOR = 3.0
 """An RMS above this many times the data's noise is not described by the model."""
 
-GOLDEN_BRACKET = 1e-10
-"""Golden-section search (one shape parameter) ends when the bracket on ln θ is this narrow."""
-
 SIMPLEX_SIZE = 1e-10
-"""Nelder–Mead (several shape parameters) ends when the simplex spans less than this in every ln θ."""
+"""Nelder–Mead ends when the simplex spans less than this in every ln θ (``xatol``)."""
 
 SIMPLEX_ITERATIONS = 2000
 """…or after this many iterations."""
@@ -168,61 +164,8 @@ def bending_problems(fit: BendingFit, loop: BendingLoop) -> list[tuple[str, str]
 
 def _linear_part(curvature: np.ndarray, moment: np.ndarray, offset: np.ndarray) -> tuple[float, float, float]:
     # D, A ≥ 0 of M = D K + A g for one shape, and the sum of squared residuals.
-    d, a = nnls(np.column_stack([curvature, offset]), moment)
+    (d, a), _ = nnls(np.column_stack([curvature, offset]), moment)
     return float(d), float(a), float(np.sum((d * curvature + a * offset - moment) ** 2))
-
-
-def _golden(objective: Callable[[float], float], a: float, b: float) -> tuple[float, float]:
-    # Golden-section search on [a, b]: the bracket's midpoint and the best value seen inside.
-    ratio = (math.sqrt(5.0) - 1.0) / 2.0
-    c, d = b - ratio * (b - a), a + ratio * (b - a)
-    fc, fd = objective(c), objective(d)
-    while b - a > GOLDEN_BRACKET:
-        if fc < fd:
-            b, d, fd = d, c, fc
-            c = b - ratio * (b - a)
-            fc = objective(c)
-        else:
-            a, c, fc = c, d, fd
-            d = a + ratio * (b - a)
-            fd = objective(d)
-    return 0.5 * (a + b), min(fc, fd)
-
-
-def _nelder_mead(objective: Callable[[np.ndarray], float], start: np.ndarray, steps: np.ndarray,
-                 lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, float]:
-    # Nelder–Mead (reflect 1, expand 2, contract ½, shrink ½) inside the box [lower, upper]
-    # (points outside are projected onto it); the best vertex and its value.
-    def f(x: np.ndarray) -> float:
-        return objective(np.clip(x, lower, upper))
-
-    simplex = np.vstack([start, start + np.diag(steps)])
-    values = np.array([f(x) for x in simplex])
-    for _ in range(SIMPLEX_ITERATIONS):
-        order = np.argsort(values, kind="stable")
-        simplex, values = simplex[order], values[order]
-        if np.all(np.ptp(np.clip(simplex, lower, upper), axis=0) < SIMPLEX_SIZE):
-            break
-        centre = simplex[:-1].mean(axis=0)
-        reflected = centre + (centre - simplex[-1])
-        fr = f(reflected)
-        if fr < values[0]:
-            expanded = centre + 2.0 * (centre - simplex[-1])
-            fe = f(expanded)
-            simplex[-1], values[-1] = (expanded, fe) if fe < fr else (reflected, fr)
-        elif fr < values[-2]:
-            simplex[-1], values[-1] = reflected, fr
-        else:
-            inside = fr >= values[-1]
-            contracted = centre + (0.5 if not inside else -0.5) * (centre - simplex[-1])
-            fk = f(contracted)
-            if fk < min(fr, values[-1]):
-                simplex[-1], values[-1] = contracted, fk
-            else:
-                simplex[1:] = simplex[0] + 0.5 * (simplex[1:] - simplex[0])
-                values[1:] = [f(x) for x in simplex[1:]]
-    best = int(np.argmin(values))
-    return np.clip(simplex[best], lower, upper), float(values[best])
 
 
 @dataclass(frozen=True)
@@ -316,15 +259,16 @@ class LawFitter:
         def objective(log_shape: np.ndarray) -> float:
             return _linear_part(k, m, self.unit_offsets(k, np.exp(log_shape)[None, :], k0, device)[:, 0])[2]
 
-        if len(self.shape) == 1:
-            (i,) = index
-            x, refined = _golden(lambda v: objective(np.array([v])), logs[0][max(i - 1, 0)],
-                                 logs[0][min(i + 1, len(logs[0]) - 1)])
-            x = np.array([x])
-        else:
-            steps = np.array([lg[1] - lg[0] for lg in logs])
-            x, refined = _nelder_mead(objective, np.log(points[best]), steps, np.array([lg[0] for lg in logs]),
-                                      np.array([lg[-1] for lg in logs]))
+        # Nelder–Mead on ln θ inside the grid's box from the best grid point, the first
+        # simplex one grid step along each ln θ, inwards from an edge (SciPy clips a
+        # vertex onto the box, which would flatten a simplex started outwards).
+        steps = np.array([(lg[1] - lg[0]) * (-1 if i == len(lg) - 1 else 1) for lg, i in zip(logs, index,
+                                                                                             strict=True)])
+        start = np.log(points[best])
+        search = minimize(objective, start, method="Nelder-Mead", bounds=[(lg[0], lg[-1]) for lg in logs],
+                          options={"initial_simplex": np.vstack([start, start + np.diag(steps)]),
+                                   "xatol": SIMPLEX_SIZE, "fatol": np.inf, "maxiter": SIMPLEX_ITERATIONS})
+        x, refined = search.x, float(search.fun)
         shape = np.exp(x)
         if sse[best] < refined:  # a flat objective (no hysteresis): keep the grid's point
             shape = points[best]

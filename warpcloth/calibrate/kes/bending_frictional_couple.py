@@ -4,8 +4,7 @@ KES-FB2 loop (docs/model.md §13.5), by the machinery of :mod:`.bending_fit`.
 At fixed K_w the regularised couple h = clamp(h + (M_f / K_w) ΔK, −M_f, M_f) is
 proportional to M_f, so (D, M_f) is a linear least-squares problem with D, M_f ≥ 0. K_w
 is searched on a logarithmic grid of K_w / K0 in [0.001, 2] (one kernel launch), then
-refined by golden-section search between the best grid point's neighbours. Free
-parameters: D, M_f, K_w.
+refined by Nelder–Mead inside the grid's range. Free parameters: D, M_f, K_w.
 """
 
 from __future__ import annotations

@@ -6,8 +6,8 @@ the hysteretic offset is proportional to D1 (the branch functions are, and the l
 centre after a reversal depends on the offset only through (M0 ∓ H)/D1), so
 M = D K + D1 h₁(α; path) with h₁ the offset for D1 = 1 gf·cm/cm: for each α, (D, D1) is a
 linear least-squares problem (with D, D1 ≥ 0). α is searched on a logarithmic grid of
-α K0 in [0.05, 60] (all in one kernel launch), then refined by golden-section search
-between the best grid point's neighbours. Free parameters: D, D1, α.
+α K0 in [0.05, 60] (all in one kernel launch), then refined by Nelder–Mead inside the
+grid's range. Free parameters: D, D1, α.
 """
 
 from __future__ import annotations
