@@ -213,3 +213,25 @@ def test_a_fit_says_when_its_law_depends_on_the_mesh():
     masing = read_scene_file("damped_swing")
     masing["material"]["bending_law"] = "masing"
     assert mesh_note(masing) == ""
+
+
+def test_a_sweep_reports_the_variants_whose_memory_was_full(tmp_path, capsys):
+    import tomli_w
+
+    from warpcloth.cli import main
+    from warpcloth.scene import read_scene_file
+
+    scene = read_scene_file("damped_swing")
+    scene["run"]["duration_s"] = 0.3
+    scene["integrator"]["reversal_memory"] = 2
+    scene["material"] = {"from_file": "wool90-nylon10"}
+    scene["sweep"] = {"grid": {"material.bending_law": ["tagawa2003", "masing"]}}
+    path = tmp_path / "laws.toml"
+    path.write_text(tomli_w.dumps(scene))
+    assert main(["sweep", str(path), "--out", str(tmp_path / "s"), "--no-progress", "--workers", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: the masing reversal memory was full in 1 variant(s) (1;" in err
+    import pandas as pd
+
+    overflows = pd.read_parquet(tmp_path / "s" / "summary.parquet").sort_values("variant")["reversal_overflows"]
+    assert not overflows.iloc[0] > 0 and overflows.iloc[1] > 0  # NaN: a batch without a masing strip
