@@ -105,6 +105,17 @@ def build(scalar: Any) -> SimpleNamespace:
         return one
 
     @wp.func
+    def open_point(history: ReversalMemory, depth: int, origin: scalar, hinge: int, strip: int):
+        # The top open point (the origin on the virgin curve) and the curvature of the one below it.
+        top = vec2(origin, zero)
+        below = origin
+        if depth > 0:
+            top = history.points[depth, hinge, strip]
+            if depth > 1:
+                below = history.points[depth - 1, hinge, strip][0]
+        return top, below
+
+    @wp.func
     def fresh_memory(curvature: scalar, p: Parameters, history: ReversalMemory, hinge: int, strip: int):
         # A hinge that has never bent: on the virgin curve from its own curvature.
         if p[1] != zero:
@@ -122,13 +133,9 @@ def build(scalar: Any) -> SimpleNamespace:
         depth = int(wp.abs(memory[1])) - 1
         capacity = history.points.shape[0] - 1
         origin = history.points[0, hinge, strip][0]
-        top = vec2(origin, zero)
-        below = origin
+        top, below = open_point(history, depth, origin, hinge, strip)
         s = d  # on the virgin curve at its origin every direction loads
         if depth > 0:
-            top = history.points[depth, hinge, strip]
-            if depth > 1:
-                below = history.points[depth - 1, hinge, strip][0]
             s = direction_from(top[0], below)
         elif previous != origin:
             s = wp.sign(previous - origin)
@@ -149,12 +156,7 @@ def build(scalar: Any) -> SimpleNamespace:
         while d != s and depth > 0 and s * (curvature - top[0]) <= zero:
             depth -= 1
             s = d
-            top = vec2(origin, zero)
-            below = origin
-            if depth > 0:
-                top = history.points[depth, hinge, strip]
-                if depth > 1:
-                    below = history.points[depth - 1, hinge, strip][0]
+            top, below = open_point(history, depth, origin, hinge, strip)
         # Return-point memory: reaching the point below the top closes the inner loop.
         while d == s and depth > 0:
             target = below
@@ -163,12 +165,7 @@ def build(scalar: Any) -> SimpleNamespace:
             if s * (curvature - target) < zero:
                 break
             depth = wp.max(depth - 2, 0)
-            top = vec2(origin, zero)
-            below = origin
-            if depth > 0:
-                top = history.points[depth, hinge, strip]
-                if depth > 1:
-                    below = history.points[depth - 1, hinge, strip][0]
+            top, below = open_point(history, depth, origin, hinge, strip)
         h = virgin(curvature - origin, p)
         if depth > 0:
             h = branch(curvature, top, s, p)
@@ -187,10 +184,7 @@ def build(scalar: Any) -> SimpleNamespace:
         origin = history.points[0, hinge, strip][0]
         if depth == 0:
             return p[0] + p[2] * p[1] * wp.exp(-two * p[2] * wp.abs(curvature - origin))
-        top = history.points[depth, hinge, strip]
-        below = origin
-        if depth > 1:
-            below = history.points[depth - 1, hinge, strip][0]
+        top, below = open_point(history, depth, origin, hinge, strip)
         s = direction_from(top[0], below)
         return p[0] + p[2] * p[1] * wp.exp(-p[2] * s * (curvature - top[0]))
 

@@ -3,7 +3,9 @@ major loop, an Iwan model of Jenkins elements as the independent reference for i
 return-point memory, continuity in the curvature path for every law, and its bounded
 memory, whose overflows are counted and reported."""
 
+import importlib.util
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,21 +15,17 @@ from test_bending_laws import kes_path, material, wandering_path
 import warpcloth as wc
 from warpcloth.sim import moment_along_path
 
+_spec = importlib.util.spec_from_file_location(
+    "make_kes_examples", Path(__file__).resolve().parents[1] / "scenes" / "data" / "make_kes_examples.py")
+EXAMPLES = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(EXAMPLES)
+
 
 def iwan(path, d1, alpha, elements):
-    """H along ``path`` of an Iwan model: ``elements`` Jenkins elements in parallel (spring
-    of stiffness αD1/N, slider at ±k κ_i), yield curvatures κ_i at the midpoint quantiles of
-    the density 2α e^{−2ακ}, all at rest at path[0]. Its virgin curve is ½ D1 (1 − e^{−2αy})
-    as elements → ∞, and Iwan models obey Masing's rules exactly."""
-    q = (np.arange(elements) + 0.5) / elements
-    yield_force = alpha * d1 / elements * -np.log1p(-q) / (2 * alpha)
-    stiffness = alpha * d1 / elements
-    force = np.zeros(elements)
-    out = [0.0]
-    for a, b in zip(path[:-1], path[1:], strict=True):
-        force = np.clip(force + stiffness * (b - a), -yield_force, yield_force)
-        out.append(force.sum())
-    return np.array(out)
+    """H along ``path`` of an Iwan model of fibre friction (Jenkins elements in parallel, written
+    out in NumPy in scenes/data/make_kes_examples.py, independent of the kernels); Iwan
+    models obey Masing's rules exactly, and this one's virgin curve is the law's as N → ∞."""
+    return EXAMPLES.iwan_moment(path, d1, alpha, elements)
 
 
 def hysteretic(law_material, path, **kwargs):
