@@ -304,3 +304,31 @@ def test_figures_are_results_too(tmp_path):
                "--plot", "figure")
     assert done.returncode == 2 and "--plot: figure must be a file ending in .png" in done.stderr
     assert not list(tmp_path.rglob(".*.tmp*"))
+
+
+def cli(*args, cwd, timeout=300):
+    """``warpcloth ARGS`` in a child process, run to its end."""
+    return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=timeout)
+
+
+def one_line_error(done, status):
+    """The child exited ``status`` with exactly one line on stderr and no traceback."""
+    assert done.returncode == status and "Traceback" not in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1, done.stderr
+
+
+@pytest.mark.parametrize("command, delay_s", [
+    (("run", "damped_swing", "--set", "run.duration_s=600", "--out", "r"), 0.1),  # importing the modules
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--out", "f"), 0.7),
+])
+def test_ctrl_c_while_starting_is_exit_130_and_one_line(tmp_path, command, delay_s):
+    # Whether it lands in the imports, Warp's start or the first step of the work, an early
+    # Ctrl-C is exit 130 with one line, never a KeyboardInterrupt traceback.
+    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", *command, "--no-progress"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=interruptible)
+    time.sleep(delay_s)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "Traceback" not in stderr and "interrupted" in stderr, stderr
+    assert len(stderr.strip().splitlines()) == 1, stderr

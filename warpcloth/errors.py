@@ -65,3 +65,9 @@ class DivergenceError(WarpclothError, RuntimeError):
         self.diverged = diverged
         self.result = result
         super().__init__(message)
+
+
+class PlausibilityWarning(UserWarning):
+    """A finite input outside the range a fabric strip or its measurement plausibly has
+    (:data:`warpcloth.units.PLAUSIBLE`): it is used as given, and the warning names the
+    value and the range. The command line prints it as one line."""

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from warpcloth.errors import DataFileError, DivergenceError, OptionError, ResourceError, SceneError, WarpclothError
 from warpcloth.sim.model import init_warp_quietly
 
-from . import analyse, fit, material, run, scene, sweep, view
+from . import EXIT_INTERRUPTED, analyse, fit, interrupted_at_start, material, run, scene, sweep, view
 
 COMMAND_GROUPS = (run, sweep, view, fit, material, analyse, scene)
 """Each registers its subcommands with a ``handler`` (see :func:`main`)."""
@@ -30,7 +30,6 @@ EXIT_DIVERGED = 3
 STREAMING = ("run", "sweep")
 """Commands whose results stream to disk (the rest write each file whole, atomically)."""
 EXIT_IO = 5
-EXIT_INTERRUPTED = 130  # the shell's convention for SIGINT
 FULL = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)
 
 
@@ -59,8 +58,11 @@ def parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``warpcloth`` command; returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    init_warp_quietly(verbose="--verbose" in argv)  # before parsing: a --device option starts Warp
-    args = parser().parse_args(argv)
+    try:
+        init_warp_quietly(verbose="--verbose" in argv)  # before parsing: a --device option starts Warp
+        args = parser().parse_args(argv)
+    except KeyboardInterrupt:
+        return interrupted_at_start()
     try:
         return args.handler(args)
     except DivergenceError as exc:
