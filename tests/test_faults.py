@@ -332,3 +332,54 @@ def test_ctrl_c_while_starting_is_exit_130_and_one_line(tmp_path, command, delay
     _, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 130 and "Traceback" not in stderr and "interrupted" in stderr, stderr
     assert len(stderr.strip().splitlines()) == 1, stderr
+
+
+def holding(marker):
+    """A child process that holds ``marker`` as a writer does (until killed)."""
+    proc = subprocess.Popen([sys.executable, "-c", "import sys, time\nfrom warpcloth.io.writing import hold\n"
+                             f"assert hold({str(marker)!r}) is None\nprint('held', flush=True)\ntime.sleep(300)"],
+                            stdout=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "held"
+    return proc
+
+
+@pytest.mark.parametrize("args, result", [
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--out", "f"), "f"),
+    (("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation", "-o", "c.toml"), "c.toml"),
+    (("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example", "--density-g-per-cm2",
+      "0.02", "-o", "m.toml"), "m.toml"),
+    (("export-usd", "r", "-o", "s.usda"), "s.usda"),
+    (("plot", "r", "--out", "figs"), "figs"),
+])
+def test_a_result_another_process_is_writing_is_refused_by_every_command(tmp_path, args, result):
+    if "r" in args:
+        wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.1", "release.settle_time_s=0.1"]),
+                    out=tmp_path / "r")
+    from warpcloth.io.writing import marker_of
+
+    writer = holding(marker_of(tmp_path / result))
+    try:
+        done = cli(*args, cwd=tmp_path)
+    finally:
+        writer.kill()
+        writer.wait()
+    one_line_error(done, 2)
+    assert f"{result} is being written by another warpcloth process (pid {writer.pid})" in done.stderr
+    assert not (tmp_path / result).exists()
+    # the marker a killed writer leaves holds nothing: the same command now writes its result
+    assert marker_of(tmp_path / result).exists()
+    if args[0] == "material":
+        assert cli(*args, cwd=tmp_path).returncode == 0 and (tmp_path / result).is_file()
+
+
+def test_two_material_fits_into_one_new_file_never_replace_each_other(tmp_path):
+    args = [sys.executable, "-m", "warpcloth.cli", "material", "fit-kes", "--tensile", "kes_fb1_example", "--bending",
+            "kes_fb2_example", "--density-g-per-cm2", "0.02", "-o", "m.toml"]
+    procs = [subprocess.Popen([*args, "--name", name], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True) for name in ("first", "second")]
+    outcomes = [(p.wait(timeout=300), p.communicate()[1]) for p in procs]
+    assert sorted(code for code, _ in outcomes) == [0, 2], outcomes
+    refused = next(err for code, err in outcomes if code == 2)
+    assert "is being written by another warpcloth process" in refused or "already exists" in refused, refused
+    winner = ("first", "second")[[code for code, _ in outcomes].index(0)]
+    assert f'name = "{winner}"' in (tmp_path / "m.toml").read_text()

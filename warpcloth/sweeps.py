@@ -21,6 +21,7 @@ from tqdm import tqdm
 
 from warpcloth.errors import OptionError
 from warpcloth.io.sweep_dir import SweepDirectory
+from warpcloth.io.writing import claim_result
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.metrics import swing_summary
 from warpcloth.runs import simulate
@@ -146,6 +147,7 @@ def run_sweep(
         # resuming is for the same sweep only; a run or other files are never mixed into
         held = "a run" if (out / "meta.json").is_file() else "files that are not a sweep"
         raise OptionError("--out", f"{out} already holds {held}; choose another --out")
+    claim_result(out, "--out")  # two sweeps into one directory never write it at once
     out.mkdir(parents=True, exist_ok=True)
     directory = SweepDirectory(out)
     n_workers = (os.cpu_count() or 1) if workers is None else workers

@@ -43,33 +43,14 @@ from .atomic import naming, write_npy_atomically, write_text_atomically
 from .json_file import read_json
 from .provenance import provenance
 from .recording import Recording, per_strip_parameters, select_variants
+from .writing import WRITING, hold, live_writer, release
 
 PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
-WRITING = ".writing"
-"""Marker of a run directory a process is streaming into (left behind by a killed one)."""
 
 
 def write_scene(path: Path, scene: Scene) -> None:
     """Write a resolved scene as TOML."""
     path.write_text(tomli_w.dumps(scene.to_dict()))
-
-
-def live_writer(directory: Path) -> int | None:
-    """The pid of a running process streaming into ``directory`` (its marker names it),
-    or None (no marker, or one left by a process that no longer runs)."""
-    try:
-        pid = int((directory / WRITING).read_text() or 0)
-    except (OSError, ValueError):
-        return None
-    if pid <= 0 or pid == os.getpid():
-        return None
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return None
-    except PermissionError:
-        return pid
-    return pid
 
 
 def reserve(file: io.BufferedWriter, size: int) -> None:
@@ -117,7 +98,7 @@ class RunWriter:
                  overwrite: bool = False) -> None:
         check_output_directory(out_dir, overwrite)
         self.target = Path(out_dir).absolute()
-        writer = live_writer(self.target)
+        writer = live_writer(self.target / WRITING)
         if writer is not None:
             raise OptionError("--out", f"{out_dir} is being written by another warpcloth process (pid {writer}); "
                               "wait for it, or choose another --out")
@@ -133,16 +114,13 @@ class RunWriter:
         self.dir.mkdir(parents=True, exist_ok=True)
         # One writer per directory: a second process that passed the emptiness check at
         # the same moment finds the marker and stops instead of interleaving its rows.
-        try:
-            marker = os.open(self.dir / WRITING, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-            os.write(marker, str(os.getpid()).encode())
-            os.close(marker)
-        except FileExistsError:
-            raise OptionError("--out", f"{self.target} is being written by another warpcloth process; "
-                              "choose another --out") from None
+        writer = hold(self.dir / WRITING)
+        if writer is not None:
+            raise OptionError("--out", f"{self.target} is being written by another warpcloth process (pid {writer}); "
+                              "choose another --out")
         if any(p.name != WRITING for p in self.dir.iterdir()):
             # another writer finished here between the emptiness check and the marker
-            (self.dir / WRITING).unlink()
+            release(self.dir / WRITING)
             raise OptionError("--out", f"{self.target} already holds a run (written meanwhile by another process); "
                               "choose another --out, or pass --overwrite")
         if len(scenes) == 1:
@@ -233,7 +211,7 @@ class RunWriter:
         self.meta["provenance"] = provenance(extra.get("device"))
         self.meta["complete"] = True
         self._write_meta()
-        (self.dir / WRITING).unlink()
+        release(self.dir / WRITING)
         if self.dir != self.target:
             # Swap: the old result moves aside, the complete new one takes its name, then
             # the old goes. Killed between the two renames, both survive (hidden names).
