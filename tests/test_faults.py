@@ -383,3 +383,29 @@ def test_two_material_fits_into_one_new_file_never_replace_each_other(tmp_path):
     assert "is being written by another warpcloth process" in refused or "already exists" in refused, refused
     winner = ("first", "second")[[code for code, _ in outcomes].index(0)]
     assert f'name = "{winner}"' in (tmp_path / "m.toml").read_text()
+
+
+@pytest.mark.parametrize("args, message", [
+    (("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=30000000", "--max-variants", "100000000000"),
+     "too large: the sweep's 30000000 variant scenes would take 600 GB of memory"),
+    (("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=2e10"), "the sweep has 20000000000 variants"),
+    (("run", "damped_swing", "--set", "strip.clamp_length_mm=1e300"), "are 2e+299 nodes, more than 2147483647"),
+    (("run", "damped_swing", "--set", "strip.spacing_mm=1e-6", "--set", "strip.free_length_mm=1e5"),
+     "are 1e+11 nodes, more than 2147483647"),
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--bootstrap", str(10**15)),
+     f"too large: --bootstrap {10**15}: the resamples would take"),
+])
+def test_sizes_are_checked_in_closed_form_before_anything_is_allocated(tmp_path, args, message):
+    started = time.monotonic()
+    done = cli(*args, "--out", "o", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert message in done.stderr and not (tmp_path / "o").exists()
+    assert time.monotonic() - started < 60  # refused at once, not after a sampler or a fit
+
+
+def test_a_size_beyond_a_float_is_written_without_overflowing():
+    from warpcloth.sim.resources import check_memory, size_text
+
+    assert size_text(10**400) == "1.00e+388 TB" and size_text(3 * 10**12) == "3 TB"
+    with pytest.raises(wc.ResourceError, match=r"x would take 1.00e\+388 TB of memory"):
+        check_memory(10**400, "x", "y")

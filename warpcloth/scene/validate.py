@@ -11,6 +11,9 @@ from .materials import to_si, validate_material
 from .schema import ClampSection, Scene
 
 MAX_STEPS = 2**31 - 1
+MAX_NODES = 2**31 - 1
+"""Nodes of one strip at most: what a kernel's 32-bit index reaches (the memory check of
+:func:`warpcloth.scene.build.builder_for` refuses far fewer on a real machine)."""
 
 
 def _multiple(length: float, spacing: float) -> bool:
@@ -21,6 +24,13 @@ def _multiple(length: float, spacing: float) -> bool:
 def validate_scene(scene: Scene) -> None:
     """Cross-field checks that single fields cannot express; raises SceneError."""
     st = scene.strip
+    # in floats, before any count is rounded to an integer (a length of 1e308 mm is inf nodes)
+    nodes = st.clamp_length_mm / st.spacing_mm + st.free_length_mm / st.spacing_mm
+    if not nodes <= MAX_NODES:
+        raise SceneError("strip.free_length_mm", f"{st.free_length_mm:g} mm below and strip.clamp_length_mm = "
+                         f"{st.clamp_length_mm:g} mm in the clamp at strip.spacing_mm = {st.spacing_mm:g} mm are "
+                         f"{nodes:.3g} nodes, more than {MAX_NODES}", related=("strip.clamp_length_mm",
+                                                                               "strip.spacing_mm"))
     for name in ("free_length_mm", "clamp_length_mm"):
         if not _multiple(getattr(st, name), st.spacing_mm):
             raise SceneError("strip.spacing_mm", f"{st.spacing_mm:g} mm does not divide strip.{name} = "
