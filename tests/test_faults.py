@@ -7,6 +7,7 @@ committed part reads back exactly, never a torn file that reads as valid.
 """
 
 import json
+import re
 import resource
 import signal
 import subprocess
@@ -409,3 +410,21 @@ def test_a_size_beyond_a_float_is_written_without_overflowing():
     assert size_text(10**400) == "1.00e+388 TB" and size_text(3 * 10**12) == "3 TB"
     with pytest.raises(wc.ResourceError, match=r"x would take 1.00e\+388 TB of memory"):
         check_memory(10**400, "x", "y")
+
+
+@pytest.mark.parametrize("args, message", [
+    # 3000 variants × 0.6 GB of probes and frames: ~2 TB, though one batch of one fits memory and disk
+    (("--set", "run.duration_s=20000", "--set", "output.probes_per_frame=1", "--set", "sweep.random.samples=3000",
+      "--frames", "--workers", "1", "--max-batch", "1"),
+     r"too large: the probes and frames of the sweep's 3000 remaining variants would write [0-9.]+ TB to .*s, "
+     r"whose file system has"),
+    # four strips of ~450 GB of results each
+    (("--set", "run.duration_s=20000", "--set", "output.probes_per_frame=1666", "--set", "sweep.random.samples=4",
+      "--workers", "2"),
+     r"too large: the recorded probes of 2 sweep batch\(es\) running side by side would take 896 GB of memory"),
+])
+def test_a_sweep_is_sized_as_a_whole_before_its_first_batch(tmp_path, args, message):
+    done = cli("sweep", "damped_swing_sweep", *args, "--no-progress", "--out", "s", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert re.search(message, done.stderr), done.stderr
+    assert not (tmp_path / "s").exists()  # nothing laid out, nothing simulated
