@@ -428,3 +428,40 @@ def test_a_sweep_is_sized_as_a_whole_before_its_first_batch(tmp_path, args, mess
     one_line_error(done, 2)
     assert re.search(message, done.stderr), done.stderr
     assert not (tmp_path / "s").exists()  # nothing laid out, nothing simulated
+
+
+def test_probe_rows_out_of_time_order_are_refused_by_name(tmp_path):
+    # Same rows, same bytes, reordered: a period read from them would be wrong.
+    wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.3", "release.settle_time_s=0.1"]), out=tmp_path / "r")
+    lines = (tmp_path / "r" / "probes.csv").read_text().splitlines()
+    lines[7:10] = [lines[8], lines[9], lines[7]]  # three rows rotated
+    (tmp_path / "r" / "probes.csv").write_text("\n".join(lines) + "\n")
+    done = cli("analyse", "r", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert "probes.csv, line 10: t = 0.01 s of variant 0 comes after t = 0.01333 s (line 9): the rows are out of " \
+           "time order" in done.stderr
+
+
+def test_frame_times_out_of_order_are_refused(tmp_path):
+    out = tmp_path / "r"
+    wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.2", "release.settle_time_s=0.1"]), out=out)
+    times = np.load(out / "frame_times.npy")
+    times[[2, 3]] = times[[3, 2]]
+    np.save(out / "frame_times.npy", times)
+    with pytest.raises(wc.DataFileError, match=r"frame_times.npy: frame 3 at t = 0.03333 s does not come after "
+                       r"frame 2 at 0.05 s"):
+        load_recording(out)
+
+
+def test_sweep_probes_out_of_time_order_are_refused(tmp_path):
+    import pandas as pd
+
+    done = cli("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=2", "--set", "run.duration_s=0.2",
+               "--frames", "--no-progress", "--out", "s", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    batch = sorted((tmp_path / "s" / "probes").glob("*.parquet"))[0]
+    table = pd.read_parquet(batch)
+    table.iloc[[4, 5]] = table.iloc[[5, 4]].to_numpy()
+    table.to_parquet(batch, index=False)
+    with pytest.raises(wc.DataFileError, match=rf"{batch.name}: t = .* s of variant 0 comes after .* \(row 5\)"):
+        load_recording(tmp_path / "s")

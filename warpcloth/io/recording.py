@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import DataFileError, OptionError
 from warpcloth.scene import COORDINATES, Scene, batch_fields, choice_fields, rest_positions
 
 
@@ -208,3 +208,19 @@ def select_variants(parameters: pd.DataFrame, variants: str | None, where: str |
     if where:
         chosen = np.intersect1d(chosen, filter_variants(parameters.iloc[chosen], where))
     return chosen
+
+
+def check_time_order(path: Path, t: np.ndarray, variant: np.ndarray, line_offset: int | None = None) -> None:
+    """Refuse stored probe rows whose times do not increase within each variant (rows
+    reordered after the run: same counts and sizes, but every period read from them
+    would be wrong). ``line_offset`` turns a row index into the file's line (None: a file
+    without lines, e.g. Parquet, where the row is named instead)."""
+    order = np.argsort(variant, kind="stable")
+    same = variant[order][1:] == variant[order][:-1]
+    back = np.flatnonzero(same & ~(np.diff(t[order]) > 0))  # NaN is out of order too
+    if len(back):
+        row, before = int(order[back[0] + 1]), int(order[back[0]])
+        where = f"row {before + 1}" if line_offset is None else f"line {before + line_offset}"
+        raise DataFileError(path, f"t = {t[row]:.10g} s of variant {variant[row]} comes after t = {t[before]:.10g} s "
+                            f"({where}): the rows are out of time order, so the file was changed after it was "
+                            "written", None if line_offset is None else row + line_offset)

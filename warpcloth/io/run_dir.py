@@ -42,7 +42,7 @@ from warpcloth.sim.resources import check_disk
 from .atomic import naming, write_npy_atomically, write_text_atomically
 from .json_file import read_json
 from .provenance import provenance
-from .recording import Recording, per_strip_parameters, select_variants
+from .recording import Recording, check_time_order, per_strip_parameters, select_variants
 from .writing import WRITING, hold, live_writer, release
 
 PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
@@ -260,6 +260,7 @@ def read_probes(path: Path, meta: dict) -> pd.DataFrame:
         raise DataFileError(file, f"holds {len(numbers)} rows but meta.json records {committed['probe_rows']} for "
                             "the complete run")
     numbers["variant"] = numbers["variant"].astype(int)
+    check_time_order(file, numbers["t"].to_numpy(), numbers["variant"].to_numpy(), line_offset=2)
     return numbers
 
 
@@ -315,6 +316,11 @@ def read_run(path: Path, variants: str | None = None, where: str | None = None) 
                             f"{expected} ({reached} committed): the run directory is damaged")
     frames = np.asarray(stored[:reached, chosen])
     times = np.load(path / "frame_times.npy")[:reached]
+    if np.any(~(np.diff(times) > 0)):
+        first = int(np.argmax(~(np.diff(times) > 0)))
+        raise DataFileError(path / "frame_times.npy", f"frame {first + 1} at t = {times[first + 1]:.10g} s does not "
+                            f"come after frame {first} at {times[first]:.10g} s: the frame times are out of order, "
+                            "so the run directory is damaged")
     probes = read_probes(path, meta)
     return Recording(path, chosen, [scenes[i] for i in chosen], times, frames, probes[probes["variant"].isin(chosen)],
                      parameters.iloc[chosen].reset_index(drop=True), bool(meta["complete"]))
