@@ -465,3 +465,19 @@ def test_sweep_probes_out_of_time_order_are_refused(tmp_path):
     table.to_parquet(batch, index=False)
     with pytest.raises(wc.DataFileError, match=rf"{batch.name}: t = .* s of variant 0 comes after .* \(row 5\)"):
         load_recording(tmp_path / "s")
+
+
+@pytest.mark.parametrize("header, rows, message", [
+    ("t_s,x [yd]", "0,1\n0.1,2\n", "column 2 is headed 'x [yd]': 'yd' is not a length unit"),
+    ("t_s,displacement_thou", "0,1\n0.1,2\n", "column 2 is headed 'displacement_thou': 'thou' is not a length unit"),
+    ("t (fortnight),x_mm", "0,1\n0.1,2\n", "column 1 is headed 't (fortnight)': 'fortnight' is not a time unit"),
+    ("t_s,theta_grads", "0,0\n0.1,2\n", "column 2 is headed 'theta_grads': 'grads' is not an angle unit"),
+    ("frame,t_s,s_parsec,x_mm,y_mm", "0,0,10,1,2\n1,0.1,10,1,2\n",
+     "column 3 is headed 's_parsec': 'parsec' is not a length unit"),
+])
+def test_a_unit_the_header_states_is_refused_unless_known(tmp_path, header, rows, message):
+    (tmp_path / "m.csv").write_text(f"{header}\n{rows}")
+    done = cli("analyse", "m.csv", cwd=tmp_path) if "theta" not in header else cli(
+        "clamp", "fit-angle", "m.csv", "--scene", "impulsive_rotation", "-o", "c.toml", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert f"m.csv, line 1: {message}" in done.stderr and not (tmp_path / "c.toml").exists()

@@ -17,7 +17,9 @@ clamp encoder      ``t, theta``                s, rad (``angle_unit`` overrides 
 underscore or in brackets (``t_ms``, ``x_m``, ``theta_deg``, ``time [ms]``, ``x (cm)``;
 :data:`warpcloth.units.MEASURED_UNITS` lists them); a name without one (``t``, ``x``)
 takes the form's unit above; a unit that is not one of the column's quantity (``x_s``,
-``t_in``) is an error naming the file, line and column. Columns beyond those a form has
+``t_in``, ``x [furlong]``, ``x_furlong``) is an error naming the file, line and column:
+whatever is in brackets at the end of a name is its unit, and so is what follows its last
+underscore unless that is a name word (``laser_x``, ``x_tip``: :data:`NAME_WORDS`). Columns beyond those a form has
 are ignored. Anything wrong in a file is a
 DataFileError naming the file (and the line, where one is to blame); a file that cannot
 be read at all is an OptionError of the option (``flag``) that named it.
@@ -57,18 +59,34 @@ def read_table(path: str | Path, n_columns: int | None, what: str, flag: str,
 
 _QUANTITY = {"t_s": ("time", "s"), "x_mm": ("length", "mm"), "y_mm": ("length", "mm"), "s_mm": ("length", "mm"),
              "theta": ("angle", "rad"), "frame": (None, None)}
-_UNIT = re.compile(r"(?:_|\s*[\[(]\s*)([A-Za-zµ]+)\s*[\])]?\s*$")
+_BRACKETED = re.compile(r"\s*[\[(]\s*([^\[\]()]*?)\s*[\])]\s*$")
+_SUFFIX = re.compile(r"_([A-Za-zµ%]+)\s*$")
 
 
-UNIT_WORDS = {u.lower() for units_of in units.MEASURED_UNITS.values() for u in units_of} | {
-    "min", "h", "hr", "ns", "ps", "km", "dm", "nm", "in", "inch", "ft", "grad", "gon", "rev", "turn", "turns",
-    "degree", "degrees", "radian", "radians", "sec", "msec", "usec"}
-"""Header endings read as a unit (those warpcloth converts, and common ones it refuses)."""
+NAME_WORDS = {"t", "time", "x", "y", "s", "theta", "angle", "phi", "frame", "tip", "laser", "marker", "encoder",
+              "clamp", "pos", "position", "disp", "displacement", "arc", "raw"}
+"""Words that may end a column's name after an underscore without being a unit
+(``laser_x``, ``tip_x``, ``x_tip``); any other ending after an underscore is read as a
+unit, and refused unless it is one of the column's quantity."""
+
+
+def stated_unit(name: str) -> str | None:
+    """The unit a header name states: in brackets at its end (``time [ms]``, ``x (cm)``:
+    whatever is written there), or after its last underscore (``t_ms``, ``x_furlong``)
+    unless that ending is a name (:data:`NAME_WORDS`); None when it states none."""
+    bracketed = _BRACKETED.search(name)
+    if bracketed is not None:
+        return bracketed.group(1)
+    suffix = _SUFFIX.search(name)
+    if suffix is None or suffix.group(1).lower() in NAME_WORDS:
+        return None
+    return suffix.group(1)
 
 
 def header_unit(table: Table, column: int, role: str) -> float:
     """Factor to SI of ``column`` (0-based) for its ``role`` (a name of the form, e.g.
-    ``x_mm``), from the unit its header names, else the role's own unit."""
+    ``x_mm``), from the unit its header names, else the role's own unit. A stated unit
+    that is not one of the role's quantity (``x [furlong]``, ``t_in``) is refused."""
     quantity, default = _QUANTITY[role]
     if quantity is None:
         return 1.0
@@ -76,16 +94,14 @@ def header_unit(table: Table, column: int, role: str) -> float:
     if not table.header or column >= len(table.header):
         return known[default]
     name = table.header[column]
-    match = _UNIT.search(name)
-    if match is None:
+    unit = stated_unit(name)
+    if unit is None:
         return known[default]
-    unit = match.group(1)
-    if unit.lower() not in UNIT_WORDS:
-        return known[default]  # "laser_x", "tip_x": the end of a name, not a unit
     if unit not in known and unit.lower() not in known:
-        raise DataFileError(table.path, f"column {column + 1} is headed {name!r}: {unit!r} is not a {quantity} "
-                            f"unit (known: {', '.join(known)}); write e.g. {role.split('_')[0]}_{default}, or a "
-                            f"name without a unit for {default}", table.header_line)
+        raise DataFileError(table.path, f"column {column + 1} is headed {name!r}: {unit!r} is not "
+                            f"{'an' if quantity == 'angle' else 'a'} {quantity} unit (known: {', '.join(known)}); "
+                            f"write e.g. {role.split('_')[0]}_{default}, or a name without a unit for {default}",
+                            table.header_line)
     return known.get(unit, known.get(unit.lower()))
 
 
@@ -175,8 +191,7 @@ def is_angle_column(table: Table, column: int) -> bool:
     if not table.header or column >= len(table.header):
         return False
     name = table.header[column]
-    unit = _UNIT.search(name)
-    return bool(_ANGLE_NAME.match(name)) or (unit is not None and unit.group(1) in units.MEASURED_UNITS["angle"])
+    return bool(_ANGLE_NAME.match(name)) or stated_unit(name) in units.MEASURED_UNITS["angle"]
 
 
 def read_encoder(path: str | Path, angle_unit: str | None = None,
@@ -193,8 +208,8 @@ def _clamp_angle(table: Table, angle_unit: str | None = None) -> ClampAngleTrace
     data = _scaled(table, _ENCODER)
     _increasing(table, data[:, 0])
     if angle_unit is not None:
-        said = _UNIT.search(table.header[1]) if table.header and len(table.header) > 1 else None
-        if said and said.group(1).lower() in units.MEASURED_UNITS["angle"] and said.group(1).lower() != angle_unit:
+        said = (stated_unit(table.header[1]) or "").lower() if table.header and len(table.header) > 1 else ""
+        if said in units.MEASURED_UNITS["angle"] and said != angle_unit:
             raise OptionError("--angle-unit", f"{angle_unit} contradicts the header of {table.path}, whose column 2 "
                               f"is {table.header[1]!r}; drop --angle-unit or fix the header")
         data[:, 1] = table.values[:, 1] * units.MEASURED_UNITS["angle"][angle_unit]
