@@ -481,3 +481,52 @@ def test_a_unit_the_header_states_is_refused_unless_known(tmp_path, header, rows
         "clamp", "fit-angle", "m.csv", "--scene", "impulsive_rotation", "-o", "c.toml", cwd=tmp_path)
     one_line_error(done, 2)
     assert f"m.csv, line 1: {message}" in done.stderr and not (tmp_path / "c.toml").exists()
+
+
+@pytest.fixture(scope="module")
+def short_result():
+    return wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.05", "release.settle_time_s=0.1"]))
+
+
+@pytest.mark.parametrize("keywords, error, message", [
+    ({"initial_positions": np.zeros((24, 1, 2))}, wc.OptionError,
+     r"initial_positions: has shape \(24, 1, 2\); expected \(25, 1, 2\)"),
+    ({"initial_positions": np.full((25, 1, 2), np.inf)}, wc.OptionError,
+     r"initial_positions: \[0, 0, 0\] is inf; every value must be finite"),
+    ({"initial_positions": [["a"]]}, TypeError, r"initial_positions must be an array of numbers"),
+    ({"initial_velocities": np.zeros((25, 1, 2))}, wc.OptionError, "initial_velocities: given without "
+                                                                   "initial_positions"),
+])
+def test_simulate_names_a_wrong_start_instead_of_diverging(keywords, error, message):
+    with pytest.raises(error, match=message):
+        wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.05"]), **keywords)
+
+
+@pytest.mark.parametrize("call, error, message", [
+    (lambda r: r.probe("tip_x", variant=-2), wc.OptionError, r"variant: -2 is not one of the 1 variants \(0 to 0\)"),
+    (lambda r: r.probe("tip_x", variant=1), wc.OptionError, "variant: 1 is not one of the 1 variants"),
+    (lambda r: r.probe("tip_x", variant=0.0), TypeError, "variant must be an integer index"),
+    (lambda r: r.probe("tip_z"), wc.OptionError, "name: 'tip_z' is not a probe; the probes are tip_x, tip_y"),
+])
+def test_a_result_refuses_an_index_or_name_it_does_not_have(short_result, call, error, message):
+    with pytest.raises(error, match=message):
+        call(short_result)
+
+
+@pytest.mark.parametrize("n_strips, n_variants, message", [
+    (1, 2, "meta.json: n_variants is 2, but the run directory holds one scene.toml"),
+    (2, 1, r"meta.json: n_variants is 1, but the run directory holds 2 variant scene\(s\) in variants/"),
+    (2, 3, r"meta.json: n_variants is 3, but the run directory holds 2 variant scene\(s\) in variants/"),
+])
+def test_a_damaged_run_directory_names_the_file_that_is_wrong(tmp_path, n_strips, n_variants, message):
+    out = tmp_path / "r"
+    wc.simulate([wc.load_scene("damped_swing", ["run.duration_s=0.05", "release.settle_time_s=0.1"])] * n_strips,
+                out=out)
+    with pytest.raises(wc.OptionError, match="a range is START:STOP"):
+        load_recording(out, variants="-1:")
+    meta = json.loads((out / "meta.json").read_text())
+    (out / "meta.json").write_text(json.dumps(meta | {"n_variants": n_variants}))
+    with pytest.raises(wc.DataFileError, match=message):
+        load_recording(out)
+    with pytest.raises(TypeError, match="load_recording takes the path"):
+        load_recording(None)

@@ -288,10 +288,24 @@ def _check_meta(path: Path, meta: dict) -> None:
             raise DataFileError(file, f"{why}: the run directory is damaged")
 
 
+def _check_scene_files(path: Path, n_variants: int) -> None:
+    # the scenes meta.json's n_variants says are there: scene.toml for one, variants/NNNN.toml for more
+    stored = sorted(p.name for p in (path / "variants").glob("*.toml")) if (path / "variants").is_dir() else []
+    if n_variants == 1 and (path / "scene.toml").is_file() and not stored:
+        return
+    if n_variants > 1 and stored == [f"{i:04d}.toml" for i in range(n_variants)]:
+        return
+    held = (f"{len(stored)} variant scene(s) in variants/" if stored else
+            "one scene.toml" if (path / "scene.toml").is_file() else "no scene file")
+    raise DataFileError(path / "meta.json", f"n_variants is {n_variants}, but the run directory holds {held}: "
+                        "meta.json or the directory was changed after the run")
+
+
 def read_run(path: Path, variants: str | None = None, where: str | None = None) -> Recording:
     """Selected variants of a run directory as a Recording (an interrupted run: the frames it reached)."""
     meta = read_json(path / "meta.json")
     _check_meta(path, meta)
+    _check_scene_files(path, meta["n_variants"])
     if meta["n_variants"] == 1:
         scenes = [scene_from_dict(read_scene_file(path / "scene.toml"))]
     else:
