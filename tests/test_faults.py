@@ -530,3 +530,77 @@ def test_a_damaged_run_directory_names_the_file_that_is_wrong(tmp_path, n_strips
         load_recording(out)
     with pytest.raises(TypeError, match="load_recording takes the path"):
         load_recording(None)
+
+
+def fb1_without_unit(tmp_path):
+    """The example KES-FB1 loop (strain in percent) with a header that does not say so."""
+    from warpcloth.io.measured import bundled_data
+
+    rows = bundled_data("kes_fb1_example").read_text().splitlines()[1:]
+    (tmp_path / "fb1.csv").write_text("\n".join(["strain,force_gf_per_cm", *rows]) + "\n")
+    return "fb1.csv"
+
+
+@pytest.mark.parametrize("case, warning", [
+    ("density 0.5", "--density-g-per-cm2: areal density 0.5 g/cm² is outside the plausible 0.001 to 0.2 g/cm²"),
+    ("density 1e-5", "--density-g-per-cm2: areal density 1e-05 g/cm² is outside the plausible 0.001 to 0.2 g/cm²"),
+    ("percent read as fraction", "fb1.csv, column 1 read as fraction: largest tensile strain 6.001 (fraction) is "
+                                 "outside the plausible 0.001 to 1 (fraction)"),
+])
+def test_an_implausible_kes_input_is_named_with_its_range(tmp_path, case, warning):
+    density = case.split()[1] if case.startswith("density") else "0.02"
+    extra = ("--strain-unit", "fraction") if "fraction" in case else ()
+    done = cli("material", "fit-kes", "--tensile", fb1_without_unit(tmp_path), "--bending", "kes_fb2_example",
+               "--density-g-per-cm2", density, *extra, "-o", "m.toml", "--accept", cwd=tmp_path)
+    assert done.returncode == 0 and f"warpcloth material: warning: {warning}" in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr and done.stderr.count("warning:") == 1
+
+
+@pytest.mark.parametrize("text, warning", [
+    ("t,x\n" + "".join(f"{i * 10},{0.02 * np.sin(i / 3):.5f}\n" for i in range(400)),  # ms and metres
+     ["column 1 (headed 't', no unit): record length 3990 s is outside the plausible 0.01 to 3600 s",
+      "column 2 (headed 'x', no unit): largest displacement 0.02 mm is outside the plausible 0.1 to 2000 mm"]),
+    ("".join(f"{i / 100},{30 * np.sin(i / 9):.4f}\n" for i in range(300)),  # millimetres, no header: fine
+     []),
+])
+def test_a_trace_that_looks_like_another_unit_is_named(tmp_path, text, warning):
+    (tmp_path / "trace.csv").write_text(text)
+    done = cli("analyse", "trace.csv", cwd=tmp_path)
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+    assert done.stderr.count("warning:") == len(warning) and all(w in done.stderr for w in warning), done.stderr
+
+
+@pytest.mark.parametrize("overrides, message", [
+    (("output.laser_height_mm=-150",), "output.laser_height_mm: -150 mm is not on the hanging strip, which reaches "
+                                       "from 0 to -100 mm"),
+    (("output.laser_height_mm=5",), "output.laser_height_mm: 5 mm is not on the hanging strip"),
+    (("strip.free_length_mm=60", "release.hold_x_mm=30", "release.hold_y_mm=-40"),
+     "output.laser_height_mm: -80 mm is not on the hanging strip, which reaches from 0 to -60 mm"),
+])
+def test_a_laser_line_off_the_strip_is_refused_before_the_run(tmp_path, overrides, message):
+    done = cli("run", "damped_swing", *(a for o in overrides for a in ("--set", o)), "--out", "r", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert message in done.stderr and not (tmp_path / "r").exists()
+
+
+def test_a_density_out_of_range_in_a_scene_is_warned_about(tmp_path):
+    done = cli("run", "damped_swing", "--set", "material.density_g_per_cm2=3", "--set", "run.duration_s=0.05",
+               "--no-progress", "--out", "r", cwd=tmp_path)
+    assert done.returncode == 0 and done.stderr.count("warning:") == 1, done.stderr
+    assert "material.density_g_per_cm2: areal density 3 g/cm² is outside the plausible 0.001 to 0.2 g/cm²" \
+           in done.stderr
+
+
+@pytest.mark.parametrize("scale", ["1e300", "-1e300"])
+def test_a_kes_fit_that_overflows_writes_no_material_file(tmp_path, scale):
+    from warpcloth.io.measured import bundled_data
+
+    rows = bundled_data("kes_fb1_example").read_text().splitlines()
+    scaled = [f"{r.split(',')[0]},{float(r.split(',')[1]) * float(scale):.6g}" for r in rows[1:]]
+    (tmp_path / "fb1.csv").write_text("\n".join([rows[0], *scaled]) + "\n")
+    done = cli("material", "fit-kes", "--tensile", "fb1.csv", "--bending", "kes_fb2_example", "--density-g-per-cm2",
+               "0.02", "-o", "m.toml", "--accept", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert ("fb1.csv: the fit gave the tensile RMS = inf, not a finite number: no material file is written"
+            if scale == "1e300" else "fb1.csv: no quartic T(ε) rising on [0, 0.25] fits this loop") in done.stderr
+    assert not (tmp_path / "m.toml").exists()

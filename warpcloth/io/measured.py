@@ -35,6 +35,7 @@ import numpy as np
 
 from warpcloth import units
 from warpcloth.errors import DataFileError, OptionError
+from warpcloth.units import check_plausible
 
 from .csv import Table, bundled_data, read_csv, read_text
 
@@ -113,7 +114,17 @@ def _scaled(table: Table, roles: tuple[str, ...]) -> np.ndarray:
     return data
 
 
+def _plausible(table: Table, column: int, quantity: str, value: float, guess: str) -> None:
+    # a column whose header states no unit, read in the form's own: warn when its numbers
+    # look like another unit's (metres or milliseconds without a unit in the header)
+    if table.header and column < len(table.header) and stated_unit(table.header[column]) is not None:
+        return
+    said = f"headed {table.header[column]!r}" if table.header and column < len(table.header) else "without a header"
+    check_plausible(quantity, value, f"{table.path}, column {column + 1} ({said}, no unit)", guess)
+
+
 def _increasing(table: Table, t: np.ndarray) -> None:
+    _plausible(table, 0, "record length", float(t[-1] - t[0]), "milliseconds? head the column t_ms")
     step = np.diff(t)
     if np.any(step <= 0):
         i = int(np.argmax(step <= 0))
@@ -149,6 +160,8 @@ def read_laser_trace(path: str | Path, flag: str = "--measured") -> LaserTrace:
 def _laser_trace(table: Table) -> LaserTrace:
     data = _scaled(table, _LASER)
     _increasing(table, data[:, 0])
+    _plausible(table, 1, "largest displacement", float(np.max(np.abs(data[:, 1]))) / units.LENGTH_MM,
+               "metres? head the column x_m")
     return LaserTrace(data[:, 0], data[:, 1])
 
 
@@ -161,6 +174,7 @@ def read_tracked_shapes(path: str | Path, flag: str = "--measured") -> TrackedSh
 def _tracked_shapes(table: Table) -> TrackedShapes:
     data, lines = _scaled(table, _SHAPES), table.lines
     frame, t = data[:, 0], data[:, 1]
+    _plausible(table, 1, "record length", float(t[-1] - t[0]), "milliseconds? head the column t_ms")
     disordered = (np.diff(frame) < 0) | ((np.diff(frame) > 0) & (np.diff(t) <= 0))
     if np.any(disordered):
         i = int(np.argmax(disordered))
@@ -207,7 +221,10 @@ def read_encoder(path: str | Path, angle_unit: str | None = None,
 def _clamp_angle(table: Table, angle_unit: str | None = None) -> ClampAngleTrace:
     data = _scaled(table, _ENCODER)
     _increasing(table, data[:, 0])
-    if angle_unit is not None:
+    if angle_unit is None:
+        _plausible(table, 1, "largest clamp angle", float(np.max(np.abs(data[:, 1]))),
+                   "degrees? head the column theta_deg, or give --angle-unit deg")
+    else:
         said = (stated_unit(table.header[1]) or "").lower() if table.header and len(table.header) > 1 else ""
         if said in units.MEASURED_UNITS["angle"] and said != angle_unit:
             raise OptionError("--angle-unit", f"{angle_unit} contradicts the header of {table.path}, whose column 2 "

@@ -6,6 +6,7 @@ import math
 
 from warpcloth.errors import SceneError
 from warpcloth.sim.solvers import SOLVERS
+from warpcloth.units import check_plausible
 
 from .materials import to_si, validate_material
 from .schema import ClampSection, Scene
@@ -76,8 +77,18 @@ def check_step(scene: Scene) -> None:
     """Refuse a time step the scene's scheme cannot run stably (docs/model.md §9.3).
 
     Not part of :func:`validate_scene`: a recorded scene is read back as it was run (a
-    diverged run stays readable); this check is for scenes about to run.
+    diverged run stays readable); this check is for scenes about to run. So are two more:
+    a laser line the hanging strip never crosses is refused (its record would be the free
+    end's, not the laser's), and an implausible density is warned about
+    (:func:`warpcloth.units.check_plausible`).
     """
+    st = scene.strip
+    if not -st.free_length_mm < scene.output.laser_height_mm < 0:
+        raise SceneError("output.laser_height_mm", f"{scene.output.laser_height_mm:g} mm is not on the hanging "
+                         f"strip, which reaches from 0 to -{st.free_length_mm:g} mm (strip.free_length_mm): the "
+                         f"laser line would never cross it; put it between -{st.free_length_mm:g} and 0 mm",
+                         related=("strip.free_length_mm",))
+    check_plausible("areal density", scene.material.density_g_per_cm2, "material.density_g_per_cm2")
     dt, scheme = scene.integrator.dt_s, scene.integrator.scheme
     limit = SOLVERS[scheme].step_limit(to_si(scene.material), scene.spacing, scene.n_nodes - scene.n_clamped)
     softening = any(a < 0 for a in scene.material.tensile_gf_per_cm[1:])
