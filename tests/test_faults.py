@@ -7,6 +7,7 @@ committed part reads back exactly, never a torn file that reads as valid.
 """
 
 import json
+import re
 import resource
 import signal
 import subprocess
@@ -304,3 +305,302 @@ def test_figures_are_results_too(tmp_path):
                "--plot", "figure")
     assert done.returncode == 2 and "--plot: figure must be a file ending in .png" in done.stderr
     assert not list(tmp_path.rglob(".*.tmp*"))
+
+
+def cli(*args, cwd, timeout=300):
+    """``warpcloth ARGS`` in a child process, run to its end."""
+    return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=timeout)
+
+
+def one_line_error(done, status):
+    """The child exited ``status`` with exactly one line on stderr and no traceback."""
+    assert done.returncode == status and "Traceback" not in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1, done.stderr
+
+
+@pytest.mark.parametrize("command, delay_s", [
+    (("run", "damped_swing", "--set", "run.duration_s=600", "--out", "r"), 0.1),  # importing the modules
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--out", "f"), 0.7),
+])
+def test_ctrl_c_while_starting_is_exit_130_and_one_line(tmp_path, command, delay_s):
+    # Whether it lands in the imports, Warp's start or the first step of the work, an early
+    # Ctrl-C is exit 130 with one line, never a KeyboardInterrupt traceback.
+    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", *command, "--no-progress"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=interruptible)
+    time.sleep(delay_s)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "Traceback" not in stderr and "interrupted" in stderr, stderr
+    assert len(stderr.strip().splitlines()) == 1, stderr
+
+
+def holding(marker):
+    """A child process that holds ``marker`` as a writer does (until killed)."""
+    proc = subprocess.Popen([sys.executable, "-c", "import sys, time\nfrom warpcloth.io.writing import hold\n"
+                             f"assert hold({str(marker)!r}) is None\nprint('held', flush=True)\ntime.sleep(300)"],
+                            stdout=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "held"
+    return proc
+
+
+@pytest.mark.parametrize("args, result", [
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--out", "f"), "f"),
+    (("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation", "-o", "c.toml"), "c.toml"),
+    (("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example", "--density-g-per-cm2",
+      "0.02", "-o", "m.toml"), "m.toml"),
+    (("export-usd", "r", "-o", "s.usda"), "s.usda"),
+    (("plot", "r", "--out", "figs"), "figs"),
+])
+def test_a_result_another_process_is_writing_is_refused_by_every_command(tmp_path, args, result):
+    if "r" in args:
+        wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.1", "release.settle_time_s=0.1"]),
+                    out=tmp_path / "r")
+    from warpcloth.io.writing import marker_of
+
+    writer = holding(marker_of(tmp_path / result))
+    try:
+        done = cli(*args, cwd=tmp_path)
+    finally:
+        writer.kill()
+        writer.wait()
+    one_line_error(done, 2)
+    assert f"{result} is being written by another warpcloth process (pid {writer.pid})" in done.stderr
+    assert not (tmp_path / result).exists()
+    # the marker a killed writer leaves holds nothing: the same command now writes its result
+    assert marker_of(tmp_path / result).exists()
+    if args[0] == "material":
+        assert cli(*args, cwd=tmp_path).returncode == 0 and (tmp_path / result).is_file()
+
+
+def test_two_material_fits_into_one_new_file_never_replace_each_other(tmp_path):
+    args = [sys.executable, "-m", "warpcloth.cli", "material", "fit-kes", "--tensile", "kes_fb1_example", "--bending",
+            "kes_fb2_example", "--density-g-per-cm2", "0.02", "-o", "m.toml"]
+    procs = [subprocess.Popen([*args, "--name", name], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True) for name in ("first", "second")]
+    outcomes = [(p.wait(timeout=300), p.communicate()[1]) for p in procs]
+    assert sorted(code for code, _ in outcomes) == [0, 2], outcomes
+    refused = next(err for code, err in outcomes if code == 2)
+    assert "is being written by another warpcloth process" in refused or "already exists" in refused, refused
+    winner = ("first", "second")[[code for code, _ in outcomes].index(0)]
+    assert f'name = "{winner}"' in (tmp_path / "m.toml").read_text()
+
+
+@pytest.mark.parametrize("args, message", [
+    (("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=30000000", "--max-variants", "100000000000"),
+     "too large: the sweep's 30000000 variant scenes would take 600 GB of memory"),
+    (("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=2e10"), "the sweep has 20000000000 variants"),
+    (("run", "damped_swing", "--set", "strip.clamp_length_mm=1e300"), "are 2e+299 nodes, more than 2147483647"),
+    (("run", "damped_swing", "--set", "strip.spacing_mm=1e-6", "--set", "strip.free_length_mm=1e5"),
+     "are 1e+11 nodes, more than 2147483647"),
+    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--bootstrap", str(10**15)),
+     f"too large: --bootstrap {10**15}: the resamples would take"),
+])
+def test_sizes_are_checked_in_closed_form_before_anything_is_allocated(tmp_path, args, message):
+    started = time.monotonic()
+    done = cli(*args, "--out", "o", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert message in done.stderr and not (tmp_path / "o").exists()
+    assert time.monotonic() - started < 60  # refused at once, not after a sampler or a fit
+
+
+def test_a_size_beyond_a_float_is_written_without_overflowing():
+    from warpcloth.sim.resources import check_memory, size_text
+
+    assert size_text(10**400) == "1.00e+388 TB" and size_text(3 * 10**12) == "3 TB"
+    with pytest.raises(wc.ResourceError, match=r"x would take 1.00e\+388 TB of memory"):
+        check_memory(10**400, "x", "y")
+
+
+@pytest.mark.parametrize("args, message", [
+    # 3000 variants × 0.6 GB of probes and frames: ~2 TB, though one batch of one fits memory and disk
+    (("--set", "run.duration_s=20000", "--set", "output.probes_per_frame=1", "--set", "sweep.random.samples=3000",
+      "--frames", "--workers", "1", "--max-batch", "1"),
+     r"too large: the probes and frames of the sweep's 3000 remaining variants would write [0-9.]+ TB to .*s, "
+     r"whose file system has"),
+    # four strips of ~450 GB of results each
+    (("--set", "run.duration_s=20000", "--set", "output.probes_per_frame=1666", "--set", "sweep.random.samples=4",
+      "--workers", "2"),
+     r"too large: the recorded probes of 2 sweep batch\(es\) running side by side would take 896 GB of memory"),
+])
+def test_a_sweep_is_sized_as_a_whole_before_its_first_batch(tmp_path, args, message):
+    done = cli("sweep", "damped_swing_sweep", *args, "--no-progress", "--out", "s", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert re.search(message, done.stderr), done.stderr
+    assert not (tmp_path / "s").exists()  # nothing laid out, nothing simulated
+
+
+def test_probe_rows_out_of_time_order_are_refused_by_name(tmp_path):
+    # Same rows, same bytes, reordered: a period read from them would be wrong.
+    wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.3", "release.settle_time_s=0.1"]), out=tmp_path / "r")
+    lines = (tmp_path / "r" / "probes.csv").read_text().splitlines()
+    lines[7:10] = [lines[8], lines[9], lines[7]]  # three rows rotated
+    (tmp_path / "r" / "probes.csv").write_text("\n".join(lines) + "\n")
+    done = cli("analyse", "r", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert "probes.csv, line 10: t = 0.01 s of variant 0 comes after t = 0.01333 s (line 9): the rows are out of " \
+           "time order" in done.stderr
+
+
+def test_frame_times_out_of_order_are_refused(tmp_path):
+    out = tmp_path / "r"
+    wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.2", "release.settle_time_s=0.1"]), out=out)
+    times = np.load(out / "frame_times.npy")
+    times[[2, 3]] = times[[3, 2]]
+    np.save(out / "frame_times.npy", times)
+    with pytest.raises(wc.DataFileError, match=r"frame_times.npy: frame 3 at t = 0.03333 s does not come after "
+                       r"frame 2 at 0.05 s"):
+        load_recording(out)
+
+
+def test_sweep_probes_out_of_time_order_are_refused(tmp_path):
+    import pandas as pd
+
+    done = cli("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=2", "--set", "run.duration_s=0.2",
+               "--frames", "--no-progress", "--out", "s", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    batch = sorted((tmp_path / "s" / "probes").glob("*.parquet"))[0]
+    table = pd.read_parquet(batch)
+    table.iloc[[4, 5]] = table.iloc[[5, 4]].to_numpy()
+    table.to_parquet(batch, index=False)
+    with pytest.raises(wc.DataFileError, match=rf"{batch.name}: t = .* s of variant 0 comes after .* \(row 5\)"):
+        load_recording(tmp_path / "s")
+
+
+@pytest.mark.parametrize("header, rows, message", [
+    ("t_s,x [yd]", "0,1\n0.1,2\n", "column 2 is headed 'x [yd]': 'yd' is not a length unit"),
+    ("t_s,displacement_thou", "0,1\n0.1,2\n", "column 2 is headed 'displacement_thou': 'thou' is not a length unit"),
+    ("t (fortnight),x_mm", "0,1\n0.1,2\n", "column 1 is headed 't (fortnight)': 'fortnight' is not a time unit"),
+    ("t_s,theta_grads", "0,0\n0.1,2\n", "column 2 is headed 'theta_grads': 'grads' is not an angle unit"),
+    ("frame,t_s,s_parsec,x_mm,y_mm", "0,0,10,1,2\n1,0.1,10,1,2\n",
+     "column 3 is headed 's_parsec': 'parsec' is not a length unit"),
+])
+def test_a_unit_the_header_states_is_refused_unless_known(tmp_path, header, rows, message):
+    (tmp_path / "m.csv").write_text(f"{header}\n{rows}")
+    done = cli("analyse", "m.csv", cwd=tmp_path) if "theta" not in header else cli(
+        "clamp", "fit-angle", "m.csv", "--scene", "impulsive_rotation", "-o", "c.toml", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert f"m.csv, line 1: {message}" in done.stderr and not (tmp_path / "c.toml").exists()
+
+
+@pytest.fixture(scope="module")
+def short_result():
+    return wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.05", "release.settle_time_s=0.1"]))
+
+
+@pytest.mark.parametrize("keywords, error, message", [
+    ({"initial_positions": np.zeros((24, 1, 2))}, wc.OptionError,
+     r"initial_positions: has shape \(24, 1, 2\); expected \(25, 1, 2\)"),
+    ({"initial_positions": np.full((25, 1, 2), np.inf)}, wc.OptionError,
+     r"initial_positions: \[0, 0, 0\] is inf; every value must be finite"),
+    ({"initial_positions": [["a"]]}, TypeError, r"initial_positions must be an array of numbers"),
+    ({"initial_velocities": np.zeros((25, 1, 2))}, wc.OptionError, "initial_velocities: given without "
+                                                                   "initial_positions"),
+])
+def test_simulate_names_a_wrong_start_instead_of_diverging(keywords, error, message):
+    with pytest.raises(error, match=message):
+        wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.05"]), **keywords)
+
+
+@pytest.mark.parametrize("call, error, message", [
+    (lambda r: r.probe("tip_x", variant=-2), wc.OptionError, r"variant: -2 is not one of the 1 variants \(0 to 0\)"),
+    (lambda r: r.probe("tip_x", variant=1), wc.OptionError, "variant: 1 is not one of the 1 variants"),
+    (lambda r: r.probe("tip_x", variant=0.0), TypeError, "variant must be an integer index"),
+    (lambda r: r.probe("tip_z"), wc.OptionError, "name: 'tip_z' is not a probe; the probes are tip_x, tip_y"),
+])
+def test_a_result_refuses_an_index_or_name_it_does_not_have(short_result, call, error, message):
+    with pytest.raises(error, match=message):
+        call(short_result)
+
+
+@pytest.mark.parametrize("n_strips, n_variants, message", [
+    (1, 2, "meta.json: n_variants is 2, but the run directory holds one scene.toml"),
+    (2, 1, r"meta.json: n_variants is 1, but the run directory holds 2 variant scene\(s\) in variants/"),
+    (2, 3, r"meta.json: n_variants is 3, but the run directory holds 2 variant scene\(s\) in variants/"),
+])
+def test_a_damaged_run_directory_names_the_file_that_is_wrong(tmp_path, n_strips, n_variants, message):
+    out = tmp_path / "r"
+    wc.simulate([wc.load_scene("damped_swing", ["run.duration_s=0.05", "release.settle_time_s=0.1"])] * n_strips,
+                out=out)
+    with pytest.raises(wc.OptionError, match="a range is START:STOP"):
+        load_recording(out, variants="-1:")
+    meta = json.loads((out / "meta.json").read_text())
+    (out / "meta.json").write_text(json.dumps(meta | {"n_variants": n_variants}))
+    with pytest.raises(wc.DataFileError, match=message):
+        load_recording(out)
+    with pytest.raises(TypeError, match="load_recording takes the path"):
+        load_recording(None)
+
+
+def fb1_without_unit(tmp_path):
+    """The example KES-FB1 loop (strain in percent) with a header that does not say so."""
+    from warpcloth.io.measured import bundled_data
+
+    rows = bundled_data("kes_fb1_example").read_text().splitlines()[1:]
+    (tmp_path / "fb1.csv").write_text("\n".join(["strain,force_gf_per_cm", *rows]) + "\n")
+    return "fb1.csv"
+
+
+@pytest.mark.parametrize("case, warning", [
+    ("density 0.5", "--density-g-per-cm2: areal density 0.5 g/cm² is outside the plausible 0.001 to 0.2 g/cm²"),
+    ("density 1e-5", "--density-g-per-cm2: areal density 1e-05 g/cm² is outside the plausible 0.001 to 0.2 g/cm²"),
+    ("percent read as fraction", "fb1.csv, column 1 read as fraction: largest tensile strain 6.001 (fraction) is "
+                                 "outside the plausible 0.001 to 1 (fraction)"),
+])
+def test_an_implausible_kes_input_is_named_with_its_range(tmp_path, case, warning):
+    density = case.split()[1] if case.startswith("density") else "0.02"
+    extra = ("--strain-unit", "fraction") if "fraction" in case else ()
+    done = cli("material", "fit-kes", "--tensile", fb1_without_unit(tmp_path), "--bending", "kes_fb2_example",
+               "--density-g-per-cm2", density, *extra, "-o", "m.toml", "--accept", cwd=tmp_path)
+    assert done.returncode == 0 and f"warpcloth material: warning: {warning}" in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr and done.stderr.count("warning:") == 1
+
+
+@pytest.mark.parametrize("text, warning", [
+    ("t,x\n" + "".join(f"{i * 10},{0.02 * np.sin(i / 3):.5f}\n" for i in range(400)),  # ms and metres
+     ["column 1 (headed 't', no unit): record length 3990 s is outside the plausible 0.01 to 3600 s",
+      "column 2 (headed 'x', no unit): largest displacement 0.02 mm is outside the plausible 0.1 to 2000 mm"]),
+    ("".join(f"{i / 100},{30 * np.sin(i / 9):.4f}\n" for i in range(300)),  # millimetres, no header: fine
+     []),
+])
+def test_a_trace_that_looks_like_another_unit_is_named(tmp_path, text, warning):
+    (tmp_path / "trace.csv").write_text(text)
+    done = cli("analyse", "trace.csv", cwd=tmp_path)
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+    assert done.stderr.count("warning:") == len(warning) and all(w in done.stderr for w in warning), done.stderr
+
+
+@pytest.mark.parametrize("overrides, message", [
+    (("output.laser_height_mm=-150",), "output.laser_height_mm: -150 mm is not on the hanging strip, which reaches "
+                                       "from 0 to -100 mm"),
+    (("output.laser_height_mm=5",), "output.laser_height_mm: 5 mm is not on the hanging strip"),
+    (("strip.free_length_mm=60", "release.hold_x_mm=30", "release.hold_y_mm=-40"),
+     "output.laser_height_mm: -80 mm is not on the hanging strip, which reaches from 0 to -60 mm"),
+])
+def test_a_laser_line_off_the_strip_is_refused_before_the_run(tmp_path, overrides, message):
+    done = cli("run", "damped_swing", *(a for o in overrides for a in ("--set", o)), "--out", "r", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert message in done.stderr and not (tmp_path / "r").exists()
+
+
+def test_a_density_out_of_range_in_a_scene_is_warned_about(tmp_path):
+    done = cli("run", "damped_swing", "--set", "material.density_g_per_cm2=3", "--set", "run.duration_s=0.05",
+               "--no-progress", "--out", "r", cwd=tmp_path)
+    assert done.returncode == 0 and done.stderr.count("warning:") == 1, done.stderr
+    assert "material.density_g_per_cm2: areal density 3 g/cm² is outside the plausible 0.001 to 0.2 g/cm²" \
+           in done.stderr
+
+
+@pytest.mark.parametrize("scale", ["1e300", "-1e300"])
+def test_a_kes_fit_that_overflows_writes_no_material_file(tmp_path, scale):
+    from warpcloth.io.measured import bundled_data
+
+    rows = bundled_data("kes_fb1_example").read_text().splitlines()
+    scaled = [f"{r.split(',')[0]},{float(r.split(',')[1]) * float(scale):.6g}" for r in rows[1:]]
+    (tmp_path / "fb1.csv").write_text("\n".join([rows[0], *scaled]) + "\n")
+    done = cli("material", "fit-kes", "--tensile", "fb1.csv", "--bending", "kes_fb2_example", "--density-g-per-cm2",
+               "0.02", "-o", "m.toml", "--accept", cwd=tmp_path)
+    one_line_error(done, 2)
+    assert ("fb1.csv: the fit gave the tensile RMS = inf, not a finite number: no material file is written"
+            if scale == "1e300" else "fb1.csv: no quartic T(ε) rising on [0, 0.25] fits this loop") in done.stderr
+    assert not (tmp_path / "m.toml").exists()

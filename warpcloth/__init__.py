@@ -9,23 +9,57 @@ Evaluation Experiments in Vacuum", as written up in docs/model.md. Typical use::
 
 The namespaces :mod:`warpcloth.sim` (the SI simulation core), :mod:`warpcloth.scene`,
 :mod:`warpcloth.calibrate`, :mod:`warpcloth.viz` and :mod:`warpcloth.io` hold the rest.
+
+The names below are imported when first used (PEP 562), so ``import warpcloth.cli``
+costs no Warp, NumPy or pandas start: the command installs its Ctrl-C handling before
+those heavy imports, and an interrupt while they load exits 130 with one line.
 """
 
-from . import calibrate, io, scene, sim, viz
-from .errors import DataFileError, DivergenceError, OptionError, ResourceError, SceneError, WarpclothError
-from .io.load import load_recording
-from .io.recording import Recording
-from .metrics import first_period
-from .runs import run, simulate
-from .scene import Scene, Sweep, bundled_scenes, expand, load_scene, load_sweep, scene_from_dict
-from .sim import RunResult
-from .sweeps import run_sweep
-from .viz.usd import export_usd
+from __future__ import annotations
+
+import importlib
+
+from .errors import (
+    DataFileError,
+    DivergenceError,
+    OptionError,
+    PlausibilityWarning,
+    ResourceError,
+    SceneError,
+    WarpclothError,
+)
+
+_SUBMODULES = ("calibrate", "io", "scene", "sim", "viz")
+_LAZY = {
+    "load_recording": "io.load", "Recording": "io.recording", "first_period": "metrics", "run": "runs",
+    "simulate": "runs", "Scene": "scene", "Sweep": "scene", "bundled_scenes": "scene", "expand": "scene",
+    "load_scene": "scene", "load_sweep": "scene", "scene_from_dict": "scene", "RunResult": "sim",
+    "run_sweep": "sweeps", "export_usd": "viz.usd",
+}
+"""Public name → the module (below warpcloth) that defines it."""
+
+
+def __getattr__(name: str) -> object:
+    """Import a public name's module on first use (see the module docstring)."""
+    if name in _SUBMODULES:
+        return importlib.import_module(f".{name}", __name__)
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'warpcloth' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    """The public names, imported or not."""
+    return sorted(set(globals()) | set(__all__))
+
 
 __all__ = [
     "DataFileError",
     "DivergenceError",
     "OptionError",
+    "PlausibilityWarning",
     "ResourceError",
     "Recording",
     "RunResult",

@@ -65,3 +65,22 @@ class DivergenceError(WarpclothError, RuntimeError):
         self.diverged = diverged
         self.result = result
         super().__init__(message)
+
+
+class PlausibilityWarning(UserWarning):
+    """A finite input outside the range a fabric strip or its measurement plausibly has
+    (:data:`warpcloth.units.PLAUSIBLE`): it is used as given, and the warning names the
+    value and the range. The command line prints it as one line."""
+
+
+def checked_index(argument: str, value: object, count: int, what: str) -> int:
+    """``value`` as an index of one of ``count`` ``what`` (0 … count − 1), or a TypeError /
+    OptionError naming ``argument``, the value and what is expected. A negative index is
+    refused, as the command line refuses ``--variants -1``: it would pick from the end."""
+    import numbers
+
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{argument} must be an integer index of the {count} {what}, got {value!r}")
+    if not 0 <= value < count:
+        raise OptionError(argument, f"{value} is not one of the {count} {what} (0 to {count - 1})")
+    return int(value)

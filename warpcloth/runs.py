@@ -7,12 +7,14 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import OptionError
 from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
 from .scene import COORDINATES, Scene, build_batch, load_scene
 from .scene.overrides import Overrides, override_pairs
 from .sim import RunResult, simulate_batch
 from .sim.runner import check_divergence_policy, check_recording_fits
+from .sim.state import checked_nodes
 
 
 def simulate(
@@ -46,6 +48,12 @@ def simulate(
         raise TypeError(f"simulate takes Scene objects (wc.load_scene(name_or_path) makes one), got {wrong!r}"
                         if scenes else "simulate needs at least one scene")
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
+    if initial_velocities is not None and initial_positions is None:
+        raise OptionError("initial_velocities", "given without initial_positions; give the start's positions too "
+                          "(e.g. the rest shape, warpcloth.scene.rest_positions)")
+    for argument, value in (("initial_positions", initial_positions), ("initial_velocities", initial_velocities)):
+        if value is not None:
+            checked_nodes(argument, value, scenes[0].n_nodes, len(scenes))
     if out is not None:
         check_output_directory(out, overwrite)
     batch = build_batch(scenes, device)

@@ -21,11 +21,13 @@ from tqdm import tqdm
 
 from warpcloth.errors import OptionError
 from warpcloth.io.sweep_dir import SweepDirectory
+from warpcloth.io.writing import claim_result
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.metrics import swing_summary
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, Sweep, scene_from_dict
 from warpcloth.sim.model import init_warp_quietly
+from warpcloth.sim.resources import check_disk, check_memory
 
 WORKER_MEMORY_BYTES = 1 << 30  # per-batch result memory a worker may hold
 MAX_WORKERS_PER_CORE = 4
@@ -35,16 +37,52 @@ SUMMARY_SCALARS = ("first_period_s", "first_amplitude_m", "mean_log_decrement", 
                    "diverged_time_s", "diverged_phase", "diverged_quantity")
 
 
+def _recorded(scene: Scene) -> tuple[int, int]:
+    # probe samples and shape frames of one strip's record, as Python integers
+    return (int(scene.run.duration_s / scene.output_interval) + 1,
+            int(scene.run.duration_s * scene.output.frame_rate_hz) + 1)
+
+
+def strip_memory_bytes(scene: Scene, frames: bool) -> int:
+    """Memory one strip's recorded results take while its batch runs (probes and frames
+    twice: as recorded and as written)."""
+    n_samples, n_frames = _recorded(scene)
+    return 8 * len(PROBE_FIELDS) * n_samples * 2 + 16 * 8 * scene.n_nodes + (
+        16 * scene.n_nodes * n_frames * 2 if frames else 0)
+
+
+def strip_disk_bytes(scene: Scene, frames: bool) -> int:
+    """Bytes one strip's files take in the sweep directory: its probe rows (variant, t
+    and the probes, uncompressed) and, with ``frames``, its shape frames."""
+    n_samples, n_frames = _recorded(scene)
+    return (4 + 8 + 8 * len(PROBE_FIELDS)) * n_samples + (16 * scene.n_nodes * n_frames if frames else 0)
+
+
 def default_max_batch(scene: Scene, n_variants: int, workers: int, frames: bool) -> int:
     """Largest batch whose recorded results fit a worker's memory budget, and small
     enough that every worker gets several batches."""
-    n_samples = int(scene.run.duration_s / scene.output_interval) + 1
-    per_strip = 8 * len(PROBE_FIELDS) * n_samples * 2 + 16 * 8 * scene.n_nodes
-    if frames:
-        per_strip += 16 * scene.n_nodes * (int(scene.run.duration_s * scene.output.frame_rate_hz) + 1) * 2
-    memory_cap = max(1, WORKER_MEMORY_BYTES // per_strip)
+    memory_cap = max(1, WORKER_MEMORY_BYTES // strip_memory_bytes(scene, frames))
     balance = -(-n_variants // (BATCHES_PER_WORKER * max(1, workers)))
     return max(1, min(memory_cap, balance))
+
+
+def check_sweep_fits(sweep: Sweep, batches: list[list[int]], pending: list[int], workers: int | None,
+                     frames: bool, out: Path) -> None:
+    """Refuse, before its first batch, a sweep whose batches running side by side would
+    not fit in memory (``workers`` at once; None: on a Dask cluster, whose memory is its
+    own) or whose remaining results would not fit the free disk of ``out``."""
+    what = "probes and frames" if frames else "probes"
+    if workers is not None:
+        sizes = sorted((sum(strip_memory_bytes(sweep.scenes[v], frames) for v in batches[b]) for b in pending),
+                       reverse=True)[: max(1, workers)]
+        check_memory(sum(sizes), f"the recorded {what} of {len(sizes)} sweep batch(es) running side by side",
+                     "run fewer at once (--workers) or smaller ones (--max-batch), or record less "
+                     "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)")
+    variants = [v for b in pending for v in batches[b]]
+    check_disk(out, sum(strip_disk_bytes(sweep.scenes[v], frames) for v in variants),
+               f"the {what} of the sweep's {len(variants)} remaining variants",
+               "free space, choose another --out, or record less (output.probes_per_frame, output.frame_rate_hz, "
+               "run.duration_s" + (", or leave out --frames)" if frames else ")"))
 
 
 def _last(series: np.ndarray) -> float:
@@ -148,13 +186,22 @@ def run_sweep(
         # resuming is for the same sweep only; a run or other files are never mixed into
         held = "a run" if (out / "meta.json").is_file() else "files that are not a sweep"
         raise OptionError("--out", f"{out} already holds {held}; choose another --out")
-    out.mkdir(parents=True, exist_ok=True)
+    claim_result(out, "--out")  # two sweeps into one directory never write it at once
     directory = SweepDirectory(out)
     n_workers = (os.cpu_count() or 1) if workers is None else workers
     if max_batch is None:
         max_batch = default_max_batch(sweep.scenes[0], len(sweep.scenes), n_workers, frames)
-    batches = directory.prepare(sweep, lambda: sweep.batches(max_batch))
+    at_once = None if scheduler is not None else max(1, n_workers)
+
+    def planned() -> list[list[int]]:
+        # a new sweep is sized as a whole before its directory is laid out
+        layout = sweep.batches(max_batch)
+        check_sweep_fits(sweep, layout, list(range(len(layout))), at_once, frames, out)
+        return layout
+
+    batches = directory.prepare(sweep, planned)
     pending = [b for b in range(len(batches)) if not directory.is_done(b)]
+    check_sweep_fits(sweep, batches, pending, at_once, frames, out)  # a resumed one: what remains
     done = len(sweep.scenes) - sum(len(batches[b]) for b in pending)
     bar = tqdm(total=len(sweep.scenes), initial=done, unit="variant", desc="sweep", disable=not progress,
                dynamic_ncols=True)

@@ -54,6 +54,7 @@ from warpcloth.runs import simulate
 from warpcloth.scene import Scene, batch_fields, check_step, field_laws, law_fields, scene_from_dict, set_field
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.sim import RunResult
+from warpcloth.sim.resources import check_memory
 
 from .bootstrap import block_bootstrap_sigma
 from .noise import difference_noise
@@ -414,6 +415,10 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
     if n0 > MAX_SPACE_FILLING:
         raise OptionError("--space-filling", f"{n0} variants in one launch is more than {MAX_SPACE_FILLING}; a "
                           "Latin hypercube of a few dozen per parameter finds the basin")
+    # the resamples' indices and residuals (8 B each, at most two residuals per measured row),
+    # sized before hours of fitting, not after
+    check_memory(16 * bootstrap * 2 * len(measurement.t), f"--bootstrap {bootstrap}: the resamples",
+                 "ask for fewer (a few thousand give σ to about 1 %)")
     bar = tqdm(total=max_iterations + 1, desc="fit", unit="launch", disable=not progress)
     history: list[dict] = []
 

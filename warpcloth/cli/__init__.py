@@ -1,6 +1,32 @@
 """Command line: ``warpcloth run | sweep | export-usd | plot | render | fit | clamp | material``
-(``--help`` on each); one module per command group, registered in :mod:`.app`."""
+(``--help`` on each); one module per command group, registered in :mod:`.app`.
 
-from .app import main
+Importing this package is cheap (``warpcloth`` loads its names lazily): :func:`main`
+catches a Ctrl-C while the heavy modules (Warp, NumPy, pandas) are imported, so an
+interrupt at any moment of start-up is exit 130 with one line, never a traceback.
+"""
 
-__all__ = ["main"]
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+
+EXIT_INTERRUPTED = 130  # the shell's convention for SIGINT
+
+
+def interrupted_at_start() -> int:
+    """Report a Ctrl-C that came before the command started its work; returns 130."""
+    print("warpcloth: interrupted while starting, before anything was written", file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``warpcloth`` command; returns the exit status."""
+    try:
+        from .app import main as run_command
+    except KeyboardInterrupt:
+        return interrupted_at_start()
+    return run_command(argv)
+
+
+__all__ = ["EXIT_INTERRUPTED", "interrupted_at_start", "main"]

@@ -13,12 +13,21 @@ from __future__ import annotations
 import argparse
 import errno
 import sys
+import warnings
 from collections.abc import Sequence
 
-from warpcloth.errors import DataFileError, DivergenceError, OptionError, ResourceError, SceneError, WarpclothError
+from warpcloth.errors import (
+    DataFileError,
+    DivergenceError,
+    OptionError,
+    PlausibilityWarning,
+    ResourceError,
+    SceneError,
+    WarpclothError,
+)
 from warpcloth.sim.model import init_warp_quietly
 
-from . import analyse, fit, material, run, scene, sweep, view
+from . import EXIT_INTERRUPTED, analyse, fit, interrupted_at_start, material, run, scene, sweep, view
 
 COMMAND_GROUPS = (run, sweep, view, fit, material, analyse, scene)
 """Each registers its subcommands with a ``handler`` (see :func:`main`)."""
@@ -30,7 +39,6 @@ EXIT_DIVERGED = 3
 STREAMING = ("run", "sweep")
 """Commands whose results stream to disk (the rest write each file whole, atomically)."""
 EXIT_IO = 5
-EXIT_INTERRUPTED = 130  # the shell's convention for SIGINT
 FULL = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)
 
 
@@ -56,11 +64,35 @@ def parser() -> argparse.ArgumentParser:
     return top
 
 
+def show_warnings_as_lines(command: str) -> None:
+    """Print each :class:`~warpcloth.errors.PlausibilityWarning` as one line
+    ``warpcloth COMMAND: warning: ...`` (no source line), each text once; NumPy's
+    RuntimeWarnings are not shown."""
+    def show(message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
+        if issubclass(category, PlausibilityWarning):
+            if str(message) not in seen:
+                seen.add(str(message))
+                print(f"warpcloth {command}: warning: {message}", file=sys.stderr)
+        else:
+            shown(message, category, *_, **__)
+
+    seen: set[str] = set()
+    # NumPy's overflow notices are not for the user: every number warpcloth reports or
+    # writes is checked finite, and a non-finite one is an error that says so
+    warnings.simplefilter("ignore", RuntimeWarning)
+    shown = warnings.showwarning
+    warnings.showwarning = show
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``warpcloth`` command; returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    init_warp_quietly(verbose="--verbose" in argv)  # before parsing: a --device option starts Warp
-    args = parser().parse_args(argv)
+    try:
+        init_warp_quietly(verbose="--verbose" in argv)  # before parsing: a --device option starts Warp
+        args = parser().parse_args(argv)
+    except KeyboardInterrupt:
+        return interrupted_at_start()
+    show_warnings_as_lines(args.command)
     try:
         return args.handler(args)
     except DivergenceError as exc:

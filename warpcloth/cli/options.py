@@ -88,9 +88,14 @@ def figure_path(path: str | Path, overwrite: bool, option: str = "--plot") -> Pa
 
 
 def new_result(path: str | Path, overwrite: bool, option: str) -> Path:
-    """``path`` for a result about to be written: refused when something is there already,
-    unless ``overwrite`` (the writers replace it atomically, only once the new one is whole)."""
+    """``path`` for a result about to be written: refused when another warpcloth process is
+    writing it (this one holds its marker from now until it exits:
+    :mod:`warpcloth.io.writing`), or when something is there already, unless ``overwrite``
+    (the writers replace it atomically, only once the new one is whole)."""
+    from warpcloth.io.writing import claim_result
+
     out = Path(path)
+    claim_result(out, option)
     exists = out.is_file() or (out.is_dir() and any(out.iterdir()))
     if exists and not overwrite:
         raise OptionError(option, f"{out} already exists; choose another {option}, or pass --overwrite")

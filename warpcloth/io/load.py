@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from warpcloth.errors import DataFileError
@@ -18,6 +19,8 @@ def load_recording(path: str | Path, variants: str | None = None, where: str | N
     a parameter filter as for :func:`~warpcloth.io.recording.filter_variants`; both may be given (the filter applies to
     the selection).
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"load_recording takes the path of a run or sweep directory, got {path!r}")
     path = Path(path)
     if (path / "sweep.json").is_file():
         return read_sweep(path, variants, where)

@@ -17,7 +17,9 @@ clamp encoder      ``t, theta``                s, rad (``angle_unit`` overrides 
 underscore or in brackets (``t_ms``, ``x_m``, ``theta_deg``, ``time [ms]``, ``x (cm)``;
 :data:`warpcloth.units.MEASURED_UNITS` lists them); a name without one (``t``, ``x``)
 takes the form's unit above; a unit that is not one of the column's quantity (``x_s``,
-``t_in``) is an error naming the file, line and column. Columns beyond those a form has
+``t_in``, ``x [furlong]``, ``x_furlong``) is an error naming the file, line and column:
+whatever is in brackets at the end of a name is its unit, and so is what follows its last
+underscore unless that is a name word (``laser_x``, ``x_tip``: :data:`NAME_WORDS`). Columns beyond those a form has
 are ignored. Anything wrong in a file is a
 DataFileError naming the file (and the line, where one is to blame); a file that cannot
 be read at all is an OptionError of the option (``flag``) that named it.
@@ -33,6 +35,7 @@ import numpy as np
 
 from warpcloth import units
 from warpcloth.errors import DataFileError, OptionError
+from warpcloth.units import check_plausible
 
 from .csv import Table, bundled_data, read_csv, read_text
 
@@ -57,18 +60,34 @@ def read_table(path: str | Path, n_columns: int | None, what: str, flag: str,
 
 _QUANTITY = {"t_s": ("time", "s"), "x_mm": ("length", "mm"), "y_mm": ("length", "mm"), "s_mm": ("length", "mm"),
              "theta": ("angle", "rad"), "frame": (None, None)}
-_UNIT = re.compile(r"(?:_|\s*[\[(]\s*)([A-Za-zµ]+)\s*[\])]?\s*$")
+_BRACKETED = re.compile(r"\s*[\[(]\s*([^\[\]()]*?)\s*[\])]\s*$")
+_SUFFIX = re.compile(r"_([A-Za-zµ%]+)\s*$")
 
 
-UNIT_WORDS = {u.lower() for units_of in units.MEASURED_UNITS.values() for u in units_of} | {
-    "min", "h", "hr", "ns", "ps", "km", "dm", "nm", "in", "inch", "ft", "grad", "gon", "rev", "turn", "turns",
-    "degree", "degrees", "radian", "radians", "sec", "msec", "usec"}
-"""Header endings read as a unit (those warpcloth converts, and common ones it refuses)."""
+NAME_WORDS = {"t", "time", "x", "y", "s", "theta", "angle", "phi", "frame", "tip", "laser", "marker", "encoder",
+              "clamp", "pos", "position", "disp", "displacement", "arc", "raw"}
+"""Words that may end a column's name after an underscore without being a unit
+(``laser_x``, ``tip_x``, ``x_tip``); any other ending after an underscore is read as a
+unit, and refused unless it is one of the column's quantity."""
+
+
+def stated_unit(name: str) -> str | None:
+    """The unit a header name states: in brackets at its end (``time [ms]``, ``x (cm)``:
+    whatever is written there), or after its last underscore (``t_ms``, ``x_furlong``)
+    unless that ending is a name (:data:`NAME_WORDS`); None when it states none."""
+    bracketed = _BRACKETED.search(name)
+    if bracketed is not None:
+        return bracketed.group(1)
+    suffix = _SUFFIX.search(name)
+    if suffix is None or suffix.group(1).lower() in NAME_WORDS:
+        return None
+    return suffix.group(1)
 
 
 def header_unit(table: Table, column: int, role: str) -> float:
     """Factor to SI of ``column`` (0-based) for its ``role`` (a name of the form, e.g.
-    ``x_mm``), from the unit its header names, else the role's own unit."""
+    ``x_mm``), from the unit its header names, else the role's own unit. A stated unit
+    that is not one of the role's quantity (``x [furlong]``, ``t_in``) is refused."""
     quantity, default = _QUANTITY[role]
     if quantity is None:
         return 1.0
@@ -76,16 +95,14 @@ def header_unit(table: Table, column: int, role: str) -> float:
     if not table.header or column >= len(table.header):
         return known[default]
     name = table.header[column]
-    match = _UNIT.search(name)
-    if match is None:
+    unit = stated_unit(name)
+    if unit is None:
         return known[default]
-    unit = match.group(1)
-    if unit.lower() not in UNIT_WORDS:
-        return known[default]  # "laser_x", "tip_x": the end of a name, not a unit
     if unit not in known and unit.lower() not in known:
-        raise DataFileError(table.path, f"column {column + 1} is headed {name!r}: {unit!r} is not a {quantity} "
-                            f"unit (known: {', '.join(known)}); write e.g. {role.split('_')[0]}_{default}, or a "
-                            f"name without a unit for {default}", table.header_line)
+        raise DataFileError(table.path, f"column {column + 1} is headed {name!r}: {unit!r} is not "
+                            f"{'an' if quantity == 'angle' else 'a'} {quantity} unit (known: {', '.join(known)}); "
+                            f"write e.g. {role.split('_')[0]}_{default}, or a name without a unit for {default}",
+                            table.header_line)
     return known.get(unit, known.get(unit.lower()))
 
 
@@ -97,7 +114,17 @@ def _scaled(table: Table, roles: tuple[str, ...]) -> np.ndarray:
     return data
 
 
+def _plausible(table: Table, column: int, quantity: str, value: float, guess: str) -> None:
+    # a column whose header states no unit, read in the form's own: warn when its numbers
+    # look like another unit's (metres or milliseconds without a unit in the header)
+    if table.header and column < len(table.header) and stated_unit(table.header[column]) is not None:
+        return
+    said = f"headed {table.header[column]!r}" if table.header and column < len(table.header) else "without a header"
+    check_plausible(quantity, value, f"{table.path}, column {column + 1} ({said}, no unit)", guess)
+
+
 def _increasing(table: Table, t: np.ndarray) -> None:
+    _plausible(table, 0, "record length", float(t[-1] - t[0]), "milliseconds? head the column t_ms")
     step = np.diff(t)
     if np.any(step <= 0):
         i = int(np.argmax(step <= 0))
@@ -133,6 +160,8 @@ def read_laser_trace(path: str | Path, flag: str = "--measured") -> LaserTrace:
 def _laser_trace(table: Table) -> LaserTrace:
     data = _scaled(table, _LASER)
     _increasing(table, data[:, 0])
+    _plausible(table, 1, "largest displacement", float(np.max(np.abs(data[:, 1]))) / units.LENGTH_MM,
+               "metres? head the column x_m")
     return LaserTrace(data[:, 0], data[:, 1])
 
 
@@ -145,6 +174,7 @@ def read_tracked_shapes(path: str | Path, flag: str = "--measured") -> TrackedSh
 def _tracked_shapes(table: Table) -> TrackedShapes:
     data, lines = _scaled(table, _SHAPES), table.lines
     frame, t = data[:, 0], data[:, 1]
+    _plausible(table, 1, "record length", float(t[-1] - t[0]), "milliseconds? head the column t_ms")
     disordered = (np.diff(frame) < 0) | ((np.diff(frame) > 0) & (np.diff(t) <= 0))
     if np.any(disordered):
         i = int(np.argmax(disordered))
@@ -175,8 +205,7 @@ def is_angle_column(table: Table, column: int) -> bool:
     if not table.header or column >= len(table.header):
         return False
     name = table.header[column]
-    unit = _UNIT.search(name)
-    return bool(_ANGLE_NAME.match(name)) or (unit is not None and unit.group(1) in units.MEASURED_UNITS["angle"])
+    return bool(_ANGLE_NAME.match(name)) or stated_unit(name) in units.MEASURED_UNITS["angle"]
 
 
 def read_encoder(path: str | Path, angle_unit: str | None = None,
@@ -192,9 +221,12 @@ def read_encoder(path: str | Path, angle_unit: str | None = None,
 def _clamp_angle(table: Table, angle_unit: str | None = None) -> ClampAngleTrace:
     data = _scaled(table, _ENCODER)
     _increasing(table, data[:, 0])
-    if angle_unit is not None:
-        said = _UNIT.search(table.header[1]) if table.header and len(table.header) > 1 else None
-        if said and said.group(1).lower() in units.MEASURED_UNITS["angle"] and said.group(1).lower() != angle_unit:
+    if angle_unit is None:
+        _plausible(table, 1, "largest clamp angle", float(np.max(np.abs(data[:, 1]))),
+                   "degrees? head the column theta_deg, or give --angle-unit deg")
+    else:
+        said = (stated_unit(table.header[1]) or "").lower() if table.header and len(table.header) > 1 else ""
+        if said in units.MEASURED_UNITS["angle"] and said != angle_unit:
             raise OptionError("--angle-unit", f"{angle_unit} contradicts the header of {table.path}, whose column 2 "
                               f"is {table.header[1]!r}; drop --angle-unit or fix the header")
         data[:, 1] = table.values[:, 1] * units.MEASURED_UNITS["angle"][angle_unit]

@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import functools
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import DataFileError, OptionError, checked_index
 from warpcloth.scene import COORDINATES, Scene, batch_fields, choice_fields, rest_positions
+from warpcloth.sim.runner import checked_probe
 
 
 @dataclass
@@ -81,8 +83,10 @@ class Recording:
         return self.scenes[0].n_clamped
 
     def probe(self, name: str, j: int) -> tuple[np.ndarray, np.ndarray]:
-        """Times and values of one probe of the j-th selected variant."""
-        rows = self.probes[self.probes["variant"] == self.variants[j]]
+        """Times and values of one probe of the j-th selected variant (0 … n − 1)."""
+        name = checked_probe(name)
+        rows = self.probes[self.probes["variant"] == self.variants[checked_index("j", j, len(self.variants),
+                                                                                 "selected variants")]]
         return rows["t"].to_numpy(), rows[name].to_numpy()
 
     def to_dataframe(self) -> pd.DataFrame:
@@ -124,19 +128,30 @@ class Recording:
         return angle, moved.mean(axis=1) - rotated
 
 
-def parse_variants(text: str | None, n_variants: int) -> np.ndarray:
-    """Variant numbers from ``"3"``, ``"0:50"``, ``"0:50:5"`` or ``"1,4,9"`` (None: all)."""
+def parse_variants(text: str | int | Sequence[int] | None, n_variants: int) -> np.ndarray:
+    """Variant numbers from ``"3"``, ``"0:50"``, ``"0:50:5"`` or ``"1,4,9"`` (None: all; from
+    Python also an int or a list of ints). A negative number is refused, never counted
+    from the end."""
     if text is None:
         return np.arange(n_variants)
+    if isinstance(text, (list, tuple)) and all(isinstance(v, int) and not isinstance(v, bool) for v in text):
+        text = ",".join(map(str, text))
+    elif isinstance(text, int) and not isinstance(text, bool):
+        text = str(text)
+    elif not isinstance(text, str):
+        raise TypeError(f"variants must be a selection such as '3', '1,4,9' or '0:50' (or an int or a list of "
+                        f"ints), got {text!r}")
     text = text.strip()
     try:
-        if ":" in text:
-            parts = [int(p) if p else None for p in text.split(":")]
-            chosen = np.arange(n_variants)[slice(*parts)]
-        else:
-            chosen = np.array([int(p) for p in text.split(",")])
+        parts = [int(p) if p else None for p in text.split(":")] if ":" in text else None
+        chosen = None if parts else np.array([int(p) for p in text.split(",")])
     except ValueError:
         raise OptionError("--variants", f"{text!r} is not a variant number, list (1,4,9) or range (0:50)") from None
+    if parts is not None:
+        if len(parts) > 3 or any(p is not None and p < 0 for p in parts) or parts[2:3] == [0]:
+            raise OptionError("--variants", f"{text!r}: a range is START:STOP[:STEP] of numbers ≥ 0 (a step > 0); "
+                              "it never counts from the end")
+        chosen = np.arange(n_variants)[slice(*parts)]
     if len(chosen) == 0:
         raise OptionError("--variants", f"{text!r} selects no variant of {n_variants}")
     if len(np.unique(chosen)) != len(chosen):
@@ -208,3 +223,19 @@ def select_variants(parameters: pd.DataFrame, variants: str | None, where: str |
     if where:
         chosen = np.intersect1d(chosen, filter_variants(parameters.iloc[chosen], where))
     return chosen
+
+
+def check_time_order(path: Path, t: np.ndarray, variant: np.ndarray, line_offset: int | None = None) -> None:
+    """Refuse stored probe rows whose times do not increase within each variant (rows
+    reordered after the run: same counts and sizes, but every period read from them
+    would be wrong). ``line_offset`` turns a row index into the file's line (None: a file
+    without lines, e.g. Parquet, where the row is named instead)."""
+    order = np.argsort(variant, kind="stable")
+    same = variant[order][1:] == variant[order][:-1]
+    back = np.flatnonzero(same & ~(np.diff(t[order]) > 0))  # NaN is out of order too
+    if len(back):
+        row, before = int(order[back[0] + 1]), int(order[back[0]])
+        where = f"row {before + 1}" if line_offset is None else f"line {before + line_offset}"
+        raise DataFileError(path, f"t = {t[row]:.10g} s of variant {variant[row]} comes after t = {t[before]:.10g} s "
+                            f"({where}): the rows are out of time order, so the file was changed after it was "
+                            "written", None if line_offset is None else row + line_offset)

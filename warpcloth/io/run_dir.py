@@ -42,34 +42,15 @@ from warpcloth.sim.resources import check_disk
 from .atomic import naming, write_npy_atomically, write_text_atomically
 from .json_file import read_json
 from .provenance import provenance
-from .recording import Recording, per_strip_parameters, select_variants
+from .recording import Recording, check_time_order, per_strip_parameters, select_variants
+from .writing import WRITING, hold, live_writer, release
 
 PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
-WRITING = ".writing"
-"""Marker of a run directory a process is streaming into (left behind by a killed one)."""
 
 
 def write_scene(path: Path, scene: Scene) -> None:
     """Write a resolved scene as TOML."""
     path.write_text(tomli_w.dumps(scene.to_dict()))
-
-
-def live_writer(directory: Path) -> int | None:
-    """The pid of a running process streaming into ``directory`` (its marker names it),
-    or None (no marker, or one left by a process that no longer runs)."""
-    try:
-        pid = int((directory / WRITING).read_text() or 0)
-    except (OSError, ValueError):
-        return None
-    if pid <= 0 or pid == os.getpid():
-        return None
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return None
-    except PermissionError:
-        return pid
-    return pid
 
 
 def reserve(file: io.BufferedWriter, size: int) -> None:
@@ -117,7 +98,7 @@ class RunWriter:
                  overwrite: bool = False) -> None:
         check_output_directory(out_dir, overwrite)
         self.target = Path(out_dir).absolute()
-        writer = live_writer(self.target)
+        writer = live_writer(self.target / WRITING)
         if writer is not None:
             raise OptionError("--out", f"{out_dir} is being written by another warpcloth process (pid {writer}); "
                               "wait for it, or choose another --out")
@@ -133,16 +114,13 @@ class RunWriter:
         self.dir.mkdir(parents=True, exist_ok=True)
         # One writer per directory: a second process that passed the emptiness check at
         # the same moment finds the marker and stops instead of interleaving its rows.
-        try:
-            marker = os.open(self.dir / WRITING, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-            os.write(marker, str(os.getpid()).encode())
-            os.close(marker)
-        except FileExistsError:
-            raise OptionError("--out", f"{self.target} is being written by another warpcloth process; "
-                              "choose another --out") from None
+        writer = hold(self.dir / WRITING)
+        if writer is not None:
+            raise OptionError("--out", f"{self.target} is being written by another warpcloth process (pid {writer}); "
+                              "choose another --out")
         if any(p.name != WRITING for p in self.dir.iterdir()):
             # another writer finished here between the emptiness check and the marker
-            (self.dir / WRITING).unlink()
+            release(self.dir / WRITING)
             raise OptionError("--out", f"{self.target} already holds a run (written meanwhile by another process); "
                               "choose another --out, or pass --overwrite")
         if len(scenes) == 1:
@@ -233,7 +211,7 @@ class RunWriter:
         self.meta["provenance"] = provenance(extra.get("device"))
         self.meta["complete"] = True
         self._write_meta()
-        (self.dir / WRITING).unlink()
+        release(self.dir / WRITING)
         if self.dir != self.target:
             # Swap: the old result moves aside, the complete new one takes its name, then
             # the old goes. Killed between the two renames, both survive (hidden names).
@@ -282,6 +260,7 @@ def read_probes(path: Path, meta: dict) -> pd.DataFrame:
         raise DataFileError(file, f"holds {len(numbers)} rows but meta.json records {committed['probe_rows']} for "
                             "the complete run")
     numbers["variant"] = numbers["variant"].astype(int)
+    check_time_order(file, numbers["t"].to_numpy(), numbers["variant"].to_numpy(), line_offset=2)
     return numbers
 
 
@@ -309,10 +288,24 @@ def _check_meta(path: Path, meta: dict) -> None:
             raise DataFileError(file, f"{why}: the run directory is damaged")
 
 
+def _check_scene_files(path: Path, n_variants: int) -> None:
+    # the scenes meta.json's n_variants says are there: scene.toml for one, variants/NNNN.toml for more
+    stored = sorted(p.name for p in (path / "variants").glob("*.toml")) if (path / "variants").is_dir() else []
+    if n_variants == 1 and (path / "scene.toml").is_file() and not stored:
+        return
+    if n_variants > 1 and stored == [f"{i:04d}.toml" for i in range(n_variants)]:
+        return
+    held = (f"{len(stored)} variant scene(s) in variants/" if stored else
+            "one scene.toml" if (path / "scene.toml").is_file() else "no scene file")
+    raise DataFileError(path / "meta.json", f"n_variants is {n_variants}, but the run directory holds {held}: "
+                        "meta.json or the directory was changed after the run")
+
+
 def read_run(path: Path, variants: str | None = None, where: str | None = None) -> Recording:
     """Selected variants of a run directory as a Recording (an interrupted run: the frames it reached)."""
     meta = read_json(path / "meta.json")
     _check_meta(path, meta)
+    _check_scene_files(path, meta["n_variants"])
     if meta["n_variants"] == 1:
         scenes = [scene_from_dict(read_scene_file(path / "scene.toml"))]
     else:
@@ -337,6 +330,11 @@ def read_run(path: Path, variants: str | None = None, where: str | None = None) 
                             f"{expected} ({reached} committed): the run directory is damaged")
     frames = np.asarray(stored[:reached, chosen])
     times = np.load(path / "frame_times.npy")[:reached]
+    if np.any(~(np.diff(times) > 0)):
+        first = int(np.argmax(~(np.diff(times) > 0)))
+        raise DataFileError(path / "frame_times.npy", f"frame {first + 1} at t = {times[first + 1]:.10g} s does not "
+                            f"come after frame {first} at {times[first]:.10g} s: the frame times are out of order, "
+                            "so the run directory is damaged")
     probes = read_probes(path, meta)
     return Recording(path, chosen, [scenes[i] for i in chosen], times, frames, probes[probes["variant"].isin(chosen)],
                      parameters.iloc[chosen].reset_index(drop=True), bool(meta["complete"]))

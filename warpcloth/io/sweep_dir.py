@@ -42,7 +42,7 @@ from warpcloth.scene.sweep import samples_latin_hypercube, variant_scenes
 from .atomic import write_atomically, write_npy_atomically
 from .json_file import read_json
 from .provenance import provenance
-from .recording import Recording, per_strip_parameters, select_variants
+from .recording import Recording, check_time_order, per_strip_parameters, select_variants
 
 FORMAT = 2
 """The sweep directory format sweep.json states: 2 since the Latin hypercube became
@@ -205,8 +205,12 @@ def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording
                             "its directory to recompute it") from None
     n_frames = min(len(s) for s in stores.values())
     frames = np.stack([stores[where_is[v][0]][:n_frames, where_is[v][1]] for v in chosen], axis=1)
-    probes = pd.concat([read_parquet(path / "probes" / f"batch-{b:04d}.parquet",
-                                     filters=[("variant", "in", [int(v) for v in chosen])]) for b in needed])
+    tables = {b: read_parquet(path / "probes" / f"batch-{b:04d}.parquet",
+                              filters=[("variant", "in", [int(v) for v in chosen])]) for b in needed}
+    for b, table in tables.items():
+        check_time_order(path / "probes" / f"batch-{b:04d}.parquet", table["t"].to_numpy(),
+                         table["variant"].to_numpy())
+    probes = pd.concat(tables.values())
     probes = probes[["t", "variant", *PROBE_FIELDS]]
     frame_times = np.arange(n_frames) / sweep.scenes[0].output.frame_rate_hz
     return Recording(path, chosen, [sweep.scenes[i] for i in chosen], frame_times, frames, probes,

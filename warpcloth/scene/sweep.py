@@ -35,6 +35,7 @@ import numpy as np
 from tqdm import tqdm
 
 from warpcloth.errors import OptionError, SceneError
+from warpcloth.sim.resources import check_memory
 
 from .files import read_scene_file, scene_from_dict, scene_source
 from .keys import is_material_file_key, key_path, key_path_or_none, overlaps
@@ -47,6 +48,10 @@ from .validate import check_step
 MAX_VARIANTS = 100_000
 """Default cap on a sweep's variants: each is a validated scene held in memory (a few kB,
 ~1 ms to build), so a million would take many minutes and gigabytes before any runs."""
+
+VARIANT_BYTES = 20_000
+"""Memory one expanded variant takes (its validated scene, assignment and samples): an
+upper bound, for the check before a sweep is expanded."""
 
 SWEEP_KEYS = {"seed", "grid", "zip", "random"}
 RANDOM_KEYS = {"method", "samples", "ranges"}
@@ -119,18 +124,36 @@ def _value_lists(table: dict, where: str) -> dict[str, list]:
     return table
 
 
-def samples_latin_hypercube(spec: dict) -> bool:
-    """Whether a raw [sweep] section draws a Latin hypercube (its variants then depend on
-    the sampler's draws, not only on its seed)."""
-    block = spec.get("random")
-    return isinstance(block, dict) and bool(block) and block.get("method", "latin_hypercube") == "latin_hypercube"
+@dataclass(frozen=True)
+class RandomBlock:
+    """A validated ``[sweep.random]`` block: its fields and how many samples, before any
+    is drawn (so its size is checked in closed form first)."""
+
+    keys: list[str]
+    bounds: list[tuple[float, float]]
+    samples: int
+    method: str
+    seed: int
+
+    def sample(self) -> tuple[np.ndarray, np.ndarray]:
+        """The seeded samples ``[sample, field]`` inside the bounds and the same sample in the
+        unit box (one empty row and no box without a block)."""
+        if not self.keys:
+            return np.zeros((1, 0)), np.zeros((0, 0))
+        generator = np.random.default_rng(self.seed)
+        d = len(self.bounds)
+        # latin_hypercube: one sample per stratum in every dimension, strata paired at random
+        unit = (generator.random((self.samples, d)) if self.method == "uniform"
+                else latin_hypercube(self.samples, d, generator))
+        low = np.array([b[0] for b in self.bounds])
+        high = np.array([b[1] for b in self.bounds])
+        return low + unit * (high - low), unit
 
 
-def _random_block(spec: dict) -> tuple[list[str], np.ndarray, np.ndarray]:
-    # the swept fields, their values [sample, field] and the sample in the unit box
+def _random_block(spec: dict) -> RandomBlock:
     block = _table(spec, "random")
     if not block:
-        return [], np.zeros((1, 0)), np.zeros((0, 0))
+        return RandomBlock([], [], 1, "uniform", 0)
     unknown = set(block) - RANDOM_KEYS
     if unknown:
         raise SceneError(f"sweep.random.{sorted(unknown)[0]}",
@@ -139,6 +162,8 @@ def _random_block(spec: dict) -> tuple[list[str], np.ndarray, np.ndarray]:
     if method not in METHODS:
         raise SceneError("sweep.random.method", f"must be one of {', '.join(METHODS)}; got {method!r}")
     samples = block.get("samples")
+    if isinstance(samples, float) and samples.is_integer() and samples >= 1:
+        samples = int(samples)  # 1e4, as TOML writes a large count in exponent form
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
         raise SceneError("sweep.random.samples", f"expected a positive integer, got {samples!r}")
     ranges = block.get("ranges", {})
@@ -156,13 +181,7 @@ def _random_block(spec: dict) -> tuple[list[str], np.ndarray, np.ndarray]:
     seed = spec.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise SceneError("sweep.seed", f"expected a non-negative integer, got {seed!r}")
-    generator = np.random.default_rng(seed)
-    d = len(bounds)
-    # latin_hypercube: one sample per stratum in every dimension, strata paired at random
-    unit = generator.random((samples, d)) if method == "uniform" else latin_hypercube(samples, d, generator)
-    low = np.array([b[0] for b in bounds])
-    high = np.array([b[1] for b in bounds])
-    return list(ranges), low + unit * (high - low), unit
+    return RandomBlock(list(ranges), bounds, samples, method, seed)
 
 
 def variant_error(error: SceneError, variant: int, assignment: dict) -> SceneError:
@@ -190,7 +209,8 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     lengths = {len(v) for v in zipped.values()}
     if len(lengths) > 1:
         raise SceneError("sweep.zip", f"lists must have equal lengths, got {sorted(lengths)}")
-    random_keys, random_values, unit = _random_block(spec)
+    random = _random_block(spec)
+    random_keys = random.keys
     keys = list(grid) + list(zipped) + random_keys
     for where, block in (("sweep.grid", grid), ("sweep.zip", zipped), ("sweep.random.ranges", random_keys)):
         for key in block:
@@ -201,13 +221,17 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
         if key in seen:
             raise SceneError(f'sweep."{key}"', "is swept in more than one block")
         seen.add(key)
-    n_variants = math.prod(len(v) for v in grid.values()) * max(lengths or {1}) * len(random_values)
+    # Python integers, counted before anything is drawn or expanded
+    n_variants = math.prod(len(v) for v in grid.values()) * max(lengths or {1}) * random.samples
     if n_variants > max_variants:
         raise OptionError("--max-variants", f"the sweep has {n_variants} variants, more than {max_variants}; each "
                           "is a validated scene in memory (~1 ms and a few kB apiece): split it into several "
                           "sweeps, or raise --max-variants (Python: max_variants=)")
+    check_memory(n_variants * VARIANT_BYTES, f"the sweep's {n_variants} variant scenes",
+                 "split it into several sweeps")
     grid_rows = list(itertools.product(*grid.values())) if grid else [()]
     zip_rows = list(zip(*zipped.values(), strict=True)) if zipped else [()]
+    random_values, unit = random.sample()
     assignments = []
     for g, z, r in itertools.product(grid_rows, zip_rows, random_values):
         assignments.append(dict(zip(keys, [*g, *z, *(float(x) for x in r)], strict=True)))

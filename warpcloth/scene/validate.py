@@ -6,11 +6,15 @@ import math
 
 from warpcloth.errors import SceneError
 from warpcloth.sim.solvers import SOLVERS
+from warpcloth.units import check_plausible
 
 from .materials import to_si, validate_material
 from .schema import ClampSection, Scene
 
 MAX_STEPS = 2**31 - 1
+MAX_NODES = 2**31 - 1
+"""Nodes of one strip at most: what a kernel's 32-bit index reaches (the memory check of
+:func:`warpcloth.scene.build.builder_for` refuses far fewer on a real machine)."""
 
 
 def _multiple(length: float, spacing: float) -> bool:
@@ -21,6 +25,13 @@ def _multiple(length: float, spacing: float) -> bool:
 def validate_scene(scene: Scene) -> None:
     """Cross-field checks that single fields cannot express; raises SceneError."""
     st = scene.strip
+    # in floats, before any count is rounded to an integer (a length of 1e308 mm is inf nodes)
+    nodes = st.clamp_length_mm / st.spacing_mm + st.free_length_mm / st.spacing_mm
+    if not nodes <= MAX_NODES:
+        raise SceneError("strip.free_length_mm", f"{st.free_length_mm:g} mm below and strip.clamp_length_mm = "
+                         f"{st.clamp_length_mm:g} mm in the clamp at strip.spacing_mm = {st.spacing_mm:g} mm are "
+                         f"{nodes:.3g} nodes, more than {MAX_NODES}", related=("strip.clamp_length_mm",
+                                                                               "strip.spacing_mm"))
     for name in ("free_length_mm", "clamp_length_mm"):
         if not _multiple(getattr(st, name), st.spacing_mm):
             raise SceneError("strip.spacing_mm", f"{st.spacing_mm:g} mm does not divide strip.{name} = "
@@ -66,8 +77,18 @@ def check_step(scene: Scene) -> None:
     """Refuse a time step the scene's scheme cannot run stably (docs/model.md §9.3).
 
     Not part of :func:`validate_scene`: a recorded scene is read back as it was run (a
-    diverged run stays readable); this check is for scenes about to run.
+    diverged run stays readable); this check is for scenes about to run. So are two more:
+    a laser line the hanging strip never crosses is refused (its record would be the free
+    end's, not the laser's), and an implausible density is warned about
+    (:func:`warpcloth.units.check_plausible`).
     """
+    st = scene.strip
+    if not -st.free_length_mm < scene.output.laser_height_mm < 0:
+        raise SceneError("output.laser_height_mm", f"{scene.output.laser_height_mm:g} mm is not on the hanging "
+                         f"strip, which reaches from 0 to -{st.free_length_mm:g} mm (strip.free_length_mm): the "
+                         f"laser line would never cross it; put it between -{st.free_length_mm:g} and 0 mm",
+                         related=("strip.free_length_mm",))
+    check_plausible("areal density", scene.material.density_g_per_cm2, "material.density_g_per_cm2")
     dt, scheme = scene.integrator.dt_s, scene.integrator.scheme
     limit = SOLVERS[scheme].step_limit(to_si(scene.material), scene.spacing, scene.n_nodes - scene.n_clamped)
     softening = any(a < 0 for a in scene.material.tensile_gf_per_cm[1:])

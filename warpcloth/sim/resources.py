@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import shutil
+from decimal import Decimal
 from pathlib import Path
 
 from warpcloth.errors import ResourceError
@@ -27,11 +28,13 @@ def available_memory() -> int:
 
 
 def size_text(n: float) -> str:
-    """A byte count for a message: three digits and a decimal unit."""
-    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
-        if n >= scale:
-            return f"{n / scale:.3g} {unit}"
-    return f"{n:.0f} B"
+    """A byte count for a message: three digits and a decimal unit (any Python integer,
+    however far beyond a float's range, is written without overflowing)."""
+    n = Decimal(n)
+    unit, scale = next(((u, s) for u, s in (("TB", 12), ("GB", 9), ("MB", 6), ("kB", 3)) if n >= Decimal(10) ** s),
+                       ("B", 0))
+    value = n.scaleb(-scale)
+    return f"{float(value):.3g} {unit}" if value < Decimal("1e300") else f"{value:.3g} {unit}"
 
 
 def check_memory(needed: int, what: str, knobs: str, available: int | None = None) -> None:

@@ -13,7 +13,7 @@ import pandas as pd
 import warp as wp
 from tqdm import tqdm
 
-from warpcloth.errors import DivergenceError
+from warpcloth.errors import DivergenceError, OptionError, checked_index
 from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, STATUS_BUDGET, STATUS_NONFINITE_ENERGY
 
 from .control import Control
@@ -132,9 +132,10 @@ class RunResult:
         return probes_frame(self.t, self.probes, np.arange(self.probes.shape[2]), self.parameters)
 
     def probe(self, name: str, variant: int | None = None) -> np.ndarray:
-        """Time series of one probe: ``[sample, variant]``, or ``[sample]`` for one variant."""
-        series = self.probes[:, PROBE_INDEX[name], :]
-        return series if variant is None else series[:, variant]
+        """Time series of one probe: ``[sample, variant]``, or ``[sample]`` for one variant
+        (an index 0 … n − 1; a name or index that is not one is refused, naming it)."""
+        series = self.probes[:, PROBE_INDEX[checked_probe(name)], :]
+        return series if variant is None else series[:, checked_index("variant", variant, series.shape[1], "variants")]
 
     def energy_total(self) -> np.ndarray:
         """Budget that should stay constant: kinetic + gravitational + tensile + work done
@@ -155,6 +156,13 @@ def reversal_memory_warning(report: dict[str, object]) -> str | None:
     return (f"the masing reversal memory ({report['capacity']} points per hinge) was full: {int(overflows.sum())} "
             f"reversal(s) not stored in strip(s) {named}; their inner loops were traced without hysteresis, so the "
             "hysteresis work is underestimated by their area; raise integrator.reversal_memory")
+
+
+def checked_probe(name: object) -> str:
+    """``name`` if it is a recorded probe, else an OptionError listing them."""
+    if not isinstance(name, str) or name not in PROBE_INDEX:
+        raise OptionError("name", f"{name!r} is not a probe; the probes are {', '.join(PROBE_FIELDS)}")
+    return name
 
 
 def check_recording_fits(model: Model, control: Control, recorder: Recorder, keep_frames: bool = True) -> None:

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import warp as wp
 
+from warpcloth.errors import OptionError
 from warpcloth.kernels import hinge_kernels
 
 if TYPE_CHECKING:
@@ -24,6 +25,26 @@ def allocate_reversal_memory(struct_type: type, capacity: int, n_hinges: int, n_
     history.overflows = wp.zeros(n_strips, dtype=int, device=device)
     history.deepest = wp.zeros(n_strips, dtype=int, device=device)
     return history
+
+
+def checked_nodes(argument: str, value: object, n_nodes: int, n_strips: int) -> np.ndarray:
+    """``value`` as a float array ``[node, strip, xy]`` of ``n_nodes`` × ``n_strips`` × 2
+    finite numbers, or a TypeError / OptionError naming ``argument``, what it got and what
+    is expected (a NaN start would otherwise read as a divergence of the run)."""
+    expected = (n_nodes, n_strips, 2)
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{argument} must be an array of numbers [node, strip, xy] of shape {expected}, got "
+                        f"{type(value).__name__}") from None
+    if array.shape != expected:
+        raise OptionError(argument, f"has shape {array.shape}; expected {expected} ([node, strip, xy]: "
+                          f"{n_nodes} nodes, {n_strips} strip(s), x and y)")
+    if not np.isfinite(array).all():
+        node, strip, axis = np.argwhere(~np.isfinite(array))[0]
+        raise OptionError(argument, f"[{node}, {strip}, {axis}] is {array[node, strip, axis]}; every value must be "
+                          "finite")
+    return array
 
 
 class State:
@@ -78,11 +99,13 @@ class State:
         return {"capacity": capacity, "deepest": h.deepest.numpy().tolist(), "overflows": h.overflows.numpy().tolist()}
 
     def set_positions(self, positions: np.ndarray, velocities: np.ndarray | None = None) -> None:
-        """Replace node positions ``[node, strip, 2]`` (and velocities), e.g. a mode shape."""
+        """Replace node positions ``[node, strip, 2]`` (and velocities), e.g. a mode shape
+        (m, m/s; finite, of exactly that shape: anything else is refused, naming it)."""
         vec2 = self.model.types.vec2
-        self.struct.position.assign(self.model.array(positions, vec2))
+        n, b = self.model.n_nodes, self.model.n_strips
+        self.struct.position.assign(self.model.array(checked_nodes("positions", positions, n, b), vec2))
         if velocities is not None:
-            self.struct.velocity.assign(self.model.array(velocities, vec2))
+            self.struct.velocity.assign(self.model.array(checked_nodes("velocities", velocities, n, b), vec2))
         self.reset_hinges()
 
     def reset_hinges(self) -> None:

@@ -9,9 +9,10 @@ from pathlib import Path
 
 import tomli_w
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import DataFileError, OptionError
 from warpcloth.io.atomic import write_text_atomically
 from warpcloth.scene import MaterialSection, material_fields, validate_material
+from warpcloth.units import check_plausible
 
 from .kes_fit import KesFit
 from .tensile_fit import DIVERGENCE_STRAIN
@@ -23,7 +24,17 @@ def material_file_data(fit: KesFit, name: str, density_g_per_cm2: float, source:
     if not (math.isfinite(density_g_per_cm2) and density_g_per_cm2 > 0):
         raise OptionError("--density-g-per-cm2", f"must be a positive mass per area in g/cm², got "
                           f"{density_g_per_cm2!r}")
+    check_plausible("areal density", density_g_per_cm2, "--density-g-per-cm2")
     material = fit.material(name, density_g_per_cm2)
+    # a fit whose numbers overflowed is not written: a scene would load it as a material
+    values = {f"material.{k}": v for k, v in material.items()} | {
+        "the tensile RMS": fit.tensile.rms_gf_per_cm, "the bending RMS": fit.bending.rms_gf_cm_per_cm}
+    for field, value in values.items():
+        numbers = value if isinstance(value, list) else [value]
+        if any(isinstance(v, float) and not math.isfinite(v) for v in numbers):
+            source = fit.tensile_loop.source if "tensile" in field else fit.bending_loop.source
+            raise DataFileError(source, f"the fit gave {field} = {value!r}, not a finite number: no material file "
+                                "is written (are the numbers in the units the header says?)")
     validate_material(MaterialSection(**material), max_strain, "material")
     law = material["bending_law"]
     ordered = {"name": name, "source": source, "bending_law": law,

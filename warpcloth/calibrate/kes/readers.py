@@ -35,6 +35,7 @@ import numpy as np
 from warpcloth import units
 from warpcloth.errors import DataFileError, OptionError
 from warpcloth.io.csv import WHITESPACE, Table, read_csv
+from warpcloth.units import check_plausible
 
 PERCENT = units.STRAIN_PERCENT
 """Strain written in % → fraction (KES-FB1 files, EMT)."""
@@ -192,6 +193,10 @@ def read_tensile_csv(path: str | Path, strain_unit: str | None = None,
         how = "guessed: the column's maximum is " + ("above" if unit == "percent" else "at most") + " 1"
     scale = {"percent": PERCENT, "fraction": 1.0, "mm": 1.0 / gauge_length_mm}[unit]
     loop = tensile_loop(values[:, 0] * scale, values[:, 1], source=str(path), rows=rows)
+    other = {"fraction": "percent (--strain-unit percent)", "percent": "a fraction (--strain-unit fraction)",
+             "mm": "another gauge length (--gauge-length-mm)"}[unit]
+    check_plausible("largest tensile strain", float(np.max(np.abs(loop.strain))), f"{path}, column 1 read as {unit}",
+                    f"is the column in {other}?")
     described = f"extension in mm over a {gauge_length_mm:g} mm gauge" if unit == "mm" else f"strain in {unit}"
     return dataclasses.replace(loop, strain_unit=f"{described} ({how})")
 

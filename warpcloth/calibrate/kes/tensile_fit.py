@@ -70,7 +70,12 @@ def fit_tensile(loop: TensileLoop, max_strain: float = DIVERGENCE_STRAIN) -> Ten
         # dT/dε = Σ k b_k (ε/s)^(k−1) / s for the scaled coefficients b_k
         gradient = powers * grid[:, None] ** (powers - 1) / scale
         floor = SLOPE_FLOOR * abs(loop.force[loop.turn]) / scale
-        coefficients = least_squares_above(design, t, gradient, np.full(len(grid), floor)) * unscale
+        try:
+            coefficients = least_squares_above(design, t, gradient, np.full(len(grid), floor)) * unscale
+        except ValueError:  # numerically infeasible: forces far outside a fabric's (overflowing squares)
+            raise DataFileError(loop.source, f"no quartic T(ε) rising on [0, {upper:g}] fits this loop (largest "
+                                f"|force| {float(np.max(np.abs(loop.force))):.3g} gf/cm): are the forces in gf/cm?") \
+                from None
         constrained = True
         slope, where = tensile_slope_minimum(list(coefficients), upper)
         if not slope > 0:  # pragma: no cover - the grid constraint holds between its points
