@@ -124,6 +124,13 @@ def _value_lists(table: dict, where: str) -> dict[str, list]:
     return table
 
 
+def samples_latin_hypercube(spec: dict) -> bool:
+    """Whether a raw [sweep] section draws a Latin hypercube (its variants then depend on
+    the sampler's draws, not only on its seed)."""
+    block = spec.get("random")
+    return isinstance(block, dict) and bool(block) and block.get("method", "latin_hypercube") == "latin_hypercube"
+
+
 @dataclass(frozen=True)
 class RandomBlock:
     """A validated ``[sweep.random]`` block: its fields and how many samples, before any
