@@ -8,16 +8,9 @@ interrupt at any moment of start-up is exit 130 with one line, never a traceback
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Sequence
 
-EXIT_INTERRUPTED = 130  # the shell's convention for SIGINT
-
-
-def interrupted_at_start() -> int:
-    """Report a Ctrl-C that came before the command started its work; returns 130."""
-    print("warpcloth: interrupted while starting, before anything was written", file=sys.stderr)
-    return EXIT_INTERRUPTED
+from .interrupt import EXIT_INTERRUPTED, interrupted_at_start
 
 
 def main(argv: Sequence[str] | None = None) -> int:

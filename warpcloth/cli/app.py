@@ -27,7 +27,8 @@ from warpcloth.errors import (
 )
 from warpcloth.sim.model import init_warp_quietly
 
-from . import EXIT_INTERRUPTED, analyse, fit, interrupted_at_start, material, run, scene, sweep, view
+from . import analyse, fit, material, run, scene, sweep, view
+from .interrupt import EXIT_INTERRUPTED, interrupted_at_start
 
 COMMAND_GROUPS = (run, sweep, view, fit, material, analyse, scene)
 """Each registers its subcommands with a ``handler`` (see :func:`main`)."""
@@ -93,6 +94,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         return interrupted_at_start()
     show_warnings_as_lines(args.command)
+    try:
+        return _run_handler(args)
+    finally:
+        from warpcloth.io.writing import release_claims
+
+        release_claims()  # the command is over: a later one in this process may write there
+
+
+def _run_handler(args: argparse.Namespace) -> int:
+    # the command, its failures mapped to one line and an exit status each
     try:
         return args.handler(args)
     except DivergenceError as exc:

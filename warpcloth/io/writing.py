@@ -25,6 +25,9 @@ WRITING = ".writing"
 _HELD: dict[Path, int] = {}
 """Markers this process holds: path → the open descriptor that holds the lock."""
 
+_CLAIMED: set[Path] = set()
+"""The markers :func:`claim_result` took (released by :func:`release_claims` or at exit)."""
+
 
 def marker_of(result: str | Path) -> Path:
     """The marker beside result file or directory ``result``."""
@@ -105,4 +108,13 @@ def claim_result(result: str | Path, option: str) -> None:
     if writer is not None:
         raise OptionError(option, f"{result} is being written by another warpcloth process (pid {writer}); wait for "
                           f"it, or choose another {option}")
+    _CLAIMED.add(marker)
     atexit.register(release, marker)
+
+
+def release_claims() -> None:
+    """Release every marker :func:`claim_result` took: the command that claimed them is over
+    (its results are whole, or were never started), though the process may go on (a
+    command run from Python, a test)."""
+    while _CLAIMED:
+        release(_CLAIMED.pop())
