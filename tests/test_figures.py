@@ -143,11 +143,17 @@ def test_every_reader_reads_a_delimiter_the_same(tmp_path, name, text):
 
 
 def test_tab_separated_names_with_spaces_are_read_by_every_reader(tmp_path):
+    from warpcloth.calibrate import kes
+
     path = tmp_path / "tab.txt"
     path.write_text("Strain (%)\tForce (gf/cm)\n" + numbers("\t", ","))
-    trace, loop = read_both(path)
-    np.testing.assert_array_equal(trace.t, T_PERCENT)
+    loop = kes.read_tensile_csv(path)
     np.testing.assert_array_equal(loop.force, X_FORCE)
+    # as a laser trace its units are no time and length: refused, never read as s and mm
+    with pytest.raises(wc.DataFileError, match=r"column 1 is headed 'Strain \(%\)': '%' is not a time unit"):
+        read_laser_trace(path)
+    path.write_text("time of day\tlaser x\n" + numbers("\t", ","))
+    np.testing.assert_array_equal(read_laser_trace(path).t, T_PERCENT)
     assert loop.strain_unit == "strain in percent (from the header)"
     assert list(loop.rows) == list(range(2, 2 + len(T_PERCENT)))
     path.write_text("t (s)\ttheta (deg)\n0\t0\n0,1\t90\n")
