@@ -18,6 +18,7 @@ those heavy imports, and an interrupt while they load exits 130 with one line.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 
 from .errors import (
     DataFileError,
@@ -41,8 +42,8 @@ _LAZY = {
 
 def __getattr__(name: str) -> object:
     """Import a public name's module on first use (see the module docstring)."""
-    if name in _SUBMODULES:
-        return importlib.import_module(f".{name}", __name__)
+    if name in _SUBMODULES or (not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}")):
+        return importlib.import_module(f".{name}", __name__)  # wc.metrics and every other submodule
     if name in _LAZY:
         value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
         globals()[name] = value
