@@ -12,6 +12,7 @@ from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
 from .scene import COORDINATES, Scene, build_batch, load_scene
 from .scene.overrides import Overrides, override_pairs
+from .scene.step import shared_auto_step
 from .sim import RunResult, simulate_batch
 from .sim.runner import check_divergence_policy, check_recording_fits
 from .sim.state import checked_nodes
@@ -37,10 +38,12 @@ def simulate(
     DivergenceError (its ``result`` holds what was recorded); ``"record"`` lets the other
     strips go on. ``initial_positions`` / ``initial_velocities`` (``[node, variant, xy]``,
     m and m/s) replace the straight hanging start, e.g. with a mode shape; hinges start
-    fresh there. An ``out`` that already holds something is refused unless ``overwrite``,
-    and then replaced only once the new run is complete. On a CPU the batch's strips are
-    shared among ``threads`` threads (default: every core this process may use; the
-    results are bitwise the same for any count).
+    fresh there. Scenes whose step ``dt_s = "auto"`` chose alone share the step that suits
+    them all (:func:`~warpcloth.scene.step.shared_auto_step`). An ``out`` that already
+    holds something is refused unless ``overwrite``, and then replaced only once the new
+    run is complete. On a CPU the batch's strips are shared among ``threads`` threads
+    (default: every core this process may use; the results are bitwise the same for any
+    count).
     """
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
     wrong = next((s for s in scenes if not isinstance(s, Scene)), None)
@@ -48,6 +51,7 @@ def simulate(
         raise TypeError(f"simulate takes Scene objects (wc.load_scene(name_or_path) makes one), got {wrong!r}"
                         if scenes else "simulate needs at least one scene")
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
+    scenes = shared_auto_step(scenes)
     if initial_velocities is not None and initial_positions is None:
         raise OptionError("initial_velocities", "given without initial_positions; give the start's positions too "
                           "(e.g. the rest shape, warpcloth.scene.rest_positions)")

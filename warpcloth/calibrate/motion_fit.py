@@ -38,6 +38,7 @@ estimated from the data by :func:`~warpcloth.calibrate.noise.difference_noise`),
 from __future__ import annotations
 
 import copy
+import itertools
 import json
 import math
 import time
@@ -53,11 +54,16 @@ from warpcloth.kernels import bending_law
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, batch_fields, check_step, field_laws, law_fields, scene_from_dict, set_field
 from warpcloth.scene.sampling import latin_hypercube
+from warpcloth.scene.step import AUTO, choose_step
 from warpcloth.sim import RunResult
 from warpcloth.sim.resources import check_memory
 
 from .bootstrap import block_bootstrap_sigma
 from .noise import difference_noise
+
+MAX_STEP_CORNERS_FREE = 10
+"""With ``integrator.dt_s = "auto"`` a fit chooses its one step over the 2^d corners of its
+box: at most this many free parameters (1024 scenes, a few seconds)."""
 
 ALIASES = {
     "gamma": "damping.gamma_per_s",
@@ -164,6 +170,8 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
         for bound in (lower, upper):  # every point of the box must be a valid scene
             data = base.to_dict()
             set_field(data, dotted, float(bound))
+            if base.integrator.dt_chosen_by == AUTO:  # the fit chooses its step over the box
+                set_field(data, "integrator.dt_s", AUTO)
             try:
                 check_step(scene_from_dict(data))
             except SceneError as exc:
@@ -217,6 +225,7 @@ class Objective:
             # between samples 1/600 s apart instead of video frames.
             set_field(self.base, "output.frame_rate_hz", scene.output.frame_rate_hz * scene.output.probes_per_frame)
             set_field(self.base, "output.probes_per_frame", 1)
+        self._choose_step()
         self.scene = scene_from_dict(copy.deepcopy(self.base))
         if isinstance(measurement, TrackedShapes):
             free_length = self.scene.strip.free_length_mm * 1e-3
@@ -228,6 +237,20 @@ class Objective:
         self.shift_step = 0.5 * self.scene.output_interval
         self.launches = 0
         self.variants = 0
+
+    def _choose_step(self) -> None:
+        # dt_s = "auto": one step for every candidate (a batch shares it), the one that
+        # suits every corner of the box: the step bounds move with D, D1, α and density
+        if self.base.get("integrator", {}).get("dt_s") != AUTO:
+            return
+        if len(self.free) > MAX_STEP_CORNERS_FREE:
+            raise OptionError("--free", f"integrator.dt_s = auto checks every corner of the box, 2^{len(self.free)} "
+                              f"scenes for {len(self.free)} free parameters (at most {MAX_STEP_CORNERS_FREE}); "
+                              "give integrator.dt_s a number")
+        corners = [scene_from_dict(self.scene_data(np.array(c, dtype=float)), choose_step=False)
+                   for c in itertools.product((0.0, 1.0), repeat=len(self.free))]
+        set_field(self.base, "integrator.dt_s", choose_step(corners).dt_s)
+        set_field(self.base, "integrator.dt_chosen_by", AUTO)
 
     def values(self, u: np.ndarray) -> dict[str, float]:
         """Physical values (the scene fields) of a unit-box point."""

@@ -119,6 +119,7 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
     from warpcloth.io.atomic import write_text_atomically
     from warpcloth.io.measured import read_encoder
     from warpcloth.scene import load_scene, read_scene_file
+    from warpcloth.scene.step import AUTO
 
     until = load_scene(args.scene).run.duration_s  # a bad field is named with its file and line
     out = new_result(args.output, args.overwrite, "-o")
@@ -129,7 +130,10 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
     data = scene_with_clamp_motion(raw, fit, until_s=until)
     data.pop("sweep", None)
     scene = scene_from_dict(data)  # validates before anything is written
-    write_text_atomically(out, tomli_w.dumps(scene.to_dict()))
+    written = scene.to_dict()
+    if scene.integrator.dt_chosen_by == AUTO:  # a fit of this scene chooses its own step over its box
+        written["integrator"].update(dt_s=AUTO, dt_chosen_by="scene")
+    write_text_atomically(out, tomli_w.dumps(written))
     a = ", ".join(f"{c:.5g}" for c in fit.quartic_si)
     lines = "; ".join(f"{w:.5g} rad/s from {b:.4f} s" for w, b in zip(fit.speeds_rad_per_s, fit.breaks_s, strict=True))
     end = (f"stopped at {fit.stop_s:.4f} s" if fit.stop_s is not None else

@@ -10,6 +10,7 @@ from warpcloth.errors import DivergenceError
 from warpcloth.metrics import swing_summary
 from warpcloth.runs import simulate
 from warpcloth.scene import bundled_scenes, load_scene
+from warpcloth.scene.step import describe_step
 
 from .options import device, new_result, path_text
 
@@ -37,6 +38,8 @@ def run_scene(args: argparse.Namespace) -> int:
         check_stage_path(args.usd, "--usd")  # before the run, not after it
         new_result(args.usd, args.overwrite, "--usd")
     scene = load_scene(args.scene, args.overrides)
+    if scene.integrator.dt_chosen_by == "auto":
+        print(describe_step(scene))
     out = Path(args.out or Path("runs") / Path(args.scene).stem)
     try:
         result = simulate(scene, device=args.device, out=out, progress=not args.no_progress, overwrite=args.overwrite)

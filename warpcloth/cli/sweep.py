@@ -41,6 +41,12 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     out = Path(args.out or Path("runs") / Path(args.scene).stem)
     sweep = load_sweep(args.scene, args.overrides, max_variants=args.max_variants or MAX_VARIANTS,
                        progress=not args.no_progress)
+    chosen = [s for s in sweep.scenes if s.integrator.dt_chosen_by == "auto"]
+    if chosen:
+        from warpcloth.scene.step import choose_step, requesting_auto
+
+        print(choose_step(requesting_auto(chosen)).describe()
+              .replace("auto:", f"auto, for all {len(chosen)} variants:", 1))
     summary = run_sweep(sweep, out, max_batch=args.max_batch, workers=args.workers, scheduler=args.scheduler,
                         device=args.device, frames=args.frames, progress=not args.no_progress)
     n_div = int(summary["diverged"].sum())

@@ -84,7 +84,7 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
                                                         scene.clamp.rotation_centre_dy_mm]),
             hold_target=units.LENGTH_MM * np.array([scene.release.hold_x_mm, scene.release.hold_y_mm]),
             settle_damping=scene.release.settle_damping_per_s,
-            edge_hinge_length=first.spacing * (0.5 if scene.clamp.edge_hinge == "second_order" else 1.0),
+            edge_hinge_length=scene.edge_hinge_length,
         )
     return builder
 

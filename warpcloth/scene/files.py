@@ -13,6 +13,7 @@ from .materials import MATERIAL_FILE_KEY, with_material_file
 from .overrides import Overrides, apply_overrides
 from .parse import parse_section, parse_toml, read_toml_text
 from .schema import Scene
+from .step import AUTO, with_chosen_step
 from .validate import check_step, validate_scene
 
 
@@ -87,15 +88,19 @@ def read_scene_file(name_or_path: str | Path) -> dict:
     return _read_scene(name_or_path)[0]
 
 
-def scene_from_dict(data: dict) -> Scene:
+def scene_from_dict(data: dict, choose_step: bool = True) -> Scene:
     """Parse and validate raw scene data.
 
     A ``material.from_file`` (path or bundled name) fills every [material] field the data
     do not set; the scene holds the explicit values afterwards, so ``to_dict()`` re-reads
-    to the same scene.
+    to the same scene. ``integrator.dt_s = "auto"`` is replaced by the step
+    :func:`~warpcloth.scene.step.with_chosen_step` picks for this scene alone, unless
+    ``choose_step`` is false (a sweep picks one step for all its variants).
     """
     scene = parse_section(Scene, with_material_file(data), "")
     validate_scene(scene)
+    if choose_step and scene.integrator.dt_s == AUTO:
+        (scene,) = with_chosen_step([scene])
     return scene
 
 

@@ -36,8 +36,12 @@ def coerce_value(value: Any, tp: Any, name: str, meta: dict) -> Any:
             raise SceneError(name, f"expected an integer, got {value!r}")
         out: Any = value
     elif tp is float:
+        words = meta.get("words") or ()
+        if isinstance(value, str) and value in words:
+            return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise SceneError(name, f"expected a number, got {value!r}")
+            also = "".join(f" or {w!r}" for w in words)
+            raise SceneError(name, f"expected a number{also}, got {value!r}")
         out = float(value)
         if not math.isfinite(out):
             raise SceneError(name, f"must be a finite number, got {out}")

@@ -51,9 +51,12 @@ PAPER_LAW_SHAPE = ("tagawa2003", "masing")
 
 
 def _field(default: Any, doc: str, *, gt: float | None = None, ge: float | None = None,
-           choices: tuple[str, ...] | None = None, per_strip: bool = False, laws: tuple[str, ...] = ()) -> Any:
+           choices: tuple[str, ...] | None = None, per_strip: bool = False, laws: tuple[str, ...] = (),
+           words: tuple[str, ...] = ()) -> Any:
     # ``laws``: the field is a parameter of those bending laws only (material fields; none: every law's)
-    meta = {"doc": doc, "gt": gt, "ge": ge, "choices": choices, "per_strip": per_strip, "laws": laws}
+    # ``words``: strings a number field also takes (dt_s = "auto")
+    meta = {"doc": doc, "gt": gt, "ge": ge, "choices": choices, "per_strip": per_strip, "laws": laws,
+            "words": words}
     if isinstance(default, list):
         return field(default_factory=lambda: list(default), metadata=meta)
     return field(default=default, metadata=meta)
@@ -183,7 +186,11 @@ class IntegratorSection:
     scheme: str = _field("semi_implicit", " | ".join(f"{name} ({solver.label})" for name, solver in SOLVERS.items()),
                          choices=tuple(SOLVERS))
     dt_s: float = _field(1e-5, "time step (the paper used 1e-7); with semi_implicit below the stretching limit "
-                         "h·√(ρ_A/a1)/cos(π/4N), docs/model.md §9.3", gt=0)
+                         "h·√(ρ_A/a1)/cos(π/4N), docs/model.md §9.3; \"auto\": the longest step stable and "
+                         "measured accurate, a whole fraction of the probe interval (§9.6)", gt=0, words=("auto",))
+    dt_chosen_by: str = _field("scene", "how dt_s was set: \"auto\" when the scene asked for dt_s = \"auto\" "
+                               "(warpcloth writes the step it chose into dt_s), else \"scene\"",
+                               choices=("scene", "auto"))
     precision: str = _field("float64", "float64 | float32", choices=("float64", "float32"))
     divergence_strain: float = _field(0.25, "|ε| beyond which a strip counts as diverged; the "
                                       "tensile curve must increase up to it", gt=0)
@@ -244,6 +251,11 @@ class Scene:
     def n_nodes(self) -> int:
         """Number of nodes, clamp included."""
         return round((self.strip.clamp_length_mm + self.strip.free_length_mm) / self.strip.spacing_mm) + 1
+
+    @property
+    def edge_hinge_length(self) -> float:
+        """Length (m) of strip the clamp-edge hinge bends: h/2 second order, h the paper's."""
+        return self.spacing * (0.5 if self.clamp.edge_hinge == "second_order" else 1.0)
 
     @property
     def output_interval(self) -> float:

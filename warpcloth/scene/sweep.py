@@ -43,6 +43,7 @@ from .locate import located
 from .overrides import apply_overrides, set_field
 from .sampling import discrepancy, latin_hypercube
 from .schema import Scene, batch_fields
+from .step import with_chosen_step
 from .validate import check_step
 
 MAX_VARIANTS = 100_000
@@ -259,11 +260,11 @@ def variant_scenes(base: dict, assignments: list[dict[str, Any]], progress: bool
                 # swept material fields land on top of it, whatever their order in [sweep].
                 for key, value in sorted(assignment.items(), key=lambda kv: not is_material_file_key(kv[0])):
                     set_field(data, key, value)
-                scenes.append(scene_from_dict(data))
+                scenes.append(scene_from_dict(data, choose_step=False))
             except SceneError as exc:
                 raise variant_error(exc, i, assignment) from exc
             bar.update()
-    return scenes
+    return with_chosen_step(scenes)
 
 
 def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] = (),

@@ -55,6 +55,8 @@ def validate_scene(scene: Scene) -> None:
                          f"{st.free_length_mm - st.spacing_mm:g} mm below the clamp",
                          related=("strip.spacing_mm", "strip.free_length_mm"))
     dt = scene.integrator.dt_s
+    if isinstance(dt, str):  # "auto", chosen after these checks (warpcloth.scene.step)
+        return
     if dt > scene.output_interval:
         raise SceneError("integrator.dt_s", f"{dt:g} s is longer than the probe interval "
                          f"{scene.output_interval:g} s (1 / (output.frame_rate_hz × output.probes_per_frame))",

@@ -9,6 +9,7 @@ solver class here registered in :data:`SOLVERS`.
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -27,6 +28,7 @@ from .control import Control
 from .material import MaterialSI
 from .model import Model
 from .recorder import Recorder
+from .stability import transverse_step_limit
 from .state import State
 
 BUDGET_TOLERANCE = 0.1
@@ -52,6 +54,16 @@ QUANTITY = {
     STATUS_BUDGET: ("energy budget residual (in units of the peak kinetic energy, at least 1e-3 of the strip's "
                     "weight times its free length)"),
 }
+
+
+@dataclass(frozen=True)
+class StepBound:
+    """The longest step a scheme runs stably, the mode that sets it and whether the bound
+    is exact (the stretching limit) or a linearised estimate (explicit bending)."""
+
+    seconds: float
+    mode: str
+    exact: bool
 
 
 class Solver(Protocol):
@@ -97,6 +109,15 @@ class ExplicitEulerSolver:
         """The dt (s) beyond which this scheme is unstable for ``material`` on a chain of
         ``free_nodes`` nodes below the clamp at segment length ``spacing`` (m), or None
         where no such bound is known."""
+        return None
+
+    @classmethod
+    def stable_step(cls, material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
+                    gravity: float) -> StepBound | None:
+        """The longest step this scheme runs stably on the chain :meth:`step_limit`
+        describes (the clamp-edge hinge bending ``edge_hinge_length``, under ``gravity``),
+        or None where no bound is known. Explicit bending enters as the straight hanging
+        chain's stiffest transverse mode (:func:`~warpcloth.sim.stability.transverse_step_limit`)."""
         return None
 
     def step_of(self, time: float) -> int:
@@ -189,6 +210,16 @@ class SemiImplicitEulerSolver(ExplicitEulerSolver):
             return None
         return spacing * float(np.sqrt(material.density / a1)) / float(np.cos(np.pi / (4 * free_nodes)))
 
+    @classmethod
+    def stable_step(cls, material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
+                    gravity: float) -> StepBound | None:
+        """The smaller of the exact stretching limit and the transverse (bending) estimate."""
+        stretching = cls.step_limit(material, spacing, free_nodes)
+        bending = transverse_step_limit(material, spacing, free_nodes, edge_hinge_length, gravity)
+        if stretching is not None and stretching <= bending:
+            return StepBound(stretching, "stretching", exact=True)
+        return StepBound(bending, "bending", exact=False)
+
 
 class ForwardEulerSolver(ExplicitEulerSolver):
     """Forward Euler, the paper's eqs. 5-6; it amplifies every undamped oscillation."""
@@ -207,6 +238,13 @@ class ImexSolver(ExplicitEulerSolver):
     scheme = "imex"
     label = "stretching implicit, the rest symplectic Euler"
     advice = " (with imex, explicit bending limits dt: ∝ h², docs/model.md §9.5)"
+
+    @classmethod
+    def stable_step(cls, material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
+                    gravity: float) -> StepBound | None:
+        """The transverse (bending) estimate: stretching is implicit."""
+        return StepBound(transverse_step_limit(material, spacing, free_nodes, edge_hinge_length, gravity),
+                         "bending", exact=False)
 
 
 SOLVERS: dict[str, type[ExplicitEulerSolver]] = {

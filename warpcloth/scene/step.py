@@ -1,0 +1,146 @@
+"""``integrator.dt_s = "auto"``: the longest step the scheme runs stably and the evidence
+says is accurate, a whole fraction of the probe interval (docs/model.md §9.6).
+
+The step is the smallest of three, over every scene that shares it (a sweep's variants, a
+fit's corners): a margin under the scheme's stability bound (exact for stretching,
+:data:`STABILITY_MARGIN`), the longest step measured accurate for the scheme
+(:data:`ACCURATE_STEP_S`), and the probe interval; then shortened so that a whole number
+of steps fills the interval, so every probe falls on a step.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from warpcloth.errors import SceneError
+from warpcloth.kernels import bending_law
+from warpcloth.sim import SOLVERS
+from warpcloth.sim.solvers import StepBound
+from warpcloth.sim.stability import cycle_response
+
+from .materials import to_si
+from .schema import Scene
+from .validate import validate_scene
+
+AUTO = "auto"
+"""The value of ``integrator.dt_s`` that asks for this choice."""
+
+STABILITY_MARGIN = {True: 0.9, False: 0.8}
+"""The fraction of the stability bound taken: 0.9 of an exact bound (strain and damping
+lower the stretching limit a little, §9.3), 0.8 of the linearised bending estimate (a
+deflected strip is not straight; measured 10 % conservative on a hysteretic rotation and
+exact on an elastic one, §9.6)."""
+
+ACCURATE_STEP_S = {"semi_implicit": None, "imex": 2e-4}
+"""The longest step each scheme is measured accurate at, where stability does not already
+bound it. imex: within 0.2 % of the tip's excursion of the dt = 1e-7 s solution at 2e-4 s
+on both bundled experiments with masing (0.106 % on the swing at h = 5 mm, 0.129 % on the
+rotation at 2.5 mm) and on the elastic swing (0.15 %); its error grows as dt
+(benchmarks/imex_defaults.py, benchmarks/RESULTS.md). semi_implicit: within 0.03 % at its
+stretching limit on both (stability binds first)."""
+
+
+@dataclass(frozen=True)
+class StepChoice:
+    """The chosen step and what set it."""
+
+    dt_s: float
+    bound: StepBound
+    margin: float
+    accurate_s: float | None
+    interval_s: float
+    scheme: str
+
+    def describe(self) -> str:
+        """One line for the run's output."""
+        held = (f"{self.margin:g} × the {self.bound.mode} {'limit' if self.bound.exact else 'estimate'} "
+                f"{self.bound.seconds:.3e} s")
+        if self.accurate_s is not None:
+            held += f" and the {self.accurate_s:g} s up to which {self.scheme} is measured within 0.2 %"
+        return (f"integrator.dt_s = auto: {self.dt_s:.4e} s = 1/{round(self.interval_s / self.dt_s)} of the probe "
+                f"interval, within {held} (docs/model.md §9.6)")
+
+
+def _requests(scene: Scene) -> bool:
+    return scene.integrator.dt_s == AUTO
+
+
+def choose_step(scenes: Sequence[Scene]) -> StepChoice:
+    """The step for ``scenes`` (one scheme and probe interval: batch fields), the longest
+    that suits every one; a SceneError of ``integrator.dt_s`` where there is no such step."""
+    first = scenes[0]
+    scheme, interval = first.integrator.scheme, first.output_interval
+    solver = SOLVERS[scheme]
+    materials = [to_si(scene.material) for scene in scenes]
+    response = cycle_response(materials)
+    for scene, material, (_, loop) in zip(scenes, materials, response, strict=True):
+        law = bending_law(material.bending_law)
+        if scheme == "imex" and loop > 0 and not law.MESH_INDEPENDENT:
+            raise SceneError("integrator.dt_s", f"auto has no accurate imex step for the {law.NAME} law of "
+                             f"material {scene.material.name!r}: without return-point memory its loop keeps a "
+                             "0.1–2 % floor against the converged solution that no dt removes (docs/model.md "
+                             "§9.5); use bending_law = \"masing\", or scheme = \"semi_implicit\" with dt_s = "
+                             "\"auto\"", related=("integrator.scheme", "material.bending_law"))
+    bounds = []
+    for scene, material in zip(scenes, materials, strict=True):
+        bound = solver.stable_step(material, scene.spacing, scene.n_nodes - scene.n_clamped,
+                                   scene.edge_hinge_length, scene.run.gravity_m_per_s2)
+        if bound is None:
+            raise SceneError("integrator.dt_s", f"auto needs a scheme with a known stability limit; {scheme} has "
+                             "none (forward Euler amplifies every undamped oscillation, docs/model.md §9): use "
+                             "semi_implicit or imex", related=("integrator.scheme",))
+        bounds.append(bound)
+    bound = min(bounds, key=lambda b: b.seconds * STABILITY_MARGIN[b.exact])
+    margin = STABILITY_MARGIN[bound.exact]
+    accurate = ACCURATE_STEP_S.get(scheme)
+    longest = min(bound.seconds * margin, accurate or math.inf, interval)
+    dt = interval / math.ceil(interval / longest * (1 - 1e-12))
+    return StepChoice(dt, bound, margin, accurate if accurate is not None and accurate < bound.seconds * margin
+                      else None, interval, scheme)
+
+
+def with_chosen_step(scenes: Sequence[Scene]) -> list[Scene]:
+    """``scenes`` with every ``dt_s = "auto"`` replaced by the one step
+    :func:`choose_step` picks for all of them, marked ``dt_chosen_by = "auto"``; scenes
+    with a number keep it. The choice is made per group of scheme and probe interval."""
+    scenes = list(scenes)
+    groups: dict[tuple[str, float], list[int]] = {}
+    for i, scene in enumerate(scenes):
+        if _requests(scene):
+            groups.setdefault((scene.integrator.scheme, scene.output_interval), []).append(i)
+    for members in groups.values():
+        dt = choose_step([scenes[i] for i in members]).dt_s
+        for i in members:
+            integrator = dataclasses.replace(scenes[i].integrator, dt_s=dt, dt_chosen_by=AUTO)
+            scenes[i] = dataclasses.replace(scenes[i], integrator=integrator)
+            validate_scene(scenes[i])  # the checks that needed a number (steps in the run)
+    return scenes
+
+
+def shared_auto_step(scenes: Sequence[Scene]) -> list[Scene]:
+    """``scenes`` for one batch: those whose step auto chose (``dt_chosen_by = "auto"``),
+    each alone, get the one step that suits them all when theirs differ; the rest as given."""
+    scenes = list(scenes)
+    chosen = [i for i, s in enumerate(scenes) if s.integrator.dt_chosen_by == AUTO]
+    if len({scenes[i].integrator.dt_s for i in chosen}) > 1:
+        for i, scene in zip(chosen, with_chosen_step(requesting_auto([scenes[i] for i in chosen])), strict=True):
+            scenes[i] = scene
+    return scenes
+
+
+def requesting_auto(scenes: Sequence[Scene]) -> list[Scene]:
+    """``scenes`` as if each asked for ``dt_s = "auto"`` again (to say why a step was chosen)."""
+    return [dataclasses.replace(s, integrator=dataclasses.replace(s.integrator, dt_s=AUTO)) for s in scenes]
+
+
+def describe_step(scene: Scene) -> str:
+    """What auto chooses for ``scene`` alone and why: the line ``run`` prints for a step
+    chosen automatically (a sweep's or a fit's step suits all its scenes, and may be shorter)."""
+    choice = choose_step(requesting_auto([scene]))
+    if math.isclose(choice.dt_s, scene.integrator.dt_s, rel_tol=1e-12):
+        return choice.describe()
+    return (f"integrator.dt_s = auto: {scene.integrator.dt_s:.4e} s, the longest step that suits every scene "
+            f"sharing it (this one alone: {choice.describe().split(': ', 1)[1]})")
