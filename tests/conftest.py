@@ -47,3 +47,33 @@ def kes_moment(material, k):
 
     m, _ = moment_along_path(to_si(material), np.asarray(k) * units.CURVATURE_PER_CM)
     return m / units.MOMENT_GF_CM_PER_CM
+
+
+def run_cli(*args, cwd=None, timeout=None):
+    """``warpcloth ARGS`` run in this process by the command's entry point
+    (:func:`warpcloth.cli.app.main`) in ``cwd``, its output captured: a child process
+    would spend ~2 s of CPU starting Python, Warp and pandas for each command. Returns a
+    :class:`subprocess.CompletedProcess` like ``subprocess.run``. (``timeout`` is accepted
+    for the same signature: a command here runs to its end.) What needs a process of its
+    own (Ctrl-C, a kill, a file-size limit, two writers) starts one."""
+    import contextlib
+    import io
+    import os
+    import subprocess
+    import warnings
+
+    from warpcloth.cli.app import main
+
+    out, err = io.StringIO(), io.StringIO()
+    before = os.getcwd()
+    try:
+        if cwd is not None:
+            os.chdir(cwd)
+        with warnings.catch_warnings(), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                code = main([str(a) for a in args])
+            except SystemExit as exc:  # argparse's own errors and --help
+                code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    finally:
+        os.chdir(before)
+    return subprocess.CompletedProcess(list(args), code, out.getvalue(), err.getvalue())

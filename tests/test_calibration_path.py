@@ -4,12 +4,10 @@ header units), its verdict on encoders it cannot describe, and ``clamp fit-angle
 ``fit`` recovering the rotation centre, γ and D1 (issue 12's acceptance)."""
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
-from conftest import overrides  # noqa: F401  (keeps Warp quiet)
+from conftest import overrides, run_cli  # noqa: F401  (keeps Warp quiet)
 
 import warpcloth as wc
 from warpcloth.calibrate.clamp_fit import fit_clamp_motion, scene_with_clamp_motion
@@ -72,9 +70,8 @@ def test_an_encoder_no_form_describes_is_a_poor_fit_and_the_command_says_so(tmp_
                                                                                                strict=True)))
 
     def cli(*extra):
-        return subprocess.run([sys.executable, "-m", "warpcloth.cli", "clamp", "fit-angle", str(encoder), "--scene",
-                               "impulsive_rotation", "-o", "w.toml", "--overwrite", *extra], capture_output=True,
-                              text=True, cwd=tmp_path, timeout=300)
+        return run_cli("clamp", "fit-angle", str(encoder), "--scene", "impulsive_rotation", "-o", "w.toml",
+                       "--overwrite", *extra, cwd=tmp_path)
 
     done = cli()
     assert done.returncode == 6 and "not a fit (poor_fit)" in done.stderr and "--accept" in done.stderr
@@ -146,8 +143,7 @@ def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path):
         f"{t:.4f},{v:.6f}" for t, v in zip(encoder_t, reading, strict=True)))
 
     def cli(*args):
-        return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True,
-                              cwd=tmp_path, timeout=600)
+        return run_cli(*args, cwd=tmp_path)
 
     done = cli("clamp", "fit-angle", "encoder.csv", "--scene", "impulsive_rotation", "-o", "measured.toml")
     assert done.returncode == 0, done.stderr
@@ -238,10 +234,9 @@ def test_separate_basins_of_the_space_filling_stage_are_reported(name, cost, exp
 def test_a_wrong_clamp_motion_is_not_reported_as_a_fit(tmp_path):
     # The bundled markers (rotation at 16 rad/s) fitted with the clamp's speed set 25 %
     # low: the best γ, dy (6.98 mm against the truth 4.0) leave an RMS 2.0× the noise.
-    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "fit", "impulsive_rotation", "--measured",
-                           "impulsive_rotation_shapes", "--free", "gamma,rotation_centre_dy_mm", "--align-start",
-                           "0.01", "--set", "clamp.segments.1.theta_coefficients_si.1=12.0", "--out", "wrong",
-                           "--no-progress"], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    done = run_cli("fit", "impulsive_rotation", "--measured", "impulsive_rotation_shapes", "--free",
+                   "gamma,rotation_centre_dy_mm", "--align-start", "0.01", "--set",
+                   "clamp.segments.1.theta_coefficients_si.1=12.0", "--out", "wrong", "--no-progress", cwd=tmp_path)
     assert done.returncode == 6 and "not a fit (poor_fit)" in done.stderr, done.stdout + done.stderr
     assert json.loads((tmp_path / "wrong" / "fit.json").read_text())["status"] == "poor_fit"
 

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import warp as wp
-from conftest import interruptible
+from conftest import interruptible, run_cli
 from warpcloth.kernels import PROBE_FIELDS
 
 import warpcloth as wc
@@ -21,8 +21,7 @@ from warpcloth import load_recording
 
 
 def warpcloth_cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True,
-                          cwd=cwd, timeout=300)
+    return run_cli(*args, cwd=cwd)
 
 
 def test_run_writes_a_complete_run_directory(tmp_path):
@@ -91,6 +90,11 @@ def test_wheel_maps_kernels_and_scenes_into_the_warpcloth_namespace(tmp_path):
     assert "warpcloth/kernels/strip.py" in names and "warpcloth/calibrate/kes/readers.py" in names
     assert "warpcloth/scenes/damped_swing.toml" in names and "warpcloth/scenes/impulsive_rotation.toml" in names
     assert not any(n.startswith("kernels/") or n.startswith("scenes/") for n in names)
+    # the data files too (one wheel build serves both checks: it takes ~5 s)
+    for name in wc.scene.bundled_materials():
+        assert f"warpcloth/scenes/materials/{name}.toml" in names
+    for name in ("kes_fb1_example", "kes_fb2_example", "kes_fb2_inner_loops"):
+        assert f"warpcloth/scenes/data/{name}.csv" in names
 
 
 def test_progress_bar_shows_simulated_time_rate_and_eta(capsys):

@@ -2,12 +2,10 @@
 the simulation put it."""
 
 import re
-import subprocess
-import sys
 
 import numpy as np
 import pytest
-from conftest import overrides
+from conftest import overrides, run_cli
 from PIL import Image
 
 import warpcloth as wc
@@ -245,8 +243,7 @@ def test_gif_strides_play_in_real_time():
 
 def test_cli_export_plot_and_render(swing_run, tmp_path):
     def cli(*args):
-        return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True,
-                              timeout=300)
+        return run_cli(*args)
 
     done = cli("export-usd", str(swing_run), "-o", str(tmp_path / "swing.usdc"), "--ribbon")
     assert done.returncode == 0, done.stderr

@@ -4,15 +4,12 @@ hand-computable loops, every bad-data error, material files and scenes that use 
 and the ``warpcloth material`` commands end to end."""
 
 import copy
-import subprocess
-import sys
-import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 import tomli_w
-from conftest import kes_cycle, kes_moment
+from conftest import kes_cycle, kes_moment, run_cli
 
 import warpcloth as wc
 from warpcloth.calibrate import kes
@@ -387,23 +384,11 @@ def test_unknown_material_reference_lists_the_bundled_ones():
         wc.load_scene("damped_swing", ["material.from_file=cotton"])
 
 
-def test_material_files_are_in_the_wheel(tmp_path):
-    done = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(tmp_path), str(ROOT)],
-                          capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    (wheel,) = tmp_path.glob("warpcloth-*.whl")
-    names = zipfile.ZipFile(wheel).namelist()
-    for name in bundled_materials():
-        assert f"warpcloth/scenes/materials/{name}.toml" in names
-    assert "warpcloth/scenes/data/kes_fb1_example.csv" in names and "warpcloth/scenes/data/kes_fb2_example.csv" in names
-
-
 # ------------------------------------------------------------------------------- CLI
 
 
 def warpcloth_cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True,
-                          cwd=cwd, timeout=300)
+    return run_cli(*args, cwd=cwd)
 
 
 def test_cli_fit_kes_on_the_example_data(tmp_path):
@@ -479,8 +464,6 @@ def test_a_bending_loop_must_start_from_rest(tmp_path):
 def test_a_loop_the_law_cannot_describe_is_not_reported_as_a_fit(tmp_path):
     # A "bending loop" that is a sine: the fit ends hundreds of times the data's noise
     # away; the material file records that, and the command exits 6 unless --accept.
-    import subprocess
-    import sys
 
     k = np.concatenate([np.linspace(0, 2.5, 100), np.linspace(2.5, -2.5, 200), np.linspace(-2.5, 0, 100)])
     moment = 0.3 * np.sin(5 * k) + np.random.default_rng(0).normal(0, 0.001, len(k))
@@ -488,9 +471,8 @@ def test_a_loop_the_law_cannot_describe_is_not_reported_as_a_fit(tmp_path):
         f"{a:.5f},{b:.6f}" for a, b in zip(k, moment, strict=True)))
 
     def cli(*extra):
-        return subprocess.run([sys.executable, "-m", "warpcloth.cli", "material", "fit-kes", "--tensile",
-                               "kes_fb1_example", "--bending", "fb2.csv", "--density-g-per-cm2", "0.02", "-o", "m.toml",
-                               "--overwrite", *extra], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+        return run_cli("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "fb2.csv",
+                       "--density-g-per-cm2", "0.02", "-o", "m.toml", "--overwrite", *extra, cwd=tmp_path)
 
     done = cli()
     assert done.returncode == 6 and "not a fit (poor_fit): the bending RMS" in done.stderr, done.stderr

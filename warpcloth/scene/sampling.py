@@ -6,7 +6,6 @@ fills the box."""
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import qmc
 
 DISCREPANCY_SAMPLES = 10_000
 """Samples up to which :func:`discrepancy` is computed: its cost grows as n², about 1 s
@@ -20,6 +19,8 @@ def latin_hypercube(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
     drawing from ``rng`` (a sweep's variants are fixed by its seed, bit for bit, for a
     given SciPy).
     """
+    from scipy.stats import qmc  # here: scipy.stats is ~40 % of every command's start-up
+
     return qmc.LatinHypercube(d, rng=rng).random(n)
 
 
@@ -29,4 +30,6 @@ def discrepancy(unit: np.ndarray) -> float | None:
     None for more than :data:`DISCREPANCY_SAMPLES` points, or none."""
     if not 0 < len(unit) <= DISCREPANCY_SAMPLES or unit.shape[1] == 0:
         return None
+    from scipy.stats import qmc
+
     return float(qmc.discrepancy(unit))
