@@ -4,13 +4,11 @@ requests are named."""
 
 import copy
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 import warp as wp
-from conftest import overrides  # noqa: F401  (keeps Warp quiet)
+from conftest import overrides, run_cli  # noqa: F401  (keeps Warp quiet)
 
 import warpcloth as wc
 from warpcloth.calibrate.motion_fit import SHIFT, fit_motion, free_parameters
@@ -114,8 +112,7 @@ def test_cli_fits_the_bundled_examples(tmp_path):
     # The bundled data (scenes/data/make_motion_examples.py): encoder from the scene's
     # own θ(t) with 0.1° noise; markers of a rotation about a centre 4.0 mm up, γ 0.8.
     def cli(*args):
-        return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True,
-                              cwd=tmp_path, timeout=300)
+        return run_cli(*args, cwd=tmp_path)
 
     done = cli("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation",
                "-o", "fitted.toml", "--plot", "clamp.png")
@@ -157,9 +154,8 @@ def test_markers_beyond_the_free_end_are_refused():
 def test_a_fit_that_ends_on_a_bound_says_so_and_exits_non_zero(tmp_path):
     # Truth γ = 0.55 /s in the bundled trace; bounds that exclude it pin γ at 5: the search
     # ends there at many times the noise, and that must not read as a fitted value.
-    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "fit", "damped_swing", "--measured",
-                           "damped_swing_laser", "--free", "gamma", "--bounds", "gamma=5:6", "--max-iterations", "3",
-                           "--out", "fit", "--no-progress"], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    done = run_cli("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--bounds",
+                   "gamma=5:6", "--max-iterations", "3", "--out", "fit", "--no-progress", cwd=tmp_path)
     assert done.returncode == 4, done.stderr
     assert "not a fit (at_bound): damping.gamma_per_s = 5 ended on a bound (5:6)" in done.stderr
     result = json.loads((tmp_path / "fit" / "fit.json").read_text())

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 from warpcloth.metrics import swing_metrics, swing_summary
 
@@ -112,8 +113,6 @@ def test_ripples_near_turning_points_are_not_half_cycles():
 def test_one_ruler_for_runs_sweeps_and_measured_traces(tmp_path):
     # The sweep summary, `analyse` of a run of the same scene, and `analyse` of that run's
     # laser line written out as a measured trace give the same first period and decrements.
-    import subprocess
-    import sys
 
     import warpcloth as wc
     from warpcloth.calibrate.analysis import analyse
@@ -141,9 +140,7 @@ def test_one_ruler_for_runs_sweeps_and_measured_traces(tmp_path):
     # a measured trace's period has the uncertainty of the noise it shows (here rounding
     # and ripple: microseconds); a simulation's has none
     assert from_trace["first_period_u_s"] < 1e-5 and np.isnan(from_run["first_period_u_s"])
-    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "analyse", str(trace), str(tmp_path / "r"),
-                           str(tmp_path / "s"), "--csv", str(tmp_path / "t.csv")], capture_output=True, text=True,
-                          timeout=300)
+    done = run_cli("analyse", str(trace), str(tmp_path / "r"), str(tmp_path / "s"), "--csv", str(tmp_path / "t.csv"))
     assert done.returncode == 0, done.stderr
     import pandas as pd
 

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import tomli_w
-from conftest import overrides
+from conftest import overrides, run_cli
 
 import warpcloth as wc
 from warpcloth.scene import apply_overrides, expand, load_sweep, read_scene_file
@@ -181,7 +181,7 @@ def test_resume_after_the_process_is_killed(tmp_path):
     raw = with_sweep(base(run__duration_s=0.6), grid={D1: [0.0, 0.02, 0.04, 0.06]}, zip={GAMMA: [0.1, 1.0]})
     scene_file.write_text(tomli_w.dumps(raw))
     reference = tmp_path / "reference"
-    subprocess.run(cli_sweep(scene_file, reference, "--workers", "0", "--max-batch", "1"), check=True, timeout=300)
+    assert run_cli(*cli_sweep(scene_file, reference, "--workers", "0", "--max-batch", "1")[3:]).returncode == 0
 
     out = tmp_path / "killed"
     child = subprocess.Popen(cli_sweep(scene_file, out, "--workers", "0", "--max-batch", "1"))
@@ -194,7 +194,7 @@ def test_resume_after_the_process_is_killed(tmp_path):
     assert 2 <= len(kept) < 8, "the kill should land mid-sweep"
     assert not (out / "summary.parquet").exists()
 
-    subprocess.run(cli_sweep(scene_file, out, "--workers", "0", "--max-batch", "1"), check=True, timeout=300)
+    assert run_cli(*cli_sweep(scene_file, out, "--workers", "0", "--max-batch", "1")[3:]).returncode == 0
     # only the missing batches ran: the finished ones were not rewritten
     assert all((out / "summary" / name).stat().st_mtime_ns == t for name, t in kept.items())
     assert not list(out.rglob("*.tmp"))
