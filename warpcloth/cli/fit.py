@@ -64,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                          help="override the header's unit (default: the header's, else rad)")
     angle_p.add_argument("--plot", help="also write a PNG of the encoder data and the fit")
     angle_p.add_argument("--accept", action="store_true",
-                         help="exit 0 even when the fit is poor (RMS above 3× the encoder's noise)")
+                         help="exit 0 even when the fit is poor (RMS above 1.5× the encoder's noise)")
     add_overwrite(angle_p, "scene file -o")
 
 
@@ -137,8 +137,11 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
            f"{scene.run.duration_s:g} s (run.duration_s)")
     print(f"form: {fit.form} (lowest BIC; RMS of each form: "
           + ", ".join(f"{f} {r:.3g} rad" for f, r in fit.candidates.items()) + ")")
-    print(f"encoder at rest {fit.rest_rad:.4g} rad (the mean before the onset; the scene's θ is measured from it); "
-          f"onset {fit.onset_s:.4f} s; quartic a1…a4 = ({a}) rad/s^k; then {lines}; {end}")
+    start = (f"moving from the first sample ({fit.onset_s:.4f} s) at θ0 = {fit.rest_rad:.4g} rad (fitted: the record "
+             "has no rest before the motion; the scene's θ is measured from it)" if fit.moving_at_start else
+             f"encoder at rest {fit.rest_rad:.4g} rad (the mean before the onset; the scene's θ is measured from it); "
+             f"onset {fit.onset_s:.4f} s")
+    print(f"{start}; quartic a1…a4 = ({a}) rad/s^k; then {lines}; {end}")
     print(f"RMS {fit.rms_rad:.3g} rad over {fit.n_samples} samples, noise {fit.noise_rad:.2g} rad ({fit.noise_source})"
           f"; status: {fit.status}")
     print(f"wrote {out}")
