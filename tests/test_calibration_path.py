@@ -241,6 +241,27 @@ def test_a_clamp_motion_the_model_cannot_describe_stops_the_path_at_its_first_st
     assert "1.8× the encoder's noise" in done.stderr and "Traceback" not in done.stderr
 
 
+def test_a_fit_at_5_mm_of_a_converged_fine_measurement_costs_what_the_guide_says():
+    # Issue 22: markers (σ = 0.1 mm) from the impulsive rotation under masing at h = 1.25 mm
+    # (converged: halving dt moves them 0.6 µm, halving h 0.06 mm), fitted at the paper's
+    # h = 5 mm. γ comes back within its σ; the rotation centre and D1 carry the coarse
+    # mesh's error: +0.36 mm (24 σ) and +5.2 % (5 σ), the cost docs/calibration.md states,
+    # shrinking to +0.08 mm and +1.6 % at 2.5 mm (benchmarks/spacing_cost.py). The issue
+    # asked for all three within σ or 2 % at 5 mm: the physics at 5 mm does not give it.
+    from conftest import SPACING_TRUTH, fine_rotation_markers, rotation_scene_data
+
+    from warpcloth.calibrate.motion_fit import fit_motion, free_parameters
+
+    base = rotation_scene_data(5.0)
+    free = free_parameters("gamma,rotation_centre_dy_mm,D1", wc.scene_from_dict(base))
+    fit = fit_motion(base, fine_rotation_markers(), free, progress=False, noise=1e-4)
+    error = {name: value - SPACING_TRUTH[name] for name, value in fit.parameters.items()}
+    gamma, dy, d1 = "damping.gamma_per_s", "clamp.rotation_centre_dy_mm", "material.hysteresis_d1_gf_cm_per_cm"
+    assert abs(error[gamma]) <= max(fit.sigma[gamma], 0.02 * SPACING_TRUTH[gamma]), fit.parameters
+    assert 0 < error[dy] < 0.4 and 0 < error[d1] / SPACING_TRUTH[d1] < 0.06, fit.parameters
+    assert fit.rms / 1e-4 < 1.5  # the residuals do not show it: only refining h does
+
+
 @pytest.mark.parametrize("phi", [0.0, 0.9])
 def test_the_block_bootstrap_covers_the_truth_where_gauss_newton_does_not(phi):
     # A linear least-squares problem shaped like a damped swing, with AR(1) noise: the
