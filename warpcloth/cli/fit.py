@@ -142,6 +142,11 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
              f"encoder at rest {fit.rest_rad:.4g} rad (the mean before the onset; the scene's θ is measured from it); "
              f"onset {fit.onset_s:.4f} s")
     print(f"{start}; quartic a1…a4 = ({a}) rad/s^k; then {lines}; {end}")
+    turned = float(fit.theta(0.0)[0] - fit.rest_rad)
+    if fit.moving_at_start and fit.onset_s < 0 and abs(turned) > 3 * fit.noise_rad:
+        print(f"note: the record is in motion from {fit.onset_s:g} s, so at the scene's t = 0 the clamp has already "
+              f"turned {turned:.4g} rad while the strip starts from its hanging rest shape; put the record's t = 0 at "
+              "the start of the motion", file=sys.stderr)
     print(f"RMS {fit.rms_rad:.3g} rad over {fit.n_samples} samples, noise {fit.noise_rad:.2g} rad ({fit.noise_source})"
           f"; status: {fit.status}")
     print(f"wrote {out}")
