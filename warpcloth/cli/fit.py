@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from warpcloth.calibrate.noise import POOR_FIT_FACTOR
 from warpcloth.scene import scene_from_dict
 
 from .options import (
@@ -64,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                          help="override the header's unit (default: the header's, else rad)")
     angle_p.add_argument("--plot", help="also write a PNG of the encoder data and the fit")
     angle_p.add_argument("--accept", action="store_true",
-                         help="exit 0 even when the fit is poor (RMS above 1.5× the encoder's noise)")
+                         help=f"exit 0 even when the fit is poor (RMS above {POOR_FIT_FACTOR:g}× the encoder's noise)")
     add_overwrite(angle_p, "scene file -o")
 
 
