@@ -75,7 +75,7 @@ class ClampMotionFit:
     onset_s: float
     breaks_s: tuple[float, ...]  # quartic → first line, then line → line
     stop_s: float | None  # None: still moving at the end of the record
-    rest_rad: float  # the encoder's reading at rest, θ0
+    rest_rad: float  # θ0: the encoder's reading at rest, or θ fitted at the first sample of a moving record
     quartic_si: tuple[float, float, float, float]  # a1 … a4
     speeds_rad_per_s: tuple[float, ...]  # each line's speed
     rms_rad: float
