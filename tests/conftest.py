@@ -77,3 +77,44 @@ def run_cli(*args, cwd=None, timeout=None):
     finally:
         os.chdir(before)
     return subprocess.CompletedProcess(list(args), code, out.getvalue(), err.getvalue())
+
+
+SPACING_TRUTH = {"clamp.rotation_centre_dy_mm": 2.8, "damping.gamma_per_s": 0.4,
+                 "material.hysteresis_d1_gf_cm_per_cm": 0.05}
+"""The parameters of the fine reference of the impulsive rotation (issue 22)."""
+
+
+def rotation_scene_data(spacing_mm: float, duration_s: float = 0.25) -> dict:
+    """Raw data of the bundled impulsive rotation under the masing law at ``spacing_mm``,
+    dt in proportion (5e-6 s at the scene's 2.5 mm: converged, tests/test_convergence.py)."""
+    from warpcloth.scene import read_scene_file, set_field
+
+    data = read_scene_file("impulsive_rotation")
+    for name, value in {"material.bending_law": "masing", "run.duration_s": duration_s,
+                        "strip.spacing_mm": spacing_mm, "integrator.dt_s": 5e-6 * spacing_mm / 2.5}.items():
+        set_field(data, name, value)
+    return data
+
+
+def fine_rotation_markers(spacing_mm: float = 1.25, noise_m: float = 1e-4, seed: int = 22, dt_factor: float = 1.0):
+    """Markers every 10 mm on the impulsive rotation simulated at ``spacing_mm`` (masing, the
+    :data:`SPACING_TRUTH`), 60 frames/s for 0.25 s, with seeded Gaussian noise of
+    ``noise_m`` per coordinate: a measurement made by a converged fine simulation."""
+    import numpy as np
+
+    import warpcloth as wc
+    from warpcloth.io.measured import TrackedShapes
+    from warpcloth.scene import set_field
+
+    data = rotation_scene_data(spacing_mm)
+    for name, value in SPACING_TRUTH.items():
+        set_field(data, name, value)
+    set_field(data, "integrator.dt_s", data["integrator"]["dt_s"] * dt_factor)
+    scene = wc.scene_from_dict(data)
+    result = wc.simulate(scene)
+    s = np.arange(0, 101, 10) * 1e-3
+    node = scene.n_clamped - 1 + np.round(s / scene.spacing).astype(int)
+    frames = len(result.frame_times)
+    xy = result.frames[:, 0, node].reshape(-1, 2) + np.random.default_rng(seed).normal(0, noise_m, (frames * len(s), 2))
+    return TrackedShapes(np.repeat(np.arange(frames), len(s)), np.repeat(result.frame_times, len(s)),
+                         np.tile(s, frames), xy[:, 0], xy[:, 1])

@@ -10,7 +10,7 @@ import pytest
 from conftest import overrides, run_cli  # noqa: F401  (keeps Warp quiet)
 
 import warpcloth as wc
-from warpcloth.calibrate.clamp_fit import fit_clamp_motion, scene_with_clamp_motion
+from warpcloth.calibrate.clamp_fit import FORMS, fit_clamp_motion, scene_with_clamp_motion
 from warpcloth.calibrate.motion_fit import measurement_noise
 from warpcloth.io.measured import LaserTrace, read_encoder, read_measurement
 from warpcloth.scene import read_scene_file
@@ -50,8 +50,11 @@ def test_the_clamp_fit_recovers_each_form_with_an_offset_at_rest(case):
     fields, form = CASES[case]
     truth = motion(T, **fields) - 0.0004  # the encoder reads -0.4 mrad at rest
     fit = fit_clamp_motion(T, truth + np.random.default_rng(3).normal(0, 1e-3, len(T)))
-    assert fit.form == form and fit.status == "converged", (fit.form, fit.problems)
-    assert fit.rest_rad == pytest.approx(-0.0004, abs=1e-3)  # the mean of ~20 samples of σ 1 mrad
+    # A t⁴ start is so flat that one quartic from the first sample describes the 20 ms of
+    # rest and the start within 0.5 % of the noise: the BIC may then prefer the "moving"
+    # twin (one breakpoint fewer); the pieces after the start and θ(t) are the same.
+    assert fit.form in (form, f"moving: {form}") and fit.status == "converged", (fit.form, fit.problems)
+    assert fit.rest_rad == pytest.approx(-0.0004, abs=1e-3)  # the mean of ~20 samples of σ 1 mrad, or θ(t0) fitted
     assert np.abs(fit.theta(T) - truth).max() < 2e-3  # within 2σ of the noise everywhere
     assert fit.noise_rad == pytest.approx(1e-3, rel=0.25) and fit.rms_rad == pytest.approx(1e-3, rel=0.15)
     assert fit.breaks_s[0] == pytest.approx(0.05, abs=2e-3)
@@ -59,6 +62,50 @@ def test_the_clamp_fit_recovers_each_form_with_an_offset_at_rest(case):
         assert fit.stop_s == pytest.approx(fields["stop"], abs=1e-3)
     else:
         assert fit.stop_s is None
+
+
+MOVING_BREAK_S, MOVING_LINE_RAD_PER_S = 0.045, 2.0
+
+
+def moving_quartic(a=2000.0):
+    """(a1 … a4) of issue 22's start θ = a t² + b t³ + c t⁴: b and c make the quartic meet
+    the 2 rad/s line at 45 ms with its speed and acceleration (an impulsive start, 27 rad/s
+    at its fastest, that the encoder records from its first sample)."""
+    t1 = MOVING_BREAK_S
+    b, c = np.linalg.solve([[3 * t1**2, 4 * t1**3], [6 * t1, 12 * t1**2]], [MOVING_LINE_RAD_PER_S - 2 * a * t1, -2 * a])
+    return (0.0, a, float(b), float(c))
+
+
+def test_a_record_that_starts_in_motion_gets_the_same_theta_with_0_3_or_30_ms_of_rest():
+    # Issue 22: the recording triggered on the motion. Each record has the same samples
+    # (and noise, σ = 1 mrad) from t = 0 on; only the rest before differs.
+    quartic = moving_quartic()
+    full_t = np.round(np.arange(-0.03, 0.2 + 1e-9, 1e-3), 6)
+    noise = np.random.default_rng(22).normal(0, 1e-3, len(full_t))
+    common = full_t >= 0
+    truth = motion(full_t, quartic=quartic, break_s=MOVING_BREAK_S)
+    fits = {}
+    for rest_ms in (0, 3, 30):
+        keep = full_t >= -rest_ms * 1e-3 - 1e-9
+        fit = fits[rest_ms] = fit_clamp_motion(full_t[keep], truth[keep] + noise[keep])
+        assert fit.status == "converged" and fit.form.endswith("quartic, line"), (rest_ms, fit.form, fit.problems)
+        assert fit.rms_rad / fit.noise_rad < 1.2 and fit.stop_s is None
+        assert fit.breaks_s[0] == pytest.approx(MOVING_BREAK_S, abs=2e-3)
+        assert fit.speeds_rad_per_s[0] == pytest.approx(MOVING_LINE_RAD_PER_S, abs=2e-3)
+        assert np.abs(fit.theta(full_t[common]) - truth[common]).max() < 1e-3, rest_ms  # within σ everywhere
+    assert fits[0].moving_at_start and fits[0].onset_s == 0.0 and not fits[30].moving_at_start
+    for a, b in [(0, 3), (0, 30), (3, 30)]:
+        assert np.abs(fits[a].theta(full_t[common]) - fits[b].theta(full_t[common])).max() < 1e-3, (a, b)
+    # Held to a rest first (the fit before issue 22), the record gets an invented rest
+    # (the mean of its first samples) and a θ(t) off by several σ where the motion starts;
+    # the "moving" form is the one the BIC picks, on the same samples and costs.
+    rest_first = tuple(form for form, (_, _, at_rest) in FORMS.items() if at_rest)
+    invented = fit_clamp_motion(full_t[common], truth[common] + noise[common], rest_first)
+    assert np.abs(invented.theta(full_t[common]) - truth[common]).max() > 3e-3
+    assert fits[0].bic < invented.bic - 10
+    # the scene starts the clamp from θ0 at the first sample
+    segments = fits[0].segments(until_s=0.2)
+    assert segments[0]["t_start_s"] == 0.0 and segments[0]["theta_coefficients_si"][0] == 0.0
 
 
 def test_an_encoder_no_form_describes_is_a_poor_fit_and_the_command_says_so(tmp_path):
@@ -117,15 +164,26 @@ def test_the_noise_of_a_measurement_is_estimated_from_the_data():
         assert measurement_noise(LaserTrace(t, noisy)) == pytest.approx(sigma, rel=0.2)
 
 
-def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path):
-    # Issue 12's acceptance: an encoder of a general quartic start and a line that does
-    # not stop in the record; the "measurement" made with that θ(t) given to the
-    # simulator as a dense cubic table (an independent path from the fitted pieces);
-    # markers with 0.1 mm noise. clamp fit-angle, then fit γ, dy, D1 from the command line.
+ENCODERS = {
+    # issue 12: 20 ms at rest (reading -0.4 mrad), the general quartic, a line at 21.75 rad/s
+    "rest first": (np.round(np.arange(-0.02, 0.2, 1e-3), 6), QUARTIC, 0.05),
+    # issue 22: recorded from the first sample of the motion (no rest), 2 rad/s after 45 ms
+    "moving from the first sample": (np.round(np.arange(0.0, 0.2, 1e-3), 6), moving_quartic(), MOVING_BREAK_S),
+}
+
+
+@pytest.mark.parametrize("encoder", ENCODERS)
+def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path, encoder):
+    # Issue 12's and 22's acceptance: an encoder of a general quartic start and a line
+    # that does not stop in the record, at rest before the motion or moving from its
+    # first sample; the "measurement" made with that θ(t) given to the simulator as a
+    # dense cubic table (an independent path from the fitted pieces); markers with 0.1 mm
+    # noise. clamp fit-angle, then fit γ, dy, D1 from the command line.
+    encoder_t, quartic, break_s = ENCODERS[encoder]
     truth = {"clamp.rotation_centre_dy_mm": 2.8, "damping.gamma_per_s": 0.4,
              "material.hysteresis_d1_gf_cm_per_cm": 0.05}
     table_t = np.linspace(0.0, 0.3, 601)
-    theta = motion(table_t)
+    theta = motion(table_t, quartic=quartic, break_s=break_s)
     measured_scene = wc.load_scene("impulsive_rotation", [
         "run.duration_s=0.25", 'clamp.motion="table"', 'clamp.interpolation="cubic"',
         f"clamp.table_t_s={table_t.tolist()}", f"clamp.table_theta_rad={theta.tolist()}",
@@ -137,8 +195,7 @@ def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path):
             for s in range(0, 101, 10)
             for x, y in [(result.frames[f, 0, nc - 1 + round(s * 1e-3 / h)] * 1e3 + rng.normal(0, 0.1, 2))]]
     (tmp_path / "markers.csv").write_text("frame,t_s,s_mm,x_mm,y_mm\n" + "\n".join(rows) + "\n")
-    encoder_t = np.round(np.arange(-0.02, 0.2, 1e-3), 6)
-    reading = motion(encoder_t) - 0.0004 + rng.normal(0, 1e-3, len(encoder_t))
+    reading = motion(encoder_t, quartic=quartic, break_s=break_s) - 0.0004 + rng.normal(0, 1e-3, len(encoder_t))
     (tmp_path / "encoder.csv").write_text("t_s,theta_rad\n" + "\n".join(
         f"{t:.4f},{v:.6f}" for t, v in zip(encoder_t, reading, strict=True)))
 
@@ -146,7 +203,9 @@ def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path):
         return run_cli(*args, cwd=tmp_path)
 
     done = cli("clamp", "fit-angle", "encoder.csv", "--scene", "impulsive_rotation", "-o", "measured.toml")
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 0 and "status: converged" in done.stdout, done.stdout + done.stderr
+    assert ("moving from the first sample" in done.stdout) == (encoder_t[0] == 0.0), done.stdout
+    print(done.stdout)
     done = cli("fit", "measured.toml", "--measured", "markers.csv", "--free", "gamma,rotation_centre_dy_mm,D1",
                "--set", "run.duration_s=0.25", "--out", "fit", "--no-progress")
     assert done.returncode == 0, done.stdout + done.stderr
@@ -158,6 +217,44 @@ def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path):
     assert abs(value["clamp.rotation_centre_dy_mm"] - 2.8) < 0.05
     assert abs(value["damping.gamma_per_s"] / 0.4 - 1) < 0.05
     assert abs(value["material.hysteresis_d1_gf_cm_per_cm"] / 0.05 - 1) < 0.02
+
+
+def test_a_clamp_motion_the_model_cannot_describe_stops_the_path_at_its_first_step(tmp_path):
+    # Issue 22's record moving from its first sample, with a drive's 30 Hz ripple of 2 mrad
+    # (2σ) on the line: no form describes it, and the one verdict rule says so (RMS 1.8×
+    # the noise; the clamp fit's old 3× called it converged), so `clamp fit-angle`, the
+    # documented path's first step, ends poor_fit (exit 6) before any motion fit.
+    t = np.round(np.arange(0.0, 0.2, 1e-3), 6)
+    reading = (motion(t, quartic=moving_quartic(), break_s=MOVING_BREAK_S)
+               + 2e-3 * np.sin(2 * np.pi * 30 * np.clip(t - MOVING_BREAK_S, 0, None))
+               + np.random.default_rng(5).normal(0, 1e-3, len(t)))
+    (tmp_path / "rippled.csv").write_text("t_s,theta_rad\n" + "\n".join(f"{a:.4f},{v:.6f}" for a, v in zip(
+        t, reading, strict=True)))
+    done = run_cli("clamp", "fit-angle", "rippled.csv", "--scene", "impulsive_rotation", "-o", "rippled.toml",
+                   cwd=tmp_path)
+    assert done.returncode == 6 and "status: poor_fit" in done.stdout, done.stdout + done.stderr
+    assert "1.8× the encoder's noise" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_a_fit_at_5_mm_of_a_converged_fine_measurement_costs_what_the_guide_says():
+    # Issue 22: markers (σ = 0.1 mm) from the impulsive rotation under masing at h = 1.25 mm
+    # (converged: halving dt moves them 0.6 µm, halving h 0.06 mm), fitted at the paper's
+    # h = 5 mm. γ comes back within its σ; the rotation centre and D1 carry the coarse
+    # mesh's error: +0.36 mm (24 σ) and +5.2 % (5 σ), the cost docs/calibration.md states,
+    # shrinking to +0.08 mm and +1.6 % at 2.5 mm (benchmarks/spacing_cost.py). The issue
+    # asked for all three within σ or 2 % at 5 mm: the physics at 5 mm does not give it.
+    from conftest import SPACING_TRUTH, fine_rotation_markers, rotation_scene_data
+
+    from warpcloth.calibrate.motion_fit import fit_motion, free_parameters
+
+    base = rotation_scene_data(5.0)
+    free = free_parameters("gamma,rotation_centre_dy_mm,D1", wc.scene_from_dict(base))
+    fit = fit_motion(base, fine_rotation_markers(), free, progress=False, noise=1e-4)
+    error = {name: value - SPACING_TRUTH[name] for name, value in fit.parameters.items()}
+    gamma, dy, d1 = "damping.gamma_per_s", "clamp.rotation_centre_dy_mm", "material.hysteresis_d1_gf_cm_per_cm"
+    assert abs(error[gamma]) <= max(fit.sigma[gamma], 0.02 * SPACING_TRUTH[gamma]), fit.parameters
+    assert 0 < error[dy] < 0.4 and 0 < error[d1] / SPACING_TRUTH[d1] < 0.06, fit.parameters
+    assert fit.rms / 1e-4 < 1.5  # the residuals do not show it: only refining h does
 
 
 @pytest.mark.parametrize("phi", [0.0, 0.9])

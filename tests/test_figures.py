@@ -640,3 +640,28 @@ def test_the_marker_overlay_axes_read_as_the_shape_figures(swing_run, tmp_path, 
     overlay, shapes = figures["overlay.png"].axes[0], figures["shapes.png"].axes[0]
     assert (overlay.get_xlabel(), overlay.get_ylabel()) == (shapes.get_xlabel(), shapes.get_ylabel()) == (
         "x from the clamp edge (mm)", "y from the clamp edge (mm)")
+
+
+def test_a_measured_trace_and_the_run_are_drawn_on_one_window(swing_run, tmp_path, figures):
+    # Issue 22: plot --measured draws the run only where the trace is (their overlap),
+    # or on --from/--to, and says which in the title; a window outside is refused first.
+    from warpcloth.errors import OptionError
+
+    recording = load_recording(swing_run)
+    t, x = recording.probe("laser_x", 0)
+    half = t <= t[-1] / 2 + 1e-9
+    laser = tmp_path / "laser.csv"
+    laser.write_text("t_s,x_mm\n" + "".join(f"{a:.6f},{b * 1e3:.4f}\n" for a, b in zip(t[half], x[half],
+                                                                                           strict=True)))
+    end = float(np.round(t[half][-1], 6))
+    plot_run(recording, tmp_path / "a", measured=laser)
+    ax = figures["amplitude.png"].axes[0]
+    run_line = ax.get_lines()[0]
+    assert run_line.get_xdata().max() == pytest.approx(end, abs=1e-6)
+    assert f"compared on t = 0 … {end:g} s" in ax.get_title()
+    plot_run(recording, tmp_path / "b", measured=laser, t_from=0.1, t_to=0.2)
+    xs = figures["amplitude.png"].axes[0].get_lines()[0].get_xdata()
+    assert xs.min() >= 0.1 - 1e-9 and xs.max() <= 0.2 + 1e-9
+    with pytest.raises(OptionError, match=rf"--to: 5 s is after the end of .*laser.csv \({end:g} s\)"):
+        plot_run(recording, tmp_path / "c", measured=laser, t_to=5.0)
+    assert not (tmp_path / "c").exists()

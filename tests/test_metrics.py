@@ -157,3 +157,40 @@ def test_a_strip_at_rest_has_no_swing():
     still = wc.simulate(wc.load_scene("damped_swing", ["release.enabled=false", "run.duration_s=0.5"]))
     metrics = swing_summary(still.t, still.probe("laser_x", 0), still.probe("tip_x", 0))
     assert metrics["n_half_cycles"] == 0 and np.isnan(metrics["first_period_s"])
+
+
+def test_analyse_measures_every_input_on_one_window(tmp_path):
+    # Issue 22: a record twice as long as another was measured on all of it, and a swing
+    # whose decrement changes with amplitude (hysteresis) then reads another mean
+    # decrement. Two traces of one swing (decrement falling with amplitude), 1.5 s and 3 s.
+    import subprocess
+    import sys
+
+    import warpcloth as wc
+    from warpcloth.calibrate.analysis import analyse
+
+    t = np.arange(0, 3.0 + 1e-9, 1 / 300)
+    x = 50.0 / (1 + 2 * t) * np.cos(2 * np.pi * t / 0.52)
+    for name, end in (("short.csv", 1.5), ("long.csv", 3.0)):
+        keep = t <= end + 1e-9
+        (tmp_path / name).write_text("t_s,x_mm\n" + "\n".join(f"{a:.6f},{v:.6f}" for a, v in zip(t[keep], x[keep],
+                                                                                                strict=True)))
+    short, long = str(tmp_path / "short.csv"), str(tmp_path / "long.csv")
+    (alone,) = analyse(long)
+    rows = analyse([short, long])
+    assert [(r["from_s"], r["to_s"]) for r in rows] == [(0.0, 1.5), (0.0, 1.5)]
+    for key in ("first_period_s", "first_amplitude_mm", "mean_log_decrement", "n_half_cycles"):
+        assert rows[0][key] == rows[1][key], key
+    assert abs(alone["mean_log_decrement"] / rows[0]["mean_log_decrement"] - 1) > 0.1  # what the overlap prevents
+    chosen = analyse([short, long], t_from=0.3, t_to=1.2)
+    assert [(r["from_s"], r["to_s"]) for r in chosen] == [(0.3, 1.2)] * 2 and chosen[0]["n_half_cycles"] > 0
+    with pytest.raises(wc.OptionError, match=r"--to: 3 s is after the end of .*short.csv \(1.5 s\)"):
+        analyse([short, long], t_to=3.0)
+    with pytest.raises(wc.OptionError, match=r"--from: -1 s is before the start of"):
+        analyse([short, long], t_from=-1.0)
+    with pytest.raises(wc.OptionError, match=r"--from: 1 s is not before the window's end 0.5 s \(--to\)"):
+        analyse([short, long], t_from=1.0, t_to=0.5)
+    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "analyse", short, long, "--from", "2"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    assert "--from: 2 s is not before the window's end 1.5 s (the end of" in done.stderr

@@ -1,64 +1,139 @@
 """The swing metrics of anything that swings, measured by the one ruler
-(:func:`~warpcloth.metrics.swing_summary`): measured traces, run directories
-and sweep directories, so a table of lab against simulation is one call. A measured
-trace's first period comes with its standard uncertainty (``first_period_u_s``) from the
-noise the trace shows (:func:`~warpcloth.calibrate.noise.difference_noise`); a
+(:func:`~warpcloth.metrics.swing_summary`) on one time window: measured traces, run
+directories and sweep directories, so a table of lab against simulation is one call. A
+record longer than another is not compared on its extra time (a decaying swing's mean
+decrement depends on how many half-cycles it includes): the window is the records'
+overlap unless chosen (:func:`comparison_window`), and every row says which it was. A
+measured trace's first period comes with its standard uncertainty (``first_period_u_s``)
+from the noise the trace shows (:func:`~warpcloth.calibrate.noise.difference_noise`); a
 simulation's has none (NaN)."""
 
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
-from warpcloth.errors import DataFileError
+import numpy as np
+
+from warpcloth.errors import DataFileError, OptionError
+from warpcloth.io.json_file import read_json
 from warpcloth.io.load import load_recording
 from warpcloth.io.measured import LaserTrace, bundled_data, read_measurement
-from warpcloth.io.sweep_dir import read_parquet
+from warpcloth.io.sweep_dir import read_parquet, stored_sweep
 from warpcloth.metrics import swing_summary
 
 from .noise import difference_noise
 
-
-def _row(source: str, variant: int | None, metrics: dict) -> dict:
-    return {"source": source, "variant": variant, "signal": metrics.get("signal", "laser_x"),
-            "first_period_s": metrics["first_period_s"],
-            "first_period_u_s": metrics.get("first_period_u_s", float("nan")),
-            "first_amplitude_mm": metrics["first_amplitude_m"] * 1e3,
-            "mean_log_decrement": metrics["mean_log_decrement"], "n_half_cycles": metrics["n_half_cycles"],
-            "log_decrement": json.dumps(metrics["log_decrement"]) if isinstance(metrics["log_decrement"], list)
-            else metrics["log_decrement"]}
+TIME_TOLERANCE_S = 1e-9  # sample times written with 10 digits still count as inside a window
 
 
-def analyse(source: str | Path, starts_at_rest: bool = True) -> list[dict]:
-    """One row of swing metrics per measured trace, or per variant of a run or sweep.
+@dataclass(frozen=True)
+class SwingRecord:
+    """One swinging series: a measured trace, or one variant of a run or sweep (SI)."""
+
+    source: str
+    variant: int | None
+    t: np.ndarray
+    laser: np.ndarray
+    tip: np.ndarray | None  # the free end's x, for a run whose strip misses the laser line
+    starts_at_rest: bool  # its first sample is the release
+    measured: bool
+
+    @property
+    def span(self) -> tuple[float, float]:
+        """First and last sample time (s)."""
+        return float(self.t[0]), float(self.t[-1])
+
+
+def comparison_window(spans: dict[str, tuple[float, float]], t_from: float | None = None,
+                      t_to: float | None = None) -> tuple[float, float]:
+    """The window (s) on which records of these ``spans`` (name → first, last sample time)
+    are compared: ``--from``/``--to`` where given, else the overlap of every record. A
+    window that reaches outside any record, or is empty, is an :class:`OptionError`
+    naming the option and its value."""
+    start_name = max(spans, key=lambda name: spans[name][0])
+    end_name = min(spans, key=lambda name: spans[name][1])
+    start, end = spans[start_name][0], spans[end_name][1]
+    if t_from is not None and t_from < start - TIME_TOLERANCE_S:
+        raise OptionError("--from", f"{t_from:g} s is before the start of {start_name} ({start:g} s): the window must "
+                          "lie inside every record compared")
+    if t_to is not None and t_to > end + TIME_TOLERANCE_S:
+        raise OptionError("--to", f"{t_to:g} s is after the end of {end_name} ({end:g} s): the window must lie inside "
+                          "every record compared")
+    lower = start if t_from is None else t_from
+    upper = end if t_to is None else t_to
+    if not lower < upper:
+        if t_from is not None:
+            raise OptionError("--from", f"{t_from:g} s is not before the window's end {upper:g} s "
+                              + ("(--to)" if t_to is not None else f"(the end of {end_name})"))
+        if t_to is not None:
+            raise OptionError("--to", f"{t_to:g} s is not after the window's start {lower:g} s (the start of "
+                              f"{start_name})")
+        raise OptionError("INPUT", f"the records do not overlap in time: {end_name} ends at {end:g} s, before "
+                          f"{start_name} starts at {start:g} s")
+    return float(lower), float(upper)
+
+
+def swing_records(source: str | Path, starts_at_rest: bool = True) -> list[SwingRecord]:
+    """The series of a measured trace, or of every variant of a run or sweep directory.
 
     A measured trace (``t, x``) is taken to start at the release unless
-    ``starts_at_rest`` is False; a run's or sweep's own scenes say whether they do. A
-    sweep's rows are its summary's, computed when it ran by the same function.
+    ``starts_at_rest`` is False; a run's or sweep's own scenes say whether they do.
     """
     path = Path(source)
-    if (path / "sweep.json").is_file():
-        summary = path / "summary.parquet"
-        if not summary.is_file():
-            raise DataFileError(path, "the sweep has not finished (no summary.parquet); rerun it to complete it")
-        table = read_parquet(summary)
-        return [_row(str(path), int(r["variant"]), {**r, "signal": "sweep summary",
-                                                    "log_decrement": list(r["log_decrement"])})
-                for _, r in table.iterrows()]
+    if (path / "sweep.json").is_file() and not (path / "summary.parquet").is_file():
+        raise DataFileError(path, "the sweep has not finished (no summary.parquet); rerun it to complete it")
+    if (path / "sweep.json").is_file():  # its probe store: a sweep need not have kept shape frames
+        scenes = stored_sweep(path, read_json(path / "sweep.json")).scenes
+        probes = read_parquet(path / "probes").sort_values(["variant", "t"], kind="stable")
+        return [SwingRecord(str(path), int(variant), rows["t"].to_numpy(), rows["laser_x"].to_numpy(),
+                            rows["tip_x"].to_numpy(), scenes[int(variant)].release.enabled, False)
+                for variant, rows in probes.groupby("variant")]
     if (path / "meta.json").is_file():
         recording = load_recording(path)
-        rows = []
+        records = []
         for j, variant in enumerate(recording.variants):
             probes = recording.probes[recording.probes["variant"] == variant]
-            metrics = swing_summary(probes["t"].to_numpy(), probes["laser_x"].to_numpy(), probes["tip_x"].to_numpy(),
-                                    starts_at_rest=recording.scenes[j].release.enabled)
-            rows.append(_row(str(path), int(variant), metrics))
-        return rows
+            records.append(SwingRecord(str(path), int(variant), probes["t"].to_numpy(), probes["laser_x"].to_numpy(),
+                                       probes["tip_x"].to_numpy(), recording.scenes[j].release.enabled, False))
+        return records
     measured = read_measurement(bundled_data(source), flag="INPUT")
     if not isinstance(measured, LaserTrace):
         raise DataFileError(str(source), "holds tracked shapes; analyse needs a displacement trace (t_s, x_mm)")
-    metrics = swing_summary(measured.t, measured.x, None, starts_at_rest, noise=difference_noise([measured.x]))
-    return [_row(str(source), None, metrics | {"signal": "measured x"})]
+    return [SwingRecord(str(source), None, measured.t, measured.x, None, starts_at_rest, True)]
 
 
-__all__ = ["analyse"]
+def swing_row(record: SwingRecord, window: tuple[float, float] | None = None) -> dict:
+    """The record's swing metrics on ``window`` (default: the whole record), with the window.
+
+    A window that starts after the record's first sample does not start at the release."""
+    lower, upper = window or record.span
+    inside = (record.t >= lower - TIME_TOLERANCE_S) & (record.t <= upper + TIME_TOLERANCE_S)
+    t, laser = record.t[inside], record.laser[inside]
+    at_rest = record.starts_at_rest and lower <= record.span[0] + TIME_TOLERANCE_S
+    if record.measured:
+        metrics = swing_summary(t, laser, None, at_rest, noise=difference_noise([laser])) | {"signal": "measured x"}
+    else:
+        metrics = swing_summary(t, laser, record.tip[inside], at_rest)
+    return {"source": record.source, "variant": record.variant, "from_s": lower, "to_s": upper,
+            "signal": metrics["signal"], "first_period_s": metrics["first_period_s"],
+            "first_period_u_s": metrics.get("first_period_u_s", float("nan")),
+            "first_amplitude_mm": metrics["first_amplitude_m"] * 1e3,
+            "mean_log_decrement": metrics["mean_log_decrement"], "n_half_cycles": metrics["n_half_cycles"],
+            "log_decrement": json.dumps(np.asarray(metrics["log_decrement"]).tolist())}
+
+
+def analyse(sources: str | Path | list[str | Path], starts_at_rest: bool = True, t_from: float | None = None,
+            t_to: float | None = None) -> list[dict]:
+    """One row of swing metrics per measured trace and per variant of a run or sweep,
+    every one on the same window (:func:`comparison_window`: the overlap of all the
+    records unless ``t_from``/``t_to`` choose it); each row holds ``from_s`` and ``to_s``."""
+    sources = sources if isinstance(sources, list) else [sources]
+    records = [record for source in sources for record in swing_records(source, starts_at_rest)]
+    spans = {f"{r.source}" + ("" if r.variant is None else f" variant {r.variant}"): r.span for r in records}
+    window = comparison_window(spans, t_from, t_to)
+    return [swing_row(record, window) for record in records]
+
+
+__all__ = ["SwingRecord", "analyse", "comparison_window", "swing_records", "swing_row"]

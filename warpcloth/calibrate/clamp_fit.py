@@ -10,19 +10,29 @@ The forms (:data:`FORMS`)::
          = θ(t2) + ω2 (t − t2)                         t2 ≤ t < ts     (a second speed, if any)
          = θ(ts)                                       t ≥ ts          (stopped, if it stops)
 
-θ0 is the encoder's reading at rest: the mean of the samples before the onset, not a
-fitted constant (an encoder offset must not trade against the start). θ is continuous
-everywhere and θ' at the quartic's end (the line continues the start's speed); between
-two lines and at the stop the speed may jump, as a drive's does. For given breakpoints
-the model is linear in a1…a4 and the later speeds, so each candidate is one small
-least-squares solve; the breakpoints come from a grid over the record refined by
-coordinate scans. The form is chosen by the Bayesian information criterion among those
-the data can hold (each needs a few samples per piece).
+A record that starts at rest reads θ0 from it: the mean of the samples before the onset,
+not a fitted constant (an encoder offset must not trade against the start). Many rigs
+trigger the recording on the motion, so a record may have no rest: its "moving" forms
+put the onset at the first sample t0 = t[0] and fit θ0 with a1…a4 (an onset before the
+record is the same quartic re-expanded: θ0 and a1 take up the difference, so nothing in
+the data places it). Both families are judged on every sample and by the same Bayesian
+information criterion, each counting what it takes from the data (the moving forms one
+breakpoint fewer), so a record with 0, 3 or 30 ms of rest before the motion gets the same
+θ(t) within the noise (tests/test_calibration_path.py).
 
-The noise is estimated from the data: the smaller of the scatter of the samples at rest
-and the 4th-difference estimate (:func:`~warpcloth.calibrate.noise.difference_noise`). A fit
-whose RMS exceeds 3× that noise is ``poor_fit``: its θ(t) does not describe the encoder
-and a scene driven by it would be wrong for the whole record.
+θ is continuous everywhere and θ' at the quartic's end (the line continues the start's
+speed); between two lines and at the stop the speed may jump, as a drive's does. For given
+breakpoints the model is linear in a1…a4 and the later speeds (and θ0 when moving), so each
+candidate is one small least-squares solve; the breakpoints come from a grid over the
+record refined by coordinate scans. The form is chosen by the lowest BIC among those the
+data can hold (each needs a few samples per piece, a rest at least :data:`MIN_REST`).
+
+The noise is estimated from the data, from the 4th differences of the whole record
+(:func:`~warpcloth.calibrate.noise.difference_noise`, never below the encoder's count). A fit
+whose RMS exceeds :data:`~warpcloth.calibrate.noise.POOR_FIT_FACTOR` × that noise (the rule
+every fit shares, :func:`~warpcloth.calibrate.noise.poor_fit_ratio`) is ``poor_fit``: its
+θ(t) does not describe the encoder and a scene driven by it would be wrong for the whole
+record.
 """
 
 from __future__ import annotations
@@ -36,21 +46,25 @@ import numpy as np
 
 from warpcloth.errors import OptionError
 
-from .noise import difference_noise, quantisation_floor
+from .noise import difference_noise, poor_fit_ratio
 
 FORMS = {
-    "quartic, line, rest": (1, True),
-    "quartic, line": (1, False),
-    "quartic, line, line, rest": (2, True),
-    "quartic, line, line": (2, False),
+    "quartic, line, rest": (1, True, True),
+    "quartic, line": (1, False, True),
+    "quartic, line, line, rest": (2, True, True),
+    "quartic, line, line": (2, False, True),
+    "moving: quartic, line, rest": (1, True, False),
+    "moving: quartic, line": (1, False, False),
+    "moving: quartic, line, line, rest": (2, True, False),
+    "moving: quartic, line, line": (2, False, False),
 }
-"""Each form's number of straight lines and whether the clamp comes to rest in the record."""
+"""Each form's number of straight lines, whether the clamp comes to rest in the record, and
+whether the record starts at rest (else "moving": the clamp is in motion at the first sample)."""
 GRID = 26  # breakpoint candidates per axis in the first search
 STARTS = 6  # best grid cells refined (a breakpoint search has local minima)
 REFINE_ROUNDS = 6
 MIN_PER_PIECE = 4  # samples a piece needs to be fitted
 MIN_REST = 3  # samples before the onset needed to read the rest angle
-POOR_FIT_FACTOR = 3.0
 
 
 @dataclass(frozen=True)
@@ -61,7 +75,7 @@ class ClampMotionFit:
     onset_s: float
     breaks_s: tuple[float, ...]  # quartic → first line, then line → line
     stop_s: float | None  # None: still moving at the end of the record
-    rest_rad: float  # the encoder's reading at rest, θ0
+    rest_rad: float  # θ0: the encoder's reading at rest, or θ fitted at the first sample of a moving record
     quartic_si: tuple[float, float, float, float]  # a1 … a4
     speeds_rad_per_s: tuple[float, ...]  # each line's speed
     rms_rad: float
@@ -91,6 +105,11 @@ class ClampMotionFit:
             pieces.append({"t_start_s": start, "t_end_s": end,
                            "theta_coefficients_si": [float(self.theta(start)[0] - self.rest_rad), speed]})
         return pieces
+
+    @property
+    def moving_at_start(self) -> bool:
+        """The clamp is in motion at the first sample (no rest before the onset in the record)."""
+        return self.form.startswith("moving")
 
     @property
     def end_s(self) -> float:
@@ -126,14 +145,16 @@ def _columns(t: np.ndarray, points: np.ndarray, lines: int, stops: bool) -> np.n
     return np.stack(cols, axis=-1)
 
 
-def _solve(t: np.ndarray, theta: np.ndarray, points: np.ndarray, lines: int,
-           stops: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Cost, coefficients and rest angle of many breakpoint sets ``points`` [candidate, k]
+def _solve(t: np.ndarray, theta: np.ndarray, points: np.ndarray, lines: int, stops: bool,
+           rest_first: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cost, coefficients and θ0 of many breakpoint sets ``points`` [candidate, k]
     (times scaled to the record, so the columns are O(1)); infinite cost for a set that
-    leaves a piece too few samples."""
+    leaves a piece too few samples. θ0 is the mean of the samples before the onset for a
+    record that starts at rest, a fitted constant for one moving from its first sample."""
     edges = np.searchsorted(t, points)
     counts = np.diff(np.column_stack([np.zeros(len(points), int), edges, np.full(len(points), len(t))]), axis=1)
-    usable = (counts[:, 0] >= MIN_REST) & np.all(counts[:, 1:] >= MIN_PER_PIECE, axis=1)
+    usable = (counts[:, 0] >= MIN_REST if rest_first else counts[:, 0] == 0) & np.all(counts[:, 1:] >= MIN_PER_PIECE,
+                                                                                      axis=1)
     costs = np.full(len(points), np.inf)
     coefficients = np.zeros((len(points), 3 + lines))
     prefix = np.concatenate([[0.0], np.cumsum(theta)])
@@ -142,16 +163,28 @@ def _solve(t: np.ndarray, theta: np.ndarray, points: np.ndarray, lines: int,
         if not len(chunk):
             continue
         a = _columns(t, points[chunk], lines, stops)
-        b = theta[None, :] - rests[chunk, None]
-        normal = np.einsum("csi,csj->cij", a, a)
-        normal += 1e-12 * np.trace(normal, axis1=1, axis2=2)[:, None, None] * np.eye(normal.shape[1])
-        x = np.linalg.solve(normal, np.einsum("csi,cs->ci", a, b)[..., None])[..., 0]
+        if rest_first:
+            b = theta[None, :] - rests[chunk, None]
+        else:
+            a = np.concatenate([np.ones((*a.shape[:2], 1)), a], axis=-1)
+            b = np.broadcast_to(theta, (len(chunk), len(theta)))
+        # Columns scaled to unit norm before the normal equations: a short quartic's τ⁴ is
+        # 1e-4 of the constant θ0's column, and an unscaled ridge would bias it.
+        norms = np.sqrt(np.einsum("csi,csi->ci", a, a))
+        norms[norms == 0] = 1.0
+        a_unit = a / norms[:, None, :]
+        normal = np.einsum("csi,csj->cij", a_unit, a_unit) + 1e-12 * np.eye(a.shape[-1])
+        x = np.linalg.solve(normal, np.einsum("csi,cs->ci", a_unit, b)[..., None])[..., 0] / norms
         r = np.einsum("csi,ci->cs", a, x) - b
-        costs[chunk], coefficients[chunk] = np.sum(r**2, axis=1), x
+        costs[chunk] = np.sum(r**2, axis=1)
+        if rest_first:
+            coefficients[chunk] = x
+        else:
+            rests[chunk], coefficients[chunk] = x[:, 0], x[:, 1:]
     return costs, coefficients, rests
 
 
-def _guided(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool) -> np.ndarray:
+def _guided(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool, rest_first: bool) -> np.ndarray:
     # Candidates placed by the data: the onset between the start of the record and where θ
     # first leaves its rest band (a quartic start is flat, so the onset precedes that),
     # the stop where θ last leaves its final value; the breaks on a fine grid between.
@@ -161,7 +194,7 @@ def _guided(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool) -> np.nda
     departure = t[moved[0]] if len(moved) else t[-1]
     settled = np.flatnonzero(np.abs(theta - np.median(theta[-MIN_REST:])) > 6 * sigma)
     arrival = t[min(settled[-1] + 1, len(t) - 1)] if len(settled) else t[-1]
-    onsets = np.linspace(t[0], departure, 8)[1:]
+    onsets = np.linspace(t[0], departure, 8)[1:] if rest_first else [t[0]]
     step = np.median(np.diff(t))
     ends = arrival + step * np.arange(-2, 3) if stops else [t[-1]]
     out = []
@@ -173,9 +206,12 @@ def _guided(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool) -> np.nda
     return np.array(out).reshape(-1, 1 + lines + (1 if stops else 0))
 
 
-def _search(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool) -> tuple[float, np.ndarray, np.ndarray, float]:
-    """Cost, breakpoints, coefficients and rest angle of the best breakpoint set: a grid
-    over the record, then coordinate scans around the best few (distinct) starts.
+def _search(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool,
+            rest_first: bool) -> tuple[float, np.ndarray, np.ndarray, float]:
+    """Cost, breakpoints, coefficients and θ0 of the best breakpoint set: a grid over the
+    record, then coordinate scans around the best few (distinct) starts. A record moving
+    from its first sample has its onset there (an onset before the record reads the same
+    quartic: θ0 and a1 take up the difference), so only the later breakpoints are searched.
 
     Not :mod:`scipy.optimize`: the cost steps wherever a breakpoint crosses a sample
     (the pieces' sample counts change), so ``minimize``'s simplex and gradient methods
@@ -185,9 +221,13 @@ def _search(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool) -> tuple[
     one is deterministic.
     """
     k = 1 + lines + (1 if stops else 0)
+    first = 0 if rest_first else 1  # the first breakpoint searched (the onset, or the first break)
     grid = np.linspace(t[0], t[-1], GRID)
-    points = np.vstack([np.array(list(itertools.combinations(grid[1:-1], k))), _guided(t, theta, lines, stops)])
-    costs, _, _ = _solve(t, theta, points, lines, stops)
+    cells = np.array(list(itertools.combinations(grid[1:-1], k - first)))
+    if not rest_first:
+        cells = np.column_stack([np.full(len(cells), t[0]), cells])
+    points = np.vstack([cells, _guided(t, theta, lines, stops, rest_first)])
+    costs, _, _ = _solve(t, theta, points, lines, stops, rest_first)
     if not np.isfinite(costs).any():
         return math.inf, np.zeros(k), np.zeros(3 + lines), 0.0
     best_cost, best_point = math.inf, None
@@ -197,25 +237,26 @@ def _search(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool) -> tuple[
         point, cost = points[start].copy(), costs[start]
         span = (t[-1] - t[0]) / (GRID - 1)
         for _ in range(REFINE_ROUNDS):
-            for i in range(k):
+            for i in range(first, k):
                 trial = np.repeat(point[None], 25, axis=0)
                 trial[:, i] = np.linspace(point[i] - span, point[i] + span, 25)
-                trial = trial[np.all(np.diff(trial, axis=1) > 0, axis=1) & (trial[:, 0] > t[0])
+                trial = trial[np.all(np.diff(trial, axis=1) > 0, axis=1) & (trial[:, first] > t[0])
                               & (trial[:, -1] < t[-1])]
-                c, _, _ = _solve(t, theta, trial, lines, stops)
+                c, _, _ = _solve(t, theta, trial, lines, stops, rest_first)
                 j = int(np.argmin(c))
                 if c[j] < cost:
                     point, cost = trial[j], c[j]
             span /= 4
         if cost < best_cost:
             best_cost, best_point = cost, point
-    c, x, r = _solve(t, theta, best_point[None], lines, stops)
+    c, x, r = _solve(t, theta, best_point[None], lines, stops, rest_first)
     return float(c[0]), best_point, x[0], float(r[0])
 
 
-def fit_clamp_motion(t: np.ndarray, theta: np.ndarray) -> ClampMotionFit:
-    """Least-squares fit of every form of :data:`FORMS` to an encoder series (s, rad),
-    the one with the lowest BIC returned with its status (see the module docstring)."""
+def fit_clamp_motion(t: np.ndarray, theta: np.ndarray, forms: tuple[str, ...] = tuple(FORMS)) -> ClampMotionFit:
+    """Least-squares fit of each of ``forms`` (names in :data:`FORMS`, all by default) to
+    an encoder series (s, rad), the one with the lowest BIC returned with its status (see
+    the module docstring)."""
     t = np.asarray(t, dtype=float)
     theta = np.asarray(theta, dtype=float)
     needed = MIN_REST + 3 * MIN_PER_PIECE
@@ -228,36 +269,42 @@ def fit_clamp_motion(t: np.ndarray, theta: np.ndarray) -> ClampMotionFit:
     origin, scale = t[0], t[-1] - t[0]
     unit_t = (t - origin) / scale  # the search works on the record scaled to [0, 1]
     found = {}
-    for form, (lines, stops) in FORMS.items():
-        cost, point, x, rest = _search(unit_t, theta, lines, stops)
+    unknown = [form for form in forms if form not in FORMS]
+    if unknown or not forms:
+        raise OptionError("forms", f"{unknown[0] if unknown else 'none'!r} is not a clamp-motion form; the forms are "
+                          + ", ".join(FORMS))
+    for form in forms:
+        lines, stops, rest_first = FORMS[form]
+        cost, point, x, rest = _search(unit_t, theta, lines, stops, rest_first)
         point = origin + point * scale
         x = x / scale ** np.array([1, 2, 3, 4, *[1] * (lines - 1)])
         if not math.isfinite(cost):
             continue
-        k = 1 + len(x) + len(point)  # θ0, the linear coefficients, the breakpoints
+        # Every form is judged on every sample, and counts what it takes from the data: θ0
+        # (the rest's mean, or fitted), the linear coefficients and the breakpoints it
+        # searched (a moving record's onset is the first sample, not searched).
+        k = 1 + len(x) + len(point) - (0 if rest_first else 1)
         bic = n * math.log(max(cost, 1e-300) / n) + k * math.log(n)
         found[form] = (bic, cost, point, x, rest, lines, stops)
     if not found:
         raise OptionError("ENCODER", "no form fits: every candidate leaves a piece with fewer than "
-                          f"{MIN_PER_PIECE} samples or fewer than {MIN_REST} at rest before the onset")
+                          f"{MIN_PER_PIECE} samples")
     form = min(found, key=lambda f: found[f][0])
     bic, cost, point, x, rest, lines, stops = found[form]
     t0, breaks = float(point[0]), tuple(float(b) for b in point[1:1 + lines])
     stop = float(point[1 + lines]) if stops else None
     speeds = (float(sum(k * x[k - 1] * (breaks[0] - t0) ** (k - 1) for k in range(1, 5))), *map(float, x[4:]))
-    # The smaller of two estimates: samples the fit calls "at rest" may not be (a wrong
-    # form puts its onset late), and 4th differences grow where θ changes abruptly.
-    at_rest = theta[t < t0]
-    estimates = {"the encoder's 4th differences": difference_noise([theta])}
-    if len(at_rest) >= 8:
-        estimates[f"the scatter of the {len(at_rest)} samples at rest"] = max(float(np.std(at_rest, ddof=1)),
-                                                                            quantisation_floor([theta]))
-    source = min(estimates, key=estimates.get)
-    noise = estimates[source]
+    # The 4th differences of the whole record, not the smaller of that and the scatter at
+    # rest: a minimum of two estimates is biased low, and 20 samples at rest scatter by
+    # ±16 % (one seed in 12 of issue 12's record read 0.58 σ, its right fit 1.6× "poor").
+    # The median of the differences ignores the few samples where θ changes abruptly.
+    noise = difference_noise([theta])
+    source = "the encoder's 4th differences"
     rms = math.sqrt(cost / n)
     problems = []
-    if noise > 0 and rms > POOR_FIT_FACTOR * noise:
-        problems.append(f"the RMS {rms:.3g} rad is {rms / noise:.1f}× the encoder's noise {noise:.2g} rad "
+    ratio = poor_fit_ratio(rms, noise)
+    if ratio is not None:
+        problems.append(f"the RMS {rms:.3g} rad is {ratio:.1f}× the encoder's noise {noise:.2g} rad "
                         f"({source}): no form of rest, quartic, lines and stop describes this encoder")
     return ClampMotionFit(form, t0, breaks, stop, rest, tuple(float(v) for v in x[:4]), speeds, rms, noise, source,
                           n, bic, "poor_fit" if problems else "converged", problems,

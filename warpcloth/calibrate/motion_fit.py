@@ -30,9 +30,10 @@ not: ``failed`` (the best run does not reproduce the measured quantity everywher
 search stopped at its iteration limit), ``at_bound`` (a parameter within 0.1 % of the
 range of a bound: the optimum lies beyond, the value is not an estimate),
 ``not_identifiable`` (two parameters correlated beyond 0.95, or a singular Jacobian: the
-data do not separate them), ``poor_fit`` (RMS above 1.5× the measurement noise, given or
-estimated from the data by :func:`~warpcloth.calibrate.noise.difference_noise`), else
-``converged``.
+data do not separate them), ``poor_fit`` (RMS above :data:`~warpcloth.calibrate.noise.POOR_FIT_FACTOR` × the
+measurement noise, given or estimated from the data by
+:func:`~warpcloth.calibrate.noise.difference_noise`: the rule every fit shares,
+:func:`~warpcloth.calibrate.noise.poor_fit_ratio`), else ``converged``.
 """
 
 from __future__ import annotations
@@ -59,7 +60,7 @@ from warpcloth.sim import RunResult
 from warpcloth.sim.resources import check_memory
 
 from .bootstrap import block_bootstrap_sigma
-from .noise import difference_noise
+from .noise import difference_noise, poor_fit_ratio
 
 MAX_STEP_CORNERS_FREE = 10
 """With ``integrator.dt_s = "auto"`` a fit chooses its one step over the 2^d corners of its
@@ -94,11 +95,6 @@ STENCIL_STEP = 2e-3  # central-difference step, as a fraction of each parameter'
 MAX_LAMBDA = 1e8
 AT_BOUND = 1e-3  # a parameter this close to a bound, as a fraction of its range, ended on it
 MAX_SPACE_FILLING = 10_000
-POOR_FIT_FACTOR = 1.5
-"""An RMS above this many times the noise is not explained by the model. With hundreds of
-residuals a good fit's RMS equals the noise to a few %, and the estimate from the data is
-good to about ±25 %; a clamp speed 25 % wrong leaves 2.0× (and a rotation centre 3 mm
-off), which 3× would pass as converged (tests/test_calibration_path.py)."""
 NOT_IDENTIFIABLE_CORRELATION = 0.95
 STATUSES = ("converged", "at_bound", "poor_fit", "not_identifiable", "failed")
 """Verdicts of a fit, from the only one that is a fit to the worst (see the module docstring)."""
@@ -398,8 +394,9 @@ class FitResult:
                     found.append(("not_identifiable", f"{names[i]} and {names[j]} are correlated {corr[i, j]:+.3f}: "
                                                       "the data do not separate them; fix one, or measure what "
                                                       "distinguishes them"))
-        if math.isfinite(self.noise) and self.noise > 0 and self.rms > POOR_FIT_FACTOR * self.noise:
-            found.append(("poor_fit", f"the RMS {self.rms * 1e3:.4g} mm is {self.rms / self.noise:.1f}× the "
+        ratio = poor_fit_ratio(self.rms, self.noise)
+        if ratio is not None:
+            found.append(("poor_fit", f"the RMS {self.rms * 1e3:.4g} mm is {ratio:.1f}× the "
                                       f"measurement noise {self.noise * 1e3:.3g} mm ({self.noise_source}): the "
                                       "model with these free parameters does not explain the data"))
         if not self.converged:

@@ -42,3 +42,21 @@ def difference_noise(series: Iterable[np.ndarray]) -> float:
         return float("nan")
     estimate = MAD_TO_SIGMA * np.median(np.abs(d - np.median(d))) / math.sqrt(FOURTH_DIFFERENCE_VARIANCE)
     return float(max(estimate, quantisation_floor(series)))
+
+
+POOR_FIT_FACTOR = 1.5
+"""The one verdict rule of every fit (clamp motion, motion, KES): an RMS above this many
+times the noise of the data is not explained by the model. Measured (benchmarks/RESULTS.md,
+issue 22): over 20 noise seeds every right model stays at or below 1.15×, and the
+estimator's own spread (≈ 1.46/√n) passes 1.5 in none of 5000 draws at n ≥ 200; models
+wrong enough to move a fitted value beyond its tolerance leave 2.0× and more."""
+
+
+def poor_fit_ratio(rms: float, noise: float) -> float | None:
+    """RMS / noise when it exceeds :data:`POOR_FIT_FACTOR` (the model does not explain the
+    data: the fit is ``poor_fit``); None when it does not, or the noise is unknown (not
+    finite or zero: nothing to judge against)."""
+    if not (math.isfinite(noise) and noise > 0):
+        return None
+    ratio = rms / noise
+    return ratio if ratio > POOR_FIT_FACTOR else None

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from warpcloth.calibrate.noise import POOR_FIT_FACTOR
 from warpcloth.scene import scene_from_dict
 
 from .options import (
@@ -64,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                          help="override the header's unit (default: the header's, else rad)")
     angle_p.add_argument("--plot", help="also write a PNG of the encoder data and the fit")
     angle_p.add_argument("--accept", action="store_true",
-                         help="exit 0 even when the fit is poor (RMS above 3× the encoder's noise)")
+                         help=f"exit 0 even when the fit is poor (RMS above {POOR_FIT_FACTOR:g}× the encoder's noise)")
     add_overwrite(angle_p, "scene file -o")
 
 
@@ -141,8 +142,16 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
            f"{scene.run.duration_s:g} s (run.duration_s)")
     print(f"form: {fit.form} (lowest BIC; RMS of each form: "
           + ", ".join(f"{f} {r:.3g} rad" for f, r in fit.candidates.items()) + ")")
-    print(f"encoder at rest {fit.rest_rad:.4g} rad (the mean before the onset; the scene's θ is measured from it); "
-          f"onset {fit.onset_s:.4f} s; quartic a1…a4 = ({a}) rad/s^k; then {lines}; {end}")
+    start = (f"moving from the first sample ({fit.onset_s:.4f} s) at θ0 = {fit.rest_rad:.4g} rad (fitted: the record "
+             "has no rest before the motion; the scene's θ is measured from it)" if fit.moving_at_start else
+             f"encoder at rest {fit.rest_rad:.4g} rad (the mean before the onset; the scene's θ is measured from it); "
+             f"onset {fit.onset_s:.4f} s")
+    print(f"{start}; quartic a1…a4 = ({a}) rad/s^k; then {lines}; {end}")
+    turned = float(fit.theta(0.0)[0] - fit.rest_rad)
+    if fit.moving_at_start and fit.onset_s < 0 and abs(turned) > 3 * fit.noise_rad:
+        print(f"note: the record is in motion from {fit.onset_s:g} s, so at the scene's t = 0 the clamp has already "
+              f"turned {turned:.4g} rad while the strip starts from its hanging rest shape; put the record's t = 0 at "
+              "the start of the motion", file=sys.stderr)
     print(f"RMS {fit.rms_rad:.3g} rad over {fit.n_samples} samples, noise {fit.noise_rad:.2g} rad ({fit.noise_source})"
           f"; status: {fit.status}")
     print(f"wrote {out}")

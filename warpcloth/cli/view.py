@@ -36,6 +36,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     plot_p.add_argument("--measured", help="a measured CSV, drawn on the figure of its kind: a laser trace (t, x) on "
                         "amplitude, a clamp encoder (t, theta: column 2 headed theta/angle) on clamp_angle, tracked "
                         "markers (frame, t, s, x, y) on shapes")
+    plot_p.add_argument("--from", dest="t_from", type=finite, metavar="S", help="draw the time series (and a "
+                        "--measured trace or encoder) from this time, s (default: the start of their overlap)")
+    plot_p.add_argument("--to", dest="t_to", type=finite, metavar="S", help="…up to this time, s (default: the end "
+                        "of their overlap)")
     plot_p.add_argument("--format", choices=FORMATS, default="png", help="figure file format (default: png)")
     plot_p.add_argument("--dpi", type=positive, default=DPI, help=f"resolution of raster output (default: {DPI})")
     plot_p.add_argument("--times", type=finite, nargs="+", help="shape-overlay times, s from t = 0 (the release, "
@@ -89,7 +93,7 @@ def plot_command(args: argparse.Namespace) -> int:
         return 0
     recording = load_recording(args.run_dir, args.variants, args.where)
     for path in plot_run(recording, out, measured=args.measured, times=args.times, kes=material_kes_values(recording),
-                         fmt=args.format, dpi=args.dpi):
+                         fmt=args.format, dpi=args.dpi, t_from=args.t_from, t_to=args.t_to):
         print(f"wrote {path}")
     return 0
 

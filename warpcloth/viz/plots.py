@@ -123,36 +123,53 @@ def _save(fig: plt.Figure, path: Path, dpi: float = DPI) -> Path:
     return path
 
 
+def _inside(t: np.ndarray, window: tuple[float, float] | None) -> np.ndarray:
+    # samples within a comparison window (all of them without one)
+    if window is None:
+        return np.ones(len(t), bool)
+    return (t >= window[0] - 1e-9) & (t <= window[1] + 1e-9)
+
+
+def _window_note(window: tuple[float, float] | None) -> str:
+    return "" if window is None else f"; compared on t = {window[0]:g} … {window[1]:g} s"
+
+
 def plot_amplitude(recording: Recording, path: Path, measured: LaserTrace | None = None, *,
-                   dpi: float = DPI) -> Path:
-    """Laser-line displacement (and free-end x) against time, as in the paper's Fig. 10."""
+                   dpi: float = DPI, window: tuple[float, float] | None = None) -> Path:
+    """Laser-line displacement (and free-end x) against time, as in the paper's Fig. 10;
+    with ``window`` (s) only that span of the run and of ``measured`` (same footing)."""
     fig, ax = plt.subplots(figsize=(8, 4))
     laser_mm = recording.scenes[0].output.laser_height_mm
     for j, (colour, label) in enumerate(_variant_colours(recording, fig, ax)):
         t, laser = recording.probe("laser_x", j)
-        ax.plot(t, laser * MM, lw=1.2, color=colour, label=label and f"{label}: laser line")
+        keep = _inside(t, window)
+        ax.plot(t[keep], laser[keep] * MM, lw=1.2, color=colour, label=label and f"{label}: laser line")
         if len(recording.variants) == 1:
             t, tip = recording.probe("tip_x", j)
-            ax.plot(t, tip * MM, lw=0.8, ls="--", color=colour, alpha=0.6, label="free end x")
+            ax.plot(t[keep], tip[keep] * MM, lw=0.8, ls="--", color=colour, alpha=0.6, label="free end x")
     if measured is not None:
-        ax.plot(measured.t, measured.x * MM, "k.", ms=2.5, label="measured")
+        keep = _inside(measured.t, window)
+        ax.plot(measured.t[keep], measured.x[keep] * MM, "k.", ms=2.5, label="measured")
     ax.axhline(0, color="0.6", lw=0.6)
     ax.set(xlabel=time_label(recording), ylabel="x (mm)",
-           title=f"Displacement at the laser line (y = {laser_mm:g} mm from the clamp edge)")
+           title=f"Displacement at the laser line (y = {laser_mm:g} mm from the clamp edge){_window_note(window)}")
     _legend(ax, fontsize=7, loc="upper right")
     return _save(fig, path, dpi)
 
 
 def plot_clamp_angle(recording: Recording, path: Path, measured: ClampAngleTrace | None = None, *,
-                     dpi: float = DPI) -> Path:
-    """Clamp rotation angle against time, as in the paper's Fig. 12, over an encoder's."""
+                     dpi: float = DPI, window: tuple[float, float] | None = None) -> Path:
+    """Clamp rotation angle against time, as in the paper's Fig. 12, over an encoder's;
+    with ``window`` (s) only that span of both."""
     fig, ax = plt.subplots(figsize=(6, 4))
     for j, (colour, label) in enumerate(_variant_colours(recording, fig, ax)):
         t, theta = recording.probe("clamp_angle", j)
-        ax.plot(t, np.degrees(theta), lw=1.2, color=colour, label=label)
+        keep = _inside(t, window)
+        ax.plot(t[keep], np.degrees(theta[keep]), lw=1.2, color=colour, label=label)
     if measured is not None:
-        ax.plot(measured.t, np.degrees(measured.theta), "k.", ms=2.5, label="encoder (measured)")
-    ax.set(xlabel=time_label(recording), ylabel="clamp angle θ (deg)", title="Clamp rotation")
+        keep = _inside(measured.t, window)
+        ax.plot(measured.t[keep], np.degrees(measured.theta[keep]), "k.", ms=2.5, label="encoder (measured)")
+    ax.set(xlabel=time_label(recording), ylabel="clamp angle θ (deg)", title=f"Clamp rotation{_window_note(window)}")
     _legend(ax, fontsize=7)
     return _save(fig, path, dpi)
 
@@ -311,12 +328,17 @@ def plot_energy(recording: Recording, path: Path, variant: int = 0, *, dpi: floa
 
 def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path | None = None,
              times: np.ndarray | None = None, variant: int = 0, kes: object | None = None,
-             fmt: str = "png", dpi: float = DPI) -> list[Path]:
+             fmt: str = "png", dpi: float = DPI, t_from: float | None = None,
+             t_to: float | None = None) -> list[Path]:
     """Write every run figure into ``out_dir`` as ``fmt`` (png, pdf or svg); returns the
     paths. A ``measured`` file goes onto the figure of its kind: a laser trace onto the
     amplitude, a clamp encoder onto the clamp angle, tracked markers onto the shapes
-    (:func:`warpcloth.io.measured.read_measurement`). ``kes`` marks B and 2HB on the
-    bending loop (:func:`plot_bending_loop`)."""
+    (:func:`warpcloth.io.measured.read_measurement`); a trace or encoder and the run are
+    drawn on one window, their overlap unless ``t_from``/``t_to`` choose it
+    (:func:`warpcloth.calibrate.analysis.comparison_window`), which the title states.
+    ``kes`` marks B and 2HB on the bending loop (:func:`plot_bending_loop`)."""
+    from warpcloth.calibrate.analysis import comparison_window
+
     if fmt not in FORMATS:
         raise OptionError("--format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
     if not (np.isfinite(dpi) and 10 <= dpi <= 2400):
@@ -324,13 +346,20 @@ def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path 
     if times is not None:
         recording.nearest_frames(times)  # an out-of-range time is refused before any figure is written
     data = read_measurement(measured, encoder=True) if measured else None
+    window = None
+    if isinstance(data, (LaserTrace, ClampAngleTrace)) or t_from is not None or t_to is not None:
+        spans = {"the run": (float(recording.probes["t"].min()), float(recording.probes["t"].max()))}
+        if isinstance(data, (LaserTrace, ClampAngleTrace)):
+            spans[str(measured)] = (float(data.t[0]), float(data.t[-1]))
+        window = comparison_window(spans, t_from, t_to)  # refused before any figure is written
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     shapes = data if isinstance(data, TrackedShapes) else None
     return [
-        plot_amplitude(recording, out / f"amplitude.{fmt}", data if isinstance(data, LaserTrace) else None, dpi=dpi),
+        plot_amplitude(recording, out / f"amplitude.{fmt}", data if isinstance(data, LaserTrace) else None, dpi=dpi,
+                       window=window),
         plot_clamp_angle(recording, out / f"clamp_angle.{fmt}", data if isinstance(data, ClampAngleTrace) else None,
-                         dpi=dpi),
+                         dpi=dpi, window=window),
         plot_shapes(recording, out / f"shapes.{fmt}",
                     default_shape_times(recording, variant=variant) if times is None else times, variant, shapes,
                     dpi=dpi),
@@ -467,14 +496,17 @@ def plot_fit_overlay(result: object, objective: object, measurement: LaserTrace 
     if isinstance(measurement, LaserTrace):
         fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, height_ratios=[3, 1])
         top.plot(measurement.t, measurement.x * MM, "k.", ms=2.5, label="measured")
-        top.plot(result.t - shift, result.probe("laser_x", 0) * MM, "C3", lw=1.2, label="best fit")
+        window = (float(measurement.t[0]), float(measurement.t[-1]))  # the fit's own: the measured record
+        keep = _inside(result.t - shift, window)
+        top.plot((result.t - shift)[keep], result.probe("laser_x", 0)[keep] * MM, "C3", lw=1.2, label="best fit")
         top.set(ylabel="x at the laser line (mm)")
         top.legend(fontsize=7)
         residual = objective.residuals(result, 0, shift, penalise=False)
         bottom.plot(measurement.t, residual * MM, "C0.", ms=2)
         bottom.axhline(0, color="0.6", lw=0.6)
         bottom.set(xlabel="measured time (s)", ylabel="residual (mm)")
-        top.set_title(f"RMS {fit.rms * MM:.3g} mm; {title}", fontsize=8)
+        top.set_title(f"RMS {fit.rms * MM:.3g} mm on t = {window[0]:g} … {window[1]:g} s (the measured record); "
+                      f"{title}", fontsize=8)
         return _save(fig, path)
     fig, ax = plt.subplots(figsize=(6.5, 6))
     frames = np.unique(measurement.frame)
@@ -490,7 +522,8 @@ def plot_fit_overlay(result: object, objective: object, measurement: LaserTrace 
         ax.plot(measurement.x[rows] * MM, measurement.y[rows] * MM, "o", color=colour, ms=3.5, mfc="none")
     ax.set_aspect("equal")
     ax.set(xlabel=X_LABEL, ylabel=Y_LABEL)
-    ax.set_title(f"markers (o) vs best fit (lines); RMS {fit.rms * MM:.3g} mm\n{title}", fontsize=8)
+    ax.set_title(f"markers (o) vs best fit (lines); RMS {fit.rms * MM:.3g} mm on t = {measurement.t.min():g} … "
+                 f"{measurement.t.max():g} s (the measured record)\n{title}", fontsize=8)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title="measured t", title_fontsize=7)
     return _save(fig, path)
 

@@ -19,8 +19,9 @@ One module per concern:
 - :mod:`.material_file`: the material file of a fit.
 """
 
+from ..noise import POOR_FIT_FACTOR
 from .bending_dahl import DAHL, EXPONENT_GRID, SCALE_K0_GRID, fit_dahl
-from .bending_fit import POOR_FIT_FACTOR, BendingFit, LawFitter, Parameter, ShapeParameter, bending_problems
+from .bending_fit import BendingFit, LawFitter, Parameter, ShapeParameter, bending_problems
 from .bending_frictional_couple import FRICTIONAL_COUPLE, WIDTH_K0_GRID, fit_frictional_couple
 from .bending_masing import MASING, fit_masing
 from .bending_tagawa2003 import ALPHA_K0_GRID, TAGAWA2003, Tagawa2003Fit, fit_bending, hysteretic_offsets

@@ -26,11 +26,8 @@ from warpcloth import units
 from warpcloth.scene import MaterialSection, to_si
 from warpcloth.sim import moment_along_path
 
-from ..noise import difference_noise
+from ..noise import difference_noise, poor_fit_ratio
 from .readers import BendingLoop
-
-POOR_FIT_FACTOR = 3.0
-"""An RMS above this many times the data's noise is not described by the model."""
 
 SIMPLEX_SIZE = 1e-10
 """Nelder–Mead ends when the simplex spans less than this in every ln θ (``xatol``)."""
@@ -113,11 +110,13 @@ class BendingFit:
 
 
 def poor_fit(what: str, rms: float, unit: str, samples: np.ndarray) -> str | None:
-    """Why a fit whose RMS is above :data:`POOR_FIT_FACTOR` × the noise of its data (from
-    their 4th differences) is not a fit; None when it is not that far."""
+    """Why a fit whose RMS is above :data:`~warpcloth.calibrate.noise.POOR_FIT_FACTOR` × the
+    noise of its data (from their 4th differences; the rule of every fit,
+    :func:`~warpcloth.calibrate.noise.poor_fit_ratio`) is not a fit; None when it is not that far."""
     noise = difference_noise([samples])
-    if math.isfinite(noise) and noise > 0 and rms > POOR_FIT_FACTOR * noise:
-        return (f"the {what} RMS {rms:.4g} {unit} is {rms / noise:.1f}× the noise of the data ({noise:.3g} {unit}, "
+    ratio = poor_fit_ratio(rms, noise)
+    if ratio is not None:
+        return (f"the {what} RMS {rms:.4g} {unit} is {ratio:.1f}× the noise of the data ({noise:.3g} {unit}, "
                 "from its 4th differences): the model does not describe this loop")
     return None
 

@@ -24,9 +24,9 @@ from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
 from warpcloth.scene import to_si
 from warpcloth.sim import moment_along_path
 
-from ..noise import difference_noise
+from ..noise import difference_noise, poor_fit_ratio
 from .bending_dahl import DAHL
-from .bending_fit import AIC_TIE, POOR_FIT_FACTOR, BendingFit, LawFitter, bending_problems
+from .bending_fit import AIC_TIE, BendingFit, LawFitter, bending_problems
 from .bending_frictional_couple import FRICTIONAL_COUPLE
 from .bending_masing import MASING
 from .bending_tagawa2003 import TAGAWA2003
@@ -154,7 +154,7 @@ class LawComparison:
         head = (f"partial cycles from {self.loop.row_label} {self.loop.rows[start]} on "
                 f"({len(self.loop.moment) - start} points), n ln(SSE/SSE_best) there: {listed}")
         ratio = self.inner_rms(best) / noise
-        if math.isfinite(ratio) and ratio > POOR_FIT_FACTOR:
+        if poor_fit_ratio(self.inner_rms(best), noise) is not None:
             return f"{head}; no law describes them (the best, {best}, at {ratio:.1f}× the noise {noise:.3g} gf·cm/cm)"
         if len(ties) == len(delta):
             return f"{head}; they do not tell the laws' inner loops apart (every law within {AIC_TIE:g})"
