@@ -163,9 +163,6 @@ def test_analyse_measures_every_input_on_one_window(tmp_path):
     # Issue 22: a record twice as long as another was measured on all of it, and a swing
     # whose decrement changes with amplitude (hysteresis) then reads another mean
     # decrement. Two traces of one swing (decrement falling with amplitude), 1.5 s and 3 s.
-    import subprocess
-    import sys
-
     import warpcloth as wc
     from warpcloth.calibrate.analysis import analyse
 
@@ -190,7 +187,6 @@ def test_analyse_measures_every_input_on_one_window(tmp_path):
         analyse([short, long], t_from=-1.0)
     with pytest.raises(wc.OptionError, match=r"--from: 1 s is not before the window's end 0.5 s \(--to\)"):
         analyse([short, long], t_from=1.0, t_to=0.5)
-    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "analyse", short, long, "--from", "2"],
-                          capture_output=True, text=True, timeout=300)
+    done = run_cli("analyse", short, long, "--from", "2")
     assert done.returncode == 2 and "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1
     assert "--from: 2 s is not before the window's end 1.5 s (the end of" in done.stderr
