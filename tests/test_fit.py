@@ -160,3 +160,34 @@ def test_a_fit_that_ends_on_a_bound_says_so_and_exits_non_zero(tmp_path):
     assert "not a fit (at_bound): damping.gamma_per_s = 5 ended on a bound (5:6)" in done.stderr
     result = json.loads((tmp_path / "fit" / "fit.json").read_text())
     assert result["status"] == "at_bound" and result["parameters"]["damping.gamma_per_s"]["at_bound"] is True
+
+
+def test_the_spacing_check_predicts_the_refit_at_half_the_spacing():
+    # The bundled rotation markers (tagawa2003, h = 2.5 mm) fitted over their first 0.25 s;
+    # the check's one run at h = 1.25 mm and its Gauss–Newton step against an actual refit
+    # there (over the full record: dy −0.0991 predicted, −0.0988 refitted, 3.8σ; γ +0.067,
+    # +0.063): the mesh moves the rotation centre by several σ, and the fit says so.
+    from warpcloth.io.measured import read_measurement
+
+    markers = read_measurement("impulsive_rotation_shapes")
+    keep = markers.t <= 0.25
+    markers = TrackedShapes(*(getattr(markers, k)[keep] for k in ("frame", "t", "s", "x", "y")))
+    base = raw("impulsive_rotation")
+    free = free_parameters("gamma,rotation_centre_dy_mm", wc.scene_from_dict(copy.deepcopy(base)),
+                           "rotation_centre_dy_mm=0:8")
+    fit = fit_motion(base, markers, free, align_start_s=0.01, progress=False, check_spacing=True)
+    moves = fit.spacing_check["moves"]
+    assert fit.spacing_check["spacing_mm"] == 1.25
+    fine = copy.deepcopy(base)
+    set_field(fine, "strip.spacing_mm", 1.25)
+    set_field(fine, "integrator.dt_s", 2.5e-6)
+    refit = fit_motion(fine, markers, free, align_start_s=0.01, progress=False)
+    for name in ("clamp.rotation_centre_dy_mm", "damping.gamma_per_s"):
+        actual = refit.parameters[name] - fit.parameters[name]
+        print(f"{name}: predicted {moves[name]:+.4g}, refitted {actual:+.4g} (σ {fit.sigma[name]:.2g})")
+        assert moves[name] == pytest.approx(actual, rel=0.15, abs=0.2 * fit.sigma[name])
+    dy = "clamp.rotation_centre_dy_mm"
+    assert abs(moves[dy]) > fit.sigma[dy] and fit.status == "spacing_limited"
+    assert any(p.startswith("refining the strip to strip.spacing_mm = 1.25 moves clamp.rotation_centre_dy_mm")
+               for p in fit.problems)
+    assert fit.to_json()["spacing_check"] == fit.spacing_check

@@ -33,7 +33,9 @@ range of a bound: the optimum lies beyond, the value is not an estimate),
 data do not separate them), ``poor_fit`` (RMS above :data:`~warpcloth.calibrate.noise.POOR_FIT_FACTOR` × the
 measurement noise, given or estimated from the data by
 :func:`~warpcloth.calibrate.noise.difference_noise`: the rule every fit shares,
-:func:`~warpcloth.calibrate.noise.poor_fit_ratio`), else ``converged``.
+:func:`~warpcloth.calibrate.noise.poor_fit_ratio`), ``spacing_limited`` (with
+``check_spacing``: the fit at half the spacing would move a parameter by more than its σ,
+:func:`spacing_shift`), else ``converged``.
 """
 
 from __future__ import annotations
@@ -96,7 +98,7 @@ MAX_LAMBDA = 1e8
 AT_BOUND = 1e-3  # a parameter this close to a bound, as a fraction of its range, ended on it
 MAX_SPACE_FILLING = 10_000
 NOT_IDENTIFIABLE_CORRELATION = 0.95
-STATUSES = ("converged", "at_bound", "poor_fit", "not_identifiable", "failed")
+STATUSES = ("converged", "spacing_limited", "at_bound", "poor_fit", "not_identifiable", "failed")
 """Verdicts of a fit, from the only one that is a fit to the worst (see the module docstring)."""
 
 
@@ -342,6 +344,7 @@ class FitResult:
     status: str = "failed"
     problems: list[str] = field(default_factory=list)  # why the status is not "converged"
     mesh_note: str = ""  # why the values hold at the fitted spacing only (a law whose answers depend on h)
+    spacing_check: dict = field(default_factory=dict)  # check_spacing: the fit's move at h/2 (:func:`spacing_shift`)
 
     def to_json(self) -> dict:
         """The verdict, each parameter with its 1σ and bounds, and how the search went;
@@ -350,6 +353,7 @@ class FitResult:
             "status": self.status,
             "problems": self.problems,
             "mesh_note": self.mesh_note,
+            "spacing_check": self.spacing_check,
             "rms_mm": self.rms * 1e3,
             "noise_mm": self.noise * 1e3,
             "noise_source": self.noise_source,
@@ -399,6 +403,13 @@ class FitResult:
             found.append(("poor_fit", f"the RMS {self.rms * 1e3:.4g} mm is {ratio:.1f}× the "
                                       f"measurement noise {self.noise * 1e3:.3g} mm ({self.noise_source}): the "
                                       "model with these free parameters does not explain the data"))
+        moved = self.spacing_check.get("moves", {})
+        for name, delta in moved.items():
+            if abs(delta) > self.sigma.get(name, math.inf):
+                found.append(("spacing_limited", f"refining the strip to strip.spacing_mm = "
+                                                 f"{self.spacing_check['spacing_mm']:g} moves {name} by {delta:+.4g} "
+                                                 f"({abs(delta) / self.sigma[name]:.1f}σ): the mesh, not the data, "
+                                                 "limits it; fit at a finer strip.spacing_mm"))
         if not self.converged:
             found.append(("failed", "the search stopped at its iteration limit before converging "
                                     "(raise --max-iterations)"))
@@ -421,12 +432,15 @@ def _stencil(point: np.ndarray, d: int) -> tuple[list[np.ndarray], list[tuple[in
 def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[FreeParameter], *,
                align_start_s: float = 0.0, space_filling: int | None = None, max_iterations: int = 25,
                seed: int = 0, device: str | None = None, progress: bool = True,
-               noise: float | None = None, bootstrap: int = 0) -> FitResult:
+               noise: float | None = None, bootstrap: int = 0, check_spacing: bool = False) -> FitResult:
     """Fit ``free`` parameters of raw scene ``base`` to ``measurement`` (see the module doc).
 
     ``noise`` is the measurement's σ (m) the RMS is judged against; by default it is
     estimated from the measurement (:func:`measurement_noise`). ``bootstrap`` > 0 adds a
-    moving-block bootstrap σ from that many resamples (:mod:`.bootstrap`)."""
+    moving-block bootstrap σ from that many resamples (:mod:`.bootstrap`).
+    ``check_spacing`` runs the best point once more at half the spacing and reports how
+    far that would move each parameter (:func:`spacing_shift`); a move beyond its σ makes
+    the status ``spacing_limited``."""
     started = time.perf_counter()
     objective = Objective(base, measurement, free, align_start_s, device)
     d = len(free)
@@ -513,10 +527,45 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
     else:
         fit.noise, fit.noise_source = float(noise), "given"
     fit.other_minima = other_minima
+    if check_spacing:
+        fit.spacing_check = spacing_shift(objective, u, shift, jac, residual)
     # result row 0 is the reported point (accepted last, or re-run above)
     fit.judge(int(np.isnan(objective.residuals(result, 0, shift, penalise=False)).sum()))
     fit.mesh_note = mesh_note(base)
     return fit
+
+
+def spacing_shift(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarray,
+                  residual: np.ndarray) -> dict:
+    """How far the fit at point ``u`` would move at half the strip's spacing: the best point
+    run once more at h/2 (dt halved, or chosen again where ``dt_s = "auto"`` chose it) and
+    the Gauss–Newton step its residuals ask for, −J⁺(r_{h/2} − r_h) with the fit's own
+    Jacobian J (``jac``, unit-box coordinates) and residuals r_h (``residual``). Returns
+    ``{"spacing_mm": h/2, "moves": {field: Δ}}`` (Δ in the field's units); a move larger
+    than the parameter's σ means the spacing, not the measurement, limits it (docs/
+    calibration.md). A law that converges at second order moves a third as far again
+    from h/2 to the continuum."""
+    fine = copy.deepcopy(objective.base)
+    for name, value in objective.values(u).items():
+        set_field(fine, name, value)
+    scene = scene_from_dict(copy.deepcopy(fine))
+    set_field(fine, "strip.spacing_mm", scene.strip.spacing_mm / 2)
+    auto = scene.integrator.dt_chosen_by == AUTO
+    set_field(fine, "integrator.dt_s", AUTO if auto else scene.integrator.dt_s / 2)
+    if not auto:  # the stretching limit shrinks a little faster than h (its cos(π/4N) factor)
+        try:
+            check_step(scene_from_dict(copy.deepcopy(fine)))
+        except SceneError:
+            set_field(fine, "integrator.dt_s", scene.integrator.dt_s / 4)
+    refined = Objective(fine, objective.measurement, [], objective.align, objective.device)
+    fine_residual = refined.residuals(refined.run(np.zeros((1, 0))), 0, shift, penalise=False)
+    names = [p.field for p in objective.free] + ([SHIFT] if objective.align else [])
+    if not np.all(np.isfinite(fine_residual)):
+        return {"spacing_mm": scene.strip.spacing_mm / 2, "moves": {},
+                "note": "the run at half the spacing misses measured points (the laser line, or it diverged)"}
+    ranges = np.array([p.upper - p.lower for p in objective.free] + ([1.0] if objective.align else []))
+    step = -np.linalg.lstsq(jac, fine_residual - residual, rcond=None)[0] * ranges
+    return {"spacing_mm": scene.strip.spacing_mm / 2, "moves": dict(zip(names, step.tolist(), strict=True))}
 
 
 def mesh_note(base: dict) -> str:

@@ -51,6 +51,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                             "none)")
     fit_p.add_argument("--noise", type=positive, default=None, metavar="MM",
                        help="measurement noise σ in mm the RMS is judged against (default: estimated from the data)")
+    fit_p.add_argument("--check-spacing", action="store_true",
+                       help="also run the best fit at half the strip spacing and say how far each parameter would "
+                            "move; a move beyond its σ is status spacing_limited (exit 9)")
     fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda (default: Warp's preferred device)")
     fit_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_overwrite(fit_p, "fit directory --out")
@@ -86,11 +89,11 @@ def fit_command(args: argparse.Namespace) -> int:
     fit = fit_motion(base, measurement, free, align_start_s=args.align_start, space_filling=args.space_filling,
                      max_iterations=args.max_iterations, seed=args.seed, device=args.device,
                      progress=not args.no_progress, noise=None if args.noise is None else args.noise * 1e-3,
-                     bootstrap=args.bootstrap)
+                     bootstrap=args.bootstrap, check_spacing=args.check_spacing)
     inputs = {"scene": str(args.scene), "overrides": args.overrides, "measured": file_checksum(
         bundled_data(args.measured)), "free": [p.field for p in free], "align_start_s": args.align_start,
         "space_filling": args.space_filling, "max_iterations": args.max_iterations, "seed": args.seed,
-        "bootstrap": args.bootstrap}
+        "bootstrap": args.bootstrap, "check_spacing": args.check_spacing}
     write_fit(fit, base, measurement, out, args.device, inputs)
     print(f"RMS {fit.rms * 1e3:.4g} mm over {fit.n_residuals} residuals (noise {fit.noise * 1e3:.3g} mm, "
           f"{fit.noise_source}); {fit.launches} launches, {fit.variants} variants, {fit.wall_time_s:.1f} s")
@@ -104,6 +107,12 @@ def fit_command(args: argparse.Namespace) -> int:
               f"there, a ridge of {other['ridge_rms_mm']:.4g} mm between); the result above refined the lowest")
     if fit.mesh_note:
         print(f"note: {fit.mesh_note}")
+    if fit.spacing_check:
+        check = fit.spacing_check
+        moves = ", ".join(f"{name} {delta:+.3g} ({abs(delta) / fit.sigma[name]:.1f}σ)"
+                          for name, delta in check["moves"].items())
+        print(f"spacing check: at strip.spacing_mm = {check['spacing_mm']:g} the fit would move "
+              f"{moves or 'nothing: ' + check.get('note', '')}")
     print(f"status: {fit.status}")
     print(f"wrote {out}/ (best.toml reruns the best fit: warpcloth run {out / 'best.toml'})")
     if fit.status != "converged":

@@ -10,7 +10,8 @@ from pathlib import Path
 
 from warpcloth.errors import OptionError
 
-EXIT_FIT_STATUS = {"converged": 0, "at_bound": 4, "poor_fit": 6, "not_identifiable": 7, "failed": 8}
+EXIT_FIT_STATUS = {"converged": 0, "at_bound": 4, "poor_fit": 6, "not_identifiable": 7, "failed": 8,
+                   "spacing_limited": 9}
 """Exit status of a fit by its verdict: only ``converged`` is 0; every other result is
 written (to look at) but must not be read as a fit."""
 
