@@ -155,8 +155,10 @@ def centre_through(curvature, h_offset, branch, d1, alpha, k0, m0):
 
 
 @njit(error_model="numpy")
-def fresh_hinges(px, py, nc, edge_scale, law, branch, centre, kprev, hprev):
-    """Every hinge fresh at its current curvature: rising branch, no offset (§4.5)."""
+def fresh_hinges(px, py, nc, edge_scale, law, masing, hinges, points):
+    """Every hinge fresh at its current curvature (§4.5): tagawa2003 on the rising branch
+    with no offset; masing at the origin of its virgin curve, ``points[strip, hinge, 0]``
+    (the hinge planes are those of the block array, ``hinges[plane − HB, hinge, strip]``)."""
     n, b = px.shape
     for j in range(n - nc):
         i = nc - 1 + j
@@ -168,9 +170,86 @@ def fresh_hinges(px, py, nc, edge_scale, law, branch, centre, kprev, hprev):
             if j == 0:
                 k = k * edge_scale[s]
             d1, alpha, k0, m0 = law[1, s], law[2, s], law[3, s], law[4, s]
-            c = centre_through(k, 0.0, 1.0, d1, alpha, k0, m0)
-            branch[j, s], centre[j, s], kprev[j, s] = 1.0, c, k
-            hprev[j, s] = offset(k - c, 1.0, d1, alpha, k0, m0)
+            hinges[:, j, s] = 0.0
+            hinges[HK - HB, j, s] = k
+            if masing:
+                # Depth 0, on the virgin curve at its origin: every direction loads, so the
+                # first change takes the scalar path (TD = 0), which sets the branch.
+                hinges[HB - HB, j, s], hinges[HC - HB, j, s] = 1.0, k
+                if d1 != 0.0:
+                    points[s, j, 0, 0], points[s, j, 0, 1] = k, 0.0
+            else:
+                c = centre_through(k, 0.0, 1.0, d1, alpha, k0, m0)
+                hinges[HB - HB, j, s], hinges[HC - HB, j, s] = 1.0, c
+                hinges[HH - HB, j, s] = offset(k - c, 1.0, d1, alpha, k0, m0)
+
+
+@njit(inline="always")
+def masing_open_point(points, slot, h, depth, origin):
+    """The top open point (K, H) of a masing hinge (the origin (K_o, 0) at depth 0) and the
+    curvature of the one below it (kernels/bending_masing.py ``open_point``)."""
+    if depth == 0:
+        return origin, 0.0, origin
+    below = points[slot, h, depth - 1, 0] if depth > 1 else origin
+    return points[slot, h, depth, 0], points[slot, h, depth, 1], below
+
+
+@njit(error_model="numpy")
+def masing_follow(k, W, h, lane, points, overflows, deepest, slot, d1, alpha):
+    """The scalar path of a masing hinge, rare (a reversal, a closed loop, the memory full
+    or the first change): kernels/bending_masing.py ``follow`` operation for operation, its
+    stack ``points[slot, h]``, then the branch the block's SIMD loop evaluates now (HC, TH,
+    TA, TR) and the test that keeps the next evaluation off this path (TD, TT)."""
+    previous = W[h, HK, lane]
+    d = -1.0 if k - previous < 0.0 else 1.0
+    last = -1.0 if W[h, HB, lane] < 0.0 else 1.0
+    depth = int(abs(W[h, HB, lane])) - 1
+    capacity = points.shape[2] - 1
+    origin = points[slot, h, 0, 0]
+    top_k, top_h, below = masing_open_point(points, slot, h, depth, origin)
+    s = d  # on the virgin curve at its origin every direction loads
+    if depth > 0:
+        s = -1.0 if top_k > below else 1.0
+    elif previous != origin:
+        s = -1.0 if previous - origin < 0.0 else 1.0
+    if d != s and last != d:
+        # The curvature reversed at the previous evaluation, against the current branch.
+        if depth < capacity:
+            below = top_k
+            depth += 1
+            top_k, top_h = previous, W[h, HH, lane]
+            points[slot, h, depth, 0], points[slot, h, depth, 1] = top_k, top_h
+            s = d
+            deepest[slot] = max(deepest[slot], depth)
+        else:
+            overflows[slot] += 1
+    # Retracing after a reversal the full memory could not hold, until the top point.
+    while d != s and depth > 0 and s * (k - top_k) <= 0.0:
+        depth -= 1
+        s = d
+        top_k, top_h, below = masing_open_point(points, slot, h, depth, origin)
+    # Return-point memory: reaching the point below the top closes the inner loop.
+    while d == s and depth > 0:
+        target = below if depth > 1 else 2.0 * origin - top_k
+        if s * (k - target) < 0.0:
+            break
+        depth = max(depth - 2, 0)
+        top_k, top_h, below = masing_open_point(points, slot, h, depth, origin)
+    W[h, HB, lane] = d * float(depth + 1)
+    if depth == 0:
+        # virgin: sgn(y)·½D1·(1 − e^(−2α|y|)), y = K − K_o; −2α·sgn(y)·y = −2α|y| exactly
+        v = -1.0 if k - origin < 0.0 else 1.0
+        W[h, HC, lane], W[h, TH, lane] = origin, 0.0
+        W[h, TA, lane], W[h, TR, lane] = v * 0.5 * d1, -2.0 * alpha * v
+        # next: loading away from the origin, no loop to close
+        nxt = 0.0 if k == origin else v
+        W[h, TD, lane], W[h, TT, lane] = nxt, nxt * math.inf
+    else:
+        W[h, HC, lane], W[h, TH, lane] = top_k, top_h
+        W[h, TA, lane], W[h, TR, lane] = s * d1, -alpha * s
+        nxt = -1.0 if top_k > below else 1.0
+        W[h, TD, lane] = nxt if nxt == s else 0.0
+        W[h, TT, lane] = below if depth > 1 else 2.0 * origin - top_k
 
 
 # A block's whole working set is ONE local array W[row, plane, lane] whose two inner
@@ -182,16 +261,24 @@ def fresh_hinges(px, py, nc, edge_scale, law, branch, centre, kprev, hprev):
 # temporaries, row NMAX + 1 the per-strip parameters.
 LANES = 16  # two AVX-512 registers of float64 (LLVM treats loops under 16 trips as tiny: scalar)
 NMAX = 64  # most nodes a strip may have (h = 2.5 mm has 49)
-X, Y, U, V, FTX, FTY, FEX, FEY, FHX, FHY, HB, HC, HK, HH = range(14)  # node / hinge planes
+X, Y, U, V, FTX, FTY, FEX, FEY, FHX, FHY = range(10)  # node planes
+# Hinge planes. tagawa2003: branch s, loop centre c, K_prev, H. masing: the signed depth
+# d·(depth + 1) of warpcloth's memory vector, the top reversal point's curvature, K_prev, H,
+# then the branch this evaluation is on, H = TH + TA·(1 − exp(TR·(K − HC))) (the virgin
+# curve from the origin too), and what lets the next evaluation stay on it: the direction
+# TD it must keep (0: take the scalar path) and the curvature TT where it would close a
+# loop (docs/model.md §4.10, kernels/bending_masing.py).
+HB, HC, HK, HH, TH, TA, TR, TD, TT = range(10, 19)
+HINGE_PLANES = 9  # hinge planes HB … TT, kept between runs as hinges[plane, hinge, strip]
 E1X, E1Y, IL1, E2X, E2Y, IL2, KK, EX, BAD, R0, R1, A0, TURN = range(13)  # row NMAX
 A1, A2, A3, A4, RIGIDITY, D1, ALPHA, K0, M0, WIDTH, SCALE, MASS, GAMMA, SETTLE = range(14)  # row NMAX + 1
-PLANES = 14
+PLANES = 19
 
 
 @njit(error_model="numpy")
-def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centre, kprev, hprev, tensile, law,
-                  width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt, max_strain,
-                  release_step, move_steps, tip_x, tip_y, failed):
+def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinges, points, overflows, deepest,
+                  tensile, law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt,
+                  max_strain, release_step, move_steps, tip_x, tip_y, failed):
     """Strips s0 … s1−1 (at most LANES) from step0 to step1 (semi-implicit Euler,
     docs/model.md §9.1), in the block array W described above.
 
@@ -199,6 +286,9 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centr
     for negative indices, which would hide from LLVM that rows i−1, i, i+1 are adjacent.
     ``tip_x/tip_y[k, s]`` take the free end after output step ``out_steps[k]``;
     ``failed[s]`` the first step whose strain or fold check failed (−1: healthy).
+    ``masing`` selects the bending law (tagawa2003 otherwise); a masing lane keeps its
+    reversal points in ``points[s0 + lane]``, the lanes past the last strip included (they
+    copy it, and run its scalar path with it, so they never take that path on their own).
     """
     n = px.shape[0]
     used = s1 - s0
@@ -213,9 +303,10 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centr
             ii = np.uintp(i)
             W[ii, X, lane], W[ii, Y, lane], W[ii, U, lane], W[ii, V, lane] = px[i, s], py[i, s], vx[i, s], vy[i, s]
         for h in range(n - nc):
-            hh = np.uintp(h)
-            W[hh, HB, lane], W[hh, HC, lane] = branch[h, s], centre[h, s]
-            W[hh, HK, lane], W[hh, HH, lane] = kprev[h, s], hprev[h, s]
+            for q in range(HINGE_PLANES):
+                W[np.uintp(h), HB + q, lane] = hinges[q, h, s]
+        if masing and lane >= used:
+            points[s0 + lane] = points[s]
         W[P, A1, lane], W[P, A2, lane], W[P, A3, lane], W[P, A4, lane] = (tensile[0, s], tensile[1, s],
                                                                           tensile[2, s], tensile[3, s])
         W[P, RIGIDITY, lane], W[P, D1, lane], W[P, ALPHA, lane] = law[0, s], law[1, s], law[2, s]
@@ -259,7 +350,6 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centr
         for i in range(first + 1, n - 1):
             im, ii, ip = np.uintp(i - 1), np.uintp(i), np.uintp(i + 1)
             h = np.uintp(i - first - 1)
-            reversals = 0  # an integer OR: a float sum would not vectorise without fastmath
             # SIMD loop 1: tension of segment i, curvature at hinge i, the reversal test.
             # Divisions are the slowest SIMD operation: one per segment (its reciprocal
             # length, used by strain, tension, curvature and the angle gradient) and one
@@ -287,36 +377,73 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centr
                 W[T, E2X, lane], W[T, E2Y, lane], W[T, IL2, lane] = dx, dy, r2
                 healthy = (e <= max_strain) & (chord > 1e-3 * l0)  # False for NaN too
                 W[T, BAD, lane] = W[T, BAD, lane] if healthy else 1.0
-                reversals |= 1 if (k - W[h, HK, lane]) * W[h, HB, lane] < 0.0 else 0
-            # Scalar loop, rare: the lanes whose curvature turned against their branch
-            # flip it and move the loop centre through the offset they had (§4.3).
-            if reversals:
+            # The law, in loops of its own (selected per hinge, outside the lane loops, so
+            # each stays a SIMD loop): which lanes need the scalar path, that path, and the
+            # argument of the branch's exponential.
+            rare = 0  # an integer OR: a float sum would not vectorise without fastmath
+            if masing:
+                # Scalar path unless the curvature is unchanged, the strip has no hysteresis,
+                # or it keeps the branch's direction short of closing a loop.
                 for lane in range(LANES):
-                    hb = W[h, HB, lane]
-                    if (W[T, KK, lane] - W[h, HK, lane]) * hb < 0.0:
-                        hb = -hb
-                        W[h, HB, lane] = hb
-                        W[h, HC, lane] = centre_through(W[h, HK, lane], W[h, HH, lane], hb, W[P, D1, lane],
-                                                        W[P, ALPHA, lane], W[P, K0, lane], W[P, M0, lane])
-            # The branch's exponential (§4.2), alone in its loop (see VECTOR_EXP).
-            for lane in range(LANES):
-                u_ = W[T, KK, lane] - W[h, HC, lane]
-                w = W[P, K0, lane] + u_ if W[h, HB, lane] > 0.0 else W[P, K0, lane] - u_
-                W[T, EX, lane] = -W[P, ALPHA, lane] * w
+                    k, td = W[T, KK, lane], W[h, TD, lane]
+                    change = k - W[h, HK, lane]
+                    d = -1.0 if change < 0.0 else 1.0
+                    stays = (change == 0.0) | (W[P, D1, lane] == 0.0) | ((d == td) & (td * (k - W[h, TT, lane]) < 0.0))
+                    rare |= 0 if stays else 1
+                if rare:
+                    for lane in range(LANES):
+                        k, td = W[T, KK, lane], W[h, TD, lane]
+                        change = k - W[h, HK, lane]
+                        d = -1.0 if change < 0.0 else 1.0
+                        if not ((change == 0.0) | (W[P, D1, lane] == 0.0)
+                                | ((d == td) & (td * (k - W[h, TT, lane]) < 0.0))):
+                            masing_follow(k, W, h, lane, points, overflows, deepest, s0 + lane, W[P, D1, lane],
+                                          W[P, ALPHA, lane])
+                for lane in range(LANES):
+                    W[T, EX, lane] = W[h, TR, lane] * (W[T, KK, lane] - W[h, HC, lane])
+            else:
+                for lane in range(LANES):
+                    rare |= 1 if (W[T, KK, lane] - W[h, HK, lane]) * W[h, HB, lane] < 0.0 else 0
+                # Scalar loop, rare: the lanes whose curvature turned against their branch
+                # flip it and move the loop centre through the offset they had (§4.3).
+                if rare:
+                    for lane in range(LANES):
+                        hb = W[h, HB, lane]
+                        if (W[T, KK, lane] - W[h, HK, lane]) * hb < 0.0:
+                            hb = -hb
+                            W[h, HB, lane] = hb
+                            W[h, HC, lane] = centre_through(W[h, HK, lane], W[h, HH, lane], hb, W[P, D1, lane],
+                                                            W[P, ALPHA, lane], W[P, K0, lane], W[P, M0, lane])
+                for lane in range(LANES):
+                    u_ = W[T, KK, lane] - W[h, HC, lane]
+                    w = W[P, K0, lane] + u_ if W[h, HB, lane] > 0.0 else W[P, K0, lane] - u_
+                    W[T, EX, lane] = -W[P, ALPHA, lane] * w
+            # The branch's exponential (§4.2, §4.10), alone in its loop (see VECTOR_EXP).
             if VECTOR_EXP:
                 for j in range(0, LANES, 8):
                     exp8(flat, exp_row + j)
             else:
                 for lane in range(LANES):
                     W[T, EX, lane] = math.exp(W[T, EX, lane])
-            # SIMD loop 2: the hinge's moment and its forces on nodes i−1, i, i+1 (§5.1).
+            # The hysteretic moment H from the exponential; K becomes K_prev.
+            if masing:
+                for lane in range(LANES):
+                    k = W[T, KK, lane]
+                    change = k - W[h, HK, lane]
+                    branch_h = W[h, TH, lane] + W[h, TA, lane] * (1.0 - W[T, EX, lane])
+                    W[h, HH, lane] = W[h, HH, lane] if change == 0.0 else branch_h
+                    depth1 = abs(W[h, HB, lane])  # the depth + 1, signed by the last change
+                    W[h, HB, lane] = W[h, HB, lane] if change == 0.0 else (depth1 if change >= 0.0 else -depth1)
+                    W[h, HK, lane] = k
+            else:
+                for lane in range(LANES):
+                    d1, m0, ex = W[P, D1, lane], W[P, M0, lane], W[T, EX, lane]
+                    ho = m0 - d1 * ex if W[h, HB, lane] > 0.0 else -m0 + d1 * ex
+                    W[h, HH, lane] = 0.0 if d1 == 0.0 else ho
+                    W[h, HK, lane] = W[T, KK, lane]
+            # SIMD loop 2: the hinge's forces on nodes i−1, i, i+1 (§5.1).
             for lane in range(LANES):
-                k = W[T, KK, lane]
-                d1, m0, ex = W[P, D1, lane], W[P, M0, lane], W[T, EX, lane]
-                ho = m0 - d1 * ex if W[h, HB, lane] > 0.0 else -m0 + d1 * ex
-                ho = 0.0 if d1 == 0.0 else ho
-                W[h, HK, lane] = k
-                W[h, HH, lane] = ho
+                k, ho = W[T, KK, lane], W[h, HH, lane]
                 q1 = W[T, IL1, lane] * W[T, IL1, lane]
                 q2 = W[T, IL2, lane] * W[T, IL2, lane]
                 gix, giy = -W[T, E1Y, lane] * q1, W[T, E1X, lane] * q1
@@ -384,20 +511,19 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centr
             ii = np.uintp(i)
             px[i, s], py[i, s], vx[i, s], vy[i, s] = W[ii, X, lane], W[ii, Y, lane], W[ii, U, lane], W[ii, V, lane]
         for h in range(n - nc):
-            hh = np.uintp(h)
-            branch[h, s], centre[h, s] = W[hh, HB, lane], W[hh, HC, lane]
-            kprev[h, s], hprev[h, s] = W[hh, HK, lane], W[hh, HH, lane]
+            for q in range(HINGE_PLANES):
+                hinges[q, h, s] = W[np.uintp(h), HB + q, lane]
 
 
 @njit(parallel=True, error_model="numpy")
-def advance(blocks, step0, step1, out_steps, px, py, vx, vy, branch, centre, kprev, hprev, tensile, law, width,
-            node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt, max_strain, release_step,
-            move_steps, tip_x, tip_y, failed):
+def advance(blocks, step0, step1, out_steps, px, py, vx, vy, masing, hinges, points, overflows, deepest, tensile,
+            law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt, max_strain,
+            release_step, move_steps, tip_x, tip_y, failed):
     """Every block of strips (``blocks[b]`` … ``blocks[b + 1]``) on the cores: prange."""
     for b in prange(blocks.shape[0] - 1):
-        advance_block(blocks[b], blocks[b + 1], step0, step1, out_steps, px, py, vx, vy, branch, centre, kprev,
-                      hprev, tensile, law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0,
-                      gravity, dt, max_strain, release_step, move_steps, tip_x, tip_y, failed)
+        advance_block(blocks[b], blocks[b + 1], step0, step1, out_steps, px, py, vx, vy, masing, hinges, points,
+                      overflows, deepest, tensile, law, width, node_mass, gamma, settle_gamma, edge_scale, hold,
+                      nc, l0, gravity, dt, max_strain, release_step, move_steps, tip_x, tip_y, failed)
 
 
 class NumbaStrips:
@@ -407,8 +533,10 @@ class NumbaStrips:
     def __init__(self, scenes: list[wc.Scene], initial_positions: np.ndarray | None = None) -> None:
         batch = build_batch(scenes)
         model, control, solver, recorder = batch.model, batch.control, batch.solver, batch.recorder
-        if any(bending_law(s.material.bending_law).NAME != "tagawa2003" for s in model.strips):
-            raise ValueError("the Numba peer implements the paper's bending law (tagawa2003) only")
+        laws = {bending_law(s.material.bending_law).NAME for s in model.strips}
+        if len(laws) != 1 or not laws <= {"tagawa2003", "masing"}:
+            raise ValueError(f"the Numba peer implements one of tagawa2003 and masing per batch, not {sorted(laws)}")
+        self.masing = laws == {"masing"}
         if any(len(s.clamp.start) for s in model.strips) or model.precision != "float64":
             raise ValueError("the Numba peer implements the fixed clamp in float64 only")
         if solver.scheme != "semi_implicit":
@@ -435,10 +563,13 @@ class NumbaStrips:
         self.px, self.py = np.ascontiguousarray(x[..., 0]), np.ascontiguousarray(x[..., 1])
         self.vx, self.vy = np.zeros((n, b)), np.zeros((n, b))
         hinges = n - self.nc
-        self.branch, self.centre = np.empty((hinges, b)), np.empty((hinges, b))
-        self.kprev, self.hprev = np.empty((hinges, b)), np.empty((hinges, b))
-        fresh_hinges(self.px, self.py, self.nc, self.edge_scale, self.law, self.branch, self.centre, self.kprev,
-                     self.hprev)
+        self.hinges = np.empty((HINGE_PLANES, hinges, b))
+        # masing: every lane of every block has a stack (the last block's spare lanes too)
+        lanes = -(-b // LANES) * LANES
+        self.capacity = model.reversal_memory
+        self.points = np.zeros((lanes, hinges, self.capacity + 1, 2) if self.masing else (1, 1, 1, 2))
+        self.overflows, self.deepest = np.zeros(lanes, dtype=np.int64), np.zeros(lanes, dtype=np.int64)
+        fresh_hinges(self.px, self.py, self.nc, self.edge_scale, self.law, self.masing, self.hinges, self.points)
         self.step = 0
         self.tip_x = np.full((len(self.out_steps), b), np.nan)
         self.tip_y = np.full((len(self.out_steps), b), np.nan)
@@ -453,9 +584,9 @@ class NumbaStrips:
         """Advance ``steps`` substeps (default: to the last output step)."""
         end = int(self.out_steps[-1]) if steps is None else self.step + steps
         advance(self.blocks(numba.get_num_threads()), self.step, end, self.out_steps, self.px, self.py, self.vx,
-                self.vy, self.branch, self.centre, self.kprev, self.hprev, self.tensile, self.law, self.width,
-                self.node_mass, self.gamma, self.settle_gamma, self.edge_scale, self.hold, self.nc, self.l0,
-                self.gravity, self.dt, self.max_strain, self.release_step, self.move_steps, self.tip_x,
+                self.vy, self.masing, self.hinges, self.points, self.overflows, self.deepest, self.tensile, self.law,
+                self.width, self.node_mass, self.gamma, self.settle_gamma, self.edge_scale, self.hold, self.nc,
+                self.l0, self.gravity, self.dt, self.max_strain, self.release_step, self.move_steps, self.tip_x,
                 self.tip_y, self.failed)
         self.step = end
 
