@@ -66,6 +66,7 @@ import warp as wp
 from llvmlite import ir
 from numba import njit, prange, types
 from numba.core import cgutils
+from numba.core.caching import NullCache
 from numba.extending import intrinsic
 from warpcloth.kernels import bending_law
 
@@ -89,36 +90,42 @@ def fma(typingctx, a, b, c):
     return sig, codegen
 
 
-def _libmvec() -> bool:
-    """Load glibc's vector math library if this CPU can run its AVX-512 exp."""
+LIBMVEC_EXP = {8: "_ZGVeN8v_exp", 4: "_ZGVdN4v_exp"}  # glibc's AVX-512 and AVX2 exp, by width
+
+
+def _libmvec() -> int:
+    """Load glibc's vector math library; the width of the widest exp this CPU can run
+    (8: AVX-512, 4: AVX2), 0 if none."""
     try:
         flags = Path("/proc/cpuinfo").read_text()
-        if " avx512f" not in flags:
-            return False
-        llvm.load_library_permanently("libmvec.so.1")
-        return True
+        width = 8 if " avx512f" in flags else 4 if " avx2" in flags else 0
+        if width:
+            llvm.load_library_permanently("libmvec.so.1")
+        return width
     except (OSError, RuntimeError):
-        return False
+        return 0
 
 
 # The branch's exponential is the one transcendental per hinge and substep. Numba's PyPI
 # LLVM has no vector exp (no SVML), so a loop calling math.exp runs glibc's scalar exp,
 # ~3 ns a call, about half of the whole substep. glibc's libmvec has an 8-wide AVX-512
 # exp (0.7 ns an element, within 4 ulp; it differs from the scalar one in the last bit
-# for ~40 % of arguments): called directly below. --libm-exp selects the scalar call.
+# for ~40 % of arguments) and a 4-wide AVX2 one: called directly below (0: the scalar
+# call, which --libm-exp selects).
 VECTOR_EXP = _libmvec()
 
 
 @intrinsic
-def exp8(typingctx, array, start):
-    """array[start : start + 8] ← exp(…) in place, by libmvec's ``_ZGVeN8v_exp``."""
+def vector_exp(typingctx, array, start):
+    """array[start : start + VECTOR_EXP] ← exp(…) in place, by libmvec (LIBMVEC_EXP)."""
     sig = types.void(array, start)
 
     def codegen(context, builder, signature, args):
         data = context.make_array(signature.args[0])(context, builder, args[0]).data
-        vector = ir.VectorType(ir.DoubleType(), 8)
+        vector = ir.VectorType(ir.DoubleType(), VECTOR_EXP)
         pointer = builder.bitcast(builder.gep(data, [args[1]]), vector.as_pointer())
-        function = cgutils.get_or_insert_function(builder.module, ir.FunctionType(vector, [vector]), "_ZGVeN8v_exp")
+        function = cgutils.get_or_insert_function(builder.module, ir.FunctionType(vector, [vector]),
+                                                  LIBMVEC_EXP[VECTOR_EXP])
         builder.store(builder.call(function, [builder.load(pointer, align=8)]), pointer, align=8)
         return context.get_dummy_value()
 
@@ -154,7 +161,7 @@ def centre_through(curvature, h_offset, branch, d1, alpha, k0, m0):
     return curvature - k0 - math.log((h + m0) / d1) / alpha
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", cache=True)
 def fresh_hinges(px, py, nc, edge_scale, law, masing, hinges, points):
     """Every hinge fresh at its current curvature (§4.5): tagawa2003 on the rising branch
     with no offset; masing at the origin of its virgin curve, ``points[strip, hinge, 0]``
@@ -194,7 +201,7 @@ def masing_open_point(points, slot, h, depth, origin):
     return points[slot, h, depth, 0], points[slot, h, depth, 1], below
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", cache=True)
 def masing_follow(k, W, h, lane, points, overflows, deepest, slot, d1, alpha):
     """The scalar path of a masing hinge, rare (a reversal, a closed loop, the memory full
     or the first change): kernels/bending_masing.py ``follow`` operation for operation, its
@@ -275,7 +282,7 @@ A1, A2, A3, A4, RIGIDITY, D1, ALPHA, K0, M0, WIDTH, SCALE, MASS, GAMMA, SETTLE =
 PLANES = 19
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", cache=True)
 def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinges, points, overflows, deepest,
                   tensile, law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt,
                   max_strain, release_step, move_steps, tip_x, tip_y, failed):
@@ -295,7 +302,7 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinge
     first = nc - 2  # the clamped node above the clamp-edge hinge
     W = np.zeros((NMAX + 2, PLANES, LANES))
     T, P = np.uintp(NMAX), np.uintp(NMAX + 1)
-    flat = W.reshape(W.size)  # the same memory, for exp8
+    flat = W.reshape(W.size)  # the same memory, for vector_exp
     exp_row = (NMAX * PLANES + EX) * LANES
     for lane in range(LANES):
         s = s0 + min(lane, used - 1)
@@ -420,8 +427,8 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinge
                     W[T, EX, lane] = -W[P, ALPHA, lane] * w
             # The branch's exponential (§4.2, §4.10), alone in its loop (see VECTOR_EXP).
             if VECTOR_EXP:
-                for j in range(0, LANES, 8):
-                    exp8(flat, exp_row + j)
+                for j in range(0, LANES, VECTOR_EXP):
+                    vector_exp(flat, exp_row + j)
             else:
                 for lane in range(LANES):
                     W[T, EX, lane] = math.exp(W[T, EX, lane])
@@ -515,7 +522,7 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinge
                 hinges[q, h, s] = W[np.uintp(h), HB + q, lane]
 
 
-@njit(parallel=True, error_model="numpy")
+@njit(parallel=True, error_model="numpy", cache=True)
 def advance(blocks, step0, step1, out_steps, px, py, vx, vy, masing, hinges, points, overflows, deepest, tensile,
             law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt, max_strain,
             release_step, move_steps, tip_x, tip_y, failed):
@@ -669,6 +676,118 @@ def agreement(sweep_dir: Path, peer: NumbaStrips) -> tuple[float, float]:
     return gap, excursion
 
 
+def tip_errors(tips: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Each variant's largest |Δ tip x| over the record as a fraction of its reference
+    excursion (``[sample, variant]`` arrays; the metric of benchmarks/imex_defaults.py)."""
+    if tips.shape != reference.shape:
+        return np.full(reference.shape[1], math.inf)
+    return np.abs(tips - reference).max(axis=0) / np.ptp(reference, axis=0)
+
+
+def warpcloth_tips(scenes: list[wc.Scene]) -> np.ndarray:
+    """Tip x ``[sample, variant]`` of warpcloth on 2 threads (inf where a strip diverged)."""
+    result = wc.simulate(scenes, keep_frames=False, on_divergence="record", threads=2)
+    tips = result.probe("tip_x").copy()
+    tips[:, [d["strip"] for d in result.diverged]] = math.inf
+    return tips
+
+
+def numba_tips(scenes: list[wc.Scene]) -> np.ndarray:
+    """Tip x ``[sample, variant]`` of the Numba port on 2 threads (inf where a strip failed)."""
+    numba.set_num_threads(2)
+    peer = NumbaStrips(scenes)
+    peer.run()
+    tips = peer.kept_tips()[0].copy()
+    tips[:, peer.failed >= 0] = math.inf
+    return tips
+
+
+def stepping(scheme: str, dt: float) -> list[str]:
+    """The overrides for ``scheme`` at ``dt``."""
+    return [f'integrator.scheme="{scheme}"', f"integrator.dt_s={dt!r}"]
+
+
+def sweep_wall(impl: str, samples: int, record: float, overrides: list[str]) -> float:
+    """Wall seconds of the sweep: ``wc.run_sweep(workers=2)`` into a fresh directory
+    (building the batches and writing the sweep included), or the Numba port on 2 threads
+    (building warpcloth's batch for its inputs included, no files)."""
+    sweep, scenes = sweep_scenes(samples, record, overrides)
+    start = time.perf_counter()
+    if impl == "warpcloth":
+        with tempfile.TemporaryDirectory() as tmp:
+            wc.run_sweep(sweep, Path(tmp) / "sweep", workers=2)
+            return time.perf_counter() - start
+    numba.set_num_threads(2)
+    NumbaStrips(scenes).run()
+    return time.perf_counter() - start
+
+
+def equal_accuracy(args: argparse.Namespace, law: list[str], samples: int) -> None:
+    """The sweep at equal accuracy: each candidate's worst variant against the explicit
+    reference at ``--reference-dt`` (computed by the port, which agrees with warpcloth to
+    rounding, part 1), the largest dt of each within ``--tolerance``, then the walls."""
+    record = args.record
+    print(f"\n---- equal accuracy on the {samples}-variant sweep ({' '.join(law) or 'tagawa2003'}; "
+          f"{record:g} s record; tolerance {args.tolerance:.2%} of each variant's excursion, worst variant) ----")
+    start = time.perf_counter()
+    reference = numba_tips(sweep_scenes(samples, record, [*law, *stepping("semi_implicit", args.reference_dt)])[1])
+    print(f"reference: semi_implicit dt = {args.reference_dt:g} s by the Numba port, "
+          f"{time.perf_counter() - start:.0f} s wall")
+    scene_dt = sweep_scenes(1, record, law)[1][0].integrator.dt_s
+    ladders = {("warpcloth", "semi_implicit"): args.explicit_ladder, ("numba", "semi_implicit"): args.explicit_ladder,
+               ("warpcloth", "imex"): args.imex_ladder}
+    best: dict[tuple[str, str], float] = {}
+    tips: dict[tuple[str, str, float], np.ndarray] = {}
+    for (impl, scheme), ladder in ladders.items():
+        for dt in ladder:
+            try:
+                scenes = sweep_scenes(samples, record, [*law, *stepping(scheme, dt)])[1]
+            except wc.SceneError as error:
+                print(f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: refused ({error})")
+                break
+            tips[impl, scheme, dt] = (warpcloth_tips if impl == "warpcloth" else numba_tips)(scenes)
+            errors = tip_errors(tips[impl, scheme, dt], reference)
+            worst = int(np.argmax(errors))
+            print(f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: worst {errors[worst]:.3%} (variant {worst}), "
+                  f"median {np.median(errors):.3%}")
+            if errors[worst] <= args.tolerance:
+                best[impl, scheme] = dt
+    print("largest dt within the tolerance: " + ", ".join(f"{i} {s} {dt:g} s" for (i, s), dt in best.items()))
+    for dt in args.explicit_ladder:
+        if ("warpcloth", "semi_implicit", dt) in tips and ("numba", "semi_implicit", dt) in tips:
+            gap = np.abs(tips["warpcloth", "semi_implicit", dt] - tips["numba", "semi_implicit", dt]).max()
+            print(f"  warpcloth against the port, semi_implicit at dt = {dt:.4g} s: largest tip x gap {gap:.2e} m")
+    if args.check_dt and ("warpcloth", "imex") in best:
+        # The reference's own error: the variants worst at the chosen imex step, again
+        # against a finer explicit solution.
+        errors = tip_errors(tips["warpcloth", "imex", best["warpcloth", "imex"]], reference)
+        worst = np.sort(np.argsort(errors)[-args.check_worst:])
+        start = time.perf_counter()
+        finer = numba_tips([sweep_scenes(samples, record, [*law, *stepping("semi_implicit", args.check_dt)])[1][i]
+                            for i in worst])
+        print(f"check: the {len(worst)} variants worst under imex at {best['warpcloth', 'imex']:.4g} s against "
+              f"semi_implicit dt = {args.check_dt:g} s ({time.perf_counter() - start:.0f} s wall); the reference "
+              f"is off it by {tip_errors(reference[:, worst], finer).max():.4%} at most")
+        for (impl, scheme, dt), run in tips.items():
+            print(f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: worst of these "
+                  f"{tip_errors(run[:, worst], finer).max():.3%}")
+    runs = [("warpcloth", "semi_implicit", scene_dt)] + [(i, s, dt) for (i, s), dt in best.items()]
+    walls: dict[tuple[str, str, float], list[float]] = {run: [] for run in runs}
+    loads = []
+    for _ in range(args.repeats):
+        for run in runs:  # interleaved, so a drift of the machine's speed hits every row alike
+            loads.append(os.getloadavg()[0])
+            walls[run].append(sweep_wall(run[0], samples, record, [*law, *stepping(run[1], run[2])]))
+    numba_row = next((run for run in runs if run[0] == "numba"), None)
+    print(f"\nwalls on 2 threads, {args.repeats} repeats interleaved (load average 1 min "
+          f"{min(loads):.1f}–{max(loads):.1f}; this run uses 2):")
+    print(f"{'implementation':<10} {'scheme':<14} {'dt (s)':>8} {'median wall':>12} {'walls':>26} {'vs Numba':>9}")
+    for run, times in walls.items():
+        ratio = np.median(times) / np.median(walls[numba_row]) if numba_row else math.nan
+        print(f"{run[0]:<10} {run[1]:<14} {run[2]:>8.3g} {np.median(times):>10.2f} s "
+              f"{' '.join(f'{t:.2f}' for t in times):>26} {ratio:>8.2f}×")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="smaller run: 40 variants, short timings")
@@ -676,57 +795,105 @@ def main() -> None:
     parser.add_argument("--record", type=float, default=1.0, help="sweep record after the release, s")
     parser.add_argument("--sizes", type=int, nargs="+", default=[1, 16, 200, 1024])
     parser.add_argument("--libm-exp", action="store_true", help="glibc's scalar exp (Warp's) instead of libmvec's")
+    parser.add_argument("--law", choices=("tagawa2003", "masing"), default="tagawa2003",
+                        help="material.bending_law of every variant (default: the sweep's, tagawa2003)")
+    parser.add_argument("--parts", nargs="+", choices=("agreement", "tables", "equal-accuracy"),
+                        default=["agreement", "tables"], help="what to run (default: agreement tables)")
+    parser.add_argument("--reference-dt", type=float, default=1e-6, help="equal accuracy: the explicit reference's dt")
+    parser.add_argument("--tolerance", type=float, default=2e-3, help="equal accuracy: of the excursion (0.2 %%)")
+    # Steps that divide the 1/600 s probe interval (and the 1.3 s hold), so that no sample
+    # is off its time by up to dt/2, which at 4e-4 s alone is ~0.1 % of the excursion.
+    parser.add_argument("--explicit-ladder", type=float, nargs="+", default=[1 / (600 * n) for n in (40, 34, 33)],
+                        help="equal accuracy: semi_implicit steps, s (default 1/(600 n), n = 40, 34, 33)")
+    parser.add_argument("--imex-ladder", type=float, nargs="+",
+                        default=[1 / (600 * n) for n in (16, 12, 10, 8, 7, 6, 5, 4)],
+                        help="equal accuracy: imex steps, s (default 1/(600 n), n = 16, 12, 10, 8, 7, 6, 5, 4)")
+    parser.add_argument("--repeats", type=int, default=3, help="equal accuracy: timed repeats of each wall")
+    parser.add_argument("--check-dt", type=float, default=0.0,
+                        help="equal accuracy: recheck the worst variants against this finer explicit dt (0: no)")
+    parser.add_argument("--check-worst", type=int, default=32, help="equal accuracy: how many variants to recheck")
+    parser.add_argument("--sweep-wall", nargs=3, metavar=("IMPL", "SCHEME", "DT"),
+                        help="only time one sweep (IMPL warpcloth or numba), nothing warmed up: for timing "
+                             "the whole process from outside")
     args = parser.parse_args()
     global VECTOR_EXP
-    VECTOR_EXP = VECTOR_EXP and not args.libm_exp  # read when Numba compiles, i.e. at the first call
+    VECTOR_EXP = 0 if args.libm_exp else VECTOR_EXP  # read when Numba compiles, i.e. at the first call
+    if args.libm_exp:
+        for function in (fresh_hinges, masing_follow, advance_block, advance):
+            function._cache = NullCache()  # a cached compile would have baked libmvec's exp in
     samples = 40 if args.quick else args.samples
-    budget = 0.25 if args.quick else 1.0  # target wall seconds per table cell
+    law = [] if args.law == "tagawa2003" else [f'material.bending_law="{args.law}"']
     wp.config.log_level = logging.WARNING
     wp.init()
+    if args.sweep_wall:
+        impl, scheme, dt = args.sweep_wall
+        wall = sweep_wall(impl, samples, args.record, [*law, *stepping(scheme, float(dt))])
+        print(f"{impl} {scheme} dt = {float(dt):g} s, {samples} variants: sweep wall {wall:.3f} s")
+        return
     print(f"load average at start: {os.getloadavg()[0]:.2f}")
     cores = os.cpu_count() or 1
 
     # ---- warm-up: compile every path (Numba's and Warp's) before anything is timed ----
-    _s, warm = sweep_scenes(4, 0.01)
-    peer = NumbaStrips(warm)
+    _s, warm = sweep_scenes(4, 0.01, law)
     for threads in (1, min(2, cores)):
         numba.set_num_threads(threads)
         peer = NumbaStrips(warm)
         peer.run()
     x0 = displaced_start(warm[0])
-    warpcloth_wall(free_runs(4, 0.002, 2), x0, 1)
+    warpcloth_wall(free_runs(4, 0.002, 2, law), x0, 1)
     print(f"machine: {machine()}; warp {wp.__version__} (cpu), numba {numba.__version__} "
           f"(threading layer {numba.threading_layer()}), numpy {np.__version__}; exp: "
-          f"{'libmvec AVX-512' if VECTOR_EXP else 'glibc scalar'}; compile excluded (everything warmed up first)")
+          f"{f'libmvec {VECTOR_EXP}-wide' if VECTOR_EXP else 'glibc scalar'}; compile excluded (everything warmed "
+          "up first)")
     with tempfile.TemporaryDirectory() as tmp:
-        wc.run_sweep(sweep_scenes(4, 0.01)[0], Path(tmp) / "warm", workers=min(2, cores))
+        for scheme in ("semi_implicit", "imex"):
+            wc.run_sweep(sweep_scenes(4, 0.01, [*law, *stepping(scheme, 1e-5)])[0], Path(tmp) / scheme,
+                         workers=min(2, cores))
 
     # ---- 1. the sweep: agreement and wall time, warpcloth on 2 threads vs Numba on 2 ----
-    sweep, scenes = sweep_scenes(samples, args.record)
-    with tempfile.TemporaryDirectory() as tmp:
-        start = time.perf_counter()
-        wc.run_sweep(sweep, Path(tmp) / "sweep", workers=min(2, cores))
-        warp_sweep = time.perf_counter() - start
-        numba.set_num_threads(min(2, cores))
-        start = time.perf_counter()
-        peer = NumbaStrips(scenes)
-        peer.run()
-        numba_sweep = time.perf_counter() - start
-        gap, excursion = agreement(Path(tmp) / "sweep", peer)
-    steps = int(peer.out_steps[-1])
-    print(f"\nagreement: {samples} variants of damped_swing_sweep (D, D1, α, γ varied), hold and release "
-          f"replicated, {args.record:g} s record, tip x and y at {peer.kept} samples each: largest gap "
-          f"{gap:.2e} m (tip excursion {excursion * 1e3:.0f} mm); Numba strips failing the strain/fold "
-          f"check: {(peer.failed >= 0).sum()}")
-    print(f"sweep wall ({samples} variants, {steps} steps each = {steps * scenes[0].integrator.dt_s:.2f} s "
-          f"simulated incl. the hold): warpcloth run_sweep 2 threads {warp_sweep:.2f} s, "
-          f"Numba 2 threads {numba_sweep:.2f} s: Numba {warp_sweep / numba_sweep:.2f}× faster")
+    sweep, scenes = sweep_scenes(samples, args.record, law)
+    if "agreement" in args.parts:
+        with tempfile.TemporaryDirectory() as tmp:
+            start = time.perf_counter()
+            wc.run_sweep(sweep, Path(tmp) / "sweep", workers=min(2, cores))
+            warp_sweep = time.perf_counter() - start
+            numba.set_num_threads(min(2, cores))
+            start = time.perf_counter()
+            peer = NumbaStrips(scenes)
+            peer.run()
+            numba_sweep = time.perf_counter() - start
+            gap, excursion = agreement(Path(tmp) / "sweep", peer)
+            summary = pd.read_parquet(Path(tmp) / "sweep" / "summary.parquet")
+        steps = int(peer.out_steps[-1])
+        print(f"\nagreement: {samples} variants of damped_swing_sweep (D, D1, α, γ varied; law {args.law}), "
+              f"hold and release replicated, {args.record:g} s record, tip x and y at {peer.kept} samples each: "
+              f"largest gap {gap:.2e} m (tip excursion {excursion * 1e3:.0f} mm); Numba strips failing the "
+              f"strain/fold check: {(peer.failed >= 0).sum()}")
+        if peer.masing:
+            ours = summary["reversal_overflows"].to_numpy() if "reversal_overflows" in summary else "none recorded"
+            print(f"reversal memory ({peer.capacity} points): Numba deepest {peer.deepest[:samples].max()}, "
+                  f"overflows {peer.overflows[:samples].sum()}; warpcloth's sweep overflows "
+                  f"{np.sum(ours) if not isinstance(ours, str) else ours}")
+        print(f"sweep wall ({samples} variants, {steps} steps each = {steps * scenes[0].integrator.dt_s:.2f} s "
+              f"simulated incl. the hold): warpcloth run_sweep 2 threads {warp_sweep:.2f} s, "
+              f"Numba 2 threads {numba_sweep:.2f} s: Numba {warp_sweep / numba_sweep:.2f}× faster")
 
     # The cores may be shared: a busy core shows as 2-thread rows no faster than 1-thread ones.
     print(f"load average before the tables: {os.getloadavg()[0]:.2f} (this run uses up to 2)")
 
     # ---- 2. throughput tables ----
-    dt = scenes[0].integrator.dt_s
+    if "tables" in args.parts:
+        throughput_tables(args, law, samples, scenes[0].integrator.dt_s, x0, cores)
+
+    # ---- 3. the sweep at equal accuracy ----
+    if "equal-accuracy" in args.parts:
+        equal_accuracy(args, law, samples)
+
+
+def throughput_tables(args: argparse.Namespace, law: list[str], samples: int, dt: float, x0: np.ndarray,
+                      cores: int) -> None:
+    """Strip-steps/s and wall per simulated second of every implementation at each size."""
+    budget = 0.25 if args.quick else 1.0  # target wall seconds per table cell
     print(f"\n{'B':>5} {'implementation':<22} {'strip-steps/s':>14} {'wall per sim s':>15} {'vs warpcloth 1T':>16}")
     rows = []
     for b in args.sizes:
@@ -737,22 +904,22 @@ def main() -> None:
                  "numba 1 thread": 3e6, "numba 2 threads": 6e6}
         for name, rate in guess.items():
             threads = 2 if "2" in name else 1
-            if threads > min(b, cores):
+            if threads > min(b, cores) or (name == "numpy" and law):  # NumPy has the paper's law only
                 results.append((name, math.nan))
                 continue
             n_steps = max(200, int(budget * rate / b))
             if name.startswith("warpcloth"):
-                results.append((name, warpcloth_rate(samples, b, n_steps, dt, x0, threads)))
+                results.append((name, warpcloth_rate(samples, b, n_steps, dt, x0, threads, law)))
                 continue
             if name == "numpy":
-                strips = NumpyStrips(free_runs(samples, n_steps * dt, 1)[0], b, x0)
+                strips = NumpyStrips(free_runs(samples, n_steps * dt, 1, law)[0], b, x0)
                 start = time.perf_counter()
                 for _ in range(n_steps):
                     strips.step()
                 wall = time.perf_counter() - start
             else:
                 numba.set_num_threads(threads)
-                strips = NumbaStrips(free_runs(samples, n_steps * dt, b), np.repeat(x0[:, None, :], b, axis=1))
+                strips = NumbaStrips(free_runs(samples, n_steps * dt, b, law), np.repeat(x0[:, None, :], b, axis=1))
                 start = time.perf_counter()
                 strips.run(n_steps)
                 wall = time.perf_counter() - start
@@ -764,6 +931,7 @@ def main() -> None:
             else:
                 print(f"{b:>5} {name:<22} {rate:>14.3e} {b / (rate * dt):>13.3g} s {rate / base:>15.2f}×")
             rows.append((b, name, rate))
+
 
 
 if __name__ == "__main__":
