@@ -1,47 +1,72 @@
 """The strongest CPU peer a user could write: an expert Numba port of warpcloth's explicit
-model, checked against warpcloth and timed beside it (issue 11, item 7).
+model, checked against warpcloth and timed beside it (issue 11, item 7; masing: issue 21).
 
     python benchmarks/numba_peer.py [--quick] [--samples 200] [--record 1.0]
+        [--law tagawa2003|masing] [--parts agreement tables equal-accuracy]
+        [--reference-dt 1e-6] [--check-dt 1e-7] [--tolerance 2e-3] [--repeats 3]
+    python benchmarks/numba_peer.py --law masing --sweep-wall numba semi_implicit 4.9e-5
 
-The port is the semi-implicit scheme of docs/model.md §2-§10 with the paper's hysteretic
-law (tagawa2003, parameters from ``MaterialSI.bending_parameters()``), the second-order
+The port is the semi-implicit scheme of docs/model.md §2-§10 with either the paper's
+hysteretic law (tagawa2003, parameters from ``MaterialSI.bending_parameters()``) or the
+same loop with return-point memory (masing, §4.10), one law per batch; the second-order
 clamp-edge hinge (``edge_curvature_scale``), mass-proportional damping, gravity, the half
 mass at the free end and the whole hold-and-release of §8 (the free end carried along its
 polar smootherstep path, held with the settle damping, released at t = 0). It handles the
 fixed clamp only, which is what the damped swing and its sweep use, and skips the energy
 budget warpcloth books every substep (which favours Numba). Every per-strip number
 (masses, widths, tensile and bending parameters, damping, edge scale, hold target) and
-the stepping (dt, release and move steps, output steps) is read from the batch warpcloth
-itself builds for the same scenes, so both run the same inputs.
+the stepping (dt, release and move steps, output steps, the reversal memory's capacity) is
+read from the batch warpcloth itself builds for the same scenes, so both run the same inputs.
 
 How it is fast: strips are the innermost, contiguous axis ([node, strip]); a block of
 LANES strips is copied into one local array whose inner dimensions are compile-time
 constants, so LLVM can prove its loops over the lanes free of aliasing and vectorises them
-(AVX-512, 8 float64 a register); ``numba.prange`` hands the blocks to the cores, and each
-block runs every substep while its state stays in cache. The hinge does two divisions (a
-reciprocal length per segment, the chord) as warpcloth's does since issue 11 item 5. The
-one transcendental per hinge and substep, the branch's exponential, is glibc's 8-wide
-libmvec exp called directly (Numba's LLVM from PyPI has no vector math library); the
-reversal's logarithm runs only in the lanes that reverse, in a scalar loop of its own.
-The offset at a reversal is the previous substep's offset (same branch, centre and
-curvature: bitwise the value warpcloth recomputes), so it is kept instead of recomputed.
-No fastmath: reassociation would change the rounding and with it the agreement with
-warpcloth below. Lengths are sqrt(fma(x, x, y·y)), as clang contracts Warp's ``length``.
-Bitwise equality is not expected: libmvec's exp differs from glibc's scalar exp (which
-Warp calls) in the last bit for ~40 % of arguments (``--libm-exp`` uses the scalar one,
-2× slower), and LLVM contracts Warp's C++ in places Numba's IR does not.
+(AVX-512: 8 float64 a register; AVX2: 4); ``numba.prange`` hands the blocks to the cores,
+and each block runs every substep while its state stays in cache. The hinge does two
+divisions (a reciprocal length per segment, the chord) as warpcloth's does since issue 11
+item 5. The one transcendental per hinge and substep, the branch's exponential, is glibc's
+libmvec exp (8-wide AVX-512 or 4-wide AVX2, whichever the CPU has) called directly
+(Numba's LLVM from PyPI has no vector math library). Each law's rare work runs only in the
+lanes that need it, in a scalar loop of its own: tagawa2003's reversal (a logarithm for the
+new loop centre; the offset there is the previous substep's, same branch, centre and
+curvature: bitwise the value warpcloth recomputes, so it is kept); masing's reversal,
+loop closure, full memory and first change, which is kernels/bending_masing.py's
+``follow`` operation for operation on a per-lane stack of reversal points (capacity
+``integrator.reversal_memory``; a reversal that finds it full is not stored, the hinge
+retraces its branch, and it is counted, as in warpcloth). Between those events a masing
+hinge stays on one branch H = H_r + a·(1 − exp(r·(K − K_r))) (the virgin curve is one
+too), whose four numbers the scalar path leaves in the block array with the direction it
+must keep and the curvature where it would close a loop: the common substep is the same
+SIMD loop as tagawa2003's. No fastmath: reassociation would change the rounding and with
+it the agreement with warpcloth below. Lengths are sqrt(fma(x, x, y·y)), as clang
+contracts Warp's ``length``. Bitwise equality is not expected: libmvec's exp differs from
+glibc's scalar exp (which Warp calls) in the last bit for ~40 % of arguments
+(``--libm-exp`` uses the scalar one, 2× slower), and LLVM contracts Warp's C++ in places
+Numba's IR does not. Compiled code is cached on disk (``cache=True``; ``--libm-exp``
+compiles afresh), so a second process starts in about a second.
 
 What it prints, all measured in this one run (compile time excluded: every code path is
 run once before timing):
-1. agreement: the 200-variant damped-swing sweep (scenes/damped_swing_sweep.toml, its
-   Latin hypercube of D, D1, α, γ; 1 s record after the 1.3 s hold), warpcloth's tip
-   trajectories (600 Hz probes) against the Numba port's, both from the straight hanging
-   strip through the same hold and release;
-2. strip-steps/s and wall per simulated second for B = 1, 16, 200, 1024 strips: warpcloth
-   on 1 thread (one launch) and 2 threads (two half-batches launched from two Python
-   threads; Warp releases the GIL during a CPU launch), NumPy (benchmarks/numpy_baseline.py),
-   Numba on 1 and 2 threads; ratios against warpcloth on 1 thread;
-3. the sweep's wall time: ``wc.run_sweep`` on 2 threads against the Numba port on 2 threads.
+1. agreement (``--parts agreement``): the 200-variant damped-swing sweep
+   (scenes/damped_swing_sweep.toml, its Latin hypercube of D, D1, α, γ; 1 s record after
+   the 1.3 s hold) under ``--law``, warpcloth's tip trajectories (600 Hz probes) against
+   the Numba port's, both from the straight hanging strip through the same hold and
+   release; for masing also the deepest reversal stack and the overflows of both; and the
+   sweep's wall at the scene dt, ``wc.run_sweep`` on 2 threads against the port on 2;
+2. strip-steps/s and wall per simulated second for B = 1, 16, 200, 1024 strips
+   (``--parts tables``): warpcloth on 1 thread (one launch) and 2 threads (two
+   half-batches launched from two Python threads; Warp releases the GIL during a CPU
+   launch), NumPy (benchmarks/numpy_baseline.py; tagawa2003 only), Numba on 1 and 2
+   threads; ratios against warpcloth on 1 thread;
+3. the sweep at equal accuracy (``--parts equal-accuracy``): every variant's largest
+   |Δ tip x| over the record, as a fraction of its excursion, against the explicit
+   solution at ``--reference-dt`` (computed by the port), for warpcloth semi_implicit,
+   the port and warpcloth imex on ladders of dt that divide the probe interval; the
+   largest dt of each whose worst variant is within ``--tolerance``; the variants worst
+   under imex rechecked against ``--check-dt``; then the sweep's wall at those dt (and
+   warpcloth at the scene dt), repeats interleaved, with the ratio to the port's.
+``--sweep-wall IMPL SCHEME DT`` times one sweep and nothing else, for timing the whole
+process from outside (start-up and, for the port, loading its cached code included).
 """
 
 from __future__ import annotations
@@ -684,22 +709,30 @@ def tip_errors(tips: np.ndarray, reference: np.ndarray) -> np.ndarray:
     return np.abs(tips - reference).max(axis=0) / np.ptp(reference, axis=0)
 
 
-def warpcloth_tips(scenes: list[wc.Scene]) -> np.ndarray:
-    """Tip x ``[sample, variant]`` of warpcloth on 2 threads (inf where a strip diverged)."""
+def warpcloth_tips(scenes: list[wc.Scene]) -> tuple[np.ndarray, str]:
+    """Tip x ``[sample, variant]`` of warpcloth on 2 threads (inf where a strip diverged)
+    and what its reversal memory held."""
     result = wc.simulate(scenes, keep_frames=False, on_divergence="record", threads=2)
     tips = result.probe("tip_x").copy()
     tips[:, [d["strip"] for d in result.diverged]] = math.inf
-    return tips
+    memory = result.reversal_memory
+    held = (f"; deepest {np.max(memory['deepest'])} of {memory['capacity']}, {np.sum(memory['overflows'])} "
+            "overflows") if memory else ""
+    return tips, held
 
 
-def numba_tips(scenes: list[wc.Scene]) -> np.ndarray:
-    """Tip x ``[sample, variant]`` of the Numba port on 2 threads (inf where a strip failed)."""
+def numba_tips(scenes: list[wc.Scene]) -> tuple[np.ndarray, str]:
+    """Tip x ``[sample, variant]`` of the Numba port on 2 threads (inf where a strip failed)
+    and what its reversal memory held."""
     numba.set_num_threads(2)
     peer = NumbaStrips(scenes)
     peer.run()
     tips = peer.kept_tips()[0].copy()
     tips[:, peer.failed >= 0] = math.inf
-    return tips
+    b = peer.n_strips
+    held = (f"; deepest {peer.deepest[:b].max()} of {peer.capacity}, {peer.overflows[:b].sum()} overflows"
+            if peer.masing else "")
+    return tips, held
 
 
 def stepping(scheme: str, dt: float) -> list[str]:
@@ -730,7 +763,8 @@ def equal_accuracy(args: argparse.Namespace, law: list[str], samples: int) -> No
     print(f"\n---- equal accuracy on the {samples}-variant sweep ({' '.join(law) or 'tagawa2003'}; "
           f"{record:g} s record; tolerance {args.tolerance:.2%} of each variant's excursion, worst variant) ----")
     start = time.perf_counter()
-    reference = numba_tips(sweep_scenes(samples, record, [*law, *stepping("semi_implicit", args.reference_dt)])[1])
+    reference, _held = numba_tips(sweep_scenes(samples, record,
+                                               [*law, *stepping("semi_implicit", args.reference_dt)])[1])
     print(f"reference: semi_implicit dt = {args.reference_dt:g} s by the Numba port, "
           f"{time.perf_counter() - start:.0f} s wall")
     scene_dt = sweep_scenes(1, record, law)[1][0].integrator.dt_s
@@ -745,11 +779,11 @@ def equal_accuracy(args: argparse.Namespace, law: list[str], samples: int) -> No
             except wc.SceneError as error:
                 print(f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: refused ({error})")
                 break
-            tips[impl, scheme, dt] = (warpcloth_tips if impl == "warpcloth" else numba_tips)(scenes)
+            tips[impl, scheme, dt], held = (warpcloth_tips if impl == "warpcloth" else numba_tips)(scenes)
             errors = tip_errors(tips[impl, scheme, dt], reference)
             worst = int(np.argmax(errors))
             print(f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: worst {errors[worst]:.3%} (variant {worst}), "
-                  f"median {np.median(errors):.3%}")
+                  f"median {np.median(errors):.3%}{held}")
             if errors[worst] <= args.tolerance:
                 best[impl, scheme] = dt
     print("largest dt within the tolerance: " + ", ".join(f"{i} {s} {dt:g} s" for (i, s), dt in best.items()))
@@ -763,8 +797,8 @@ def equal_accuracy(args: argparse.Namespace, law: list[str], samples: int) -> No
         errors = tip_errors(tips["warpcloth", "imex", best["warpcloth", "imex"]], reference)
         worst = np.sort(np.argsort(errors)[-args.check_worst:])
         start = time.perf_counter()
-        finer = numba_tips([sweep_scenes(samples, record, [*law, *stepping("semi_implicit", args.check_dt)])[1][i]
-                            for i in worst])
+        finer_scenes = sweep_scenes(samples, record, [*law, *stepping("semi_implicit", args.check_dt)])[1]
+        finer, _held = numba_tips([finer_scenes[i] for i in worst])
         print(f"check: the {len(worst)} variants worst under imex at {best['warpcloth', 'imex']:.4g} s against "
               f"semi_implicit dt = {args.check_dt:g} s ({time.perf_counter() - start:.0f} s wall); the reference "
               f"is off it by {tip_errors(reference[:, worst], finer).max():.4%} at most")
