@@ -302,7 +302,7 @@ X, Y, U, V, FTX, FTY, FEX, FEY, FHX, FHY = range(10)  # node planes
 # loop (docs/model.md §4.10, kernels/bending_masing.py).
 HB, HC, HK, HH, TH, TA, TR, TD, TT = range(10, 19)
 HINGE_PLANES = 9  # hinge planes HB … TT, kept between runs as hinges[plane, hinge, strip]
-E1X, E1Y, IL1, E2X, E2Y, IL2, KK, EX, BAD, R0, R1, A0, TURN = range(13)  # row NMAX
+E1X, E1Y, IL1, E2X, E2Y, IL2, KK, EX, BAD, R0, R1, A0, TURN, SCALAR = range(14)  # row NMAX
 A1, A2, A3, A4, RIGIDITY, D1, ALPHA, K0, M0, WIDTH, SCALE, MASS, GAMMA, SETTLE = range(14)  # row NMAX + 1
 PLANES = 19
 
@@ -421,16 +421,13 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinge
                     change = k - W[h, HK, lane]
                     d = -1.0 if change < 0.0 else 1.0
                     stays = (change == 0.0) | (W[P, D1, lane] == 0.0) | ((d == td) & (td * (k - W[h, TT, lane]) < 0.0))
+                    W[T, SCALAR, lane] = 0.0 if stays else 1.0
                     rare |= 0 if stays else 1
                 if rare:
                     for lane in range(LANES):
-                        k, td = W[T, KK, lane], W[h, TD, lane]
-                        change = k - W[h, HK, lane]
-                        d = -1.0 if change < 0.0 else 1.0
-                        if not ((change == 0.0) | (W[P, D1, lane] == 0.0)
-                                | ((d == td) & (td * (k - W[h, TT, lane]) < 0.0))):
-                            masing_follow(k, W, h, lane, points, overflows, deepest, s0 + lane, W[P, D1, lane],
-                                          W[P, ALPHA, lane])
+                        if W[T, SCALAR, lane] != 0.0:
+                            masing_follow(W[T, KK, lane], W, h, lane, points, overflows, deepest, s0 + lane,
+                                          W[P, D1, lane], W[P, ALPHA, lane])
                 for lane in range(LANES):
                     W[T, EX, lane] = W[h, TR, lane] * (W[T, KK, lane] - W[h, HC, lane])
             else:
