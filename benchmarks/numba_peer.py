@@ -1,47 +1,72 @@
 """The strongest CPU peer a user could write: an expert Numba port of warpcloth's explicit
-model, checked against warpcloth and timed beside it (issue 11, item 7).
+model, checked against warpcloth and timed beside it (issue 11, item 7; masing: issue 21).
 
     python benchmarks/numba_peer.py [--quick] [--samples 200] [--record 1.0]
+        [--law tagawa2003|masing] [--parts agreement tables equal-accuracy]
+        [--reference-dt 1e-6] [--check-dt 1e-7] [--tolerance 2e-3] [--repeats 3]
+    python benchmarks/numba_peer.py --law masing --sweep-wall numba semi_implicit 4.9e-5
 
-The port is the semi-implicit scheme of docs/model.md §2-§10 with the paper's hysteretic
-law (tagawa2003, parameters from ``MaterialSI.bending_parameters()``), the second-order
+The port is the semi-implicit scheme of docs/model.md §2-§10 with either the paper's
+hysteretic law (tagawa2003, parameters from ``MaterialSI.bending_parameters()``) or the
+same loop with return-point memory (masing, §4.10), one law per batch; the second-order
 clamp-edge hinge (``edge_curvature_scale``), mass-proportional damping, gravity, the half
 mass at the free end and the whole hold-and-release of §8 (the free end carried along its
 polar smootherstep path, held with the settle damping, released at t = 0). It handles the
 fixed clamp only, which is what the damped swing and its sweep use, and skips the energy
 budget warpcloth books every substep (which favours Numba). Every per-strip number
 (masses, widths, tensile and bending parameters, damping, edge scale, hold target) and
-the stepping (dt, release and move steps, output steps) is read from the batch warpcloth
-itself builds for the same scenes, so both run the same inputs.
+the stepping (dt, release and move steps, output steps, the reversal memory's capacity) is
+read from the batch warpcloth itself builds for the same scenes, so both run the same inputs.
 
 How it is fast: strips are the innermost, contiguous axis ([node, strip]); a block of
 LANES strips is copied into one local array whose inner dimensions are compile-time
 constants, so LLVM can prove its loops over the lanes free of aliasing and vectorises them
-(AVX-512, 8 float64 a register); ``numba.prange`` hands the blocks to the cores, and each
-block runs every substep while its state stays in cache. The hinge does two divisions (a
-reciprocal length per segment, the chord) as warpcloth's does since issue 11 item 5. The
-one transcendental per hinge and substep, the branch's exponential, is glibc's 8-wide
-libmvec exp called directly (Numba's LLVM from PyPI has no vector math library); the
-reversal's logarithm runs only in the lanes that reverse, in a scalar loop of its own.
-The offset at a reversal is the previous substep's offset (same branch, centre and
-curvature: bitwise the value warpcloth recomputes), so it is kept instead of recomputed.
-No fastmath: reassociation would change the rounding and with it the agreement with
-warpcloth below. Lengths are sqrt(fma(x, x, y·y)), as clang contracts Warp's ``length``.
-Bitwise equality is not expected: libmvec's exp differs from glibc's scalar exp (which
-Warp calls) in the last bit for ~40 % of arguments (``--libm-exp`` uses the scalar one,
-2× slower), and LLVM contracts Warp's C++ in places Numba's IR does not.
+(AVX-512: 8 float64 a register; AVX2: 4); ``numba.prange`` hands the blocks to the cores,
+and each block runs every substep while its state stays in cache. The hinge does two
+divisions (a reciprocal length per segment, the chord) as warpcloth's does since issue 11
+item 5. The one transcendental per hinge and substep, the branch's exponential, is glibc's
+libmvec exp (8-wide AVX-512 or 4-wide AVX2, whichever the CPU has) called directly
+(Numba's LLVM from PyPI has no vector math library). Each law's rare work runs only in the
+lanes that need it, in a scalar loop of its own: tagawa2003's reversal (a logarithm for the
+new loop centre; the offset there is the previous substep's, same branch, centre and
+curvature: bitwise the value warpcloth recomputes, so it is kept); masing's reversal,
+loop closure, full memory and first change, which is kernels/bending_masing.py's
+``follow`` operation for operation on a per-lane stack of reversal points (capacity
+``integrator.reversal_memory``; a reversal that finds it full is not stored, the hinge
+retraces its branch, and it is counted, as in warpcloth). Between those events a masing
+hinge stays on one branch H = H_r + a·(1 − exp(r·(K − K_r))) (the virgin curve is one
+too), whose four numbers the scalar path leaves in the block array with the direction it
+must keep and the curvature where it would close a loop: the common substep is the same
+SIMD loop as tagawa2003's. No fastmath: reassociation would change the rounding and with
+it the agreement with warpcloth below. Lengths are sqrt(fma(x, x, y·y)), as clang
+contracts Warp's ``length``. Bitwise equality is not expected: libmvec's exp differs from
+glibc's scalar exp (which Warp calls) in the last bit for ~40 % of arguments
+(``--libm-exp`` uses the scalar one, 2× slower), and LLVM contracts Warp's C++ in places
+Numba's IR does not. Compiled code is cached on disk (``cache=True``; ``--libm-exp``
+compiles afresh), so a second process starts in about a second.
 
 What it prints, all measured in this one run (compile time excluded: every code path is
 run once before timing):
-1. agreement: the 200-variant damped-swing sweep (scenes/damped_swing_sweep.toml, its
-   Latin hypercube of D, D1, α, γ; 1 s record after the 1.3 s hold), warpcloth's tip
-   trajectories (600 Hz probes) against the Numba port's, both from the straight hanging
-   strip through the same hold and release;
-2. strip-steps/s and wall per simulated second for B = 1, 16, 200, 1024 strips: warpcloth
-   on 1 thread (one launch) and 2 threads (two half-batches launched from two Python
-   threads; Warp releases the GIL during a CPU launch), NumPy (benchmarks/numpy_baseline.py),
-   Numba on 1 and 2 threads; ratios against warpcloth on 1 thread;
-3. the sweep's wall time: ``wc.run_sweep`` on 2 threads against the Numba port on 2 threads.
+1. agreement (``--parts agreement``): the 200-variant damped-swing sweep
+   (scenes/damped_swing_sweep.toml, its Latin hypercube of D, D1, α, γ; 1 s record after
+   the 1.3 s hold) under ``--law``, warpcloth's tip trajectories (600 Hz probes) against
+   the Numba port's, both from the straight hanging strip through the same hold and
+   release; for masing also the deepest reversal stack and the overflows of both; and the
+   sweep's wall at the scene dt, ``wc.run_sweep`` on 2 threads against the port on 2;
+2. strip-steps/s and wall per simulated second for B = 1, 16, 200, 1024 strips
+   (``--parts tables``): warpcloth on 1 thread (one launch) and 2 threads (two
+   half-batches launched from two Python threads; Warp releases the GIL during a CPU
+   launch), NumPy (benchmarks/numpy_baseline.py; tagawa2003 only), Numba on 1 and 2
+   threads; ratios against warpcloth on 1 thread;
+3. the sweep at equal accuracy (``--parts equal-accuracy``): every variant's largest
+   |Δ tip x| over the record, as a fraction of its excursion, against the explicit
+   solution at ``--reference-dt`` (computed by the port), for warpcloth semi_implicit,
+   the port and warpcloth imex on ladders of dt that divide the probe interval; the
+   largest dt of each whose worst variant is within ``--tolerance``; the variants worst
+   under imex rechecked against ``--check-dt``; then the sweep's wall at those dt (and
+   warpcloth at the scene dt), repeats interleaved, with the ratio to the port's.
+``--sweep-wall IMPL SCHEME DT`` times one sweep and nothing else, for timing the whole
+process from outside (start-up and, for the port, loading its cached code included).
 """
 
 from __future__ import annotations
@@ -66,6 +91,7 @@ import warp as wp
 from llvmlite import ir
 from numba import njit, prange, types
 from numba.core import cgutils
+from numba.core.caching import NullCache
 from numba.extending import intrinsic
 from warpcloth.kernels import bending_law
 
@@ -89,36 +115,42 @@ def fma(typingctx, a, b, c):
     return sig, codegen
 
 
-def _libmvec() -> bool:
-    """Load glibc's vector math library if this CPU can run its AVX-512 exp."""
+LIBMVEC_EXP = {8: "_ZGVeN8v_exp", 4: "_ZGVdN4v_exp"}  # glibc's AVX-512 and AVX2 exp, by width
+
+
+def _libmvec() -> int:
+    """Load glibc's vector math library; the width of the widest exp this CPU can run
+    (8: AVX-512, 4: AVX2), 0 if none."""
     try:
         flags = Path("/proc/cpuinfo").read_text()
-        if " avx512f" not in flags:
-            return False
-        llvm.load_library_permanently("libmvec.so.1")
-        return True
+        width = 8 if " avx512f" in flags else 4 if " avx2" in flags else 0
+        if width:
+            llvm.load_library_permanently("libmvec.so.1")
+        return width
     except (OSError, RuntimeError):
-        return False
+        return 0
 
 
 # The branch's exponential is the one transcendental per hinge and substep. Numba's PyPI
 # LLVM has no vector exp (no SVML), so a loop calling math.exp runs glibc's scalar exp,
 # ~3 ns a call, about half of the whole substep. glibc's libmvec has an 8-wide AVX-512
 # exp (0.7 ns an element, within 4 ulp; it differs from the scalar one in the last bit
-# for ~40 % of arguments): called directly below. --libm-exp selects the scalar call.
+# for ~40 % of arguments) and a 4-wide AVX2 one: called directly below (0: the scalar
+# call, which --libm-exp selects).
 VECTOR_EXP = _libmvec()
 
 
 @intrinsic
-def exp8(typingctx, array, start):
-    """array[start : start + 8] ← exp(…) in place, by libmvec's ``_ZGVeN8v_exp``."""
+def vector_exp(typingctx, array, start):
+    """array[start : start + VECTOR_EXP] ← exp(…) in place, by libmvec (LIBMVEC_EXP)."""
     sig = types.void(array, start)
 
     def codegen(context, builder, signature, args):
         data = context.make_array(signature.args[0])(context, builder, args[0]).data
-        vector = ir.VectorType(ir.DoubleType(), 8)
+        vector = ir.VectorType(ir.DoubleType(), VECTOR_EXP)
         pointer = builder.bitcast(builder.gep(data, [args[1]]), vector.as_pointer())
-        function = cgutils.get_or_insert_function(builder.module, ir.FunctionType(vector, [vector]), "_ZGVeN8v_exp")
+        function = cgutils.get_or_insert_function(builder.module, ir.FunctionType(vector, [vector]),
+                                                  LIBMVEC_EXP[VECTOR_EXP])
         builder.store(builder.call(function, [builder.load(pointer, align=8)]), pointer, align=8)
         return context.get_dummy_value()
 
@@ -154,9 +186,11 @@ def centre_through(curvature, h_offset, branch, d1, alpha, k0, m0):
     return curvature - k0 - math.log((h + m0) / d1) / alpha
 
 
-@njit(error_model="numpy")
-def fresh_hinges(px, py, nc, edge_scale, law, branch, centre, kprev, hprev):
-    """Every hinge fresh at its current curvature: rising branch, no offset (§4.5)."""
+@njit(error_model="numpy", cache=True)
+def fresh_hinges(px, py, nc, edge_scale, law, masing, hinges, points):
+    """Every hinge fresh at its current curvature (§4.5): tagawa2003 on the rising branch
+    with no offset; masing at the origin of its virgin curve, ``points[strip, hinge, 0]``
+    (the hinge planes are those of the block array, ``hinges[plane − HB, hinge, strip]``)."""
     n, b = px.shape
     for j in range(n - nc):
         i = nc - 1 + j
@@ -168,9 +202,86 @@ def fresh_hinges(px, py, nc, edge_scale, law, branch, centre, kprev, hprev):
             if j == 0:
                 k = k * edge_scale[s]
             d1, alpha, k0, m0 = law[1, s], law[2, s], law[3, s], law[4, s]
-            c = centre_through(k, 0.0, 1.0, d1, alpha, k0, m0)
-            branch[j, s], centre[j, s], kprev[j, s] = 1.0, c, k
-            hprev[j, s] = offset(k - c, 1.0, d1, alpha, k0, m0)
+            hinges[:, j, s] = 0.0
+            hinges[HK - HB, j, s] = k
+            if masing:
+                # Depth 0, on the virgin curve at its origin: every direction loads, so the
+                # first change takes the scalar path (TD = 0), which sets the branch.
+                hinges[HB - HB, j, s], hinges[HC - HB, j, s] = 1.0, k
+                if d1 != 0.0:
+                    points[s, j, 0, 0], points[s, j, 0, 1] = k, 0.0
+            else:
+                c = centre_through(k, 0.0, 1.0, d1, alpha, k0, m0)
+                hinges[HB - HB, j, s], hinges[HC - HB, j, s] = 1.0, c
+                hinges[HH - HB, j, s] = offset(k - c, 1.0, d1, alpha, k0, m0)
+
+
+@njit(inline="always")
+def masing_open_point(points, slot, h, depth, origin):
+    """The top open point (K, H) of a masing hinge (the origin (K_o, 0) at depth 0) and the
+    curvature of the one below it (kernels/bending_masing.py ``open_point``)."""
+    if depth == 0:
+        return origin, 0.0, origin
+    below = points[slot, h, depth - 1, 0] if depth > 1 else origin
+    return points[slot, h, depth, 0], points[slot, h, depth, 1], below
+
+
+@njit(error_model="numpy", cache=True)
+def masing_follow(k, W, h, lane, points, overflows, deepest, slot, d1, alpha):
+    """The scalar path of a masing hinge, rare (a reversal, a closed loop, the memory full
+    or the first change): kernels/bending_masing.py ``follow`` operation for operation, its
+    stack ``points[slot, h]``, then the branch the block's SIMD loop evaluates now (HC, TH,
+    TA, TR) and the test that keeps the next evaluation off this path (TD, TT)."""
+    previous = W[h, HK, lane]
+    d = -1.0 if k - previous < 0.0 else 1.0
+    last = -1.0 if W[h, HB, lane] < 0.0 else 1.0
+    depth = int(abs(W[h, HB, lane])) - 1
+    capacity = points.shape[2] - 1
+    origin = points[slot, h, 0, 0]
+    top_k, top_h, below = masing_open_point(points, slot, h, depth, origin)
+    s = d  # on the virgin curve at its origin every direction loads
+    if depth > 0:
+        s = -1.0 if top_k > below else 1.0
+    elif previous != origin:
+        s = -1.0 if previous - origin < 0.0 else 1.0
+    if d != s and last != d:
+        # The curvature reversed at the previous evaluation, against the current branch.
+        if depth < capacity:
+            below = top_k
+            depth += 1
+            top_k, top_h = previous, W[h, HH, lane]
+            points[slot, h, depth, 0], points[slot, h, depth, 1] = top_k, top_h
+            s = d
+            deepest[slot] = max(deepest[slot], depth)
+        else:
+            overflows[slot] += 1
+    # Retracing after a reversal the full memory could not hold, until the top point.
+    while d != s and depth > 0 and s * (k - top_k) <= 0.0:
+        depth -= 1
+        s = d
+        top_k, top_h, below = masing_open_point(points, slot, h, depth, origin)
+    # Return-point memory: reaching the point below the top closes the inner loop.
+    while d == s and depth > 0:
+        target = below if depth > 1 else 2.0 * origin - top_k
+        if s * (k - target) < 0.0:
+            break
+        depth = max(depth - 2, 0)
+        top_k, top_h, below = masing_open_point(points, slot, h, depth, origin)
+    W[h, HB, lane] = d * float(depth + 1)
+    if depth == 0:
+        # virgin: sgn(y)·½D1·(1 − e^(−2α|y|)), y = K − K_o; −2α·sgn(y)·y = −2α|y| exactly
+        v = -1.0 if k - origin < 0.0 else 1.0
+        W[h, HC, lane], W[h, TH, lane] = origin, 0.0
+        W[h, TA, lane], W[h, TR, lane] = v * 0.5 * d1, -2.0 * alpha * v
+        # next: loading away from the origin, no loop to close
+        nxt = 0.0 if k == origin else v
+        W[h, TD, lane], W[h, TT, lane] = nxt, nxt * math.inf
+    else:
+        W[h, HC, lane], W[h, TH, lane] = top_k, top_h
+        W[h, TA, lane], W[h, TR, lane] = s * d1, -alpha * s
+        nxt = -1.0 if top_k > below else 1.0
+        W[h, TD, lane] = nxt if nxt == s else 0.0
+        W[h, TT, lane] = below if depth > 1 else 2.0 * origin - top_k
 
 
 # A block's whole working set is ONE local array W[row, plane, lane] whose two inner
@@ -182,16 +293,24 @@ def fresh_hinges(px, py, nc, edge_scale, law, branch, centre, kprev, hprev):
 # temporaries, row NMAX + 1 the per-strip parameters.
 LANES = 16  # two AVX-512 registers of float64 (LLVM treats loops under 16 trips as tiny: scalar)
 NMAX = 64  # most nodes a strip may have (h = 2.5 mm has 49)
-X, Y, U, V, FTX, FTY, FEX, FEY, FHX, FHY, HB, HC, HK, HH = range(14)  # node / hinge planes
-E1X, E1Y, IL1, E2X, E2Y, IL2, KK, EX, BAD, R0, R1, A0, TURN = range(13)  # row NMAX
+X, Y, U, V, FTX, FTY, FEX, FEY, FHX, FHY = range(10)  # node planes
+# Hinge planes. tagawa2003: branch s, loop centre c, K_prev, H. masing: the signed depth
+# d·(depth + 1) of warpcloth's memory vector, the top reversal point's curvature, K_prev, H,
+# then the branch this evaluation is on, H = TH + TA·(1 − exp(TR·(K − HC))) (the virgin
+# curve from the origin too), and what lets the next evaluation stay on it: the direction
+# TD it must keep (0: take the scalar path) and the curvature TT where it would close a
+# loop (docs/model.md §4.10, kernels/bending_masing.py).
+HB, HC, HK, HH, TH, TA, TR, TD, TT = range(10, 19)
+HINGE_PLANES = 9  # hinge planes HB … TT, kept between runs as hinges[plane, hinge, strip]
+E1X, E1Y, IL1, E2X, E2Y, IL2, KK, EX, BAD, R0, R1, A0, TURN, SCALAR = range(14)  # row NMAX
 A1, A2, A3, A4, RIGIDITY, D1, ALPHA, K0, M0, WIDTH, SCALE, MASS, GAMMA, SETTLE = range(14)  # row NMAX + 1
-PLANES = 14
+PLANES = 19
 
 
-@njit(error_model="numpy")
-def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centre, kprev, hprev, tensile, law,
-                  width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt, max_strain,
-                  release_step, move_steps, tip_x, tip_y, failed):
+@njit(error_model="numpy", cache=True)
+def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinges, points, overflows, deepest,
+                  tensile, law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt,
+                  max_strain, release_step, move_steps, tip_x, tip_y, failed):
     """Strips s0 … s1−1 (at most LANES) from step0 to step1 (semi-implicit Euler,
     docs/model.md §9.1), in the block array W described above.
 
@@ -199,13 +318,16 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centr
     for negative indices, which would hide from LLVM that rows i−1, i, i+1 are adjacent.
     ``tip_x/tip_y[k, s]`` take the free end after output step ``out_steps[k]``;
     ``failed[s]`` the first step whose strain or fold check failed (−1: healthy).
+    ``masing`` selects the bending law (tagawa2003 otherwise); a masing lane keeps its
+    reversal points in ``points[s0 + lane]``, the lanes past the last strip included (they
+    copy it, and run its scalar path with it, so they never take that path on their own).
     """
     n = px.shape[0]
     used = s1 - s0
     first = nc - 2  # the clamped node above the clamp-edge hinge
     W = np.zeros((NMAX + 2, PLANES, LANES))
     T, P = np.uintp(NMAX), np.uintp(NMAX + 1)
-    flat = W.reshape(W.size)  # the same memory, for exp8
+    flat = W.reshape(W.size)  # the same memory, for vector_exp
     exp_row = (NMAX * PLANES + EX) * LANES
     for lane in range(LANES):
         s = s0 + min(lane, used - 1)
@@ -213,9 +335,10 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centr
             ii = np.uintp(i)
             W[ii, X, lane], W[ii, Y, lane], W[ii, U, lane], W[ii, V, lane] = px[i, s], py[i, s], vx[i, s], vy[i, s]
         for h in range(n - nc):
-            hh = np.uintp(h)
-            W[hh, HB, lane], W[hh, HC, lane] = branch[h, s], centre[h, s]
-            W[hh, HK, lane], W[hh, HH, lane] = kprev[h, s], hprev[h, s]
+            for q in range(HINGE_PLANES):
+                W[np.uintp(h), HB + q, lane] = hinges[q, h, s]
+        if masing and lane >= used:
+            points[s0 + lane] = points[s]
         W[P, A1, lane], W[P, A2, lane], W[P, A3, lane], W[P, A4, lane] = (tensile[0, s], tensile[1, s],
                                                                           tensile[2, s], tensile[3, s])
         W[P, RIGIDITY, lane], W[P, D1, lane], W[P, ALPHA, lane] = law[0, s], law[1, s], law[2, s]
@@ -259,7 +382,6 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centr
         for i in range(first + 1, n - 1):
             im, ii, ip = np.uintp(i - 1), np.uintp(i), np.uintp(i + 1)
             h = np.uintp(i - first - 1)
-            reversals = 0  # an integer OR: a float sum would not vectorise without fastmath
             # SIMD loop 1: tension of segment i, curvature at hinge i, the reversal test.
             # Divisions are the slowest SIMD operation: one per segment (its reciprocal
             # length, used by strain, tension, curvature and the angle gradient) and one
@@ -287,36 +409,70 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centr
                 W[T, E2X, lane], W[T, E2Y, lane], W[T, IL2, lane] = dx, dy, r2
                 healthy = (e <= max_strain) & (chord > 1e-3 * l0)  # False for NaN too
                 W[T, BAD, lane] = W[T, BAD, lane] if healthy else 1.0
-                reversals |= 1 if (k - W[h, HK, lane]) * W[h, HB, lane] < 0.0 else 0
-            # Scalar loop, rare: the lanes whose curvature turned against their branch
-            # flip it and move the loop centre through the offset they had (§4.3).
-            if reversals:
+            # The law, in loops of its own (selected per hinge, outside the lane loops, so
+            # each stays a SIMD loop): which lanes need the scalar path, that path, and the
+            # argument of the branch's exponential.
+            rare = 0  # an integer OR: a float sum would not vectorise without fastmath
+            if masing:
+                # Scalar path unless the curvature is unchanged, the strip has no hysteresis,
+                # or it keeps the branch's direction short of closing a loop.
                 for lane in range(LANES):
-                    hb = W[h, HB, lane]
-                    if (W[T, KK, lane] - W[h, HK, lane]) * hb < 0.0:
-                        hb = -hb
-                        W[h, HB, lane] = hb
-                        W[h, HC, lane] = centre_through(W[h, HK, lane], W[h, HH, lane], hb, W[P, D1, lane],
-                                                        W[P, ALPHA, lane], W[P, K0, lane], W[P, M0, lane])
-            # The branch's exponential (§4.2), alone in its loop (see VECTOR_EXP).
-            for lane in range(LANES):
-                u_ = W[T, KK, lane] - W[h, HC, lane]
-                w = W[P, K0, lane] + u_ if W[h, HB, lane] > 0.0 else W[P, K0, lane] - u_
-                W[T, EX, lane] = -W[P, ALPHA, lane] * w
+                    k, td = W[T, KK, lane], W[h, TD, lane]
+                    change = k - W[h, HK, lane]
+                    d = -1.0 if change < 0.0 else 1.0
+                    stays = (change == 0.0) | (W[P, D1, lane] == 0.0) | ((d == td) & (td * (k - W[h, TT, lane]) < 0.0))
+                    W[T, SCALAR, lane] = 0.0 if stays else 1.0
+                    rare |= 0 if stays else 1
+                if rare:
+                    for lane in range(LANES):
+                        if W[T, SCALAR, lane] != 0.0:
+                            masing_follow(W[T, KK, lane], W, h, lane, points, overflows, deepest, s0 + lane,
+                                          W[P, D1, lane], W[P, ALPHA, lane])
+                for lane in range(LANES):
+                    W[T, EX, lane] = W[h, TR, lane] * (W[T, KK, lane] - W[h, HC, lane])
+            else:
+                for lane in range(LANES):
+                    rare |= 1 if (W[T, KK, lane] - W[h, HK, lane]) * W[h, HB, lane] < 0.0 else 0
+                # Scalar loop, rare: the lanes whose curvature turned against their branch
+                # flip it and move the loop centre through the offset they had (§4.3).
+                if rare:
+                    for lane in range(LANES):
+                        hb = W[h, HB, lane]
+                        if (W[T, KK, lane] - W[h, HK, lane]) * hb < 0.0:
+                            hb = -hb
+                            W[h, HB, lane] = hb
+                            W[h, HC, lane] = centre_through(W[h, HK, lane], W[h, HH, lane], hb, W[P, D1, lane],
+                                                            W[P, ALPHA, lane], W[P, K0, lane], W[P, M0, lane])
+                for lane in range(LANES):
+                    u_ = W[T, KK, lane] - W[h, HC, lane]
+                    w = W[P, K0, lane] + u_ if W[h, HB, lane] > 0.0 else W[P, K0, lane] - u_
+                    W[T, EX, lane] = -W[P, ALPHA, lane] * w
+            # The branch's exponential (§4.2, §4.10), alone in its loop (see VECTOR_EXP).
             if VECTOR_EXP:
-                for j in range(0, LANES, 8):
-                    exp8(flat, exp_row + j)
+                for j in range(0, LANES, VECTOR_EXP):
+                    vector_exp(flat, exp_row + j)
             else:
                 for lane in range(LANES):
                     W[T, EX, lane] = math.exp(W[T, EX, lane])
-            # SIMD loop 2: the hinge's moment and its forces on nodes i−1, i, i+1 (§5.1).
+            # The hysteretic moment H from the exponential; K becomes K_prev.
+            if masing:
+                for lane in range(LANES):
+                    k = W[T, KK, lane]
+                    change = k - W[h, HK, lane]
+                    branch_h = W[h, TH, lane] + W[h, TA, lane] * (1.0 - W[T, EX, lane])
+                    W[h, HH, lane] = W[h, HH, lane] if change == 0.0 else branch_h
+                    depth1 = abs(W[h, HB, lane])  # the depth + 1, signed by the last change
+                    W[h, HB, lane] = W[h, HB, lane] if change == 0.0 else (depth1 if change >= 0.0 else -depth1)
+                    W[h, HK, lane] = k
+            else:
+                for lane in range(LANES):
+                    d1, m0, ex = W[P, D1, lane], W[P, M0, lane], W[T, EX, lane]
+                    ho = m0 - d1 * ex if W[h, HB, lane] > 0.0 else -m0 + d1 * ex
+                    W[h, HH, lane] = 0.0 if d1 == 0.0 else ho
+                    W[h, HK, lane] = W[T, KK, lane]
+            # SIMD loop 2: the hinge's forces on nodes i−1, i, i+1 (§5.1).
             for lane in range(LANES):
-                k = W[T, KK, lane]
-                d1, m0, ex = W[P, D1, lane], W[P, M0, lane], W[T, EX, lane]
-                ho = m0 - d1 * ex if W[h, HB, lane] > 0.0 else -m0 + d1 * ex
-                ho = 0.0 if d1 == 0.0 else ho
-                W[h, HK, lane] = k
-                W[h, HH, lane] = ho
+                k, ho = W[T, KK, lane], W[h, HH, lane]
                 q1 = W[T, IL1, lane] * W[T, IL1, lane]
                 q2 = W[T, IL2, lane] * W[T, IL2, lane]
                 gix, giy = -W[T, E1Y, lane] * q1, W[T, E1X, lane] * q1
@@ -384,20 +540,19 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, branch, centr
             ii = np.uintp(i)
             px[i, s], py[i, s], vx[i, s], vy[i, s] = W[ii, X, lane], W[ii, Y, lane], W[ii, U, lane], W[ii, V, lane]
         for h in range(n - nc):
-            hh = np.uintp(h)
-            branch[h, s], centre[h, s] = W[hh, HB, lane], W[hh, HC, lane]
-            kprev[h, s], hprev[h, s] = W[hh, HK, lane], W[hh, HH, lane]
+            for q in range(HINGE_PLANES):
+                hinges[q, h, s] = W[np.uintp(h), HB + q, lane]
 
 
-@njit(parallel=True, error_model="numpy")
-def advance(blocks, step0, step1, out_steps, px, py, vx, vy, branch, centre, kprev, hprev, tensile, law, width,
-            node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt, max_strain, release_step,
-            move_steps, tip_x, tip_y, failed):
+@njit(parallel=True, error_model="numpy", cache=True)
+def advance(blocks, step0, step1, out_steps, px, py, vx, vy, masing, hinges, points, overflows, deepest, tensile,
+            law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt, max_strain,
+            release_step, move_steps, tip_x, tip_y, failed):
     """Every block of strips (``blocks[b]`` … ``blocks[b + 1]``) on the cores: prange."""
     for b in prange(blocks.shape[0] - 1):
-        advance_block(blocks[b], blocks[b + 1], step0, step1, out_steps, px, py, vx, vy, branch, centre, kprev,
-                      hprev, tensile, law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0,
-                      gravity, dt, max_strain, release_step, move_steps, tip_x, tip_y, failed)
+        advance_block(blocks[b], blocks[b + 1], step0, step1, out_steps, px, py, vx, vy, masing, hinges, points,
+                      overflows, deepest, tensile, law, width, node_mass, gamma, settle_gamma, edge_scale, hold,
+                      nc, l0, gravity, dt, max_strain, release_step, move_steps, tip_x, tip_y, failed)
 
 
 class NumbaStrips:
@@ -407,8 +562,10 @@ class NumbaStrips:
     def __init__(self, scenes: list[wc.Scene], initial_positions: np.ndarray | None = None) -> None:
         batch = build_batch(scenes)
         model, control, solver, recorder = batch.model, batch.control, batch.solver, batch.recorder
-        if any(bending_law(s.material.bending_law).NAME != "tagawa2003" for s in model.strips):
-            raise ValueError("the Numba peer implements the paper's bending law (tagawa2003) only")
+        laws = {bending_law(s.material.bending_law).NAME for s in model.strips}
+        if len(laws) != 1 or not laws <= {"tagawa2003", "masing"}:
+            raise ValueError(f"the Numba peer implements one of tagawa2003 and masing per batch, not {sorted(laws)}")
+        self.masing = laws == {"masing"}
         if any(len(s.clamp.start) for s in model.strips) or model.precision != "float64":
             raise ValueError("the Numba peer implements the fixed clamp in float64 only")
         if solver.scheme != "semi_implicit":
@@ -435,10 +592,13 @@ class NumbaStrips:
         self.px, self.py = np.ascontiguousarray(x[..., 0]), np.ascontiguousarray(x[..., 1])
         self.vx, self.vy = np.zeros((n, b)), np.zeros((n, b))
         hinges = n - self.nc
-        self.branch, self.centre = np.empty((hinges, b)), np.empty((hinges, b))
-        self.kprev, self.hprev = np.empty((hinges, b)), np.empty((hinges, b))
-        fresh_hinges(self.px, self.py, self.nc, self.edge_scale, self.law, self.branch, self.centre, self.kprev,
-                     self.hprev)
+        self.hinges = np.empty((HINGE_PLANES, hinges, b))
+        # masing: every lane of every block has a stack (the last block's spare lanes too)
+        lanes = -(-b // LANES) * LANES
+        self.capacity = model.reversal_memory
+        self.points = np.zeros((lanes, hinges, self.capacity + 1, 2) if self.masing else (1, 1, 1, 2))
+        self.overflows, self.deepest = np.zeros(lanes, dtype=np.int64), np.zeros(lanes, dtype=np.int64)
+        fresh_hinges(self.px, self.py, self.nc, self.edge_scale, self.law, self.masing, self.hinges, self.points)
         self.step = 0
         self.tip_x = np.full((len(self.out_steps), b), np.nan)
         self.tip_y = np.full((len(self.out_steps), b), np.nan)
@@ -453,9 +613,9 @@ class NumbaStrips:
         """Advance ``steps`` substeps (default: to the last output step)."""
         end = int(self.out_steps[-1]) if steps is None else self.step + steps
         advance(self.blocks(numba.get_num_threads()), self.step, end, self.out_steps, self.px, self.py, self.vx,
-                self.vy, self.branch, self.centre, self.kprev, self.hprev, self.tensile, self.law, self.width,
-                self.node_mass, self.gamma, self.settle_gamma, self.edge_scale, self.hold, self.nc, self.l0,
-                self.gravity, self.dt, self.max_strain, self.release_step, self.move_steps, self.tip_x,
+                self.vy, self.masing, self.hinges, self.points, self.overflows, self.deepest, self.tensile, self.law,
+                self.width, self.node_mass, self.gamma, self.settle_gamma, self.edge_scale, self.hold, self.nc,
+                self.l0, self.gravity, self.dt, self.max_strain, self.release_step, self.move_steps, self.tip_x,
                 self.tip_y, self.failed)
         self.step = end
 
@@ -538,6 +698,127 @@ def agreement(sweep_dir: Path, peer: NumbaStrips) -> tuple[float, float]:
     return gap, excursion
 
 
+def tip_errors(tips: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Each variant's largest |Δ tip x| over the record as a fraction of its reference
+    excursion (``[sample, variant]`` arrays; the metric of benchmarks/imex_defaults.py)."""
+    if tips.shape != reference.shape:
+        return np.full(reference.shape[1], math.inf)
+    return np.abs(tips - reference).max(axis=0) / np.ptp(reference, axis=0)
+
+
+def warpcloth_tips(scenes: list[wc.Scene]) -> tuple[np.ndarray, str]:
+    """Tip x ``[sample, variant]`` of warpcloth on 2 threads (inf where a strip diverged)
+    and what its reversal memory held."""
+    result = wc.simulate(scenes, keep_frames=False, on_divergence="record", threads=2)
+    tips = result.probe("tip_x").copy()
+    tips[:, [d["strip"] for d in result.diverged]] = math.inf
+    memory = result.reversal_memory
+    held = (f"; deepest {np.max(memory['deepest'])} of {memory['capacity']}, {np.sum(memory['overflows'])} "
+            "overflows") if memory else ""
+    return tips, held
+
+
+def numba_tips(scenes: list[wc.Scene]) -> tuple[np.ndarray, str]:
+    """Tip x ``[sample, variant]`` of the Numba port on 2 threads (inf where a strip failed)
+    and what its reversal memory held."""
+    numba.set_num_threads(2)
+    peer = NumbaStrips(scenes)
+    peer.run()
+    tips = peer.kept_tips()[0].copy()
+    tips[:, peer.failed >= 0] = math.inf
+    b = peer.n_strips
+    held = (f"; deepest {peer.deepest[:b].max()} of {peer.capacity}, {peer.overflows[:b].sum()} overflows"
+            if peer.masing else "")
+    return tips, held
+
+
+def stepping(scheme: str, dt: float) -> list[str]:
+    """The overrides for ``scheme`` at ``dt``."""
+    return [f'integrator.scheme="{scheme}"', f"integrator.dt_s={dt!r}"]
+
+
+def sweep_wall(impl: str, samples: int, record: float, overrides: list[str]) -> float:
+    """Wall seconds of the sweep: ``wc.run_sweep(workers=2)`` into a fresh directory
+    (building the batches and writing the sweep included), or the Numba port on 2 threads
+    (building warpcloth's batch for its inputs included, no files)."""
+    sweep, scenes = sweep_scenes(samples, record, overrides)
+    start = time.perf_counter()
+    if impl == "warpcloth":
+        with tempfile.TemporaryDirectory() as tmp:
+            wc.run_sweep(sweep, Path(tmp) / "sweep", workers=2)
+            return time.perf_counter() - start
+    numba.set_num_threads(2)
+    NumbaStrips(scenes).run()
+    return time.perf_counter() - start
+
+
+def equal_accuracy(args: argparse.Namespace, law: list[str], samples: int) -> None:
+    """The sweep at equal accuracy: each candidate's worst variant against the explicit
+    reference at ``--reference-dt`` (computed by the port, which agrees with warpcloth to
+    rounding, part 1), the largest dt of each within ``--tolerance``, then the walls."""
+    record = args.record
+    print(f"\n---- equal accuracy on the {samples}-variant sweep ({' '.join(law) or 'tagawa2003'}; "
+          f"{record:g} s record; tolerance {args.tolerance:.2%} of each variant's excursion, worst variant) ----")
+    start = time.perf_counter()
+    reference, _held = numba_tips(sweep_scenes(samples, record,
+                                               [*law, *stepping("semi_implicit", args.reference_dt)])[1])
+    print(f"reference: semi_implicit dt = {args.reference_dt:g} s by the Numba port, "
+          f"{time.perf_counter() - start:.0f} s wall")
+    scene_dt = sweep_scenes(1, record, law)[1][0].integrator.dt_s
+    ladders = {("warpcloth", "semi_implicit"): args.explicit_ladder, ("numba", "semi_implicit"): args.explicit_ladder,
+               ("warpcloth", "imex"): args.imex_ladder}
+    best: dict[tuple[str, str], float] = {}
+    tips: dict[tuple[str, str, float], np.ndarray] = {}
+    for (impl, scheme), ladder in ladders.items():
+        for dt in ladder:
+            try:
+                scenes = sweep_scenes(samples, record, [*law, *stepping(scheme, dt)])[1]
+            except wc.SceneError as error:
+                print(f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: refused ({error})")
+                break
+            tips[impl, scheme, dt], held = (warpcloth_tips if impl == "warpcloth" else numba_tips)(scenes)
+            errors = tip_errors(tips[impl, scheme, dt], reference)
+            worst = int(np.argmax(errors))
+            print(f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: worst {errors[worst]:.3%} (variant {worst}), "
+                  f"median {np.median(errors):.3%}{held}")
+            if errors[worst] <= args.tolerance:
+                best[impl, scheme] = dt
+    print("largest dt within the tolerance: " + ", ".join(f"{i} {s} {dt:g} s" for (i, s), dt in best.items()))
+    for dt in args.explicit_ladder:
+        if ("warpcloth", "semi_implicit", dt) in tips and ("numba", "semi_implicit", dt) in tips:
+            gap = np.abs(tips["warpcloth", "semi_implicit", dt] - tips["numba", "semi_implicit", dt]).max()
+            print(f"  warpcloth against the port, semi_implicit at dt = {dt:.4g} s: largest tip x gap {gap:.2e} m")
+    if args.check_dt and ("warpcloth", "imex") in best:
+        # The reference's own error: the variants worst at the chosen imex step, again
+        # against a finer explicit solution.
+        errors = tip_errors(tips["warpcloth", "imex", best["warpcloth", "imex"]], reference)
+        worst = np.sort(np.argsort(errors)[-args.check_worst:])
+        start = time.perf_counter()
+        finer_scenes = sweep_scenes(samples, record, [*law, *stepping("semi_implicit", args.check_dt)])[1]
+        finer, _held = numba_tips([finer_scenes[i] for i in worst])
+        print(f"check: the {len(worst)} variants worst under imex at {best['warpcloth', 'imex']:.4g} s against "
+              f"semi_implicit dt = {args.check_dt:g} s ({time.perf_counter() - start:.0f} s wall); the reference "
+              f"is off it by {tip_errors(reference[:, worst], finer).max():.4%} at most")
+        for (impl, scheme, dt), run in tips.items():
+            print(f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: worst of these "
+                  f"{tip_errors(run[:, worst], finer).max():.3%}")
+    runs = [("warpcloth", "semi_implicit", scene_dt)] + [(i, s, dt) for (i, s), dt in best.items()]
+    walls: dict[tuple[str, str, float], list[float]] = {run: [] for run in runs}
+    loads = []
+    for _ in range(args.repeats):
+        for run in runs:  # interleaved, so a drift of the machine's speed hits every row alike
+            loads.append(os.getloadavg()[0])
+            walls[run].append(sweep_wall(run[0], samples, record, [*law, *stepping(run[1], run[2])]))
+    numba_row = next((run for run in runs if run[0] == "numba"), None)
+    print(f"\nwalls on 2 threads, {args.repeats} repeats interleaved (load average 1 min "
+          f"{min(loads):.1f}–{max(loads):.1f}; this run uses 2):")
+    print(f"{'implementation':<10} {'scheme':<14} {'dt (s)':>8} {'median wall':>12} {'walls':>26} {'vs Numba':>9}")
+    for run, times in walls.items():
+        ratio = np.median(times) / np.median(walls[numba_row]) if numba_row else math.nan
+        print(f"{run[0]:<10} {run[1]:<14} {run[2]:>8.3g} {np.median(times):>10.2f} s "
+              f"{' '.join(f'{t:.2f}' for t in times):>26} {ratio:>8.2f}×")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="smaller run: 40 variants, short timings")
@@ -545,57 +826,105 @@ def main() -> None:
     parser.add_argument("--record", type=float, default=1.0, help="sweep record after the release, s")
     parser.add_argument("--sizes", type=int, nargs="+", default=[1, 16, 200, 1024])
     parser.add_argument("--libm-exp", action="store_true", help="glibc's scalar exp (Warp's) instead of libmvec's")
+    parser.add_argument("--law", choices=("tagawa2003", "masing"), default="tagawa2003",
+                        help="material.bending_law of every variant (default: the sweep's, tagawa2003)")
+    parser.add_argument("--parts", nargs="+", choices=("agreement", "tables", "equal-accuracy"),
+                        default=["agreement", "tables"], help="what to run (default: agreement tables)")
+    parser.add_argument("--reference-dt", type=float, default=1e-6, help="equal accuracy: the explicit reference's dt")
+    parser.add_argument("--tolerance", type=float, default=2e-3, help="equal accuracy: of the excursion (0.2 %%)")
+    # Steps that divide the 1/600 s probe interval (and the 1.3 s hold), so that no sample
+    # is off its time by up to dt/2, which at 4e-4 s alone is ~0.1 % of the excursion.
+    parser.add_argument("--explicit-ladder", type=float, nargs="+", default=[1 / (600 * n) for n in (40, 34, 33)],
+                        help="equal accuracy: semi_implicit steps, s (default 1/(600 n), n = 40, 34, 33)")
+    parser.add_argument("--imex-ladder", type=float, nargs="+",
+                        default=[1 / (600 * n) for n in (16, 12, 10, 8, 7, 6, 5, 4)],
+                        help="equal accuracy: imex steps, s (default 1/(600 n), n = 16, 12, 10, 8, 7, 6, 5, 4)")
+    parser.add_argument("--repeats", type=int, default=3, help="equal accuracy: timed repeats of each wall")
+    parser.add_argument("--check-dt", type=float, default=0.0,
+                        help="equal accuracy: recheck the worst variants against this finer explicit dt (0: no)")
+    parser.add_argument("--check-worst", type=int, default=32, help="equal accuracy: how many variants to recheck")
+    parser.add_argument("--sweep-wall", nargs=3, metavar=("IMPL", "SCHEME", "DT"),
+                        help="only time one sweep (IMPL warpcloth or numba), nothing warmed up: for timing "
+                             "the whole process from outside")
     args = parser.parse_args()
     global VECTOR_EXP
-    VECTOR_EXP = VECTOR_EXP and not args.libm_exp  # read when Numba compiles, i.e. at the first call
+    VECTOR_EXP = 0 if args.libm_exp else VECTOR_EXP  # read when Numba compiles, i.e. at the first call
+    if args.libm_exp:
+        for function in (fresh_hinges, masing_follow, advance_block, advance):
+            function._cache = NullCache()  # a cached compile would have baked libmvec's exp in
     samples = 40 if args.quick else args.samples
-    budget = 0.25 if args.quick else 1.0  # target wall seconds per table cell
+    law = [] if args.law == "tagawa2003" else [f'material.bending_law="{args.law}"']
     wp.config.log_level = logging.WARNING
     wp.init()
+    if args.sweep_wall:
+        impl, scheme, dt = args.sweep_wall
+        wall = sweep_wall(impl, samples, args.record, [*law, *stepping(scheme, float(dt))])
+        print(f"{impl} {scheme} dt = {float(dt):g} s, {samples} variants: sweep wall {wall:.3f} s")
+        return
     print(f"load average at start: {os.getloadavg()[0]:.2f}")
     cores = os.cpu_count() or 1
 
     # ---- warm-up: compile every path (Numba's and Warp's) before anything is timed ----
-    _s, warm = sweep_scenes(4, 0.01)
-    peer = NumbaStrips(warm)
+    _s, warm = sweep_scenes(4, 0.01, law)
     for threads in (1, min(2, cores)):
         numba.set_num_threads(threads)
         peer = NumbaStrips(warm)
         peer.run()
     x0 = displaced_start(warm[0])
-    warpcloth_wall(free_runs(4, 0.002, 2), x0, 1)
+    warpcloth_wall(free_runs(4, 0.002, 2, law), x0, 1)
     print(f"machine: {machine()}; warp {wp.__version__} (cpu), numba {numba.__version__} "
           f"(threading layer {numba.threading_layer()}), numpy {np.__version__}; exp: "
-          f"{'libmvec AVX-512' if VECTOR_EXP else 'glibc scalar'}; compile excluded (everything warmed up first)")
+          f"{f'libmvec {VECTOR_EXP}-wide' if VECTOR_EXP else 'glibc scalar'}; compile excluded (everything warmed "
+          "up first)")
     with tempfile.TemporaryDirectory() as tmp:
-        wc.run_sweep(sweep_scenes(4, 0.01)[0], Path(tmp) / "warm", workers=min(2, cores))
+        for scheme in ("semi_implicit", "imex"):
+            wc.run_sweep(sweep_scenes(4, 0.01, [*law, *stepping(scheme, 1e-5)])[0], Path(tmp) / scheme,
+                         workers=min(2, cores))
 
     # ---- 1. the sweep: agreement and wall time, warpcloth on 2 threads vs Numba on 2 ----
-    sweep, scenes = sweep_scenes(samples, args.record)
-    with tempfile.TemporaryDirectory() as tmp:
-        start = time.perf_counter()
-        wc.run_sweep(sweep, Path(tmp) / "sweep", workers=min(2, cores))
-        warp_sweep = time.perf_counter() - start
-        numba.set_num_threads(min(2, cores))
-        start = time.perf_counter()
-        peer = NumbaStrips(scenes)
-        peer.run()
-        numba_sweep = time.perf_counter() - start
-        gap, excursion = agreement(Path(tmp) / "sweep", peer)
-    steps = int(peer.out_steps[-1])
-    print(f"\nagreement: {samples} variants of damped_swing_sweep (D, D1, α, γ varied), hold and release "
-          f"replicated, {args.record:g} s record, tip x and y at {peer.kept} samples each: largest gap "
-          f"{gap:.2e} m (tip excursion {excursion * 1e3:.0f} mm); Numba strips failing the strain/fold "
-          f"check: {(peer.failed >= 0).sum()}")
-    print(f"sweep wall ({samples} variants, {steps} steps each = {steps * scenes[0].integrator.dt_s:.2f} s "
-          f"simulated incl. the hold): warpcloth run_sweep 2 threads {warp_sweep:.2f} s, "
-          f"Numba 2 threads {numba_sweep:.2f} s: Numba {warp_sweep / numba_sweep:.2f}× faster")
+    sweep, scenes = sweep_scenes(samples, args.record, law)
+    if "agreement" in args.parts:
+        with tempfile.TemporaryDirectory() as tmp:
+            start = time.perf_counter()
+            wc.run_sweep(sweep, Path(tmp) / "sweep", workers=min(2, cores))
+            warp_sweep = time.perf_counter() - start
+            numba.set_num_threads(min(2, cores))
+            start = time.perf_counter()
+            peer = NumbaStrips(scenes)
+            peer.run()
+            numba_sweep = time.perf_counter() - start
+            gap, excursion = agreement(Path(tmp) / "sweep", peer)
+            summary = pd.read_parquet(Path(tmp) / "sweep" / "summary.parquet")
+        steps = int(peer.out_steps[-1])
+        print(f"\nagreement: {samples} variants of damped_swing_sweep (D, D1, α, γ varied; law {args.law}), "
+              f"hold and release replicated, {args.record:g} s record, tip x and y at {peer.kept} samples each: "
+              f"largest gap {gap:.2e} m (tip excursion {excursion * 1e3:.0f} mm); Numba strips failing the "
+              f"strain/fold check: {(peer.failed >= 0).sum()}")
+        if peer.masing:
+            ours = summary["reversal_overflows"].to_numpy() if "reversal_overflows" in summary else "none recorded"
+            print(f"reversal memory ({peer.capacity} points): Numba deepest {peer.deepest[:samples].max()}, "
+                  f"overflows {peer.overflows[:samples].sum()}; warpcloth's sweep overflows "
+                  f"{np.sum(ours) if not isinstance(ours, str) else ours}")
+        print(f"sweep wall ({samples} variants, {steps} steps each = {steps * scenes[0].integrator.dt_s:.2f} s "
+              f"simulated incl. the hold): warpcloth run_sweep 2 threads {warp_sweep:.2f} s, "
+              f"Numba 2 threads {numba_sweep:.2f} s: Numba {warp_sweep / numba_sweep:.2f}× faster")
 
     # The cores may be shared: a busy core shows as 2-thread rows no faster than 1-thread ones.
     print(f"load average before the tables: {os.getloadavg()[0]:.2f} (this run uses up to 2)")
 
     # ---- 2. throughput tables ----
-    dt = scenes[0].integrator.dt_s
+    if "tables" in args.parts:
+        throughput_tables(args, law, samples, scenes[0].integrator.dt_s, x0, cores)
+
+    # ---- 3. the sweep at equal accuracy ----
+    if "equal-accuracy" in args.parts:
+        equal_accuracy(args, law, samples)
+
+
+def throughput_tables(args: argparse.Namespace, law: list[str], samples: int, dt: float, x0: np.ndarray,
+                      cores: int) -> None:
+    """Strip-steps/s and wall per simulated second of every implementation at each size."""
+    budget = 0.25 if args.quick else 1.0  # target wall seconds per table cell
     print(f"\n{'B':>5} {'implementation':<22} {'strip-steps/s':>14} {'wall per sim s':>15} {'vs warpcloth 1T':>16}")
     rows = []
     for b in args.sizes:
@@ -606,22 +935,22 @@ def main() -> None:
                  "numba 1 thread": 3e6, "numba 2 threads": 6e6}
         for name, rate in guess.items():
             threads = 2 if "2" in name else 1
-            if threads > min(b, cores):
+            if threads > min(b, cores) or (name == "numpy" and law):  # NumPy has the paper's law only
                 results.append((name, math.nan))
                 continue
             n_steps = max(200, int(budget * rate / b))
             if name.startswith("warpcloth"):
-                results.append((name, warpcloth_rate(samples, b, n_steps, dt, x0, threads)))
+                results.append((name, warpcloth_rate(samples, b, n_steps, dt, x0, threads, law)))
                 continue
             if name == "numpy":
-                strips = NumpyStrips(free_runs(samples, n_steps * dt, 1)[0], b, x0)
+                strips = NumpyStrips(free_runs(samples, n_steps * dt, 1, law)[0], b, x0)
                 start = time.perf_counter()
                 for _ in range(n_steps):
                     strips.step()
                 wall = time.perf_counter() - start
             else:
                 numba.set_num_threads(threads)
-                strips = NumbaStrips(free_runs(samples, n_steps * dt, b), np.repeat(x0[:, None, :], b, axis=1))
+                strips = NumbaStrips(free_runs(samples, n_steps * dt, b, law), np.repeat(x0[:, None, :], b, axis=1))
                 start = time.perf_counter()
                 strips.run(n_steps)
                 wall = time.perf_counter() - start
@@ -633,6 +962,7 @@ def main() -> None:
             else:
                 print(f"{b:>5} {name:<22} {rate:>14.3e} {b / (rate * dt):>13.3g} s {rate / base:>15.2f}×")
             rows.append((b, name, rate))
+
 
 
 if __name__ == "__main__":
