@@ -53,10 +53,12 @@ MEMORY = ("hysteretic_moment", "direction_depth", "previous_curvature")
 curvature (+1 / −1) times (the number of open reversal points + 1), K at the last force
 evaluation (1/m)."""
 
-DEFAULT_CAPACITY = 64
-"""Reversal points kept per hinge unless the run asks otherwise. The bundled experiments
-open at most ~20 (a decaying swing nests one loop per half-cycle; benchmarks/masing_memory.py
-measures it); a full memory is reported."""
+DEFAULT_CAPACITY = 128
+"""Reversal points kept per hinge unless the run asks otherwise: the bundled swing opens at
+most 43 in 3 s and 46 in 10 s at every h, the bundled sweep's variants up to 63 within
+2.3 s (a decaying swing nests one loop per half-cycle and per ripple of its fast modes;
+benchmarks/masing_convergence.py, benchmarks/numba_peer.py --law masing print the
+deepest); twice that leaves room. A full memory is counted and reported."""
 
 MESH_INDEPENDENT = True
 """Whether the law's answers converge as the mesh is refined: return-point memory:
