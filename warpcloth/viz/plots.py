@@ -23,7 +23,7 @@ from warpcloth.errors import DataFileError, OptionError  # noqa: E402
 from warpcloth.io.atomic import write_atomically  # noqa: E402
 from warpcloth.io.measured import ClampAngleTrace, LaserTrace, TrackedShapes, read_measurement  # noqa: E402
 from warpcloth.io.recording import Recording  # noqa: E402
-from warpcloth.metrics import extrema  # noqa: E402
+from warpcloth.metrics import comparison_window, extrema  # noqa: E402
 from warpcloth.scene import to_si  # noqa: E402
 from warpcloth.scene.schema import PAPER_LAW_SHAPE  # noqa: E402
 from warpcloth.sim import moment_along_path  # noqa: E402
@@ -335,9 +335,8 @@ def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path 
     amplitude, a clamp encoder onto the clamp angle, tracked markers onto the shapes
     (:func:`warpcloth.io.measured.read_measurement`); a trace or encoder and the run are
     drawn on one window, their overlap unless ``t_from``/``t_to`` choose it
-    (:func:`warpcloth.calibrate.analysis.comparison_window`), which the title states.
+    (:func:`warpcloth.metrics.comparison_window`), which the title states.
     ``kes`` marks B and 2HB on the bending loop (:func:`plot_bending_loop`)."""
-    from warpcloth.calibrate.analysis import comparison_window
 
     if fmt not in FORMATS:
         raise OptionError("--format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
