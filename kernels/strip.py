@@ -211,7 +211,8 @@ def hinge_kernels(scalar: Any) -> SimpleNamespace:
 
     @wp.kernel(module="unique", enable_backward=False)
     def initialise_hinges(model: StripModel, state: StripState):
-        """Start every hinge fresh at its current curvature (no hysteretic moment, loading up)."""
+        """Start every hinge fresh at its current curvature relative to its natural one (no
+        hysteretic moment, loading up)."""
         s = wp.tid()
         first = model.n_clamped - 2
         p = model.bending[s]
@@ -221,6 +222,7 @@ def hinge_kernels(scalar: Any) -> SimpleNamespace:
             curvature, chord = signed_curvature(e1, e2, one / wp.length(e1), one / wp.length(e2))
             if j == first + 1:
                 curvature = curvature * model.edge_curvature_scale[s]  # as the force pass sees it
+            curvature = curvature - model.rest_curvature[j - first - 1, s]
             state.hinge[j - first - 1, s] = law.fresh_memory(curvature, p, state.history, j - first - 1, s)
 
     return SimpleNamespace(initialise_hinges=initialise_hinges)

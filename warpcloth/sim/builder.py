@@ -34,6 +34,59 @@ class ClampMotion:
 
 
 @dataclass(frozen=True)
+class FabricSet:
+    """The natural curvature K_rest(s) (1/m, counter-clockwise positive) the unloaded strip
+    keeps, s the arc length below the clamp edge (m): ``curvature`` everywhere, or the
+    piecewise-linear profile through (``table_s``, ``table_curvature``) when those are given
+    (docs/model.md §5.4)."""
+
+    curvature: float = 0.0
+    table_s: tuple[float, ...] = ()
+    table_curvature: tuple[float, ...] = ()
+
+    def hinge_values(self, intervals: np.ndarray) -> np.ndarray:
+        """K_rest of each hinge: the profile's mean over the arc ``intervals`` ``[hinge, (start,
+        end)]`` it bends (m), so the rest turning angle of the chain is the profile's own."""
+        if not self.table_s:
+            return np.full(len(intervals), self.curvature)
+        s, k = np.asarray(self.table_s), np.asarray(self.table_curvature)
+        # ∫K ds of the linear interpolant from s[0], at any point (the profile is held beyond its ends)
+        cumulative = np.concatenate([[0.0], np.cumsum(np.diff(s) * (k[1:] + k[:-1]) / 2)])
+
+        def integral(x: np.ndarray) -> np.ndarray:
+            i = np.clip(np.searchsorted(s, x, side="right") - 1, 0, len(s) - 2)
+            kx = np.interp(x, s, k)
+            return cumulative[i] + (x - s[i]) * (k[i] + kx) / 2
+
+        a, b = intervals[:, 0], intervals[:, 1]
+        return (integral(b) - integral(a)) / (b - a)
+
+
+@dataclass(frozen=True)
+class Grip:
+    """The clamp's grip: over ``length`` (m) below the clamp edge the bending rigidity is
+    ``bending_factor`` × the fabric's and the hysteresis amplitude ``hysteresis_factor`` ×
+    (docs/model.md §5.4); length 0 or both factors 1: no grip effect."""
+
+    length: float = 0.0
+    bending_factor: float = 1.0
+    hysteresis_factor: float = 1.0
+
+    def hinge_factors(self, intervals: np.ndarray) -> np.ndarray:
+        """``[hinge, (bending, hysteresis)]`` factors of hinges bending the arc ``intervals``:
+        a hinge partly in the zone is the series compliance of its two parts for the
+        rigidity (its rotation is ∫M/D ds) and their length-weighted mean for the amplitude;
+        exactly 1 for a hinge outside it."""
+        a, b = intervals[:, 0], intervals[:, 1]
+        inside = np.clip(np.minimum(b, self.length) - a, 0.0, None) / (b - a)
+        f, g = self.bending_factor, self.hysteresis_factor
+        # a factor of 1 gives exactly 1 (the moment unscaled to the bit), whatever the length
+        bending = f / (inside + (1.0 - inside) * f) if f != 1.0 else np.ones(len(a))
+        hysteresis = inside * g + (1.0 - inside) if g != 1.0 else np.ones(len(a))
+        return np.column_stack([bending, hysteresis])
+
+
+@dataclass(frozen=True)
 class StripSpec:
     """One strip of a batch as :meth:`StripBuilder.add_strip` recorded it (SI)."""
 
@@ -45,6 +98,8 @@ class StripSpec:
     hold_target: np.ndarray
     settle_damping: float
     edge_hinge_length: float
+    fabric_set: FabricSet = field(default_factory=FabricSet)
+    grip: Grip = field(default_factory=Grip)
 
 
 class StripBuilder:
@@ -91,14 +146,17 @@ class StripBuilder:
     def add_strip(self, material: MaterialSI, *, width: float, damping: float = 0.0,
                   clamp: ClampMotion | None = None, rotation_centre: Sequence[float] | None = None,
                   hold_target: Sequence[float] | None = None, settle_damping: float = 0.0,
-                  edge_hinge_length: float | None = None) -> int:
+                  edge_hinge_length: float | None = None, fabric_set: FabricSet | None = None,
+                  grip: Grip | None = None) -> int:
         """Add one strip (SI: m, 1/s, absolute positions); returns its index in the batch.
 
         ``rotation_centre`` defaults to the clamp edge and ``hold_target`` to the free
         end's rest position. ``edge_hinge_length`` is the length of strip the clamp-edge
         hinge bends: h/2 (the default, like a scene's ``clamp.edge_hinge = "second_order"``)
         makes the built-in end second order in h; h is the paper's model, which acts as if
-        clamped h/2 inside the clamp (docs/model.md §5.3).
+        clamped h/2 inside the clamp (docs/model.md §5.3). ``fabric_set`` is the strip's
+        natural curvature and ``grip`` the clamp's grip zone (docs/model.md §5.4; default:
+        neither).
         """
         edge = 0.5 * self.spacing if edge_hinge_length is None else edge_hinge_length
         if not 0 < edge <= self.spacing:
@@ -107,8 +165,17 @@ class StripBuilder:
             material=material, width=width, damping=damping, clamp=clamp or ClampMotion(),
             rotation_centre=np.asarray(self.clamp_edge if rotation_centre is None else rotation_centre, dtype=float),
             hold_target=np.asarray(self.rest_positions[-1] if hold_target is None else hold_target, dtype=float),
-            settle_damping=settle_damping, edge_hinge_length=edge))
+            settle_damping=settle_damping, edge_hinge_length=edge, fabric_set=fabric_set or FabricSet(),
+            grip=grip or Grip()))
         return len(self.strips) - 1
+
+    def hinge_intervals(self) -> np.ndarray:
+        """``[hinge, (start, end)]``: the arc below the clamp edge each hinge bends (m). The
+        clamp-edge hinge bends [0, h/2] (either edge model: the paper's acts h/2 inside the
+        clamp, §5.3), hinge j the segment halves either side of it, [(j − ½) h, (j + ½) h]."""
+        h = self.spacing
+        j = np.arange(len(self.rest_positions) - self.n_clamped, dtype=float)
+        return np.column_stack([np.maximum(j - 0.5, 0.0) * h, (j + 0.5) * h])
 
     def finalize(self, device: str | None = None, precision: str = "float64") -> Model:
         """The :class:`Model` of every strip added, on ``device`` in ``precision``."""
