@@ -24,7 +24,8 @@ RAMP_S = 0.5
 LENGTH_M = 0.1
 
 
-def horizontal_scene(kappa: float, edge: str, spacing_mm: float, dt: float) -> wc.Scene:
+def horizontal_scene(kappa: float, edge: str, spacing_mm: float, dt: float, *extra: str) -> wc.Scene:
+    """The strip turned horizontal and settled; ``extra``: more ``--set`` overrides."""
     density = wc.load_scene("damped_swing").material.density_g_per_cm2 * units.AREAL_DENSITY_G_PER_CM2
     rigidity = density * 9.80665 * LENGTH_M**3 / kappa
     omega = 1.875104068711961**2 * math.sqrt(rigidity / (density * LENGTH_M**4))
@@ -35,7 +36,7 @@ def horizontal_scene(kappa: float, edge: str, spacing_mm: float, dt: float) -> w
         strip__spacing_mm=spacing_mm, material__hysteresis_d1_gf_cm_per_cm=0.0,
         material__bending_rigidity_gf_cm2_per_cm=rigidity / units.RIGIDITY_GF_CM2_PER_CM,
         damping__gamma_per_s=2 * omega, release__enabled=False, run__duration_s=2.5, integrator__dt_s=dt,
-        clamp__edge_hinge=edge) + ['clamp.motion="piecewise"', f"clamp.segments={segment}"])
+        clamp__edge_hinge=edge) + ['clamp.motion="piecewise"', f"clamp.segments={segment}", *extra])
 
 
 @pytest.fixture(scope="module")

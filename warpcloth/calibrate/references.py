@@ -46,41 +46,47 @@ def hanging_beam_mode(gamma: float, mode: int = 0, n_basis: int = 24) -> tuple[f
     return float(np.sqrt(values[mode])), shape
 
 
-def heavy_elastica(kappa: float, steps: int = 4000) -> dict[str, float]:
+def heavy_elastica(kappa: float, steps: int = 4000,
+                   natural_curvature: float | Callable[[float], float] = 0.0) -> dict[str, float]:
     """Static shape of an inextensible cantilever clamped horizontally under its own weight.
 
     θ(s), the tangent's angle below the horizontal at s = arc length / L, solves
-    θ'' = −κ (1 − s) cos θ with θ(0) = 0 (built in) and θ'(1) = 0 (free end), κ = ρ_A g L³ / D.
-    Shooting on θ'(0), bracketed by [0, κ/2] (the small-deflection value is κ/2 and the
-    weight's arm only shortens as the strip droops), solved by :func:`scipy.optimize.brentq` to
-    rounding; RK4 in s (fixed steps: the convergence tests need the integrator's order
-    known, which an adaptive ``solve_ivp`` would not state).
+    (θ′ + q)′ = −κ (1 − s) cos θ with θ(0) = 0 (built in) and θ′(1) + q(1) = 0 (no moment
+    at the free end), κ = ρ_A g L³ / D; q(s) = K_rest L is the strip's natural curvature
+    (counter-clockwise positive, so it lifts a strip pointing along +x; a constant or a
+    function of s), whose moment D (K − K_rest) the equation balances. Without one it is
+    θ″ = −κ (1 − s) cos θ. Shooting on the root moment φ(0) = θ′(0) + q(0), bracketed by
+    [−κ/2, κ/2] (the weight's moment about the root is at most κ/2), solved by
+    :func:`scipy.optimize.brentq` to rounding; RK4 in s (fixed steps: the convergence
+    tests need the integrator's order known, which an adaptive ``solve_ivp`` would not state).
     Returns the tip's reach x/L and drop y/L (of ∫cos θ, ∫sin θ), the tip angle θ(1) in
-    rad, and the root slope θ'(0).
+    rad, and the root slope θ′(0).
     """
     ds = 1.0 / steps
+    q = natural_curvature if callable(natural_curvature) else (lambda s, c=float(natural_curvature): c)
 
-    def shoot(slope: float) -> tuple[float, float, float, float]:
-        theta, omega, x, y = 0.0, slope, 0.0, 0.0
+    def shoot(moment: float) -> tuple[float, float, float, float]:
+        # (θ, φ = θ′ + q, x, y) from the root
+        theta, phi, x, y = 0.0, moment, 0.0, 0.0
 
-        def rhs(s: float, th: float, om: float) -> tuple[float, float, float, float]:
-            return om, -kappa * (1.0 - s) * math.cos(th), math.cos(th), math.sin(th)
+        def rhs(s: float, th: float, ph: float) -> tuple[float, float, float, float]:
+            return ph - q(s), -kappa * (1.0 - s) * math.cos(th), math.cos(th), math.sin(th)
 
         for i in range(steps):
             s = i * ds
-            k1 = rhs(s, theta, omega)
-            k2 = rhs(s + ds / 2, theta + ds / 2 * k1[0], omega + ds / 2 * k1[1])
-            k3 = rhs(s + ds / 2, theta + ds / 2 * k2[0], omega + ds / 2 * k2[1])
-            k4 = rhs(s + ds, theta + ds * k3[0], omega + ds * k3[1])
+            k1 = rhs(s, theta, phi)
+            k2 = rhs(s + ds / 2, theta + ds / 2 * k1[0], phi + ds / 2 * k1[1])
+            k3 = rhs(s + ds / 2, theta + ds / 2 * k2[0], phi + ds / 2 * k2[1])
+            k4 = rhs(s + ds, theta + ds * k3[0], phi + ds * k3[1])
             theta += ds / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
-            omega += ds / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+            phi += ds / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
             x += ds / 6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2])
             y += ds / 6 * (k1[3] + 2 * k2[3] + 2 * k3[3] + k4[3])
-        return theta, omega, x, y
+        return theta, phi, x, y
 
-    slope = brentq(lambda s: shoot(s)[1], 0.0, 0.5 * kappa, xtol=1e-15, rtol=4 * np.finfo(float).eps)
-    theta, _, x, y = shoot(slope)
-    return {"tip_reach": x, "tip_drop": y, "tip_angle": theta, "root_slope": slope}
+    moment = brentq(lambda m: shoot(m)[1], -0.5 * kappa, 0.5 * kappa, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+    theta, _, x, y = shoot(moment)
+    return {"tip_reach": x, "tip_drop": y, "tip_angle": theta, "root_slope": moment - q(0.0)}
 
 
 def hanging_beam_eigenvalue(gamma: float, steps: int = 2000, lambda_max: float = 60.0) -> float:

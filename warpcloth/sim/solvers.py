@@ -37,8 +37,10 @@ grow a zig-zag or an oscillation long before a segment overstretches. Energy the
 removes is not counted: imex's backward Euler damps the stretching modes by design
 (docs/model.md §9.5), which a soft or long strip started unstretched shows as a budget
 loss of about its initial strain energy. The scale is the peak kinetic energy up to that
-sample, and at least 1e-3 of the strip's weight times its free length (just after a
-release the kinetic energy is still near 0, and rounding is not). A healthy run's budget
+sample, and at least 1e-3 of the strip's weight times its free length, or of D W / L
+(the work of bending it through a radian) where that is larger, as without gravity (just
+after a release, or for a strip at rest, the kinetic energy is near 0, and rounding is
+not). A healthy run's budget
 stays within 1e-2 of its peak kinetic energy (imex at its largest stable dt), usually
 1e-4. The check reads the recorded samples, so where it fires does not depend on how the
 run is cut into launches."""
@@ -50,7 +52,7 @@ QUANTITY = {
     STATUS_FOLDED: "hinge chord |e1+e2|/h (the strip folded onto itself)",
     STATUS_NONFINITE_ENERGY: "total energy (not finite)",
     STATUS_BUDGET: ("energy budget residual (in units of the peak kinetic energy, at least 1e-3 of the strip's "
-                    "weight times its free length)"),
+                    "weight times its free length or of D W / L)"),
 }
 
 
