@@ -73,14 +73,15 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
         gamma = model.damping[s]
         if held:
             gamma = control.settle_damping[s]
+        holding = held and control.hold_free_end[s] != 0  # the free end prescribed, not free to settle
         g = vec2(zero, -model.gravity)
         m_node = model.node_mass[s]
         work = state.work[s]
         if wp.static(implicit):
-            stretching_corrections(model, control, stepping, state, s, step, held, gamma, t_next)
+            stretching_corrections(model, control, stepping, state, s, step, holding, gamma, t_next)
         for i in range(model.n_clamped, n):
             x = state.position[i, s]
-            if held and i == n - 1:
+            if holding and i == n - 1:
                 x_new, v_new = held_free_end(
                     control, model.rest_position[model.n_clamped - 1, s], model.rest_position[i, s], s, step + 1,
                     stepping.move_steps, dt,

@@ -87,7 +87,7 @@ def test_a_stiff_grip_zone_gives_the_two_section_beam_period_at_5_mm(with_gravit
     # second order like the uniform beam (tests/test_clamp_root.py); the hinge the zone's
     # end cuts takes the series compliance of its two parts.
     coarse, fine = with_gravity
-    for name, (error, effect) in coarse.items():
+    for error, effect in coarse.values():
         assert 0 < error < 0.005
         assert error < abs(effect) / 10
     for name in ("γ = 203, 20 mm × 3", "γ = 20.3, 20 mm × 3"):  # the zone's end on a hinge at both h

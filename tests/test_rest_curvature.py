@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from conftest import overrides
 from test_elastica import LENGTH_M, horizontal_scene
+from warpcloth.kernels import BENDING_LAWS
 
 import warpcloth as wc
 from warpcloth.calibrate.references import heavy_elastica
-from warpcloth.kernels import BENDING_LAWS
 from warpcloth.scene import to_si
 
 

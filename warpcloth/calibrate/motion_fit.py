@@ -75,9 +75,17 @@ ALIASES = {
     "rotation_centre_dy_mm": "clamp.rotation_centre_dy_mm",
     "hold_x_mm": "release.hold_x_mm",
     "hold_y_mm": "release.hold_y_mm",
+    "K_rest": "strip.rest_curvature_per_cm",
+    "grip_factor": "clamp.grip_bending_factor",
+    "grip_hysteresis": "clamp.grip_hysteresis_factor",
+    "grip_length": "clamp.grip_length_mm",
 }
 """Short names accepted by ``--free`` (any per-strip numeric field also works by its dotted name);
 a bending law's parameters only for a scene whose material uses that law."""
+
+REST_CURVATURE_SPAN = 0.2
+"""Default range of ``K_rest``: ± this (1/cm) around the scene's value, a set down to a
+radius of 5 cm either way (docs/calibration.md)."""
 
 HYSTERESIS_AMPLITUDES = ("material.hysteresis_d1_gf_cm_per_cm", "material.dahl_moment_gf_cm_per_cm",
                          "material.friction_moment_gf_cm_per_cm")
@@ -119,7 +127,9 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
 
     Default bounds: a rotation centre or held position ± 10 mm around the scene's value;
     γ from 0 to 4× the scene's value (at least 2 /s); a hysteresis amplitude (D1, M_s,
-    M_f) from 0 to 4×; any other positive field from ¼× to 4×.
+    M_f) from 0 to 4×; K_rest ± :data:`REST_CURVATURE_SPAN` around the scene's value; the
+    grip length from 0 to 4× the scene's value (at least 4 h, at most the free length);
+    any other positive field from ¼× to 4×.
     """
     names = [n.strip() for n in (names.split(",") if isinstance(names, str) else names) if n.strip()]
     if not names:
@@ -150,6 +160,10 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
             lower, upper = value - 10.0, value + 10.0
         elif dotted == "damping.gamma_per_s":
             lower, upper = 0.0, max(4 * value, 2.0)
+        elif dotted == "strip.rest_curvature_per_cm":
+            lower, upper = value - REST_CURVATURE_SPAN, value + REST_CURVATURE_SPAN
+        elif dotted == "clamp.grip_length_mm":
+            lower, upper = 0.0, min(max(4 * value, 4 * base.strip.spacing_mm), base.strip.free_length_mm)
         elif dotted in HYSTERESIS_AMPLITUDES and value > 0:
             lower, upper = 0.0, 4 * value
         elif value > 0:

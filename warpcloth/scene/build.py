@@ -84,6 +84,7 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
                                                         scene.clamp.rotation_centre_dy_mm]),
             hold_target=units.LENGTH_MM * np.array([scene.release.hold_x_mm, scene.release.hold_y_mm]),
             settle_damping=scene.release.settle_damping_per_s,
+            hold_free_end=scene.release.hold_free_end,
             edge_hinge_length=first.spacing * (0.5 if scene.clamp.edge_hinge == "second_order" else 1.0),
             fabric_set=FabricSet(scene.strip.rest_curvature_per_cm * units.CURVATURE_PER_CM,
                                  tuple(s * units.LENGTH_MM for s in scene.strip.rest_curvature_table_s_mm),

@@ -182,6 +182,9 @@ class ReleaseSection:
     position, held while the strip settles, then released at t = 0."""
 
     enabled: bool = _field(False, "start with the hold-and-release phase")
+    hold_free_end: bool = _field(True, "carry the free end to the held position and hold it; false: the free end "
+                                 "is left free and the strip settles under its own weight (a strip with a set "
+                                 "starts from its own hanging shape, docs/model.md §8)", per_strip=True)
     hold_x_mm: float = _field(50.0, "held free-end x, from the clamp's lowest point", per_strip=True)
     hold_y_mm: float = _field(-80.0, "held free-end y (up +), from the clamp's lowest point",
                               per_strip=True)

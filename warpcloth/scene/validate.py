@@ -43,7 +43,7 @@ def validate_scene(scene: Scene) -> None:
     _validate_clamp(scene.clamp)
     _validate_rest_curvature(scene)
     _validate_grip(scene)
-    if scene.release.enabled:
+    if scene.release.enabled and scene.release.hold_free_end:
         r = math.hypot(scene.release.hold_x_mm, scene.release.hold_y_mm)
         if not st.spacing_mm <= r <= st.free_length_mm:
             raise SceneError("release.hold_x_mm", f"held position ({scene.release.hold_x_mm:g}, "
@@ -144,16 +144,11 @@ def _validate_rest_curvature(scene: Scene) -> None:
 
 
 def _validate_grip(scene: Scene) -> None:
+    # a zone of length 0 has no effect whatever its factors: the limit a fit of ℓ_g crosses
     clamp, st = scene.clamp, scene.strip
     if clamp.grip_length_mm > st.free_length_mm:
         raise SceneError("clamp.grip_length_mm", f"{clamp.grip_length_mm:g} mm is longer than the free strip "
                          f"(strip.free_length_mm = {st.free_length_mm:g} mm)", related=("strip.free_length_mm",))
-    if clamp.grip_length_mm == 0.0:
-        for name in ("grip_bending_factor", "grip_hysteresis_factor"):
-            if getattr(clamp, name) != 1.0:
-                raise SceneError(f"clamp.{name}", f"= {getattr(clamp, name):g} but clamp.grip_length_mm = 0 gives "
-                                 "the grip no length, so the factor would be ignored; set clamp.grip_length_mm",
-                                 related=("clamp.grip_length_mm",))
 
 
 def _validate_clamp(clamp: ClampSection) -> None:

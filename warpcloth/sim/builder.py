@@ -98,6 +98,7 @@ class StripSpec:
     hold_target: np.ndarray
     settle_damping: float
     edge_hinge_length: float
+    hold_free_end: bool = True
     fabric_set: FabricSet = field(default_factory=FabricSet)
     grip: Grip = field(default_factory=Grip)
 
@@ -147,7 +148,7 @@ class StripBuilder:
                   clamp: ClampMotion | None = None, rotation_centre: Sequence[float] | None = None,
                   hold_target: Sequence[float] | None = None, settle_damping: float = 0.0,
                   edge_hinge_length: float | None = None, fabric_set: FabricSet | None = None,
-                  grip: Grip | None = None) -> int:
+                  grip: Grip | None = None, hold_free_end: bool = True) -> int:
         """Add one strip (SI: m, 1/s, absolute positions); returns its index in the batch.
 
         ``rotation_centre`` defaults to the clamp edge and ``hold_target`` to the free
@@ -156,7 +157,8 @@ class StripBuilder:
         makes the built-in end second order in h; h is the paper's model, which acts as if
         clamped h/2 inside the clamp (docs/model.md §5.3). ``fabric_set`` is the strip's
         natural curvature and ``grip`` the clamp's grip zone (docs/model.md §5.4; default:
-        neither).
+        neither). ``hold_free_end`` False leaves the free end free during the hold: the
+        strip settles under its own weight instead of in the held shape.
         """
         edge = 0.5 * self.spacing if edge_hinge_length is None else edge_hinge_length
         if not 0 < edge <= self.spacing:
@@ -166,7 +168,7 @@ class StripBuilder:
             rotation_centre=np.asarray(self.clamp_edge if rotation_centre is None else rotation_centre, dtype=float),
             hold_target=np.asarray(self.rest_positions[-1] if hold_target is None else hold_target, dtype=float),
             settle_damping=settle_damping, edge_hinge_length=edge, fabric_set=fabric_set or FabricSet(),
-            grip=grip or Grip()))
+            grip=grip or Grip(), hold_free_end=bool(hold_free_end)))
         return len(self.strips) - 1
 
     def hinge_intervals(self) -> np.ndarray:
