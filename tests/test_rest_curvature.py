@@ -201,3 +201,18 @@ def test_the_set_is_converted_once_to_si():
     batch = wc.scene.build_batch([scene])
     assert np.all(batch.model.rest_curvature == 20.0)  # 1/cm → 1/m
     assert to_si(scene.material).bending_rigidity > 0
+
+
+def test_a_free_settle_starts_a_set_strip_from_its_own_hanging_shape():
+    # release.hold_free_end = false: the pre-roll lets the set strip settle under its own
+    # weight, so it is at rest at t = 0, curled (tip 6.9 mm aside for K_rest = 0.2 1/cm);
+    # without a pre-roll the same strip starts straight and springs towards its set.
+    fields = dict(strip__rest_curvature_per_cm=0.2, run__duration_s=0.1)
+    settled = wc.simulate(wc.load_scene("damped_swing", overrides(
+        release__hold_free_end=False, release__move_time_s=0.1, release__settle_time_s=1.0, **fields)))
+    straight = wc.simulate(wc.load_scene("damped_swing", overrides(release__enabled=False, **fields)))
+    tip = settled.probe("tip_x", 0)
+    print(f"settled: tip at {tip[0] * 1e3:.3f} mm, speed {settled.probe('tip_speed', 0)[0]:.2e} m/s")
+    assert settled.probe("tip_speed", 0).max() < 1e-4 and np.ptp(tip) < 1e-5
+    assert tip[0] > 1e-3
+    assert straight.probe("tip_speed", 0).max() > 1e-2
