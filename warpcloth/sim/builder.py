@@ -44,6 +44,12 @@ class FabricSet:
     table_s: tuple[float, ...] = ()
     table_curvature: tuple[float, ...] = ()
 
+    def __post_init__(self) -> None:
+        s = np.asarray(self.table_s, dtype=float)
+        if len(s) != len(self.table_curvature) or len(s) == 1 or np.any(np.diff(s) <= 0):
+            raise ValueError(f"a rest-curvature table needs at least 2 strictly increasing arc lengths, one curvature "
+                             f"each; got {len(s)} arc lengths and {len(self.table_curvature)} curvatures")
+
     def hinge_values(self, intervals: np.ndarray) -> np.ndarray:
         """K_rest of each hinge: the profile's mean over the arc ``intervals`` ``[hinge, (start,
         end)]`` it bends (m), so the rest turning angle of the chain is the profile's own."""
@@ -71,6 +77,11 @@ class Grip:
     length: float = 0.0
     bending_factor: float = 1.0
     hysteresis_factor: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (self.length >= 0 and self.bending_factor > 0 and self.hysteresis_factor >= 0):
+            raise ValueError(f"a grip needs length ≥ 0, bending_factor > 0 and hysteresis_factor ≥ 0; got "
+                             f"{self.length:g}, {self.bending_factor:g}, {self.hysteresis_factor:g}")
 
     def hinge_factors(self, intervals: np.ndarray) -> np.ndarray:
         """``[hinge, (bending, hysteresis)]`` factors of hinges bending the arc ``intervals``:
