@@ -70,6 +70,8 @@ def load(**fields):
     (dict(strip__rest_curvature_table_s_mm=[0.0, 100.0], strip__rest_curvature_table_per_cm=[0.1, 3.0]),
      "strip.rest_curvature_table_per_cm[1]", "3 1/cm curls the strip"),
     (dict(strip__rest_curvature_per_cm="curly"), "strip.rest_curvature_per_cm", "expected a number"),
+    (dict(release__hold_free_end=False, release__hold_x_mm=30.0), "release.hold_x_mm",
+     "= 30 mm but release.hold_free_end = false leaves the free end free"),
     (dict(clamp__grip_length_mm=120.0), "clamp.grip_length_mm", "120 mm is longer than the free strip"),
     (dict(clamp__grip_length_mm=-1.0), "clamp.grip_length_mm", "must be ≥ 0"),
     (dict(clamp__grip_bending_factor=0.0), "clamp.grip_bending_factor", "must be > 0, got 0"),

@@ -9,7 +9,7 @@ from warpcloth.sim.solvers import SOLVERS
 from warpcloth.units import check_plausible
 
 from .materials import to_si, validate_material
-from .schema import ClampSection, Scene
+from .schema import ClampSection, ReleaseSection, Scene
 
 MAX_STEPS = 2**31 - 1
 MAX_NODES = 2**31 - 1
@@ -43,6 +43,13 @@ def validate_scene(scene: Scene) -> None:
     _validate_clamp(scene.clamp)
     _validate_rest_curvature(scene)
     _validate_grip(scene)
+    if not scene.release.hold_free_end:
+        defaults = ReleaseSection()
+        for name in ("hold_x_mm", "hold_y_mm"):
+            if getattr(scene.release, name) != getattr(defaults, name):
+                raise SceneError(f"release.{name}", f"= {getattr(scene.release, name):g} mm but "
+                                 "release.hold_free_end = false leaves the free end free, so no held position is "
+                                 "used; remove it or hold the free end", related=("release.hold_free_end",))
     if scene.release.enabled and scene.release.hold_free_end:
         r = math.hypot(scene.release.hold_x_mm, scene.release.hold_y_mm)
         if not st.spacing_mm <= r <= st.free_length_mm:
