@@ -197,14 +197,20 @@ def test_a_swing_with_set_and_grip_is_fitted_back_with_them(swing_with_set_and_g
     # grip factor are recovered within 3σ: measured γ 0.5505 ± 0.0017, K_rest 0.09933 ±
     # 0.00055 1/cm, grip 3.0033 ± 0.0099, RMS 0.193 mm (the noise).
     base, truth, measured = swing_with_set_and_grip
+    fit = fitted_back_with_set_and_grip(base, measured, truth, 2e-4)
+    assert fit.rms == pytest.approx(2e-4, rel=0.1)
+
+
+def fitted_back_with_set_and_grip(base, measured, truth, noise):
+    """The fit of γ, K_rest and the grip factor, asserted converged with the truth within 3σ."""
     free = free_parameters("gamma,K_rest,grip_factor", wc.scene_from_dict(copy.deepcopy(base)))
-    fit = fit_motion(base, measured, free, progress=False, noise=2e-4)
+    fit = fit_motion(base, measured, free, progress=False, noise=noise)
     print(f"with set and grip: {fit.status}, RMS {fit.rms * 1e3:.3f} mm, "
           + ", ".join(f"{k} {v:.5g} ± {fit.sigma[k]:.2g}" for k, v in fit.parameters.items()))
     assert fit.status == "converged", fit.problems
     for name, value in truth.items():
         assert abs(fit.parameters[name] - value) < 3 * fit.sigma[name]
-    assert fit.rms == pytest.approx(2e-4, rel=0.1)
+    return fit
 
 
 def test_the_swing_alone_does_not_separate_the_set_from_d_a_horizontal_still_does():
@@ -253,10 +259,4 @@ def test_a_rotation_with_set_and_grip_is_fitted_back():
                          progress=False, noise=3e-4)
     print(f"rotation without set and grip: {without.status}, RMS {without.rms * 1e3:.3f} mm")
     assert without.status != "converged"
-    free = free_parameters("gamma,K_rest,grip_factor", wc.scene_from_dict(copy.deepcopy(base)))
-    fit = fit_motion(base, measured, free, progress=False, noise=3e-4)
-    print(f"rotation with set and grip: {fit.status}, RMS {fit.rms * 1e3:.3f} mm, "
-          + ", ".join(f"{k} {v:.5g} ± {fit.sigma[k]:.2g}" for k, v in fit.parameters.items()))
-    assert fit.status == "converged", fit.problems
-    for name, value in truth.items():
-        assert abs(fit.parameters[name] - value) < 3 * fit.sigma[name]
+    fitted_back_with_set_and_grip(base, measured, truth, 3e-4)
