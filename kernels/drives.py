@@ -44,6 +44,7 @@ def build(scalar: Any) -> SimpleNamespace:
         rotation_centre: wp.array(dtype=vec2)  # m, absolute
         hold_target: wp.array(dtype=vec2)  # free-end held position, m, absolute
         settle_damping: wp.array(dtype=scalar)  # γ while held, 1/s
+        hold_free_end: wp.array(dtype=int)  # 1: the free end is carried and held; 0: it settles freely
 
     @wp.func
     def clamp_angle(control: StripControl, s: int, t: scalar):

@@ -72,13 +72,18 @@ def build(scalar: Any) -> SimpleNamespace:
                 # (docs/model.md §5.3): its curvature is the turning angle over h/2, twice
                 # the chain's; the paper's model keeps h (scale 1, bitwise the same).
                 curvature = curvature * edge_scale
+            # Every law bends from the strip's natural curvature; the grip scales the hinge's
+            # D and its hysteretic moment (docs/model.md §5.4; K_rest = 0 and factors 1 leave
+            # every bit as it was).
+            curvature = curvature - model.rest_curvature[h, s]
+            grip = model.grip[h, s]
             memory = law.follow(curvature, state.hinge[h, s], p, state.history, h, s)
             state.hinge[h, s] = memory
             # τ = M·W acts on the turning angle φ; F = -τ ∇φ with ∇φ as below.
             grad_i = perp(e1) * (inverse_l1 * inverse_l1)
             grad_k = perp(e2) * (inverse_l2 * inverse_l2)
-            tau_elastic = law.elastic_moment(curvature, p) * width
-            tau_hysteretic = law.hysteretic_moment(curvature, memory, p) * width
+            tau_elastic = law.elastic_moment(curvature, p) * grip[0] * width
+            tau_hysteretic = law.hysteretic_moment(curvature, memory, p) * grip[1] * width
             state.force_elastic[i - 1, s] = state.force_elastic[i - 1, s] - tau_elastic * grad_i
             state.force_elastic[i + 1, s] = vec2() - tau_elastic * grad_k
             state.force_elastic[i, s] = state.force_elastic[i, s] + tau_elastic * (grad_i + grad_k)

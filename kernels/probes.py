@@ -130,11 +130,18 @@ def build(scalar: Any) -> SimpleNamespace:
         probes[k, DRIVE_WORK, s] = work[3]
         # The loop hinge's curvature at the last force evaluation and the moment per
         # width there, read back from its memory (no extra force pass).
+        # The memory holds K − K_rest (the law's argument); the probe is the strip's own K.
         memory = state.hinge[settings.loop_hinge, s]
         p = model.bending[s]
         curvature = law.last_curvature(memory)
-        probes[k, LOOP_CURVATURE, s] = curvature
-        probes[k, LOOP_MOMENT, s] = law.elastic_moment(curvature, p) + law.hysteretic_moment(curvature, memory, p)
+        rest = model.rest_curvature[settings.loop_hinge, s]
+        grip = model.grip[settings.loop_hinge, s]
+        if rest != zero:  # adding 0 would turn a −0 curvature into +0
+            probes[k, LOOP_CURVATURE, s] = curvature + rest
+        else:
+            probes[k, LOOP_CURVATURE, s] = curvature
+        probes[k, LOOP_MOMENT, s] = law.elastic_moment(curvature, p) * grip[0] + \
+            law.hysteretic_moment(curvature, memory, p) * grip[1]
         return kinetic + gravitational + tensile + work[0] + work[1] + work[2]
 
     return SimpleNamespace(ProbeSettings=ProbeSettings, record_probes=record_probes)

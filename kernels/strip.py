@@ -73,14 +73,15 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
         gamma = model.damping[s]
         if held:
             gamma = control.settle_damping[s]
+        holding = held and control.hold_free_end[s] != 0  # the free end prescribed, not free to settle
         g = vec2(zero, -model.gravity)
         m_node = model.node_mass[s]
         work = state.work[s]
         if wp.static(implicit):
-            stretching_corrections(model, control, stepping, state, s, step, held, gamma, t_next)
+            stretching_corrections(model, control, stepping, state, s, step, holding, gamma, t_next)
         for i in range(model.n_clamped, n):
             x = state.position[i, s]
-            if held and i == n - 1:
+            if holding and i == n - 1:
                 x_new, v_new = held_free_end(
                     control, model.rest_position[model.n_clamped - 1, s], model.rest_position[i, s], s, step + 1,
                     stepping.move_steps, dt,
@@ -211,7 +212,8 @@ def hinge_kernels(scalar: Any) -> SimpleNamespace:
 
     @wp.kernel(module="unique", enable_backward=False)
     def initialise_hinges(model: StripModel, state: StripState):
-        """Start every hinge fresh at its current curvature (no hysteretic moment, loading up)."""
+        """Start every hinge fresh at its current curvature relative to its natural one (no
+        hysteretic moment, loading up)."""
         s = wp.tid()
         first = model.n_clamped - 2
         p = model.bending[s]
@@ -221,6 +223,7 @@ def hinge_kernels(scalar: Any) -> SimpleNamespace:
             curvature, chord = signed_curvature(e1, e2, one / wp.length(e1), one / wp.length(e2))
             if j == first + 1:
                 curvature = curvature * model.edge_curvature_scale[s]  # as the force pass sees it
+            curvature = curvature - model.rest_curvature[j - first - 1, s]
             state.hinge[j - first - 1, s] = law.fresh_memory(curvature, p, state.history, j - first - 1, s)
 
     return SimpleNamespace(initialise_hinges=initialise_hinges)

@@ -37,6 +37,8 @@ def build(scalar: Any) -> SimpleNamespace:
         node_mass: wp.array(dtype=scalar)  # ρ_A W h, kg (half at the free end)
         damping: wp.array(dtype=scalar)  # γ after release, 1/s
         edge_curvature_scale: wp.array(dtype=scalar)  # h / length of the clamp-edge hinge (docs/model.md §5.3)
+        rest_curvature: wp.array2d(dtype=scalar)  # [hinge, strip], K_rest, 1/m (docs/model.md §5.4)
+        grip: wp.array2d(dtype=vec2)  # [hinge, strip], factors on D and on the hysteretic moment (§5.4)
 
     @wp.struct
     class StripState:

@@ -24,7 +24,8 @@ RAMP_S = 0.5
 LENGTH_M = 0.1
 
 
-def horizontal_scene(kappa: float, edge: str, spacing_mm: float) -> wc.Scene:
+def horizontal_scene(kappa: float, edge: str, spacing_mm: float, *extra: str) -> wc.Scene:
+    """The strip turned horizontal and settled; ``extra``: more ``--set`` overrides."""
     density = wc.load_scene("damped_swing").material.density_g_per_cm2 * units.AREAL_DENSITY_G_PER_CM2
     rigidity = density * 9.80665 * LENGTH_M**3 / kappa
     omega = 1.875104068711961**2 * math.sqrt(rigidity / (density * LENGTH_M**4))
@@ -36,7 +37,8 @@ def horizontal_scene(kappa: float, edge: str, spacing_mm: float) -> wc.Scene:
         material__bending_rigidity_gf_cm2_per_cm=rigidity / units.RIGIDITY_GF_CM2_PER_CM,
         damping__gamma_per_s=2 * omega, release__enabled=False, run__duration_s=2.5, clamp__edge_hinge=edge,
         # a static shape: the step need only be stable (elastic, so imex's auto step is)
-        integrator__scheme="imex", integrator__dt_s="auto") + ['clamp.motion="piecewise"', f"clamp.segments={segment}"])
+        integrator__scheme="imex", integrator__dt_s="auto") + ['clamp.motion="piecewise"',
+                                                               f"clamp.segments={segment}", *extra])
 
 
 @pytest.fixture(scope="module")

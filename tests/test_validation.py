@@ -51,6 +51,31 @@ def load(**fields):
      "clamp.table_theta_rad", "needs as many samples"),
     (dict(clamp__motion="table", clamp__table_t_s=[0.0, 0.1, 0.1], clamp__table_theta_rad=[0.0, 1.0, 2.0]),
      "clamp.table_t_s[2]", "must be after"),
+    (dict(strip__rest_curvature_per_cm=0.1, strip__rest_curvature_table_s_mm=[0.0, 100.0],
+          strip__rest_curvature_table_per_cm=[0.1, 0.1]), "strip.rest_curvature_per_cm",
+     "= 0.1 1/cm and a table strip.rest_curvature_table_per_cm are both given"),
+    (dict(strip__rest_curvature_table_s_mm=[0.0, 100.0], strip__rest_curvature_table_per_cm=[0.1]),
+     "strip.rest_curvature_table_per_cm", "needs as many values as strip.rest_curvature_table_s_mm, at least 2 "
+     "(got 2 arc lengths and 1 curvatures)"),
+    (dict(strip__rest_curvature_table_s_mm=[5.0, 100.0], strip__rest_curvature_table_per_cm=[0.1, 0.2]),
+     "strip.rest_curvature_table_s_mm[0]", "5 mm must be 0"),
+    (dict(strip__rest_curvature_table_s_mm=[0.0, 50.0, 50.0, 100.0],
+          strip__rest_curvature_table_per_cm=[0.1, 0.2, 0.2, 0.1]), "strip.rest_curvature_table_s_mm[2]",
+     "50 mm must be after 50 mm"),
+    (dict(strip__rest_curvature_table_s_mm=[0.0, 80.0], strip__rest_curvature_table_per_cm=[0.1, 0.2]),
+     "strip.rest_curvature_table_s_mm[1]", "80 mm ends above the free end; the profile must reach "
+     "strip.free_length_mm = 100 mm"),
+    (dict(strip__rest_curvature_per_cm=-2.5), "strip.rest_curvature_per_cm",
+     "-2.5 1/cm curls the strip by more than one radian per segment (1/h = 2 1/cm"),
+    (dict(strip__rest_curvature_table_s_mm=[0.0, 100.0], strip__rest_curvature_table_per_cm=[0.1, 3.0]),
+     "strip.rest_curvature_table_per_cm[1]", "3 1/cm curls the strip"),
+    (dict(strip__rest_curvature_per_cm="curly"), "strip.rest_curvature_per_cm", "expected a number"),
+    (dict(release__hold_free_end=False, release__hold_x_mm=30.0), "release.hold_x_mm",
+     "= 30 mm but release.hold_free_end = false leaves the free end free"),
+    (dict(clamp__grip_length_mm=120.0), "clamp.grip_length_mm", "120 mm is longer than the free strip"),
+    (dict(clamp__grip_length_mm=-1.0), "clamp.grip_length_mm", "must be ≥ 0"),
+    (dict(clamp__grip_bending_factor=0.0), "clamp.grip_bending_factor", "must be > 0, got 0"),
+    (dict(clamp__grip_hysteresis_factor=-1.0), "clamp.grip_hysteresis_factor", "must be ≥ 0"),
 ])
 def test_field_errors_name_field_and_value(fields, field, text):
     with pytest.raises(wc.SceneError) as info:

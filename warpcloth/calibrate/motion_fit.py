@@ -84,9 +84,17 @@ ALIASES = {
     "rotation_centre_dy_mm": "clamp.rotation_centre_dy_mm",
     "hold_x_mm": "release.hold_x_mm",
     "hold_y_mm": "release.hold_y_mm",
+    "K_rest": "strip.rest_curvature_per_cm",
+    "grip_factor": "clamp.grip_bending_factor",
+    "grip_hysteresis": "clamp.grip_hysteresis_factor",
+    "grip_length": "clamp.grip_length_mm",
 }
 """Short names accepted by ``--free`` (any per-strip numeric field also works by its dotted name);
 a bending law's parameters only for a scene whose material uses that law."""
+
+REST_CURVATURE_SPAN = 0.2
+"""Default range of ``K_rest``: ± this (1/cm) around the scene's value, a set down to a
+radius of 5 cm either way (docs/calibration.md)."""
 
 HYSTERESIS_AMPLITUDES = ("material.hysteresis_d1_gf_cm_per_cm", "material.dahl_moment_gf_cm_per_cm",
                          "material.friction_moment_gf_cm_per_cm")
@@ -123,7 +131,9 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
 
     Default bounds: a rotation centre or held position ± 10 mm around the scene's value;
     γ from 0 to 4× the scene's value (at least 2 /s); a hysteresis amplitude (D1, M_s,
-    M_f) from 0 to 4×; any other positive field from ¼× to 4×.
+    M_f) from 0 to 4×; K_rest ± :data:`REST_CURVATURE_SPAN` around the scene's value; the
+    grip length from 0 to 4× the scene's value (at least 4 h, at most the free length);
+    any other positive field from ¼× to 4×.
     """
     names = [n.strip() for n in (names.split(",") if isinstance(names, str) else names) if n.strip()]
     if not names:
@@ -154,6 +164,10 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
             lower, upper = value - 10.0, value + 10.0
         elif dotted == "damping.gamma_per_s":
             lower, upper = 0.0, max(4 * value, 2.0)
+        elif dotted == "strip.rest_curvature_per_cm":
+            lower, upper = value - REST_CURVATURE_SPAN, value + REST_CURVATURE_SPAN
+        elif dotted == "clamp.grip_length_mm":
+            lower, upper = 0.0, min(max(4 * value, 4 * base.strip.spacing_mm), base.strip.free_length_mm)
         elif dotted in HYSTERESIS_AMPLITUDES and value > 0:
             lower, upper = 0.0, 4 * value
         elif value > 0:
@@ -700,3 +714,61 @@ def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | Tr
         "residuals.csv": lambda p: table.to_csv(p, index=False),
         "overlay.png": lambda p: plot_fit_overlay(result, objective, measurement, fit, p),
     })
+
+
+@dataclass
+class Identifiability:
+    """What an experiment (or several together) can determine about the free parameters at a
+    point, before any fit: the Gauss–Newton σ and correlation for measurement noise σ_m, and
+    the pairs correlated beyond :data:`NOT_IDENTIFIABLE_CORRELATION` (the fit's
+    ``not_identifiable`` verdict)."""
+
+    names: list[str]
+    sigma: dict[str, float]
+    correlation: np.ndarray
+    not_identifiable: list[tuple[str, str, float]]
+
+    def table(self) -> str:
+        """The correlation matrix as text, with σ and the pairs the data do not separate."""
+        width = max(len(n) for n in self.names)
+        lines = [" " * width + "  " + " ".join(f"{i:>6d}" for i in range(len(self.names))) + "   σ"]
+        for i, name in enumerate(self.names):
+            row = " ".join(f"{c:+6.3f}" for c in self.correlation[i])
+            lines.append(f"{name:<{width}}  {row}   {self.sigma[name]:.3g}")
+        lines += [f"not identifiable: {a} and {b} correlated {c:+.3f}" for a, b, c in self.not_identifiable]
+        return "\n".join(lines)
+
+
+def weighted_jacobian(base: dict, measurement: LaserTrace | TrackedShapes, noise: float, names: str | list[str],
+                      bounds: str | None = None, device: str | None = None) -> tuple[list[str], np.ndarray]:
+    """The fields of the ``--free`` parameters ``names`` and ∂r/∂(field value) / σ_m of the
+    experiment (raw scene ``base``, its ``measurement``, noise σ_m in m) at the scene's own
+    values: one batched launch of the central-difference stencil, as the fit takes it."""
+    free = free_parameters(names, scene_from_dict(copy.deepcopy(base)), bounds)
+    objective = Objective(base, measurement, free, 0.0, device)
+    u = np.array([(p.initial - p.lower) / (p.upper - p.lower) for p in free])
+    rows, pairs = _stencil(u, len(free))
+    result = objective.run(np.vstack([u, *rows]))
+    ranges = np.array([p.upper - p.lower for p in free])
+    return [p.field for p in free], objective.jacobian(result, pairs, 0, 0.0) / ranges / noise
+
+
+def identifiability(blocks: list[tuple[list[str], np.ndarray]]) -> Identifiability:
+    """σ and correlation of the parameters from experiments' :func:`weighted_jacobian`
+    blocks, stacked as one fit of all their residuals would stack them (the same fields in
+    each). A correlation beyond :data:`NOT_IDENTIFIABLE_CORRELATION`, or a singular
+    Jacobian, is a pair the data do not separate (docs/calibration.md, "What the data
+    determine")."""
+    fields = blocks[0][0]
+    if any(f != fields for f, _ in blocks):
+        raise ValueError("every experiment must have the same free parameters, in the same order")
+    jac = np.vstack([j for _, j in blocks])
+    try:
+        covariance = np.linalg.inv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        covariance = np.full((len(fields), len(fields)), np.nan)
+    sigma = np.sqrt(np.clip(np.diag(covariance), 0, None))
+    correlation = covariance / np.outer(sigma, sigma)
+    pairs = [(fields[i], fields[j], float(correlation[i, j])) for i in range(len(fields)) for j in range(i)
+             if not abs(correlation[i, j]) <= NOT_IDENTIFIABLE_CORRELATION]
+    return Identifiability(fields, dict(zip(fields, sigma.tolist(), strict=True)), correlation, pairs)

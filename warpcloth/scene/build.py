@@ -15,7 +15,7 @@ import numpy as np
 from warpcloth import units
 from warpcloth.errors import SceneError
 from warpcloth.kernels import bending_masing
-from warpcloth.sim import SOLVERS, ClampMotion, Control, Model, Recorder, Solver, StripBuilder
+from warpcloth.sim import SOLVERS, ClampMotion, Control, FabricSet, Grip, Model, Recorder, Solver, StripBuilder
 from warpcloth.sim.resources import check_memory
 
 from .clamp_motion import clamp_pieces
@@ -62,11 +62,11 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
     check_batch(scenes)
     first = scenes[0]
     # the model's per-node arrays (positions, velocities, three force parts, imex's two
-    # scratch arrays, rest positions, hinge memory: ~24 numbers of 8 B per node and
-    # strip), before any exists
+    # scratch arrays, rest positions, hinge memory, rest curvature and grip factors: ~27
+    # numbers of 8 B per node and strip), before any exists
     masing = any(scene.material.bending_law == bending_masing.NAME for scene in scenes)
     history = 16 * (first.integrator.reversal_memory + 1) * first.n_nodes if masing else 0
-    check_memory((192 * first.n_nodes + history) * len(scenes),
+    check_memory((216 * first.n_nodes + history) * len(scenes),
                  f"the state of {len(scenes)} strip(s) of {first.n_nodes} nodes",
                  "use a coarser strip.spacing_mm, fewer strips per batch"
                  + (" or a smaller integrator.reversal_memory" if masing else ""))
@@ -84,9 +84,20 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
                                                         scene.clamp.rotation_centre_dy_mm]),
             hold_target=units.LENGTH_MM * np.array([scene.release.hold_x_mm, scene.release.hold_y_mm]),
             settle_damping=scene.release.settle_damping_per_s,
+            hold_free_end=scene.release.hold_free_end,
             edge_hinge_length=scene.edge_hinge_length,
+            fabric_set=FabricSet(scene.strip.rest_curvature_per_cm * units.CURVATURE_PER_CM,
+                                 tuple(s * units.LENGTH_MM for s in scene.strip.rest_curvature_table_s_mm),
+                                 tuple(k * units.CURVATURE_PER_CM for k in scene.strip.rest_curvature_table_per_cm)),
+            grip=grip_of(scene),
         )
     return builder
+
+
+def grip_of(scene: Scene) -> Grip:
+    """The clamp's grip zone of ``scene`` in SI (docs/model.md §5.4)."""
+    return Grip(scene.clamp.grip_length_mm * units.LENGTH_MM, scene.clamp.grip_bending_factor,
+                scene.clamp.grip_hysteresis_factor)
 
 
 def build_batch(scenes: Sequence[Scene], device: str | None = None) -> Batch:

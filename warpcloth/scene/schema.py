@@ -71,6 +71,15 @@ class StripSection:
     width_mm: float = _field(50.0, "strip width W (forces, masses and moments scale with it)",
                              gt=0, per_strip=True)
     spacing_mm: float = _field(5.0, "node spacing h; must divide both lengths", gt=0)
+    rest_curvature_per_cm: float = _field(0.0, "K_rest, the natural curvature the unloaded strip keeps (its set, "
+                                          "'kuse'), in the bending plane, counter-clockwise positive; every bending "
+                                          "law acts on K − K_rest (docs/model.md §5.4)", per_strip=True)
+    rest_curvature_table_s_mm: list[float] = _field([], "arc lengths below the clamp's lowest point of a profile "
+                                                    "K_rest(s), strictly increasing from 0 to at least "
+                                                    "free_length_mm (linear between; instead of "
+                                                    "rest_curvature_per_cm)", per_strip=True)
+    rest_curvature_table_per_cm: list[float] = _field([], "K_rest at those arc lengths (counter-clockwise +)",
+                                                      per_strip=True)
 
 
 @dataclass(frozen=True)
@@ -162,6 +171,12 @@ class ClampSection:
     edge_hinge: str = _field("second_order", "second_order (the clamp-edge hinge bends the half segment below "
                              "the built-in end: second order in h) | paper (the paper's model: as if clamped "
                              "h/2 inside the clamp, first order)", choices=EDGE_HINGES, per_strip=True)
+    grip_length_mm: float = _field(0.0, "ℓ_g, length below the clamp edge that the clamp's grip stiffens "
+                                   "(0: no grip zone; docs/model.md §5.4)", ge=0, per_strip=True)
+    grip_bending_factor: float = _field(1.0, "bending rigidity D in the grip zone, as a multiple of the fabric's "
+                                        "(1: no grip effect)", gt=0, per_strip=True)
+    grip_hysteresis_factor: float = _field(1.0, "hysteresis amplitude in the grip zone, as a multiple of the "
+                                           "fabric's (1: no grip effect)", ge=0, per_strip=True)
 
 
 @dataclass(frozen=True)
@@ -170,6 +185,9 @@ class ReleaseSection:
     position, held while the strip settles, then released at t = 0."""
 
     enabled: bool = _field(False, "start with the hold-and-release phase")
+    hold_free_end: bool = _field(True, "carry the free end to the held position and hold it; false: the free end "
+                                 "is left free and the strip settles under its own weight (a strip with a set "
+                                 "starts from its own hanging shape, docs/model.md §8)", per_strip=True)
     hold_x_mm: float = _field(50.0, "held free-end x, from the clamp's lowest point", per_strip=True)
     hold_y_mm: float = _field(-80.0, "held free-end y (up +), from the clamp's lowest point",
                               per_strip=True)

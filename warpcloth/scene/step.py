@@ -21,6 +21,7 @@ from warpcloth.sim import SOLVERS
 from warpcloth.sim.solvers import StepBound
 from warpcloth.sim.stability import cycle_response
 
+from .build import grip_of
 from .materials import to_si
 from .schema import Scene
 from .validate import validate_scene
@@ -87,7 +88,7 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
     bounds = []
     for scene, material in zip(scenes, materials, strict=True):
         bound = solver.stable_step(material, scene.spacing, scene.n_nodes - scene.n_clamped,
-                                   scene.edge_hinge_length, scene.run.gravity_m_per_s2)
+                                   scene.edge_hinge_length, scene.run.gravity_m_per_s2, grip_of(scene))
         if bound is None:
             raise SceneError("integrator.dt_s", f"auto needs a scheme with a known stability limit; {scheme} has "
                              "none (forward Euler amplifies every undamped oscillation, docs/model.md §9): use "

@@ -9,7 +9,7 @@ from warpcloth.sim.solvers import SOLVERS
 from warpcloth.units import check_plausible
 
 from .materials import to_si, validate_material
-from .schema import ClampSection, Scene
+from .schema import ClampSection, ReleaseSection, Scene
 
 MAX_STEPS = 2**31 - 1
 MAX_NODES = 2**31 - 1
@@ -41,7 +41,16 @@ def validate_scene(scene: Scene) -> None:
                          related=("strip.free_length_mm",))
     validate_material(scene.material, scene.integrator.divergence_strain, "material")
     _validate_clamp(scene.clamp)
-    if scene.release.enabled:
+    _validate_rest_curvature(scene)
+    _validate_grip(scene)
+    if not scene.release.hold_free_end:
+        defaults = ReleaseSection()
+        for name in ("hold_x_mm", "hold_y_mm"):
+            if getattr(scene.release, name) != getattr(defaults, name):
+                raise SceneError(f"release.{name}", f"= {getattr(scene.release, name):g} mm but "
+                                 "release.hold_free_end = false leaves the free end free, so no held position is "
+                                 "used; remove it or hold the free end", related=("release.hold_free_end",))
+    if scene.release.enabled and scene.release.hold_free_end:
         r = math.hypot(scene.release.hold_x_mm, scene.release.hold_y_mm)
         if not st.spacing_mm <= r <= st.free_length_mm:
             raise SceneError("release.hold_x_mm", f"held position ({scene.release.hold_x_mm:g}, "
@@ -107,6 +116,48 @@ def check_step(scene: Scene) -> None:
                      "\"imex\" (stretching implicit)",
                      related=("strip.spacing_mm", "strip.free_length_mm", "material.density_g_per_cm2",
                               "material.tensile_gf_per_cm", "material.from_file", "integrator.scheme"))
+
+
+def _validate_rest_curvature(scene: Scene) -> None:
+    st = scene.strip
+    s, k = st.rest_curvature_table_s_mm, st.rest_curvature_table_per_cm
+    if s or k:
+        if st.rest_curvature_per_cm != 0.0:
+            raise SceneError("strip.rest_curvature_per_cm", f"= {st.rest_curvature_per_cm:g} 1/cm and a table "
+                             "strip.rest_curvature_table_per_cm are both given; give the constant or the table",
+                             related=("strip.rest_curvature_table_per_cm",))
+        if len(s) < 2 or len(s) != len(k):
+            raise SceneError("strip.rest_curvature_table_per_cm", f"needs as many values as "
+                             f"strip.rest_curvature_table_s_mm, at least 2 (got {len(s)} arc lengths and {len(k)} "
+                             "curvatures)", related=("strip.rest_curvature_table_s_mm",))
+        if s[0] != 0.0:
+            raise SceneError("strip.rest_curvature_table_s_mm[0]", f"{s[0]:g} mm must be 0 (the clamp's lowest "
+                             "point): the profile covers the whole free strip")
+        for i in range(1, len(s)):
+            if not s[i] > s[i - 1]:
+                raise SceneError(f"strip.rest_curvature_table_s_mm[{i}]", f"{s[i]:g} mm must be after "
+                                 f"{s[i - 1]:g} mm")
+        if s[-1] < st.free_length_mm:
+            raise SceneError(f"strip.rest_curvature_table_s_mm[{len(s) - 1}]", f"{s[-1]:g} mm ends above the free "
+                             f"end; the profile must reach strip.free_length_mm = {st.free_length_mm:g} mm",
+                             related=("strip.free_length_mm",))
+    # a hinge turns by about K h between its segments; beyond 1/h the chain folds (§5.4)
+    limit = 10.0 / st.spacing_mm  # 1/h in 1/cm
+    for name, values in (("rest_curvature_per_cm", [st.rest_curvature_per_cm]), ("rest_curvature_table_per_cm", k)):
+        for i, value in enumerate(values):
+            if abs(value) > limit:
+                where = f"strip.{name}" + (f"[{i}]" if name.endswith("table_per_cm") else "")
+                raise SceneError(where, f"{value:g} 1/cm curls the strip by more than one radian per segment "
+                                 f"(1/h = {limit:g} 1/cm at strip.spacing_mm = {st.spacing_mm:g}); a fabric's set "
+                                 "is far gentler, or refine the spacing", related=("strip.spacing_mm",))
+
+
+def _validate_grip(scene: Scene) -> None:
+    # a zone of length 0 has no effect whatever its factors: the limit a fit of ℓ_g crosses
+    clamp, st = scene.clamp, scene.strip
+    if clamp.grip_length_mm > st.free_length_mm:
+        raise SceneError("clamp.grip_length_mm", f"{clamp.grip_length_mm:g} mm is longer than the free strip "
+                         f"(strip.free_length_mm = {st.free_length_mm:g} mm)", related=("strip.free_length_mm",))
 
 
 def _validate_clamp(clamp: ClampSection) -> None:

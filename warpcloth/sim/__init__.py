@@ -9,7 +9,7 @@
 """
 
 from .bending import moment_along_path
-from .builder import ClampMotion, StripBuilder
+from .builder import ClampMotion, FabricSet, Grip, StripBuilder
 from .control import Control
 from .material import MaterialSI
 from .model import PRECISIONS, Model
@@ -32,7 +32,9 @@ __all__ = [
     "ClampMotion",
     "Control",
     "ExplicitEulerSolver",
+    "FabricSet",
     "ForwardEulerSolver",
+    "Grip",
     "ImexSolver",
     "MaterialSI",
     "Model",

@@ -34,6 +34,79 @@ class ClampMotion:
 
 
 @dataclass(frozen=True)
+class FabricSet:
+    """The natural curvature K_rest(s) (1/m, counter-clockwise positive) the unloaded strip
+    keeps, s the arc length below the clamp edge (m): ``curvature`` everywhere, or the
+    piecewise-linear profile through (``table_s``, ``table_curvature``) when those are given
+    (docs/model.md §5.4)."""
+
+    curvature: float = 0.0
+    table_s: tuple[float, ...] = ()
+    table_curvature: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        s = np.asarray(self.table_s, dtype=float)
+        if len(s) != len(self.table_curvature) or len(s) == 1 or np.any(np.diff(s) <= 0):
+            raise ValueError(f"a rest-curvature table needs at least 2 strictly increasing arc lengths, one curvature "
+                             f"each; got {len(s)} arc lengths and {len(self.table_curvature)} curvatures")
+
+    def hinge_values(self, intervals: np.ndarray) -> np.ndarray:
+        """K_rest of each hinge: the profile's mean over the arc ``intervals`` ``[hinge, (start,
+        end)]`` it bends (m), so the rest turning angle of the chain is the profile's own."""
+        if not self.table_s:
+            return np.full(len(intervals), self.curvature)
+        s, k = np.asarray(self.table_s), np.asarray(self.table_curvature)
+        # ∫K ds of the linear interpolant from s[0], at any point (the profile is held beyond its ends)
+        cumulative = np.concatenate([[0.0], np.cumsum(np.diff(s) * (k[1:] + k[:-1]) / 2)])
+
+        def integral(x: np.ndarray) -> np.ndarray:
+            i = np.clip(np.searchsorted(s, x, side="right") - 1, 0, len(s) - 2)
+            kx = np.interp(x, s, k)
+            return cumulative[i] + (x - s[i]) * (k[i] + kx) / 2
+
+        a, b = intervals[:, 0], intervals[:, 1]
+        return (integral(b) - integral(a)) / (b - a)
+
+
+def hinge_intervals(spacing: float, hinges: int) -> np.ndarray:
+    """``[hinge, (start, end)]``: the arc below the clamp edge each of ``hinges`` hinges
+    bends (m) at node ``spacing`` h. The clamp-edge hinge bends [0, h/2] (either edge model:
+    the paper's acts h/2 inside the clamp, §5.3), hinge j the segment halves either side of
+    it, [(j − ½) h, (j + ½) h]."""
+    j = np.arange(hinges, dtype=float)
+    return np.column_stack([np.maximum(j - 0.5, 0.0) * spacing, (j + 0.5) * spacing])
+
+
+@dataclass(frozen=True)
+class Grip:
+    """The clamp's grip: over ``length`` (m) below the clamp edge the bending rigidity is
+    ``bending_factor`` × the fabric's and the hysteresis amplitude ``hysteresis_factor`` ×
+    (docs/model.md §5.4); length 0 or both factors 1: no grip effect."""
+
+    length: float = 0.0
+    bending_factor: float = 1.0
+    hysteresis_factor: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (self.length >= 0 and self.bending_factor > 0 and self.hysteresis_factor >= 0):
+            raise ValueError(f"a grip needs length ≥ 0, bending_factor > 0 and hysteresis_factor ≥ 0; got "
+                             f"{self.length:g}, {self.bending_factor:g}, {self.hysteresis_factor:g}")
+
+    def hinge_factors(self, intervals: np.ndarray) -> np.ndarray:
+        """``[hinge, (bending, hysteresis)]`` factors of hinges bending the arc ``intervals``:
+        a hinge partly in the zone is the series compliance of its two parts for the
+        rigidity (its rotation is ∫M/D ds) and their length-weighted mean for the amplitude;
+        exactly 1 for a hinge outside it."""
+        a, b = intervals[:, 0], intervals[:, 1]
+        inside = np.clip(np.minimum(b, self.length) - a, 0.0, None) / (b - a)
+        f, g = self.bending_factor, self.hysteresis_factor
+        # a factor of 1 gives exactly 1 (the moment unscaled to the bit), whatever the length
+        bending = f / (inside + (1.0 - inside) * f) if f != 1.0 else np.ones(len(a))
+        hysteresis = inside * g + (1.0 - inside) if g != 1.0 else np.ones(len(a))
+        return np.column_stack([bending, hysteresis])
+
+
+@dataclass(frozen=True)
 class StripSpec:
     """One strip of a batch as :meth:`StripBuilder.add_strip` recorded it (SI)."""
 
@@ -45,6 +118,9 @@ class StripSpec:
     hold_target: np.ndarray
     settle_damping: float
     edge_hinge_length: float
+    hold_free_end: bool = True
+    fabric_set: FabricSet = field(default_factory=FabricSet)
+    grip: Grip = field(default_factory=Grip)
 
 
 class StripBuilder:
@@ -91,14 +167,18 @@ class StripBuilder:
     def add_strip(self, material: MaterialSI, *, width: float, damping: float = 0.0,
                   clamp: ClampMotion | None = None, rotation_centre: Sequence[float] | None = None,
                   hold_target: Sequence[float] | None = None, settle_damping: float = 0.0,
-                  edge_hinge_length: float | None = None) -> int:
+                  edge_hinge_length: float | None = None, fabric_set: FabricSet | None = None,
+                  grip: Grip | None = None, hold_free_end: bool = True) -> int:
         """Add one strip (SI: m, 1/s, absolute positions); returns its index in the batch.
 
         ``rotation_centre`` defaults to the clamp edge and ``hold_target`` to the free
         end's rest position. ``edge_hinge_length`` is the length of strip the clamp-edge
         hinge bends: h/2 (the default, like a scene's ``clamp.edge_hinge = "second_order"``)
         makes the built-in end second order in h; h is the paper's model, which acts as if
-        clamped h/2 inside the clamp (docs/model.md §5.3).
+        clamped h/2 inside the clamp (docs/model.md §5.3). ``fabric_set`` is the strip's
+        natural curvature and ``grip`` the clamp's grip zone (docs/model.md §5.4; default:
+        neither). ``hold_free_end`` False leaves the free end free during the hold: the
+        strip settles under its own weight instead of in the held shape.
         """
         edge = 0.5 * self.spacing if edge_hinge_length is None else edge_hinge_length
         if not 0 < edge <= self.spacing:
@@ -107,8 +187,14 @@ class StripBuilder:
             material=material, width=width, damping=damping, clamp=clamp or ClampMotion(),
             rotation_centre=np.asarray(self.clamp_edge if rotation_centre is None else rotation_centre, dtype=float),
             hold_target=np.asarray(self.rest_positions[-1] if hold_target is None else hold_target, dtype=float),
-            settle_damping=settle_damping, edge_hinge_length=edge))
+            settle_damping=settle_damping, edge_hinge_length=edge, fabric_set=fabric_set or FabricSet(),
+            grip=grip or Grip(), hold_free_end=bool(hold_free_end)))
         return len(self.strips) - 1
+
+    def hinge_intervals(self) -> np.ndarray:
+        """``[hinge, (start, end)]``: the arc below the clamp edge each hinge bends (m), see
+        :func:`hinge_intervals`."""
+        return hinge_intervals(self.spacing, len(self.rest_positions) - self.n_clamped)
 
     def finalize(self, device: str | None = None, precision: str = "float64") -> Model:
         """The :class:`Model` of every strip added, on ``device`` in ``precision``."""

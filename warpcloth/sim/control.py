@@ -43,4 +43,5 @@ class Control:
         c.rotation_centre = model.array(self.rotation_centre, t.vec2)
         c.hold_target = model.array(self.hold_target, t.vec2)
         c.settle_damping = model.array(np.array([s.settle_damping for s in strips]))
+        c.hold_free_end = model.array(np.array([s.hold_free_end for s in strips], dtype=np.int32), int)
         self.struct = c

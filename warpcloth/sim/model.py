@@ -102,6 +102,9 @@ class Model:
         self.bending = np.array([s.material.bending_parameters() for s in strips])
         self.damping = np.array([s.damping for s in strips])
         self.edge_curvature_scale = np.array([self.spacing / s.edge_hinge_length for s in strips])
+        intervals = builder.hinge_intervals()
+        self.rest_curvature = np.stack([s.fabric_set.hinge_values(intervals) for s in strips], axis=1)  # [hinge, strip]
+        self.grip_factors = np.stack([s.grip.hinge_factors(intervals) for s in strips], axis=1)  # [hinge, strip, 2]
         # Reversal points are stored only when some strip's law has return-point memory.
         uses_history = any(s.material.bending_law == bending_masing.NAME for s in strips)
         self.reversal_memory = builder.reversal_memory if uses_history else 0
@@ -137,4 +140,6 @@ class Model:
         m.node_mass = self.array(self.node_mass)
         m.damping = self.array(self.damping)
         m.edge_curvature_scale = self.array(self.edge_curvature_scale)
+        m.rest_curvature = self.array(self.rest_curvature)
+        m.grip = self.array(self.grip_factors, t.vec2)
         return m

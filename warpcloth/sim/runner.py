@@ -38,7 +38,11 @@ class BudgetWatch:
         self.reference = np.full(model.n_strips, np.nan)
         self.peak_kinetic = np.zeros(model.n_strips)
         free = model.n_nodes - model.n_clamped
-        self.floor = 1e-3 * model.node_mass * (free - 0.5) * model.gravity * free * model.spacing
+        weight = model.node_mass * (free - 0.5) * model.gravity * free * model.spacing
+        # without gravity (a set strip curling at rest) the scale is bending's: D W over the
+        # free length, the work of bending it through one radian
+        bending = model.bending[:, 0] * model.width / (free * model.spacing)
+        self.floor = 1e-3 * np.maximum(weight, bending)
 
     def first_violation(self, values: np.ndarray, usable: np.ndarray) -> dict[int, tuple[int, float]]:
         """``strip → (sample index, residual / scale)`` of the first failing sample of

@@ -24,6 +24,7 @@ from warpcloth.kernels import (
     build_strip,
 )
 
+from .builder import Grip
 from .control import Control
 from .material import MaterialSI
 from .model import Model
@@ -39,8 +40,10 @@ grow a zig-zag or an oscillation long before a segment overstretches. Energy the
 removes is not counted: imex's backward Euler damps the stretching modes by design
 (docs/model.md §9.5), which a soft or long strip started unstretched shows as a budget
 loss of about its initial strain energy. The scale is the peak kinetic energy up to that
-sample, and at least 1e-3 of the strip's weight times its free length (just after a
-release the kinetic energy is still near 0, and rounding is not). A healthy run's budget
+sample, and at least 1e-3 of the strip's weight times its free length, or of D W / L
+(the work of bending it through a radian) where that is larger, as without gravity (just
+after a release, or for a strip at rest, the kinetic energy is near 0, and rounding is
+not). A healthy run's budget
 stays within 1e-2 of its peak kinetic energy (imex at its largest stable dt), usually
 1e-4. The check reads the recorded samples, so where it fires does not depend on how the
 run is cut into launches."""
@@ -52,7 +55,7 @@ QUANTITY = {
     STATUS_FOLDED: "hinge chord |e1+e2|/h (the strip folded onto itself)",
     STATUS_NONFINITE_ENERGY: "total energy (not finite)",
     STATUS_BUDGET: ("energy budget residual (in units of the peak kinetic energy, at least 1e-3 of the strip's "
-                    "weight times its free length)"),
+                    "weight times its free length or of D W / L)"),
 }
 
 
@@ -113,9 +116,10 @@ class ExplicitEulerSolver:
 
     @classmethod
     def stable_step(cls, material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
-                    gravity: float) -> StepBound | None:
+                    gravity: float, grip: Grip | None = None) -> StepBound | None:
         """The longest step this scheme runs stably on the chain :meth:`step_limit`
-        describes (the clamp-edge hinge bending ``edge_hinge_length``, under ``gravity``),
+        describes (the clamp-edge hinge bending ``edge_hinge_length``, under ``gravity``,
+        with the clamp's ``grip``),
         or None where no bound is known. Explicit bending enters as the straight hanging
         chain's stiffest transverse mode (:func:`~warpcloth.sim.stability.transverse_step_limit`)."""
         return None
@@ -212,10 +216,10 @@ class SemiImplicitEulerSolver(ExplicitEulerSolver):
 
     @classmethod
     def stable_step(cls, material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
-                    gravity: float) -> StepBound | None:
+                    gravity: float, grip: Grip | None = None) -> StepBound | None:
         """The smaller of the exact stretching limit and the transverse (bending) estimate."""
         stretching = cls.step_limit(material, spacing, free_nodes)
-        bending = transverse_step_limit(material, spacing, free_nodes, edge_hinge_length, gravity)
+        bending = transverse_step_limit(material, spacing, free_nodes, edge_hinge_length, gravity, grip)
         if stretching is not None and stretching <= bending:
             return StepBound(stretching, "stretching", exact=True)
         return StepBound(bending, "bending", exact=False)
@@ -241,9 +245,9 @@ class ImexSolver(ExplicitEulerSolver):
 
     @classmethod
     def stable_step(cls, material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
-                    gravity: float) -> StepBound | None:
+                    gravity: float, grip: Grip | None = None) -> StepBound | None:
         """The transverse (bending) estimate: stretching is implicit."""
-        return StepBound(transverse_step_limit(material, spacing, free_nodes, edge_hinge_length, gravity),
+        return StepBound(transverse_step_limit(material, spacing, free_nodes, edge_hinge_length, gravity, grip),
                          "bending", exact=False)
 
 

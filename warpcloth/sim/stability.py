@@ -18,6 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .bending import moment_along_path
+from .builder import Grip, hinge_intervals
 from .material import MaterialSI
 
 CYCLE_CURVATURE = 1000.0
@@ -69,21 +70,25 @@ def is_hysteretic(material: MaterialSI) -> bool:
 
 
 def transverse_step_limit(material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
-                          gravity: float) -> float:
+                          gravity: float, grip: Grip | None = None) -> float:
     """2/ω_max (s) of the straight hanging chain's transverse modes: ``free_nodes`` nodes
     below the clamp edge at ``spacing`` (m), masses ρ_A·h (the free end half), hinge
     stiffness tangent·(h/edge_hinge_length)/h at the clamp-edge hinge and tangent/h below
     it on the turning angles, and the geometric stiffness T_j/h of each segment under the
-    weight below it (``gravity`` in m/s²). Per unit width: the width cancels."""
+    weight below it (``gravity`` in m/s²). A ``grip`` scales each hinge's elastic part D
+    and its hysteretic part (tangent − D) by the hinge's factors (§5.4). Per unit width:
+    the width cancels."""
     h, n = spacing, free_nodes
     mass = np.full(n, material.density * h)
     mass[-1] *= 0.5
     stiffness = np.zeros((n, n))
-    tangent = stiffest_tangent(material)
+    tangent, rigidity = stiffest_tangent(material), material.bending_rigidity
+    factors = (grip or Grip()).hinge_factors(hinge_intervals(h, n))
     # hinge j turns at node j (node 0: the clamp edge, held; node -1 inside the clamp);
     # its turning angle is (y[j+1] - 2 y[j] + y[j-1]) / h; the unknowns are nodes 1..n
     for j in range(n):
-        couple = tangent * (h / edge_hinge_length if j == 0 else 1.0) / h
+        hinge = factors[j, 0] * rigidity + factors[j, 1] * (tangent - rigidity)
+        couple = hinge * (h / edge_hinge_length if j == 0 else 1.0) / h
         rows = [(node - 1, c / h) for node, c in ((j - 1, 1.0), (j, -2.0), (j + 1, 1.0)) if 1 <= node <= n]
         for a, ca in rows:
             for b, cb in rows:
