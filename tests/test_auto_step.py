@@ -84,13 +84,30 @@ def test_the_auto_step_is_within_its_stated_accuracy(name, scheme):
 
 
 def test_a_sweep_shares_one_auto_step_the_strictest_variant_sets():
-    sweep = wc.scene.load_sweep("damped_swing_sweep", [
-        'integrator.dt_s="auto"', "sweep.random.samples=4"])
-    steps = {s.integrator.dt_s for s in sweep.scenes}
-    assert len(steps) == 1
-    (dt,) = steps
+    # the stretching limit grows as √ρ_A: the lighter variant sets the sweep's one step
+    raw = wc.scene.read_scene_file("damped_swing")
+    raw["integrator"]["dt_s"] = "auto"
+    raw["sweep"] = {"grid": {"material.density_g_per_cm2": [0.01, 0.02, 0.04]}}
+    sweep = wc.expand(raw)
     alone = [choose_step(requesting_auto([s])).dt_s for s in sweep.scenes]
-    assert dt == min(alone)
+    assert len(set(alone)) == 3
+    assert {s.integrator.dt_s for s in sweep.scenes} == {min(alone)}
+
+
+def test_a_step_auto_chose_for_another_scene_is_refused_not_reused(tmp_path):
+    # a recorded auto scene rerun at a finer spacing would keep a step 5× too long for it
+    scene = wc.load_scene("damped_swing", overrides(integrator__dt_s="auto", run__duration_s=0.02,
+                                                    release__settle_time_s=0.01))
+    wc.simulate(scene, out=tmp_path / "run")
+    with pytest.raises(SceneError, match=r"integrator\.dt_s: 4\.5045e-05 s was chosen by dt_s = \"auto\" for another "
+                                         r"scene .* auto chooses 1\.1"):
+        wc.load_scene(tmp_path / "run" / "scene.toml", ["strip.spacing_mm=1.25"])
+    again = wc.load_scene(tmp_path / "run" / "scene.toml", ["strip.spacing_mm=1.25", 'integrator.dt_s="auto"'])
+    assert again.integrator.dt_s < scene.integrator.dt_s / 3
+    # and a Scene still asking for auto (made in Python) has its step chosen by simulate
+    asking = dataclasses.replace(scene, integrator=dataclasses.replace(scene.integrator, dt_s="auto",
+                                                                       dt_chosen_by="scene"))
+    assert wc.simulate(asking).strip_steps == wc.simulate(scene).strip_steps
 
 
 def test_auto_is_refused_where_no_step_is_both_stable_and_accurate():

@@ -6,6 +6,7 @@ kill or a full disk leaves either the old result or a new one marked incomplete 
 committed part reads back exactly, never a torn file that reads as valid.
 """
 
+import functools
 import json
 import re
 import resource
@@ -22,9 +23,18 @@ import warpcloth as wc
 from warpcloth.io.load import load_recording
 
 
+@functools.cache
+def kernels_compiled():
+    """The scenes' kernels compiled into Warp's cache by this process: with a cold cache a
+    file-size-limited child would meet its limit in Warp's precompiled header (a cache
+    file, not a result) and print clang's complaints."""
+    wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.01", "release.settle_time_s=0.01"]))
+
+
 def limited_cli(*args, cwd, max_file_bytes):
     """``warpcloth ARGS`` in a child whose files may not grow past ``max_file_bytes``
     (writes beyond fail with EFBIG: Python ignores SIGXFSZ)."""
+    kernels_compiled()
     def limit():
         resource.setrlimit(resource.RLIMIT_FSIZE, (max_file_bytes, max_file_bytes))
     return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True,

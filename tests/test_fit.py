@@ -191,3 +191,19 @@ def test_the_spacing_check_predicts_the_refit_at_half_the_spacing():
     assert any(p.startswith("refining the strip to strip.spacing_mm = 1.25 moves clamp.rotation_centre_dy_mm")
                for p in fit.problems)
     assert fit.to_json()["spacing_check"] == fit.spacing_check
+
+
+def test_a_spacing_check_that_could_not_run_is_not_a_pass():
+    from warpcloth.calibrate.motion_fit import FitResult
+
+    def judged(check):
+        fit = FitResult({"damping.gamma_per_s": 0.5}, {"damping.gamma_per_s": 0.01}, [[1.0]], 1e-4, 0.0, 100, 1, 1,
+                        0.0, converged=True, noise=1e-4, spacing_check=check)
+        fit.judge(0)
+        return fit
+
+    assert judged({}).status == "converged"
+    assert judged({"spacing_mm": 2.5, "moves": {"damping.gamma_per_s": 0.005}}).status == "converged"
+    assert judged({"spacing_mm": 2.5, "moves": {"damping.gamma_per_s": 0.02}}).status == "spacing_limited"
+    failed = judged({"spacing_mm": 2.5, "moves": {}, "note": "the run at half the spacing misses measured points"})
+    assert failed.status == "failed" and failed.problems[0].startswith("--check-spacing could not check the spacing")

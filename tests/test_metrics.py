@@ -190,3 +190,19 @@ def test_analyse_measures_every_input_on_one_window(tmp_path):
     done = run_cli("analyse", short, long, "--from", "2")
     assert done.returncode == 2 and "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1
     assert "--from: 2 s is not before the window's end 1.5 s (the end of" in done.stderr
+
+
+def test_analyse_gives_a_strip_that_diverged_before_t0_a_row_of_nans(tmp_path):
+    # strip 1 (400× the bending rigidity, imex at 2e-4 s) diverges during the hold: it has no
+    # sample after t = 0, so it gets NaNs and no say in the window, not a traceback
+    import warpcloth as wc
+    from warpcloth.calibrate.analysis import analyse
+
+    fields = ["run.duration_s=0.3", 'integrator.scheme="imex"', "integrator.dt_s=2e-4"]
+    scenes = [wc.load_scene("damped_swing", fields),
+              wc.load_scene("damped_swing", [*fields, "material.bending_rigidity_gf_cm2_per_cm=40"])]
+    result = wc.simulate(scenes, out=tmp_path / "r", on_divergence="record")
+    assert [d["strip"] for d in result.diverged] == [1] and result.diverged[0]["phase"] != "record"
+    good, gone = analyse(tmp_path / "r")
+    assert (good["from_s"], good["to_s"]) == (0.0, 0.3) and good["first_amplitude_mm"] > 10
+    assert gone["n_half_cycles"] == 0 and np.isnan(gone["first_amplitude_mm"])

@@ -11,6 +11,7 @@ simulation's has none (NaN)."""
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -40,8 +41,9 @@ class SwingRecord:
 
     @property
     def span(self) -> tuple[float, float]:
-        """First and last sample time (s)."""
-        return float(self.t[0]), float(self.t[-1])
+        """First and last sample time (s); NaN for a record with no samples (a strip that
+        diverged before t = 0)."""
+        return (float(self.t[0]), float(self.t[-1])) if len(self.t) else (math.nan, math.nan)
 
 
 def swing_records(source: str | Path, starts_at_rest: bool = True) -> list[SwingRecord]:
@@ -80,7 +82,7 @@ def swing_row(record: SwingRecord, window: tuple[float, float] | None = None) ->
     lower, upper = window or record.span
     inside = (record.t >= lower - TIME_TOLERANCE_S) & (record.t <= upper + TIME_TOLERANCE_S)
     t, laser = record.t[inside], record.laser[inside]
-    at_rest = record.starts_at_rest and lower <= record.span[0] + TIME_TOLERANCE_S
+    at_rest = record.starts_at_rest and not lower > record.span[0] + TIME_TOLERANCE_S
     if record.measured:
         metrics = swing_summary(t, laser, None, at_rest, noise=difference_noise([laser])) | {"signal": "measured x"}
     else:
@@ -100,7 +102,12 @@ def analyse(sources: str | Path | list[str | Path], starts_at_rest: bool = True,
     records unless ``t_from``/``t_to`` choose it); each row holds ``from_s`` and ``to_s``."""
     sources = sources if isinstance(sources, list) else [sources]
     records = [record for source in sources for record in swing_records(source, starts_at_rest)]
-    spans = {f"{r.source}" + ("" if r.variant is None else f" variant {r.variant}"): r.span for r in records}
+    # a record without samples (diverged before t = 0) gets its row of NaNs, not a say in the window
+    spans = {f"{r.source}" + ("" if r.variant is None else f" variant {r.variant}"): r.span for r in records
+             if len(r.t)}
+    if not spans:
+        raise DataFileError(", ".join(str(s) for s in sources), "holds no samples after t = 0 (every strip "
+                            "diverged before it)")
     window = comparison_window(spans, t_from, t_to)
     return [swing_row(record, window) for record in records]
 

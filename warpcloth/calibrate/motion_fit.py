@@ -57,7 +57,7 @@ from warpcloth.kernels import bending_law
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, batch_fields, check_step, field_laws, law_fields, scene_from_dict, set_field
 from warpcloth.scene.sampling import latin_hypercube
-from warpcloth.scene.step import AUTO, choose_step
+from warpcloth.scene.step import AUTO, choose_step, stable_step_of
 from warpcloth.sim import RunResult
 from warpcloth.sim.resources import check_memory
 
@@ -359,6 +359,7 @@ class FitResult:
     problems: list[str] = field(default_factory=list)  # why the status is not "converged"
     mesh_note: str = ""  # why the values hold at the fitted spacing only (a law whose answers depend on h)
     spacing_check: dict = field(default_factory=dict)  # check_spacing: the fit's move at h/2 (:func:`spacing_shift`)
+    dt_s: float = float("nan")  # the step every run of the fit took (one per batch)
 
     def to_json(self) -> dict:
         """The verdict, each parameter with its 1σ and bounds, and how the search went;
@@ -417,6 +418,8 @@ class FitResult:
             found.append(("poor_fit", f"the RMS {self.rms * 1e3:.4g} mm is {ratio:.1f}× the "
                                       f"measurement noise {self.noise * 1e3:.3g} mm ({self.noise_source}): the "
                                       "model with these free parameters does not explain the data"))
+        if self.spacing_check.get("note"):
+            found.append(("failed", f"--check-spacing could not check the spacing: {self.spacing_check['note']}"))
         moved = self.spacing_check.get("moves", {})
         for name, delta in moved.items():
             if abs(delta) > self.sigma.get(name, math.inf):
@@ -546,6 +549,7 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
     # result row 0 is the reported point (accepted last, or re-run above)
     fit.judge(int(np.isnan(objective.residuals(result, 0, shift, penalise=False)).sum()))
     fit.mesh_note = mesh_note(base)
+    fit.dt_s = objective.scene.integrator.dt_s
     return fit
 
 
@@ -564,13 +568,15 @@ def spacing_shift(objective: Objective, u: np.ndarray, shift: float, jac: np.nda
         set_field(fine, name, value)
     scene = scene_from_dict(copy.deepcopy(fine))
     set_field(fine, "strip.spacing_mm", scene.strip.spacing_mm / 2)
-    auto = scene.integrator.dt_chosen_by == AUTO
-    set_field(fine, "integrator.dt_s", AUTO if auto else scene.integrator.dt_s / 2)
-    if not auto:  # the stretching limit shrinks a little faster than h (its cos(π/4N) factor)
-        try:
-            check_step(scene_from_dict(copy.deepcopy(fine)))
-        except SceneError:
-            set_field(fine, "integrator.dt_s", scene.integrator.dt_s / 4)
+    if scene.integrator.dt_chosen_by == AUTO:
+        set_field(fine, "integrator.dt_s", AUTO)
+        set_field(fine, "integrator.dt_chosen_by", "scene")
+    else:  # dt/2, or shorter where the bound at h/2 asks (imex's bending bound shrinks as h²)
+        stable = stable_step_of(scene_from_dict(copy.deepcopy(fine), choose_step=False))
+        dt = scene.integrator.dt_s / 2
+        if stable is not None and dt > stable:
+            dt = scene.output_interval / math.ceil(scene.output_interval / stable)
+        set_field(fine, "integrator.dt_s", dt)
     refined = Objective(fine, objective.measurement, [], objective.align, objective.device)
     fine_residual = refined.residuals(refined.run(np.zeros((1, 0))), 0, shift, penalise=False)
     names = [p.field for p in objective.free] + ([SHIFT] if objective.align else [])
@@ -695,6 +701,9 @@ def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | Tr
     for name, value in fit.parameters.items():
         if name != SHIFT:
             set_field(best, name, value)
+    if best.get("integrator", {}).get("dt_s") == AUTO and math.isfinite(fit.dt_s):
+        set_field(best, "integrator.dt_s", fit.dt_s)  # the box's step, which the RMS was measured at
+        set_field(best, "integrator.dt_chosen_by", AUTO)
     scene = scene_from_dict(copy.deepcopy(best))
     objective = Objective(best, measurement, [], abs(fit.shift_s), device)
     result = objective.run(np.zeros((1, 0)))

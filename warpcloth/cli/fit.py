@@ -111,8 +111,8 @@ def fit_command(args: argparse.Namespace) -> int:
         check = fit.spacing_check
         moves = ", ".join(f"{name} {delta:+.3g} ({abs(delta) / fit.sigma[name]:.1f}σ)"
                           for name, delta in check["moves"].items())
-        print(f"spacing check: at strip.spacing_mm = {check['spacing_mm']:g} the fit would move "
-              f"{moves or 'nothing: ' + check.get('note', '')}")
+        print(f"spacing check: at strip.spacing_mm = {check['spacing_mm']:g} "
+              + (f"the fit would move {moves}" if moves else f"it could not run: {check.get('note', '')}"))
     print(f"status: {fit.status}")
     print(f"wrote {out}/ (best.toml reruns the best fit: warpcloth run {out / 'best.toml'})")
     if fit.status != "converged":

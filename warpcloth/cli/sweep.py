@@ -41,12 +41,17 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     out = Path(args.out or Path("runs") / Path(args.scene).stem)
     sweep = load_sweep(args.scene, args.overrides, max_variants=args.max_variants or MAX_VARIANTS,
                        progress=not args.no_progress)
-    chosen = [s for s in sweep.scenes if s.integrator.dt_chosen_by == "auto"]
-    if chosen:
+    groups: dict[tuple[str, float], list] = {}  # one step per scheme and probe interval
+    for s in sweep.scenes:
+        if s.integrator.dt_chosen_by == "auto":
+            groups.setdefault((s.integrator.scheme, s.output_interval), []).append(s)
+    if groups:
         from warpcloth.scene.step import choose_step, requesting_auto
 
-        print(choose_step(requesting_auto(chosen)).describe()
-              .replace("auto:", f"auto, for all {len(chosen)} variants:", 1))
+        for (scheme, _), chosen in groups.items():
+            print(choose_step(requesting_auto(chosen)).describe()
+                  .replace("auto:", f"auto, for the {len(chosen)} {scheme} variants:" if len(groups) > 1
+                           else f"auto, for all {len(chosen)} variants:", 1))
     summary = run_sweep(sweep, out, max_batch=args.max_batch, workers=args.workers, scheduler=args.scheduler,
                         device=args.device, frames=args.frames, progress=not args.no_progress)
     n_div = int(summary["diverged"].sum())

@@ -1,8 +1,8 @@
 """``integrator.dt_s = "auto"``: the longest step the scheme runs stably and the evidence
 says is accurate, a whole fraction of the probe interval (docs/model.md §9.6).
 
-The step is the smallest of three, over every scene that shares it (a sweep's variants, a
-fit's corners): a margin under the scheme's stability bound (exact for stretching,
+The step is the smallest of three, over every scene that shares it (a sweep's variants of
+one scheme and probe interval, a fit's corners): a margin under the scheme's stability bound (exact for stretching,
 :data:`STABILITY_MARGIN`), the longest step measured accurate for the scheme
 (:data:`ACCURATE_STEP_S`), and the probe interval; then shortened so that a whole number
 of steps fills the interval, so every probe falls on a step.
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from warpcloth.errors import SceneError
 from warpcloth.kernels import bending_law
-from warpcloth.sim import SOLVERS
+from warpcloth.sim import SOLVERS, MaterialSI
 from warpcloth.sim.solvers import StepBound
 from warpcloth.sim.stability import cycle_response
 
@@ -32,8 +32,8 @@ AUTO = "auto"
 STABILITY_MARGIN = {True: 0.9, False: 0.8}
 """The fraction of the stability bound taken: 0.9 of an exact bound (strain and damping
 lower the stretching limit a little, §9.3), 0.8 of the linearised bending estimate (a
-deflected strip is not straight; measured 10 % conservative on a hysteretic rotation and
-exact on an elastic one, §9.6)."""
+deflected strip is not straight; measured 12 % conservative on a hysteretic rotation and
+within 3 % on elastic ones, §9.6)."""
 
 ACCURATE_STEP_S = {"semi_implicit": None, "imex": 2e-4}
 """The longest step each scheme is measured accurate at, where stability does not already
@@ -74,7 +74,6 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
     that suits every one; a SceneError of ``integrator.dt_s`` where there is no such step."""
     first = scenes[0]
     scheme, interval = first.integrator.scheme, first.output_interval
-    solver = SOLVERS[scheme]
     materials = [to_si(scene.material) for scene in scenes]
     response = cycle_response(materials)
     for scene, material, (_, loop) in zip(scenes, materials, response, strict=True):
@@ -87,8 +86,7 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
                              "\"auto\"", related=("integrator.scheme", "material.bending_law"))
     bounds = []
     for scene, material in zip(scenes, materials, strict=True):
-        bound = solver.stable_step(material, scene.spacing, scene.n_nodes - scene.n_clamped,
-                                   scene.edge_hinge_length, scene.run.gravity_m_per_s2, grip_of(scene))
+        bound = _stability_bound(scene, material)
         if bound is None:
             raise SceneError("integrator.dt_s", f"auto needs a scheme with a known stability limit; {scheme} has "
                              "none (forward Euler amplifies every undamped oscillation, docs/model.md §9): use "
@@ -123,13 +121,43 @@ def with_chosen_step(scenes: Sequence[Scene]) -> list[Scene]:
 
 def shared_auto_step(scenes: Sequence[Scene]) -> list[Scene]:
     """``scenes`` for one batch: those whose step auto chose (``dt_chosen_by = "auto"``),
-    each alone, get the one step that suits them all when theirs differ; the rest as given."""
-    scenes = list(scenes)
+    each alone, get the one step that suits them all when theirs differ, and a scene that
+    still asks for ``dt_s = "auto"`` gets it chosen; the rest as given."""
+    scenes = with_chosen_step(scenes)
     chosen = [i for i, s in enumerate(scenes) if s.integrator.dt_chosen_by == AUTO]
     if len({scenes[i].integrator.dt_s for i in chosen}) > 1:
         for i, scene in zip(chosen, with_chosen_step(requesting_auto([scenes[i] for i in chosen])), strict=True):
             scenes[i] = scene
     return scenes
+
+
+def check_chosen_step(scene: Scene) -> None:
+    """Refuse a step that ``dt_s = "auto"`` chose for another scene: a recorded scene
+    (``dt_chosen_by = "auto"``) whose spacing, material or scheme was changed since, so its
+    number is longer than auto would choose for it now. (A step shared with other scenes,
+    a sweep's or a fit's, is never longer than this scene's own.)"""
+    if scene.integrator.dt_chosen_by != AUTO or isinstance(scene.integrator.dt_s, str):
+        return
+    now = choose_step(requesting_auto([scene])).dt_s
+    if scene.integrator.dt_s > now * (1 + 1e-9):
+        raise SceneError("integrator.dt_s", f"{scene.integrator.dt_s:.4e} s was chosen by dt_s = \"auto\" for "
+                         f"another scene (integrator.dt_chosen_by = \"auto\"); for this one auto chooses "
+                         f"{now:.4e} s: set integrator.dt_s = \"auto\" to choose again, or give the step with "
+                         "integrator.dt_chosen_by = \"scene\"",
+                         related=("integrator.dt_chosen_by", "strip.spacing_mm", "integrator.scheme"))
+
+
+def _stability_bound(scene: Scene, material: MaterialSI) -> StepBound | None:
+    return SOLVERS[scene.integrator.scheme].stable_step(material, scene.spacing, scene.n_nodes - scene.n_clamped,
+                                                        scene.edge_hinge_length, scene.run.gravity_m_per_s2,
+                                                        grip_of(scene))
+
+
+def stable_step_of(scene: Scene) -> float | None:
+    """The longest step the scene's scheme runs stably with auto's margin (s), None for
+    a scheme without a known bound."""
+    bound = _stability_bound(scene, to_si(scene.material))
+    return None if bound is None else bound.seconds * STABILITY_MARGIN[bound.exact]
 
 
 def requesting_auto(scenes: Sequence[Scene]) -> list[Scene]:

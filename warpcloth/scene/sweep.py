@@ -211,7 +211,7 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     unknown = set(spec) - SWEEP_KEYS
     if unknown:
         raise SceneError(f"sweep.{sorted(unknown)[0]}", f"unknown field; known: {', '.join(sorted(SWEEP_KEYS))}")
-    resolved = scene_from_dict(copy.deepcopy(base)).to_dict()
+    resolved = scene_from_dict(copy.deepcopy(base), choose_step=False).to_dict()
     grid = _value_lists(_table(spec, "grid"), "sweep.grid")
     zipped = _value_lists(_table(spec, "zip"), "sweep.zip")
     lengths = {len(v) for v in zipped.values()}

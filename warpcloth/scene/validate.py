@@ -44,6 +44,10 @@ def validate_scene(scene: Scene) -> None:
     _validate_rest_curvature(scene)
     _validate_grip(scene)
     if not scene.release.hold_free_end:
+        if not scene.release.enabled:
+            raise SceneError("release.hold_free_end", "= false but release.enabled = false: there is no pre-roll "
+                             "for the free end to settle in, so it would be ignored; remove it or enable the release",
+                             related=("release.enabled",))
         defaults = ReleaseSection()
         for name in ("hold_x_mm", "hold_y_mm"):
             if getattr(scene.release, name) != getattr(defaults, name):
@@ -100,6 +104,9 @@ def check_step(scene: Scene) -> None:
                          f"laser line would never cross it; put it between -{st.free_length_mm:g} and 0 mm",
                          related=("strip.free_length_mm",))
     check_plausible("areal density", scene.material.density_g_per_cm2, "material.density_g_per_cm2")
+    from .step import check_chosen_step  # step.py reads validate's checks
+
+    check_chosen_step(scene)
     dt, scheme = scene.integrator.dt_s, scene.integrator.scheme
     limit = SOLVERS[scheme].step_limit(to_si(scene.material), scene.spacing, scene.n_nodes - scene.n_clamped)
     softening = any(a < 0 for a in scene.material.tensile_gf_per_cm[1:])
