@@ -26,8 +26,8 @@ from .schema import (
     batch_fields,
     choice_fields,
 )
+from .step import check_step
 from .sweep import Sweep, expand, load_sweep
-from .validate import check_step
 
 __all__ = [
     "COORDINATES",

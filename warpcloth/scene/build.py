@@ -15,14 +15,15 @@ import numpy as np
 from warpcloth import units
 from warpcloth.errors import SceneError
 from warpcloth.kernels import bending_masing
-from warpcloth.sim import SOLVERS, ClampMotion, Control, FabricSet, Grip, Model, Recorder, Solver, StripBuilder
+from warpcloth.sim import SOLVERS, ClampMotion, Control, FabricSet, Model, Recorder, Solver, StripBuilder
 from warpcloth.sim.resources import check_memory
 
 from .clamp_motion import clamp_pieces
 from .geometry import rest_positions
+from .grip import grip_of
 from .materials import to_si
 from .schema import Scene, batch_fields
-from .validate import check_step
+from .step import check_step
 
 
 @dataclass
@@ -92,12 +93,6 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
             grip=grip_of(scene),
         )
     return builder
-
-
-def grip_of(scene: Scene) -> Grip:
-    """The clamp's grip zone of ``scene`` in SI (docs/model.md §5.4)."""
-    return Grip(scene.clamp.grip_length_mm * units.LENGTH_MM, scene.clamp.grip_bending_factor,
-                scene.clamp.grip_hysteresis_factor)
 
 
 def build_batch(scenes: Sequence[Scene], device: str | None = None) -> Batch:

@@ -13,8 +13,8 @@ from .materials import MATERIAL_FILE_KEY, with_material_file
 from .overrides import Overrides, apply_overrides
 from .parse import parse_section, parse_toml, read_toml_text
 from .schema import Scene
-from .step import AUTO, with_chosen_step
-from .validate import check_step, validate_scene
+from .step import AUTO, check_step, with_chosen_step
+from .validate import validate_scene
 
 
 def bundled_scenes() -> list[str]:

@@ -6,6 +6,9 @@ one scheme and probe interval, a fit's corners): a margin under the scheme's sta
 :data:`STABILITY_MARGIN`), the longest step measured accurate for the scheme
 (:data:`ACCURATE_STEP_S`), and the probe interval; then shortened so that a whole number
 of steps fills the interval, so every probe falls on a step.
+
+:func:`check_step` is here too: the checks of a scene about to run, its step's stability
+among them (docs/model.md §9.3), and that a step auto chose was chosen for this scene.
 """
 
 from __future__ import annotations
@@ -20,8 +23,9 @@ from warpcloth.kernels import bending_law
 from warpcloth.sim import SOLVERS, MaterialSI
 from warpcloth.sim.solvers import StepBound
 from warpcloth.sim.stability import cycle_response
+from warpcloth.units import check_plausible
 
-from .build import grip_of
+from .grip import grip_of
 from .materials import to_si
 from .schema import Scene
 from .validate import validate_scene
@@ -173,3 +177,45 @@ def describe_step(scene: Scene) -> str:
         return choice.describe()
     return (f"integrator.dt_s = auto: {scene.integrator.dt_s:.4e} s, the longest step that suits every scene "
             f"sharing it (this one alone: {choice.describe().split(': ', 1)[1]})")
+
+
+STEP_LIMIT_SLACK = 1e-3
+"""With a softening tensile law (a negative a2..a4), a step is refused only this far
+(relative) above the scheme's limit: strained by the hang, such a law can raise the
+true limit by up to ~5e-4. Without one, the limit is exact and a step above it is
+refused."""
+
+
+def check_step(scene: Scene) -> None:
+    """Refuse a time step the scene's scheme cannot run stably (docs/model.md §9.3).
+
+    Not part of :func:`validate_scene`: a recorded scene is read back as it was run (a
+    diverged run stays readable); this check is for scenes about to run. So are two more:
+    a laser line the hanging strip never crosses is refused (its record would be the free
+    end's, not the laser's), and an implausible density is warned about
+    (:func:`warpcloth.units.check_plausible`).
+    """
+    st = scene.strip
+    if not -st.free_length_mm < scene.output.laser_height_mm < 0:
+        raise SceneError("output.laser_height_mm", f"{scene.output.laser_height_mm:g} mm is not on the hanging "
+                         f"strip, which reaches from 0 to -{st.free_length_mm:g} mm (strip.free_length_mm): the "
+                         f"laser line would never cross it; put it between -{st.free_length_mm:g} and 0 mm",
+                         related=("strip.free_length_mm",))
+    check_plausible("areal density", scene.material.density_g_per_cm2, "material.density_g_per_cm2")
+    check_chosen_step(scene)
+    dt, scheme = scene.integrator.dt_s, scene.integrator.scheme
+    limit = SOLVERS[scheme].step_limit(to_si(scene.material), scene.spacing, scene.n_nodes - scene.n_clamped)
+    softening = any(a < 0 for a in scene.material.tensile_gf_per_cm[1:])
+    if limit is None or dt <= limit * (1 + (STEP_LIMIT_SLACK if softening else 0.0)):
+        return
+    m, st = scene.material, scene.strip
+    unit = 10.0 ** (math.floor(math.log10(limit)) - 3)
+    below = math.floor(limit / unit) * unit  # 4 digits, rounded down: the advice itself runs
+    raise SceneError("integrator.dt_s", f"{dt:g} s is above the {scheme} scheme's stability limit {below:.3e} s "
+                     f"for this strip: the stretching mode, h·√(ρ_A/a1)/cos(π/4N) with strip.spacing_mm = "
+                     f"{st.spacing_mm:g} (N = {scene.n_nodes - scene.n_clamped} free nodes), "
+                     f"material.density_g_per_cm2 = {m.density_g_per_cm2:g}, material.tensile_gf_per_cm[0] = "
+                     f"{m.tensile_gf_per_cm[0]:g}; use a dt_s of at most {below:.3e} s or integrator.scheme = "
+                     "\"imex\" (stretching implicit)",
+                     related=("strip.spacing_mm", "strip.free_length_mm", "material.density_g_per_cm2",
+                              "material.tensile_gf_per_cm", "material.from_file", "integrator.scheme"))

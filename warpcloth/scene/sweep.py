@@ -43,8 +43,7 @@ from .locate import located
 from .overrides import apply_overrides, set_field
 from .sampling import discrepancy, latin_hypercube
 from .schema import Scene, batch_fields
-from .step import with_chosen_step
-from .validate import check_step
+from .step import check_step, with_chosen_step
 
 MAX_VARIANTS = 100_000
 """Default cap on a sweep's variants: each is a validated scene held in memory (a few kB,

@@ -5,10 +5,8 @@ from __future__ import annotations
 import math
 
 from warpcloth.errors import SceneError
-from warpcloth.sim.solvers import SOLVERS
-from warpcloth.units import check_plausible
 
-from .materials import to_si, validate_material
+from .materials import validate_material
 from .schema import ClampSection, ReleaseSection, Scene
 
 MAX_STEPS = 2**31 - 1
@@ -79,50 +77,6 @@ def validate_scene(scene: Scene) -> None:
         raise SceneError("run.duration_s", f"{scene.preroll + scene.run.duration_s:g} s at dt {dt:g} s is "
                          f"{steps:.3g} steps, more than {MAX_STEPS}",
                          related=("integrator.dt_s", "release.settle_time_s", "release.move_time_s"))
-
-
-STEP_LIMIT_SLACK = 1e-3
-"""With a softening tensile law (a negative a2..a4), a step is refused only this far
-(relative) above the scheme's limit: strained by the hang, such a law can raise the
-true limit by up to ~5e-4. Without one, the limit is exact and a step above it is
-refused."""
-
-
-def check_step(scene: Scene) -> None:
-    """Refuse a time step the scene's scheme cannot run stably (docs/model.md §9.3).
-
-    Not part of :func:`validate_scene`: a recorded scene is read back as it was run (a
-    diverged run stays readable); this check is for scenes about to run. So are two more:
-    a laser line the hanging strip never crosses is refused (its record would be the free
-    end's, not the laser's), and an implausible density is warned about
-    (:func:`warpcloth.units.check_plausible`).
-    """
-    st = scene.strip
-    if not -st.free_length_mm < scene.output.laser_height_mm < 0:
-        raise SceneError("output.laser_height_mm", f"{scene.output.laser_height_mm:g} mm is not on the hanging "
-                         f"strip, which reaches from 0 to -{st.free_length_mm:g} mm (strip.free_length_mm): the "
-                         f"laser line would never cross it; put it between -{st.free_length_mm:g} and 0 mm",
-                         related=("strip.free_length_mm",))
-    check_plausible("areal density", scene.material.density_g_per_cm2, "material.density_g_per_cm2")
-    from .step import check_chosen_step  # step.py reads validate's checks
-
-    check_chosen_step(scene)
-    dt, scheme = scene.integrator.dt_s, scene.integrator.scheme
-    limit = SOLVERS[scheme].step_limit(to_si(scene.material), scene.spacing, scene.n_nodes - scene.n_clamped)
-    softening = any(a < 0 for a in scene.material.tensile_gf_per_cm[1:])
-    if limit is None or dt <= limit * (1 + (STEP_LIMIT_SLACK if softening else 0.0)):
-        return
-    m, st = scene.material, scene.strip
-    unit = 10.0 ** (math.floor(math.log10(limit)) - 3)
-    below = math.floor(limit / unit) * unit  # 4 digits, rounded down: the advice itself runs
-    raise SceneError("integrator.dt_s", f"{dt:g} s is above the {scheme} scheme's stability limit {below:.3e} s "
-                     f"for this strip: the stretching mode, h·√(ρ_A/a1)/cos(π/4N) with strip.spacing_mm = "
-                     f"{st.spacing_mm:g} (N = {scene.n_nodes - scene.n_clamped} free nodes), "
-                     f"material.density_g_per_cm2 = {m.density_g_per_cm2:g}, material.tensile_gf_per_cm[0] = "
-                     f"{m.tensile_gf_per_cm[0]:g}; use a dt_s of at most {below:.3e} s or integrator.scheme = "
-                     "\"imex\" (stretching implicit)",
-                     related=("strip.spacing_mm", "strip.free_length_mm", "material.density_g_per_cm2",
-                              "material.tensile_gf_per_cm", "material.from_file", "integrator.scheme"))
 
 
 def _validate_rest_curvature(scene: Scene) -> None:
