@@ -17,13 +17,14 @@ from warpcloth.errors import SceneError
 from warpcloth.kernels import bending_masing
 from warpcloth.sim import SOLVERS, ClampMotion, Control, FabricSet, Model, Recorder, Solver, StripBuilder
 from warpcloth.sim.resources import check_memory
+from warpcloth.sim.stability import cycle_response
 
 from .clamp_motion import clamp_pieces
 from .geometry import rest_positions
 from .grip import grip_of
 from .materials import to_si
 from .schema import Scene, batch_fields
-from .step import check_step
+from .step import AUTO, check_step
 
 
 @dataclass
@@ -42,6 +43,9 @@ def check_batch(scenes: Sequence[Scene]) -> None:
     where they can say which line to change)."""
     if not scenes:
         raise SceneError("scenes", "a batch needs at least one scene")
+    chosen = [to_si(s.material) for s in scenes if s.integrator.dt_chosen_by == AUTO]
+    if chosen:  # the laws' cycles for check_step's auto check: one launch, not one per scene
+        cycle_response(chosen)
     for i, scene in enumerate(scenes):
         try:
             check_step(scene)

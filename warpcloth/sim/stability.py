@@ -81,24 +81,17 @@ def transverse_step_limit(material: MaterialSI, spacing: float, free_nodes: int,
     h, n = spacing, free_nodes
     mass = np.full(n, material.density * h)
     mass[-1] *= 0.5
-    stiffness = np.zeros((n, n))
     tangent, rigidity = stiffest_tangent(material), material.bending_rigidity
     factors = (grip or Grip()).hinge_factors(hinge_intervals(h, n))
-    # hinge j turns at node j (node 0: the clamp edge, held; node -1 inside the clamp);
-    # its turning angle is (y[j+1] - 2 y[j] + y[j-1]) / h; the unknowns are nodes 1..n
-    for j in range(n):
-        hinge = factors[j, 0] * rigidity + factors[j, 1] * (tangent - rigidity)
-        couple = hinge * (h / edge_hinge_length if j == 0 else 1.0) / h
-        rows = [(node - 1, c / h) for node, c in ((j - 1, 1.0), (j, -2.0), (j + 1, 1.0)) if 1 <= node <= n]
-        for a, ca in rows:
-            for b, cb in rows:
-                stiffness[a, b] += couple * ca * cb
-    for j in range(n):  # segment j, node j to j + 1, carries the weight of nodes j + 1..n
-        spring = gravity * mass[j:].sum() / h
-        rows = [(node - 1, c) for node, c in ((j, -1.0), (j + 1, 1.0)) if node >= 1]
-        for a, ca in rows:
-            for b, cb in rows:
-                stiffness[a, b] += spring * ca * cb
+    couple = (factors[:, 0] * rigidity + factors[:, 1] * (tangent - rigidity)) / h
+    couple[0] *= h / edge_hinge_length
+    # hinge j turns at node j (node 0: the clamp edge, held; node -1 inside the clamp) by
+    # (y[j+1] - 2 y[j] + y[j-1]) / h; segment j (node j to j + 1) stretches by y[j+1] - y[j]
+    # and carries the weight of nodes j + 1..n. Unknowns: nodes 1..n (column k is node k + 1).
+    turning = (np.eye(n, k=-2) - 2 * np.eye(n, k=-1) + np.eye(n)) / h
+    stretch = np.eye(n) - np.eye(n, k=-1)
+    spring = gravity * np.cumsum(mass[::-1])[::-1] / h
+    stiffness = turning.T @ (couple[:, None] * turning) + stretch.T @ (spring[:, None] * stretch)
     scale = 1.0 / np.sqrt(mass)
     omega_squared = float(np.linalg.eigvalsh(scale[:, None] * stiffness * scale[None, :]).max())
     return float(2.0 / np.sqrt(omega_squared))
