@@ -93,7 +93,6 @@ from numba import njit, prange, types
 from numba.core import cgutils
 from numba.core.caching import NullCache
 from numba.extending import intrinsic
-from warpcloth.kernels import bending_law
 
 import warpcloth as wc
 from warpcloth.scene import build_batch
@@ -562,7 +561,7 @@ class NumbaStrips:
     def __init__(self, scenes: list[wc.Scene], initial_positions: np.ndarray | None = None) -> None:
         batch = build_batch(scenes)
         model, control, solver, recorder = batch.model, batch.control, batch.solver, batch.recorder
-        laws = {bending_law(s.material.bending_law).NAME for s in model.strips}
+        laws = {s.material.bending_law for s in model.strips}
         if len(laws) != 1 or not laws <= {"tagawa2003", "masing"}:
             raise ValueError(f"the Numba peer implements one of tagawa2003 and masing per batch, not {sorted(laws)}")
         self.masing = laws == {"masing"}

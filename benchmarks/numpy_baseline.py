@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 import warp as wp
+from warpcloth.kernels.bending_tagawa2003 import loop_asymptote
 
 import warpcloth as wc
 from warpcloth.scene import rest_positions, to_si
@@ -30,8 +31,9 @@ class NumpyStrips:
     def __init__(self, scene: wc.Scene, batch: int, x0: np.ndarray) -> None:
         m = to_si(scene.material)
         self.a = np.array(m.tensile)
-        self.d, self.d1, self.alpha, self.k0, self.m0 = (m.bending_rigidity, m.hysteresis_d1, m.hysteresis_alpha,
-                                                         m.hysteresis_k0, m.hysteresis_m0)
+        b = m.bending
+        self.d, self.d1, self.alpha, self.k0 = m.bending_rigidity, b.hysteresis_d1, b.hysteresis_alpha, b.hysteresis_k0
+        self.m0 = loop_asymptote(self.d1, self.alpha, self.k0)
         self.width = scene.strip.width_mm * 1e-3
         self.h = scene.spacing
         self.nc = scene.n_clamped

@@ -22,43 +22,27 @@ frictional couple regularised by a spring of stiffness M_s / K_s
 """
 
 import functools
-from types import SimpleNamespace
 from typing import Any
 
 import warp as wp
 
+from .bending_tagawa2003 import default_curvature_scale, default_loop_asymptote
+from .law import BendingLaw, LawFunctions, LawParameter
 from .types import precision
-
-NAME = "dahl"
-
-PARAMETERS = ("bending_rigidity", "dahl_moment", "dahl_curvature", "dahl_exponent")
-"""Layout of the packed per-strip parameter vector: D (N·m), M_s (N), K_s (1/m), n."""
-
-MATERIAL_FIELDS = PARAMETERS
-"""The :class:`warpcloth.sim.MaterialSI` fields :func:`packed_parameters` takes, in order."""
-
-MEMORY = ("hysteretic_moment", "direction", "previous_curvature")
-"""Layout of the packed per-hinge memory: h (N), the direction of the last change of
-curvature (+1 / −1), K at the last force evaluation (1/m)."""
-
-MESH_INDEPENDENT = False
-"""Whether the law's answers converge as the mesh is refined: its hysteretic moment depends
-on the total variation of the curvature history (no return-point memory), so fitted
-values depend on h (docs/model.md §15.6)."""
 
 wp.set_module_options({"enable_backward": False})
 
 
 def packed_parameters(bending_rigidity: float, moment: float, curvature: float, exponent: float) -> tuple[float, ...]:
-    """The per-strip parameter vector (layout :data:`PARAMETERS`) from D, M_s, K_s, n in SI."""
+    """The per-strip parameter vector (D, M_s, K_s, n) from D (N·m), M_s (N), K_s (1/m), n in SI."""
     return (bending_rigidity, moment, curvature, exponent)
 
 
 @functools.cache
-def build(scalar: Any) -> SimpleNamespace:
+def build(scalar: Any) -> LawFunctions:
     """The law's Warp functions for ``scalar``, on the shared parameter and memory types."""
     types = precision(scalar)
-    Memory, Parameters = types.law_memory, types.law_parameters  # this law uses 4 of the 6 parameter slots
+    Memory, Parameters, History = types.law_memory, types.law_parameters, types.reversal_memory  # 4 of 6 slots
     zero = scalar(0.0)
     one = scalar(1.0)
 
@@ -86,12 +70,12 @@ def build(scalar: Any) -> SimpleNamespace:
         return y0 * wp.exp(-log1p(x) / (n - one))
 
     @wp.func
-    def fresh_memory(curvature: scalar, p: Parameters):
+    def fresh_memory(curvature: scalar, p: Parameters, history: History, hinge: int, strip: int):
         # A hinge that has never bent: no hysteretic moment, loading upward.
         return Memory(zero, one, curvature)
 
     @wp.func
-    def follow(curvature: scalar, memory: Memory, p: Parameters):
+    def follow(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         h = memory[0]
         direction = memory[1]
         change = curvature - memory[2]
@@ -107,7 +91,7 @@ def build(scalar: Any) -> SimpleNamespace:
         return memory[0]
 
     @wp.func
-    def tangent(curvature: scalar, memory: Memory, p: Parameters):
+    def tangent(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         # dM/dK on the current direction: D + (M_s / K_s) y^n
         m_s = p[1]
         if m_s == zero:
@@ -117,5 +101,29 @@ def build(scalar: Any) -> SimpleNamespace:
             return p[0]  # saturated: the hysteretic moment no longer grows (0^0 is not 1 here)
         return p[0] + m_s / p[2] * wp.pow(y, p[3])
 
-    return SimpleNamespace(name=NAME, fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment,
-                           tangent=tangent)
+    return LawFunctions(fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment, tangent=tangent)
+
+
+LAW = BendingLaw(
+    name="dahl",
+    summary="Dahl's",
+    parameters=(
+        LawParameter("dahl_moment", "dahl_moment_gf_cm_per_cm", "MOMENT_GF_CM_PER_CM", "Ms", "M_s", "gf·cm/cm",
+                     "M_s, saturation of the hysteretic moment (0 = elastic; 2HB → 2 M_s for K_s ≪ 1 1/cm)",
+                     default=default_loop_asymptote, ge=0, amplitude=True),
+        LawParameter("dahl_curvature", "dahl_curvature_per_cm", "CURVATURE_PER_CM", "Ks", "K_s", "cm⁻¹",
+                     "K_s, curvature scale over which the hysteretic moment saturates",
+                     default=default_curvature_scale, gt=0),
+        LawParameter("dahl_exponent", "dahl_exponent", "", "n", "Dahl exponent n", "",
+                     "n, shape of the branches (1: the paper's exponential branches; → 0: a frictional couple)",
+                     default=1.0, ge=0),
+    ),
+    pack=packed_parameters,
+    memory=("hysteretic_moment", "direction", "previous_curvature"),  # h (N), +1 / −1, K (1/m)
+    build=build,
+    fitter="warpcloth.calibrate.kes.bending_dahl:DAHL",
+    # the hysteretic moment depends on the total variation of the curvature history (no
+    # return-point memory), so fitted values depend on h (docs/model.md §15.6)
+    mesh_independent=False,
+)
+"""Dahl's law, described once (kernels/law.py)."""

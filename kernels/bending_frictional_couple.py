@@ -15,52 +15,37 @@ M_s = M_f and K_s = K_w (kernels/bending_dahl.py).
 """
 
 import functools
-from types import SimpleNamespace
 from typing import Any
 
 import warp as wp
 
+from .bending_tagawa2003 import default_curvature_scale, default_loop_asymptote
+from .law import BendingLaw, LawFunctions, LawParameter
 from .types import precision
-
-NAME = "frictional_couple"
-
-PARAMETERS = ("bending_rigidity", "friction_moment", "friction_width")
-"""Layout of the packed per-strip parameter vector: D (N·m), M_f (N), K_w (1/m)."""
-
-MATERIAL_FIELDS = PARAMETERS
-"""The :class:`warpcloth.sim.MaterialSI` fields :func:`packed_parameters` takes, in order."""
-
-MEMORY = ("hysteretic_moment", "direction", "previous_curvature")
-"""Layout of the packed per-hinge memory: h (N), the direction of the last change of
-curvature (+1 / −1), K at the last force evaluation (1/m)."""
-
-MESH_INDEPENDENT = True
-"""Whether the law's answers converge as the mesh is refined: a Jenkins element: continuous
-in the curvature path, with return-point memory."""
 
 wp.set_module_options({"enable_backward": False})
 
 
 def packed_parameters(bending_rigidity: float, moment: float, width: float) -> tuple[float, ...]:
-    """The per-strip parameter vector (layout :data:`PARAMETERS`) from D, M_f, K_w in SI."""
+    """The per-strip parameter vector (D, M_f, K_w) from D (N·m), M_f (N), K_w (1/m) in SI."""
     return (bending_rigidity, moment, width)
 
 
 @functools.cache
-def build(scalar: Any) -> SimpleNamespace:
+def build(scalar: Any) -> LawFunctions:
     """The law's Warp functions for ``scalar``, on the shared parameter and memory types."""
     types = precision(scalar)
-    Memory, Parameters = types.law_memory, types.law_parameters  # this law uses 3 of the 6 parameter slots
+    Memory, Parameters, History = types.law_memory, types.law_parameters, types.reversal_memory  # 3 of 6 slots
     zero = scalar(0.0)
     one = scalar(1.0)
 
     @wp.func
-    def fresh_memory(curvature: scalar, p: Parameters):
+    def fresh_memory(curvature: scalar, p: Parameters, history: History, hinge: int, strip: int):
         # A hinge that has never bent: the slider at rest in the middle of its play.
         return Memory(zero, one, curvature)
 
     @wp.func
-    def follow(curvature: scalar, memory: Memory, p: Parameters):
+    def follow(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         change = curvature - memory[2]
         m_f = p[1]
         if change == zero or m_f == zero:
@@ -73,7 +58,7 @@ def build(scalar: Any) -> SimpleNamespace:
         return memory[0]
 
     @wp.func
-    def tangent(curvature: scalar, memory: Memory, p: Parameters):
+    def tangent(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         # dM/dK on the current direction: D + M_f / K_w while the spring takes up the
         # change, D once the slider slips
         m_f = p[1]
@@ -81,5 +66,24 @@ def build(scalar: Any) -> SimpleNamespace:
             return p[0]
         return p[0] + m_f / p[2]
 
-    return SimpleNamespace(name=NAME, fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment,
-                           tangent=tangent)
+    return LawFunctions(fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment, tangent=tangent)
+
+
+LAW = BendingLaw(
+    name="frictional_couple",
+    summary="Grosberg's frictional couple",
+    parameters=(
+        LawParameter("friction_moment", "friction_moment_gf_cm_per_cm", "MOMENT_GF_CM_PER_CM", "Mf", "M_f",
+                     "gf·cm/cm", "M_f, the frictional couple (0 = elastic; 2HB = 2 M_f)",
+                     default=default_loop_asymptote, ge=0, amplitude=True),
+        LawParameter("friction_width", "friction_width_per_cm", "CURVATURE_PER_CM", "Kw", "K_w", "cm⁻¹",
+                     "K_w, curvature change over which the couple reverses (half of it each way; → 0: Grosberg's "
+                     "M_f sign(dK/dt))", default=default_curvature_scale, gt=0),
+    ),
+    pack=packed_parameters,
+    memory=("hysteretic_moment", "direction", "previous_curvature"),  # h (N), +1 / −1, K (1/m)
+    build=build,
+    fitter="warpcloth.calibrate.kes.bending_frictional_couple:FRICTIONAL_COUPLE",
+    mesh_independent=True,  # a Jenkins element: continuous in the curvature path, with return-point memory
+)
+"""Grosberg's frictional couple, described once (kernels/law.py)."""

@@ -20,7 +20,8 @@ converges as the mesh and the step are refined (docs/model.md §15.6). An Iwan m
 continuum of Jenkins elements with yield curvatures of density 2 α² D1 e^{−2ακ}) has
 exactly this response, which the tests use as the reference.
 
-Each hinge keeps its open reversal points in :class:`ReversalMemory` (``points[0]`` is
+Each hinge keeps its open reversal points in the shared ``reversal_memory`` of
+:func:`~warpcloth.kernels.types.precision` (``points[0]`` is
 the origin (K_o, 0), ``points[1..depth]`` the reversals). A reversal that finds the
 memory full is not stored: the hinge retraces its current branch elastically until the
 curvature passes the top point again (the smallest loop, the new one, dissipates
@@ -33,25 +34,13 @@ times (depth + 1), and the curvature at the last force evaluation.
 """
 
 import functools
-from types import SimpleNamespace
 from typing import Any
 
 import warp as wp
 
+from .bending_tagawa2003 import LOOP_PARAMETERS
+from .law import BendingLaw, LawFunctions
 from .types import precision
-
-NAME = "masing"
-
-PARAMETERS = ("bending_rigidity", "hysteresis_d1", "hysteresis_alpha", "hysteresis_k0")
-"""Layout of the packed per-strip parameter vector: D (N·m), D1 (N), α (m), K0 (1/m)."""
-
-MATERIAL_FIELDS = PARAMETERS
-"""The :class:`warpcloth.sim.MaterialSI` fields :func:`packed_parameters` takes, in order."""
-
-MEMORY = ("hysteretic_moment", "direction_depth", "previous_curvature")
-"""Layout of the packed per-hinge memory: H (N), the direction of the last change of
-curvature (+1 / −1) times (the number of open reversal points + 1), K at the last force
-evaluation (1/m)."""
 
 DEFAULT_CAPACITY = 128
 """Reversal points kept per hinge unless the run asks otherwise: the bundled swing opens at
@@ -60,35 +49,23 @@ most 43 in 3 s and 46 in 10 s at every h, the bundled sweep's variants up to 63 
 benchmarks/masing_convergence.py, benchmarks/numba_peer.py --law masing print the
 deepest); twice that leaves room. A full memory is counted and reported."""
 
-MESH_INDEPENDENT = True
-"""Whether the law's answers converge as the mesh is refined: return-point memory:
-continuous in the curvature path, it converges in h and dt (docs/model.md §15.6)."""
-
 wp.set_module_options({"enable_backward": False})
 
 
 def packed_parameters(bending_rigidity: float, d1: float, alpha: float, k0: float) -> tuple[float, ...]:
-    """The per-strip parameter vector (layout :data:`PARAMETERS`) from D, D1, α, K0 in SI."""
+    """The per-strip parameter vector (D, D1, α, K0) from D (N·m), D1 (N), α (m), K0 (1/m) in SI."""
     return (bending_rigidity, d1, alpha, k0)
 
 
 @functools.cache
-def build(scalar: Any) -> SimpleNamespace:
-    """The law's Warp functions and its reversal memory struct for ``scalar``."""
+def build(scalar: Any) -> LawFunctions:
+    """The law's Warp functions for ``scalar``, on the shared parameter, memory and reversal types."""
     types = precision(scalar)
-    Memory, Parameters, vec2 = types.law_memory, types.law_parameters, types.vec2
+    Memory, Parameters, ReversalMemory, vec2 = types.law_memory, types.law_parameters, types.reversal_memory, types.vec2
     zero = scalar(0.0)
     one = scalar(1.0)
     half = scalar(0.5)
     two = scalar(2.0)
-
-    @wp.struct
-    class ReversalMemory:
-        """Every hinge's open reversal points and, per strip, what did not fit."""
-
-        points: wp.array3d(dtype=vec2)  # [level, hinge, strip]: (K, H); level 0 is the origin (K_o, 0)
-        overflows: wp.array(dtype=int)  # [strip]: reversals not stored because the memory was full
-        deepest: wp.array(dtype=int)  # [strip]: the most reversal points any of its hinges held
 
     @wp.func
     def virgin(y: scalar, p: Parameters):
@@ -190,11 +167,21 @@ def build(scalar: Any) -> SimpleNamespace:
         s = direction_from(top[0], below)
         return p[0] + p[2] * p[1] * wp.exp(-p[2] * s * (curvature - top[0]))
 
-    return SimpleNamespace(
-        name=NAME,
-        ReversalMemory=ReversalMemory,
-        fresh_memory=fresh_memory,
-        follow=follow,
-        hysteretic_moment=hysteretic_moment,
-        tangent=tangent,
-    )
+    return LawFunctions(fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment, tangent=tangent)
+
+
+LAW = BendingLaw(
+    name="masing",
+    summary="the paper's loop with return-point memory: converges in h and dt",
+    parameters=LOOP_PARAMETERS,
+    pack=packed_parameters,
+    # H (N), the direction of the last change of curvature (+1 / −1) times (the number of
+    # open reversal points + 1), K (1/m)
+    memory=("hysteretic_moment", "direction_depth", "previous_curvature"),
+    build=build,
+    fitter="warpcloth.calibrate.kes.bending_masing:MASING",
+    mesh_independent=True,  # continuous in the curvature path: converges in h and dt (docs/model.md §15.6)
+    uses_reversal_memory=True,
+    loop_closure="hysteresis_k0",
+)
+"""Masing's rules on the paper's loop, described once (kernels/law.py)."""

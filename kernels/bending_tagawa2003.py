@@ -5,11 +5,11 @@ branch (h₊ while curvature rises, h₋ while it falls) of a KES loop of amplit
 steepness α and closing curvature K0, and c is the loop centre. At every reversal the
 loop is translated along M = D K so that the moment stays continuous.
 
-A law is one file (kernels/laws.py lists them and says what each provides): its
-per-strip parameters packed in one vector, its per-hinge memory packed in one vector,
-and wp.funcs for a fresh hinge, the branch logic, the hysteretic moment and its tangent
-dM/dK. The strip kernel and ``moment_along_path`` (the law alone, on prescribed
-curvature paths) use exactly these functions.
+A law is one file ending with its description, ``LAW`` (kernels/law.py says what a law
+provides; kernels/laws.py lists them): its per-strip parameters packed in one vector, its
+per-hinge memory packed in one vector, and wp.funcs for a fresh hinge, the branch logic,
+the hysteretic moment and its tangent dM/dK. The strip kernel and ``moment_along_path``
+(the law alone, on prescribed curvature paths) use exactly these functions.
 
 On a branch the offset obeys dh/dK = α (M0 − s h) (s = ±1 the direction), and at a
 reversal h stays continuous while s flips: the Dahl model with exponent 1, saturation
@@ -18,33 +18,20 @@ moment M0 and curvature scale 1/α (kernels/bending_dahl.py; docs/model.md §4.8
 
 import functools
 import math
-from types import SimpleNamespace
+from collections.abc import Mapping
 from typing import Any
 
 import warp as wp
 
+from .law import BendingLaw, LawFunctions, LawParameter
 from .types import precision
 
-NAME = "tagawa2003"
-
-PARAMETERS = ("bending_rigidity", "hysteresis_d1", "hysteresis_alpha", "hysteresis_k0", "hysteresis_m0")
+PACKED = ("bending_rigidity", "hysteresis_d1", "hysteresis_alpha", "hysteresis_k0", "hysteresis_m0")
 """Layout of the packed per-strip parameter vector: D (N·m), D1 (N), α (m), K0 (1/m), M0 (N)."""
-
-MATERIAL_FIELDS = ("bending_rigidity", "hysteresis_d1", "hysteresis_alpha", "hysteresis_k0")
-"""The :class:`warpcloth.sim.MaterialSI` fields :func:`packed_parameters` takes, in order."""
-
-MEMORY = ("branch", "loop_centre", "previous_curvature")
-"""Layout of the packed per-hinge memory: +1 rising / −1 falling, c (1/m), K at the last
-force evaluation (1/m)."""
 
 # Fraction of M0 kept between a hysteretic offset and its asymptote before the inverse
 # branch takes a logarithm (docs/model.md §4.4: H is clamped to (−M0, M0) strictly).
 HYSTERESIS_MARGIN = {wp.float64: 1e-12, wp.float32: 1e-6}
-
-MESH_INDEPENDENT = False
-"""Whether the law's answers converge as the mesh is refined: its offset depends on the
-total variation of the curvature history (no return-point memory), so fitted values
-depend on h (docs/model.md §15.6)."""
 
 wp.set_module_options({"enable_backward": False})
 
@@ -54,16 +41,28 @@ def loop_asymptote(d1: float, alpha: float, k0: float) -> float:
     return 0.5 * d1 * (1.0 + math.exp(-2.0 * alpha * k0))
 
 
+def default_loop_asymptote(material: Mapping[str, Any]) -> float:
+    """M0 of a [material]'s values (KES units): the moment another law's default takes so
+    that switching the law alone keeps the default material's loop (docs/model.md §4.8)."""
+    return loop_asymptote(material["hysteresis_d1_gf_cm_per_cm"], material["hysteresis_alpha_cm"],
+                          material["hysteresis_k0_per_cm"])
+
+
+def default_curvature_scale(material: Mapping[str, Any]) -> float:
+    """1/α of a [material]'s values (1/cm): the curvature scale of the same loop."""
+    return 1.0 / material["hysteresis_alpha_cm"]
+
+
 def packed_parameters(bending_rigidity: float, d1: float, alpha: float, k0: float) -> tuple[float, ...]:
-    """The per-strip parameter vector (layout :data:`PARAMETERS`) from D, D1, α, K0 in SI."""
+    """The per-strip parameter vector (layout :data:`PACKED`) from D, D1, α, K0 in SI."""
     return (bending_rigidity, d1, alpha, k0, loop_asymptote(d1, alpha, k0))
 
 
 @functools.cache
-def build(scalar: Any) -> SimpleNamespace:
+def build(scalar: Any) -> LawFunctions:
     """The law's Warp functions for ``scalar``, on the shared parameter and memory types."""
     types = precision(scalar)
-    Memory, Parameters = types.law_memory, types.law_parameters  # this law uses 5 of the 6 parameter slots
+    Memory, Parameters, History = types.law_memory, types.law_parameters, types.reversal_memory  # 5 of 6 slots
     zero = scalar(0.0)
     one = scalar(1.0)
     margin = scalar(HYSTERESIS_MARGIN[scalar])
@@ -101,12 +100,12 @@ def build(scalar: Any) -> SimpleNamespace:
         return curvature - k0 - wp.log((h + m0) / d1) / alpha
 
     @wp.func
-    def fresh_memory(curvature: scalar, p: Parameters):
+    def fresh_memory(curvature: scalar, p: Parameters, history: History, hinge: int, strip: int):
         # A hinge that has never bent back: rising branch, no offset at its curvature.
         return Memory(one, loop_centre_through(curvature, zero, one, p), curvature)
 
     @wp.func
-    def follow(curvature: scalar, memory: Memory, p: Parameters):
+    def follow(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         # A reversal happens at the previous curvature; the loop is translated along
         # M = D K so that the offset there is unchanged on the new branch.
         b = memory[0]
@@ -123,7 +122,7 @@ def build(scalar: Any) -> SimpleNamespace:
         return hysteretic_offset(curvature - memory[1], memory[0], p)
 
     @wp.func
-    def tangent(curvature: scalar, memory: Memory, p: Parameters):
+    def tangent(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         # dM/dK on the current branch: D plus the slope of h, α D1 e^{−α(K0 ± u)} > 0.
         d1 = p[1]
         if d1 == zero:
@@ -135,10 +134,31 @@ def build(scalar: Any) -> SimpleNamespace:
             return p[0] + alpha * d1 * wp.exp(-alpha * (k0 + u))
         return p[0] + alpha * d1 * wp.exp(-alpha * (k0 - u))
 
-    return SimpleNamespace(
-        name=NAME,
-        fresh_memory=fresh_memory,
-        follow=follow,
-        hysteretic_moment=hysteretic_moment,
-        tangent=tangent,
-    )
+    return LawFunctions(fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment, tangent=tangent)
+
+
+LOOP_PARAMETERS = (
+    LawParameter("hysteresis_d1", "hysteresis_d1_gf_cm_per_cm", "MOMENT_GF_CM_PER_CM", "D1", "D1", "gf·cm/cm",
+                 "D1, hysteresis amplitude (0 = elastic)", default=None, ge=0, amplitude=True),
+    LawParameter("hysteresis_alpha", "hysteresis_alpha_cm", "LENGTH_CM", "alpha", "α", "cm",
+                 "α, steepness of the hysteresis branches", default=None, gt=0),
+    LawParameter("hysteresis_k0", "hysteresis_k0_per_cm", "CURVATURE_PER_CM", "K0", "K0", "cm⁻¹",
+                 "K0, curvature where the KES loop closes (masing: only there, not in the dynamics)",
+                 default=None, gt=0),
+)
+"""The paper's loop (D1, α, K0), read by this law and by masing (the same major loop)."""
+
+LAW = BendingLaw(
+    name="tagawa2003",
+    summary="the paper's",
+    parameters=LOOP_PARAMETERS,
+    pack=packed_parameters,
+    memory=("branch", "loop_centre", "previous_curvature"),  # +1 rising / −1 falling, c (1/m), K (1/m)
+    build=build,
+    fitter="warpcloth.calibrate.kes.bending_tagawa2003:TAGAWA2003",
+    # the offset depends on the total variation of the curvature history (no return-point
+    # memory), so fitted values depend on h (docs/model.md §15.6)
+    mesh_independent=False,
+    loop_closure="hysteresis_k0",
+)
+"""The paper's law, described once (kernels/law.py)."""

@@ -1,115 +1,183 @@
 """The bending laws a strip can use, and the one set of Warp functions that serves them
 all, so strips of different laws run in the same batch and launch.
 
-Each law is one file, ``bending_<name>.py``, providing ``NAME``; ``PARAMETERS`` (the
-layout of its packed per-strip parameters, bending rigidity D first);
-``MATERIAL_FIELDS`` (the :class:`warpcloth.sim.MaterialSI` fields its
-``packed_parameters`` takes); ``MEMORY`` (its per-hinge memory, the last curvature
-last); and ``build(scalar)`` with the wp.funcs ``fresh_memory``, ``follow``,
-``hysteretic_moment`` and ``tangent`` on the shared types
-(:data:`~warpcloth.kernels.types.LAW_PARAMETER_SLOTS`,
-:data:`~warpcloth.kernels.types.LAW_MEMORY_SLOTS`). Every law's moment is D K plus its
-hysteretic moment. Adding a law: its file and one entry in :data:`LAWS`.
+Each law is one file, ``bending_<name>.py``, ending with its description ``LAW``
+(:class:`~warpcloth.kernels.law.BendingLaw`: parameters, memory, kernels, fitter; the
+kernel contract is in kernels/law.py). :data:`LAWS` lists the descriptions: the four
+built in, then any a separately installed package registers under the entry-point group
+:data:`ENTRY_POINT_GROUP` (its value ``module:attribute`` naming a ``BendingLaw``). Adding
+a law: its kernel file, its KES fitter, and one entry (here, or an entry point).
 
 The packed parameters carry the law's index in :data:`LAWS` in their last slot; the
-functions here dispatch on it per strip (one branch per hinge evaluation, uniform across
-a GPU warp when a batch is sorted by law).
+functions here dispatch on it per strip, one branch per law generated with ``wp.static``
+over the list (one branch per hinge evaluation, uniform across a GPU warp when a batch is
+sorted by law).
 """
 
 import functools
-from types import ModuleType, SimpleNamespace
+from dataclasses import dataclass
+from importlib.metadata import entry_points
 from typing import Any
 
 import warp as wp
 
 from . import bending_dahl, bending_frictional_couple, bending_masing, bending_tagawa2003
-from .types import LAW_PARAMETER_SLOTS, precision
+from .law import BENDING_RIGIDITY, BendingLaw, LawParameter
+from .types import LAST_CURVATURE_SLOT, LAW_MEMORY_SLOTS, LAW_PARAMETER_SLOTS, precision
 
-LAWS: tuple[ModuleType, ...] = (bending_tagawa2003, bending_dahl, bending_frictional_couple, bending_masing)
-"""Every bending law, by its index in the packed parameters."""
+ENTRY_POINT_GROUP = "warpcloth.bending_laws"
+"""Where an installed package registers a bending law of its own."""
 
-BENDING_LAWS: dict[str, ModuleType] = {law.NAME: law for law in LAWS}
-DEFAULT_BENDING_LAW = bending_tagawa2003.NAME
+BUILT_IN = (bending_tagawa2003.LAW, bending_dahl.LAW, bending_frictional_couple.LAW, bending_masing.LAW)
+"""The laws warpcloth ships, in the order of their index in the packed parameters."""
+
 LAW_SLOT = LAW_PARAMETER_SLOTS - 1
 """Where the packed parameters hold the law's index."""
+
+DEFAULT_BENDING_LAW = bending_tagawa2003.LAW.name
+
+
+def _registered() -> tuple[BendingLaw, ...]:
+    laws = []
+    for point in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda p: p.name):
+        try:
+            law = point.load()
+        except Exception as exc:  # a broken plugin must name itself, not break every command anonymously
+            raise ImportError(f"the bending law {point.name!r} registered under {ENTRY_POINT_GROUP} as "
+                              f"{point.value!r} cannot be loaded: {exc}") from exc
+        if not isinstance(law, BendingLaw):
+            raise ImportError(f"the bending law {point.name!r} registered under {ENTRY_POINT_GROUP} as "
+                              f"{point.value!r} is a {type(law).__name__}, not a warpcloth.kernels.law.BendingLaw")
+        laws.append(law)
+    return tuple(laws)
+
+
+def checked_laws(laws: tuple[BendingLaw, ...]) -> tuple[BendingLaw, ...]:
+    """``laws`` if their descriptions fit together (unique names, aliases and scene fields, a
+    parameter shared between laws described by one object, the packed vector and the memory
+    within the shared slots); else an ImportError naming the law and what clashes."""
+    names: set[str] = set()
+    by_field: dict[str, LawParameter] = {BENDING_RIGIDITY.scene_field: BENDING_RIGIDITY}
+    by_alias: dict[str, LawParameter] = {BENDING_RIGIDITY.alias: BENDING_RIGIDITY}
+    for law in laws:
+        if law.name in names:
+            raise ImportError(f"two bending laws are called {law.name!r}")
+        names.add(law.name)
+        if 1 + len(law.parameters) > LAW_SLOT:
+            raise ImportError(f"the {law.name} law has {len(law.parameters)} parameters after D; the packed vector "
+                              f"holds {LAW_SLOT - 1}")
+        if len(law.memory) != LAW_MEMORY_SLOTS:
+            raise ImportError(f"the {law.name} law's memory has {len(law.memory)} slots; every law has "
+                              f"{LAW_MEMORY_SLOTS}, the last curvature last")
+        for p in law.parameters:
+            for key, seen in ((p.scene_field, by_field), (p.alias, by_alias)):
+                other = seen.setdefault(key, p)
+                if other is not p:
+                    raise ImportError(f"the {law.name} law's parameter {p.name!r} takes {key!r}, which another "
+                                      "parameter has (a parameter two laws share is one LawParameter)")
+    return laws
+
+
+LAWS: tuple[BendingLaw, ...] = checked_laws(BUILT_IN + _registered())
+"""Every bending law, by its index in the packed parameters."""
+
+BENDING_LAWS: dict[str, BendingLaw] = {law.name: law for law in LAWS}
+
+
+def _parameters_by_field() -> dict[str, tuple[LawParameter, tuple[str, ...]]]:
+    out: dict[str, tuple[LawParameter, tuple[str, ...]]] = {}
+    for law in LAWS:
+        for p in law.parameters:
+            out[p.scene_field] = (p, out.get(p.scene_field, (p, ()))[1] + (law.name,))
+    return out
+
+
+LAW_PARAMETERS = _parameters_by_field()
+"""Every law's own parameters by scene field (in the laws' order), each with the laws that
+read it; D, which every law reads, is not among them (:data:`~warpcloth.kernels.law.BENDING_RIGIDITY`)."""
 
 wp.set_module_options({"enable_backward": False})
 
 
-def bending_law(name: str) -> ModuleType:
-    """The module of the bending law ``name``; KeyError lists the known ones."""
+def bending_law(name: str) -> BendingLaw:
+    """The description of the bending law ``name``; KeyError lists the known ones."""
     try:
         return BENDING_LAWS[name]
     except KeyError:
         raise KeyError(f"unknown bending law {name!r}; known: {', '.join(BENDING_LAWS)}") from None
 
 
-def packed_parameters(name: str, *values: float) -> tuple[float, ...]:
-    """The shared per-strip parameter vector of law ``name`` from its ``MATERIAL_FIELDS``
-    values (SI): the law's own layout, zeros, then the law's index."""
+def packed_parameters(name: str, values: dict[str, float]) -> tuple[float, ...]:
+    """The shared per-strip parameter vector of law ``name`` from D and its parameters in SI
+    (by SI name): the law's own layout, zeros, then the law's index."""
     law = bending_law(name)
-    own = tuple(float(v) for v in law.packed_parameters(*values))
+    own = tuple(float(v) for v in law.pack(values[BENDING_RIGIDITY.name], *(values[p.name] for p in law.parameters)))
+    if len(own) > LAW_SLOT:
+        raise ValueError(f"the {name} law packs {len(own)} parameters; the shared vector holds {LAW_SLOT}")
     return own + (0.0,) * (LAW_SLOT - len(own)) + (float(LAWS.index(law)),)
 
 
+@dataclass(frozen=True)
+class LawDispatch:
+    """The laws' shared Warp types and the functions that dispatch to each strip's own law."""
+
+    Parameters: Any
+    Memory: Any
+    History: Any
+    fresh_memory: Any
+    follow: Any
+    last_curvature: Any
+    elastic_moment: Any
+    hysteretic_moment: Any
+    tangent: Any
+    moment_along_path: Any
+
+
 @functools.cache
-def build(scalar: Any) -> SimpleNamespace:
+def build(scalar: Any) -> LawDispatch:
     """The laws' Warp types, dispatching functions and path kernel for ``scalar``."""
     types = precision(scalar)
-    Parameters, Memory = types.law_parameters, types.law_memory
-    tagawa, dahl, friction, masing = (law.build(scalar) for law in LAWS)
-    History = masing.ReversalMemory
+    Parameters, Memory, History = types.law_parameters, types.law_memory, types.reversal_memory
+    functions = tuple(law.build(scalar) for law in LAWS)
     zero = scalar(0.0)
 
     @wp.func
     def law_of(p: Parameters):
         return int(p[LAW_SLOT])
 
-    # ``history`` (the reversal points, [level, hinge, strip]) is read only by a law with
-    # return-point memory; the others keep everything in their memory vector.
+    # One branch per law, unrolled at code generation; an index past the list (which the
+    # packing never writes) falls back to the first law.
     @wp.func
     def fresh_memory(curvature: scalar, p: Parameters, history: History, hinge: int, strip: int):
         law = law_of(p)
-        if law == 1:
-            return dahl.fresh_memory(curvature, p)
-        if law == 2:
-            return friction.fresh_memory(curvature, p)
-        if law == 3:
-            return masing.fresh_memory(curvature, p, history, hinge, strip)
-        return tagawa.fresh_memory(curvature, p)
+        for i in range(wp.static(len(functions))):
+            if law == i:
+                return wp.static(functions[i].fresh_memory)(curvature, p, history, hinge, strip)
+        return wp.static(functions[0].fresh_memory)(curvature, p, history, hinge, strip)
 
     @wp.func
     def follow(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         law = law_of(p)
-        if law == 1:
-            return dahl.follow(curvature, memory, p)
-        if law == 2:
-            return friction.follow(curvature, memory, p)
-        if law == 3:
-            return masing.follow(curvature, memory, p, history, hinge, strip)
-        return tagawa.follow(curvature, memory, p)
+        for i in range(wp.static(len(functions))):
+            if law == i:
+                return wp.static(functions[i].follow)(curvature, memory, p, history, hinge, strip)
+        return wp.static(functions[0].follow)(curvature, memory, p, history, hinge, strip)
 
     @wp.func
     def hysteretic_moment(curvature: scalar, memory: Memory, p: Parameters):
         law = law_of(p)
-        if law == 1:
-            return dahl.hysteretic_moment(curvature, memory, p)
-        if law == 2:
-            return friction.hysteretic_moment(curvature, memory, p)
-        if law == 3:
-            return masing.hysteretic_moment(curvature, memory, p)
-        return tagawa.hysteretic_moment(curvature, memory, p)
+        for i in range(wp.static(len(functions))):
+            if law == i:
+                return wp.static(functions[i].hysteretic_moment)(curvature, memory, p)
+        return wp.static(functions[0].hysteretic_moment)(curvature, memory, p)
 
     @wp.func
     def tangent(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         law = law_of(p)
-        if law == 1:
-            return dahl.tangent(curvature, memory, p)
-        if law == 2:
-            return friction.tangent(curvature, memory, p)
-        if law == 3:
-            return masing.tangent(curvature, memory, p, history, hinge, strip)
-        return tagawa.tangent(curvature, memory, p)
+        for i in range(wp.static(len(functions))):
+            if law == i:
+                return wp.static(functions[i].tangent)(curvature, memory, p, history, hinge, strip)
+        return wp.static(functions[0].tangent)(curvature, memory, p, history, hinge, strip)
 
     @wp.func
     def elastic_moment(curvature: scalar, p: Parameters):
@@ -117,8 +185,7 @@ def build(scalar: Any) -> SimpleNamespace:
 
     @wp.func
     def last_curvature(memory: Memory):
-        # The curvature the hinge saw at its last force evaluation (every law's last slot).
-        return memory[2]
+        return memory[LAST_CURVATURE_SLOT]
 
     @wp.kernel(module="unique", enable_backward=False)
     def moment_along_path(
@@ -149,7 +216,7 @@ def build(scalar: Any) -> SimpleNamespace:
                 w = w + m * (curvature_path[n + 1, s] - k)
         work[s] = w
 
-    return SimpleNamespace(
+    return LawDispatch(
         Parameters=Parameters,
         Memory=Memory,
         History=History,

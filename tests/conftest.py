@@ -30,6 +30,21 @@ def interruptible() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
+def loop_asymptote_of(material):
+    """M0 of a MaterialSI of the paper's loop (tagawa2003 or masing), N."""
+    from warpcloth.kernels.bending_tagawa2003 import loop_asymptote
+
+    b = material.bending
+    return loop_asymptote(b.hysteresis_d1, b.hysteresis_alpha, b.hysteresis_k0)
+
+
+def paper_loop(d1, alpha, k0, law="tagawa2003"):
+    """The BendingParameters of the paper's loop (SI)."""
+    from warpcloth.sim import BendingParameters
+
+    return BendingParameters.of(law, {"hysteresis_d1": d1, "hysteresis_alpha": alpha, "hysteresis_k0": k0})
+
+
 def kes_cycle(k0: float = 2.5, step: float = 0.02):
     """The standard KES-FB2 path 0 → +K0 → −K0 → 0 (1/cm), sampled like the bundled example."""
     from warpcloth.calibrate.kes.kes_values import standard_cycle

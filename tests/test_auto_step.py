@@ -39,9 +39,9 @@ def test_the_law_tangent_and_loop_come_from_the_law_kernel():
     material = to_si(scene.material)
     # a Masing branch starts at slope D + α·D1 (docs/model.md §4.10)
     assert stiffest_tangent(material) == pytest.approx(
-        material.bending_rigidity + material.hysteresis_alpha * material.hysteresis_d1, rel=1e-6)
+        material.bending_rigidity + material.bending.hysteresis_alpha * material.bending.hysteresis_d1, rel=1e-6)
     assert is_hysteretic(material)
-    assert not is_hysteretic(dataclasses.replace(material, hysteresis_d1=0.0))
+    assert not is_hysteretic(dataclasses.replace(material, bending=material.bending.replace(hysteresis_d1=0.0)))
 
 
 def test_auto_divides_the_probe_interval_and_stays_under_both_bounds():

@@ -4,7 +4,7 @@ one batch (docs/model.md §4)."""
 
 import numpy as np
 import pytest
-from conftest import overrides
+from conftest import loop_asymptote_of, overrides
 
 import warpcloth as wc
 from warpcloth.scene import to_si
@@ -58,8 +58,8 @@ def test_dahl_with_exponent_one_is_the_papers_law():
     # On a branch the paper's offset obeys dh/dK = α (M0 − s h): Dahl with n = 1,
     # M_s = M0, K_s = 1/α; at a reversal both keep h and flip s (docs/model.md §4.8)
     paper = material("tagawa2003")
-    dahl = material("dahl", dahl_moment_gf_cm_per_cm=paper.hysteresis_m0 / GF_CM,
-                    dahl_curvature_per_cm=1 / (paper.hysteresis_alpha * PER_CM), dahl_exponent=1.0)
+    dahl = material("dahl", dahl_moment_gf_cm_per_cm=loop_asymptote_of(paper) / GF_CM,
+                    dahl_curvature_per_cm=1 / (paper.bending.hysteresis_alpha * PER_CM), dahl_exponent=1.0)
     for path in (kes_path(), wandering_path(1), kes_path()[::97]):
         m, _ = moment_along_path([paper, dahl], path)
         assert np.abs(m[:, 0] - m[:, 1]).max() < 1e-12 * np.abs(m[:, 0]).max()
@@ -85,8 +85,8 @@ def test_dahl_shape_exponent_against_an_integrated_ode(n):
     law = material("dahl", dahl_moment_gf_cm_per_cm=0.03, dahl_curvature_per_cm=0.4, dahl_exponent=n)
     path = kes_path(samples=60)  # coarse steps: the update is exact, not a time step
     m, _ = moment_along_path(law, path)
-    reference = dahl_by_ode(path, law.dahl_moment, law.dahl_curvature, n)
-    np.testing.assert_allclose(m - law.bending_rigidity * path, reference, rtol=0, atol=1e-7 * law.dahl_moment)
+    reference = dahl_by_ode(path, law.bending.dahl_moment, law.bending.dahl_curvature, n)
+    np.testing.assert_allclose(m - law.bending_rigidity * path, reference, rtol=0, atol=1e-7 * law.bending.dahl_moment)
 
 
 def legs(nodes, steps):
@@ -154,10 +154,11 @@ def test_each_law_is_elastic_without_its_hysteresis_and_continuous_with_it(law, 
     m, _, slope = moment_along_path(hysteretic, path, with_tangent=True)
     # continuous: no step larger than the steepest branch allows (right after a reversal
     # from saturation: D + 2 α M0, D + 2^n M_s / K_s, D + M_f / K_w, D + α D1)
-    steepest = {"tagawa2003": 2 * hysteretic.hysteresis_m0 / hysteretic.hysteresis_alpha ** -1,
-                "dahl": 2 ** hysteretic.dahl_exponent * hysteretic.dahl_moment / hysteretic.dahl_curvature,
-                "frictional_couple": hysteretic.friction_moment / hysteretic.friction_width,
-                "masing": hysteretic.hysteresis_alpha * hysteretic.hysteresis_d1}[law]
+    b = hysteretic.bending
+    steepest = {"tagawa2003": lambda: 2 * loop_asymptote_of(hysteretic) / b.hysteresis_alpha ** -1,
+                "dahl": lambda: 2 ** b.dahl_exponent * b.dahl_moment / b.dahl_curvature,
+                "frictional_couple": lambda: b.friction_moment / b.friction_width,
+                "masing": lambda: b.hysteresis_alpha * b.hysteresis_d1}[law]()
     bound = (hysteretic.bending_rigidity + steepest) * np.abs(np.diff(path))
     assert np.all(np.abs(np.diff(m)) <= 1.000001 * bound)
     # the tangent is the slope of the branch being followed
@@ -243,7 +244,7 @@ def test_dahl_is_continuous_in_its_exponent_through_one(offset):
     m1, _ = moment_along_path(exact, path)
     for n in (1 + offset, 1 - offset):
         m, _ = moment_along_path(material("dahl", dahl_exponent=n), path)
-        assert np.abs(m - m1).max() < max(10 * offset, 1e-13) * exact.dahl_moment, n
+        assert np.abs(m - m1).max() < max(10 * offset, 1e-13) * exact.bending.dahl_moment, n
 
 
 def test_a_material_files_law_must_be_a_law_name(tmp_path):

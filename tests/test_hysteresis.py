@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import overrides  # noqa: F401  (keeps Warp quiet)
+from conftest import loop_asymptote_of, overrides, paper_loop  # noqa: F401  (keeps Warp quiet)
 
 from warpcloth.scene import MaterialSection, to_si
 from warpcloth.sim import MaterialSI, moment_along_path
@@ -17,9 +17,9 @@ DEFAULT = to_si(MaterialSection())
 
 def branches(m: MaterialSI, k):
     """Eq. 3a (rising) and 3b (falling) of the loop centred on K = 0."""
-    a, k0, d1 = m.hysteresis_alpha, m.hysteresis_k0, m.hysteresis_d1
-    up = m.bending_rigidity * k + m.hysteresis_m0 - d1 * np.exp(-a * (k0 + k))
-    down = m.bending_rigidity * k - m.hysteresis_m0 + d1 * np.exp(-a * (k0 - k))
+    a, k0, d1 = m.bending.hysteresis_alpha, m.bending.hysteresis_k0, m.bending.hysteresis_d1
+    up = m.bending_rigidity * k + loop_asymptote_of(m) - d1 * np.exp(-a * (k0 + k))
+    down = m.bending_rigidity * k - loop_asymptote_of(m) + d1 * np.exp(-a * (k0 - k))
     return up, down
 
 
@@ -36,7 +36,7 @@ def test_major_cycle_reproduces_eq3():
     # starts that far from eq. 3b and converges to it (the gap shrinks as e^{α(u−K0)});
     # at −K0 it is ½ D1 e^{−3αK0} ≈ 1e-20 N, so the rising leg is eq. 3a to rounding.
     m = DEFAULT
-    k0, a, d1 = m.hysteresis_k0, m.hysteresis_alpha, m.hysteresis_d1
+    k0, a, d1 = m.bending.hysteresis_k0, m.bending.hysteresis_alpha, m.bending.hysteresis_d1
     n = 4000
     k = ramp(0.0, k0, -k0, k0, n=n)
     moment, _ = moment_along_path(m, k)
@@ -55,8 +55,8 @@ def test_major_cycle_reproduces_eq3():
 def test_loop_translation_converges_to_centred_loop_for_soft_saturation():
     # α K0 = 0.5: the branches never saturate, so the first cycles are translated loops;
     # the symmetric loop is the fixed point the reversal rule must converge to.
-    m = MaterialSI(0.2, (1e3, 0, 0, 0), 1e-5, 4e-4, 0.005, 100.0)
-    k0 = m.hysteresis_k0
+    m = MaterialSI(0.2, (1e3, 0, 0, 0), 1e-5, paper_loop(4e-4, 0.005, 100.0))
+    k0 = m.bending.hysteresis_k0
     k = ramp(0.0, *([k0, -k0] * 12), k0, n=2000)
     moment, _ = moment_along_path(m, k)
     up, down = branches(m, k)
@@ -64,14 +64,14 @@ def test_loop_translation_converges_to_centred_loop_for_soft_saturation():
     last_rising = slice(len(k) - 1 - 2000 + 1, len(k))
     # Measured contraction per cycle is ≈ e^{−2αK0}·… ; after 12 cycles the offset from
     # the centred loop is below 1e-6·D1.
-    tol = 1e-6 * m.hysteresis_d1
+    tol = 1e-6 * m.bending.hysteresis_d1
     assert np.max(np.abs(moment[last_falling] - down[last_falling])) < tol
     assert np.max(np.abs(moment[last_rising] - up[last_rising])) < tol
 
 
 def lipschitz_bound(m: MaterialSI) -> float:
     # |dM/dK| ≤ D + α(M0 + |H|) ≤ D + 2αM0 on either branch (h' = α(M0 ∓ h)).
-    return m.bending_rigidity + 2 * m.hysteresis_alpha * m.hysteresis_m0
+    return m.bending_rigidity + 2 * m.bending.hysteresis_alpha * loop_asymptote_of(m)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -81,7 +81,7 @@ def test_moment_continuous_at_every_reversal_and_offset_bounded(seed):
     # magnitude (steps are 1e-4 of K0, a jump would be O(M0)).
     rng = np.random.default_rng(seed)
     m = DEFAULT
-    step = 1e-4 * m.hysteresis_k0
+    step = 1e-4 * m.bending.hysteresis_k0
     direction = np.where(rng.random(60) < 0.5, -1.0, 1.0)
     lengths = rng.integers(3, 3000, size=60)
     k = np.concatenate([[0.0], np.cumsum(np.repeat(direction, lengths) * step)])
@@ -89,13 +89,13 @@ def test_moment_continuous_at_every_reversal_and_offset_bounded(seed):
     jumps = np.abs(np.diff(moment))
     assert np.all(jumps <= lipschitz_bound(m) * np.abs(np.diff(k)) * (1 + 1e-9) + 1e-15)
     offset = moment - m.bending_rigidity * k
-    assert np.all(np.abs(offset) < m.hysteresis_m0)
+    assert np.all(np.abs(offset) < loop_asymptote_of(m))
     reversals = np.count_nonzero(np.diff(np.sign(np.diff(k))))
     assert reversals > 30
 
 
 def test_zero_d1_is_linear_elastic():
-    m = MaterialSI(0.2, (1e3, 0, 0, 0), to_si(MaterialSection()).bending_rigidity, 0.0, 0.05, 250.0)
+    m = MaterialSI(0.2, (1e3, 0, 0, 0), to_si(MaterialSection()).bending_rigidity, paper_loop(0.0, 0.05, 250.0))
     k = np.sin(np.linspace(0, 20, 5001)) * 300.0
     moment, _ = moment_along_path(m, k)
     np.testing.assert_array_equal(moment, m.bending_rigidity * k)
@@ -103,18 +103,18 @@ def test_zero_d1_is_linear_elastic():
 
 def cycle_work_error(m: MaterialSI, n: int) -> tuple[float, float, float]:
     """(work over one closed −K0 → K0 → −K0 cycle − analytic loop area, area, bound)."""
-    k0 = m.hysteresis_k0
+    k0 = m.bending.hysteresis_k0
     warmup = ramp(0.0, *([k0, -k0] * 12), n=n)  # reach the centred loop first
     _, work_warmup = moment_along_path(m, warmup)
     cycle = ramp(-k0, k0, -k0, n=n)
     _, work = moment_along_path(m, np.concatenate([warmup, cycle[1:]]))
-    a = m.hysteresis_alpha
+    a = m.bending.hysteresis_alpha
     # ∮ M dK of eq. 3 (the elastic part D K integrates to zero over a closed cycle).
-    area = 4 * m.hysteresis_m0 * k0 - 2 * m.hysteresis_d1 * (1 - math.exp(-2 * a * k0)) / a
+    area = 4 * loop_asymptote_of(m) * k0 - 2 * m.bending.hysteresis_d1 * (1 - math.exp(-2 * a * k0)) / a
     # Left-point rule: |error| ≤ ½ Σ |ΔM||ΔK| ≤ ½ L ΔK · (4 K0) with L the Lipschitz
     # bound of the branches; plus the warm-up's residual offset (≤ 1e-6 D1) over 4 K0.
     dk = 2 * k0 / n
-    bound = 0.5 * lipschitz_bound(m) * dk * 4 * k0 + 1e-6 * m.hysteresis_d1 * 4 * k0
+    bound = 0.5 * lipschitz_bound(m) * dk * 4 * k0 + 1e-6 * m.bending.hysteresis_d1 * 4 * k0
     return work[0] - work_warmup[0] - area, area, bound
 
 
@@ -122,7 +122,8 @@ def cycle_work_error(m: MaterialSI, n: int) -> tuple[float, float, float]:
 def test_closed_cycle_work_equals_loop_area(alpha_k0):
     base = DEFAULT
     k0 = 250.0
-    m = MaterialSI(base.density, base.tensile, base.bending_rigidity, base.hysteresis_d1, alpha_k0 / k0, k0)
+    m = MaterialSI(base.density, base.tensile, base.bending_rigidity,
+                   paper_loop(base.bending.hysteresis_d1, alpha_k0 / k0, k0))
     error, area, bound = cycle_work_error(m, 5000)
     assert area > 0
     assert abs(error) <= bound
@@ -174,7 +175,7 @@ def test_loop_probe_records_the_chosen_hinge(hinge_mm, edge):
         if d1 == 0.0:
             assert np.abs(offset).max() <= 1e-12 * np.abs(moment).max()
         else:
-            assert 0.1 * material.hysteresis_m0 < np.abs(offset).max() < material.hysteresis_m0
+            assert 0.1 * loop_asymptote_of(material) < np.abs(offset).max() < loop_asymptote_of(material)
             assert np.sum(0.5 * (moment[1:] + moment[:-1]) * np.diff(curvature)) > 0  # ∮ M dK > 0
 
 

@@ -45,10 +45,10 @@ def test_major_loop_is_the_papers_to_rounding():
     m_masing, _ = moment_along_path(masing, path)
     m_paper, _ = moment_along_path(paper, path)
     last = slice(len(path) - len(cycle), len(path))
-    assert np.abs(m_masing[last] - m_paper[last]).max() < 1e-12 * masing.hysteresis_d1
+    assert np.abs(m_masing[last] - m_paper[last]).max() < 1e-12 * masing.bending.hysteresis_d1
     # and masing's own loop is closed from the first cycle on (return-point memory)
     first = slice(2001, 2001 + len(cycle))
-    assert np.abs(m_masing[first] - m_masing[last]).max() < 1e-15 * masing.hysteresis_d1
+    assert np.abs(m_masing[first] - m_masing[last]).max() < 1e-15 * masing.bending.hysteresis_d1
 
 
 def test_against_an_iwan_model_on_a_path_with_two_thousand_reversals():
@@ -59,8 +59,8 @@ def test_against_an_iwan_model_on_a_path_with_two_thousand_reversals():
     path = 8.0 * wandering_path(3)
     assert (np.diff(np.sign(np.diff(path))) != 0).sum() > 1900
     h = hysteretic(masing, path)
-    errors = [np.abs(h - iwan(path, masing.hysteresis_d1, masing.hysteresis_alpha, n)).max() / masing.hysteresis_d1
-              for n in (1024, 4096)]
+    d1, alpha = masing.bending.hysteresis_d1, masing.bending.hysteresis_alpha
+    errors = [np.abs(h - iwan(path, d1, alpha, n)).max() / d1 for n in (1024, 4096)]
     print(f"masing vs Iwan: {errors[0]:.2e}, {errors[1]:.2e} D1 at 1024, 4096 elements")
     assert errors[1] < 1e-4
     assert errors[0] / errors[1] > 3.5
@@ -87,8 +87,7 @@ def test_the_moment_is_continuous_in_the_curvature_path(law, field, continuous):
     base = kes_path()
     at = 1000 + 4000 + 1000  # the second rising branch, K ≈ 0 → after a full reversal
     reference = hysteretic(m, base)
-    scale = {"masing": m.hysteresis_d1, "tagawa2003": m.hysteresis_d1, "dahl": m.dahl_moment,
-             "frictional_couple": m.friction_moment}[law]
+    scale = next(m.bending[p.name] for p in m.bending.description.parameters if p.amplitude)
     eps = 0.01
     changes = []
     for n in (10, 1000):
@@ -118,11 +117,11 @@ def test_a_full_memory_drops_only_the_innermost_loop_and_counts_it():
     past = path > 100.0 + 1e-9
     past[: np.argmax(path)] = False
     past[: 1500] = False
-    assert np.abs(small[past] - full[past]).max() < 1e-15 * m.hysteresis_d1
-    assert np.abs(small - full).max() > 1e-4 * m.hysteresis_d1  # the dropped loop did matter in between
+    assert np.abs(small[past] - full[past]).max() < 1e-15 * m.bending.hysteresis_d1
+    assert np.abs(small - full).max() > 1e-4 * m.bending.hysteresis_d1  # the dropped loop did matter in between
     # continuous everywhere: no step larger than the steepest slope allows
     step = np.abs(np.diff(path)).max()
-    assert np.abs(np.diff(small)).max() <= m.hysteresis_alpha * m.hysteresis_d1 * step * 1.000001
+    assert np.abs(np.diff(small)).max() <= m.bending.hysteresis_alpha * m.bending.hysteresis_d1 * step * 1.000001
 
 
 def test_a_run_reports_a_full_memory_and_the_default_is_enough(tmp_path, capsys):

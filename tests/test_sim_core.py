@@ -4,7 +4,7 @@ scenes, each scheme has its solver, and the laws' tangents are their derivatives
 import numpy as np
 import pytest
 import warp as wp
-from conftest import overrides
+from conftest import loop_asymptote_of, overrides, paper_loop
 from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, PROBE_UNITS, bending_tagawa2003, integrators, tensile
 from warpcloth.kernels.types import LAW_PARAMETER_SLOTS, precision
 
@@ -114,7 +114,7 @@ def test_tensile_energy_and_tangent_are_the_integral_and_derivative_of_the_force
 
 def test_bending_tangent_is_the_slope_of_the_moment_on_each_branch():
     material = to_si(wc.load_scene("damped_swing").material)
-    k0 = material.hysteresis_k0
+    k0 = material.bending.hysteresis_k0
     # rising to K0, then falling to −K0: one reversal, at the sample where the path turns
     n = 20001
     path = np.concatenate([np.linspace(-0.3 * k0, k0, n), np.linspace(k0, -k0, n)[1:]])
@@ -126,7 +126,7 @@ def test_bending_tangent_is_the_slope_of_the_moment_on_each_branch():
     smooth[n - 2 : n + 1] = False  # the reversal itself: the branch changes there
     np.testing.assert_allclose(slope[smooth], midpoint_tangent[smooth], rtol=1e-6)
     assert np.all(tangent > material.bending_rigidity)  # the hysteretic part stiffens both branches
-    elastic = sim.MaterialSI(material.density, material.tensile, material.bending_rigidity, 0.0, 1.0, 1.0)
+    elastic = sim.MaterialSI(material.density, material.tensile, material.bending_rigidity, paper_loop(0.0, 1.0, 1.0))
     _, _, flat = sim.moment_along_path(elastic, path, with_tangent=True)
     assert np.all(flat == material.bending_rigidity)  # D1 = 0: the law is M = D K exactly
 
@@ -140,9 +140,10 @@ def test_packed_parameters_follow_the_declared_layout():
     m = to_si(wc.load_scene("damped_swing").material)
     packed = m.bending_parameters()
     assert len(packed) == LAW_PARAMETER_SLOTS and packed[-1] == 0.0  # tagawa2003 is law 0 (kernels/laws.py)
-    layout = dict(zip(bending_tagawa2003.PARAMETERS, packed, strict=False))
-    assert layout == {"bending_rigidity": m.bending_rigidity, "hysteresis_d1": m.hysteresis_d1,
-                      "hysteresis_alpha": m.hysteresis_alpha, "hysteresis_k0": m.hysteresis_k0,
-                      "hysteresis_m0": m.hysteresis_m0}
-    assert m.hysteresis_m0 == pytest.approx(0.5 * m.hysteresis_d1 * (1 + np.exp(-2 * m.hysteresis_alpha
-                                                                             * m.hysteresis_k0)), rel=1e-15)
+    layout = dict(zip(bending_tagawa2003.PACKED, packed, strict=False))
+    assert layout == {"bending_rigidity": m.bending_rigidity, "hysteresis_d1": m.bending.hysteresis_d1,
+                      "hysteresis_alpha": m.bending.hysteresis_alpha, "hysteresis_k0": m.bending.hysteresis_k0,
+                      "hysteresis_m0": loop_asymptote_of(m)}
+    b = m.bending
+    assert loop_asymptote_of(m) == pytest.approx(0.5 * b.hysteresis_d1 * (1 + np.exp(-2 * b.hysteresis_alpha
+                                                                                   * b.hysteresis_k0)), rel=1e-15)

@@ -593,7 +593,7 @@ def mesh_note(base: dict) -> str:
     law's answers depend on the mesh; "" for a law that converges in h."""
     scene = scene_from_dict(base)
     law = scene.material.bending_law
-    if bending_law(law).MESH_INDEPENDENT:
+    if bending_law(law).mesh_independent:
         return ""
     return (f"the {law} law's hysteresis depends on the mesh (no return-point memory, docs/model.md §15.6): these "
             f"values hold at strip.spacing_mm = {scene.strip.spacing_mm:g} only, and refining h moves them (its "

@@ -14,7 +14,7 @@ import numpy as np
 
 from warpcloth import units
 from warpcloth.errors import SceneError
-from warpcloth.kernels import bending_masing
+from warpcloth.kernels import bending_law
 from warpcloth.sim import SOLVERS, ClampMotion, Control, FabricSet, Model, Recorder, Solver, StripBuilder
 from warpcloth.sim.resources import check_memory
 from warpcloth.sim.stability import cycle_response
@@ -69,12 +69,12 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
     # the model's per-node arrays (positions, velocities, three force parts, imex's two
     # scratch arrays, rest positions, hinge memory, rest curvature and grip factors: ~27
     # numbers of 8 B per node and strip), before any exists
-    masing = any(scene.material.bending_law == bending_masing.NAME for scene in scenes)
-    history = 16 * (first.integrator.reversal_memory + 1) * first.n_nodes if masing else 0
+    remembers = any(bending_law(scene.material.bending_law).uses_reversal_memory for scene in scenes)
+    history = 16 * (first.integrator.reversal_memory + 1) * first.n_nodes if remembers else 0
     check_memory((216 * first.n_nodes + history) * len(scenes),
                  f"the state of {len(scenes)} strip(s) of {first.n_nodes} nodes",
                  "use a coarser strip.spacing_mm, fewer strips per batch"
-                 + (" or a smaller integrator.reversal_memory" if masing else ""))
+                 + (" or a smaller integrator.reversal_memory" if remembers else ""))
     builder = StripBuilder(rest_positions(first), first.n_clamped, first.spacing, first.run.gravity_m_per_s2,
                            release_time=first.preroll, move_time=first.release.move_time_s,
                            reversal_memory=first.integrator.reversal_memory)

@@ -11,8 +11,10 @@ import numpy as np
 
 from warpcloth import units
 from warpcloth.errors import SceneError
-from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
-from warpcloth.sim import MaterialSI
+from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_law
+from warpcloth.kernels.law import BENDING_RIGIDITY, LawParameter
+from warpcloth.kernels.laws import LAW_PARAMETERS
+from warpcloth.sim import BendingParameters, MaterialSI
 
 from .keys import field_line
 from .parse import coerce_value, parse_section, parse_toml, read_toml_text
@@ -20,21 +22,20 @@ from .schema import MaterialSection
 
 MATERIAL_FILE_KEY = "material.from_file"
 
+def si_value(parameter: LawParameter, value: float) -> float:
+    """A law parameter's scene value (KES units) in SI, by the unit its description names."""
+    return value * getattr(units, parameter.unit) if parameter.unit else value
+
+
 def to_si(section: MaterialSection) -> MaterialSI:
     """Convert a KES-unit material section to SI (the only KES → SI conversion of a material)."""
+    law = bending_law(section.bending_law)
     return MaterialSI(
         density=section.density_g_per_cm2 * units.AREAL_DENSITY_G_PER_CM2,
         tensile=tuple(a * units.TENSILE_GF_PER_CM for a in section.tensile_gf_per_cm),
-        bending_rigidity=section.bending_rigidity_gf_cm2_per_cm * units.RIGIDITY_GF_CM2_PER_CM,
-        hysteresis_d1=section.hysteresis_d1_gf_cm_per_cm * units.MOMENT_GF_CM_PER_CM,
-        hysteresis_alpha=section.hysteresis_alpha_cm * units.LENGTH_CM,
-        hysteresis_k0=section.hysteresis_k0_per_cm * units.CURVATURE_PER_CM,
-        bending_law=section.bending_law,
-        dahl_moment=section.dahl_moment_gf_cm_per_cm * units.MOMENT_GF_CM_PER_CM,
-        dahl_curvature=section.dahl_curvature_per_cm * units.CURVATURE_PER_CM,
-        dahl_exponent=section.dahl_exponent,
-        friction_moment=section.friction_moment_gf_cm_per_cm * units.MOMENT_GF_CM_PER_CM,
-        friction_width=section.friction_width_per_cm * units.CURVATURE_PER_CM,
+        bending_rigidity=si_value(BENDING_RIGIDITY, getattr(section, BENDING_RIGIDITY.scene_field)),
+        bending=BendingParameters.of(law.name, {p.name: si_value(p, getattr(section, p.scene_field))
+                                                for p in law.parameters}),
     )
 
 
@@ -42,13 +43,12 @@ def field_laws(dotted: str) -> tuple[str, ...]:
     """The bending laws whose parameter the scene field ``dotted`` (``material.dahl_exponent``)
     is; empty for a field every law reads, or one outside [material]."""
     section, _, key = dotted.partition(".")
-    spec = MaterialSection.__dataclass_fields__.get(key) if section == "material" else None
-    return spec.metadata.get("laws", ()) if spec is not None else ()
+    return LAW_PARAMETERS[key][1] if section == "material" and key in LAW_PARAMETERS else ()
 
 
 def law_fields(law: str) -> list[str]:
     """The [material] fields that are parameters of the bending law ``law`` (not of every law)."""
-    return [f.name for f in dataclasses.fields(MaterialSection) if law in f.metadata.get("laws", ())]
+    return [p.scene_field for p in bending_law(law).parameters]
 
 
 def tensile_slope_minimum(coefficients: list[float], max_strain: float) -> tuple[float, float]:

@@ -17,7 +17,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from warpcloth import units
-from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_masing, bending_tagawa2003
+from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_masing
+from warpcloth.kernels.law import BENDING_RIGIDITY, LawParameter
+from warpcloth.kernels.laws import LAW_PARAMETERS
 from warpcloth.sim import SOLVERS
 
 EDGE_HINGES = ("second_order", "paper")
@@ -37,18 +39,6 @@ DEFAULT_MATERIAL = _bundled_default_material()
 """The default material's fields, read from the bundled ``wool90-nylon10`` material file:
 docs/model.md's illustrative wool 90 % / nylon 10 % (warp direction). The paper's measured
 Fig. 8 curves are not in its text, so these numbers are plausible, not measured."""
-
-# The Dahl and frictional-couple defaults are the default material's own loop: Dahl with
-# n = 1 is the paper's law with M_s = M0, K_s = 1/α (docs/model.md §4.8), so switching the
-# law alone keeps the material; the frictional couple takes the same moment and width.
-_DEFAULT_M0 = bending_tagawa2003.loop_asymptote(DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"],
-                                               DEFAULT_MATERIAL["hysteresis_alpha_cm"],
-                                               DEFAULT_MATERIAL["hysteresis_k0_per_cm"])
-_DEFAULT_SCALE = 1.0 / DEFAULT_MATERIAL["hysteresis_alpha_cm"]
-
-PAPER_LAW_SHAPE = ("tagawa2003", "masing")
-"""The laws that read the paper's loop parameters D1, α, K0 (the same major loop)."""
-
 
 def _field(default: Any, doc: str, *, gt: float | None = None, ge: float | None = None,
            choices: tuple[str, ...] | None = None, per_strip: bool = False, laws: tuple[str, ...] = (),
@@ -82,57 +72,50 @@ class StripSection:
                                                       per_strip=True)
 
 
-@dataclass(frozen=True)
-class MaterialSection:
-    """Fabric in KES units; converted to SI once, by warpcloth.scene.to_si."""
+def _law_field(parameter: LawParameter, laws: tuple[str, ...]) -> Any:
+    # A law's parameter as a [material] field: the default material's value where it gives one,
+    # else the law's own default (which may be the default material's loop).
+    default = DEFAULT_MATERIAL.get(parameter.scene_field)
+    if default is None:
+        default = parameter.default(DEFAULT_MATERIAL) if callable(parameter.default) else parameter.default
+    if default is None:
+        raise ImportError(f"the default material {DEFAULT_MATERIAL_NAME!r} lacks {parameter.scene_field}, and the "
+                          f"{' and '.join(laws)} law gives it no default")
+    return _field(default, f"{', '.join(laws)}: {parameter.doc}", gt=parameter.gt, ge=parameter.ge, per_strip=True,
+                  laws=laws)
 
-    name: str = _field(DEFAULT_MATERIAL["name"], "label (the default is illustrative, docs/model.md)",
-                       per_strip=True)
-    density_g_per_cm2: float = _field(DEFAULT_MATERIAL["density_g_per_cm2"], "mass per area ρ_A",
-                                      gt=0, per_strip=True)
-    tensile_gf_per_cm: list[float] = _field(
-        DEFAULT_MATERIAL["tensile_gf_per_cm"],
-        "a1..a4 of T(ε) = a1 ε + a2 ε² + a3 ε³ + a4 ε⁴ (force per width, KES-FB1 upper loop)",
-        per_strip=True)
-    bending_rigidity_gf_cm2_per_cm: float = _field(
-        DEFAULT_MATERIAL["bending_rigidity_gf_cm2_per_cm"], "D, slope of the centre line M = D K (every law)",
-        ge=0, per_strip=True)
-    bending_law: str = _field(DEFAULT_MATERIAL.get("bending_law", DEFAULT_BENDING_LAW),
-                              "hysteretic bending law (docs/model.md §4): tagawa2003 (the paper's), masing (the "
-                              "paper's loop with return-point memory: converges in h and dt), dahl, "
-                              "frictional_couple; each reads only its own fields below", choices=tuple(BENDING_LAWS),
-                              per_strip=True)
-    hysteresis_d1_gf_cm_per_cm: float = _field(
-        DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"], "tagawa2003, masing: D1, hysteresis amplitude (0 = elastic)",
-        ge=0, per_strip=True, laws=PAPER_LAW_SHAPE)
-    hysteresis_alpha_cm: float = _field(DEFAULT_MATERIAL["hysteresis_alpha_cm"],
-                                        "tagawa2003, masing: α, steepness of the hysteresis branches", gt=0,
-                                        per_strip=True, laws=PAPER_LAW_SHAPE)
-    hysteresis_k0_per_cm: float = _field(DEFAULT_MATERIAL["hysteresis_k0_per_cm"],
-                                         "tagawa2003, masing: K0, curvature where the KES loop closes (masing: "
-                                         "only there, not in the dynamics)", gt=0, per_strip=True,
-                                         laws=PAPER_LAW_SHAPE)
-    dahl_moment_gf_cm_per_cm: float = _field(
-        DEFAULT_MATERIAL.get("dahl_moment_gf_cm_per_cm", _DEFAULT_M0),
-        "dahl: M_s, saturation of the hysteretic moment (0 = elastic; 2HB → 2 M_s for K_s ≪ 1 1/cm)", ge=0,
-        per_strip=True, laws=("dahl",))
-    dahl_curvature_per_cm: float = _field(
-        DEFAULT_MATERIAL.get("dahl_curvature_per_cm", _DEFAULT_SCALE),
-        "dahl: K_s, curvature scale over which the hysteretic moment saturates", gt=0, per_strip=True, laws=("dahl",))
-    dahl_exponent: float = _field(DEFAULT_MATERIAL.get("dahl_exponent", 1.0),
-                                  "dahl: n, shape of the branches (1: the paper's exponential branches; "
-                                  "→ 0: a frictional couple)", ge=0, per_strip=True, laws=("dahl",))
-    friction_moment_gf_cm_per_cm: float = _field(
-        DEFAULT_MATERIAL.get("friction_moment_gf_cm_per_cm", _DEFAULT_M0),
-        "frictional_couple: M_f, the frictional couple (0 = elastic; 2HB = 2 M_f)", ge=0, per_strip=True,
-        laws=("frictional_couple",))
-    friction_width_per_cm: float = _field(
-        DEFAULT_MATERIAL.get("friction_width_per_cm", _DEFAULT_SCALE),
-        "frictional_couple: K_w, curvature change over which the couple reverses (half of it each way; "
-        "→ 0: Grosberg's M_f sign(dK/dt))", gt=0, per_strip=True, laws=("frictional_couple",))
-    from_file: str = _field("", "a material file (path ending in .toml, relative to the scene file) or a bundled "
-                            "material name; its values fill every [material] field the scene does not set itself",
-                            per_strip=True)
+
+def _material_section() -> type:
+    # The common fields, then every law's own parameters (from the laws' descriptions,
+    # kernels/law.py), then from_file.
+    common = [
+        ("name", str, _field(DEFAULT_MATERIAL["name"], "label (the default is illustrative, docs/model.md)",
+                             per_strip=True)),
+        ("density_g_per_cm2", float, _field(DEFAULT_MATERIAL["density_g_per_cm2"], "mass per area ρ_A", gt=0,
+                                            per_strip=True)),
+        ("tensile_gf_per_cm", list[float], _field(
+            DEFAULT_MATERIAL["tensile_gf_per_cm"],
+            "a1..a4 of T(ε) = a1 ε + a2 ε² + a3 ε³ + a4 ε⁴ (force per width, KES-FB1 upper loop)", per_strip=True)),
+        (BENDING_RIGIDITY.scene_field, float, _field(DEFAULT_MATERIAL[BENDING_RIGIDITY.scene_field],
+                                                     BENDING_RIGIDITY.doc, ge=BENDING_RIGIDITY.ge, per_strip=True)),
+        ("bending_law", str, _field(
+            DEFAULT_MATERIAL.get("bending_law", DEFAULT_BENDING_LAW),
+            "hysteretic bending law (docs/model.md §4): "
+            + ", ".join(f"{law.name} ({law.summary})" for law in BENDING_LAWS.values())
+            + "; each reads only its own fields below", choices=tuple(BENDING_LAWS), per_strip=True)),
+    ]
+    own = [(name, float, _law_field(parameter, laws)) for name, (parameter, laws) in LAW_PARAMETERS.items()]
+    last = [("from_file", str, _field(
+        "", "a material file (path ending in .toml, relative to the scene file) or a bundled material name; its "
+        "values fill every [material] field the scene does not set itself", per_strip=True))]
+    section = dataclasses.make_dataclass("MaterialSection", common + own + last, frozen=True)
+    section.__module__ = __name__
+    section.__doc__ = ("Fabric in KES units; converted to SI once, by warpcloth.scene.to_si. The bending laws' own "
+                       "fields come from their descriptions (kernels/law.py).")
+    return section
+
+
+MaterialSection = _material_section()
 
 
 @dataclass(frozen=True)

@@ -82,8 +82,8 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
     response = cycle_response(materials)
     for scene, material, (_, loop) in zip(scenes, materials, response, strict=True):
         law = bending_law(material.bending_law)
-        if scheme == "imex" and loop > 0 and not law.MESH_INDEPENDENT:
-            raise SceneError("integrator.dt_s", f"auto has no accurate imex step for the {law.NAME} law of "
+        if scheme == "imex" and loop > 0 and not law.mesh_independent:
+            raise SceneError("integrator.dt_s", f"auto has no accurate imex step for the {law.name} law of "
                              f"material {scene.material.name!r}: without return-point memory its loop keeps a "
                              "0.1–2 % floor against the converged solution that no dt removes (docs/model.md "
                              "§9.5); use bending_law = \"masing\", or scheme = \"semi_implicit\" with dt_s = "

@@ -11,7 +11,7 @@
 from .bending import moment_along_path
 from .builder import ClampMotion, FabricSet, Grip, StripBuilder
 from .control import Control
-from .material import MaterialSI
+from .material import BendingParameters, MaterialSI
 from .model import PRECISIONS, Model
 from .recorder import Recorder, Schedule
 from .runner import RunResult, Sink, simulate_batch
@@ -36,6 +36,7 @@ __all__ = [
     "ForwardEulerSolver",
     "Grip",
     "ImexSolver",
+    "BendingParameters",
     "MaterialSI",
     "Model",
     "Recorder",

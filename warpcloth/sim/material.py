@@ -2,38 +2,90 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
-from warpcloth.kernels import DEFAULT_BENDING_LAW, bending_law, bending_tagawa2003, packed_parameters
+from warpcloth.kernels import DEFAULT_BENDING_LAW, bending_law, packed_parameters
+from warpcloth.kernels.law import BENDING_RIGIDITY, BendingLaw
+
+
+@dataclass(frozen=True)
+class BendingParameters:
+    """A bending law and its own parameters in SI, by the names its description gives
+    (:class:`warpcloth.kernels.law.LawParameter`; D, which every law reads, is the
+    material's ``bending_rigidity``)."""
+
+    law: str
+    values: tuple[tuple[str, float], ...] = ()
+
+    @classmethod
+    def of(cls, law: str, values: Mapping[str, float] | None = None) -> BendingParameters:
+        """The parameters of ``law`` from ``values`` (SI, by name); KeyError for a name the law
+        does not have or a parameter it lacks."""
+        description = bending_law(law)
+        values = dict(values or {})
+        unknown = sorted(set(values) - {p.name for p in description.parameters})
+        if unknown:
+            raise KeyError(f"the {law} law has no parameter {unknown[0]!r}; it has "
+                           f"{', '.join(p.name for p in description.parameters) or 'none'}")
+        missing = [p.name for p in description.parameters if p.name not in values]
+        if missing:
+            raise KeyError(f"the {law} law needs {', '.join(missing)}")
+        return cls(law, tuple((p.name, float(values[p.name])) for p in description.parameters))
+
+    @property
+    def description(self) -> BendingLaw:
+        """The law's description (kernels/law.py)."""
+        return bending_law(self.law)
+
+    def __getitem__(self, name: str) -> float:
+        for key, value in self.values:
+            if key == name:
+                return value
+        raise KeyError(f"the {self.law} law has no parameter {name!r}")
+
+    def __getattr__(self, name: str) -> float:
+        # material.bending.dahl_moment reads as the law's own parameter
+        if name.startswith("_") or name in ("law", "values"):
+            raise AttributeError(name)
+        try:
+            return self[name]
+        except KeyError as exc:
+            raise AttributeError(str(exc)) from None
+
+    def replace(self, **values: float) -> BendingParameters:
+        """The same law with some of its parameters changed (SI, by name)."""
+        return BendingParameters.of(self.law, {**self.as_dict(), **values})
+
+    def as_dict(self) -> dict[str, float]:
+        """The parameters by SI name."""
+        return dict(self.values)
+
+
+ELASTIC = BendingParameters.of(DEFAULT_BENDING_LAW, {"hysteresis_d1": 0.0, "hysteresis_alpha": 0.05,
+                                                     "hysteresis_k0": 250.0})
+"""The default law without hysteresis (D1 = 0): M = D K."""
 
 
 @dataclass(frozen=True)
 class MaterialSI:
     """A material in SI units, as the kernels use it (KES → SI: :func:`warpcloth.scene.to_si`).
 
-    ``bending_law`` names the law (kernels/laws.py); each law reads its own fields (its
-    ``MATERIAL_FIELDS``) and ignores the others'.
+    ``bending`` is the bending law with its own parameters; D, the slope every law has,
+    is ``bending_rigidity``.
     """
 
     density: float  # ρ_A, kg/m²
     tensile: tuple[float, float, float, float]  # a1..a4 of T(ε), N/m
     bending_rigidity: float  # D, N·m
-    hysteresis_d1: float = 0.0  # tagawa2003 and masing: D1, N
-    hysteresis_alpha: float = 0.05  # tagawa2003 and masing: α, m
-    hysteresis_k0: float = 250.0  # tagawa2003 and masing: K0, 1/m
-    bending_law: str = DEFAULT_BENDING_LAW
-    dahl_moment: float = 0.0  # dahl: M_s, N
-    dahl_curvature: float = 20.0  # dahl: K_s, 1/m
-    dahl_exponent: float = 1.0  # dahl: n
-    friction_moment: float = 0.0  # frictional_couple: M_f, N
-    friction_width: float = 20.0  # frictional_couple: K_w, 1/m
+    bending: BendingParameters = ELASTIC
 
     @property
-    def hysteresis_m0(self) -> float:
-        """M0 = ½ D1 (1 + e^{−2αK0}), the asymptote of the tagawa2003 hysteretic offset (N)."""
-        return bending_tagawa2003.loop_asymptote(self.hysteresis_d1, self.hysteresis_alpha, self.hysteresis_k0)
+    def bending_law(self) -> str:
+        """The name of the material's bending law."""
+        return self.bending.law
 
     def bending_parameters(self) -> tuple[float, ...]:
         """The packed per-strip parameters of the material's bending law (kernels/laws.py)."""
-        law = bending_law(self.bending_law)
-        return packed_parameters(self.bending_law, *(getattr(self, name) for name in law.MATERIAL_FIELDS))
+        values = {BENDING_RIGIDITY.name: self.bending_rigidity, **self.bending.as_dict()}
+        return packed_parameters(self.bending.law, values)

@@ -12,7 +12,7 @@ import numpy as np
 import warp as wp
 
 from warpcloth.errors import OptionError
-from warpcloth.kernels import bending_masing, structs
+from warpcloth.kernels import bending_law, structs
 from warpcloth.kernels import precision as precision_types
 
 if TYPE_CHECKING:
@@ -106,7 +106,7 @@ class Model:
         self.rest_curvature = np.stack([s.fabric_set.hinge_values(intervals) for s in strips], axis=1)  # [hinge, strip]
         self.grip_factors = np.stack([s.grip.hinge_factors(intervals) for s in strips], axis=1)  # [hinge, strip, 2]
         # Reversal points are stored only when some strip's law has return-point memory.
-        uses_history = any(s.material.bending_law == bending_masing.NAME for s in strips)
+        uses_history = any(bending_law(s.material.bending_law).uses_reversal_memory for s in strips)
         self.reversal_memory = builder.reversal_memory if uses_history else 0
         self.struct = self._build_struct()
 

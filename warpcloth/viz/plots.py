@@ -25,7 +25,6 @@ from warpcloth.io.measured import ClampAngleTrace, LaserTrace, TrackedShapes, re
 from warpcloth.io.recording import Recording  # noqa: E402
 from warpcloth.metrics import comparison_window, extrema  # noqa: E402
 from warpcloth.scene import to_si  # noqa: E402
-from warpcloth.scene.schema import PAPER_LAW_SHAPE  # noqa: E402
 from warpcloth.sim import moment_along_path  # noqa: E402
 from warpcloth.viz import DPI, FORMATS  # noqa: E402
 from warpcloth.viz.geometry import colour_values  # noqa: E402
@@ -223,8 +222,10 @@ def plot_shapes(recording: Recording, path: Path, times: np.ndarray, variant: in
 def kes_loop(recording: Recording, variant: int = 0, samples: int = 400) -> tuple[np.ndarray, np.ndarray]:
     """The material's KES-FB2 loop (0 → K0 → −K0 → K0): curvature (1/m), moment (N·m/m)."""
     material = to_si(recording.scenes[variant].material)
-    # the paper's law closes its loop at its K0; the others are charted on the standard cycle
-    k0 = material.hysteresis_k0 if material.bending_law in PAPER_LAW_SHAPE else KES_K0_PER_CM * units.CURVATURE_PER_CM
+    # a law whose loop closes at a curvature of its own (the paper's K0) is charted there, the
+    # others on the standard cycle
+    closure = material.bending.description.loop_closure
+    k0 = material.bending[closure] if closure else KES_K0_PER_CM * units.CURVATURE_PER_CM
     path = np.concatenate([np.linspace(0, k0, samples), np.linspace(k0, -k0, 2 * samples)[1:],
                            np.linspace(-k0, k0, 2 * samples)[1:]])
     moment, _ = moment_along_path(material, path)

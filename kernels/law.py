@@ -1,0 +1,123 @@
+"""What a bending law is, said once: :class:`BendingLaw`, the one description from which
+everything else about a law is derived.
+
+A law's file (``kernels/bending_<name>.py``) holds its Warp functions and ends with its
+description, ``LAW``; :mod:`.laws` lists the descriptions. From a description warpcloth
+derives the scene's [material] fields (their names, defaults, documentation and which law
+reads them), the one KES → SI conversion, the fit aliases of ``warpcloth fit --free``,
+figure labels, the ``bending_law`` choices of the command line, the per-strip dispatch in
+the kernels (:func:`warpcloth.kernels.laws.build`, generated over the list with
+``wp.static``) and the KES fitter ``material fit-kes --law`` uses.
+
+The kernel contract. ``build(scalar)`` returns :class:`LawFunctions`, four ``wp.func``\\s on
+the shared types of :func:`~warpcloth.kernels.types.precision` (``law_parameters``, the
+packed per-strip vector with D in slot 0 and the law's own parameters after it;
+``law_memory``, the packed per-hinge vector whose last slot is the curvature at the last
+force evaluation; ``reversal_memory``, the per-hinge reversal points a law with
+return-point memory keeps), with one signature per function so that any law can stand in
+any branch of the dispatch:
+
+- ``fresh_memory(curvature, p, history, hinge, strip) -> memory``: a hinge that has never bent;
+- ``follow(curvature, memory, p, history, hinge, strip) -> memory``: the memory after the
+  curvature moved to ``curvature`` (its last slot set to ``curvature``);
+- ``tangent(curvature, memory, p, history, hinge, strip) -> dM/dK`` on the current branch;
+- ``hysteretic_moment(curvature, memory, p) -> M − D K`` (what ``follow`` left in the memory
+  is all it may read, so probes can evaluate it without the reversal points).
+
+Only Warp and the standard library are imported here, so units are named, not imported:
+``LawParameter.unit`` is the name of a :mod:`warpcloth.units` constant, and the fitter the
+import path of a :class:`warpcloth.calibrate.kes.bending_fit.LawFitter`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class LawParameter:
+    """One parameter of a bending law, as the kernels, scene files, fits and figures see it."""
+
+    name: str
+    """The SI name, the key in :class:`warpcloth.sim.BendingParameters` (``dahl_moment``)."""
+    scene_field: str
+    """The [material] field of a scene, in KES units (``dahl_moment_gf_cm_per_cm``)."""
+    unit: str
+    """The :mod:`warpcloth.units` constant that converts the scene field to SI
+    (``MOMENT_GF_CM_PER_CM``); empty for a dimensionless parameter."""
+    alias: str
+    """The short name ``warpcloth fit --free`` accepts (``Ms``)."""
+    label: str
+    """The symbol figures print (``M_s``)."""
+    unit_label: str
+    """The scene field's unit as figures print it (``gf·cm/cm``; empty if dimensionless)."""
+    doc: str
+    """One line for the scene reference (the law names are prefixed to it)."""
+    default: float | Callable[[Mapping[str, Any]], float] | None
+    """The scene field's default in KES units where the default material file does not give
+    it: a number, or a function of the default material's [material] values (so a law's
+    default can be the default material's own loop); None: the default material gives it."""
+    gt: float | None = None
+    """The scene field must be greater than this."""
+    ge: float | None = None
+    """The scene field must be at least this."""
+    amplitude: bool = False
+    """The size of the law's hysteresis (0 = elastic): ``warpcloth fit`` searches it from 0
+    to 4× the scene's value by default."""
+
+
+@dataclass(frozen=True)
+class LawFunctions:
+    """A law's Warp functions for one precision (the contract in the module docstring)."""
+
+    fresh_memory: Any
+    follow: Any
+    hysteretic_moment: Any
+    tangent: Any
+
+
+@dataclass(frozen=True)
+class BendingLaw:
+    """A bending law: its name, parameters, memory, kernels and fitter (module docstring)."""
+
+    name: str
+    """What ``material.bending_law`` says (``dahl``)."""
+    summary: str
+    """A few words for the scene reference and the command line's help."""
+    parameters: tuple[LawParameter, ...]
+    """The law's own parameters, after the bending rigidity D every law reads first."""
+    pack: Callable[..., tuple[float, ...]]
+    """The packed per-strip parameters (D first) from D and :attr:`parameters` in SI."""
+    memory: tuple[str, ...]
+    """What each slot of the per-hinge memory holds, the last curvature last."""
+    build: Callable[[Any], LawFunctions]
+    """The law's :class:`LawFunctions` for a Warp scalar type (cached by the law)."""
+    fitter: str
+    """``module:attribute`` of the law's KES-FB2 fitter."""
+    mesh_independent: bool
+    """Whether the law's answers converge as the mesh and the step are refined
+    (return-point memory); a law without it gives fitted values that depend on h
+    (docs/model.md §15.6)."""
+    uses_reversal_memory: bool = False
+    """Whether the law keeps reversal points in the shared ``reversal_memory`` (allocated,
+    at the run's ``reversal_memory`` depth, only for a batch with such a law)."""
+    loop_closure: str = ""
+    """The parameter (SI name) at whose curvature the law's KES loop closes, if it has one;
+    figures chart the loop there instead of on the standard KES cycle."""
+
+    def parameter(self, name: str) -> LawParameter:
+        """The parameter called ``name`` (its SI name); KeyError lists the law's."""
+        for p in self.parameters:
+            if p.name == name:
+                return p
+        raise KeyError(f"the {self.name} law has no parameter {name!r}; it has "
+                       f"{', '.join(q.name for q in self.parameters)}")
+
+
+BENDING_RIGIDITY = LawParameter(
+    name="bending_rigidity", scene_field="bending_rigidity_gf_cm2_per_cm", unit="RIGIDITY_GF_CM2_PER_CM",
+    alias="D", label="B = D", unit_label="gf·cm²/cm", doc="D, slope of the centre line M = D K (every law)",
+    default=0.0, ge=0)
+"""D, the slope of the centre line M = D K: every law's first parameter, slot 0 of the packed vector."""
