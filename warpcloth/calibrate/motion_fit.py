@@ -55,7 +55,17 @@ from warpcloth.errors import OptionError, SceneError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
 from warpcloth.kernels import bending_law
 from warpcloth.runs import simulate
-from warpcloth.scene import Scene, batch_fields, check_step, field_laws, law_fields, scene_from_dict, set_field
+from warpcloth.scene import (
+    Scene,
+    batch_fields,
+    check_step,
+    field_laws,
+    hysteresis_amplitudes,
+    law_aliases,
+    law_fields,
+    scene_from_dict,
+    set_field,
+)
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.scene.step import AUTO, choose_step, stable_step_of
 from warpcloth.sim import RunResult
@@ -70,15 +80,7 @@ box: at most this many free parameters (1024 scenes, a few seconds)."""
 
 ALIASES = {
     "gamma": "damping.gamma_per_s",
-    "D": "material.bending_rigidity_gf_cm2_per_cm",
-    "D1": "material.hysteresis_d1_gf_cm_per_cm",
-    "alpha": "material.hysteresis_alpha_cm",
-    "K0": "material.hysteresis_k0_per_cm",
-    "Ms": "material.dahl_moment_gf_cm_per_cm",
-    "Ks": "material.dahl_curvature_per_cm",
-    "n": "material.dahl_exponent",
-    "Mf": "material.friction_moment_gf_cm_per_cm",
-    "Kw": "material.friction_width_per_cm",
+    **law_aliases(),
     "density": "material.density_g_per_cm2",
     "rotation_centre_dx_mm": "clamp.rotation_centre_dx_mm",
     "rotation_centre_dy_mm": "clamp.rotation_centre_dy_mm",
@@ -90,14 +92,14 @@ ALIASES = {
     "grip_length": "clamp.grip_length_mm",
 }
 """Short names accepted by ``--free`` (any per-strip numeric field also works by its dotted name);
-a bending law's parameters only for a scene whose material uses that law."""
+a bending law's parameters (their aliases from the laws' descriptions, kernels/law.py) only
+for a scene whose material uses that law."""
 
 REST_CURVATURE_SPAN = 0.2
 """Default range of ``K_rest``: ± this (1/cm) around the scene's value, a set down to a
 radius of 5 cm either way (docs/calibration.md)."""
 
-HYSTERESIS_AMPLITUDES = ("material.hysteresis_d1_gf_cm_per_cm", "material.dahl_moment_gf_cm_per_cm",
-                         "material.friction_moment_gf_cm_per_cm")
+HYSTERESIS_AMPLITUDES = hysteresis_amplitudes()
 """Fitted from 0 (no hysteresis) to 4× the scene's value by default."""
 
 SHIFT = "time_shift_s"

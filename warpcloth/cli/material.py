@@ -10,6 +10,7 @@ import sys
 from typing import TYPE_CHECKING
 
 from warpcloth.errors import OptionError
+from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
 
 from .options import EXIT_FIT_STATUS, add_overwrite, figure_path, new_result, path_text, positive
 
@@ -28,10 +29,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     kes_p.add_argument("--tensile", required=True, metavar="FB1.csv",
                        help="KES-FB1 loop: strain (%% or fraction) or extension (mm), force per width (gf/cm)")
     kes_p.add_argument("--bending", required=True, metavar="FB2.csv", help=BENDING_HELP)
-    kes_p.add_argument("--law", default="tagawa2003", metavar="NAME|all",
-                       help="the bending law to fit: tagawa2003 (the paper's), dahl, frictional_couple, or all: fit "
-                       "every one, print their comparison and write the material of the one with the lowest AIC "
-                       "(default: tagawa2003)")
+    kes_p.add_argument("--law", default=DEFAULT_BENDING_LAW, metavar="NAME|all",
+                       help="the bending law to fit: "
+                       + ", ".join(f"{law.name} ({law.summary})" for law in BENDING_LAWS.values())
+                       + "; or all: fit every one, print their comparison and write the material of the one with "
+                       f"the lowest AIC (default: {DEFAULT_BENDING_LAW})")
     kes_p.add_argument("-o", "--output", type=path_text, required=True, help="the material file to write (.toml)")
     kes_p.add_argument("--density-g-per-cm2", type=positive, default=None,
                        help="mass per area ρ_A (required: KES-FB1/FB2 data do not contain it)")

@@ -51,6 +51,17 @@ def law_fields(law: str) -> list[str]:
     return [p.scene_field for p in bending_law(law).parameters]
 
 
+def law_aliases() -> dict[str, str]:
+    """Every law parameter's short name (``Ms``), D's included, and its dotted scene field."""
+    return {p.alias: f"material.{p.scene_field}"
+            for p in (BENDING_RIGIDITY, *(parameter for parameter, _ in LAW_PARAMETERS.values()))}
+
+
+def hysteresis_amplitudes() -> tuple[str, ...]:
+    """The dotted scene fields that set the size of a law's hysteresis (0 = elastic)."""
+    return tuple(f"material.{field}" for field, (p, _) in LAW_PARAMETERS.items() if p.amplitude)
+
+
 def tensile_slope_minimum(coefficients: list[float], max_strain: float) -> tuple[float, float]:
     """Smallest dT/dε of the quartic on [0, max_strain] and the strain where it occurs.
 

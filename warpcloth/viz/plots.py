@@ -23,6 +23,8 @@ from warpcloth.errors import DataFileError, OptionError  # noqa: E402
 from warpcloth.io.atomic import write_atomically  # noqa: E402
 from warpcloth.io.measured import ClampAngleTrace, LaserTrace, TrackedShapes, read_measurement  # noqa: E402
 from warpcloth.io.recording import Recording  # noqa: E402
+from warpcloth.kernels.law import BENDING_RIGIDITY  # noqa: E402
+from warpcloth.kernels.laws import LAW_PARAMETERS  # noqa: E402
 from warpcloth.metrics import comparison_window, extrema  # noqa: E402
 from warpcloth.scene import to_si  # noqa: E402
 from warpcloth.sim import moment_along_path  # noqa: E402
@@ -77,17 +79,11 @@ def _legend(ax: plt.Axes, **style: object) -> None:
 
 FIELD_LABELS = {
     "damping.gamma_per_s": ("γ", "s⁻¹"),
-    "material.bending_rigidity_gf_cm2_per_cm": ("B = D", "gf·cm²/cm"),
-    "material.hysteresis_d1_gf_cm_per_cm": ("D1", "gf·cm/cm"),
-    "material.hysteresis_alpha_cm": ("α", "cm"),
-    "material.hysteresis_k0_per_cm": ("K0", "cm⁻¹"),
+    # every bending law's parameters, D's included, as their descriptions label them
+    **{f"material.{p.scene_field}": (p.label, p.unit_label)
+       for p in (BENDING_RIGIDITY, *(parameter for parameter, _ in LAW_PARAMETERS.values()))},
     "material.density_g_per_cm2": ("ρ_A", "g/cm²"),
     "material.bending_law": ("bending law", ""),
-    "material.dahl_moment_gf_cm_per_cm": ("M_s", "gf·cm/cm"),
-    "material.dahl_curvature_per_cm": ("K_s", "cm⁻¹"),
-    "material.dahl_exponent": ("Dahl exponent n", ""),
-    "material.friction_moment_gf_cm_per_cm": ("M_f", "gf·cm/cm"),
-    "material.friction_width_per_cm": ("K_w", "cm⁻¹"),
     "clamp.rotation_centre_dx_mm": ("rotation centre dx", "mm"),
     "clamp.rotation_centre_dy_mm": ("rotation centre dy", "mm"),
     "release.hold_x_mm": ("hold x", "mm"),

@@ -13,6 +13,7 @@ data's own.
 
 from __future__ import annotations
 
+import importlib
 import math
 from dataclasses import dataclass
 
@@ -21,23 +22,32 @@ import numpy as np
 from warpcloth import units
 from warpcloth.errors import OptionError
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
+from warpcloth.kernels.law import BendingLaw
 from warpcloth.scene import to_si
 from warpcloth.sim import moment_along_path
 
 from ..noise import difference_noise, poor_fit_ratio
-from .bending_dahl import DAHL
 from .bending_fit import AIC_TIE, BendingFit, LawFitter, bending_problems
-from .bending_frictional_couple import FRICTIONAL_COUPLE
-from .bending_masing import MASING
-from .bending_tagawa2003 import TAGAWA2003
 from .kes_values import BendingSummary, bending_summary, standard_cycle
 from .readers import BendingLoop, bending_loop
 
-LAW_FITTERS: dict[str, LawFitter] = {f.law: f for f in (TAGAWA2003, DAHL, FRICTIONAL_COUPLE, MASING)}
-"""The fitter of each bending law, in the kernels' order."""
 
-if tuple(LAW_FITTERS) != tuple(BENDING_LAWS):  # pragma: no cover - a law added to the kernels needs a fitter
-    raise ImportError(f"bending laws {tuple(BENDING_LAWS)} but fitters for {tuple(LAW_FITTERS)}")
+def _fitter_of(law: BendingLaw) -> LawFitter:
+    # The fitter the law's description names (module:attribute): calibrate sits above the
+    # kernels, so the description can only name it.
+    module, _, attribute = law.fitter.partition(":")
+    try:
+        fitter = getattr(importlib.import_module(module), attribute)
+    except (ImportError, AttributeError) as exc:
+        raise ImportError(f"the {law.name} bending law names its KES fitter {law.fitter!r}, which cannot be "
+                          f"loaded: {exc}") from exc
+    if not isinstance(fitter, LawFitter) or fitter.law != law.name:
+        raise ImportError(f"the {law.name} bending law's KES fitter {law.fitter!r} is not a LawFitter of that law")
+    return fitter
+
+
+LAW_FITTERS: dict[str, LawFitter] = {name: _fitter_of(law) for name, law in BENDING_LAWS.items()}
+"""The fitter of each bending law, in the kernels' order (from the laws' descriptions)."""
 
 DEFAULT_LAW = DEFAULT_BENDING_LAW
 """What ``fit-kes`` fits without ``--law``: the paper's law."""
