@@ -61,8 +61,8 @@ def test_one_diverging_strip_does_not_stop_the_others():
     scenes = [hanging(damping__gamma_per_s=0.0),
               hanging(damping__gamma_per_s=400.0, material__tensile_gf_per_cm=[20.0, 0.0, 0.0, 0.0])]
     result = wc.simulate(scenes, on_divergence="record")
-    assert [d["strip"] for d in result.diverged] == [0]
-    diverged_at = result.diverged[0]["time_s"]
+    assert [d.strip for d in result.diverged] == [0]
+    diverged_at = result.diverged[0].time_s
     assert np.all(np.isnan(result.probe("tip_x", 0)[result.t > diverged_at]))
     assert np.all(np.isfinite(result.probe("tip_x", 1)))
 
@@ -82,7 +82,7 @@ def test_a_batch_on_threads_is_the_batch_on_one_thread_bit_for_bit():
     scenes.insert(10, wc.load_scene("damped_swing", overrides(run__duration_s=0.2, release__settle_time_s=0.1,
                                                                material__tensile_gf_per_cm=[0.5, 0.0, 0.0, 0.0])))
     one = wc.simulate(scenes, threads=1, on_divergence="record")
-    assert [d["strip"] for d in one.diverged] == [10]
+    assert [d.strip for d in one.diverged] == [10]
     for threads in (2, 3, 7):
         many = wc.simulate(scenes, threads=threads, on_divergence="record")
         assert np.array_equal(many.probes, one.probes, equal_nan=True)

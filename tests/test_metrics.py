@@ -202,7 +202,7 @@ def test_analyse_gives_a_strip_that_diverged_before_t0_a_row_of_nans(tmp_path):
     scenes = [wc.load_scene("damped_swing", fields),
               wc.load_scene("damped_swing", [*fields, "material.bending_rigidity_gf_cm2_per_cm=40"])]
     result = wc.simulate(scenes, out=tmp_path / "r", on_divergence="record")
-    assert [d["strip"] for d in result.diverged] == [1] and result.diverged[0]["phase"] != "record"
+    assert [d.strip for d in result.diverged] == [1] and result.diverged[0].phase != "record"
     good, gone = analyse(tmp_path / "r")
     assert (good["from_s"], good["to_s"]) == (0.0, 0.3) and good["first_amplitude_mm"] > 10
     assert gone["n_half_cycles"] == 0 and np.isnan(gone["first_amplitude_mm"])

@@ -22,13 +22,13 @@ def test_forward_euler_diverges_at_paper_dt_without_damping():
     with pytest.raises(wc.DivergenceError) as info:
         wc.simulate(hanging("forward"))
     report = info.value.diverged[0]
-    assert report["strip"] == 0 and report["quantity"].startswith("energy budget residual")
-    assert 0.0 < report["time_s"] < 0.186
+    assert report.strip == 0 and report.quantity.startswith("energy budget residual")
+    assert 0.0 < report.time_s < 0.186
     message = str(info.value)
     assert "strip 0 diverged after t = 0, at t =" in message
     assert "integrator.dt_s" in message and "semi_implicit" in message
     recorded = info.value.result
-    kept = recorded.t <= report["time_s"]
+    kept = recorded.t <= report.time_s
     assert kept.sum() > 10
     assert all(recorded.probe(name, 0)[kept].dtype.kind == "f" for name in ("tip_x", "tensile"))
 

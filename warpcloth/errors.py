@@ -57,11 +57,12 @@ class ResourceError(WarpclothError, ValueError):
 class DivergenceError(WarpclothError, RuntimeError):
     """A strip's state became non-finite or physically absurd during a run.
 
-    ``diverged`` lists one dict per diverged strip (strip, time, step, quantity, where,
-    value); ``result`` holds everything recorded before the divergence.
+    ``diverged`` lists one :class:`warpcloth.sim.Divergence` per diverged strip (strip,
+    time, step, quantity, where, value); ``result`` holds everything recorded before the
+    divergence.
     """
 
-    def __init__(self, message: str, diverged: list[dict], result: object = None) -> None:
+    def __init__(self, message: str, diverged: list, result: object = None) -> None:
         self.diverged = diverged
         self.result = result
         super().__init__(message)

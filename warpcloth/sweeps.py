@@ -103,7 +103,7 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
     # one thread per batch: the sweep already runs its batches on the cores
     result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
     wall = time.perf_counter() - started
-    diverged = {d["strip"]: d for d in result.diverged}
+    diverged = {d.strip: d for d in result.diverged}
 
     columns = {"variant": [], "t": []} | {name: [] for name in PROBE_FIELDS}
     rows = []
@@ -126,9 +126,9 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
             "hysteresis_work_J": _last(result.probe("hysteresis_work", local)[ok]),
             "damping_work_J": _last(result.probe("damping_work", local)[ok]),
             "diverged": report is not None,
-            "diverged_time_s": report["time_s"] if report else float("nan"),
-            "diverged_phase": report["phase"] if report else "",
-            "diverged_quantity": report["quantity"] if report else "",
+            "diverged_time_s": report.time_s if report else float("nan"),
+            "diverged_phase": report.phase if report else "",
+            "diverged_quantity": report.quantity if report else "",
         }
         if result.reversal_memory:  # reversals a full masing memory could not store (no hysteresis in their loops)
             row["reversal_overflows"] = int(result.reversal_memory["overflows"][local])

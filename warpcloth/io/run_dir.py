@@ -195,7 +195,7 @@ class RunWriter:
             self.frames.seek(self.frame_offset + first * self.frame_bytes)
             self.frames.write(block.tobytes())
 
-    def close(self, diverged: list[dict], extra: dict) -> None:
+    def close(self, diverged: list, extra: dict) -> None:
         """Finish the files and mark the run complete."""
         # Frames never reached (every strip stopped by a divergence) read as NaN, never
         # as a strip collapsed onto the origin.
@@ -206,7 +206,7 @@ class RunWriter:
         self._commit(0)
         self.probes.close()
         self.frames.close()
-        self.meta["diverged"] = diverged
+        self.meta["diverged"] = [d.as_dict() for d in diverged]
         self.meta.update(extra)
         self.meta["provenance"] = provenance(extra.get("device"))
         self.meta["complete"] = True

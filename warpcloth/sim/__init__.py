@@ -17,16 +17,17 @@ from .recorder import Recorder, Schedule
 from .runner import RunResult, Sink, simulate_batch
 from .solvers import (
     SOLVERS,
+    Divergence,
     ExplicitEulerSolver,
     ForwardEulerSolver,
     ImexSolver,
     SemiImplicitEulerSolver,
     Solver,
-    describe_divergence,
 )
 from .state import State
 
 __all__ = [
+    "Divergence",
     "PRECISIONS",
     "SOLVERS",
     "ClampMotion",
@@ -47,7 +48,6 @@ __all__ = [
     "Solver",
     "State",
     "StripBuilder",
-    "describe_divergence",
     "moment_along_path",
     "simulate_batch",
 ]

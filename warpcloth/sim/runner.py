@@ -21,7 +21,7 @@ from .labelled import probes_dataset, probes_frame
 from .model import Model
 from .recorder import Recorder, Schedule
 from .resources import check_memory
-from .solvers import BUDGET_TOLERANCE, Solver, describe_divergence
+from .solvers import BUDGET_TOLERANCE, Divergence, Solver
 from .state import State
 
 TARGET_LAUNCH_SECONDS = 0.5  # long enough to amortise launch cost, short enough for progress
@@ -86,7 +86,7 @@ class Sink(Protocol):
     def write_frames(self, first: int, frames: np.ndarray) -> None:
         """Store frames ``[frame, strip, node, xy]`` from frame index ``first`` on."""
 
-    def close(self, diverged: list[dict], extra: dict) -> None:
+    def close(self, diverged: list[Divergence], extra: dict) -> None:
         """Finish: the run ended (completely, or at a divergence it reports)."""
 
 
@@ -105,7 +105,7 @@ class RunResult:
     probes: np.ndarray
     frame_times: np.ndarray
     frames: np.ndarray | None
-    diverged: list[dict] = field(default_factory=list)
+    diverged: list[Divergence] = field(default_factory=list)
     wall_time_s: float = 0.0
     strip_steps: int = 0
     parameters: dict[str, np.ndarray] = field(default_factory=dict)
@@ -228,7 +228,7 @@ def simulate_batch(
     probes_buf = wp.zeros((cap, nq, b), dtype=model.scalar, device=model.device)
     frames_buf = wp.zeros((cap // ppf + 1, n, b), dtype=model.types.vec2, device=model.device)
 
-    diverged: list[dict] = []
+    diverged: list[Divergence] = []
     budget = BudgetWatch(model)
     total_steps = int(schedule.steps[-1])
     bar = tqdm(total=float(schedule.times(schedule.k_min + len(schedule.steps) - 1)
@@ -270,7 +270,7 @@ def simulate_batch(
         extra = {"wall_time_s": wall_time, "strip_steps": strip_steps, "device": str(model.device)}
         sink.close(diverged, extra | ({"reversal_memory": memory} if memory else {}))
     if diverged and on_divergence == "raise":
-        raise DivergenceError("; ".join(describe_divergence(d) for d in diverged), diverged, result)
+        raise DivergenceError("; ".join(d.describe() for d in diverged), diverged, result)
     return result
 
 
@@ -300,11 +300,11 @@ def _stop_unbalanced(state: State, budget: BudgetWatch, values: np.ndarray, step
 
 def _collect(solver: Solver, state: State, control: Control, schedule: Schedule, i: int, j: int,
              probes_buf: wp.array, frames_buf: wp.array, probes_all: np.ndarray, frames_all: np.ndarray | None,
-             sink: Sink | None, diverged: list[dict], budget: BudgetWatch) -> bool:
+             sink: Sink | None, diverged: list[Divergence], budget: BudgetWatch) -> bool:
     """Copy a finished chunk out, drop samples after a divergence, stream it to the sink."""
     k = schedule.k_min + np.arange(i, j)
     keep = k >= 0
-    known = {d["strip"] for d in diverged}
+    known = {d.strip for d in diverged}
     if keep.any():
         _stop_unbalanced(state, budget, probes_buf[: j - i].numpy()[keep], schedule.steps[i:j][keep], known)
     status = state.struct.status.numpy()
@@ -314,9 +314,8 @@ def _collect(solver: Solver, state: State, control: Control, schedule: Schedule,
     steps = schedule.steps[i:j]
     valid = np.ones((j - i, probes_all.shape[2]), dtype=bool)
     for d in diverged:
-        before = d["code"] in (STATUS_NONFINITE_ENERGY, STATUS_BUDGET)  # the sample that failed is not kept
-        last_ok = steps < d["step"] if before else steps <= d["step"]
-        valid[:, d["strip"]] &= last_ok
+        last_ok = steps < d.step if d.sample_lost else steps <= d.step
+        valid[:, d.strip] &= last_ok
     if not keep.any():
         return bool(new_reports)
     values = probes_buf[: j - i].numpy()[keep]  # copy out only this chunk's samples

@@ -8,6 +8,7 @@ solver class here registered in :data:`SOLVERS`.
 
 from __future__ import annotations
 
+import dataclasses
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Protocol
@@ -83,7 +84,7 @@ class Solver(Protocol):
         """Advance every healthy strip to each of ``output_steps``, recording probes and
         frames, on up to ``threads`` CPU threads."""
 
-    def divergence_report(self, state: State, control: Control, strip: int) -> dict | None:
+    def divergence_report(self, state: State, control: Control, strip: int) -> Divergence | None:
         """Where and how ``strip`` diverged, or None while it is healthy."""
 
 
@@ -172,27 +173,18 @@ class ExplicitEulerSolver:
         with ThreadPoolExecutor(parts) as pool:
             list(pool.map(launch, range(parts)))
 
-    def divergence_report(self, state: State, control: Control, strip: int) -> dict | None:
+    def divergence_report(self, state: State, control: Control, strip: int) -> Divergence | None:
         """Where and how ``strip`` diverged, or None while it is healthy."""
         code = int(state.struct.status.numpy()[strip])
         if code == STATUS_OK:
             return None
         step = int(state.struct.status_step.numpy()[strip])
         time_s = (step - self.release_step(control)) * self.dt
-        return {
-            "strip": strip,
-            "code": code,
-            "step": step,
-            "time_s": time_s,
-            "phase": phase_at(time_s, control),
-            "quantity": QUANTITY[code],
-            "where": int(state.struct.status_index.numpy()[strip]),
-            "value": float(state.struct.status_value.numpy()[strip]),
-            "limit": BUDGET_TOLERANCE if code == STATUS_BUDGET else self.divergence_strain,
-            "scheme": self.scheme,
-            "precision": self.model.precision,
-            "dt_s": self.dt,
-        }
+        return Divergence(strip=strip, code=code, step=step, time_s=time_s, phase=phase_at(time_s, control),
+                          quantity=QUANTITY[code], where=int(state.struct.status_index.numpy()[strip]),
+                          value=float(state.struct.status_value.numpy()[strip]),
+                          limit=BUDGET_TOLERANCE if code == STATUS_BUDGET else self.divergence_strain,
+                          scheme=self.scheme, precision=self.model.precision, dt_s=self.dt)
 
 
 class SemiImplicitEulerSolver(ExplicitEulerSolver):
@@ -271,18 +263,46 @@ def phase_at(time_s: float, control: Control) -> str:
     return "move" if time_s + control.release_time < control.move_time else "hold"
 
 
-def describe_divergence(report: dict) -> str:
-    """One sentence a user can act on."""
-    where = f" at segment {report['where']}" if report["code"] == STATUS_STRAIN else (
-        f" at hinge node {report['where']}" if report["code"] == STATUS_FOLDED else "")
-    limit = {STATUS_STRAIN: f", beyond integrator.divergence_strain = {report['limit']:g}",
-             STATUS_BUDGET: f", above {report['limit']:g}: the step is unstable"}.get(report["code"], "")
-    advice = f"try a smaller integrator.dt_s (now {report['dt_s']:g} s, e.g. {report['dt_s'] / 4:g})"
-    advice += SOLVERS[report["scheme"]].advice
-    if report["code"] == STATUS_BUDGET and report.get("precision") == "float32":
-        advice = ("float32 rounding feeds energy into the stretching modes over a long run (a smaller dt makes it "
-                  "worse): use integrator.precision = \"float64\", or " + advice)
-    during = {"move": "while its free end was carried to the hold", "hold": "during the hold",
-              "record": "after t = 0"}[report["phase"]]
-    return (f"strip {report['strip']} diverged {during}, at t = {report['time_s']:.6g} s (step {report['step']}): "
-            f"{report['quantity']} = {report['value']:.4g}{where}{limit}; {advice}")
+@dataclass(frozen=True)
+class Divergence:
+    """Where and how one strip of a batch diverged: what the runner stops it for, the run
+    directory records (:meth:`as_dict`) and the user reads (:meth:`describe`)."""
+
+    strip: int  # index in the batch
+    code: int  # the health code the kernel set (kernels/status.py)
+    step: int  # the step it was set at
+    time_s: float  # that step's time after t = 0 (negative before the release)
+    phase: str  # PHASES
+    quantity: str  # what left its range, in words
+    where: int  # the segment of a strain, the hinge node of a fold
+    value: float  # the quantity's value
+    limit: float  # the range it left
+    scheme: str  # the solver's integrator.scheme
+    precision: str
+    dt_s: float
+
+    def as_dict(self) -> dict:
+        """The report as the run directory's meta.json writes it."""
+        return dataclasses.asdict(self)
+
+    @property
+    def sample_lost(self) -> bool:
+        """Whether the probe sample at :attr:`step` is already unusable (an energy that is
+        not finite or off budget), so only the samples before it are kept."""
+        return self.code in (STATUS_NONFINITE_ENERGY, STATUS_BUDGET)
+
+    def describe(self) -> str:
+        """One sentence a user can act on."""
+        where = f" at segment {self.where}" if self.code == STATUS_STRAIN else (
+            f" at hinge node {self.where}" if self.code == STATUS_FOLDED else "")
+        limit = {STATUS_STRAIN: f", beyond integrator.divergence_strain = {self.limit:g}",
+                 STATUS_BUDGET: f", above {self.limit:g}: the step is unstable"}.get(self.code, "")
+        advice = f"try a smaller integrator.dt_s (now {self.dt_s:g} s, e.g. {self.dt_s / 4:g})"
+        advice += SOLVERS[self.scheme].advice
+        if self.code == STATUS_BUDGET and self.precision == "float32":
+            advice = ("float32 rounding feeds energy into the stretching modes over a long run (a smaller dt makes "
+                      "it worse): use integrator.precision = \"float64\", or " + advice)
+        during = {"move": "while its free end was carried to the hold", "hold": "during the hold",
+                  "record": "after t = 0"}[self.phase]
+        return (f"strip {self.strip} diverged {during}, at t = {self.time_s:.6g} s (step {self.step}): "
+                f"{self.quantity} = {self.value:.4g}{where}{limit}; {advice}")
