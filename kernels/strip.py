@@ -10,7 +10,7 @@ runs its own bending law (kernels/laws.py).
 """
 
 import functools
-from types import SimpleNamespace
+from dataclasses import dataclass
 from typing import Any
 
 import warp as wp
@@ -26,8 +26,29 @@ from .types import precision
 wp.set_module_options({"enable_backward": False})
 
 
+@dataclass(frozen=True)
+class StripKernels:
+    """The types and the fused ``advance`` kernel of one (precision, scheme)."""
+
+    types: Any
+    StripModel: Any
+    StripControl: Any
+    Stepping: Any
+    StripState: Any
+    ProbeSettings: Any
+    law: Any
+    advance: Any
+
+
+@dataclass(frozen=True)
+class HingeKernels:
+    """The kernel that starts every hinge fresh (its law's ``fresh_memory``)."""
+
+    initialise_hinges: Any
+
+
 @functools.cache
-def build(scalar: Any, scheme: str) -> SimpleNamespace:
+def build(scalar: Any, scheme: str) -> StripKernels:
     """Types and the ``advance`` kernel of one configuration."""
     types = precision(scalar)
     vec2, vec4, mat22 = types.vec2, types.vec4, types.mat22
@@ -61,54 +82,60 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
         )
 
     @wp.func
-    def substep(model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int,
-                step: int):
-        code, index, value = accumulate_internal_forces(model, stepping, state, s)
-        if code != STATUS_OK:
-            return code, index, value
-        dt = stepping.dt
+    def internal_force(state: StripState, i: int, s: int):
+        f = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
+        if wp.static(implicit):
+            f = f + state.correction[i, s]
+        return f
+
+    @wp.func
+    def carry_held_end(model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int,
+                       step: int, work: vec4):
+        # The held free end moves as prescribed; the internal forces do work on it.
+        i = model.n_nodes - 1
+        x_new, v_new = held_free_end(
+            control, model.rest_position[model.n_clamped - 1, s], model.rest_position[i, s], s, step + 1,
+            stepping.move_steps, stepping.dt,
+        )
+        sweep = (state.velocity[i, s] + v_new) * (half * stepping.dt)
+        f_int = internal_force(state, i, s)
+        work = work + work_on(state, i, s, sweep) + vec4(zero, zero, zero, -wp.dot(f_int, sweep))
+        state.position[i, s] = x_new
+        state.velocity[i, s] = v_new
+        return work
+
+    @wp.func
+    def advance_free_nodes(model: StripModel, stepping: Stepping, state: StripState, s: int, last: int,
+                           gamma: scalar, work: vec4):
+        # Nodes below the clamp, up to ``last``, by the scheme's node update under their
+        # internal forces, damping and gravity; the free end carries half a node's mass.
         n = model.n_nodes
-        t_next = scalar(step + 1 - stepping.release_step) * dt
-        held = step < stepping.release_step
-        gamma = model.damping[s]
-        if held:
-            gamma = control.settle_damping[s]
-        holding = held and control.hold_free_end[s] != 0  # the free end prescribed, not free to settle
+        dt = stepping.dt
         g = vec2(zero, -model.gravity)
         m_node = model.node_mass[s]
-        work = state.work[s]
-        if wp.static(implicit):
-            stretching_corrections(model, control, stepping, state, s, step, holding, gamma, t_next)
-        for i in range(model.n_clamped, n):
+        for i in range(model.n_clamped, last + 1):
             x = state.position[i, s]
-            if holding and i == n - 1:
-                x_new, v_new = held_free_end(
-                    control, model.rest_position[model.n_clamped - 1, s], model.rest_position[i, s], s, step + 1,
-                    stepping.move_steps, dt,
-                )
-                sweep = (state.velocity[i, s] + v_new) * (half * dt)
-                f_int = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
-                if wp.static(implicit):
-                    f_int = f_int + state.correction[i, s]
-                work = work + work_on(state, i, s, sweep) + vec4(zero, zero, zero, -wp.dot(f_int, sweep))
-                state.position[i, s] = x_new
-                state.velocity[i, s] = v_new
-            else:
-                m = m_node
-                if i == n - 1:
-                    m = half * m_node
-                v = state.velocity[i, s]
-                f_damp = -gamma * m * v
-                f = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
-                f = f + f_damp + m * g
-                if wp.static(implicit):
-                    f = f + state.correction[i, s]
-                x_new, v_new = update_node(x, v, f, m, dt)
-                sweep = (v + v_new) * (half * dt)
-                work = work + work_on(state, i, s, sweep) + vec4(zero, zero, -wp.dot(f_damp, sweep), zero)
-                state.position[i, s] = x_new
-                state.velocity[i, s] = v_new
+            m = m_node
+            if i == n - 1:
+                m = half * m_node
+            v = state.velocity[i, s]
+            f_damp = -gamma * m * v
+            f = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
+            f = f + f_damp + m * g
+            if wp.static(implicit):
+                f = f + state.correction[i, s]
+            x_new, v_new = update_node(x, v, f, m, dt)
+            sweep = (v + v_new) * (half * dt)
+            work = work + work_on(state, i, s, sweep) + vec4(zero, zero, -wp.dot(f_damp, sweep), zero)
+            state.position[i, s] = x_new
+            state.velocity[i, s] = v_new
+        return work
+
+    @wp.func
+    def move_clamp(model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int,
+                   t_next: scalar, work: vec4):
         # Clamp nodes follow the rigid rotation; only the two above the edge carry forces.
+        dt = stepping.dt
         theta, rate = clamp_angle(control, s, t_next)
         centre = control.rotation_centre[s]
         ca = wp.cos(theta)  # once per substep, not per clamp node
@@ -138,6 +165,32 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
             else:
                 state.position[i, s] = centre + arm
             state.velocity[i, s] = v_new
+        return work
+
+    @wp.func
+    def substep(model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int,
+                step: int):
+        # The passes of one step: internal forces at x_n, the implicit tension correction
+        # (imex), the free nodes, the held end, the clamp, then the work tally.
+        code, index, value = accumulate_internal_forces(model, stepping, state, s)
+        if code != STATUS_OK:
+            return code, index, value
+        n = model.n_nodes
+        t_next = scalar(step + 1 - stepping.release_step) * stepping.dt
+        held = step < stepping.release_step
+        gamma = model.damping[s]
+        if held:
+            gamma = control.settle_damping[s]
+        holding = held and control.hold_free_end[s] != 0  # the free end prescribed, not free to settle
+        if wp.static(implicit):
+            stretching_corrections(model, control, stepping, state, s, step, holding, gamma, t_next)
+        work = state.work[s]
+        if holding:
+            work = advance_free_nodes(model, stepping, state, s, n - 2, gamma, work)
+            work = carry_held_end(model, control, stepping, state, s, step, work)
+        else:
+            work = advance_free_nodes(model, stepping, state, s, n - 1, gamma, work)
+        work = move_clamp(model, control, stepping, state, s, t_next, work)
         if step + 1 == stepping.release_step:
             work = vec4()  # the energy budget is reported from the release on
         state.work[s] = work
@@ -190,7 +243,7 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
                     frames[f, i, s] = state.position[i, s]
         state.step[s] = step
 
-    return SimpleNamespace(
+    return StripKernels(
         types=types,
         StripModel=StripModel,
         StripControl=StripControl,
@@ -203,7 +256,7 @@ def build(scalar: Any, scheme: str) -> SimpleNamespace:
 
 
 @functools.cache
-def hinge_kernels(scalar: Any) -> SimpleNamespace:
+def hinge_kernels(scalar: Any) -> HingeKernels:
     """The ``initialise_hinges`` kernel for ``scalar``."""
     strip = structs.build(scalar)
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
@@ -226,4 +279,4 @@ def hinge_kernels(scalar: Any) -> SimpleNamespace:
             curvature = curvature - model.rest_curvature[j - first - 1, s]
             state.hinge[j - first - 1, s] = law.fresh_memory(curvature, p, state.history, j - first - 1, s)
 
-    return SimpleNamespace(initialise_hinges=initialise_hinges)
+    return HingeKernels(initialise_hinges=initialise_hinges)
