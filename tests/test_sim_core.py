@@ -53,7 +53,7 @@ def test_builder_refuses_what_the_kernel_cannot_simulate():
     with pytest.raises(TypeError, match="base of the Euler solvers"):
         builder = sim.StripBuilder(chain(8), n_clamped=3, spacing=5e-3)
         builder.add_strip(to_si(wc.load_scene("damped_swing").material), width=0.05)
-        sim.ExplicitEulerSolver(builder.finalize(), dt=1e-5)
+        sim.FusedStripSolver(builder.finalize(), dt=1e-5)
 
 
 def test_a_model_keeps_what_was_built():

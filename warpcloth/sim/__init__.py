@@ -18,8 +18,8 @@ from .runner import RunResult, Sink, simulate_batch
 from .solvers import (
     SOLVERS,
     Divergence,
-    ExplicitEulerSolver,
     ForwardEulerSolver,
+    FusedStripSolver,
     ImexSolver,
     SemiImplicitEulerSolver,
     Solver,
@@ -32,7 +32,7 @@ __all__ = [
     "SOLVERS",
     "ClampMotion",
     "Control",
-    "ExplicitEulerSolver",
+    "FusedStripSolver",
     "FabricSet",
     "ForwardEulerSolver",
     "Grip",

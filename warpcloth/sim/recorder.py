@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
+    import warp as wp
+
     from .control import Control
     from .solvers import Solver
 
@@ -50,6 +52,20 @@ class Recorder:
 
 
 @dataclass
+class OutputChunk:
+    """What one launch records and where: the output samples ``first_output`` … ending at
+    ``output_steps``, probe k of the chunk into ``probes[k, :, strip]``, a sample that is a
+    frame (index ≥ 0, a multiple of probes_per_frame) into ``frames[index // ppf −
+    first_frame]``."""
+
+    output_steps: np.ndarray
+    first_output: int
+    first_frame: int
+    probes: wp.array
+    frames: wp.array
+
+
+@dataclass(frozen=True)
 class Schedule:
     """Output samples k_min..k_max at t_k = k·interval; sample k ends at ``steps[k - k_min]``."""
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -19,7 +20,7 @@ from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, STATUS_BUDGET, STATUS_N
 from .control import Control
 from .labelled import probes_dataset, probes_frame
 from .model import Model
-from .recorder import Recorder, Schedule
+from .recorder import OutputChunk, Recorder, Schedule
 from .resources import check_memory
 from .solvers import BUDGET_TOLERANCE, Divergence, Solver
 from .state import State
@@ -182,6 +183,129 @@ def check_recording_fits(model: Model, control: Control, recorder: Recorder, kee
                  "strips at once (sweep --max-batch), or keep frames only on disk (keep_frames=False)")
 
 
+class DivergenceMonitor:
+    """Which strips have stopped, and why: the kernel's health codes read after each
+    launch, the energy budget checked on the chunk's probes (:class:`BudgetWatch`), and
+    which of the chunk's samples each stopped strip still owns."""
+
+    def __init__(self, model: Model, solver: Solver, control: Control) -> None:
+        self.solver, self.control = solver, control
+        self.budget = BudgetWatch(model)
+        self.diverged: list[Divergence] = []
+        self.n_strips = model.n_strips
+
+    def check(self, state: State, values: np.ndarray, steps: np.ndarray) -> list[Divergence]:
+        """The strips that stopped in the chunk just run (``values[sample, field, strip]`` at
+        ``steps``, the samples from the release on), each reported once."""
+        known = {d.strip for d in self.diverged}
+        if len(steps):
+            _stop_unbalanced(state, self.budget, values, steps, known)
+        status = state.struct.status.numpy()
+        new = [self.solver.divergence_report(state, self.control, int(s)) for s in np.nonzero(status)[0]
+               if s not in known]
+        self.diverged.extend(new)
+        return new
+
+    def valid(self, steps: np.ndarray) -> np.ndarray:
+        """``[sample, strip]``: whether each sample at ``steps`` precedes its strip's stop (the
+        sample of a strain or a fold is kept, one whose energy failed is not)."""
+        valid = np.ones((len(steps), self.n_strips), dtype=bool)
+        for d in self.diverged:
+            valid[:, d.strip] &= steps < d.step if d.sample_lost else steps <= d.step
+        return valid
+
+    @property
+    def all_stopped(self) -> bool:
+        """Whether no strip is left running."""
+        return len(self.diverged) == self.n_strips
+
+
+class RecordBuffers:
+    """The device buffers one launch fills (at most :data:`BUFFER_BYTES` each) and the host
+    arrays of the whole record they are copied into, chunk by chunk."""
+
+    def __init__(self, model: Model, schedule: Schedule, keep_frames: bool) -> None:
+        b, n, nq = model.n_strips, model.n_nodes, len(PROBE_FIELDS)
+        self.schedule = schedule
+        self.probes = np.full((len(schedule.kept), nq, b), np.nan)
+        self.frames = np.full((len(schedule.frame_samples), b, n, 2), np.nan) if keep_frames else None
+        ppf = schedule.probes_per_frame
+        cap = max(1, min(len(schedule.steps), BUFFER_BYTES // (8 * nq * b)))
+        cap_frames = max(1, min(len(schedule.frame_samples), BUFFER_BYTES // (16 * n * b)))
+        self.capacity = min(cap, cap_frames * ppf)
+        """The most output samples one launch may record."""
+        self.probe_buffer = wp.zeros((self.capacity, nq, b), dtype=model.scalar, device=model.device)
+        self.frame_buffer = wp.zeros((self.capacity // ppf + 1, n, b), dtype=model.types.vec2, device=model.device)
+
+    def chunk(self, i: int, j: int) -> OutputChunk:
+        """What the launch for the schedule's outputs ``i`` … ``j − 1`` records, and where."""
+        k0 = self.schedule.k_min + i
+        return OutputChunk(self.schedule.steps[i:j], k0, -(-max(k0, 0) // self.schedule.probes_per_frame),
+                           self.probe_buffer, self.frame_buffer)
+
+    def kept(self, i: int, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """The kept samples (t ≥ 0) of outputs ``i`` … ``j − 1``: their indices k, and their
+        probes ``[sample, field, strip]`` as the launch left them."""
+        k = self.schedule.k_min + np.arange(i, j)
+        keep = k >= 0
+        if not keep.any():
+            return k[keep], np.zeros((0, *self.probes.shape[1:]))
+        return k[keep], self.probe_buffer[: j - i].numpy()[keep]
+
+    def store(self, k: np.ndarray, values: np.ndarray, valid: np.ndarray, sink: Sink | None) -> None:
+        """Copy the kept samples ``k`` (probes ``values``; ``valid[sample, strip]``, NaN
+        elsewhere) and their frames into the record and stream them to ``sink``."""
+        if not len(k):
+            return
+        ppf = self.schedule.probes_per_frame
+        values = np.where(valid[:, None, :], values, np.nan)
+        self.probes[k] = values
+        frame_index = k[k % ppf == 0] // ppf
+        frames = np.transpose(self.frame_buffer[: len(frame_index)].numpy(), (0, 2, 1, 3)) if len(frame_index) \
+            else np.zeros((0, self.probes.shape[2], self.frame_buffer.shape[1], 2))
+        frames = np.where(valid[k % ppf == 0][:, :, None, None], frames, np.nan)
+        if self.frames is not None and len(frame_index):
+            self.frames[frame_index] = frames
+        if sink is not None:
+            times = self.schedule.times(k)
+            rows_t = np.repeat(times, values.shape[2])
+            rows_v = np.tile(np.arange(values.shape[2]), len(times))
+            flat = np.transpose(values, (0, 2, 1)).reshape(-1, values.shape[1])
+            ok = valid.reshape(-1)
+            sink.write_probes(rows_t[ok], rows_v[ok], flat[ok])
+            if len(frame_index):
+                sink.write_frames(int(frame_index[0]), frames)
+
+
+class ChunkPlan:
+    """The schedule's outputs cut into launches: each as long as about
+    :data:`TARGET_LAUNCH_SECONDS` of wall clock (re-sized from the last launch's), at most
+    ``capacity`` outputs, the first about 2000 substeps."""
+
+    def __init__(self, schedule: Schedule, capacity: int) -> None:
+        self.outputs = len(schedule.steps)
+        self.capacity = capacity
+        steps_per_output = int(schedule.steps[-1]) / self.outputs
+        self.size = max(1, min(capacity, round(2000 / max(1.0, steps_per_output))))
+        self.done = 0
+
+    def __iter__(self) -> Iterator[tuple[int, int]]:
+        while self.done < self.outputs:
+            i, j = self.done, min(self.outputs, self.done + self.size)
+            self.done = j  # counted as soon as it is handed out: a run that stops there ran it
+            yield i, j
+
+    def took(self, wall: float) -> None:
+        """Size the next launch from the wall time the last one took."""
+        self.size = max(1, min(self.capacity, round(self.size * TARGET_LAUNCH_SECONDS / max(wall, 1e-3))))
+
+
+def _progress_bar(schedule: Schedule, show: bool) -> tqdm:
+    span = float(schedule.times(schedule.k_min + len(schedule.steps) - 1) - schedule.times(schedule.k_min))
+    return tqdm(total=span, unit="s", unit_scale=False, desc="simulated", disable=not show, dynamic_ncols=True,
+                bar_format="{l_bar}{bar}| {n:.3f}/{total:.3f} s sim [{elapsed}<{remaining}, {rate_fmt}{postfix}]")
+
+
 def simulate_batch(
     model: Model,
     control: Control,
@@ -214,57 +338,35 @@ def simulate_batch(
         raise ValueError(f"threads must be at least 1, got {threads}")
     state = state or model.state()
     schedule = recorder.schedule(control, solver)
-    b, n, nq = model.n_strips, model.n_nodes, len(PROBE_FIELDS)
-    n_kept, frame_samples = len(schedule.kept), schedule.frame_samples
-    t = schedule.times(schedule.kept)
-    frame_times = schedule.times(frame_samples)
-    probes_all = np.full((n_kept, nq, b), np.nan)
-    frames_all = np.full((len(frame_samples), b, n, 2), np.nan) if keep_frames else None
-
-    ppf = schedule.probes_per_frame
-    cap = max(1, min(len(schedule.steps), BUFFER_BYTES // (8 * nq * b)))
-    cap_frames = max(1, min(len(frame_samples), BUFFER_BYTES // (16 * n * b)))
-    cap = min(cap, cap_frames * ppf)
-    probes_buf = wp.zeros((cap, nq, b), dtype=model.scalar, device=model.device)
-    frames_buf = wp.zeros((cap // ppf + 1, n, b), dtype=model.types.vec2, device=model.device)
-
-    diverged: list[Divergence] = []
-    budget = BudgetWatch(model)
-    total_steps = int(schedule.steps[-1])
-    bar = tqdm(total=float(schedule.times(schedule.k_min + len(schedule.steps) - 1)
-                           - schedule.times(schedule.k_min)),
-               unit="s", unit_scale=False, desc="simulated", disable=not progress, dynamic_ncols=True,
-               bar_format="{l_bar}{bar}| {n:.3f}/{total:.3f} s sim [{elapsed}<{remaining}, {rate_fmt}{postfix}]")
+    record = RecordBuffers(model, schedule, keep_frames)
+    monitor = DivergenceMonitor(model, solver, control)
+    plan = ChunkPlan(schedule, record.capacity)
+    bar = _progress_bar(schedule, progress)
     started = time.perf_counter()
-    chunk = max(1, min(cap, round(2000 / max(1.0, total_steps / len(schedule.steps)))))
-    i = 0
     try:
-        while i < len(schedule.steps):
-            j = min(len(schedule.steps), i + chunk)
-            k0 = schedule.k_min + i
-            first_frame = -(-max(k0, 0) // ppf)
+        for i, j in plan:
             tic = time.perf_counter()
-            solver.advance(state, control, recorder, schedule.steps[i:j], k0, first_frame, probes_buf, frames_buf,
-                           threads)
+            solver.advance(state, control, recorder, record.chunk(i, j), threads)
             wp.synchronize_device(model.device)
             wall = time.perf_counter() - tic
-            new = _collect(solver, state, control, schedule, i, j, probes_buf, frames_buf, probes_all, frames_all,
-                           sink, diverged, budget)
+            plan.took(wall)
+            k, values = record.kept(i, j)
+            steps = schedule.steps[k - schedule.k_min]
+            new = monitor.check(state, values, steps)
+            record.store(k, values, monitor.valid(steps), sink)
             steps_done = int(schedule.steps[j - 1] - (schedule.steps[i - 1] if i else 0))
-            bar.set_postfix_str(f"{b * steps_done / max(wall, 1e-9):.3g} strip-steps/s")
+            bar.set_postfix_str(f"{model.n_strips * steps_done / max(wall, 1e-9):.3g} strip-steps/s")
             bar.update(float(schedule.times(schedule.k_min + j - 1) - schedule.times(schedule.k_min)) - bar.n)
-            i = j
-            chunk = max(1, min(cap, round(chunk * TARGET_LAUNCH_SECONDS / max(wall, 1e-3))))
-            if new and on_divergence == "raise":
-                break
-            if len(diverged) == b:
+            if (new and on_divergence == "raise") or monitor.all_stopped:
                 break
     finally:
         bar.close()
     wall_time = time.perf_counter() - started
-    strip_steps = b * int(schedule.steps[i - 1])  # up to where the run stopped
+    strip_steps = model.n_strips * int(schedule.steps[plan.done - 1])  # up to where the run stopped
     memory = state.reversal_report()
-    result = RunResult(list(labels or []), t, probes_all, frame_times, frames_all, diverged, wall_time, strip_steps,
+    diverged = monitor.diverged
+    result = RunResult(list(labels or []), schedule.times(schedule.kept), record.probes,
+                       schedule.times(schedule.frame_samples), record.frames, diverged, wall_time, strip_steps,
                        dict(parameters or {}), dict(attrs or {}), memory)
     if sink is not None:
         extra = {"wall_time_s": wall_time, "strip_steps": strip_steps, "device": str(model.device)}
@@ -296,46 +398,3 @@ def _stop_unbalanced(state: State, budget: BudgetWatch, values: np.ndarray, step
         fields["status_value"][strip] = residual
     for name, value in fields.items():
         getattr(state.struct, name).assign(value)
-
-
-def _collect(solver: Solver, state: State, control: Control, schedule: Schedule, i: int, j: int,
-             probes_buf: wp.array, frames_buf: wp.array, probes_all: np.ndarray, frames_all: np.ndarray | None,
-             sink: Sink | None, diverged: list[Divergence], budget: BudgetWatch) -> bool:
-    """Copy a finished chunk out, drop samples after a divergence, stream it to the sink."""
-    k = schedule.k_min + np.arange(i, j)
-    keep = k >= 0
-    known = {d.strip for d in diverged}
-    if keep.any():
-        _stop_unbalanced(state, budget, probes_buf[: j - i].numpy()[keep], schedule.steps[i:j][keep], known)
-    status = state.struct.status.numpy()
-    new_reports = [solver.divergence_report(state, control, int(s)) for s in np.nonzero(status)[0]
-                   if s not in known]
-    diverged.extend(new_reports)
-    steps = schedule.steps[i:j]
-    valid = np.ones((j - i, probes_all.shape[2]), dtype=bool)
-    for d in diverged:
-        last_ok = steps < d.step if d.sample_lost else steps <= d.step
-        valid[:, d.strip] &= last_ok
-    if not keep.any():
-        return bool(new_reports)
-    values = probes_buf[: j - i].numpy()[keep]  # copy out only this chunk's samples
-    valid = valid[keep]
-    values = np.where(valid[:, None, :], values, np.nan)
-    probes_all[k[keep]] = values
-    is_frame = (k >= 0) & (k % schedule.probes_per_frame == 0)
-    frame_index = k[is_frame] // schedule.probes_per_frame
-    frames = np.transpose(frames_buf[: len(frame_index)].numpy(), (0, 2, 1, 3)) if len(frame_index) else \
-        np.zeros((0, probes_all.shape[2], frames_buf.shape[1], 2))
-    frames = np.where(valid[(k[keep] % schedule.probes_per_frame == 0)][:, :, None, None], frames, np.nan)
-    if frames_all is not None and len(frame_index):
-        frames_all[frame_index] = frames
-    if sink is not None:
-        times = schedule.times(k[keep])
-        rows_t = np.repeat(times, values.shape[2])
-        rows_v = np.tile(np.arange(values.shape[2]), len(times))
-        flat = np.transpose(values, (0, 2, 1)).reshape(-1, values.shape[1])
-        ok = valid.reshape(-1)
-        sink.write_probes(rows_t[ok], rows_v[ok], flat[ok])
-        if len(frame_index):
-            sink.write_frames(int(frame_index[0]), frames)
-    return bool(new_reports)

@@ -29,7 +29,7 @@ from .builder import Grip
 from .control import Control
 from .material import MaterialSI
 from .model import Model
-from .recorder import Recorder
+from .recorder import OutputChunk, Recorder
 from .stability import transverse_step_limit
 from .state import State
 
@@ -79,17 +79,20 @@ class Solver(Protocol):
     def release_step(self, control: Control) -> int:
         """Step index of t = 0 under ``control``."""
 
-    def advance(self, state: State, control: Control, recorder: Recorder, output_steps: np.ndarray,
-                first_output: int, first_frame: int, probes: wp.array, frames: wp.array, threads: int = 1) -> None:
-        """Advance every healthy strip to each of ``output_steps``, recording probes and
-        frames, on up to ``threads`` CPU threads."""
+    def advance(self, state: State, control: Control, recorder: Recorder, chunk: OutputChunk,
+                threads: int = 1) -> None:
+        """Advance every healthy strip to each output step of ``chunk``, recording its probes
+        and frames there, on up to ``threads`` CPU threads."""
 
     def divergence_report(self, state: State, control: Control, strip: int) -> Divergence | None:
         """Where and how ``strip`` diverged, or None while it is healthy."""
 
 
-class ExplicitEulerSolver:
-    """Explicit Euler with the node update of :attr:`scheme`; stability limits dt.
+class FusedStripSolver:
+    """The base of the solvers: each launch of the fused strip kernel (kernels/strip.py)
+    built for :attr:`scheme` advances every strip of the batch through many substeps of
+    fixed ``dt``. A subclass names its scheme (the node update, and whether stretching is
+    implicit) and its stability bound.
 
     ``divergence_strain``: a strip whose tensile strain leaves ± this (NaN included)
     stops and is reported, as is one that folds onto itself or whose energy is not finite.
@@ -101,7 +104,7 @@ class ExplicitEulerSolver:
 
     def __init__(self, model: Model, dt: float, divergence_strain: float = 0.25) -> None:
         if not self.scheme:
-            raise TypeError("ExplicitEulerSolver is the base of the Euler solvers; use one of "
+            raise TypeError("FusedStripSolver is the base of the Euler solvers; use one of "
                             f"{', '.join(c.__name__ for c in SOLVERS.values())}")
         self.model = model
         self.dt = dt
@@ -141,22 +144,20 @@ class ExplicitEulerSolver:
         s.move_steps = max(1, self.step_of(control.move_time))
         return s
 
-    def advance(self, state: State, control: Control, recorder: Recorder, output_steps: np.ndarray,
-                first_output: int, first_frame: int, probes: wp.array, frames: wp.array, threads: int = 1) -> None:
-        """Advance every healthy strip to each step in ``output_steps``: one launch, or on
-        a CPU one launch per thread over contiguous ranges of strips (Warp runs a CPU
-        launch on one thread and releases the GIL, so ``threads`` launches fill that many
-        cores); every strip's arithmetic is the same either way, bit for bit.
-
-        Probe k of the chunk goes to ``probes[k, :, strip]``; outputs that are frames
-        (index ≥ 0, a multiple of probes_per_frame) go to ``frames[index // ppf −
-        first_frame]``. Strips that diverge stop and report through ``state.struct.status``.
+    def advance(self, state: State, control: Control, recorder: Recorder, chunk: OutputChunk,
+                threads: int = 1) -> None:
+        """Advance every healthy strip to each output step of ``chunk``, recording there
+        (:class:`~warpcloth.sim.recorder.OutputChunk`): one launch, or on a CPU one launch
+        per thread over contiguous ranges of strips (Warp runs a CPU launch on one thread and
+        releases the GIL, so ``threads`` launches fill that many cores); every strip's
+        arithmetic is the same either way, bit for bit. Strips that diverge stop and report
+        through ``state.struct.status``.
         """
         model = self.model
-        steps = wp.array(np.asarray(output_steps, dtype=np.int32), dtype=int, device=model.device)
+        steps = wp.array(np.asarray(chunk.output_steps, dtype=np.int32), dtype=int, device=model.device)
         inputs = [model.struct, control.struct, self._stepping(control), state.struct,
-                  recorder.settings(self.kernels.ProbeSettings, model.scalar), steps, int(first_output),
-                  int(first_frame), probes, frames]
+                  recorder.settings(self.kernels.ProbeSettings, model.scalar), steps, int(chunk.first_output),
+                  int(chunk.first_frame), chunk.probes, chunk.frames]
         # at least STRIPS_PER_THREAD strips per thread: a small batch gains nothing from
         # splitting and, measured in the test suite, can lose (2-strip to 8-strip batches
         # ran 20 % slower on 2 threads there)
@@ -187,7 +188,7 @@ class ExplicitEulerSolver:
                           scheme=self.scheme, precision=self.model.precision, dt_s=self.dt)
 
 
-class SemiImplicitEulerSolver(ExplicitEulerSolver):
+class SemiImplicitEulerSolver(FusedStripSolver):
     """Symplectic (semi-implicit) Euler: velocities first, positions with the new velocity."""
 
     scheme = "semi_implicit"
@@ -217,7 +218,7 @@ class SemiImplicitEulerSolver(ExplicitEulerSolver):
         return StepBound(bending, "bending", exact=False)
 
 
-class ForwardEulerSolver(ExplicitEulerSolver):
+class ForwardEulerSolver(FusedStripSolver):
     """Forward Euler, the paper's eqs. 5-6; it amplifies every undamped oscillation."""
 
     scheme = "forward"
@@ -226,7 +227,7 @@ class ForwardEulerSolver(ExplicitEulerSolver):
               " amplifies every undamped oscillation, docs/model.md §9)")
 
 
-class ImexSolver(ExplicitEulerSolver):
+class ImexSolver(FusedStripSolver):
     """Symplectic Euler with the segments' axial stretching implicit (linearised backward
     Euler, one tridiagonal solve per strip and step; kernels/implicit_stretching.py): the
     stretching mode no longer limits dt, bending and the rest stay explicit."""
@@ -243,7 +244,7 @@ class ImexSolver(ExplicitEulerSolver):
                          "bending", exact=False)
 
 
-SOLVERS: dict[str, type[ExplicitEulerSolver]] = {
+SOLVERS: dict[str, type[FusedStripSolver]] = {
     SemiImplicitEulerSolver.scheme: SemiImplicitEulerSolver,
     ForwardEulerSolver.scheme: ForwardEulerSolver,
     ImexSolver.scheme: ImexSolver,
