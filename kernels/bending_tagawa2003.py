@@ -41,16 +41,16 @@ def loop_asymptote(d1: float, alpha: float, k0: float) -> float:
     return 0.5 * d1 * (1.0 + math.exp(-2.0 * alpha * k0))
 
 
-def default_loop_asymptote(material: Mapping[str, Any]) -> float:
-    """M0 of a [material]'s values (KES units): the moment another law's default takes so
-    that switching the law alone keeps the default material's loop (docs/model.md §4.8)."""
-    return loop_asymptote(material["hysteresis_d1_gf_cm_per_cm"], material["hysteresis_alpha_cm"],
-                          material["hysteresis_k0_per_cm"])
+def default_loop_asymptote(loop: Mapping[str, Any]) -> float:
+    """M0 of the default material's loop (D1, α, K0 by SI name, in KES units): the moment
+    another law's default takes so that switching the law alone keeps that loop
+    (docs/model.md §4.8)."""
+    return loop_asymptote(loop["hysteresis_d1"], loop["hysteresis_alpha"], loop["hysteresis_k0"])
 
 
-def default_curvature_scale(material: Mapping[str, Any]) -> float:
-    """1/α of a [material]'s values (1/cm): the curvature scale of the same loop."""
-    return 1.0 / material["hysteresis_alpha_cm"]
+def default_curvature_scale(loop: Mapping[str, Any]) -> float:
+    """1/α of the same loop: its curvature scale."""
+    return 1.0 / loop["hysteresis_alpha"]
 
 
 def packed_parameters(bending_rigidity: float, d1: float, alpha: float, k0: float) -> tuple[float, ...]:
@@ -138,11 +138,11 @@ def build(scalar: Any) -> LawFunctions:
 
 
 LOOP_PARAMETERS = (
-    LawParameter("hysteresis_d1", "hysteresis_d1_gf_cm_per_cm", "MOMENT_GF_CM_PER_CM", "D1", "D1", "gf·cm/cm",
+    LawParameter("hysteresis_d1", "hysteresis_d1_gf_cm_per_cm", "MOMENT_GF_CM_PER_CM", "moment", "D1", "D1", "gf·cm/cm",
                  "D1, hysteresis amplitude (0 = elastic)", default=None, ge=0, amplitude=True),
-    LawParameter("hysteresis_alpha", "hysteresis_alpha_cm", "LENGTH_CM", "alpha", "α", "cm",
+    LawParameter("hysteresis_alpha", "hysteresis_alpha_cm", "LENGTH_CM", "inverse_curvature", "alpha", "α", "cm",
                  "α, steepness of the hysteresis branches", default=None, gt=0),
-    LawParameter("hysteresis_k0", "hysteresis_k0_per_cm", "CURVATURE_PER_CM", "K0", "K0", "cm⁻¹",
+    LawParameter("hysteresis_k0", "hysteresis_k0_per_cm", "CURVATURE_PER_CM", "curvature", "K0", "K0", "cm⁻¹",
                  "K0, curvature where the KES loop closes (masing: only there, not in the dynamics)",
                  default=None, gt=0),
 )

@@ -41,12 +41,17 @@ class LawParameter:
     """One parameter of a bending law, as the kernels, scene files, fits and figures see it."""
 
     name: str
-    """The SI name, the key in :class:`warpcloth.sim.BendingParameters` (``dahl_moment``)."""
+    """The SI name, the key in :class:`warpcloth.sim.LawParameters` (``dahl_moment``)."""
     scene_field: str
     """The [material] field of a scene, in KES units (``dahl_moment_gf_cm_per_cm``)."""
     unit: str
     """The :mod:`warpcloth.units` constant that converts the scene field to SI
     (``MOMENT_GF_CM_PER_CM``); empty for a dimensionless parameter."""
+    kind: str
+    """What the parameter measures in the law's own variables (:data:`KINDS`): the same
+    law describes bending (curvature K, moment per width M) and in-plane shear (shear
+    angle φ, shear force per width), so the kind says what its unit is in each
+    (:data:`warpcloth.units.SHEAR_UNITS`)."""
     alias: str
     """The short name ``warpcloth fit --free`` accepts (``Ms``)."""
     label: str
@@ -57,8 +62,9 @@ class LawParameter:
     """One line for the scene reference (the law names are prefixed to it)."""
     default: float | Callable[[Mapping[str, Any]], float] | None
     """The scene field's default in KES units where the default material file does not give
-    it: a number, or a function of the default material's [material] values (so a law's
-    default can be the default material's own loop); None: the default material gives it."""
+    it: a number, or a function of the default material's values of the same law's
+    parameters by SI name (``{"hysteresis_d1": …}``, in that mode's KES units), so a law's
+    default can be the default material's own loop; None: the default material gives it."""
     gt: float | None = None
     """The scene field must be greater than this."""
     ge: float | None = None
@@ -116,8 +122,12 @@ class BendingLaw:
                        f"{', '.join(q.name for q in self.parameters)}")
 
 
+KINDS = ("moment", "curvature", "inverse_curvature", "number")
+"""A law parameter measures a moment per width (bending) or force per width (shear), a
+curvature (bending) or angle (shear), their inverse, or a pure number."""
+
 BENDING_RIGIDITY = LawParameter(
     name="bending_rigidity", scene_field="bending_rigidity_gf_cm2_per_cm", unit="RIGIDITY_GF_CM2_PER_CM",
-    alias="D", label="B = D", unit_label="gf·cm²/cm", doc="D, slope of the centre line M = D K (every law)",
-    default=0.0, ge=0)
+    kind="rigidity", alias="D", label="B = D", unit_label="gf·cm²/cm",
+    doc="D, slope of the centre line M = D K (every law)", default=0.0, ge=0)
 """D, the slope of the centre line M = D K: every law's first parameter, slot 0 of the packed vector."""

@@ -39,10 +39,10 @@ def loop_asymptote_of(material):
 
 
 def paper_loop(d1, alpha, k0, law="tagawa2003"):
-    """The BendingParameters of the paper's loop (SI)."""
-    from warpcloth.sim import BendingParameters
+    """The LawParameters of the paper's loop (SI)."""
+    from warpcloth.sim import LawParameters
 
-    return BendingParameters.of(law, {"hysteresis_d1": d1, "hysteresis_alpha": alpha, "hysteresis_k0": k0})
+    return LawParameters.of(law, {"hysteresis_d1": d1, "hysteresis_alpha": alpha, "hysteresis_k0": k0})
 
 
 def kes_cycle(k0: float = 2.5, step: float = 0.02):

@@ -75,9 +75,9 @@ LAW = BendingLaw(
     name="toy_jenkins",
     summary="a toy Jenkins element",
     parameters=(
-        LawParameter("toy_moment", "toy_moment_gf_cm_per_cm", "MOMENT_GF_CM_PER_CM", "My", "M_y", "gf·cm/cm",
+        LawParameter("toy_moment", "toy_moment_gf_cm_per_cm", "MOMENT_GF_CM_PER_CM", "moment", "My", "M_y", "gf·cm/cm",
                      "M_y, the slider's yield moment", default=0.01, ge=0, amplitude=True),
-        LawParameter("toy_width", "toy_width_per_cm", "CURVATURE_PER_CM", "Ky", "K_y", "cm⁻¹",
+        LawParameter("toy_width", "toy_width_per_cm", "CURVATURE_PER_CM", "curvature", "Ky", "K_y", "cm⁻¹",
                      "K_y, the spring's curvature at yield", default=0.2, gt=0),
     ),
     pack=pack,

@@ -33,6 +33,28 @@ LENGTH_MM = 1e-3
 STRAIN_PERCENT = 1e-2
 """Strain written in % (KES-FB1 EMT, tensile CSVs) → fraction."""
 
+SHEAR_FORCE_GF_PER_CM = GF_TO_N / 1e-2
+"""In-plane shear force per width (KES-FB1 shear Fs, 2HG, 2HG5): gf/cm → N/m (× 0.980665)."""
+
+ANGLE_DEGREE = 0.017453292519943295
+"""Shear angle φ: degree → rad (π/180)."""
+
+PER_DEGREE = 1.0 / ANGLE_DEGREE
+"""An inverse shear angle: 1/degree → 1/rad."""
+
+SHEAR_RIGIDITY_GF_PER_CM_DEG = SHEAR_FORCE_GF_PER_CM / ANGLE_DEGREE
+"""Shear rigidity per width (KES G): gf/(cm·degree) → N/(m·rad)."""
+
+SHEAR_UNITS = {
+    "moment": ("gf_per_cm", "SHEAR_FORCE_GF_PER_CM", "gf/cm"),
+    "curvature": ("deg", "ANGLE_DEGREE", "°"),
+    "inverse_curvature": ("per_deg", "PER_DEGREE", "1/°"),
+    "number": ("", "", ""),
+}
+"""A law parameter's shear unit by its kind (:data:`warpcloth.kernels.law.KINDS`): the
+field-name suffix, the constant above that converts it to SI, the unit as printed. The
+law acts on the shear angle as on the curvature, its force as on the moment."""
+
 
 MEASURED_UNITS = {
     "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6},

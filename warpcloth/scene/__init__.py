@@ -12,6 +12,7 @@ from .materials import (
     law_aliases,
     law_fields,
     material_fields,
+    material_shear,
     read_material_file,
     tensile_slope_minimum,
     to_si,
@@ -28,6 +29,7 @@ from .schema import (
     batch_fields,
     choice_fields,
 )
+from .shear import RIGIDITY_FIELD, ShearMaterial, parse_shear, shear_field, shear_fields
 from .step import check_step
 from .sweep import Sweep, expand, load_sweep
 
@@ -59,6 +61,12 @@ __all__ = [
     "law_aliases",
     "law_fields",
     "material_fields",
+    "material_shear",
+    "RIGIDITY_FIELD",
+    "ShearMaterial",
+    "parse_shear",
+    "shear_field",
+    "shear_fields",
     "read_material_file",
     "read_scene_file",
     "rest_positions",

@@ -14,11 +14,12 @@ from warpcloth.errors import SceneError
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_law
 from warpcloth.kernels.law import BENDING_RIGIDITY, LawParameter
 from warpcloth.kernels.laws import LAW_PARAMETERS
-from warpcloth.sim import BendingParameters, MaterialSI
+from warpcloth.sim import LawParameters, MaterialSI
 
 from .keys import field_line
 from .parse import coerce_value, parse_section, parse_toml, read_toml_text
 from .schema import MaterialSection
+from .shear import SHEAR_TABLE, ShearMaterial, parse_shear
 
 MATERIAL_FILE_KEY = "material.from_file"
 
@@ -34,7 +35,7 @@ def to_si(section: MaterialSection) -> MaterialSI:
         density=section.density_g_per_cm2 * units.AREAL_DENSITY_G_PER_CM2,
         tensile=tuple(a * units.TENSILE_GF_PER_CM for a in section.tensile_gf_per_cm),
         bending_rigidity=si_value(BENDING_RIGIDITY, getattr(section, BENDING_RIGIDITY.scene_field)),
-        bending=BendingParameters.of(law.name, {p.name: si_value(p, getattr(section, p.scene_field))
+        bending=LawParameters.of(law.name, {p.name: si_value(p, getattr(section, p.scene_field))
                                                 for p in law.parameters}),
     )
 
@@ -138,10 +139,10 @@ def read_material_file(ref: str | Path) -> dict:
         text = resource.read_text()
         where = f"bundled material {ref}"
     data = parse_toml(text, where, MATERIAL_FILE_KEY)
-    extra = sorted(set(data) - {"material", "fit"})
+    extra = sorted(set(data) - {"material", "fit", SHEAR_TABLE})
     if extra:
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: unknown top-level entry {extra[0]!r}; a material file "
-                         "has a [material] and optionally a [fit] table")
+                         "has a [material] and optionally a [shear] and a [fit] table")
     material = data.get("material")
     if not isinstance(material, dict) or not isinstance(data.get("fit", {}), dict):
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: needs a [material] table (and [fit], if any, a table)")
@@ -163,10 +164,19 @@ def read_material_file(ref: str | Path) -> dict:
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: a material file cannot refer to another (from_file)")
     try:
         parse_section(MaterialSection, {k: v for k, v in material.items() if k != "source"}, "material")
+        if SHEAR_TABLE in data:
+            parse_shear(data[SHEAR_TABLE], where)
     except SceneError as exc:
         line = field_line(text, exc.field)
         raise SceneError(MATERIAL_FILE_KEY, f"{where}{f', line {line}' if line else ''}: {exc}") from None
     return data
+
+
+def material_shear(ref: str | Path) -> ShearMaterial | None:
+    """The shear of a material file or bundled material (its ``[shear]``), or None when it
+    gives none (docs/model.md §17.1)."""
+    data = read_material_file(ref)
+    return parse_shear(data[SHEAR_TABLE], str(ref)) if SHEAR_TABLE in data else None
 
 
 def with_material_file(data: dict) -> dict:

@@ -77,7 +77,8 @@ def _law_field(parameter: LawParameter, laws: tuple[str, ...]) -> Any:
     # else the law's own default (which may be the default material's loop).
     default = DEFAULT_MATERIAL.get(parameter.scene_field)
     if default is None:
-        default = parameter.default(DEFAULT_MATERIAL) if callable(parameter.default) else parameter.default
+        given = {p.name: DEFAULT_MATERIAL[name] for name, (p, _) in LAW_PARAMETERS.items() if name in DEFAULT_MATERIAL}
+        default = parameter.default(given) if callable(parameter.default) else parameter.default
     if default is None:
         raise ImportError(f"the default material {DEFAULT_MATERIAL_NAME!r} lacks {parameter.scene_field}, and the "
                           f"{' and '.join(laws)} law gives it no default")

@@ -8,10 +8,10 @@
   chunked launches with progress and the divergence policy.
 """
 
-from .bending import moment_along_path
+from .bending import law_along_path, moment_along_path, shear_force_along_path
 from .builder import ClampMotion, FabricSet, Grip, StripBuilder
 from .control import Control
-from .material import BendingParameters, MaterialSI
+from .material import LawParameters, MaterialSI
 from .model import PRECISIONS, Model
 from .recorder import Recorder, Schedule
 from .runner import RunResult, Sink, simulate_batch
@@ -37,7 +37,7 @@ __all__ = [
     "ForwardEulerSolver",
     "Grip",
     "ImexSolver",
-    "BendingParameters",
+    "LawParameters",
     "MaterialSI",
     "Model",
     "Recorder",
@@ -48,6 +48,8 @@ __all__ = [
     "Solver",
     "State",
     "StripBuilder",
+    "law_along_path",
     "moment_along_path",
+    "shear_force_along_path",
     "simulate_batch",
 ]

@@ -1,7 +1,8 @@
-"""The bending law on its own: moment along prescribed curvature paths.
+"""The laws on their own: bending moment along prescribed curvature paths, shear force
+along prescribed shear-angle paths.
 
-Runs the strip kernel's hinge logic (the same Warp functions) on curvature histories, for
-plotting a material's KES loop, fitting it, and testing the law in isolation.
+Runs the strip kernel's hinge logic (the same Warp functions) on such histories, for
+plotting a material's KES loops, fitting them, and testing a law in isolation.
 """
 
 from __future__ import annotations
@@ -11,9 +12,10 @@ from collections.abc import Sequence
 import numpy as np
 import warp as wp
 
-from warpcloth.kernels import laws, precision
+from warpcloth.kernels import laws, packed_parameters, precision
+from warpcloth.kernels.law import BENDING_RIGIDITY
 
-from .material import MaterialSI
+from .material import LawParameters, MaterialSI
 from .model import machine_device
 from .state import allocate_reversal_memory
 
@@ -33,18 +35,37 @@ def moment_along_path(materials: MaterialSI | Sequence[MaterialSI], curvature: n
     the path has reversals, so none is ever dropped).
     """
     materials = [materials] if isinstance(materials, MaterialSI) else list(materials)
-    k = np.asarray(curvature, dtype=np.float64)
-    single = k.ndim == 1 and len(materials) == 1  # one path, one material: M as [sample]
+    return law_along_path([m.bending_parameters() for m in materials], curvature, device, with_tangent,
+                          reversal_memory)
+
+
+def shear_force_along_path(shear: Sequence[tuple[float, LawParameters]], angle: np.ndarray,
+                           device: str | None = "cpu", with_tangent: bool = False) -> tuple[np.ndarray, ...]:
+    """Shear force per width Fs = G φ + h(φ) (N/m) along shear-angle paths (rad), one column
+    per ``(G, law)`` (G in N/(m·rad), :meth:`warpcloth.scene.ShearMaterial.si`): the same
+    law functions as :func:`moment_along_path`, the angle for the curvature. Shapes and
+    the returned work (N·rad/m) as there."""
+    packed = [packed_parameters(law.law, {BENDING_RIGIDITY.name: rigidity, **law.as_dict()})
+              for rigidity, law in shear]
+    return law_along_path(packed, angle, device, with_tangent)
+
+
+def law_along_path(packed: Sequence[tuple[float, ...]], path: np.ndarray, device: str | None = "cpu",
+                   with_tangent: bool = False, reversal_memory: int | None = None) -> tuple[np.ndarray, ...]:
+    """The laws' response D x + h(x) along paths ``x``, one column per packed parameter
+    vector (kernels/laws.py): :func:`moment_along_path` and :func:`shear_force_along_path`
+    in one kernel launch."""
+    k = np.asarray(path, dtype=np.float64)
+    single = k.ndim == 1 and len(packed) == 1  # one path, one law: the response as [sample]
     if k.ndim == 1:
         k = k[:, None]
-    if k.shape[1] == 1 and len(materials) > 1:
-        k = np.repeat(k, len(materials), axis=1)
-    if k.shape[1] != len(materials):
-        raise ValueError(f"{k.shape[1]} curvature paths for {len(materials)} materials")
+    if k.shape[1] == 1 and len(packed) > 1:
+        k = np.repeat(k, len(packed), axis=1)
+    if k.shape[1] != len(packed):
+        raise ValueError(f"{k.shape[1]} paths for {len(packed)} materials")
     device = machine_device(device)  # Warp started quietly, as for a run
     law = laws.build(wp.float64)
-    parameters = wp.array(np.array([m.bending_parameters() for m in materials]), dtype=law.Parameters,
-                          device=device)
+    parameters = wp.array(np.array(packed), dtype=law.Parameters, device=device)
     if reversal_memory is None:  # every sign change of dK can open a point
         reversal_memory = int(np.abs(np.diff(np.sign(np.diff(k, axis=0)), axis=0)).sum(axis=0).max(initial=0)) // 2 + 1
     if not (isinstance(reversal_memory, int) and reversal_memory >= 1):

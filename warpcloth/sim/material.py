@@ -10,7 +10,7 @@ from warpcloth.kernels.law import BENDING_RIGIDITY, BendingLaw
 
 
 @dataclass(frozen=True)
-class BendingParameters:
+class LawParameters:
     """A bending law and its own parameters in SI, by the names its description gives
     (:class:`warpcloth.kernels.law.LawParameter`; D, which every law reads, is the
     material's ``bending_rigidity``)."""
@@ -19,7 +19,7 @@ class BendingParameters:
     values: tuple[tuple[str, float], ...] = ()
 
     @classmethod
-    def of(cls, law: str, values: Mapping[str, float] | None = None) -> BendingParameters:
+    def of(cls, law: str, values: Mapping[str, float] | None = None) -> LawParameters:
         """The parameters of ``law`` from ``values`` (SI, by name); KeyError for a name the law
         does not have or a parameter it lacks."""
         description = bending_law(law)
@@ -53,16 +53,16 @@ class BendingParameters:
         except KeyError as exc:
             raise AttributeError(str(exc)) from None
 
-    def replace(self, **values: float) -> BendingParameters:
+    def replace(self, **values: float) -> LawParameters:
         """The same law with some of its parameters changed (SI, by name)."""
-        return BendingParameters.of(self.law, {**self.as_dict(), **values})
+        return LawParameters.of(self.law, {**self.as_dict(), **values})
 
     def as_dict(self) -> dict[str, float]:
         """The parameters by SI name."""
         return dict(self.values)
 
 
-ELASTIC = BendingParameters.of(DEFAULT_BENDING_LAW, {"hysteresis_d1": 0.0, "hysteresis_alpha": 0.05,
+ELASTIC = LawParameters.of(DEFAULT_BENDING_LAW, {"hysteresis_d1": 0.0, "hysteresis_alpha": 0.05,
                                                      "hysteresis_k0": 250.0})
 """The default law without hysteresis (D1 = 0): M = D K."""
 
@@ -78,7 +78,7 @@ class MaterialSI:
     density: float  # ρ_A, kg/m²
     tensile: tuple[float, float, float, float]  # a1..a4 of T(ε), N/m
     bending_rigidity: float  # D, N·m
-    bending: BendingParameters = ELASTIC
+    bending: LawParameters = ELASTIC
 
     @property
     def bending_law(self) -> str:

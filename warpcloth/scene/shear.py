@@ -1,0 +1,108 @@
+"""A fabric's in-plane shear, as a material file's ``[shear]`` table gives it (KES-FB1
+shear units), and its one conversion to SI (docs/model.md §17.1).
+
+The shear force per width along the shear angle φ is Fs = G φ + h(φ): the same laws as
+bending (kernels/law.py) with the shear angle for the curvature and the force for the
+moment, so every bending law is a shear law too. The table names the law and its
+parameters; the field names follow from each parameter's kind (a moment becomes a force
+in gf/cm, a curvature an angle in degrees, :data:`warpcloth.units.SHEAR_UNITS`):
+
+    [shear]
+    law = "tagawa2003"
+    rigidity_gf_per_cm_deg = 0.6       # G
+    hysteresis_d1_gf_per_cm = 0.8
+    hysteresis_alpha_per_deg = 0.6
+    hysteresis_phi0_deg = 8.0
+
+A strip does not read it; a material file that gives it describes the fabric's shear as
+well (``warpcloth material fit-kes --shear``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from warpcloth import units
+from warpcloth.errors import SceneError
+from warpcloth.kernels import BENDING_LAWS, bending_law
+from warpcloth.kernels.law import LawParameter
+from warpcloth.sim import LawParameters
+
+SHEAR_TABLE = "shear"
+RIGIDITY_FIELD = "rigidity_gf_per_cm_deg"
+"""G, the slope of the shear loop's centre line, gf/(cm·degree)."""
+
+
+def shear_field(parameter: LawParameter) -> str:
+    """The ``[shear]`` field of a law parameter: its name in shear's words and units
+    (``hysteresis_k0`` → ``hysteresis_phi0_deg``, ``dahl_moment`` → ``dahl_force_gf_per_cm``)."""
+    stem = parameter.name.replace("moment", "force").replace("curvature", "angle").replace("k0", "phi0")
+    suffix = units.SHEAR_UNITS[parameter.kind][0]
+    return f"{stem}_{suffix}" if suffix else stem
+
+
+def shear_fields(law: str) -> list[str]:
+    """The ``[shear]`` fields a material of shear law ``law`` gives, G first."""
+    return [RIGIDITY_FIELD, *(shear_field(p) for p in bending_law(law).parameters)]
+
+
+def shear_label(parameter: LawParameter) -> str:
+    """A law parameter's unit as a shear parameter prints it."""
+    return units.SHEAR_UNITS[parameter.kind][2]
+
+
+@dataclass(frozen=True)
+class ShearMaterial:
+    """A fabric's shear law and parameters in KES-FB1 shear units (fields: :func:`shear_fields`)."""
+
+    law: str
+    rigidity_gf_per_cm_deg: float
+    parameters: dict[str, float]  # the law's own, by [shear] field
+
+    def si(self) -> tuple[float, LawParameters]:
+        """G in N/(m·rad) and the law's parameters in SI (force N/m, angle rad): the one
+        KES → SI conversion of shear."""
+        law = bending_law(self.law)
+        values = {}
+        for p in law.parameters:
+            factor = units.SHEAR_UNITS[p.kind][1]
+            value = self.parameters[shear_field(p)]
+            values[p.name] = value * getattr(units, factor) if factor else value
+        return self.rigidity_gf_per_cm_deg * units.SHEAR_RIGIDITY_GF_PER_CM_DEG, LawParameters.of(self.law, values)
+
+    def table(self) -> dict:
+        """The ``[shear]`` table of a material file."""
+        return {"law": self.law, RIGIDITY_FIELD: self.rigidity_gf_per_cm_deg, **self.parameters}
+
+
+def parse_shear(table: object, where: str) -> ShearMaterial:
+    """The ``[shear]`` table of a material file (``where`` names the file), checked: a known
+    law, every field it reads a finite number in its range, no other field; else a
+    SceneError of ``shear.<field>``."""
+    if not isinstance(table, dict):
+        raise SceneError(SHEAR_TABLE, f"{where}: [shear] must be a table, got {table!r}")
+    law = table.get("law")
+    if law not in BENDING_LAWS:
+        raise SceneError(f"{SHEAR_TABLE}.law", f"{where}: must be one of {', '.join(BENDING_LAWS)}; got {law!r}")
+    description = bending_law(law)
+    expected = shear_fields(law)
+    unknown = sorted(set(table) - {"law", *expected})
+    if unknown:
+        raise SceneError(f"{SHEAR_TABLE}.{unknown[0]}", f"{where}: not a field of the {law} shear law (its fields: "
+                         f"{', '.join(expected)})")
+    missing = [name for name in expected if name not in table]
+    if missing:
+        raise SceneError(f"{SHEAR_TABLE}.{missing[0]}", f"{where}: the {law} shear law needs {', '.join(missing)}")
+    bounds = {RIGIDITY_FIELD: (None, 0.0), **{shear_field(p): (p.gt, p.ge) for p in description.parameters}}
+    values = {}
+    for name in expected:
+        value = table[name]
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+            raise SceneError(f"{SHEAR_TABLE}.{name}", f"{where}: must be a finite number, got {value!r}")
+        gt, ge = bounds[name]
+        if (gt is not None and not value > gt) or (ge is not None and not value >= ge):
+            relation = f"> {gt:g}" if gt is not None else f"≥ {ge:g}"
+            raise SceneError(f"{SHEAR_TABLE}.{name}", f"{where}: must be {relation}, got {value:g}")
+        values[name] = float(value)
+    return ShearMaterial(law, values.pop(RIGIDITY_FIELD), values)
