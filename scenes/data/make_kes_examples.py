@@ -1,4 +1,5 @@
-"""Generate the bundled KES example data: ``kes_fb1_example.csv`` and ``kes_fb2_example.csv``.
+"""Generate the bundled KES example data: ``kes_fb1_example.csv``, ``kes_fb2_example.csv``,
+``kes_fb2_inner_loops.csv`` and ``kes_fb1_shear_example.csv``.
 
 They are synthetic: the model itself with known parameters plus seeded Gaussian noise,
 so that ``warpcloth material fit-kes`` can be checked against the truth. The material is
@@ -31,6 +32,13 @@ material's ½ D1 (1 − e^{−2α|K|}), plus D K, plus the same noise (seed 2028
 that shows which law's inner loops a fabric has: `warpcloth material compare --bending
 kes_fb2_inner_loops`.
 
+``kes_fb1_shear_example.csv`` (header ``shear_angle_deg,shear_force_gf_per_cm``): the
+standard KES-FB1 shear cycle 0 → +8 → −8 → 0° in steps of 0.05° (641 points). Its force is
+not warpcloth's either: Fs = G φ + the same Iwan model on the angle (a fabric's yarn
+crossings as Jenkins elements), with G = 0.6 gf/(cm·°), D1 = 0.8 gf/cm, α = 0.6 /°
+(illustrative values of a wool suiting's order; its loop narrows away from φ = 0, as the
+laws' do), plus Gaussian noise σ = 0.01 gf/cm (seed 2029); the angle noise-free.
+
 Run ``python scenes/data/make_kes_examples.py`` to rewrite the files next to this script.
 """
 
@@ -52,6 +60,10 @@ TENSILE_NOISE_GF_PER_CM = 2.0
 UNLOADING_EXPONENT = 3
 CURVATURE_STEP_PER_CM = 0.02
 BENDING_NOISE_GF_CM_PER_CM = 0.002
+SHEAR_TRUTH = {"rigidity_gf_per_cm_deg": 0.6, "hysteresis_d1_gf_per_cm": 0.8, "hysteresis_alpha_per_deg": 0.6}
+SHEAR_PHI0_DEG = 8.0
+SHEAR_STEP_DEG = 0.05
+SHEAR_NOISE_GF_PER_CM = 0.01
 
 
 def tensile_example() -> np.ndarray:
@@ -110,6 +122,18 @@ def inner_loops_example() -> np.ndarray:
     return np.column_stack([k, moment])
 
 
+def shear_example() -> np.ndarray:
+    """Rows (shear angle in degrees, shear force per width in gf/cm) of the cycle 0 → +8 → −8 → 0°."""
+    n = round(SHEAR_PHI0_DEG / SHEAR_STEP_DEG)
+    phi = np.concatenate([np.linspace(0.0, SHEAR_PHI0_DEG, n, endpoint=False),
+                          np.linspace(SHEAR_PHI0_DEG, -SHEAR_PHI0_DEG, 2 * n, endpoint=False),
+                          np.linspace(-SHEAR_PHI0_DEG, 0.0, n + 1)])
+    force = SHEAR_TRUTH["rigidity_gf_per_cm_deg"] * phi + iwan_moment(
+        phi, SHEAR_TRUTH["hysteresis_d1_gf_per_cm"], SHEAR_TRUTH["hysteresis_alpha_per_deg"])
+    force += np.random.default_rng(2029).normal(0.0, SHEAR_NOISE_GF_PER_CM, len(force))
+    return np.column_stack([phi, force])
+
+
 def main() -> None:
     """Write the example files next to this script."""
     np.savetxt(HERE / "kes_fb1_example.csv", tensile_example(), fmt=("%.4f", "%.3f"), delimiter=",",
@@ -118,6 +142,8 @@ def main() -> None:
                header="curvature_per_cm,moment_gf_cm_per_cm", comments="")
     np.savetxt(HERE / "kes_fb2_inner_loops.csv", inner_loops_example(), fmt=("%.3f", "%.5f"), delimiter=",",
                header="curvature_per_cm,moment_gf_cm_per_cm", comments="")
+    np.savetxt(HERE / "kes_fb1_shear_example.csv", shear_example(), fmt=("%.2f", "%.4f"), delimiter=",",
+               header="shear_angle_deg,shear_force_gf_per_cm", comments="")
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
 """``warpcloth material fit-kes | compare | list``: material files from KES-FB data, and
-the bending laws compared on a KES-FB2 loop."""
+the laws compared on a KES-FB2 bending or a KES-FB1 shear loop."""
 
 from __future__ import annotations
 
@@ -15,9 +15,13 @@ from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
 from .options import EXIT_FIT_STATUS, add_overwrite, figure_path, new_result, path_text, positive
 
 if TYPE_CHECKING:
-    from warpcloth.calibrate.kes import LawComparison
+    from warpcloth.calibrate.kes import LawComparison, ShearFit
 
 BENDING_HELP = "KES-FB2 loop: curvature (1/cm), moment per width (gf·cm/cm)"
+SHEAR_HELP = "KES-FB1 shear loop: shear angle (degree), shear force per width (gf/cm)"
+DEFAULT_SHEAR_LAW = "masing"
+"""The shear law fit-kes fits without --shear-law: the paper's loop shape with return-point
+memory, which converges as a sheet's mesh and step are refined (docs/model.md §17.1)."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,6 +38,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                        + ", ".join(f"{law.name} ({law.summary})" for law in BENDING_LAWS.values())
                        + "; or all: fit every one, print their comparison and write the material of the one with "
                        f"the lowest AIC (default: {DEFAULT_BENDING_LAW})")
+    kes_p.add_argument("--shear", metavar="FB1S.csv", help=f"also fit the fabric's in-plane shear: {SHEAR_HELP}; "
+                       "the material file gains a [shear] table (read by sheets, not by strips)")
+    kes_p.add_argument("--shear-law", default=DEFAULT_SHEAR_LAW, choices=tuple(BENDING_LAWS),
+                       help=f"the law to fit to --shear (default: {DEFAULT_SHEAR_LAW})")
     kes_p.add_argument("-o", "--output", type=path_text, required=True, help="the material file to write (.toml)")
     kes_p.add_argument("--density-g-per-cm2", type=positive, default=None,
                        help="mass per area ρ_A (required: KES-FB1/FB2 data do not contain it)")
@@ -49,9 +57,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "bending; another law or all: the bending laws' comparison figure)")
     kes_p.add_argument("--accept", action="store_true", help="exit 0 even when the fit is not trusted")
     add_overwrite(kes_p, "material file")
-    compare_p = material_sub.add_parser("compare", help="fit every bending law to a KES-FB2 loop and compare them "
-                                        "by information criterion (writes no material)")
-    compare_p.add_argument("--bending", required=True, metavar="FB2.csv", help=BENDING_HELP)
+    compare_p = material_sub.add_parser("compare", help="fit every law to a KES-FB2 bending or a KES-FB1 shear loop "
+                                        "and compare them by information criterion (writes no material)")
+    loop_p = compare_p.add_mutually_exclusive_group(required=True)
+    loop_p.add_argument("--bending", metavar="FB2.csv", help=BENDING_HELP)
+    loop_p.add_argument("--shear", metavar="FB1S.csv", help=f"{SHEAR_HELP} (--plot and --csv: bending only)")
     compare_p.add_argument("--plot", metavar="FIG.png", help="write a PNG of each law's fit over the loop and its "
                            "residuals")
     compare_p.add_argument("--csv", type=path_text, metavar="TABLE.csv", help="write the comparison table as CSV")
@@ -71,7 +81,7 @@ def material_command(args: argparse.Namespace) -> int:
             print(f"{name}: {read_material_file(name)['material']['source']}")
         return 0
     if args.material_command == "compare":
-        return _compare(args)
+        return _compare_shear(args) if args.shear else _compare(args)
     return _fit_kes(args)
 
 
@@ -97,6 +107,51 @@ def _finish(command: str, status: str, problems: list[str], accept: bool, what: 
     print(f"warpcloth material {command}: not a fit ({status}): " + "; ".join(problems)
           + (" (accepted with --accept)" if accept else f" ({what}; --accept to exit 0 anyway)"), file=sys.stderr)
     return 0 if accept else EXIT_FIT_STATUS[status]
+
+
+def _print_shear(fit: ShearFit, source: str) -> None:
+    n = len(fit.loop.angle)
+    print(f"shear ({source}, {n} points), law {fit.shear.law}: {fit.describe()}")
+    print(f"  RMS {fit.rms_gf_per_cm:.4g} gf/cm, AIC {fit.law_fit.aic():.2f}, BIC {fit.law_fit.bic():.2f} "
+          f"({fit.law_fit.free_parameters} free parameters)")
+    if fit.law_fit.note:
+        print(f"  note: {fit.law_fit.note}")
+    units = {"G": "gf/(cm·°)", "2HG": "gf/cm", "2HG5": "gf/cm"}
+    print("  KES: " + ", ".join(f"{name} {_kes_value(data, units[name])} (the law's "
+                                f"{_kes_value(law, units[name])}{_difference(data, law)})"
+                                for name, data, law in fit.kes_comparison()) + " along 0 → +φ0 → −φ0 → 0")
+
+
+def _number(value: float | None) -> str:
+    return "n/a" if value is None else f"{value:.4g}"
+
+
+def _difference(data: float | None, law: float | None) -> str:
+    return f", {100 * (law - data) / data:+.1f} %" if data and law is not None else ""
+
+
+def _compare_shear(args: argparse.Namespace) -> int:
+    from warpcloth.calibrate import kes
+
+    if args.plot or args.csv:
+        raise OptionError("--plot" if args.plot else "--csv", "the comparison figure and table are of bending "
+                          "loops; with --shear the comparison is printed")
+    loop = kes.read_shear_csv(args.shear, flag="--shear")
+    fits = {law: kes.fit_shear(loop, law) for law in BENDING_LAWS}
+    best = min(f.law_fit.aic() for f in fits.values())
+    ranking = sorted(fits, key=lambda law: (fits[law].law_fit.aic(), fits[law].law_fit.free_parameters))
+    print(f"shear laws fitted to {args.shear} ({len(loop.angle)} points); AIC = n ln(SSE/n) + 2k:")
+    for law in ranking:
+        fit = fits[law]
+        status, _ = fit.verdict()
+        print(f"  {law}: ΔAIC {fit.law_fit.aic() - best:.1f}, " + ", ".join(
+            f"{name} {_number(law_value)}{_difference(data, law_value)}"
+            for name, data, law_value in fit.kes_comparison()) + f" — {status}")
+    print(f"recommended: {ranking[0]} (the lowest AIC)")
+    _print_shear(fits[ranking[0]], args.shear)
+    status, problems = fits[ranking[0]].verdict()
+    return _finish("compare", status, [f"the recommended {ranking[0]} fit: {p}" for p in problems], args.accept,
+                   "the table shows it")
 
 
 def _compare(args: argparse.Namespace) -> int:
@@ -143,13 +198,16 @@ def _fit_kes(args: argparse.Namespace) -> int:
         raise OptionError("--divergence-strain", f"must be > 0, got {max_strain:g}")
     gauge = kes.KES_FB1_GAUGE_MM if args.gauge_length_mm is None else args.gauge_length_mm
     tensile = kes.read_tensile_csv(args.tensile, args.strain_unit, gauge, flag="--tensile")
+    shear = kes.fit_shear(kes.read_shear_csv(args.shear, flag="--shear"), args.shear_law) if args.shear else None
     comparison = kes.compare_laws(kes.read_bending_csv(args.bending, flag="--bending"), laws)
     law = comparison.recommended
     fit = kes.fit_kes(tensile, comparison.loop, max_strain, bending_fit=comparison.fits[law])
     chosen = f"; bending law {law}, the lowest AIC of {', '.join(laws)}" if len(laws) > 1 else ""
     source = (f"fitted by warpcloth material fit-kes to {args.tensile} (KES-FB1) and {args.bending} (KES-FB2)"
               f"{chosen}; density {args.density_g_per_cm2:g} g/cm² given on the command line")
-    data = kes.material_file_data(fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain)
+    if shear is not None:
+        source += f"; shear ({args.shear_law}) fitted to {args.shear} (KES-FB1 shear)"
+    data = kes.material_file_data(fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain, shear)
     if len(laws) > 1:
         data["fit"] |= comparison.fit_table()
     print(f"tensile file's first column read as {fit.tensile_loop.strain_unit}")
@@ -174,6 +232,8 @@ def _fit_kes(args: argparse.Namespace) -> int:
     print(f"  KES: B {_kes_value(bk.b_gf_cm2_per_cm, 'gf·cm²/cm')}, 2HB {_kes_value(bk.hb2_gf_cm_per_cm, 'gf·cm/cm')} "
           f"(the data's; the fitted law along 0 → +K0 → −K0 → 0: B {_kes_value(model.b_gf_cm2_per_cm, 'gf·cm²/cm')}, "
           f"2HB {_kes_value(model.hb2_gf_cm_per_cm, 'gf·cm/cm')})")
+    if shear is not None:
+        _print_shear(shear, args.shear)
     which = f" with the {law} bending law, the one AIC recommends" if len(laws) > 1 else ""
     print(f"wrote {kes.write_material_file(out, data)}{which} (a scene uses it with from_file = \"{out}\" in its "
           f"[material], or --set material.from_file={out})")
@@ -183,4 +243,8 @@ def _fit_kes(args: argparse.Namespace) -> int:
         figure = plot_kes_fit(fit, plot) if laws == ["tagawa2003"] else plot_bending_law_comparison(comparison, plot)
         print(f"wrote {figure}")
     status, problems = fit.verdict()
+    if shear is not None:
+        shear_status, shear_problems = shear.verdict()
+        problems += [f"shear: {p}" for p in shear_problems]
+        status = kes.worst_status(status, shear_status)
     return _finish("fit-kes", status, problems, args.accept, "the material file records it")

@@ -165,7 +165,7 @@ def read_material_file(ref: str | Path) -> dict:
     try:
         parse_section(MaterialSection, {k: v for k, v in material.items() if k != "source"}, "material")
         if SHEAR_TABLE in data:
-            parse_shear(data[SHEAR_TABLE], where)
+            parse_shear(data[SHEAR_TABLE])
     except SceneError as exc:
         line = field_line(text, exc.field)
         raise SceneError(MATERIAL_FILE_KEY, f"{where}{f', line {line}' if line else ''}: {exc}") from None

@@ -76,33 +76,34 @@ class ShearMaterial:
         return {"law": self.law, RIGIDITY_FIELD: self.rigidity_gf_per_cm_deg, **self.parameters}
 
 
-def parse_shear(table: object, where: str) -> ShearMaterial:
-    """The ``[shear]`` table of a material file (``where`` names the file), checked: a known
-    law, every field it reads a finite number in its range, no other field; else a
-    SceneError of ``shear.<field>``."""
+def parse_shear(table: object, where: str = "") -> ShearMaterial:
+    """The ``[shear]`` table of a material file (``where`` names the file, if the error is
+    not located otherwise), checked: a known law, every field it reads a finite number in
+    its range, no other field; else a SceneError of ``shear.<field>``."""
+    where = f"{where}: " if where else ""
     if not isinstance(table, dict):
-        raise SceneError(SHEAR_TABLE, f"{where}: [shear] must be a table, got {table!r}")
+        raise SceneError(SHEAR_TABLE, f"{where}[shear] must be a table, got {table!r}")
     law = table.get("law")
     if law not in BENDING_LAWS:
-        raise SceneError(f"{SHEAR_TABLE}.law", f"{where}: must be one of {', '.join(BENDING_LAWS)}; got {law!r}")
+        raise SceneError(f"{SHEAR_TABLE}.law", f"{where}must be one of {', '.join(BENDING_LAWS)}; got {law!r}")
     description = bending_law(law)
     expected = shear_fields(law)
     unknown = sorted(set(table) - {"law", *expected})
     if unknown:
-        raise SceneError(f"{SHEAR_TABLE}.{unknown[0]}", f"{where}: not a field of the {law} shear law (its fields: "
+        raise SceneError(f"{SHEAR_TABLE}.{unknown[0]}", f"{where}not a field of the {law} shear law (its fields: "
                          f"{', '.join(expected)})")
     missing = [name for name in expected if name not in table]
     if missing:
-        raise SceneError(f"{SHEAR_TABLE}.{missing[0]}", f"{where}: the {law} shear law needs {', '.join(missing)}")
+        raise SceneError(f"{SHEAR_TABLE}.{missing[0]}", f"{where}the {law} shear law needs {', '.join(missing)}")
     bounds = {RIGIDITY_FIELD: (None, 0.0), **{shear_field(p): (p.gt, p.ge) for p in description.parameters}}
     values = {}
     for name in expected:
         value = table[name]
         if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-            raise SceneError(f"{SHEAR_TABLE}.{name}", f"{where}: must be a finite number, got {value!r}")
+            raise SceneError(f"{SHEAR_TABLE}.{name}", f"{where}must be a finite number, got {value!r}")
         gt, ge = bounds[name]
         if (gt is not None and not value > gt) or (ge is not None and not value >= ge):
             relation = f"> {gt:g}" if gt is not None else f"≥ {ge:g}"
-            raise SceneError(f"{SHEAR_TABLE}.{name}", f"{where}: must be {relation}, got {value:g}")
+            raise SceneError(f"{SHEAR_TABLE}.{name}", f"{where}must be {relation}, got {value:g}")
         values[name] = float(value)
     return ShearMaterial(law, values.pop(RIGIDITY_FIELD), values)

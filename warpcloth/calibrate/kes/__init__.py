@@ -21,19 +21,25 @@ One module per concern:
 
 from ..noise import POOR_FIT_FACTOR
 from .bending_dahl import DAHL, EXPONENT_GRID, SCALE_K0_GRID, fit_dahl
-from .bending_fit import BendingFit, LawFitter, Parameter, ShapeParameter, bending_problems
+from .bending_fit import BendingFit, LawFitter, Parameter, ShapeParameter, bending_problems, worst_status
 from .bending_frictional_couple import FRICTIONAL_COUPLE, WIDTH_K0_GRID, fit_frictional_couple
 from .bending_masing import MASING, fit_masing
 from .bending_tagawa2003 import ALPHA_K0_GRID, TAGAWA2003, Tagawa2003Fit, fit_bending, hysteretic_offsets
 from .kes_fit import KesFit, fit_kes
 from .kes_values import (
     B_RANGE_PER_CM,
+    G_RANGE_DEG,
     HB_CURVATURE_PER_CM,
     HB_WINDOW_PER_CM,
+    HG_ANGLES_DEG,
+    HG_WINDOW_DEG,
     KES_CYCLE_STEP_PER_CM,
+    KES_SHEAR_STEP_DEG,
     BendingSummary,
+    ShearSummary,
     TensileSummary,
     bending_summary,
+    shear_summary,
     standard_cycle,
     tensile_summary,
 )
@@ -60,15 +66,32 @@ from .readers import (
     PERCENT,
     STRAIN_UNITS,
     BendingLoop,
+    ShearLoop,
     TensileLoop,
     bending_loop,
     read_bending_csv,
+    read_shear_csv,
     read_tensile_csv,
+    shear_loop,
     tensile_loop,
 )
+from .shear_fit import ShearFit, fit_shear, reproduced_shear_values
 from .tensile_fit import DIVERGENCE_STRAIN, SLOPE_FLOOR, TensileFit, fit_tensile
 
 __all__ = [
+    "worst_status",
+    "G_RANGE_DEG",
+    "HG_ANGLES_DEG",
+    "HG_WINDOW_DEG",
+    "KES_SHEAR_STEP_DEG",
+    "ShearSummary",
+    "shear_summary",
+    "ShearLoop",
+    "read_shear_csv",
+    "shear_loop",
+    "ShearFit",
+    "fit_shear",
+    "reproduced_shear_values",
     "AIC_TIE",
     "ALL_LAWS",
     "ALPHA_K0_GRID",

@@ -121,6 +121,11 @@ def poor_fit(what: str, rms: float, unit: str, samples: np.ndarray) -> str | Non
     return None
 
 
+def worst_status(*statuses: str) -> str:
+    """The least trusted of several fits' statuses (:data:`STATUS_ORDER`, then ``converged``)."""
+    return min(statuses, key=lambda s: STATUS_ORDER.index(s) if s in STATUS_ORDER else len(STATUS_ORDER))
+
+
 AIC_TIE = 2.0
 """A ΔAIC below this is no preference between two models of a loop."""
 
@@ -138,24 +143,26 @@ def elastic_aic(loop: BendingLoop) -> float:
     return len(k) * math.log(max(sse / len(k), 1e-300)) + 2
 
 
-def bending_problems(fit: BendingFit, loop: BendingLoop) -> list[tuple[str, str]]:
+def bending_problems(fit: BendingFit, loop: BendingLoop, what: str = "bending", unit: str = "gf·cm/cm",
+                     line: str = "M = D K") -> list[tuple[str, str]]:
     """(status, why) of each reason a bending fit is not trusted, in :data:`STATUS_ORDER`:
     ``failed`` (a value not finite), ``poor_fit`` (the law does not describe the loop),
     ``not_identifiable`` (the elastic line fits the loop as well: no hysteresis for the
     law's parameters to describe, which also sends them to the edges of their search),
-    ``at_bound`` (a parameter at the edge of its search)."""
+    ``at_bound`` (a parameter at the edge of its search). ``what``, ``unit`` and ``line``
+    word it for a law fitted to another loop (shear: ``Fs = G φ``, gf/cm)."""
     found = []
     if not all(math.isfinite(float(v)) for v in [*fit.parameters.values(), fit.rms_gf_cm_per_cm]):
         found.append(("failed", f"a fitted {fit.law} value is not finite"))
     gain = elastic_aic(loop) - fit.aic()
     if gain < AIC_TIE:
         found.append(("not_identifiable", f"the loop shows no hysteresis the {fit.law} law can tell: the elastic line "
-                      f"M = D K fits it as well (AIC better by {gain:.1f} < {AIC_TIE:g} for "
+                      f"{line} fits it as well (AIC better by {gain:.1f} < {AIC_TIE:g} for "
                       f"{fit.free_parameters - 1} more parameters), so its hysteresis parameters are not determined "
                       "by these data"))
     if "edge of its search range" in fit.note:
         found.append(("at_bound", fit.note))
-    why = poor_fit("bending", fit.rms_gf_cm_per_cm, "gf·cm/cm", loop.moment)
+    why = poor_fit(what, fit.rms_gf_cm_per_cm, unit, loop.moment)
     if why is not None:
         found.append(("poor_fit", why))
     return sorted(found, key=lambda problem: STATUS_ORDER.index(problem[0]))

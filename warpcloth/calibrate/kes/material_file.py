@@ -11,16 +11,18 @@ import tomli_w
 
 from warpcloth.errors import DataFileError, OptionError
 from warpcloth.io.atomic import write_text_atomically
-from warpcloth.scene import MaterialSection, material_fields, validate_material
+from warpcloth.scene import MaterialSection, material_fields, parse_shear, validate_material
 from warpcloth.units import check_plausible
 
 from .kes_fit import KesFit
+from .shear_fit import ShearFit
 from .tensile_fit import DIVERGENCE_STRAIN
 
 
 def material_file_data(fit: KesFit, name: str, density_g_per_cm2: float, source: str,
-                       max_strain: float = DIVERGENCE_STRAIN) -> dict:
-    """The TOML data of a material file for a fit, checked usable up to ``max_strain``."""
+                       max_strain: float = DIVERGENCE_STRAIN, shear: ShearFit | None = None) -> dict:
+    """The TOML data of a material file for a fit, checked usable up to ``max_strain``;
+    with ``shear``, its ``[shear]`` table too (docs/model.md §17.1)."""
     if not (math.isfinite(density_g_per_cm2) and density_g_per_cm2 > 0):
         raise OptionError("--density-g-per-cm2", f"must be a positive mass per area in g/cm², got "
                           f"{density_g_per_cm2!r}")
@@ -39,7 +41,17 @@ def material_file_data(fit: KesFit, name: str, density_g_per_cm2: float, source:
     law = material["bending_law"]
     ordered = {"name": name, "source": source, "bending_law": law,
                **{k: material[k] for k in material_fields(law) if k != "name"}}
-    return {"material": ordered, "fit": fit.summary_table()}
+    data = {"material": ordered, "fit": fit.summary_table()}
+    if shear is not None:
+        table = shear.shear.table()
+        bad = [k for k, v in table.items() if isinstance(v, float) and not math.isfinite(v)]
+        if bad:
+            raise DataFileError(shear.loop.source, f"the shear fit gave {bad[0]} = {table[bad[0]]!r}, not a finite "
+                                "number: no material file is written")
+        parse_shear(table, "the shear fit")
+        data["shear"] = table
+        data["fit"] |= shear.summary_table()
+    return data
 
 
 def write_material_file(path: str | Path, data: dict) -> Path:

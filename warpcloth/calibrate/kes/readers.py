@@ -11,6 +11,10 @@ fraction (a fabric is never stretched by 100 %, nor loaded to its 500 gf/cm stan
 load below 1 % strain). Extension in mm is divided by the gauge length
 (``gauge_length_mm``, KES-FB1 standard 50 mm). Units as docs/model.md §1.
 
+**Shear (KES-FB1, shear mode)**, a CSV of shear angle φ in degrees and shear force per
+width Fs in gf/cm: one cycle from rest, the standard 0 → +8° → −8° → 0 under the
+standard 10 gf/cm tension (:class:`ShearLoop`; docs/model.md §17.1).
+
 **Bending (KES-FB2)**, a CSV of curvature K in 1/cm and moment per width M in
 gf·cm/cm: one cycle from rest, e.g. the standard 0 → +2.5 → −2.5 → 0 1/cm, which may go
 on with partial (inner) cycles inside ±K0 (:attr:`BendingLoop.inner_start`): the major
@@ -60,6 +64,7 @@ STRAIN_UNITS = ("percent", "fraction", "mm")
 
 _TENSILE_NAMES = ({"strain", "extension", "elongation", "eps", "epsilon"}, {"force", "load", "tension", "t", "f"})
 _BENDING_NAMES = ({"curvature", "k", "kappa"}, {"moment", "bending", "m"})
+_SHEAR_NAMES = ({"shear", "angle", "phi", "gamma"}, {"shear", "force", "fs", "f"})
 
 
 @dataclass(frozen=True)
@@ -121,6 +126,27 @@ class BendingLoop:
         end = len(self.curvature) - 1 if self.inner_start is None else self.inner_start
         cuts = sorted({0, int(np.argmax(self.curvature)), int(np.argmin(self.curvature)), end})
         return [slice(a, b + 1) for a, b in zip(cuts[:-1], cuts[1:], strict=False)]
+
+
+@dataclass(frozen=True)
+class ShearLoop:
+    """A KES-FB1 shear loop in measurement order: shear angle (degree), shear force per width (gf/cm)."""
+
+    angle: np.ndarray
+    force: np.ndarray
+    rows: np.ndarray
+    source: str
+    row_label: str = "line"
+
+    def as_law_loop(self) -> BendingLoop:
+        """The same loop in the laws' own variables (the angle for the curvature, the force
+        for the moment): what the law fitters read, and where the legs are cut."""
+        return BendingLoop(self.angle, self.force, self.rows, self.source, self.row_label)
+
+    @property
+    def phi0(self) -> float:
+        """The loop's largest ``|φ|`` (degree)."""
+        return float(np.max(np.abs(self.angle)))
 
 
 # ---------------------------------------------------------------------------------- files
@@ -217,6 +243,23 @@ def read_bending_csv(path: str | Path, *, flag: str | None = None) -> BendingLoo
     return bending_loop(values[:, 0], values[:, 1], source=str(path), rows=table.lines)
 
 
+def read_shear_csv(path: str | Path, *, flag: str | None = None) -> ShearLoop:
+    """Read a KES-FB1 shear loop: columns shear angle (degree) and shear force per width (gf/cm).
+
+    ``path`` may also name a bundled example (``kes_fb1_shear_example``); ``flag`` is the
+    option that named the file, if one did. A header that gives the angle in radians is
+    refused rather than read as degrees.
+    """
+    table = _read_columns(path, "KES-FB1 shear", ("angle", "force"), flag)
+    header, values, line = table.header, table.values, table.header_line
+    if header is not None:
+        _check_name(path, line, 1, header[0], _SHEAR_NAMES[0], [{"deg"}, {"degree"}, {"degrees"}],
+                    "the shear angle in degrees (e.g. shear_angle_deg; KES-FB1 shear is recorded in degrees)")
+        _check_name(path, line, 2, header[1], _SHEAR_NAMES[1], [{"gf", "cm"}],
+                    "shear force per width in gf/cm (e.g. shear_force_gf_per_cm)")
+    return shear_loop(values[:, 0], values[:, 1], source=str(path), rows=table.lines)
+
+
 # ---------------------------------------------------------------------------------- validation
 
 
@@ -306,4 +349,34 @@ def bending_loop(curvature: np.ndarray, moment: np.ndarray, source: str = "bendi
                             f"{rows[0]}) and ends at K = {curvature[-1]:.4g} 1/cm ({label} {rows[-1]}); a KES-FB2 "
                             f"loop returns to its start (within {LOOP_CLOSURE:.0%} of the largest |K|, {k0:.4g} "
                             "1/cm)")
+    return loop
+
+
+def shear_loop(angle: np.ndarray, force: np.ndarray, source: str = "shear data",
+               rows: np.ndarray | None = None) -> ShearLoop:
+    """A validated shear loop from arrays: angle in degrees, force per width in gf/cm; one
+    cycle from rest to both signs of φ and back, as :func:`bending_loop` requires of a
+    bending loop (the same checks, in shear's words)."""
+    angle, force, rows, label = _paired(angle, force, rows, source, ("shear angle", "shear force"))
+    if len(angle) < MIN_BENDING_POINTS:
+        raise DataFileError(source, f"the loop has {len(angle)} point(s); fitting G and the hysteresis along "
+                            f"0 → +φ0 → −φ0 → 0 needs at least {MIN_BENDING_POINTS}")
+    loop = ShearLoop(angle, force, rows, source, label)
+    phi0 = loop.phi0
+    if not phi0 > 0:
+        raise DataFileError(source, "the shear angle is 0 throughout")
+    low, high = float(angle.min()), float(angle.max())
+    if high < LOOP_REACH * phi0 or low > -LOOP_REACH * phi0:
+        raise DataFileError(source, f"the loop does not reach both signs of shear: φ runs from {low:.4g} to "
+                            f"{high:.4g}°; a KES-FB1 shear loop goes to +φ0 and −φ0 (each side at least "
+                            f"{LOOP_REACH:.0%} of the largest |φ|)")
+    if phi0 > 45.0:
+        raise DataFileError(source, f"the largest shear angle is {phi0:.4g}°: is the angle in degrees? (KES-FB1 "
+                            "shears to ±8°; the column must be degrees)")
+    if abs(angle[0]) > LOOP_CLOSURE * phi0:
+        raise DataFileError(source, f"the loop starts at φ = {angle[0]:.4g}° ({label} {rows[0]}), not from rest; "
+                            "give the cycle from its start")
+    if abs(angle[-1] - angle[0]) > LOOP_CLOSURE * phi0:
+        raise DataFileError(source, f"the loop does not close: it starts at φ = {angle[0]:.4g}° ({label} {rows[0]}) "
+                            f"and ends at φ = {angle[-1]:.4g}° ({label} {rows[-1]})")
     return loop
