@@ -13,11 +13,11 @@ import tomllib
 import numpy as np
 import pytest
 from conftest import run_cli
+from warpcloth.kernels import BENDING_LAWS
 
 from warpcloth import units
 from warpcloth.calibrate import kes
 from warpcloth.errors import DataFileError, SceneError
-from warpcloth.kernels import BENDING_LAWS
 from warpcloth.scene import MaterialSection, ShearMaterial, parse_shear, shear_fields, to_si
 from warpcloth.sim import moment_along_path, shear_force_along_path
 
