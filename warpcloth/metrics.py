@@ -53,7 +53,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 
 TIME_TOLERANCE_S = 1e-9
 """Sample times written with 10 digits still count as inside a comparison window."""
@@ -253,26 +253,26 @@ def comparison_window(spans: dict[str, tuple[float, float]], t_from: float | Non
                       t_to: float | None = None) -> tuple[float, float]:
     """The window (s) on which records of these ``spans`` (name → first, last sample time)
     are compared: ``--from``/``--to`` where given, else the overlap of every record. A
-    window that reaches outside any record, or is empty, is an :class:`OptionError`
+    window that reaches outside any record, or is empty, is an :class:`ArgumentError`
     naming the option and its value."""
     start_name = max(spans, key=lambda name: spans[name][0])
     end_name = min(spans, key=lambda name: spans[name][1])
     start, end = spans[start_name][0], spans[end_name][1]
     if t_from is not None and t_from < start - TIME_TOLERANCE_S:
-        raise OptionError("--from", f"{t_from:g} s is before the start of {start_name} ({start:g} s): the window must "
-                          "lie inside every record compared")
+        raise ArgumentError("t_from", f"{t_from:g} s is before the start of {start_name} ({start:g} s): the window "
+                            "must lie inside every record compared")
     if t_to is not None and t_to > end + TIME_TOLERANCE_S:
-        raise OptionError("--to", f"{t_to:g} s is after the end of {end_name} ({end:g} s): the window must lie inside "
-                          "every record compared")
+        raise ArgumentError("t_to", f"{t_to:g} s is after the end of {end_name} ({end:g} s): the window must lie "
+                            "inside every record compared")
     lower = start if t_from is None else t_from
     upper = end if t_to is None else t_to
     if not lower < upper:
         if t_from is not None:
-            raise OptionError("--from", f"{t_from:g} s is not before the window's end {upper:g} s "
+            raise ArgumentError("t_from", f"{t_from:g} s is not before the window's end {upper:g} s "
                               + ("(--to)" if t_to is not None else f"(the end of {end_name})"))
         if t_to is not None:
-            raise OptionError("--to", f"{t_to:g} s is not after the window's start {lower:g} s (the start of "
+            raise ArgumentError("t_to", f"{t_to:g} s is not after the window's start {lower:g} s (the start of "
                               f"{start_name})")
-        raise OptionError("INPUT", f"the records do not overlap in time: {end_name} ends at {end:g} s, before "
+        raise ArgumentError("spans", f"the records do not overlap in time: {end_name} ends at {end:g} s, before "
                           f"{start_name} starts at {start:g} s")
     return float(lower), float(upper)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import OptionError
+from .errors import ArgumentError
 from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
 from .scene import COORDINATES, Scene, build_batch, load_scene
@@ -53,7 +53,7 @@ def simulate(
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
     scenes = shared_auto_step(scenes)
     if initial_velocities is not None and initial_positions is None:
-        raise OptionError("initial_velocities", "given without initial_positions; give the start's positions too "
+        raise ArgumentError("initial_velocities", "given without initial_positions; give the start's positions too "
                           "(e.g. the rest shape, warpcloth.scene.rest_positions)")
     for argument, value in (("initial_positions", initial_positions), ("initial_velocities", initial_velocities)):
         if value is not None:

@@ -51,7 +51,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from warpcloth.errors import OptionError, SceneError
+from warpcloth.errors import ArgumentError, SceneError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
 from warpcloth.kernels import bending_law
 from warpcloth.runs import simulate
@@ -137,7 +137,7 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
     """
     names = [n.strip() for n in (names.split(",") if isinstance(names, str) else names) if n.strip()]
     if not names:
-        raise OptionError("--free", "name at least one parameter to fit, e.g. gamma,D1")
+        raise ArgumentError("names", "name at least one parameter to fit, e.g. gamma,D1")
     given = _parse_bounds(bounds)
     fixed = set(batch_fields())
     out = []
@@ -145,14 +145,14 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
         dotted = ALIASES.get(name, name)
         if dotted.count(".") != 1 or not hasattr(base, dotted.split(".")[0]) or not hasattr(
                 getattr(base, dotted.split(".")[0]), dotted.split(".")[1]):
-            raise OptionError("--free", f"{name!r} is neither a scene field nor one of {', '.join(ALIASES)}")
+            raise ArgumentError("names", f"{name!r} is neither a scene field nor one of {', '.join(ALIASES)}")
         value = _field_value(base, dotted)
         if dotted in fixed or isinstance(value, (bool, str, list)):
-            raise OptionError("--free", f"{name} ({dotted}) cannot vary between the strips of one batch or is not "
+            raise ArgumentError("names", f"{name} ({dotted}) cannot vary between the strips of one batch or is not "
                               "a number; only per-strip numeric fields can be fitted")
         laws = field_laws(dotted)
         if laws and base.material.bending_law not in laws:
-            raise OptionError("--free", f"{name} ({dotted}) is a parameter of the {' or '.join(laws)} bending law, "
+            raise ArgumentError("names", f"{name} ({dotted}) is a parameter of the {' or '.join(laws)} bending law, "
                               "but the scene's "
                               f"material uses {base.material.bending_law} (whose parameters are "
                               f"{', '.join(law_fields(base.material.bending_law))}); set material.bending_law to "
@@ -173,12 +173,12 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
         elif value > 0:
             lower, upper = value / 4, value * 4
         else:
-            raise OptionError("--bounds", f"{name} is {value:g} in the scene, so no default range; give "
+            raise ArgumentError("bounds", f"{name} is {value:g} in the scene, so no default range; give "
                               f"--bounds {name}=LOW:HIGH")
         if not lower < upper:
-            raise OptionError("--bounds", f"{name}: lower bound {lower:g} must be below upper bound {upper:g}")
+            raise ArgumentError("bounds", f"{name}: lower bound {lower:g} must be below upper bound {upper:g}")
         if any(p.field == dotted for p in out):
-            raise OptionError("--free", f"{name} ({dotted}) is named twice")
+            raise ArgumentError("names", f"{name} ({dotted}) is named twice")
         for bound in (lower, upper):  # every point of the box must be a valid scene
             data = base.to_dict()
             set_field(data, dotted, float(bound))
@@ -187,10 +187,10 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
             try:
                 check_step(scene_from_dict(data))
             except SceneError as exc:
-                raise OptionError("--bounds", f"{name} = {bound:g} is not a valid scene: {exc}") from None
+                raise ArgumentError("bounds", f"{name} = {bound:g} is not a valid scene: {exc}") from None
         out.append(FreeParameter(name, dotted, float(lower), float(upper), float(min(max(value, lower), upper))))
     if given:
-        raise OptionError("--bounds", f"{next(iter(given))!r} is not among the --free parameters")
+        raise ArgumentError("bounds", f"{next(iter(given))!r} is not among the --free parameters")
     return out
 
 
@@ -204,7 +204,7 @@ def _parse_bounds(text: str | None) -> dict[str, tuple[float, float]]:
             lo, hi = span.split(":")
             out[name.strip()] = (float(lo), float(hi))
         except ValueError:
-            raise OptionError("--bounds", f"{item.strip()!r} is not name=LOW:HIGH (e.g. gamma=0:2)") from None
+            raise ArgumentError("bounds", f"{item.strip()!r} is not name=LOW:HIGH (e.g. gamma=0:2)") from None
     return out
 
 
@@ -226,10 +226,10 @@ class Objective:
         scene = scene_from_dict(copy.deepcopy(self.base))
         span = float(measurement.t[-1] - measurement.t[0])
         if self.align > span:
-            raise OptionError("--align-start", f"{self.align:g} s is longer than the measured record ({span:g} s)")
+            raise ArgumentError("align_start_s", f"{self.align:g} s is longer than the measured record ({span:g} s)")
         t_end = float(measurement.t[-1]) + self.align
         if measurement.t[0] + self.align < 0:
-            raise OptionError("--measured", f"measured times start at {measurement.t[0]:g} s, before the scene's "
+            raise ArgumentError("measurement", f"measured times start at {measurement.t[0]:g} s, before the scene's "
                               "t = 0 (release or clamp start) even with the allowed --align-start; shift them")
         set_field(self.base, "run.duration_s", t_end + scene.output_interval)
         if isinstance(measurement, TrackedShapes):
@@ -243,7 +243,7 @@ class Objective:
             free_length = self.scene.strip.free_length_mm * 1e-3
             beyond = measurement.s > free_length * (1 + 1e-9)
             if beyond.any():
-                raise OptionError("--measured", f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond "
+                raise ArgumentError("measurement", f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond "
                                   f"the free end ({free_length * 1e3:g} mm below the clamp's lowest point); s is the "
                                   "arc length from the clamp's lowest point, not from the clamp's top")
         self.shift_step = 0.5 * self.scene.output_interval
@@ -256,7 +256,7 @@ class Objective:
         if self.base.get("integrator", {}).get("dt_s") != AUTO:
             return
         if len(self.free) > MAX_STEP_CORNERS_FREE:
-            raise OptionError("--free", f"integrator.dt_s = auto checks every corner of the box, 2^{len(self.free)} "
+            raise ArgumentError("free", f"integrator.dt_s = auto checks every corner of the box, 2^{len(self.free)} "
                               f"scenes for {len(self.free)} free parameters (at most {MAX_STEP_CORNERS_FREE}); "
                               "give integrator.dt_s a number")
         corners = [scene_from_dict(self.scene_data(np.array(c, dtype=float)), choose_step=False)
@@ -464,7 +464,7 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
     rng = np.random.default_rng(seed)
     n0 = space_filling or max(16, 8 * d)
     if n0 > MAX_SPACE_FILLING:
-        raise OptionError("--space-filling", f"{n0} variants in one launch is more than {MAX_SPACE_FILLING}; a "
+        raise ArgumentError("space_filling", f"{n0} variants in one launch is more than {MAX_SPACE_FILLING}; a "
                           "Latin hypercube of a few dozen per parameter finds the basin")
     # the resamples' indices and residuals (8 B each, at most two residuals per measured row),
     # sized before hours of fitting, not after

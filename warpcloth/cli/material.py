@@ -105,7 +105,7 @@ def _compare(args: argparse.Namespace) -> int:
     table = new_result(args.csv, args.overwrite, "--csv") if args.csv else None
     if table is not None and (table.suffix.lower() != ".csv" or table.is_dir()):
         raise OptionError("--csv", f"{table} must be a file ending in .csv")
-    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, flag="--bending"))
+    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, argument="--bending"))
     _print_comparison(comparison, args.bending)
     if plot is not None:
         from warpcloth.viz.plots import plot_bending_law_comparison
@@ -140,8 +140,8 @@ def _fit_kes(args: argparse.Namespace) -> int:
     if not max_strain > 0:
         raise OptionError("--divergence-strain", f"must be > 0, got {max_strain:g}")
     gauge = kes.KES_FB1_GAUGE_MM if args.gauge_length_mm is None else args.gauge_length_mm
-    tensile = kes.read_tensile_csv(args.tensile, args.strain_unit, gauge, flag="--tensile")
-    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, flag="--bending"), laws)
+    tensile = kes.read_tensile_csv(args.tensile, args.strain_unit, gauge, argument="--tensile")
+    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, argument="--bending"), laws)
     law = comparison.recommended
     fit = kes.fit_kes(tensile, comparison.loop, max_strain, bending_fit=comparison.fits[law])
     chosen = f"; bending law {law}, the lowest AIC of {', '.join(laws)}" if len(laws) > 1 else ""

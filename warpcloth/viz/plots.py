@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from warpcloth import units  # noqa: E402
-from warpcloth.errors import DataFileError, OptionError  # noqa: E402
+from warpcloth.errors import ArgumentError, DataFileError  # noqa: E402
 from warpcloth.io.atomic import write_atomically  # noqa: E402
 from warpcloth.io.measured import ClampAngleTrace, LaserTrace, TrackedShapes, read_measurement  # noqa: E402
 from warpcloth.io.recording import Recording  # noqa: E402
@@ -339,12 +339,12 @@ def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path 
     ``kes`` marks B and 2HB on the bending loop (:func:`plot_bending_loop`)."""
 
     if fmt not in FORMATS:
-        raise OptionError("--format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
+        raise ArgumentError("fmt", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
     if not (np.isfinite(dpi) and 10 <= dpi <= 2400):
-        raise OptionError("--dpi", f"must be between 10 and 2400, got {dpi!r}")
+        raise ArgumentError("dpi", f"must be between 10 and 2400, got {dpi!r}")
     if times is not None:
         recording.nearest_frames(times)  # an out-of-range time is refused before any figure is written
-    data = read_measurement(measured, encoder=True) if measured else None
+    data = read_measurement(measured, argument="measured", encoder=True) if measured else None
     window = None
     if isinstance(data, (LaserTrace, ClampAngleTrace)) or t_from is not None or t_to is not None:
         spans = {"the run": (float(recording.probes["t"].min()), float(recording.probes["t"].max()))}
@@ -396,22 +396,22 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
     with few values, e.g. the bending law; points and their mean when more are gridded)
     or two (heat map on a grid, categories such as the law included; coloured points
     otherwise)."""
-    for name, flag in ((metric, "--metric"), (x, "--x"), (y, "--y")):
+    for argument, name in (("metric", metric), ("x", x), ("y", y)):
         if name is not None and name not in summary:
-            raise OptionError(flag, f"{name!r} is not a column of the sweep summary; "
+            raise ArgumentError(argument, f"{name!r} is not a column of the sweep summary; "
                              f"known: {', '.join(c for c in summary.columns if c not in ('variant', 'batch'))}")
     if y is not None and y == x:
-        raise OptionError("--y", f"{y!r} is already on the x axis; a heat map needs two different parameters")
+        raise ArgumentError("y", f"{y!r} is already on the x axis; a heat map needs two different parameters")
     if summary[metric].map(lambda v: isinstance(v, (list, np.ndarray))).any():
-        raise OptionError("--metric", f"{metric!r} holds a list per variant (one value per half-cycle); plot one "
+        raise ArgumentError("metric", f"{metric!r} holds a list per variant (one value per half-cycle); plot one "
                           "number per variant, e.g. mean_log_decrement or first_amplitude_m")
     if not pd.api.types.is_numeric_dtype(summary[metric]) or pd.api.types.is_bool_dtype(summary[metric]):
-        raise OptionError("--metric", f"{metric!r} is not a number per variant (it holds "
+        raise ArgumentError("metric", f"{metric!r} is not a number per variant (it holds "
                           f"{summary[metric].dtype}); plot a numeric column, e.g. first_period_s or mean_log_decrement")
     data = summary[~summary["diverged"]] if "diverged" in summary else summary
     valued = data[np.isfinite(data[metric].to_numpy(dtype=float))]
     if valued.empty:
-        raise OptionError("--metric", f"no variant has a value of "
+        raise ArgumentError("metric", f"no variant has a value of "
                           f"{metric!r} (every one is NaN: for a period or decrement, the record may be shorter "
                           "than the swing needs, or the strip does not swing); plot another metric or run longer")
     missing, data = len(data) - len(valued), valued
@@ -539,7 +539,7 @@ def fit_search_figure(fit: object, truth: dict[str, float] | None = None) -> plt
     in an inset at their own scale; ``truth`` (field → value) is marked when known."""
     names = list(fit.parameters)
     if len(names) != 2:
-        raise OptionError("--free", f"the search figure shows two parameters; this fit has {len(names)}")
+        raise ArgumentError("fit", f"the search figure shows two parameters; this fit has {len(names)}")
     path = np.array([[h[n] for n in names] for h in fit.history])
     sigma = np.array([fit.sigma[n] for n in names])
     values, vectors = np.linalg.eigh(np.array(fit.correlation) * np.outer(sigma, sigma))
