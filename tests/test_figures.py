@@ -287,15 +287,15 @@ def test_a_sampled_sweep_is_plotted_as_points_not_a_zigzag():
 @pytest.fixture()
 def figures(monkeypatch):
     """The figures the plot functions save, by file name, kept open for inspection."""
-    import warpcloth.viz.plots as plots
+    from warpcloth.viz.figures import common
 
     saved = {}
 
-    def keep(fig, path, dpi=plots.DPI):
+    def keep(fig, path, dpi=common.DPI):
         saved[path.name] = fig
         return path
 
-    monkeypatch.setattr(plots, "_save", keep)
+    monkeypatch.setattr(common, "save", keep)
     yield saved
     import matplotlib.pyplot as plt
 
