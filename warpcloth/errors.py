@@ -3,6 +3,8 @@ input. The command line maps them to exit codes in one place (warpcloth.cli)."""
 
 from __future__ import annotations
 
+import os
+
 
 class WarpclothError(Exception):
     """Base of every error warpcloth raises on purpose (bad input, a diverged run)."""
@@ -60,7 +62,7 @@ class DataFileError(WarpclothError, ValueError):
     ``path`` names the file and ``line`` the 1-based line when one is to blame.
     """
 
-    def __init__(self, path: str, message: str, line: int | None = None) -> None:
+    def __init__(self, path: str | os.PathLike[str], message: str, line: int | None = None) -> None:
         self.path = str(path)
         self.line = line
         where = self.path if line is None else f"{self.path}, line {line}"
@@ -99,6 +101,6 @@ def checked_index(argument: str, value: object, count: int, what: str) -> int:
 
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise TypeError(f"{argument} must be an integer index of the {count} {what}, got {value!r}")
-    if not 0 <= value < count:
+    if not 0 <= int(value) < count:
         raise ArgumentError(argument, f"{value} is not one of the {count} {what} (0 to {count - 1})")
     return int(value)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -76,7 +77,7 @@ def simulate(
                           threads=threads)
 
 
-def run(scene: str | Path | Scene, overrides: Overrides = (), **kwargs: object) -> RunResult:
+def run(scene: str | Path | Scene, overrides: Overrides = (), **kwargs: Any) -> RunResult:
     """Load a scene (path or bundled name), apply overrides, simulate it.
 
     ``overrides`` are ``"key=value"`` strings or a mapping ``{"damping.gamma_per_s": 0.5}``

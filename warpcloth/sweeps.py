@@ -118,7 +118,7 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
                                 starts_at_rest=scenes[local].release.enabled)
         metrics.pop("signal")
         report = diverged.get(local)
-        row = {"variant": variant, "batch": batch}
+        row: dict[str, object] = {"variant": variant, "batch": batch}
         row |= {key: (json.dumps(v) if isinstance(v, list) else v) for key, v in assignments[local].items()}
         row |= metrics
         row |= {
@@ -131,7 +131,7 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
             "diverged_quantity": report["quantity"] if report else "",
         }
         if result.reversal_memory:  # reversals a full masing memory could not store (no hysteresis in their loops)
-            row["reversal_overflows"] = int(result.reversal_memory["overflows"][local])
+            row["reversal_overflows"] = int(np.asarray(result.reversal_memory["overflows"])[local])
         rows.append(row)
     SweepDirectory(out_dir).write_batch(batch, {k: np.concatenate(v) for k, v in columns.items()}, rows,
                                         result.frames if frames else None)

@@ -25,7 +25,14 @@ if not os.environ.get("DISPLAY"):
 
 import pyvista as pv  # noqa: E402
 
-from warpcloth.viz.geometry import BOX_QUADS, clamp_box, colour_values, ribbon_quads, ribbon_vertices, variant_colours  # noqa: E402
+from warpcloth.viz.geometry import (  # noqa: E402
+    BOX_QUADS,
+    clamp_box,
+    colour_values,
+    ribbon_quads,
+    ribbon_vertices,
+    variant_colours,
+)
 
 WINDOW = (960, 720)
 CAMERA_AZIMUTH_DEG = 25.0  # about the vertical, from the +z side

@@ -55,7 +55,8 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
     history.close()
     u, shift = state.q[:len(free)], objective.shift_of(state.q)
     jac, residual = state.jac, state.residual
-    if history.rows[-1]["stage"] != "step":  # the Jacobian must be taken at the reported point
+    # the Jacobian must be taken at the reported point (the last launch's, after a full step)
+    if history.rows[-1]["stage"] != "step" or jac is None or result is None:
         result, jac, residual = _jacobian_at(objective, u, shift)
     fit = summarise(objective, u, shift, jac, residual, history.rows, state.converged, time.perf_counter() - started)
     if bootstrap > 0:
@@ -110,13 +111,13 @@ def _space_filling(objective: Objective, n0: int, rng: np.random.Generator,
 
 
 def _levenberg_marquardt(objective: Objective, state: lm.State, max_iterations: int,
-                         record: _History) -> tuple[lm.State, RunResult]:
+                         record: _History) -> tuple[lm.State, RunResult | None]:
     # 2. Speculative Levenberg–Marquardt (.lm): each launch holds the proposed step, its
-    # stencil and the cautious steps. Returns the last launch's result too, whose row 0
-    # is the last full step.
+    # stencil and the cautious steps. Returns the last launch's result too (None without
+    # one), whose row 0 is the last full step.
     d = len(objective.free)
     lower, upper = objective.box()
-    result = None
+    result: RunResult | None = None
     for _ in range(max_iterations):
         proposals = lm.proposals(state, lower, upper)
         stencil_rows, pairs = lm.stencil(proposals[0][:d])

@@ -90,6 +90,8 @@ def plot_fit_overlay(result: RunResult, objective: FitResiduals, measurement: La
         top.set_title(f"RMS {fit.rms * MM:.3g} mm on t = {window[0]:g} … {window[1]:g} s (the measured record); "
                       f"{title}", fontsize=8)
         return common.save(fig, path)
+    if result.frames is None:
+        raise ValueError("tracked markers are drawn over the run's frames: run it with keep_frames=True")
     fig, ax = plt.subplots(figsize=(6.5, 6))
     frames = np.unique(measurement.frame)
     chosen = frames[np.linspace(0, len(frames) - 1, min(6, len(frames))).round().astype(int)]
@@ -131,7 +133,7 @@ def fit_search_figure(fit: MotionFit, truth: dict[str, float] | None = None) -> 
     centre = np.array([fit.parameters[n] for n in names])[:, None]
     fig, ax = plt.subplots(figsize=(6, 5))
     ax.plot(path[:, 0], path[:, 1], "o-", color="0.5", ms=4, lw=0.8, label="search (one point per launch)")
-    inset = ax.inset_axes([0.1, 0.08, 0.38, 0.3])
+    inset = ax.inset_axes((0.1, 0.08, 0.38, 0.3))
     for k, style in SIGMA_STYLES.items():
         ellipse = centre + vectors @ (k * np.sqrt(np.clip(values, 0, None))[:, None] * circle)
         ax.plot(*ellipse, color="C3", ls=style, lw=1, label=f"{k}σ")

@@ -117,6 +117,7 @@ def _against_one(fig: plt.Figure, ax: plt.Axes, data: pd.DataFrame, metric: str,
 def _heat_map(fig: plt.Figure, ax: plt.Axes, data: pd.DataFrame, metric: str, x: str, y: str) -> None:
     # The metric over two swept parameters: cells on a full grid, coloured points otherwise.
     table = data.pivot_table(index=y, columns=x, values=metric, aggfunc="mean")
+    mesh: matplotlib.cm.ScalarMappable
     # Colours span the 2nd–98th percentile, so one outlier does not flatten the map.
     lo, hi = np.nanpercentile(data[metric], [2, 98])
     scale = {"cmap": "viridis", "vmin": lo, "vmax": hi if hi > lo else None}

@@ -127,7 +127,7 @@ def plot_energy(recording: Recording, path: Path, variant: int = 0, *, dpi: floa
     from its start in % of the peak kinetic energy (bottom), which shows how well the
     step conserves it."""
     fig, (ax, drift) = plt.subplots(2, 1, figsize=(9.5, 6), sharex=True, height_ratios=[3, 1])
-    total = 0.0
+    total = np.zeros(())  # the sum of the terms, as they are added
     for name, label in ENERGY_TERMS:
         t, value = recording.probe(name, variant)
         if name == "gravitational":
