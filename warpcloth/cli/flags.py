@@ -21,7 +21,6 @@ FLAGS = {
     "bounds": "--bounds",
     "density_g_per_cm2": "--density-g-per-cm2",
     "dpi": "--dpi",
-    "fit": "--free",  # the search figure of a fit of other than two parameters
     "fmt": "--format",
     "frames_per_clip": "--frames-per-clip",
     "free": "--free",
@@ -58,6 +57,7 @@ FLAGS = {
 """Library argument → the option (or positional argument) that supplies it."""
 
 LIBRARY_ONLY = frozenset({
+    "fit",  # fit_search_figure(fit): the command line draws no search figure
     "forms",  # clamp-motion forms: the command tries every one
     "initial_positions",  # simulate()'s start state: no option sets it
     "initial_velocities",
