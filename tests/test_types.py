@@ -10,15 +10,18 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 MODULES = [
     "warpcloth/errors.py",
+    "warpcloth/metrics.py",
     "warpcloth/runs.py",
     "warpcloth/sweeps.py",
     "warpcloth/cli/flags.py",
     "warpcloth/calibrate/motion_fit",
     "warpcloth/viz/plots.py",
     "warpcloth/viz/figures",
+    "warpcloth/viz/usd.py",
 ]
-"""The public API checked: errors, simulate/run, run_sweep, the argument → option map, the
-motion fit and the figures (whose protocols type the fit and KES results they draw)."""
+"""The public API checked: errors, the swing metrics, simulate/run, run_sweep, the
+argument → option map, the motion fit, the figures (whose protocols type the fit and KES
+results they draw) and the USD export."""
 
 
 def test_the_public_api_type_checks():

@@ -183,7 +183,7 @@ def _refine(t: np.ndarray, x: np.ndarray, j: int, half_period: float, decay: flo
     half_width = np.sqrt(2 * TURNING_WINDOW) / np.pi * half_period
     omega = np.pi / half_period if half_period > 0 else 0.0
 
-    def shape(s: np.ndarray) -> np.ndarray:
+    def shape(s: np.ndarray | float) -> np.ndarray | float:
         return s**2 - (2 * decay / 3) * s**3 - (omega**2 / 12) * s**4
 
     centre = t[j]
@@ -217,7 +217,7 @@ def swing_summary(t: np.ndarray, laser: np.ndarray, tip: np.ndarray | None = Non
     misses the laser line in more than a tenth of the samples; ``"signal"`` says which."""
     laser = np.asarray(laser, dtype=float)
     use_laser = tip is None or np.isfinite(laser).sum() > 0.9 * len(laser)
-    metrics = swing_metrics(t, laser if use_laser else tip, starts_at_rest, noise)
+    metrics = swing_metrics(t, laser if use_laser or tip is None else tip, starts_at_rest, noise)
     return {"signal": "laser_x" if use_laser else "tip_x"} | metrics
 
 
