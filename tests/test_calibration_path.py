@@ -135,9 +135,9 @@ def test_a_fitted_motion_drives_the_clamp_from_its_rest_reading():
     # the kernel's clamp angle is the fit, measured from the encoder's rest reading
     np.testing.assert_allclose(result.probe("clamp_angle", 0), fit.theta(result.t) - fit.rest_rad, atol=1e-9)
     assert abs(result.probe("clamp_angle", 0)[0]) < 1e-5 and fit.rest_rad == pytest.approx(0.05, abs=1e-9)
-    with pytest.raises(wc.OptionError, match="ENCODER: 5 samples are too few"):
+    with pytest.raises(wc.ArgumentError, match="t: 5 samples are too few"):
         fit_clamp_motion(T[:5], T[:5])
-    with pytest.raises(wc.OptionError, match="ENCODER: the angle never changes"):
+    with pytest.raises(wc.ArgumentError, match="theta: the angle never changes"):
         fit_clamp_motion(T, np.zeros_like(T))
 
 

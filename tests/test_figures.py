@@ -71,12 +71,12 @@ def test_bad_measured_files_are_named(tmp_path, reader, text, message):
 
 
 def test_measured_file_options_are_named(tmp_path):
-    # A file an option names that cannot be read blames the option; a bad --angle-unit too.
-    with pytest.raises(wc.OptionError, match="--measured: cannot read the laser trace file .*nope.csv"):
+    # A file that cannot be read blames the argument that named it; a bad angle_unit too.
+    with pytest.raises(wc.ArgumentError, match="path: cannot read the laser trace file .*nope.csv"):
         read_laser_trace(tmp_path / "nope.csv")
     path = tmp_path / "enc.csv"
     path.write_text("0,0\n0.1,1\n")
-    with pytest.raises(wc.OptionError, match="--angle-unit: must be rad or deg, got 'grad'"):
+    with pytest.raises(wc.ArgumentError, match="angle_unit: must be rad or deg, got 'grad'"):
         read_encoder(path, "grad")
 
 
@@ -195,7 +195,7 @@ def test_sweep_metric_plots(tmp_path):
                       "material.hysteresis_d1_gf_cm_per_cm")
     assert_not_blank(line)
     assert_not_blank(heat)
-    with pytest.raises(wc.OptionError, match="--metric: .no_such_metric. is not a column of the sweep summary"):
+    with pytest.raises(wc.ArgumentError, match="metric: .no_such_metric. is not a column of the sweep summary"):
         plot_sweep(summary, tmp_path / "bad.png", "no_such_metric", "damping.gamma_per_s")
 
 
@@ -287,15 +287,15 @@ def test_a_sampled_sweep_is_plotted_as_points_not_a_zigzag():
 @pytest.fixture()
 def figures(monkeypatch):
     """The figures the plot functions save, by file name, kept open for inspection."""
-    import warpcloth.viz.plots as plots
+    from warpcloth.viz.figures import common
 
     saved = {}
 
-    def keep(fig, path, dpi=plots.DPI):
+    def keep(fig, path, dpi=common.DPI):
         saved[path.name] = fig
         return path
 
-    monkeypatch.setattr(plots, "_save", keep)
+    monkeypatch.setattr(common, "save", keep)
     yield saved
     import matplotlib.pyplot as plt
 
@@ -423,11 +423,9 @@ def test_formats_and_dpi(swing_run, tmp_path):
     assert [p.suffix for p in svg] == [".svg"] * 5 and svg[0].read_text().lstrip().startswith("<?xml")
     pdf = plot_run(recording, tmp_path / "pdf", fmt="pdf")
     assert all(p.read_bytes().startswith(b"%PDF") for p in pdf)
-    from warpcloth.errors import OptionError
-
-    with pytest.raises(OptionError, match="--format: must be one of png, pdf, svg, got 'jpg'"):
+    with pytest.raises(wc.ArgumentError, match="fmt: must be one of png, pdf, svg, got 'jpg'"):
         plot_run(recording, tmp_path / "x", fmt="jpg")
-    with pytest.raises(OptionError, match="--dpi: must be between 10 and 2400, got 1"):
+    with pytest.raises(wc.ArgumentError, match="dpi: must be between 10 and 2400, got 1"):
         plot_run(recording, tmp_path / "x", dpi=1)
 
 
@@ -455,14 +453,14 @@ def plt_viridis(x):
 def test_a_metric_no_variant_has_is_refused_not_drawn_empty():
     import pandas as pd
 
-    from warpcloth.errors import OptionError
+    from warpcloth.errors import ArgumentError
     from warpcloth.viz.plots import sweep_figure
 
     summary = pd.DataFrame({"variant": range(4), "damping.gamma_per_s": [0.1, 0.2, 0.1, 0.2],
                             "material.bending_rigidity_gf_cm2_per_cm": [0.1, 0.1, 0.2, 0.2],
                             "first_period_s": np.nan, "mean_log_decrement": [0.1, np.nan, 0.3, 0.4],
                             "diverged": False})
-    with pytest.raises(OptionError, match="--metric: no variant has a value of 'first_period_s'"):
+    with pytest.raises(ArgumentError, match="metric: no variant has a value of 'first_period_s'"):
         sweep_figure(summary, "first_period_s", "damping.gamma_per_s", "material.bending_rigidity_gf_cm2_per_cm")
     figure = sweep_figure(summary, "mean_log_decrement", "damping.gamma_per_s")
     assert figure.axes[0].get_title() == "mean log decrement per half-cycle over 3 variants (1 without a value)"
@@ -518,12 +516,12 @@ def test_one_origin_the_clamp_edge_in_scenes_results_and_files(swing_run, tmp_pa
 def test_a_text_column_is_refused_as_a_metric():
     import pandas as pd
 
-    from warpcloth.errors import OptionError
+    from warpcloth.errors import ArgumentError
     from warpcloth.viz.plots import sweep_figure
 
     summary = pd.DataFrame({"variant": range(3), "damping.gamma_per_s": [0.1, 0.2, 0.3],
                             "diverged_phase": ["", "", ""], "first_period_s": [0.5, 0.5, 0.5], "diverged": False})
-    with pytest.raises(OptionError, match="--metric: 'diverged_phase' is not a number per variant"):
+    with pytest.raises(ArgumentError, match="metric: 'diverged_phase' is not a number per variant"):
         sweep_figure(summary, "diverged_phase", "damping.gamma_per_s")
 
 
@@ -645,7 +643,7 @@ def test_the_marker_overlay_axes_read_as_the_shape_figures(swing_run, tmp_path, 
 def test_a_measured_trace_and_the_run_are_drawn_on_one_window(swing_run, tmp_path, figures):
     # Issue 22: plot --measured draws the run only where the trace is (their overlap),
     # or on --from/--to, and says which in the title; a window outside is refused first.
-    from warpcloth.errors import OptionError
+    from warpcloth.errors import ArgumentError
 
     recording = load_recording(swing_run)
     t, x = recording.probe("laser_x", 0)
@@ -662,6 +660,6 @@ def test_a_measured_trace_and_the_run_are_drawn_on_one_window(swing_run, tmp_pat
     plot_run(recording, tmp_path / "b", measured=laser, t_from=0.1, t_to=0.2)
     xs = figures["amplitude.png"].axes[0].get_lines()[0].get_xdata()
     assert xs.min() >= 0.1 - 1e-9 and xs.max() <= 0.2 + 1e-9
-    with pytest.raises(OptionError, match=rf"--to: 5 s is after the end of .*laser.csv \({end:g} s\)"):
+    with pytest.raises(ArgumentError, match=rf"t_to: 5 s is after the end of .*laser.csv \({end:g} s\)"):
         plot_run(recording, tmp_path / "c", measured=laser, t_to=5.0)
     assert not (tmp_path / "c").exists()

@@ -95,13 +95,13 @@ def test_impulsive_rotation_centre_gamma_and_clock_are_recovered():
     ("", None, "at least one parameter"),
 ])
 def test_bad_fit_requests_are_named(names, bounds, message):
-    with pytest.raises(wc.OptionError, match=message):
+    with pytest.raises(wc.ArgumentError, match=message):
         free_parameters(names, wc.load_scene("impulsive_rotation"), bounds)
 
 
 def test_a_zero_parameter_needs_bounds():
     scene = wc.load_scene("damped_swing", ["material.hysteresis_d1_gf_cm_per_cm=0.0"])
-    with pytest.raises(wc.OptionError, match="--bounds: D1 is 0 in the scene, so no default range; give "
+    with pytest.raises(wc.ArgumentError, match="bounds: D1 is 0 in the scene, so no default range; give "
                        "--bounds D1=LOW:HIGH"):
         free_parameters("D1", scene)
     (d1,) = free_parameters("D1", scene, "D1=0:0.1")
@@ -147,7 +147,7 @@ def test_cli_fits_the_bundled_examples(tmp_path):
 def test_markers_beyond_the_free_end_are_refused():
     base = raw("impulsive_rotation", run__duration_s=0.1)
     markers = TrackedShapes(np.array([0, 1]), np.array([0.0, 0.05]), np.array([0.05, 0.12]), np.zeros(2), np.zeros(2))
-    with pytest.raises(wc.OptionError, match="--measured: a marker at s = 120 mm lies beyond the free end"):
+    with pytest.raises(wc.ArgumentError, match="measurement: a marker at s = 120 mm lies beyond the free end"):
         fit_motion(base, markers, free_parameters("gamma", wc.scene_from_dict(copy.deepcopy(base))), progress=False)
 
 

@@ -14,7 +14,7 @@ from conftest import kes_cycle, kes_moment, run_cli
 import warpcloth as wc
 from warpcloth.calibrate import kes
 from warpcloth.calibrate.kes.least_squares import least_squares_above
-from warpcloth.errors import DataFileError, OptionError, SceneError
+from warpcloth.errors import ArgumentError, DataFileError, SceneError
 from warpcloth.scene import (
     DEFAULT_MATERIAL,
     MaterialSection,
@@ -247,9 +247,9 @@ def test_bad_tensile_data_is_named(tmp_path, text, strain_unit, message):
 
 def test_bad_tensile_options_are_named(tmp_path):
     path = write(tmp_path / "fb1.csv", "0,0\n")
-    with pytest.raises(OptionError, match="--strain-unit: must be one of percent, fraction, mm; got 'inch'"):
+    with pytest.raises(ArgumentError, match="strain_unit: must be one of percent, fraction, mm; got 'inch'"):
         kes.read_tensile_csv(path, "inch")
-    with pytest.raises(OptionError, match="--gauge-length-mm: must be a positive length in mm, got -5"):
+    with pytest.raises(ArgumentError, match="gauge_length_mm: must be a positive length in mm, got -5"):
         kes.read_tensile_csv(path, gauge_length_mm=-5)
     with pytest.raises(DataFileError, match="missing.csv: cannot read the KES-FB1 tensile file"):
         kes.read_tensile_csv(tmp_path / "missing.csv")

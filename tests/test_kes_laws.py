@@ -15,7 +15,7 @@ from warpcloth.kernels import BENDING_LAWS, bending_tagawa2003
 import warpcloth as wc
 from warpcloth.calibrate import kes
 from warpcloth.cli import main
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 from warpcloth.scene import MaterialSection, material_fields, read_material_file, to_si
 from warpcloth.sim import moment_along_path
 
@@ -203,7 +203,7 @@ def test_ties_and_caveats_are_said():
 
 
 def test_an_unknown_law_is_named():
-    with pytest.raises(OptionError, match=r"--law: unknown bending law 'bao'; known: tagawa2003, dahl, "
+    with pytest.raises(ArgumentError, match=r"law: unknown bending law 'bao'; known: tagawa2003, dahl, "
                                           r"frictional_couple, masing$"):
         kes.fit_kes(kes.read_tensile_csv(FB1), kes.read_bending_csv(FB2), law="bao")
 

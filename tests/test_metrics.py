@@ -181,11 +181,11 @@ def test_analyse_measures_every_input_on_one_window(tmp_path):
     assert abs(alone["mean_log_decrement"] / rows[0]["mean_log_decrement"] - 1) > 0.1  # what the overlap prevents
     chosen = analyse([short, long], t_from=0.3, t_to=1.2)
     assert [(r["from_s"], r["to_s"]) for r in chosen] == [(0.3, 1.2)] * 2 and chosen[0]["n_half_cycles"] > 0
-    with pytest.raises(wc.OptionError, match=r"--to: 3 s is after the end of .*short.csv \(1.5 s\)"):
+    with pytest.raises(wc.ArgumentError, match=r"t_to: 3 s is after the end of .*short.csv \(1.5 s\)"):
         analyse([short, long], t_to=3.0)
-    with pytest.raises(wc.OptionError, match=r"--from: -1 s is before the start of"):
+    with pytest.raises(wc.ArgumentError, match=r"t_from: -1 s is before the start of"):
         analyse([short, long], t_from=-1.0)
-    with pytest.raises(wc.OptionError, match=r"--from: 1 s is not before the window's end 0.5 s \(--to\)"):
+    with pytest.raises(wc.ArgumentError, match=r"t_from: 1 s is not before the window's end 0.5 s \(--to\)"):
         analyse([short, long], t_from=1.0, t_to=0.5)
     done = run_cli("analyse", short, long, "--from", "2")
     assert done.returncode == 2 and "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1

@@ -90,7 +90,7 @@ def test_a_format_1_latin_hypercube_sweep_is_read_by_its_stored_variants_and_not
     np.testing.assert_array_equal(recording.parameters[D1], stored[D1])  # the variants that ran
     assert [s.material.hysteresis_d1_gf_cm_per_cm for s in recording.scenes] == stored[D1].tolist()
     renamed = with_sweep(raw, **(raw["sweep"] | {"seed": 12}))
-    with pytest.raises(wc.OptionError, match=r"^--out: .*old was written by an older warpcloth \(sweep format 1\), "
+    with pytest.raises(wc.ArgumentError, match=r"^out: .*old was written by an older warpcloth \(sweep format 1\), "
                        r"whose Latin hypercube drew other variants from the same seed; choose a new --out"):
         run_sweep(expand(renamed), out, workers=0)
     info["format"] = 2  # a format-2 directory that no longer matches is refused, not relabelled
@@ -161,7 +161,7 @@ def test_a_diverged_variant_is_recorded_and_the_sweep_goes_on(tmp_path):
 def test_a_changed_sweep_does_not_resume_into_an_old_directory(tmp_path):
     run_sweep(small_sweep(), tmp_path / "s", workers=0)
     changed = expand(with_sweep(base(), grid={D1: [0.0, 0.05]}))
-    with pytest.raises(wc.OptionError, match="holds a different sweep"):
+    with pytest.raises(wc.ArgumentError, match="^out: .*holds a different sweep"):
         run_sweep(changed, tmp_path / "s", workers=0)
 
 

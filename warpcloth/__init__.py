@@ -21,6 +21,7 @@ import importlib
 import importlib.util
 
 from .errors import (
+    ArgumentError,
     DataFileError,
     DivergenceError,
     OptionError,
@@ -57,6 +58,7 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "ArgumentError",
     "DataFileError",
     "DivergenceError",
     "OptionError",

@@ -3,6 +3,8 @@ input. The command line maps them to exit codes in one place (warpcloth.cli)."""
 
 from __future__ import annotations
 
+import os
+
 
 class WarpclothError(Exception):
     """Base of every error warpcloth raises on purpose (bad input, a diverged run)."""
@@ -25,15 +27,33 @@ class SceneError(WarpclothError, ValueError):
         super().__init__(f"{field}: {message}")
 
 
-class OptionError(WarpclothError, ValueError):
-    """A command-line option (or the matching keyword argument) has an unusable value.
+class ArgumentError(WarpclothError, ValueError):
+    """An argument of a library function has an unusable value.
 
-    ``option`` is the option as typed (e.g. ``--variants``).
+    ``argument`` is the Python parameter it was passed as (e.g. ``variants`` of
+    :func:`warpcloth.run_sweep`), ``message`` what is wrong with it. The library names its
+    own arguments, so a caller of a function reads the keyword it wrote; the command line
+    turns the error into an :class:`OptionError` naming the option that supplied the
+    argument, in one place (``warpcloth.cli.flags``, at its one error boundary).
+    """
+
+    def __init__(self, argument: str, message: str) -> None:
+        self.argument = argument
+        self.message = message
+        super().__init__(f"{argument}: {message}")
+
+
+class OptionError(ArgumentError):
+    """A command-line option has an unusable value.
+
+    ``option`` is the option as typed (e.g. ``--variants``) or a positional argument's
+    name (``SCENE``). It is an :class:`ArgumentError` whose argument is the option, so
+    ``except ArgumentError`` catches a library error and the command line's own alike.
     """
 
     def __init__(self, option: str, message: str) -> None:
         self.option = option
-        super().__init__(f"{option}: {message}")
+        super().__init__(option, message)
 
 
 class DataFileError(WarpclothError, ValueError):
@@ -42,7 +62,7 @@ class DataFileError(WarpclothError, ValueError):
     ``path`` names the file and ``line`` the 1-based line when one is to blame.
     """
 
-    def __init__(self, path: str, message: str, line: int | None = None) -> None:
+    def __init__(self, path: str | os.PathLike[str], message: str, line: int | None = None) -> None:
         self.path = str(path)
         self.line = line
         where = self.path if line is None else f"{self.path}, line {line}"
@@ -76,12 +96,12 @@ class PlausibilityWarning(UserWarning):
 
 def checked_index(argument: str, value: object, count: int, what: str) -> int:
     """``value`` as an index of one of ``count`` ``what`` (0 … count − 1), or a TypeError /
-    OptionError naming ``argument``, the value and what is expected. A negative index is
+    ArgumentError naming ``argument``, the value and what is expected. A negative index is
     refused, as the command line refuses ``--variants -1``: it would pick from the end."""
     import numbers
 
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise TypeError(f"{argument} must be an integer index of the {count} {what}, got {value!r}")
-    if not 0 <= value < count:
-        raise OptionError(argument, f"{value} is not one of the {count} {what} (0 to {count - 1})")
+    if not 0 <= int(value) < count:
+        raise ArgumentError(argument, f"{value} is not one of the {count} {what} (0 to {count - 1})")
     return int(value)

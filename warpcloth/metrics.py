@@ -53,7 +53,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 
 TIME_TOLERANCE_S = 1e-9
 """Sample times written with 10 digits still count as inside a comparison window."""
@@ -183,7 +183,7 @@ def _refine(t: np.ndarray, x: np.ndarray, j: int, half_period: float, decay: flo
     half_width = np.sqrt(2 * TURNING_WINDOW) / np.pi * half_period
     omega = np.pi / half_period if half_period > 0 else 0.0
 
-    def shape(s: np.ndarray) -> np.ndarray:
+    def shape(s: np.ndarray | float) -> np.ndarray | float:
         return s**2 - (2 * decay / 3) * s**3 - (omega**2 / 12) * s**4
 
     centre = t[j]
@@ -217,7 +217,7 @@ def swing_summary(t: np.ndarray, laser: np.ndarray, tip: np.ndarray | None = Non
     misses the laser line in more than a tenth of the samples; ``"signal"`` says which."""
     laser = np.asarray(laser, dtype=float)
     use_laser = tip is None or np.isfinite(laser).sum() > 0.9 * len(laser)
-    metrics = swing_metrics(t, laser if use_laser else tip, starts_at_rest, noise)
+    metrics = swing_metrics(t, laser if use_laser or tip is None else tip, starts_at_rest, noise)
     return {"signal": "laser_x" if use_laser else "tip_x"} | metrics
 
 
@@ -253,26 +253,26 @@ def comparison_window(spans: dict[str, tuple[float, float]], t_from: float | Non
                       t_to: float | None = None) -> tuple[float, float]:
     """The window (s) on which records of these ``spans`` (name → first, last sample time)
     are compared: ``--from``/``--to`` where given, else the overlap of every record. A
-    window that reaches outside any record, or is empty, is an :class:`OptionError`
+    window that reaches outside any record, or is empty, is an :class:`ArgumentError`
     naming the option and its value."""
     start_name = max(spans, key=lambda name: spans[name][0])
     end_name = min(spans, key=lambda name: spans[name][1])
     start, end = spans[start_name][0], spans[end_name][1]
     if t_from is not None and t_from < start - TIME_TOLERANCE_S:
-        raise OptionError("--from", f"{t_from:g} s is before the start of {start_name} ({start:g} s): the window must "
-                          "lie inside every record compared")
+        raise ArgumentError("t_from", f"{t_from:g} s is before the start of {start_name} ({start:g} s): the window "
+                            "must lie inside every record compared")
     if t_to is not None and t_to > end + TIME_TOLERANCE_S:
-        raise OptionError("--to", f"{t_to:g} s is after the end of {end_name} ({end:g} s): the window must lie inside "
-                          "every record compared")
+        raise ArgumentError("t_to", f"{t_to:g} s is after the end of {end_name} ({end:g} s): the window must lie "
+                            "inside every record compared")
     lower = start if t_from is None else t_from
     upper = end if t_to is None else t_to
     if not lower < upper:
         if t_from is not None:
-            raise OptionError("--from", f"{t_from:g} s is not before the window's end {upper:g} s "
+            raise ArgumentError("t_from", f"{t_from:g} s is not before the window's end {upper:g} s "
                               + ("(--to)" if t_to is not None else f"(the end of {end_name})"))
         if t_to is not None:
-            raise OptionError("--to", f"{t_to:g} s is not after the window's start {lower:g} s (the start of "
+            raise ArgumentError("t_to", f"{t_to:g} s is not after the window's start {lower:g} s (the start of "
                               f"{start_name})")
-        raise OptionError("INPUT", f"the records do not overlap in time: {end_name} ends at {end:g} s, before "
+        raise ArgumentError("spans", f"the records do not overlap in time: {end_name} ends at {end:g} s, before "
                           f"{start_name} starts at {start:g} s")
     return float(lower), float(upper)

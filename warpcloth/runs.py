@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from .errors import OptionError
+from .errors import ArgumentError
 from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
 from .scene import COORDINATES, Scene, build_batch, load_scene
@@ -53,7 +54,7 @@ def simulate(
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
     scenes = shared_auto_step(scenes)
     if initial_velocities is not None and initial_positions is None:
-        raise OptionError("initial_velocities", "given without initial_positions; give the start's positions too "
+        raise ArgumentError("initial_velocities", "given without initial_positions; give the start's positions too "
                           "(e.g. the rest shape, warpcloth.scene.rest_positions)")
     for argument, value in (("initial_positions", initial_positions), ("initial_velocities", initial_velocities)):
         if value is not None:
@@ -76,7 +77,7 @@ def simulate(
                           threads=threads)
 
 
-def run(scene: str | Path | Scene, overrides: Overrides = (), **kwargs: object) -> RunResult:
+def run(scene: str | Path | Scene, overrides: Overrides = (), **kwargs: Any) -> RunResult:
     """Load a scene (path or bundled name), apply overrides, simulate it.
 
     ``overrides`` are ``"key=value"`` strings or a mapping ``{"damping.gamma_per_s": 0.5}``

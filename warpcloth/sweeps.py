@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.io.writing import claim_result
 from warpcloth.kernels import PROBE_FIELDS
@@ -118,7 +118,7 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
                                 starts_at_rest=scenes[local].release.enabled)
         metrics.pop("signal")
         report = diverged.get(local)
-        row = {"variant": variant, "batch": batch}
+        row: dict[str, object] = {"variant": variant, "batch": batch}
         row |= {key: (json.dumps(v) if isinstance(v, list) else v) for key, v in assignments[local].items()}
         row |= metrics
         row |= {
@@ -131,7 +131,7 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
             "diverged_quantity": report.quantity if report else "",
         }
         if result.reversal_memory:  # reversals a full masing memory could not store (no hysteresis in their loops)
-            row["reversal_overflows"] = int(result.reversal_memory["overflows"][local])
+            row["reversal_overflows"] = int(np.asarray(result.reversal_memory["overflows"])[local])
         rows.append(row)
     SweepDirectory(out_dir).write_batch(batch, {k: np.concatenate(v) for k, v in columns.items()}, rows,
                                         result.frames if frames else None)
@@ -171,22 +171,22 @@ def run_sweep(
     tasks on that running cluster instead. Results do not depend on either.
     """
     if workers is not None and workers < 0:
-        raise OptionError("--workers", f"must be ≥ 0 (0 runs the batches in this process), got {workers}")
+        raise ArgumentError("workers", f"must be ≥ 0 (0 runs the batches in this process), got {workers}")
     cores = os.cpu_count() or 1
     if workers is not None and workers > MAX_WORKERS_PER_CORE * cores:
-        raise OptionError("--workers", f"{workers} threads on {cores} cores would only wait on each other "
+        raise ArgumentError("workers", f"{workers} threads on {cores} cores would only wait on each other "
                           f"(at most {MAX_WORKERS_PER_CORE * cores}); a cluster is reached with --scheduler")
     if scheduler is not None and not re.match(r"^(\w+://)?[\w.\-\[\]:]+:\d+$", scheduler):
-        raise OptionError("--scheduler", f"{scheduler!r} is not a scheduler address (host:port or "
+        raise ArgumentError("scheduler", f"{scheduler!r} is not a scheduler address (host:port or "
                           "tcp://host:port)")
     if max_batch is not None and max_batch < 1:
-        raise OptionError("--max-batch", f"must be ≥ 1, got {max_batch}")
+        raise ArgumentError("max_batch", f"must be ≥ 1, got {max_batch}")
     out = Path(out)
     if out.is_dir() and any(out.iterdir()) and not (out / "sweep.json").is_file():
         # resuming is for the same sweep only; a run or other files are never mixed into
         held = "a run" if (out / "meta.json").is_file() else "files that are not a sweep"
-        raise OptionError("--out", f"{out} already holds {held}; choose another --out")
-    claim_result(out, "--out")  # two sweeps into one directory never write it at once
+        raise ArgumentError("out", f"{out} already holds {held}; choose another --out")
+    claim_result(out, argument="out")  # two sweeps into one directory never write it at once
     directory = SweepDirectory(out)
     n_workers = (os.cpu_count() or 1) if workers is None else workers
     if max_batch is None:

@@ -69,7 +69,7 @@ def swing_records(source: str | Path, starts_at_rest: bool = True) -> list[Swing
             records.append(SwingRecord(str(path), int(variant), probes["t"].to_numpy(), probes["laser_x"].to_numpy(),
                                        probes["tip_x"].to_numpy(), recording.scenes[j].release.enabled, False))
         return records
-    measured = read_measurement(bundled_data(source), flag="INPUT")
+    measured = read_measurement(bundled_data(source), argument="source")
     if not isinstance(measured, LaserTrace):
         raise DataFileError(str(source), "holds tracked shapes; analyse needs a displacement trace (t_s, x_mm)")
     return [SwingRecord(str(source), None, measured.t, measured.x, None, starts_at_rest, True)]

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 
 from .noise import difference_noise, poor_fit_ratio
 
@@ -261,17 +261,17 @@ def fit_clamp_motion(t: np.ndarray, theta: np.ndarray, forms: tuple[str, ...] = 
     theta = np.asarray(theta, dtype=float)
     needed = MIN_REST + 3 * MIN_PER_PIECE
     if len(t) < needed:
-        raise OptionError("ENCODER", f"{len(t)} samples are too few for rest, a quartic, a line and a stop; "
+        raise ArgumentError("t", f"{len(t)} samples are too few for rest, a quartic, a line and a stop; "
                           f"give at least {needed}")
     if np.ptp(theta) <= 0:
-        raise OptionError("ENCODER", "the angle never changes: there is no clamp motion to fit")
+        raise ArgumentError("theta", "the angle never changes: there is no clamp motion to fit")
     n = len(t)
     origin, scale = t[0], t[-1] - t[0]
     unit_t = (t - origin) / scale  # the search works on the record scaled to [0, 1]
     found = {}
     unknown = [form for form in forms if form not in FORMS]
     if unknown or not forms:
-        raise OptionError("forms", f"{unknown[0] if unknown else 'none'!r} is not a clamp-motion form; the forms are "
+        raise ArgumentError("forms", f"{unknown[0] if unknown else 'none'!r} is not a clamp-motion form; the forms are "
                           + ", ".join(FORMS))
     for form in forms:
         lines, stops, rest_first = FORMS[form]
@@ -287,7 +287,7 @@ def fit_clamp_motion(t: np.ndarray, theta: np.ndarray, forms: tuple[str, ...] = 
         bic = n * math.log(max(cost, 1e-300) / n) + k * math.log(n)
         found[form] = (bic, cost, point, x, rest, lines, stops)
     if not found:
-        raise OptionError("ENCODER", "no form fits: every candidate leaves a piece with fewer than "
+        raise ArgumentError("theta", "no form fits: every candidate leaves a piece with fewer than "
                           f"{MIN_PER_PIECE} samples")
     form = min(found, key=lambda f: found[f][0])
     bic, cost, point, x, rest, lines, stops = found[form]

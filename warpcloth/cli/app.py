@@ -17,6 +17,7 @@ import warnings
 from collections.abc import Sequence
 
 from warpcloth.errors import (
+    ArgumentError,
     DataFileError,
     DivergenceError,
     OptionError,
@@ -28,6 +29,7 @@ from warpcloth.errors import (
 from warpcloth.sim.model import init_warp_quietly
 
 from . import analyse, fit, material, run, scene, sweep, view
+from .flags import as_option
 from .interrupt import EXIT_INTERRUPTED, interrupted_at_start
 
 COMMAND_GROUPS = (run, sweep, view, fit, material, analyse, scene)
@@ -110,6 +112,8 @@ def _run_handler(args: argparse.Namespace) -> int:
         print(f"warpcloth {args.command}: {exc}", file=sys.stderr)
         return EXIT_DIVERGED
     except WarpclothError as exc:
+        if isinstance(exc, ArgumentError):
+            exc = as_option(exc)  # the library names its argument; the user typed an option
         what = next((text for kind, text in WHAT if isinstance(exc, kind)), "error")
         print(f"warpcloth {args.command}: {what}: {exc}", file=sys.stderr)
         return EXIT_UNUSABLE_INPUT

@@ -83,7 +83,7 @@ def fit_command(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene, [o for o in args.overrides if not o.strip().startswith("sweep.")])
     base = apply_overrides(read_scene_file(args.scene), args.overrides)
     base.pop("sweep", None)
-    measurement = read_measurement(args.measured)
+    measurement = read_measurement(args.measured, argument="--measured")
     free = free_parameters(args.free, scene, args.bounds)
     out = new_result(args.out or Path("runs") / f"fit-{Path(args.scene).stem}", args.overwrite, "--out")
     fit = fit_motion(base, measurement, free, align_start_s=args.align_start, space_filling=args.space_filling,
@@ -134,7 +134,7 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
     until = load_scene(args.scene).run.duration_s  # a bad field is named with its file and line
     out = new_result(args.output, args.overwrite, "-o")
     plot = figure_path(args.plot, args.overwrite) if args.plot else None
-    t, theta = read_encoder(args.encoder, args.angle_unit)
+    t, theta = read_encoder(args.encoder, args.angle_unit, argument="ENCODER")
     fit = fit_clamp_motion(t, theta)
     raw = read_scene_file(args.scene)
     data = scene_with_clamp_motion(raw, fit, until_s=until)

@@ -136,7 +136,7 @@ def _compare_shear(args: argparse.Namespace) -> int:
     if args.plot or args.csv:
         raise OptionError("--plot" if args.plot else "--csv", "the comparison figure and table are of bending "
                           "loops; with --shear the comparison is printed")
-    loop = kes.read_shear_csv(args.shear, flag="--shear")
+    loop = kes.read_shear_csv(args.shear, argument="--shear")
     fits = {law: kes.fit_shear(loop, law) for law in BENDING_LAWS}
     best = min(f.law_fit.aic() for f in fits.values())
     ranking = sorted(fits, key=lambda law: (fits[law].law_fit.aic(), fits[law].law_fit.free_parameters))
@@ -162,7 +162,7 @@ def _compare(args: argparse.Namespace) -> int:
     table = new_result(args.csv, args.overwrite, "--csv") if args.csv else None
     if table is not None and (table.suffix.lower() != ".csv" or table.is_dir()):
         raise OptionError("--csv", f"{table} must be a file ending in .csv")
-    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, flag="--bending"))
+    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, argument="--bending"))
     _print_comparison(comparison, args.bending)
     if plot is not None:
         from warpcloth.viz.plots import plot_bending_law_comparison
@@ -197,9 +197,9 @@ def _fit_kes(args: argparse.Namespace) -> int:
     if not max_strain > 0:
         raise OptionError("--divergence-strain", f"must be > 0, got {max_strain:g}")
     gauge = kes.KES_FB1_GAUGE_MM if args.gauge_length_mm is None else args.gauge_length_mm
-    tensile = kes.read_tensile_csv(args.tensile, args.strain_unit, gauge, flag="--tensile")
-    shear = kes.fit_shear(kes.read_shear_csv(args.shear, flag="--shear"), args.shear_law) if args.shear else None
-    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, flag="--bending"), laws)
+    tensile = kes.read_tensile_csv(args.tensile, args.strain_unit, gauge, argument="--tensile")
+    shear = kes.fit_shear(kes.read_shear_csv(args.shear, argument="--shear"), args.shear_law) if args.shear else None
+    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, argument="--bending"), laws)
     law = comparison.recommended
     fit = kes.fit_kes(tensile, comparison.loop, max_strain, bending_fit=comparison.fits[law])
     chosen = f"; bending law {law}, the lowest AIC of {', '.join(laws)}" if len(laws) > 1 else ""

@@ -8,7 +8,7 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError, OptionError
 
 EXIT_FIT_STATUS = {"converged": 0, "at_bound": 4, "poor_fit": 6, "not_identifiable": 7, "failed": 8,
                    "spacing_limited": 9}
@@ -22,8 +22,8 @@ def device(value: str) -> str:
 
     try:
         machine_device(value)
-    except OptionError as exc:
-        raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[1]) from None
+    except ArgumentError as exc:
+        raise argparse.ArgumentTypeError(exc.message) from None
     return value
 
 

@@ -35,6 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run_sweep_command(args: argparse.Namespace) -> int:
     """Expand the sweep, run its missing batches, report the summary."""
+    from warpcloth.io.writing import claim_result
     from warpcloth.scene.sweep import MAX_VARIANTS, load_sweep
     from warpcloth.sweeps import run_sweep
 
@@ -52,6 +53,8 @@ def run_sweep_command(args: argparse.Namespace) -> int:
             print(choose_step(requesting_auto(chosen)).describe()
                   .replace("auto:", f"auto, for the {len(chosen)} {scheme} variants:" if len(groups) > 1
                            else f"auto, for all {len(chosen)} variants:", 1))
+    # claimed as --out here, so a sweep another process is writing is refused naming the option
+    claim_result(out, "--out")
     summary = run_sweep(sweep, out, max_batch=args.max_batch, workers=args.workers, scheduler=args.scheduler,
                         device=args.device, frames=args.frames, progress=not args.no_progress)
     n_div = int(summary["diverged"].sum())

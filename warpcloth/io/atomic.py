@@ -58,7 +58,7 @@ def write_npy_atomically(path: str | Path, array: object) -> Path:
     return write_atomically(path, save)
 
 
-def write_files_atomically(directory: str | Path, writers: dict[str, Callable[[Path], None]]) -> list[Path]:
+def write_files_atomically(directory: str | Path, writers: dict[str, Callable[[Path], object]]) -> list[Path]:
     """Write several files of one result: every file is prepared under its temporary name
     before any is renamed into place, so a failure while preparing leaves the old set."""
     directory = Path(directory)

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from warpcloth.errors import DataFileError, OptionError
+from warpcloth.errors import ArgumentError, DataFileError
 
 WHITESPACE = " "
 """The delimiter value that stands for runs of whitespace (spaces and tabs mixed)."""
@@ -115,21 +115,22 @@ def _content(lines: list[str]) -> list[tuple[int, str]]:
 
 
 def read_csv(path: str | Path, columns: int | None = None, *, what: str = "data",
-             names: Sequence[str] | None = None, extra_columns: bool = False, flag: str | None = None) -> Table:
+             names: Sequence[str] | None = None, extra_columns: bool = False, argument: str | None = None) -> Table:
     """Read a table of numbers from a CSV-like file (or a bundled example by name).
 
     ``columns``: how many columns every row has (None: as many as the first data row);
     with ``extra_columns`` a row may have more, and they are ignored. ``what`` names the
     kind of file and ``names`` its columns in messages. A file that cannot be read is an
-    OptionError of ``flag`` when an option supplied it, else a DataFileError; anything
+    ArgumentError of ``argument`` when one supplied it (the caller's name for ``path``),
+    else a DataFileError; anything
     wrong inside the file is a DataFileError naming the file and the line.
     """
     path = bundled_data(path)
     try:
         lines = read_text(path).splitlines()
     except OSError as exc:
-        if flag is not None:
-            raise OptionError(flag, f"cannot read the {what} file {path}: {exc.strerror}") from None
+        if argument is not None:
+            raise ArgumentError(argument, f"cannot read the {what} file {path}: {exc.strerror}") from None
         raise DataFileError(path, f"cannot read the {what} file: {exc.strerror}") from None
     content = _content(lines)
     header = header_line = header_text = None

@@ -22,7 +22,8 @@ whatever is in brackets at the end of a name is its unit, and so is what follows
 underscore unless that is a name word (``laser_x``, ``x_tip``: :data:`NAME_WORDS`). Columns beyond those a form has
 are ignored. Anything wrong in a file is a
 DataFileError naming the file (and the line, where one is to blame); a file that cannot
-be read at all is an OptionError of the option (``flag``) that named it.
+be read at all is an ArgumentError of the argument that named it (``argument``: the
+caller's name for the path, ``path`` by default).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from warpcloth import units
-from warpcloth.errors import DataFileError, OptionError
+from warpcloth.errors import ArgumentError, DataFileError
 from warpcloth.units import check_plausible
 
 from .csv import Table, bundled_data, read_csv, read_text
@@ -47,11 +48,11 @@ _SHAPES = ("frame", "t_s", "s_mm", "x_mm", "y_mm")
 _ENCODER = ("t_s", "theta")
 
 
-def read_table(path: str | Path, n_columns: int | None, what: str, flag: str,
+def read_table(path: str | Path, n_columns: int | None, what: str, argument: str,
                names: tuple[str, ...] | None = None) -> Table:
     """At least two rows of ``n_columns`` numbers (None: as many as the first data row
     has; more are ignored) from a measured-data file or a bundled example by name."""
-    table = read_csv(path, n_columns, what=what, names=names, extra_columns=True, flag=flag)
+    table = read_csv(path, n_columns, what=what, names=names, extra_columns=True, argument=argument)
     if len(table.values) < 2:
         columns = f" ({', '.join(names)})" if names else ""
         raise DataFileError(table.path, f"expected at least two rows of {what}{columns}, got {len(table.values)}")
@@ -152,9 +153,9 @@ class TrackedShapes:
     y: np.ndarray  # m
 
 
-def read_laser_trace(path: str | Path, flag: str = "--measured") -> LaserTrace:
+def read_laser_trace(path: str | Path, argument: str = "path") -> LaserTrace:
     """Read ``t (s), x (mm)``."""
-    return _laser_trace(read_table(path, 2, "laser trace", flag, _LASER))
+    return _laser_trace(read_table(path, 2, "laser trace", argument, _LASER))
 
 
 def _laser_trace(table: Table) -> LaserTrace:
@@ -165,10 +166,10 @@ def _laser_trace(table: Table) -> LaserTrace:
     return LaserTrace(data[:, 0], data[:, 1])
 
 
-def read_tracked_shapes(path: str | Path, flag: str = "--measured") -> TrackedShapes:
+def read_tracked_shapes(path: str | Path, argument: str = "path") -> TrackedShapes:
     """Read ``frame, t (s), s (mm), x (mm), y (mm)``, ordered by frame with later
     frames at later times."""
-    return _tracked_shapes(read_table(path, 5, "tracked shapes", flag, _SHAPES))
+    return _tracked_shapes(read_table(path, 5, "tracked shapes", argument, _SHAPES))
 
 
 def _tracked_shapes(table: Table) -> TrackedShapes:
@@ -209,12 +210,12 @@ def is_angle_column(table: Table, column: int) -> bool:
 
 
 def read_encoder(path: str | Path, angle_unit: str | None = None,
-                 flag: str = "ENCODER") -> tuple[np.ndarray, np.ndarray]:
+                 argument: str = "path") -> tuple[np.ndarray, np.ndarray]:
     """Read a clamp encoder series ``t (s), theta``; returns (t, θ in rad). The angle
     unit comes from ``angle_unit`` ("rad" or "deg"), else from the header, else rad."""
     if angle_unit not in (None, "rad", "deg"):
-        raise OptionError("--angle-unit", f"must be rad or deg, got {angle_unit!r}")
-    trace = _clamp_angle(read_table(path, 2, "encoder", flag, _ENCODER), angle_unit)
+        raise ArgumentError("angle_unit", f"must be rad or deg, got {angle_unit!r}")
+    trace = _clamp_angle(read_table(path, 2, "encoder", argument, _ENCODER), angle_unit)
     return trace.t, trace.theta
 
 
@@ -227,19 +228,19 @@ def _clamp_angle(table: Table, angle_unit: str | None = None) -> ClampAngleTrace
     else:
         said = (stated_unit(table.header[1]) or "").lower() if table.header and len(table.header) > 1 else ""
         if said in units.MEASURED_UNITS["angle"] and said != angle_unit:
-            raise OptionError("--angle-unit", f"{angle_unit} contradicts the header of {table.path}, whose column 2 "
+            raise ArgumentError("angle_unit", f"{angle_unit} contradicts the header of {table.path}, whose column 2 "
                               f"is {table.header[1]!r}; drop --angle-unit or fix the header")
         data[:, 1] = table.values[:, 1] * units.MEASURED_UNITS["angle"][angle_unit]
     return ClampAngleTrace(data[:, 0], data[:, 1])
 
 
-def read_measurement(path: str | Path, flag: str = "--measured",
+def read_measurement(path: str | Path, argument: str = "path",
                      encoder: bool = False) -> LaserTrace | TrackedShapes | ClampAngleTrace:
     """A laser trace (2 columns), tracked shapes (5 columns), told apart by the column
     count, or, with ``encoder``, a clamp encoder (2 columns, the second headed as an angle:
     :func:`is_angle_column`). An encoder where none is expected is refused: read as a
     laser trace its angles would pass for millimetres."""
-    table = read_table(path, None, "measured motion", flag)
+    table = read_table(path, None, "measured motion", argument)
     n = table.values.shape[1]
     if n == 2 and is_angle_column(table, 1):
         if encoder:

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from warpcloth.errors import DataFileError, OptionError, checked_index
+from warpcloth.errors import ArgumentError, DataFileError, checked_index
 from warpcloth.scene import COORDINATES, Scene, batch_fields, choice_fields, rest_positions
 from warpcloth.sim.runner import checked_probe
 
@@ -63,7 +63,7 @@ class Recording:
         times = np.atleast_1d(np.asarray(times, dtype=float))
         late = times[(times < self.frame_times[0] - 1e-9) | (times > self.frame_times[-1] + 1e-9)]
         if len(late):
-            raise OptionError("--times", f"{late[0]:g} s is outside the recording "
+            raise ArgumentError("times", f"{late[0]:g} s is outside the recording "
                              f"({self.frame_times[0]:g} to {self.frame_times[-1]:g} s)")
         return np.abs(self.frame_times[None, :] - times[:, None]).argmin(axis=1)
 
@@ -146,19 +146,19 @@ def parse_variants(text: str | int | Sequence[int] | None, n_variants: int) -> n
         parts = [int(p) if p else None for p in text.split(":")] if ":" in text else None
         chosen = None if parts else np.array([int(p) for p in text.split(",")])
     except ValueError:
-        raise OptionError("--variants", f"{text!r} is not a variant number, list (1,4,9) or range (0:50)") from None
+        raise ArgumentError("variants", f"{text!r} is not a variant number, list (1,4,9) or range (0:50)") from None
     if parts is not None:
         if len(parts) > 3 or any(p is not None and p < 0 for p in parts) or parts[2:3] == [0]:
-            raise OptionError("--variants", f"{text!r}: a range is START:STOP[:STEP] of numbers ≥ 0 (a step > 0); "
+            raise ArgumentError("variants", f"{text!r}: a range is START:STOP[:STEP] of numbers ≥ 0 (a step > 0); "
                               "it never counts from the end")
         chosen = np.arange(n_variants)[slice(*parts)]
     if len(chosen) == 0:
-        raise OptionError("--variants", f"{text!r} selects no variant of {n_variants}")
+        raise ArgumentError("variants", f"{text!r} selects no variant of {n_variants}")
     if len(np.unique(chosen)) != len(chosen):
-        raise OptionError("--variants", f"{text!r} names a variant twice")
+        raise ArgumentError("variants", f"{text!r} names a variant twice")
     bad = chosen[(chosen < 0) | (chosen >= n_variants)]
     if len(bad):
-        raise OptionError("--variants", f"variant {bad[0]} does not exist (there are {n_variants})")
+        raise ArgumentError("variants", f"variant {bad[0]} does not exist (there are {n_variants})")
     return chosen
 
 
@@ -172,15 +172,15 @@ def filter_variants(parameters: pd.DataFrame, where: str) -> np.ndarray:
     for clause in where.split(","):
         match = _FILTER.match(clause)
         if not match:
-            raise OptionError("--where", f"{clause.strip()!r} is not 'field OP value' (e.g. damping.gamma_per_s<0.5)")
+            raise ArgumentError("where", f"{clause.strip()!r} is not 'field OP value' (e.g. damping.gamma_per_s<0.5)")
         name, op, value = match.groups()
         if name not in parameters:
-            raise OptionError("--where", f"{name!r} is not a parameter of these variants; "
+            raise ArgumentError("where", f"{name!r} is not a parameter of these variants; "
                              f"known: {', '.join(c for c in parameters.columns if c != 'variant')}")
         column = parameters[name]
         if not pd.api.types.is_numeric_dtype(column):  # a choice, e.g. material.bending_law==dahl
             if op not in ("==", "!="):
-                raise OptionError("--where", f"{name} is a choice ({', '.join(sorted(set(column)))}): compare it "
+                raise ArgumentError("where", f"{name} is a choice ({', '.join(sorted(set(column)))}): compare it "
                                   f"with == or !=, not {op}")
             same = (column == value.strip("\"'")).to_numpy()
             keep &= same if op == "==" else ~same
@@ -188,12 +188,12 @@ def filter_variants(parameters: pd.DataFrame, where: str) -> np.ndarray:
         try:
             number = float(value)
         except ValueError:
-            raise OptionError("--where", f"{value!r} in {clause.strip()!r} is not a number") from None
+            raise ArgumentError("where", f"{value!r} in {clause.strip()!r} is not a number") from None
         keep &= {"<": column < number, "<=": column <= number, ">": column > number, ">=": column >= number,
                  "==": column == number, "!=": column != number}[op].to_numpy()
     chosen = parameters["variant"].to_numpy()[keep]
     if len(chosen) == 0:
-        raise OptionError("--where", f"{where!r} matches no variant")
+        raise ArgumentError("where", f"{where!r} matches no variant")
     return chosen
 
 

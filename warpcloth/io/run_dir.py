@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 import tomli_w
 
-from warpcloth.errors import DataFileError, OptionError
+from warpcloth.errors import ArgumentError, DataFileError
 from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 from warpcloth.scene import COORDINATES, Scene, read_scene_file, scene_from_dict
 from warpcloth.sim.resources import check_disk
@@ -69,19 +69,19 @@ def check_output_directory(out_dir: str | Path, overwrite: bool = False) -> None
     """Refuse an output directory that already holds something, unless ``overwrite``.
 
     An existing result is never replaced silently: without ``overwrite`` a non-empty
-    directory is an OptionError of ``--out``; with it, :class:`RunWriter` writes the new
+    directory is an ArgumentError of ``out``; with it, :class:`RunWriter` writes the new
     run aside and swaps it in only once complete.
     """
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        raise OptionError("--out", f"{out} is a file, not a run directory")
+        raise ArgumentError("out", f"{out} is a file, not a run directory")
     if out.is_dir() and any(out.iterdir()):
         what = "a run" if (out / "meta.json").is_file() else "a sweep" if (out / "sweep.json").is_file() else "files"
         if not overwrite:
-            raise OptionError("--out", f"{out} already holds {what}; choose another --out, or pass --overwrite "
+            raise ArgumentError("out", f"{out} already holds {what}; choose another --out, or pass --overwrite "
                               "(the old one is replaced only once the new run is complete)")
         if what != "a run":
-            raise OptionError("--out", f"{out} holds {what} that are not a warpcloth run; --overwrite replaces only "
+            raise ArgumentError("out", f"{out} holds {what} that are not a warpcloth run; --overwrite replaces only "
                               "a run directory, never other files: choose another --out")
 
 
@@ -100,7 +100,7 @@ class RunWriter:
         self.target = Path(out_dir).absolute()
         writer = live_writer(self.target / WRITING)
         if writer is not None:
-            raise OptionError("--out", f"{out_dir} is being written by another warpcloth process (pid {writer}); "
+            raise ArgumentError("out", f"{out_dir} is being written by another warpcloth process (pid {writer}); "
                               "wait for it, or choose another --out")
         replacing = self.target.is_dir() and any(self.target.iterdir())
         self.dir = self.target.with_name(f".{self.target.name}.new-{os.getpid()}") if replacing else self.target
@@ -116,12 +116,12 @@ class RunWriter:
         # the same moment finds the marker and stops instead of interleaving its rows.
         writer = hold(self.dir / WRITING)
         if writer is not None:
-            raise OptionError("--out", f"{self.target} is being written by another warpcloth process (pid {writer}); "
+            raise ArgumentError("out", f"{self.target} is being written by another warpcloth process (pid {writer}); "
                               "choose another --out")
         if any(p.name != WRITING for p in self.dir.iterdir()):
             # another writer finished here between the emptiness check and the marker
             release(self.dir / WRITING)
-            raise OptionError("--out", f"{self.target} already holds a run (written meanwhile by another process); "
+            raise ArgumentError("out", f"{self.target} already holds a run (written meanwhile by another process); "
                               "choose another --out, or pass --overwrite")
         if len(scenes) == 1:
             write_scene(self.dir / "scene.toml", scenes[0])

@@ -34,7 +34,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from warpcloth.errors import DataFileError, OptionError
+from warpcloth.errors import ArgumentError, DataFileError
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.scene import COORDINATES, Sweep, expand
 from warpcloth.scene.sweep import samples_latin_hypercube, variant_scenes
@@ -106,7 +106,7 @@ class SweepDirectory:
                 why = ("was written by an older warpcloth (sweep format 1), whose Latin hypercube drew other "
                        "variants from the same seed" if _older_sample(stored) else
                        "holds a different sweep (its scenes or sweep spec changed)")
-                raise OptionError("--out", f"{self.path} {why}; choose a new --out directory to start this one")
+                raise ArgumentError("out", f"{self.path} {why}; choose a new --out directory to start this one")
             return stored["batches"]
         batches = plan()
         for sub in ("summary", "probes", "frames"):

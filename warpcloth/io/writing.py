@@ -17,7 +17,7 @@ import fcntl
 import os
 from pathlib import Path
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 
 WRITING = ".writing"
 """Marker of a run directory a process is streaming into (left behind by a killed one)."""
@@ -98,16 +98,17 @@ def release(marker: str | Path) -> None:
         os.close(fd)
 
 
-def claim_result(result: str | Path, option: str) -> None:
-    """Hold ``result``'s marker until this process ends, or refuse ``option`` naming the
-    running process that writes ``result`` (see the module docstring)."""
+def claim_result(result: str | Path, argument: str) -> None:
+    """Hold ``result``'s marker until this process ends, or refuse ``argument`` (the
+    caller's name for ``result``) naming the running process that writes ``result`` (see
+    the module docstring)."""
     marker = marker_of(result)
     if not marker.parent.is_dir():
         marker.parent.mkdir(parents=True, exist_ok=True)
     writer = hold(marker)
     if writer is not None:
-        raise OptionError(option, f"{result} is being written by another warpcloth process (pid {writer}); wait for "
-                          f"it, or choose another {option}")
+        raise ArgumentError(argument, f"{result} is being written by another warpcloth process (pid {writer}); "
+                            f"wait for it, or choose another {argument}")
     _CLAIMED.add(marker)
     atexit.register(release, marker)
 

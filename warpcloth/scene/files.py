@@ -6,7 +6,7 @@ import importlib.resources
 from pathlib import Path
 from typing import Any
 
-from warpcloth.errors import DataFileError, OptionError, SceneError
+from warpcloth.errors import ArgumentError, DataFileError, SceneError
 
 from .locate import located
 from .materials import MATERIAL_FILE_KEY, with_material_file
@@ -67,7 +67,7 @@ def scene_source(name_or_path: str | Path) -> tuple[str, str]:
         return read_toml_text(path), str(path)
     resource = importlib.resources.files("warpcloth.scenes") / f"{path.name}.toml"
     if not resource.is_file():
-        raise OptionError("SCENE", f"no bundled scene {str(name_or_path)!r} (bundled: "
+        raise ArgumentError("name_or_path", f"no bundled scene {str(name_or_path)!r} (bundled: "
                          f"{', '.join(bundled_scenes())}; a scene file is a path ending in .toml)")
     return resource.read_text(), f"bundled scene {path.name}"
 

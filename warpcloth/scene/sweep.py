@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from warpcloth.errors import OptionError, SceneError
+from warpcloth.errors import ArgumentError, SceneError
 from warpcloth.sim.resources import check_memory
 
 from .files import read_scene_file, scene_from_dict, scene_source
@@ -78,7 +78,7 @@ class Sweep:
     def batches(self, max_batch: int) -> list[list[int]]:
         """Variant indices per batch: grouped by batch-level fields, at most max_batch each."""
         if max_batch < 1:
-            raise OptionError("--max-batch", f"must be ≥ 1, got {max_batch}")
+            raise ArgumentError("max_batch", f"must be ≥ 1, got {max_batch}")
         names = batch_fields()
         groups: dict[str, list[int]] = {}
         for i, scene in enumerate(self.scenes):
@@ -231,7 +231,7 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     # Python integers, counted before anything is drawn or expanded
     n_variants = math.prod(len(v) for v in grid.values()) * max(lengths or {1}) * random.samples
     if n_variants > max_variants:
-        raise OptionError("--max-variants", f"the sweep has {n_variants} variants, more than {max_variants}; each "
+        raise ArgumentError("max_variants", f"the sweep has {n_variants} variants, more than {max_variants}; each "
                           "is a validated scene in memory (~1 ms and a few kB apiece): split it into several "
                           "sweeps, or raise --max-variants (Python: max_variants=)")
     check_memory(n_variants * VARIANT_BYTES, f"the sweep's {n_variants} variant scenes",

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import warp as wp
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 from warpcloth.kernels import bending_law, structs
 from warpcloth.kernels import precision as precision_types
 
@@ -59,14 +59,14 @@ def init_warp_quietly(verbose: bool = False) -> None:
 
 
 def machine_device(device: str | None) -> wp.context.Device:
-    """The Warp device ``device`` names (None: the default), or an OptionError naming the
+    """The Warp device ``device`` names (None: the default), or an ArgumentError naming the
     devices this machine has (a GPU asked for on a machine without one)."""
     init_warp_quietly()  # scripts are as quiet as the CLI, unless Warp was started before
     try:
         return wp.get_device(device)
     except (RuntimeError, ValueError) as exc:
         known = ", ".join(d.alias for d in wp.get_devices())
-        raise OptionError("--device", f"{device!r} is not a device of this machine ({exc}); it has: {known}") \
+        raise ArgumentError("device", f"{device!r} is not a device of this machine ({exc}); it has: {known}") \
             from None
 
 class Model:

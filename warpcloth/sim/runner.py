@@ -14,7 +14,7 @@ import pandas as pd
 import warp as wp
 from tqdm import tqdm
 
-from warpcloth.errors import DivergenceError, OptionError, checked_index
+from warpcloth.errors import ArgumentError, DivergenceError, checked_index
 from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, STATUS_BUDGET, STATUS_NONFINITE_ENERGY
 
 from .control import Control
@@ -164,9 +164,9 @@ def reversal_memory_warning(report: dict[str, object]) -> str | None:
 
 
 def checked_probe(name: object) -> str:
-    """``name`` if it is a recorded probe, else an OptionError listing them."""
+    """``name`` if it is a recorded probe, else an ArgumentError listing them."""
     if not isinstance(name, str) or name not in PROBE_INDEX:
-        raise OptionError("name", f"{name!r} is not a probe; the probes are {', '.join(PROBE_FIELDS)}")
+        raise ArgumentError("name", f"{name!r} is not a probe; the probes are {', '.join(PROBE_FIELDS)}")
     return name
 
 

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import warp as wp
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 from warpcloth.kernels import hinge_kernels
 
 if TYPE_CHECKING:
@@ -29,7 +29,7 @@ def allocate_reversal_memory(struct_type: type, capacity: int, n_hinges: int, n_
 
 def checked_nodes(argument: str, value: object, n_nodes: int, n_strips: int) -> np.ndarray:
     """``value`` as a float array ``[node, strip, xy]`` of ``n_nodes`` × ``n_strips`` × 2
-    finite numbers, or a TypeError / OptionError naming ``argument``, what it got and what
+    finite numbers, or a TypeError / ArgumentError naming ``argument``, what it got and what
     is expected (a NaN start would otherwise read as a divergence of the run)."""
     expected = (n_nodes, n_strips, 2)
     try:
@@ -38,11 +38,11 @@ def checked_nodes(argument: str, value: object, n_nodes: int, n_strips: int) -> 
         raise TypeError(f"{argument} must be an array of numbers [node, strip, xy] of shape {expected}, got "
                         f"{type(value).__name__}") from None
     if array.shape != expected:
-        raise OptionError(argument, f"has shape {array.shape}; expected {expected} ([node, strip, xy]: "
+        raise ArgumentError(argument, f"has shape {array.shape}; expected {expected} ([node, strip, xy]: "
                           f"{n_nodes} nodes, {n_strips} strip(s), x and y)")
     if not np.isfinite(array).all():
         node, strip, axis = np.argwhere(~np.isfinite(array))[0]
-        raise OptionError(argument, f"[{node}, {strip}, {axis}] is {array[node, strip, axis]}; every value must be "
+        raise ArgumentError(argument, f"[{node}, {strip}, {axis}] is {array[node, strip, axis]}; every value must be "
                           "finite")
     return array
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import imageio.v3 as imageio
 import numpy as np
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 from warpcloth.io.atomic import write_atomically
 from warpcloth.io.recording import Recording
 
@@ -25,7 +25,14 @@ if not os.environ.get("DISPLAY"):
 
 import pyvista as pv  # noqa: E402
 
-from warpcloth.viz.geometry import BOX_QUADS, clamp_box, colour_values, ribbon_quads, ribbon_vertices, variant_colours  # noqa: E402
+from warpcloth.viz.geometry import (  # noqa: E402
+    BOX_QUADS,
+    clamp_box,
+    colour_values,
+    ribbon_quads,
+    ribbon_vertices,
+    variant_colours,
+)
 
 WINDOW = (960, 720)
 CAMERA_AZIMUTH_DEG = 25.0  # about the vertical, from the +z side
@@ -106,10 +113,10 @@ class StripRenderer:
             try:
                 import imageio_ffmpeg  # noqa: F401
             except ImportError:
-                raise OptionError("--movie", "MP4 needs the imageio-ffmpeg package (pip install imageio-ffmpeg); "
+                raise ArgumentError("movie", "MP4 needs the imageio-ffmpeg package (pip install imageio-ffmpeg); "
                                  "a .gif needs nothing more") from None
         elif path.suffix != ".gif":
-            raise OptionError("--movie", f"{path} must end in .gif or .mp4")
+            raise ArgumentError("movie", f"{path} must end in .gif or .mp4")
 
         def write(tmp: Path) -> None:
             if tmp.suffix == ".gif":
@@ -148,7 +155,7 @@ def render_run(recording: Recording, out_dir: str | Path, *, times: np.ndarray |
     """PNGs of the frames at ``times`` (default: six spread over the run) and, unless
     ``movie`` is None, an animation of every ``stride``-th frame at real speed."""
     if stride > len(recording.frame_times):
-        raise OptionError("--stride", f"{stride} is more than the {len(recording.frame_times)} frames recorded")
+        raise ArgumentError("stride", f"{stride} is more than the {len(recording.frame_times)} frames recorded")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     if times is None:

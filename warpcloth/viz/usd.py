@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdUtils, Vt
 
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 from warpcloth.io.provenance import provenance
 from warpcloth.io.recording import Recording
 from warpcloth.viz.geometry import (
@@ -49,11 +49,12 @@ CLIP_POINTS = 2_000_000  # node positions per layer above which frames go to val
 USD_SUFFIXES = (".usd", ".usda", ".usdc")
 
 
-def check_stage_path(path: str | Path, option: str = "-o") -> Path:
-    """``path`` as a Path if it names a USD stage file, else an OptionError of ``option``."""
+def check_stage_path(path: str | Path, argument: str = "out_file") -> Path:
+    """``path`` as a Path if it names a USD stage file, else an ArgumentError of
+    ``argument`` (the caller's name for ``path``)."""
     out = Path(path)
     if out.suffix not in USD_SUFFIXES:
-        raise OptionError(option, f"{out} must end in one of {', '.join(USD_SUFFIXES)}")
+        raise ArgumentError(argument, f"{out} must end in one of {', '.join(USD_SUFFIXES)}")
     return out
 
 
@@ -209,13 +210,13 @@ def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = Fal
     """
     out = check_stage_path(out_file)
     if ribbon and len(recording.variants) > PRIM_PER_STRIP_LIMIT:
-        raise OptionError("--ribbon", f"ribbons are written per variant; select at most {PRIM_PER_STRIP_LIMIT} "
+        raise ArgumentError("ribbon", f"ribbons are written per variant; select at most {PRIM_PER_STRIP_LIMIT} "
                          f"of the {len(recording.variants)} variants (--variants, --where)")
     n_frames, n_variants, n_nodes = recording.frames.shape[:3]
     if frames_per_clip is None and n_frames * n_variants * n_nodes > CLIP_POINTS:
         frames_per_clip = max(1, CLIP_POINTS // (n_variants * n_nodes))
     if frames_per_clip is not None and frames_per_clip < 1:
-        raise OptionError("--frames-per-clip", f"{frames_per_clip} must be at least 1")
+        raise ArgumentError("frames_per_clip", f"{frames_per_clip} must be at least 1")
     out.parent.mkdir(parents=True, exist_ok=True)
     fps = recording.frame_rate
     with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.stem}.") as tmp, usd_write_errors(out):

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from warpcloth import units
-from warpcloth.errors import OptionError
+from warpcloth.errors import ArgumentError
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
 from warpcloth.kernels.law import BendingLaw
 from warpcloth.scene import to_si
@@ -63,21 +63,21 @@ LIKELIHOOD_RATIO_95 = 3.841
 """The 95 % point of χ² with one degree of freedom: dahl (n free) against tagawa2003 (n = 1)."""
 
 
-def law_fitter(name: str) -> LawFitter:
-    """The fitter of the bending law ``name``; an OptionError (``--law``) names the known ones."""
-    if name not in LAW_FITTERS:
-        raise OptionError("--law", f"unknown bending law {name!r}; known: {', '.join(LAW_FITTERS)}")
-    return LAW_FITTERS[name]
+def law_fitter(law: str) -> LawFitter:
+    """The fitter of the bending law ``law``; an ArgumentError of ``law`` names the known ones."""
+    if law not in LAW_FITTERS:
+        raise ArgumentError("law", f"unknown bending law {law!r}; known: {', '.join(LAW_FITTERS)}")
+    return LAW_FITTERS[law]
 
 
-def selected_laws(value: str) -> list[str]:
-    """The laws ``--law VALUE`` asks for: one by name, or every one for ``all``."""
-    if value == ALL_LAWS:
+def selected_laws(law: str) -> list[str]:
+    """The laws ``law`` (``--law``) asks for: one by name, or every one for ``all``."""
+    if law == ALL_LAWS:
         return list(LAW_FITTERS)
-    if value not in LAW_FITTERS:
-        raise OptionError("--law", f"unknown bending law {value!r}; known: {', '.join(LAW_FITTERS)}, or "
+    if law not in LAW_FITTERS:
+        raise ArgumentError("law", f"unknown bending law {law!r}; known: {', '.join(LAW_FITTERS)}, or "
                           f"{ALL_LAWS} (fit every one and compare them)")
-    return [value]
+    return [law]
 
 
 def reproduced_kes_values(fits: list[BendingFit], k0_per_cm: float,

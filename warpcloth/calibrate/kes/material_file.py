@@ -9,7 +9,7 @@ from pathlib import Path
 
 import tomli_w
 
-from warpcloth.errors import DataFileError, OptionError
+from warpcloth.errors import ArgumentError, DataFileError
 from warpcloth.io.atomic import write_text_atomically
 from warpcloth.scene import MaterialSection, material_fields, parse_shear, validate_material
 from warpcloth.units import check_plausible
@@ -24,7 +24,7 @@ def material_file_data(fit: KesFit, name: str, density_g_per_cm2: float, source:
     """The TOML data of a material file for a fit, checked usable up to ``max_strain``;
     with ``shear``, its ``[shear]`` table too (docs/model.md §17.1)."""
     if not (math.isfinite(density_g_per_cm2) and density_g_per_cm2 > 0):
-        raise OptionError("--density-g-per-cm2", f"must be a positive mass per area in g/cm², got "
+        raise ArgumentError("density_g_per_cm2", f"must be a positive mass per area in g/cm², got "
                           f"{density_g_per_cm2!r}")
     check_plausible("areal density", density_g_per_cm2, "--density-g-per-cm2")
     material = fit.material(name, density_g_per_cm2)

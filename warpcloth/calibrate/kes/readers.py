@@ -23,7 +23,7 @@ loop does not determine how a law treats inner loops, and such a record does (§
 The files are read by :func:`warpcloth.io.csv.read_csv` (the one reader of instrument
 files: delimiter, decimal commas, header, comments). Anything wrong with the data is a
 DataFileError naming the file (or the arrays' source) and, where one is to blame, the
-line; ``--strain-unit`` and ``--gauge-length-mm`` values are OptionErrors.
+line; bad ``strain_unit`` and ``gauge_length_mm`` values are ArgumentErrors.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from warpcloth import units
-from warpcloth.errors import DataFileError, OptionError
+from warpcloth.errors import ArgumentError, DataFileError
 from warpcloth.io.csv import WHITESPACE, Table, read_csv
 from warpcloth.units import check_plausible
 
@@ -158,9 +158,9 @@ def _tokens(name: str) -> list[str]:
     return re.findall(r"[a-z0-9]+", text)
 
 
-def _read_columns(path: str | Path, what: str, names: tuple[str, str], flag: str | None) -> Table:
+def _read_columns(path: str | Path, what: str, names: tuple[str, str], argument: str | None) -> Table:
     # Two numeric columns (see warpcloth.io.csv); a header, if any, of two names.
-    table = read_csv(path, 2, what=what, names=names, flag=flag)
+    table = read_csv(path, 2, what=what, names=names, argument=argument)
     if table.header is not None and len(table.header) != 2:
         spaces = " (with whitespace separation a name cannot contain spaces)" if table.delimiter == WHITESPACE else ""
         raise DataFileError(table.path, f"the header {table.header_text!r} has {len(table.header)} column names, "
@@ -180,20 +180,20 @@ def _check_name(path: str | Path, line: int | None, column: int, name: str, word
 
 
 def read_tensile_csv(path: str | Path, strain_unit: str | None = None,
-                     gauge_length_mm: float = KES_FB1_GAUGE_MM, *, flag: str | None = None) -> TensileLoop:
+                     gauge_length_mm: float = KES_FB1_GAUGE_MM, *, argument: str | None = None) -> TensileLoop:
     """Read a KES-FB1 loop: columns strain (%, fraction) or extension (mm), force per width (gf/cm).
 
-    ``path`` may also name a bundled example (``kes_fb1_example``); ``flag`` is the
-    option that named the file, if one did (it is blamed when the file cannot be read).
+    ``path`` may also name a bundled example (``kes_fb1_example``); ``argument`` is the
+    caller's name for the path, if it wants one blamed (it is blamed when the file cannot be read).
 
     The first column's unit: the header's when it says, else ``strain_unit`` (percent,
     fraction, mm), else percent when its maximum exceeds 1 and a fraction otherwise.
     """
     if strain_unit is not None and strain_unit not in STRAIN_UNITS:
-        raise OptionError("--strain-unit", f"must be one of {', '.join(STRAIN_UNITS)}; got {strain_unit!r}")
+        raise ArgumentError("strain_unit", f"must be one of {', '.join(STRAIN_UNITS)}; got {strain_unit!r}")
     if not (math.isfinite(gauge_length_mm) and gauge_length_mm > 0):
-        raise OptionError("--gauge-length-mm", f"must be a positive length in mm, got {gauge_length_mm!r}")
-    table = _read_columns(path, "KES-FB1 tensile", ("strain", "force"), flag)
+        raise ArgumentError("gauge_length_mm", f"must be a positive length in mm, got {gauge_length_mm!r}")
+    table = _read_columns(path, "KES-FB1 tensile", ("strain", "force"), argument)
     header, values, rows, line = table.header, table.values, table.lines, table.header_line
     unit = strain_unit
     if header is not None:
@@ -227,13 +227,13 @@ def read_tensile_csv(path: str | Path, strain_unit: str | None = None,
     return dataclasses.replace(loop, strain_unit=f"{described} ({how})")
 
 
-def read_bending_csv(path: str | Path, *, flag: str | None = None) -> BendingLoop:
+def read_bending_csv(path: str | Path, *, argument: str | None = None) -> BendingLoop:
     """Read a KES-FB2 loop: columns curvature (1/cm) and moment per width (gf·cm/cm).
 
-    ``path`` may also name a bundled example (``kes_fb2_example``); ``flag`` is the
-    option that named the file, if one did.
+    ``path`` may also name a bundled example (``kes_fb2_example``); ``argument`` is the
+    caller's name for the path, if it wants one blamed.
     """
-    table = _read_columns(path, "KES-FB2 bending", ("curvature", "moment"), flag)
+    table = _read_columns(path, "KES-FB2 bending", ("curvature", "moment"), argument)
     header, values, line = table.header, table.values, table.header_line
     if header is not None:
         _check_name(path, line, 1, header[0], _BENDING_NAMES[0], [{"cm"}, {"1", "cm"}],
@@ -243,14 +243,14 @@ def read_bending_csv(path: str | Path, *, flag: str | None = None) -> BendingLoo
     return bending_loop(values[:, 0], values[:, 1], source=str(path), rows=table.lines)
 
 
-def read_shear_csv(path: str | Path, *, flag: str | None = None) -> ShearLoop:
+def read_shear_csv(path: str | Path, *, argument: str | None = None) -> ShearLoop:
     """Read a KES-FB1 shear loop: columns shear angle (degree) and shear force per width (gf/cm).
 
-    ``path`` may also name a bundled example (``kes_fb1_shear_example``); ``flag`` is the
-    option that named the file, if one did. A header that gives the angle in radians is
-    refused rather than read as degrees.
+    ``path`` may also name a bundled example (``kes_fb1_shear_example``); ``argument`` is
+    the caller's name for the path, if it wants one blamed. A header that gives the angle
+    in radians is refused rather than read as degrees.
     """
-    table = _read_columns(path, "KES-FB1 shear", ("angle", "force"), flag)
+    table = _read_columns(path, "KES-FB1 shear", ("angle", "force"), argument)
     header, values, line = table.header, table.values, table.header_line
     if header is not None:
         _check_name(path, line, 1, header[0], _SHEAR_NAMES[0], [{"deg"}, {"degree"}, {"degrees"}],

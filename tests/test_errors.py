@@ -1,0 +1,96 @@
+"""The library names its own arguments; the command line names its options (issue 25)."""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+import warpcloth as wc
+from warpcloth.cli.app import main
+from warpcloth.cli.flags import FLAGS, LIBRARY_ONLY, as_option, flag_of
+from warpcloth.errors import ArgumentError, OptionError
+
+PACKAGE = Path(wc.__file__).parent
+NAMING = ("ArgumentError", "OptionError", "checked_index")
+"""Calls whose first argument is the name an error blames."""
+
+
+def test_a_library_caller_reads_the_argument_it_wrote(tmp_path):
+    sweep = wc.expand({"run": {"duration_s": 0.01}, "sweep": {"grid": {"damping.gamma_per_s": [0.1, 0.2]}}})
+    with pytest.raises(ArgumentError, match=r"^workers: must be ≥ 0 \(0 runs the batches in this process\), got -1$"):
+        wc.run_sweep(sweep, tmp_path / "s", workers=-1)
+    with pytest.raises(ArgumentError, match="^max_batch: must be ≥ 1, got 0$") as raised:
+        wc.run_sweep(sweep, tmp_path / "s", max_batch=0)
+    assert not isinstance(raised.value, OptionError) and raised.value.argument == "max_batch"
+    assert not (tmp_path / "s").exists()
+
+
+def test_the_command_line_names_the_option_with_the_same_message(capsys):
+    # analyse(source, t_from=...) refuses t_from; `warpcloth analyse INPUT --from` says --from
+    assert main(["analyse", "damped_swing_laser", "--from", "100"]) == 2
+    assert capsys.readouterr().err == ("warpcloth analyse: error in option: --from: 100 s is not before the "
+                                       "window's end 1.5 s (the end of damped_swing_laser)\n")
+    assert main(["analyse", "no_such_laser"]) == 2
+    assert "error in option: INPUT: cannot read the measured motion file no_such_laser" in capsys.readouterr().err
+    converted = as_option(ArgumentError("t_from", "1 s is not before the window's end"))
+    assert (type(converted), str(converted)) == (OptionError, "--from: 1 s is not before the window's end")
+    own = OptionError("--csv", "exists")
+    assert as_option(own) is own and flag_of("--out") == "--out"
+
+
+def _named_arguments() -> dict[str, list[str]]:
+    # Every name the library (all but cli/) can blame, with where: the first argument of
+    # the calls in NAMING, an `argument=` keyword, the default of a parameter `argument`,
+    # and the first items of a loop `for argument, ... in (("name", ...), ...)`.
+    found: dict[str, list[str]] = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        if "cli" in path.relative_to(PACKAGE).parts:
+            continue
+        tree = ast.parse(path.read_text())
+        where = str(path.relative_to(PACKAGE.parent))
+        for node in ast.walk(tree):
+            names: list[ast.expr] = []
+            if isinstance(node, ast.Call):
+                func = node.func
+                called = func.id if isinstance(func, ast.Name) else getattr(func, "attr", None)
+                if called in NAMING and node.args:
+                    names.append(node.args[0])
+                names += [k.value for k in node.keywords if k.arg == "argument"]
+            elif isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                args = node.args.args + node.args.kwonlyargs
+                defaults = [None] * (len(node.args.args) - len(node.args.defaults)) + node.args.defaults
+                defaults += node.args.kw_defaults
+                names += [d for a, d in zip(args, defaults, strict=True) if a.arg == "argument" and d is not None]
+            elif (isinstance(node, ast.For) and isinstance(node.target, ast.Tuple)
+                  and getattr(node.target.elts[0], "id", None) == "argument" and isinstance(node.iter, ast.Tuple)):
+                names += [item.elts[0] for item in node.iter.elts if isinstance(item, ast.Tuple)]
+            for name in names:
+                if isinstance(name, ast.Constant) and name.value is None:
+                    continue  # no name given: the error is of another kind (a DataFileError)
+                if isinstance(name, ast.Constant) and isinstance(name.value, str):
+                    found.setdefault(name.value, []).append(f"{where}:{name.lineno}")
+                elif not (isinstance(name, ast.Name) and name.id == "argument"):
+                    # a name computed some other way cannot be checked here
+                    found.setdefault(ast.unparse(name), []).append(f"{where}:{name.lineno} (not a literal)")
+    return found
+
+
+def test_every_argument_the_library_names_has_an_option_or_is_library_only():
+    found = _named_arguments()
+    assert {"variants", "workers", "t_from", "name_or_path", "out"} <= set(found)  # the scan sees the library
+    unmapped = {name: where for name, where in found.items()
+                if name not in FLAGS and name not in LIBRARY_ONLY and not name.startswith("--")}
+    assert unmapped == {}
+    assert not set(FLAGS) & LIBRARY_ONLY
+    assert set(FLAGS) | LIBRARY_ONLY <= set(found), "a mapping for an argument nothing names"
+
+
+def test_only_the_command_line_raises_option_errors():
+    raised = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        inside = path.relative_to(PACKAGE).parts
+        if inside[0] == "cli":
+            continue
+        raised += [f"{path.name}:{node.lineno}" for node in ast.walk(ast.parse(path.read_text()))
+                   if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "OptionError"]
+    assert raised == []

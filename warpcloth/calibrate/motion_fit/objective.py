@@ -1,0 +1,178 @@
+"""What a motion fit minimises: the residuals of simulated against measured motion (the
+laser-line displacement, or tracked marker positions) for batches of parameter points,
+each batch one launch of the strip kernel."""
+
+from __future__ import annotations
+
+import copy
+import itertools
+
+import numpy as np
+
+from warpcloth.errors import ArgumentError
+from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.runs import simulate
+from warpcloth.scene import scene_from_dict, set_field
+from warpcloth.scene.step import AUTO, choose_step
+from warpcloth.sim import RunResult
+
+from .parameters import FreeParameter
+
+MAX_STEP_CORNERS_FREE = 10
+"""With ``integrator.dt_s = "auto"`` a fit chooses its one step over the 2^d corners of its
+box: at most this many free parameters (1024 scenes, a few seconds)."""
+
+SHIFT = "time_shift_s"
+"""The name of the fitted start-time offset δ (simulated time = measured + δ)."""
+
+
+class Objective:
+    """Residuals of simulated against measured motion for batches of parameter points.
+
+    A point is ``u`` in the unit box (one coordinate per free parameter) plus, when
+    the start time is aligned, the clock offset δ (s): simulated time = measured + δ.
+    """
+
+    def __init__(self, base: dict, measurement: LaserTrace | TrackedShapes, free: list[FreeParameter],
+                 align_start_s: float = 0.0, device: str | None = None) -> None:
+        self.measurement = measurement
+        self.free = free
+        self.align = float(align_start_s)
+        self.device = device
+        self.base = copy.deepcopy(base)
+        self.base.pop("sweep", None)
+        scene = scene_from_dict(copy.deepcopy(self.base))
+        span = float(measurement.t[-1] - measurement.t[0])
+        if self.align > span:
+            raise ArgumentError("align_start_s", f"{self.align:g} s is longer than the measured record ({span:g} s)")
+        t_end = float(measurement.t[-1]) + self.align
+        if measurement.t[0] + self.align < 0:
+            raise ArgumentError("measurement", f"measured times start at {measurement.t[0]:g} s, before the scene's "
+                              "t = 0 (release or clamp start) even with the allowed --align-start; shift them")
+        set_field(self.base, "run.duration_s", t_end + scene.output_interval)
+        if isinstance(measurement, TrackedShapes):
+            # Shapes are compared at the probe rate, so the time alignment interpolates
+            # between samples 1/600 s apart instead of video frames.
+            set_field(self.base, "output.frame_rate_hz", scene.output.frame_rate_hz * scene.output.probes_per_frame)
+            set_field(self.base, "output.probes_per_frame", 1)
+        self._choose_step()
+        self.scene = scene_from_dict(copy.deepcopy(self.base))
+        if isinstance(measurement, TrackedShapes):
+            free_length = self.scene.strip.free_length_mm * 1e-3
+            beyond = measurement.s > free_length * (1 + 1e-9)
+            if beyond.any():
+                raise ArgumentError("measurement", f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond "
+                                  f"the free end ({free_length * 1e3:g} mm below the clamp's lowest point); s is the "
+                                  "arc length from the clamp's lowest point, not from the clamp's top")
+        self.shift_step = 0.5 * self.scene.output_interval
+        self.launches = 0
+        self.variants = 0
+
+    def _choose_step(self) -> None:
+        # dt_s = "auto": one step for every candidate (a batch shares it), the one that
+        # suits every corner of the box: the step bounds move with D, D1, α and density
+        if self.base.get("integrator", {}).get("dt_s") != AUTO:
+            return
+        if len(self.free) > MAX_STEP_CORNERS_FREE:
+            raise ArgumentError("free", f"integrator.dt_s = auto checks every corner of the box, 2^{len(self.free)} "
+                              f"scenes for {len(self.free)} free parameters (at most {MAX_STEP_CORNERS_FREE}); "
+                              "give integrator.dt_s a number")
+        corners = [scene_from_dict(self.scene_data(np.array(c, dtype=float)), choose_step=False)
+                   for c in itertools.product((0.0, 1.0), repeat=len(self.free))]
+        set_field(self.base, "integrator.dt_s", choose_step(corners).dt_s)
+        set_field(self.base, "integrator.dt_chosen_by", AUTO)
+
+    @property
+    def names(self) -> list[str]:
+        """The fitted quantities: the free fields, then the clock offset when aligning."""
+        return [p.field for p in self.free] + ([SHIFT] if self.align else [])
+
+    @property
+    def ranges(self) -> np.ndarray:
+        """Each fitted quantity's length of the unit box's side (1 for the clock offset):
+        ∂r/∂(field value) is ∂r/∂u divided by it."""
+        return np.array([p.upper - p.lower for p in self.free] + ([1.0] if self.align else []))
+
+    def box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The lower and upper corner of the search's points: the unit box, then the allowed
+        clock offsets when aligning."""
+        d = len(self.free)
+        lower, upper = np.zeros(d), np.ones(d)
+        if self.align:
+            lower, upper = np.append(lower, -self.align), np.append(upper, self.align)
+        return lower, upper
+
+    def shift_of(self, q: np.ndarray) -> float:
+        """The clock offset of a search point (0 when not aligning)."""
+        d = len(self.free)
+        return float(q[d]) if len(q) > d else 0.0
+
+    def values(self, u: np.ndarray) -> dict[str, float]:
+        """Physical values (the scene fields) of a unit-box point."""
+        return {p.field: p.lower + float(x) * (p.upper - p.lower) for p, x in zip(self.free, u, strict=False)}
+
+    def scene_data(self, u: np.ndarray) -> dict:
+        """Raw scene data of a point (the duration and output rate set for fitting)."""
+        data = copy.deepcopy(self.base)
+        for name, value in self.values(u).items():
+            set_field(data, name, value)
+        return data
+
+    def run(self, points: np.ndarray) -> RunResult:
+        """Simulate every point (rows) in one batch."""
+        scenes = [scene_from_dict(self.scene_data(u)) for u in points]
+        self.launches += 1
+        self.variants += len(points)
+        return simulate(scenes, device=self.device, on_divergence="record",
+                        keep_frames=isinstance(self.measurement, TrackedShapes))
+
+    def residuals(self, result: RunResult, j: int, shift: float, penalise: bool = True) -> np.ndarray:
+        """Simulated minus measured, SI, for variant j of a result at clock offset δ.
+
+        Where the simulation has no value (the strip misses the laser line, or diverged)
+        the residual is a penalty that steers the search away, or NaN with
+        ``penalise=False`` (for reporting)."""
+        m = self.measurement
+        t = m.t + shift
+        if isinstance(m, LaserTrace):
+            sim = np.interp(t, result.t, result.probe("laser_x", j))
+            # Where the strip misses the laser line the signal is undefined: count the
+            # whole measured swing as missed there, so the search moves away.
+            return np.where(np.isfinite(sim) | (not penalise), sim - m.x, np.ptp(m.x))
+        if result.frames is None:
+            raise ValueError("tracked markers are compared with the run's frames: run it with keep_frames=True")
+        frames = result.frames[:, j]  # [time, node, xy], from the clamp's lowest point like the markers
+        nc = self.scene.n_clamped
+        arc = m.s / self.scene.spacing + (nc - 1)  # fractional node index of each marker
+        node = np.clip(np.floor(arc).astype(int), 0, self.scene.n_nodes - 2)
+        w_node = (arc - node)[:, None]
+        ft = result.frame_times
+        k = np.clip(np.searchsorted(ft, t) - 1, 0, len(ft) - 2)
+        w_time = ((t - ft[k]) / (ft[k + 1] - ft[k])).clip(0, 1)[:, None]
+
+        def at(frame: np.ndarray) -> np.ndarray:
+            return frame[np.arange(len(node)), node] * (1 - w_node) + frame[np.arange(len(node)), node + 1] * w_node
+
+        sim = at(frames[k]) * (1 - w_time) + at(frames[k + 1]) * w_time
+        diff = sim - np.column_stack([m.x, m.y])
+        missing = 0.1 if penalise else np.nan  # a diverged strip: 10 cm per coordinate
+        return np.where(np.isfinite(diff), diff, missing).ravel()
+
+    def best_shift(self, result: RunResult, j: int) -> float:
+        """The clock offset minimising the RMS for variant j (a scan; 0 when not aligning)."""
+        if not self.align:
+            return 0.0
+        shifts = np.linspace(-self.align, self.align, 81)
+        costs = [np.mean(self.residuals(result, j, d) ** 2) for d in shifts]
+        return float(shifts[int(np.argmin(costs))])
+
+    def jacobian(self, result: RunResult, stencil: list[tuple[int, int, float]], centre: int,
+                 shift: float) -> np.ndarray:
+        """Columns ∂r/∂u_i from stencil pairs (plus, minus, Δu), and ∂r/∂δ by re-sampling."""
+        columns = [(self.residuals(result, plus, shift) - self.residuals(result, minus, shift)) / du
+                   for plus, minus, du in stencil]
+        if self.align:
+            h = self.shift_step
+            columns.append((self.residuals(result, centre, shift + h) - self.residuals(result, centre, shift - h))
+                           / (2 * h))
+        return np.column_stack(columns)

@@ -1,0 +1,137 @@
+"""What a motion fit reports: :class:`FitResult` (values, σ, verdict, how the search went)
+and the files :func:`write_fit` writes."""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.scene import scene_from_dict, set_field
+from warpcloth.scene.step import AUTO
+
+from . import lm
+from .objective import SHIFT, Objective
+from .verdict import judge
+
+
+@dataclass
+class FitResult:
+    """Best parameters, their uncertainty, and how the search went."""
+
+    parameters: dict[str, float]
+    sigma: dict[str, float]
+    correlation: list[list[float]]
+    rms: float
+    shift_s: float
+    n_residuals: int
+    launches: int
+    variants: int
+    wall_time_s: float
+    history: list[dict] = field(default_factory=list)
+    converged: bool = False  # the search met its convergence test (not the iteration limit)
+    at_bound: list[str] = field(default_factory=list)  # fields within 0.1 % of the range of a bound
+    bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+    sigma_bootstrap: dict[str, float] = field(default_factory=dict)  # block bootstrap (``bootstrap`` > 0)
+    other_minima: list[dict] = field(default_factory=list)  # separate basins of the space-filling stage, not refined
+    bootstrap_block: int = 0  # residuals per bootstrap block
+    noise: float = float("nan")  # measurement noise σ the RMS is judged against, SI
+    noise_source: str = ""
+    status: str = "failed"
+    problems: list[str] = field(default_factory=list)  # why the status is not "converged"
+    mesh_note: str = ""  # why the values hold at the fitted spacing only (a law whose answers depend on h)
+    spacing_check: dict = field(default_factory=dict)  # check_spacing: the fit's move at h/2 (:func:`spacing_shift`)
+    dt_s: float = float("nan")  # the step every run of the fit took (one per batch)
+
+    def to_json(self) -> dict:
+        """The verdict, each parameter with its 1σ and bounds, and how the search went;
+        lengths in mm, names with their units."""
+        return {
+            "status": self.status,
+            "problems": self.problems,
+            "mesh_note": self.mesh_note,
+            "spacing_check": self.spacing_check,
+            "rms_mm": self.rms * 1e3,
+            "noise_mm": self.noise * 1e3,
+            "noise_source": self.noise_source,
+            "parameters": {name: {"value": value, "sigma": self.sigma[name], "at_bound": name in self.at_bound,
+                                  "bounds": list(self.bounds.get(name, ()))}
+                           | ({"sigma_bootstrap": self.sigma_bootstrap[name]} if self.sigma_bootstrap else {})
+                           for name, value in self.parameters.items()},
+            "bootstrap_block": self.bootstrap_block,
+            "other_minima": self.other_minima,
+            "correlation": {"names": list(self.parameters), "matrix": self.correlation},
+            "n_residuals": self.n_residuals,
+            "search_converged": self.converged,
+            "launches": self.launches,
+            "variants": self.variants,
+            "wall_time_s": self.wall_time_s,
+            "history": self.history,
+        }
+
+    def judge(self, missing: int) -> None:
+        """Set :attr:`status` and :attr:`problems` (``missing``: measured points the best
+        run has no value for; :func:`warpcloth.calibrate.motion_fit.verdict.judge`)."""
+        self.status, self.problems = judge(self, missing)
+
+
+def summarise(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarray, residual: np.ndarray,
+              history: list[dict], converged: bool, wall: float) -> FitResult:
+    """The fit at point ``u`` (clock offset ``shift``) with its Jacobian and residuals
+    there: the values, their Gauss–Newton σ and correlation, the RMS, how the search went."""
+    sigma, correlation = lm.sigma_and_correlation(lm.covariance(jac / objective.ranges, residual))
+    values = objective.values(u) | ({SHIFT: shift} if objective.align else {})
+    return FitResult(values, dict(zip(objective.names, sigma.tolist(), strict=True)), correlation.tolist(),
+                     float(np.sqrt(np.mean(residual**2))), shift, len(residual), objective.launches,
+                     objective.variants, wall, history, converged)
+
+
+def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | TrackedShapes, out: str | Path,
+              device: str | None = None, inputs: dict | None = None) -> list[Path]:
+    """Write the fit: ``best.toml`` (reruns the best fit with the scene's own duration and
+    output), ``fit.json`` (with ``inputs``, e.g. the measured file and its checksum, the
+    seed, and the provenance), ``history.csv``, ``residuals.csv`` and ``overlay.png``.
+
+    The best fit is rerun and every file prepared under a temporary name before any is
+    renamed into place, so a failure leaves no mixture of old and new files."""
+    import pandas as pd
+    import tomli_w
+
+    from warpcloth.io.atomic import write_files_atomically
+    from warpcloth.io.provenance import provenance
+    from warpcloth.viz.plots import plot_fit_overlay
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    best = copy.deepcopy(objective_base)
+    best.pop("sweep", None)
+    for name, value in fit.parameters.items():
+        if name != SHIFT:
+            set_field(best, name, value)
+    if best.get("integrator", {}).get("dt_s") == AUTO and math.isfinite(fit.dt_s):
+        set_field(best, "integrator.dt_s", fit.dt_s)  # the box's step, which the RMS was measured at
+        set_field(best, "integrator.dt_chosen_by", AUTO)
+    scene = scene_from_dict(copy.deepcopy(best))
+    objective = Objective(best, measurement, [], abs(fit.shift_s), device)
+    result = objective.run(np.zeros((1, 0)))
+    residual = objective.residuals(result, 0, fit.shift_s, penalise=False)
+    if isinstance(measurement, LaserTrace):
+        table = pd.DataFrame({"t_s": measurement.t, "measured_x_mm": measurement.x * 1e3,
+                              "simulated_x_mm": (measurement.x + residual) * 1e3, "residual_mm": residual * 1e3})
+    else:
+        r = residual.reshape(-1, 2)
+        table = pd.DataFrame({"frame": measurement.frame, "t_s": measurement.t, "s_mm": measurement.s * 1e3,
+                              "residual_x_mm": r[:, 0] * 1e3, "residual_y_mm": r[:, 1] * 1e3})
+    return write_files_atomically(out, {
+        "best.toml": lambda p: p.write_text(tomli_w.dumps(scene.to_dict())),
+        "fit.json": lambda p: p.write_text(json.dumps(fit.to_json() | {"inputs": inputs or {},
+                                                                        "provenance": provenance(device)}, indent=1)),
+        "history.csv": lambda p: pd.DataFrame(fit.history).to_csv(p, index=False),
+        "residuals.csv": lambda p: table.to_csv(p, index=False),
+        "overlay.png": lambda p: plot_fit_overlay(result, objective, measurement, fit, p),
+    })

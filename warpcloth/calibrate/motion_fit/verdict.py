@@ -1,0 +1,199 @@
+"""What a motion fit's result may be read as: its status (:data:`STATUSES`), the
+parameters that ended on a bound, the noise its RMS is judged against, whether the strip's
+spacing limits it (:func:`spacing_shift`), and, before any fit, what experiments can
+determine at all (:func:`weighted_jacobian`, :func:`identifiability`)."""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.kernels import bending_law
+from warpcloth.scene import scene_from_dict, set_field
+from warpcloth.scene.step import AUTO, stable_step_of
+
+from ..noise import difference_noise, poor_fit_ratio
+from . import lm
+from .objective import Objective
+from .parameters import FreeParameter, free_parameters, initial_point
+
+if TYPE_CHECKING:
+    from .report import FitResult
+
+STATUSES = ("converged", "spacing_limited", "at_bound", "poor_fit", "not_identifiable", "failed")
+"""Verdicts of a fit, from the only one that is a fit to the worst (see the package docstring)."""
+AT_BOUND = 1e-3  # a parameter this close to a bound, as a fraction of its range, ended on it
+NOT_IDENTIFIABLE_CORRELATION = 0.95
+
+
+def ended_at_bound(free: list[FreeParameter], u: np.ndarray) -> list[str]:
+    """The fields of the unit-box point ``u`` within :data:`AT_BOUND` of a bound: the
+    optimum lies beyond, so the value is not an estimate and its σ from the local Jacobian
+    means nothing."""
+    return [p.field for p, ui in zip(free, u, strict=True) if min(ui, 1.0 - ui) <= AT_BOUND]
+
+
+def judged_noise(measurement: LaserTrace | TrackedShapes, noise: float | None) -> tuple[float, str]:
+    """The noise σ (m) a fit's RMS is judged against, and where it comes from: ``noise``
+    if given, else estimated from the measurement (:func:`measurement_noise`)."""
+    if noise is None:
+        return measurement_noise(measurement), "estimated from the data's 4th differences"
+    return float(noise), "given"
+
+
+def judge(fit: FitResult, missing: int) -> tuple[str, list[str]]:
+    """The status of ``fit`` and its problems (``missing``: measured points the best run
+    has no value for). Problems are listed in order of precedence and the status is the
+    first's: a result that is not an estimate (failed, at_bound) before one whose
+    parameters are not separated or whose model does not fit, and the iteration limit
+    last (a fit at a bound that also ran out of iterations is reported at_bound)."""
+    names = list(fit.parameters)
+    corr = np.asarray(fit.correlation, dtype=float)
+    found: list[tuple[str, str]] = []
+    if missing or not math.isfinite(fit.rms):
+        found.append(("failed", f"the best run has no value for {missing} of the {fit.n_residuals} measured "
+                                "points (the strip misses the laser line or diverged)" if missing
+                      else f"the RMS is {fit.rms}"))
+    for name in fit.at_bound:
+        low, high = fit.bounds[name]
+        found.append(("at_bound", f"{name} = {fit.parameters[name]:.6g} ended on a bound ({low:g}:{high:g}); "
+                                  "the optimum lies outside, so it is not an estimate: widen --bounds or fix "
+                                  "the model"))
+    if not all(math.isfinite(v) for v in fit.sigma.values()):
+        found.append(("not_identifiable", "the Jacobian is singular: some parameter does not change the fit"))
+    for i in range(len(names)):
+        for j in range(i):
+            if abs(corr[i, j]) > NOT_IDENTIFIABLE_CORRELATION:
+                found.append(("not_identifiable", f"{names[i]} and {names[j]} are correlated {corr[i, j]:+.3f}: "
+                                                  "the data do not separate them; fix one, or measure what "
+                                                  "distinguishes them"))
+    ratio = poor_fit_ratio(fit.rms, fit.noise)
+    if ratio is not None:
+        found.append(("poor_fit", f"the RMS {fit.rms * 1e3:.4g} mm is {ratio:.1f}× the "
+                                  f"measurement noise {fit.noise * 1e3:.3g} mm ({fit.noise_source}): the "
+                                  "model with these free parameters does not explain the data"))
+    if fit.spacing_check.get("note"):
+        found.append(("failed", f"--check-spacing could not check the spacing: {fit.spacing_check['note']}"))
+    moved = fit.spacing_check.get("moves", {})
+    for name, delta in moved.items():
+        if abs(delta) > fit.sigma.get(name, math.inf):
+            found.append(("spacing_limited", f"refining the strip to strip.spacing_mm = "
+                                             f"{fit.spacing_check['spacing_mm']:g} moves {name} by {delta:+.4g} "
+                                             f"({abs(delta) / fit.sigma[name]:.1f}σ): the mesh, not the data, "
+                                             "limits it; fit at a finer strip.spacing_mm"))
+    if not fit.converged:
+        found.append(("failed", "the search stopped at its iteration limit before converging "
+                                "(raise --max-iterations)"))
+    return found[0][0] if found else "converged", [message for _, message in found]
+
+
+def measurement_noise(measurement: LaserTrace | TrackedShapes) -> float:
+    """σ of a measurement's noise from the data alone (each marker coordinate a series)."""
+    if isinstance(measurement, LaserTrace):
+        return difference_noise([measurement.x])
+    order = np.lexsort((measurement.frame, measurement.s))
+    s = measurement.s[order]
+    starts = np.flatnonzero(np.r_[True, np.diff(s) != 0, True])
+    pieces = [slice(a, b) for a, b in zip(starts[:-1], starts[1:], strict=True)]
+    return difference_noise([measurement.x[order][p] for p in pieces] + [measurement.y[order][p] for p in pieces])
+
+
+def spacing_shift(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarray,
+                  residual: np.ndarray) -> dict:
+    """How far the fit at point ``u`` would move at half the strip's spacing: the best point
+    run once more at h/2 (dt halved, or chosen again where ``dt_s = "auto"`` chose it) and
+    the Gauss–Newton step its residuals ask for, −J⁺(r_{h/2} − r_h) with the fit's own
+    Jacobian J (``jac``, unit-box coordinates) and residuals r_h (``residual``). Returns
+    ``{"spacing_mm": h/2, "moves": {field: Δ}}`` (Δ in the field's units); a move larger
+    than the parameter's σ means the spacing, not the measurement, limits it (docs/
+    calibration.md). A law that converges at second order moves a third as far again
+    from h/2 to the continuum."""
+    fine = copy.deepcopy(objective.base)
+    for name, value in objective.values(u).items():
+        set_field(fine, name, value)
+    scene = scene_from_dict(copy.deepcopy(fine))
+    set_field(fine, "strip.spacing_mm", scene.strip.spacing_mm / 2)
+    if scene.integrator.dt_chosen_by == AUTO:
+        set_field(fine, "integrator.dt_s", AUTO)
+        set_field(fine, "integrator.dt_chosen_by", "scene")
+    else:  # dt/2, or shorter where the bound at h/2 asks (imex's bending bound shrinks as h²)
+        stable = stable_step_of(scene_from_dict(copy.deepcopy(fine), choose_step=False))
+        dt = scene.integrator.dt_s / 2
+        if stable is not None and dt > stable:
+            dt = scene.output_interval / math.ceil(scene.output_interval / stable)
+        set_field(fine, "integrator.dt_s", dt)
+    refined = Objective(fine, objective.measurement, [], objective.align, objective.device)
+    fine_residual = refined.residuals(refined.run(np.zeros((1, 0))), 0, shift, penalise=False)
+    if not np.all(np.isfinite(fine_residual)):
+        return {"spacing_mm": scene.strip.spacing_mm / 2, "moves": {},
+                "note": "the run at half the spacing misses measured points (the laser line, or it diverged)"}
+    step = -np.linalg.lstsq(jac, fine_residual - residual, rcond=None)[0] * objective.ranges
+    return {"spacing_mm": scene.strip.spacing_mm / 2, "moves": dict(zip(objective.names, step.tolist(), strict=True))}
+
+
+def mesh_note(base: dict) -> str:
+    """Why a fit of the scene ``base`` (as a dict) holds at its spacing only, when its bending
+    law's answers depend on the mesh; "" for a law that converges in h."""
+    scene = scene_from_dict(base)
+    law = scene.material.bending_law
+    if bending_law(law).mesh_independent:
+        return ""
+    return (f"the {law} law's hysteresis depends on the mesh (no return-point memory, docs/model.md §15.6): these "
+            f"values hold at strip.spacing_mm = {scene.strip.spacing_mm:g} only, and refining h moves them (its "
+            "decrement grows without converging); the masing law takes the same parameters and converges in h")
+
+
+@dataclass
+class Identifiability:
+    """What an experiment (or several together) can determine about the free parameters at a
+    point, before any fit: the Gauss–Newton σ and correlation for measurement noise σ_m, and
+    the pairs correlated beyond :data:`NOT_IDENTIFIABLE_CORRELATION` (the fit's
+    ``not_identifiable`` verdict)."""
+
+    names: list[str]
+    sigma: dict[str, float]
+    correlation: np.ndarray
+    not_identifiable: list[tuple[str, str, float]]
+
+    def table(self) -> str:
+        """The correlation matrix as text, with σ and the pairs the data do not separate."""
+        width = max(len(n) for n in self.names)
+        lines = [" " * width + "  " + " ".join(f"{i:>6d}" for i in range(len(self.names))) + "   σ"]
+        for i, name in enumerate(self.names):
+            row = " ".join(f"{c:+6.3f}" for c in self.correlation[i])
+            lines.append(f"{name:<{width}}  {row}   {self.sigma[name]:.3g}")
+        lines += [f"not identifiable: {a} and {b} correlated {c:+.3f}" for a, b, c in self.not_identifiable]
+        return "\n".join(lines)
+
+
+def weighted_jacobian(base: dict, measurement: LaserTrace | TrackedShapes, noise: float, names: str | list[str],
+                      bounds: str | None = None, device: str | None = None) -> tuple[list[str], np.ndarray]:
+    """The fields of the ``--free`` parameters ``names`` and ∂r/∂(field value) / σ_m of the
+    experiment (raw scene ``base``, its ``measurement``, noise σ_m in m) at the scene's own
+    values: one batched launch of the central-difference stencil, as the fit takes it."""
+    free = free_parameters(names, scene_from_dict(copy.deepcopy(base)), bounds)
+    objective = Objective(base, measurement, free, 0.0, device)
+    u = initial_point(free)
+    rows, pairs = lm.stencil(u)
+    result = objective.run(np.vstack([u, *rows]))
+    return objective.names, objective.jacobian(result, pairs, 0, 0.0) / objective.ranges / noise
+
+
+def identifiability(blocks: list[tuple[list[str], np.ndarray]]) -> Identifiability:
+    """σ and correlation of the parameters from experiments' :func:`weighted_jacobian`
+    blocks, stacked as one fit of all their residuals would stack them (the same fields in
+    each). A correlation beyond :data:`NOT_IDENTIFIABLE_CORRELATION`, or a singular
+    Jacobian, is a pair the data do not separate (docs/calibration.md, "What the data
+    determine")."""
+    fields = blocks[0][0]
+    if any(f != fields for f, _ in blocks):
+        raise ValueError("every experiment must have the same free parameters, in the same order")
+    sigma, correlation = lm.sigma_and_correlation(lm.covariance(np.vstack([j for _, j in blocks])))
+    pairs = [(fields[i], fields[j], float(correlation[i, j])) for i in range(len(fields)) for j in range(i)
+             if not abs(correlation[i, j]) <= NOT_IDENTIFIABLE_CORRELATION]
+    return Identifiability(fields, dict(zip(fields, sigma.tolist(), strict=True)), correlation, pairs)
