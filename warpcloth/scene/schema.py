@@ -86,37 +86,44 @@ def _law_field(parameter: LawParameter, laws: tuple[str, ...]) -> Any:
                   laws=laws)
 
 
-def _material_section() -> type:
-    # The common fields, then every law's own parameters (from the laws' descriptions,
-    # kernels/law.py), then from_file.
-    common = [
-        ("name", str, _field(DEFAULT_MATERIAL["name"], "label (the default is illustrative, docs/model.md)",
-                             per_strip=True)),
-        ("density_g_per_cm2", float, _field(DEFAULT_MATERIAL["density_g_per_cm2"], "mass per area ρ_A", gt=0,
-                                            per_strip=True)),
-        ("tensile_gf_per_cm", list[float], _field(
-            DEFAULT_MATERIAL["tensile_gf_per_cm"],
-            "a1..a4 of T(ε) = a1 ε + a2 ε² + a3 ε³ + a4 ε⁴ (force per width, KES-FB1 upper loop)", per_strip=True)),
-        (BENDING_RIGIDITY.scene_field, float, _field(DEFAULT_MATERIAL[BENDING_RIGIDITY.scene_field],
-                                                     BENDING_RIGIDITY.doc, ge=BENDING_RIGIDITY.ge, per_strip=True)),
-        ("bending_law", str, _field(
-            DEFAULT_MATERIAL.get("bending_law", DEFAULT_BENDING_LAW),
-            "hysteretic bending law (docs/model.md §4): "
-            + ", ".join(f"{law.name} ({law.summary})" for law in BENDING_LAWS.values())
-            + "; each reads only its own fields below", choices=tuple(BENDING_LAWS), per_strip=True)),
-    ]
-    own = [(name, float, _law_field(parameter, laws)) for name, (parameter, laws) in LAW_PARAMETERS.items()]
-    last = [("from_file", str, _field(
-        "", "a material file (path ending in .toml, relative to the scene file) or a bundled material name; its "
-        "values fill every [material] field the scene does not set itself", per_strip=True))]
-    section = dataclasses.make_dataclass("MaterialSection", common + own + last, frozen=True)
-    section.__module__ = __name__
-    section.__doc__ = ("Fabric in KES units; converted to SI once, by warpcloth.scene.to_si. The bending laws' own "
-                       "fields come from their descriptions (kernels/law.py).")
-    return section
+def _with_law_fields(cls: type) -> type:
+    # Every law's own parameters (from the laws' descriptions, kernels/law.py) as fields,
+    # after the common ones and before from_file, ahead of @dataclass reading the class.
+    annotations = dict(cls.__dict__["__annotations__"])
+    last = annotations.pop("from_file")
+    for name, (parameter, laws) in LAW_PARAMETERS.items():
+        annotations[name] = "float"
+        setattr(cls, name, _law_field(parameter, laws))
+    annotations["from_file"] = last
+    cls.__annotations__ = annotations
+    return cls
 
 
-MaterialSection = _material_section()
+@dataclass(frozen=True)
+@_with_law_fields
+class MaterialSection:
+    """Fabric in KES units; converted to SI once, by warpcloth.scene.to_si. The bending laws'
+    own fields (between ``bending_law`` and ``from_file``) come from their descriptions
+    (kernels/law.py)."""
+
+    name: str = _field(DEFAULT_MATERIAL["name"], "label (the default is illustrative, docs/model.md)",
+                       per_strip=True)
+    density_g_per_cm2: float = _field(DEFAULT_MATERIAL["density_g_per_cm2"], "mass per area ρ_A",
+                                      gt=0, per_strip=True)
+    tensile_gf_per_cm: list[float] = _field(
+        DEFAULT_MATERIAL["tensile_gf_per_cm"],
+        "a1..a4 of T(ε) = a1 ε + a2 ε² + a3 ε³ + a4 ε⁴ (force per width, KES-FB1 upper loop)",
+        per_strip=True)
+    bending_rigidity_gf_cm2_per_cm: float = _field(
+        DEFAULT_MATERIAL[BENDING_RIGIDITY.scene_field], BENDING_RIGIDITY.doc, ge=BENDING_RIGIDITY.ge, per_strip=True)
+    bending_law: str = _field(DEFAULT_MATERIAL.get("bending_law", DEFAULT_BENDING_LAW),
+                              "hysteretic bending law (docs/model.md §4): "
+                              + ", ".join(f"{law.name} ({law.summary})" for law in BENDING_LAWS.values())
+                              + "; each reads only its own fields below", choices=tuple(BENDING_LAWS),
+                              per_strip=True)
+    from_file: str = _field("", "a material file (path ending in .toml, relative to the scene file) or a bundled "
+                            "material name; its values fill every [material] field the scene does not set itself",
+                            per_strip=True)
 
 
 @dataclass(frozen=True)
