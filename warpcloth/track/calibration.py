@@ -125,7 +125,7 @@ def _pixel_pair(text: str) -> np.ndarray:
 
 def calibrate_plane(paths: list[str | Path], inner: tuple[int, int], square_mm: float, *,
                     origin_corner: tuple[int, int] | None = None, clamp_edge_px: str | None = None,
-                    max_rms_px: float = 0.5) -> tuple[PlaneMapping, dict]:
+                    max_rms_px: float = 0.3) -> tuple[PlaneMapping, dict]:
     """The mapping and the full plane.json record from board images, the first the plane
     view. A calibration whose reprojection RMS exceeds ``max_rms_px`` in any image is a
     DataFileError naming the worst image: the images do not fit one camera."""
@@ -165,7 +165,7 @@ def calibrate_plane(paths: list[str | Path], inner: tuple[int, int], square_mm: 
         listed = ", ".join(f"{p.name} {r:.3g}" for p, r in zip(paths, view_rms, strict=True))
         raise DataFileError(paths[worst], f"reprojection error {view_rms[worst]:.3g} px exceeds --max-rms-px "
                             f"{max_rms_px:g} (per image, px: {listed}): the images do not fit one camera and lens "
-                            "(a changed zoom or focus, a mirrored or resized image, or a board that is not flat)")
+                            "(a changed zoom or focus, a resized image, or a board that is not flat)")
     r = cv2.Rodrigues(rvecs[0])[0]
     to_board = np.linalg.inv(np.column_stack([r[:, 0], r[:, 1], tvecs[0].ravel()]))
     distortion = distortion.ravel()[:5].astype(np.float64)

@@ -124,7 +124,8 @@ def _chain(plane: np.ndarray, start: np.ndarray, s_mm: np.ndarray, where: str, p
         raise DataFileError(path, f"{where}: marker s = {s_mm[i]:g} mm lost: it should be within "
                             f"{STRETCH * arc + SLACK_MM:.3g} mm of the marker at s = {s_mm[i - 1]:g} mm "
                             f"(at x = {plane[order[-1], 0]:.2f}, y = {plane[order[-1], 1]:.2f} mm), but {seen} "
-                            f"({len(plane)} marker-sized blobs in this frame for {len(s_mm)} markers)")
+                            f"({len(plane)} marker-sized blobs in this frame for {len(s_mm)} markers): it is hidden "
+                            "or merged with another, or --marker-s or the plane's scale (--plane) is wrong")
     return np.array(order)
 
 
@@ -153,19 +154,7 @@ def track_markers(frames: Frames, background: np.ndarray, mapping: PlaneMapping,
         px[f], sig[f] = centres[order], sigmas[order]
         previous = plane[order[0]]
     mm = mapping.to_plane(px.reshape(-1, 2)).reshape(n, m, 2)
-    _check_chords(mm, s_mm, frames, path)
     u_px = np.sqrt(0.5 * np.sum(sig**2, axis=2))
     u_mm = u_px * mapping.mm_per_px(px.reshape(-1, 2)).reshape(n, m)
     return Tracked(frames.index, frames.t, np.asarray(s_mm, dtype=float), px, mm, u_px, u_mm, noise)
 
-
-def _check_chords(mm: np.ndarray, s_mm: np.ndarray, frames: Frames, path: Path) -> None:
-    # a chord longer than its arc is impossible on a strip: the plane's scale or --marker-s is wrong
-    chords = np.linalg.norm(np.diff(mm, axis=1), axis=2)
-    arcs = np.diff(s_mm)
-    ratio = chords / arcs
-    f, i = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
-    if ratio[f, i] > STRETCH + SLACK_MM / arcs[i]:
-        raise DataFileError(path, f"frame {frames.index[f]} (t = {frames.t[f]:.6g} s): the markers s = {s_mm[i]:g} "
-                            f"and {s_mm[i + 1]:g} mm are {chords[f, i]:.3g} mm apart, more than the {arcs[i]:g} mm "
-                            "of strip between them: the plane's scale (--plane) or --marker-s is wrong")

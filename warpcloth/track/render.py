@@ -267,9 +267,12 @@ def make_example(out: str | Path, progress: bool = True) -> dict:
         images.append(_expose(radiance / len(offsets), lighting, rng))
         truth = _markers(_at(result, t), scene, s_mm)
         rows += [f"{k},{t:.9f},{s:g},{x:.6f},{y:.6f}" for s, (x, y) in zip(s_mm, truth, strict=True)]
-    from .video import write_video
+    from .video import read_frames, write_video
 
     write_atomically(out / "rotation.avi", lambda tmp: write_video(tmp, images, range(n_frames), Fraction(1, rate)))
+    back = read_frames(out / "rotation.avi")
+    if not (np.array_equal(back.images, np.stack(images)) and np.array_equal(back.t, np.arange(n_frames) / rate)):
+        raise RuntimeError("the video does not read back as written (lossless, exact timestamps)")
     write_text_atomically(out / "truth.csv", "# the simulated markers at each frame's time (python -m "
                           f"warpcloth.track.render; truth {EXAMPLE['truth']})\nframe,t_s,s_mm,x_mm,y_mm\n"
                           + "\n".join(rows) + "\n")

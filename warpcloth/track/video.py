@@ -52,28 +52,36 @@ def read_frames(path: str | Path, flag: str = "VIDEO", progress: bool = False) -
     except (av.error.FFmpegError, UnicodeDecodeError) as exc:
         raise DataFileError(path, f"cannot be read as a video ({exc})") from None
     images, times, index = [], [], []
-    with container:
-        if not container.streams.video:
-            raise DataFileError(path, "holds no video stream")
-        stream = container.streams.video[0]
-        total = stream.frames or None
-        frames = container.decode(stream)
-        with tqdm(total=total, desc="reading frames", unit=" frames", disable=not progress) as bar:
-            while True:
-                try:
-                    frame = next(frames)
-                except StopIteration:
-                    break
-                except av.error.FFmpegError as exc:
-                    raise DataFileError(path, f"frame {len(images)} (after t = {times[-1] if times else 0:g} s) "
-                                        f"cannot be decoded ({exc}); the file is damaged") from None
-                if frame.pts is None or frame.time_base is None:
-                    raise DataFileError(path, f"frame {len(images)} has no timestamp; the container must give each "
-                                        "frame's time (re-mux it, e.g. to .avi or .mkv)")
-                images.append(frame.to_ndarray(format="gray"))
-                times.append(Fraction(frame.pts) * frame.time_base)
-                index.append(len(index))
-                bar.update()
+    level = av.logging.get_level()
+    av.logging.set_level(av.logging.ERROR)  # a damaged frame is only logged by FFmpeg's decoders: catch it
+    try:
+        with container, av.logging.Capture() as logged:
+            if not container.streams.video:
+                raise DataFileError(path, "holds no video stream")
+            stream = container.streams.video[0]
+            frames = container.decode(stream)
+            with tqdm(total=stream.frames or None, desc="reading frames", unit=" frames", disable=not progress) as bar:
+                while True:
+                    try:
+                        frame = next(frames)
+                    except StopIteration:
+                        break
+                    except av.error.FFmpegError as exc:
+                        raise DataFileError(path, f"frame {len(images)} (after t = {float(times[-1]) if times else 0:g} "
+                                            f"s) cannot be decoded ({exc}); the file is damaged") from None
+                    if logged:
+                        said = "; ".join(" ".join(entry[2].split()) for entry in logged)
+                        raise DataFileError(path, f"frame {len(images)} (t = {float(frame.pts * frame.time_base):g} s) "
+                                            f"or the one before it is damaged: the decoder says {said!r}")
+                    if frame.pts is None or frame.time_base is None:
+                        raise DataFileError(path, f"frame {len(images)} has no timestamp; the container must give "
+                                            "each frame's time (re-mux it, e.g. to .avi or .mkv)")
+                    images.append(frame.to_ndarray(format="gray"))
+                    times.append(Fraction(frame.pts) * frame.time_base)
+                    index.append(len(index))
+                    bar.update()
+    finally:
+        av.logging.set_level(level)
     if len(images) < 2:
         raise DataFileError(path, f"holds {len(images)} decodable frame(s); tracking needs at least two")
     return _checked(path, np.stack(images), times, np.array(index))
@@ -109,8 +117,9 @@ def write_video(path: str | Path, images: Sequence[np.ndarray], pts: Sequence[in
     import av
 
     with av.open(str(path), "w", format="avi") as container:
-        # slice CRCs: a damaged frame fails to decode instead of decoding wrong
-        stream = container.add_stream("ffv1", rate=Fraction(1) / time_base, options={"slicecrc": "1", "context": "1"})
+        # FFV1 version 3 with slice CRCs, every frame a key frame: damage is caught where it is
+        stream = container.add_stream("ffv1", rate=Fraction(1) / time_base)
+        stream.codec_context.options = {"level": "3", "slicecrc": "1", "context": "1", "g": "1"}
         stream.height, stream.width = images[0].shape
         stream.pix_fmt = "gray"
         stream.time_base = time_base
