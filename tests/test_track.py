@@ -173,7 +173,8 @@ def test_a_calibration_that_does_not_fit_is_an_error(tmp_path):
                                                              borderMode=cv2.BORDER_REPLICATE))
     done = run_cli(*CALIBRATE[:2], *BOARDS[:3], str(tmp_path / "zoomed.png"), *BOARDS[4:], *CALIBRATE[8:], "-o",
                    str(tmp_path / "p.json"), "--max-rms-px", "0.2")
-    one_line_error(done, "zoomed.png", "reprojection error 0.299 px", "exceeds --max-rms-px 0.2", "do not fit one camera")
+    one_line_error(done, "zoomed.png", "reprojection error 0.299 px", "exceeds --max-rms-px 0.2",
+                   "do not fit one camera")
     one_line_error(run_cli(*CALIBRATE[:2], *BOARDS, "--board", "9x7", *CALIBRATE[10:], "-o", str(tmp_path / "p.json")),
                    "board_0.png", "no chessboard of 9 × 7 inner corners")
     assert not (tmp_path / "p.json").exists()

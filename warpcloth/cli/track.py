@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+
 import numpy as np
 
 from warpcloth.errors import OptionError
@@ -48,7 +49,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                      help="instead: two pixels of the plane view, the clamp's lowest point and a point along its lower "
                           "edge towards +x")
     cal.add_argument("--max-rms-px", type=positive, default=0.3,
-                     help="refuse a calibration whose reprojection RMS in any image exceeds this (default: 0.3 px; a clean calibration has a fraction of that, the bundled example 0.07)")
+                     help="refuse a calibration whose reprojection RMS in any image exceeds this (default: 0.3 px; "
+                          "a clean calibration has a fraction of that, the bundled example 0.07)")
     add_overwrite(cal, "plane file -o")
     vid = track_sub.add_parser("video", help="track the markers of a video (warpcloth track VIDEO ... for short)")
     vid.set_defaults(handler=video_command)

@@ -41,7 +41,7 @@ def overlay_figure(image: np.ndarray, tracked: Tracked, frame: int) -> object:
     right.set_xlabel("x (mm)")
     right.set_ylabel("y (mm)")
     right.set_title(f"tracked shapes, every frame (median uncertainty {np.median(tracked.u_mm) * 1e3:.2g} µm)")
-    right.legend(loc="upper right", fontsize=8)
+    right.legend(loc="lower left", fontsize=8)
     fig.tight_layout()
     return fig
 

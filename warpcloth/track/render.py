@@ -173,7 +173,8 @@ def _board_texture() -> tuple[np.ndarray, tuple[float, float, float, float]]:
     # board coordinates (X, Y) mm with inner corner (0, 0) at the origin, X along a row
     nx, ny = EXAMPLE["board_squares"]
     sq = EXAMPLE["square_mm"]
-    box = (-sq - BOARD_MARGIN_MM, -sq - BOARD_MARGIN_MM, (nx - 1) * sq + BOARD_MARGIN_MM, (ny - 1) * sq + BOARD_MARGIN_MM)
+    edge = sq + BOARD_MARGIN_MM
+    box = (-edge, -edge, (nx - 2) * sq + edge, (ny - 2) * sq + edge)
     shape = (round((box[3] - box[1]) / TEXEL_MM), round((box[2] - box[0]) / TEXEL_MM))
     rows, cols = np.mgrid[0: shape[0], 0: shape[1]]
     x, y = box[0] + (cols + 0.5) * TEXEL_MM, box[1] + (rows + 0.5) * TEXEL_MM
@@ -281,11 +282,13 @@ def make_example(out: str | Path, progress: bool = True) -> dict:
                  "strip_plane": {"rotation": strip_plane.rotation.tolist(),
                                  "translation_mm": strip_plane.translation.tolist()},
                  "files": {"video": "rotation.avi (FFV1 in AVI, lossless, 8-bit grey)", "background": "background.png",
-                           "plane_view": "board_0.png", "boards": [f"board_{i}.png" for i in range(len(BOARD_VIEWS) + 1)],
+                           "plane_view": "board_0.png",
+                           "boards": [f"board_{i}.png" for i in range(len(BOARD_VIEWS) + 1)],
                            "truth": "truth.csv"}}
     write_text_atomically(out / "truth.json", json.dumps(described, indent=1) + "\n")
     return described
 
 
 if __name__ == "__main__":
-    make_example(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).resolve().parents[2] / "scenes" / "data" / "track")
+    make_example(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).resolve().parents[2] / "scenes" / "data"
+                 / "track")

@@ -67,8 +67,9 @@ def read_frames(path: str | Path, flag: str = "VIDEO", progress: bool = False) -
                     except StopIteration:
                         break
                     except av.error.FFmpegError as exc:
-                        raise DataFileError(path, f"frame {len(images)} (after t = {float(times[-1]) if times else 0:g} "
-                                            f"s) cannot be decoded ({exc}); the file is damaged") from None
+                        after = float(times[-1]) if times else 0.0
+                        raise DataFileError(path, f"frame {len(images)} (after t = {after:g} s) cannot be decoded "
+                                            f"({exc}); the file is damaged") from None
                     if logged:
                         said = "; ".join(" ".join(entry[2].split()) for entry in logged)
                         raise DataFileError(path, f"frame {len(images)} (t = {float(frame.pts * frame.time_base):g} s) "
