@@ -191,6 +191,27 @@ def test_markers_closer_than_their_arc_allows_are_an_error(tracked, first_frames
     assert not (tmp_path / "out.csv").exists()
 
 
+def test_a_background_model_that_holds_the_strip_is_an_error(tracked, tmp_path):
+    # without --background the model is the frames' median; in the bundled clip the clamp
+    # rests in its final pose for half the frames and the strip's root near it
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    done = run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tmp_path / "plane.json"), *MARKERS, "-o",
+                   str(tmp_path / "out.csv"))
+    one_line_error(done, "lost", "give --background")
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_the_clamp_edge_given_in_pixels_places_the_same_plane(tracked, tmp_path):
+    # the pixels of inner corners (1, 1) and (2, 1) of the plane view: the same frame as --origin-corner 1,1
+    corner = read_plane(tracked / "plane.json")
+    ends = corner.to_pixels(np.array([[0.0, 0.0], [10.0, 0.0]]))
+    edge = ",".join(f"{v:.4f}" for v in ends.ravel())
+    done = run_cli(*CALIBRATE[:12], "--clamp-edge-px", edge, "-o", str(tmp_path / "p.json"))
+    assert done.returncode == 0, done.stderr
+    pixels = np.array([[200.0, 150.0], [400.0, 500.0], [600.0, 300.0]])
+    assert np.max(np.abs(read_plane(tmp_path / "p.json").to_plane(pixels) - corner.to_plane(pixels))) < 1e-3
+
+
 def test_an_existing_result_is_kept(tracked, tmp_path):
     (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
     (tmp_path / "out.csv").write_text("mine\n")

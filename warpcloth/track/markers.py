@@ -121,11 +121,13 @@ def _chain(plane: np.ndarray, start: np.ndarray, s_mm: np.ndarray, where: str, p
             seen = f"the nearest other dark blob is {chord:.3g} mm from it"
         else:
             seen = "no other dark blob is left"
+        extra = (", or the background holds the strip or the clamp where this frame has none (a median of frames in "
+                 "which they rest: give --background)" if len(plane) > len(s_mm) else "")
         raise DataFileError(path, f"{where}: marker s = {s_mm[i]:g} mm lost: it should be within "
                             f"{STRETCH * arc + SLACK_MM:.3g} mm of the marker at s = {s_mm[i - 1]:g} mm "
                             f"(at x = {plane[order[-1], 0]:.2f}, y = {plane[order[-1], 1]:.2f} mm), but {seen} "
                             f"({len(plane)} marker-sized blobs in this frame for {len(s_mm)} markers): it is hidden "
-                            "or merged with another, or --marker-s or the plane's scale (--plane) is wrong")
+                            f"or merged with another, or --marker-s or the plane's scale (--plane) is wrong{extra}")
     return np.array(order)
 
 
