@@ -126,18 +126,19 @@ def track_cli(video, where, *more):
                    str(DATA / "background.png"), *MARKERS, "-o", str(where / "out.csv"), *more)
 
 
-def test_a_lost_marker_is_an_error(tracked, first_frames, tmp_path):
+@pytest.mark.parametrize("s_mm", [45, 5])
+def test_a_lost_marker_is_an_error(tracked, first_frames, tmp_path, s_mm):
     frames = first_frames.copy()
     background = cv2.imread(str(DATA / "background.png"), cv2.IMREAD_GRAYSCALE)
     truth = read_tracked_shapes(DATA / "truth.csv")
-    at = (truth.frame == 2) & np.isclose(truth.s, 0.045)
+    at = (truth.frame == 2) & np.isclose(truth.s, s_mm * 1e-3)
     u, v = read_plane(tracked / "plane.json").to_pixels(np.array([[truth.x[at][0], truth.y[at][0]]]) * 1e3)[0]
     rows, cols = np.mgrid[0: frames.shape[1], 0: frames.shape[2]]
-    hidden = np.hypot(cols - u, rows - v) < 12  # the marker at s = 45 mm covered in frame 2
+    hidden = np.hypot(cols - u, rows - v) < 12  # the marker covered in frame 2
     frames[2][hidden] = background[hidden]
     small_video(tmp_path / "lost.avi", frames, range(4))
     (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
-    one_line_error(track_cli(tmp_path / "lost.avi", tmp_path), "frame 2", "marker s = 45 mm lost")
+    one_line_error(track_cli(tmp_path / "lost.avi", tmp_path), "frame 2", f"marker s = {s_mm} mm lost")
     assert not (tmp_path / "out.csv").exists()
 
 

@@ -11,8 +11,9 @@ sensor noise, estimated from the frame − background difference itself (the MAD
 (:class:`~warpcloth.track.calibration.PlaneMapping`).
 
 Identity is the order along the strip, which markers on a strip cannot change: in each
-frame the chain starts at the blob nearest where the first marker was (the clamp's lowest
-point in the first frame) and steps to the nearest remaining blob, each step no longer
+frame the chain starts at the blob nearest where the first marker was, within half the
+spacing of the first two markers (in the first frame: near the clamp's lowest point at
+rest, within its s and that), and steps to the nearest remaining blob, each step no longer
 than the arc between the two markers (+5 % and 1 mm) and no shorter than 0.3 of it. A
 marker the chain cannot reach is lost: an error naming the frame, its time and the
 marker, never a shapes file with a gap or a swapped identity.
@@ -102,12 +103,18 @@ def _blobs(darkening: np.ndarray, threshold: float, areas: tuple[float, float],
     return np.array(centres).reshape(-1, 2), np.array(sigmas).reshape(-1, 2)
 
 
-def _chain(plane: np.ndarray, start: np.ndarray, s_mm: np.ndarray, where: str, path: Path) -> np.ndarray:
+def _chain(plane: np.ndarray, start: np.ndarray, reach: float, s_mm: np.ndarray, where: str,
+           path: Path) -> np.ndarray:
     # indices into `plane` of the markers in their order along the strip
     if not len(plane):
         raise DataFileError(path, f"{where}: no marker found (none darker than the background by the threshold, "
                             "with a marker's area)")
-    order = [int(np.argmin(np.linalg.norm(plane - start, axis=1)))]
+    first = int(np.argmin(np.linalg.norm(plane - start, axis=1)))
+    if np.linalg.norm(plane[first] - start) > reach:
+        raise DataFileError(path, f"{where}: marker s = {s_mm[0]:g} mm lost: no dark blob within {reach:.3g} mm of "
+                            f"where it was (x = {start[0]:.2f}, y = {start[1]:.2f} mm); the nearest is "
+                            f"{np.linalg.norm(plane[first] - start):.3g} mm away")
+    order = [first]
     left = set(range(len(plane))) - set(order)
     for i in range(1, len(s_mm)):
         arc = s_mm[i] - s_mm[i - 1]
@@ -152,7 +159,10 @@ def track_markers(frames: Frames, background: np.ndarray, mapping: PlaneMapping,
         centres, sigmas = _blobs(darkening, threshold, areas, noise[f])
         where = f"frame {frames.index[f]} (t = {frames.t[f]:.6g} s)"
         plane = mapping.to_plane(centres) if len(centres) else centres
-        order = _chain(plane, previous, s_mm, where, path)
+        # the first marker: near the clamp's lowest point at rest in the first frame, then
+        # within half the spacing of where it was (it moves least: it is nearest the clamp)
+        reach = 0.5 * (s_mm[1] - s_mm[0]) + (s_mm[0] if f == 0 else 0.0)
+        order = _chain(plane, previous, reach, s_mm, where, path)
         px[f], sig[f] = centres[order], sigmas[order]
         previous = plane[order[0]]
     mm = mapping.to_plane(px.reshape(-1, 2)).reshape(n, m, 2)
