@@ -78,6 +78,42 @@ def test_fit_of_the_tracked_shapes_recovers_the_rotation_centre(tracked):
     assert abs(dy - TRUTH_DY_MM) <= 0.05, dy
 
 
+@pytest.fixture(scope="module")
+def centreline(tracked):
+    done = run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tracked / "plane.json"), "--background",
+                   str(DATA / "background.png"), "--centreline-s", "5:95:10", "--free-length-mm", "100",
+                   "--no-progress", "-o", str(tracked / "centreline.csv"))
+    assert done.returncode == 0, done.stderr
+    return tracked / "centreline.csv"
+
+
+def test_the_centreline_without_markers_recovers_the_simulated_strip(centreline):
+    # the same arc lengths as the markers, from the free end: the same truth
+    shapes, truth = read_tracked_shapes(centreline), read_tracked_shapes(DATA / "truth.csv")
+    error_mm = np.column_stack([shapes.x - truth.x, shapes.y - truth.y]) * 1e3
+    assert np.all(np.abs(error_mm.mean(axis=0)) <= 0.02), error_mm.mean(axis=0)
+    assert np.all(np.sqrt(np.mean(error_mm**2, axis=0)) <= 0.1)
+    done = run_cli("fit", "impulsive_rotation", "--measured", str(centreline), "--free",
+                   "gamma,rotation_centre_dy_mm", "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out",
+                   str(centreline.parent / "fit-centreline"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    fit = json.loads((centreline.parent / "fit-centreline" / "fit.json").read_text())
+    assert abs(fit["parameters"]["clamp.rotation_centre_dy_mm"]["value"] - TRUTH_DY_MM) <= 0.05
+
+
+def test_a_centreline_shorter_than_asked_is_an_error(tracked, first_frames, tmp_path):
+    small_video(tmp_path / "v.avi", first_frames, range(4))
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    done = run_cli("track", str(tmp_path / "v.avi"), "--plane", str(tmp_path / "plane.json"), "--background",
+                   str(DATA / "background.png"), "--centreline-s", "5:95:10", "--free-length-mm", "130",
+                   "--no-progress", "-o", str(tmp_path / "out.csv"))
+    one_line_error(done, "frame 0", "the centreline found is", "shorter than the 125 mm")
+    both = run_cli("track", str(tmp_path / "v.avi"), "--plane", str(tmp_path / "plane.json"), *MARKERS,
+                   "--centreline-s", "5:95:10", "-o", str(tmp_path / "out.csv"))
+    one_line_error(both, "--marker-s", "one of them")
+    assert not (tmp_path / "out.csv").exists()
+
+
 def test_shapes_with_uncertainty_columns_read_as_shapes(tracked, tmp_path):
     assert type(read_measurement(tracked / "shapes.csv")).__name__ == "TrackedShapes"
     other = tmp_path / "seven.csv"

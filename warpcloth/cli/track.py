@@ -52,14 +52,19 @@ def register(sub: argparse._SubParsersAction) -> None:
                      help="refuse a calibration whose reprojection RMS in any image exceeds this (default: 0.3 px; "
                           "a clean calibration has a fraction of that, the bundled example 0.07)")
     add_overwrite(cal, "plane file -o")
-    vid = track_sub.add_parser("video", help="track the markers of a video (warpcloth track VIDEO ... for short)")
+    vid = track_sub.add_parser("video", help="track the markers (or the centreline) of a video (warpcloth track "
+                               "VIDEO ... for short)")
     vid.set_defaults(handler=video_command)
     vid.add_argument("video", metavar="VIDEO", help="the video (any container and codec FFmpeg reads; its timestamps "
                      "are each frame's time)")
     vid.add_argument("--plane", required=True, help="plane.json from warpcloth track calibrate")
-    vid.add_argument("--marker-s", required=True, metavar="S,S,...|FIRST:LAST:STEP",
+    vid.add_argument("--marker-s", metavar="S,S,...|FIRST:LAST:STEP",
                      help="the markers' arc lengths from the clamp's lowest point, mm, in order along the strip")
-    vid.add_argument("--marker-diameter-mm", type=positive, required=True, help="the markers' diameter, mm")
+    vid.add_argument("--marker-diameter-mm", type=positive, help="the markers' diameter, mm (with --marker-s)")
+    vid.add_argument("--centreline-s", metavar="S,S,...|FIRST:LAST:STEP",
+                     help="instead of markers: the strip's centreline at these arc lengths from the clamp's lowest "
+                          "point, mm, measured from the free end (needs --free-length-mm)")
+    vid.add_argument("--free-length-mm", type=positive, help="the strip's free length, mm (with --centreline-s)")
     vid.add_argument("-o", "--output", type=path_text, required=True, help="the tracked shapes to write (.csv)")
     vid.add_argument("--background", metavar="IMAGE",
                      help="a frame of the scene without the strip (default: the per-pixel median of the video's "
@@ -84,8 +89,9 @@ def _pair(text: str, option: str, sep: str) -> tuple[int, int]:
     return a, b
 
 
-def marker_arcs(text: str) -> np.ndarray:
-    """``--marker-s``: ``5,15,25`` or ``5:95:10`` (last included), increasing, ≥ 0, at least two."""
+def marker_arcs(text: str, option: str = "--marker-s") -> np.ndarray:
+    """``--marker-s`` (or ``--centreline-s``): ``5,15,25`` or ``5:95:10`` (last included),
+    increasing, ≥ 0, at least two."""
     try:
         if ":" in text:
             first, last, step = (float(v) for v in text.split(":"))
@@ -95,9 +101,28 @@ def marker_arcs(text: str) -> np.ndarray:
         else:
             arcs = np.array([float(v) for v in text.split(",")])
     except ValueError:
-        raise OptionError("--marker-s", f"expected S,S,... or FIRST:LAST:STEP (mm, STEP > 0), got {text!r}") from None
+        raise OptionError(option, f"expected S,S,... or FIRST:LAST:STEP (mm, STEP > 0), got {text!r}") from None
     if len(arcs) < 2 or not np.all(np.isfinite(arcs)) or arcs[0] < 0 or np.any(np.diff(arcs) <= 0):
-        raise OptionError("--marker-s", f"{text!r}: at least two arc lengths, ≥ 0 and increasing along the strip")
+        raise OptionError(option, f"{text!r}: at least two arc lengths, ≥ 0 and increasing along the strip")
+    return arcs
+
+
+def _what_to_track(args: argparse.Namespace) -> np.ndarray:
+    # markers (--marker-s with their diameter) or the centreline (--centreline-s with the free length)
+    if bool(args.marker_s) == bool(args.centreline_s):
+        raise OptionError("--marker-s", "give --marker-s (markers) or --centreline-s (the centreline without markers), "
+                          "one of them")
+    if args.marker_s:
+        if args.marker_diameter_mm is None:
+            raise OptionError("--marker-diameter-mm", "is needed with --marker-s (the markers' diameter, mm)")
+        return marker_arcs(args.marker_s)
+    if args.free_length_mm is None:
+        raise OptionError("--free-length-mm", "is needed with --centreline-s (arc lengths are measured from the free "
+                          "end)")
+    arcs = marker_arcs(args.centreline_s, "--centreline-s")
+    if arcs[-1] > args.free_length_mm:
+        raise OptionError("--centreline-s", f"{arcs[-1]:g} mm lies beyond the free end (--free-length-mm "
+                          f"{args.free_length_mm:g})")
     return arcs
 
 
@@ -133,11 +158,13 @@ def video_command(args: argparse.Namespace) -> int:
     from warpcloth.io.atomic import write_text_atomically
     from warpcloth.io.provenance import file_checksum
     from warpcloth.track.calibration import read_image, read_plane
+    from warpcloth.track.centreline import track_centreline
     from warpcloth.track.markers import track_markers
     from warpcloth.track.overlay import write_overlay
     from warpcloth.track.video import read_frames
 
-    arcs = marker_arcs(args.marker_s)
+    arcs = _what_to_track(args)
+    what = "markers" if args.marker_s else "centreline points"
     mapping = read_plane(args.plane)
     out = new_result(args.output, args.overwrite, "-o")
     overlay = figure_path(args.overlay, args.overwrite, "--overlay") if args.overlay else None
@@ -160,11 +187,15 @@ def video_command(args: argparse.Namespace) -> int:
     if args.overlay_frame is not None and args.overlay_frame >= len(frames.t):
         raise OptionError("--overlay-frame", f"{args.overlay_frame} is not one of the {len(frames.t)} frames kept "
                           f"(0 to {len(frames.t) - 1})")
-    tracked = track_markers(frames, background, mapping, arcs, args.marker_diameter_mm, args.video,
-                            threshold_dn=args.threshold_dn, progress=not args.no_progress)
+    if args.marker_s:
+        tracked = track_markers(frames, background, mapping, arcs, args.marker_diameter_mm, args.video,
+                                threshold_dn=args.threshold_dn, progress=not args.no_progress)
+    else:
+        tracked = track_centreline(frames, background, mapping, arcs, args.free_length_mm, args.video,
+                                   threshold_dn=args.threshold_dn, progress=not args.no_progress)
     video = file_checksum(args.video)
     header = [f"# warpcloth track {args.video} (sha256 {video['sha256']}), plane {args.plane}, background {source}",
-              f"# {len(arcs)} markers, {len(frames.t)} frames; sensor noise {np.median(tracked.noise_dn):.3g} grey "
+              f"# {len(arcs)} {what}, {len(frames.t)} frames; sensor noise {np.median(tracked.noise_dn):.3g} grey "
               "levels; u_px, u_mm: standard uncertainty of each coordinate from the sensor noise alone (the "
               "calibration's is in the plane file)",
               *(f"# dropped: {note}" for note in frames.dropped),
@@ -174,7 +205,7 @@ def video_command(args: argparse.Namespace) -> int:
     if overlay is not None:
         shown = args.overlay_frame if args.overlay_frame is not None else len(frames.t) // 2
         write_overlay(overlay, frames.images[shown], tracked, shown)
-    print(f"tracked {len(arcs)} markers in {len(frames.t)} frames (t = {frames.t[0]:.6g} to {frames.t[-1]:.6g} s): "
+    print(f"tracked {len(arcs)} {what} in {len(frames.t)} frames (t = {frames.t[0]:.6g} to {frames.t[-1]:.6g} s): "
           f"median uncertainty {np.median(tracked.u_mm):.2g} mm ({np.median(tracked.u_px):.2g} px), sensor noise "
           f"{np.median(tracked.noise_dn):.3g} grey levels; {len(frames.dropped)} gaps of dropped frames, "
           f"{len(frames.duplicated)} duplicated frames left out")

@@ -133,6 +133,31 @@ def _texel(x_mm: np.ndarray, y_down_mm: np.ndarray) -> np.ndarray:
     return np.stack([(x_mm - x0) / TEXEL_MM - 0.5, (y_down_mm - y0) / TEXEL_MM - 0.5], axis=-1)
 
 
+def _draw_band(texture: np.ndarray, free: np.ndarray, half: float) -> None:
+    # the strip's edge: a band of its thickness along the free nodes, cut square at both ends,
+    # its edges by exact coverage (OpenCV's anti-aliased fill grows a shape by ~1.5 texels,
+    # and a thick polyline's round caps would lengthen the strip by half its thickness)
+    import cv2
+
+    candidates = np.zeros(texture.shape, np.uint8)
+    pts = np.rint(_texel(free[:, 0], -free[:, 1])).astype(np.int32)
+    cv2.polylines(candidates, [pts], False, 1, int(2 * half / TEXEL_MM) + 6)
+    rows, cols = np.nonzero(candidates)
+    x0, y0 = WALL_BOX_MM[:2]
+    point = np.column_stack([x0 + (cols + 0.5) * TEXEL_MM, -(y0 + (rows + 0.5) * TEXEL_MM)])  # mm, y up
+    a, b = free[:-1], free[1:]
+    ab = b - a
+    w = np.clip(((point[:, None] - a) * ab).sum(axis=2) / (ab * ab).sum(axis=1), 0, 1)
+    distance = np.min(np.linalg.norm(point[:, None] - (a + w[..., None] * ab), axis=2), axis=1)
+    side = np.clip((half - distance) / TEXEL_MM + 0.5, 0, 1)
+    end_tangent = ab[-1] / np.linalg.norm(ab[-1])
+    start_tangent = ab[0] / np.linalg.norm(ab[0])
+    beyond = np.clip(0.5 - ((point - free[-1]) @ end_tangent) / TEXEL_MM, 0, 1)
+    before = np.clip(0.5 - ((free[0] - point) @ start_tangent) / TEXEL_MM, 0, 1)
+    coverage = (side * beyond * before).astype(np.float32)
+    texture[rows, cols] += (ALBEDO["strip"] - texture[rows, cols]) * coverage
+
+
 def _draw_strip(wall: np.ndarray, nodes_mm: np.ndarray, n_clamped: int, markers_mm: np.ndarray) -> np.ndarray:
     """The wall with the clamp, the strip's edge and its markers drawn at one instant
     (nodes and markers in the clamp-edge frame, mm, y up)."""
@@ -142,7 +167,8 @@ def _draw_strip(wall: np.ndarray, nodes_mm: np.ndarray, n_clamped: int, markers_
     shift = 4
     scale = 2**shift
     cover = np.zeros(texture.shape, np.uint8)
-    # the clamp: a bar 8 mm wide along the clamped nodes, 4 mm past the top one
+    # the clamp: a bar 8 mm wide along the clamped nodes, 4 mm past the top one (its edges
+    # are not measured: OpenCV's anti-aliased fill does)
     top, low = nodes_mm[0], nodes_mm[n_clamped - 1]
     along = (top - low) / np.linalg.norm(top - low)
     across = np.array([-along[1], along[0]]) * 4.0
@@ -151,12 +177,7 @@ def _draw_strip(wall: np.ndarray, nodes_mm: np.ndarray, n_clamped: int, markers_
     pts = np.rint(_texel(corners[:, 0], -corners[:, 1]) * scale).astype(np.int32)
     cv2.fillPoly(cover, [pts], 255, cv2.LINE_AA, shift)
     texture += (ALBEDO["clamp"] - texture) * (cover / 255.0)
-    cover[:] = 0
-    free = nodes_mm[n_clamped - 1:]
-    pts = np.rint(_texel(free[:, 0], -free[:, 1]) * scale).astype(np.int32)
-    thickness = round(EXAMPLE["strip_thickness_mm"] / TEXEL_MM)
-    cv2.polylines(cover, [pts], False, 255, thickness, cv2.LINE_AA, shift)
-    texture += (ALBEDO["strip"] - texture) * (cover / 255.0)
+    _draw_band(texture, nodes_mm[n_clamped - 1:], 0.5 * EXAMPLE["strip_thickness_mm"])
     radius = 0.5 * EXAMPLE["marker_diameter_mm"] / TEXEL_MM
     for centre in _texel(markers_mm[:, 0], -markers_mm[:, 1]):
         c0, r0 = np.floor(centre - radius - 2).astype(int)
