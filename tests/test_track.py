@@ -41,7 +41,7 @@ def tracked(tmp_path_factory):
     assert cal.returncode == 0, cal.stderr
     done = run_cli("track", str(DATA / "rotation.avi"), "--plane", str(where / "plane.json"), "--background",
                    str(DATA / "background.png"), *MARKERS, "-o", str(where / "shapes.csv"), "--overlay",
-                   str(where / "overlay.png"))
+                   str(where / "overlay.png"), "--overlay-video", str(where / "overlay.avi"))
     assert done.returncode == 0, done.stderr
     return where
 
@@ -66,6 +66,8 @@ def test_track_recovers_the_simulated_markers(tracked):
     table = np.loadtxt(tracked / "shapes.csv", delimiter=",", comments="#", skiprows=3)
     assert table.shape[1] == 7 and np.all(table[:, 5:] > 0)  # u_px, u_mm
     assert (tracked / "overlay.png").stat().st_size > 10_000
+    movie = read_frames(tracked / "overlay.avi")
+    assert np.allclose(movie.t, truth.t[::10]) and not movie.dropped
 
 
 def test_fit_of_the_tracked_shapes_recovers_the_rotation_centre(tracked):

@@ -73,10 +73,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                      help="darkening below the background that counts as marker, grey levels (default: 10× the "
                           "sensor noise estimated in each frame)")
     vid.add_argument("--overlay", metavar="PNG", help="also write a figure of what was tracked")
+    vid.add_argument("--overlay-video", metavar="AVI",
+                     help="also write every frame with its tracked points circled (grey FFV1 in AVI)")
     vid.add_argument("--overlay-frame", type=at_least(0), default=None,
                      help="the frame the overlay shows (default: the middle one)")
     vid.add_argument("--no-progress", action="store_true", help="no progress bar")
-    add_overwrite(vid, "output file -o (and --overlay)")
+    add_overwrite(vid, "output file -o (and --overlay, --overlay-video)")
 
 
 def _pair(text: str, option: str, sep: str) -> tuple[int, int]:
@@ -160,7 +162,7 @@ def video_command(args: argparse.Namespace) -> int:
     from warpcloth.track.calibration import read_image, read_plane
     from warpcloth.track.centreline import track_centreline
     from warpcloth.track.markers import track_markers
-    from warpcloth.track.overlay import write_overlay
+    from warpcloth.track.overlay import write_overlay, write_overlay_video
     from warpcloth.track.video import read_frames
 
     arcs = _what_to_track(args)
@@ -168,6 +170,11 @@ def video_command(args: argparse.Namespace) -> int:
     mapping = read_plane(args.plane)
     out = new_result(args.output, args.overwrite, "-o")
     overlay = figure_path(args.overlay, args.overwrite, "--overlay") if args.overlay else None
+    movie = None
+    if args.overlay_video:
+        if not args.overlay_video.lower().endswith(".avi"):
+            raise OptionError("--overlay-video", f"{args.overlay_video} must end in .avi")
+        movie = new_result(args.overlay_video, args.overwrite, "--overlay-video")
     background = read_image(args.background, "--background") if args.background else None
     frames = read_frames(args.video, progress=not args.no_progress)
     size = frames.images.shape[2:0:-1]
@@ -205,10 +212,12 @@ def video_command(args: argparse.Namespace) -> int:
     if overlay is not None:
         shown = args.overlay_frame if args.overlay_frame is not None else len(frames.t) // 2
         write_overlay(overlay, frames.images[shown], tracked, shown)
+    if movie is not None:
+        write_overlay_video(movie, frames, tracked)
     print(f"tracked {len(arcs)} {what} in {len(frames.t)} frames (t = {frames.t[0]:.6g} to {frames.t[-1]:.6g} s): "
           f"median uncertainty {np.median(tracked.u_mm):.2g} mm ({np.median(tracked.u_px):.2g} px), sensor noise "
           f"{np.median(tracked.noise_dn):.3g} grey levels; {len(frames.dropped)} gaps of dropped frames, "
           f"{len(frames.duplicated)} duplicated frames left out")
-    print(f"wrote {out}" + (f" and {overlay}" if overlay else ""))
+    print(f"wrote {', '.join(str(p) for p in (out, overlay, movie) if p is not None)}")
     return 0
 

@@ -1,15 +1,18 @@
-"""The figure of what was tracked: one frame with every marker's path and that frame's
-markers on it, beside the tracked shapes in the clamp-edge frame."""
+"""What was tracked, to look at: a figure of one frame with every marker's path and that
+frame's markers on it, beside the tracked shapes in the clamp-edge frame; and a video of
+every frame with its points circled."""
 
 from __future__ import annotations
 
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
 
 from .markers import Tracked
+from .video import Frames
 
-__all__ = ["overlay_figure", "write_overlay"]
+__all__ = ["overlay_figure", "write_overlay", "write_overlay_video"]
 
 
 def overlay_figure(image: np.ndarray, tracked: Tracked, frame: int) -> object:
@@ -57,3 +60,28 @@ def write_overlay(path: str | Path, image: np.ndarray, tracked: Tracked, frame: 
         write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=110))
     finally:
         plt.close(fig)
+
+
+def write_overlay_video(path: str | Path, frames: Frames, tracked: Tracked) -> None:
+    """Every kept frame with its tracked points circled and labelled (grey FFV1 in AVI),
+    written atomically; frames keep their times to the nearest nominal interval."""
+    import cv2
+
+    from warpcloth.io.atomic import write_atomically
+
+    from .video import write_video
+
+    rate = Fraction(1 / frames.nominal_interval_s).limit_denominator(1001)
+    images = []
+    for f, image in enumerate(frames.images):
+        drawn = image.copy()
+        for m, s in enumerate(tracked.s_mm):
+            centre = tuple(int(round(v * 16)) for v in tracked.px[f, m])
+            cv2.circle(drawn, centre, 8 * 16, 255, 1, cv2.LINE_AA, 4)
+            cv2.putText(drawn, f"{s:g}", (int(tracked.px[f, m, 0]) + 10, int(tracked.px[f, m, 1]) + 4),
+                        cv2.FONT_HERSHEY_SIMPLEX, 0.35, 255, 1, cv2.LINE_AA)
+        cv2.putText(drawn, f"frame {tracked.frame[f]}  t = {tracked.t[f]:.4f} s", (10, 20), cv2.FONT_HERSHEY_SIMPLEX,
+                    0.5, 255, 1, cv2.LINE_AA)
+        images.append(drawn)
+    pts = np.rint(np.asarray(frames.t) * float(rate)).astype(int)
+    write_atomically(path, lambda tmp: write_video(tmp, images, pts, 1 / rate))
