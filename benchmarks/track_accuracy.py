@@ -6,7 +6,8 @@ Calibrates on scenes/data/track/board_*.png, tracks rotation.avi and compares wi
 truth.csv (the simulation's markers at each frame's time): the error in the clamp-edge
 frame (mm: centroiding and calibration together) and in the image (px: the tracked
 centroid against the true marker centre projected by the renderer's own camera, so
-centroiding alone). Results in benchmarks/RESULTS.md.
+centroiding alone); and the centreline without markers at the markers' arc lengths.
+Results in benchmarks/RESULTS.md.
 """
 
 import json
@@ -17,6 +18,7 @@ import numpy as np
 from warpcloth.io.measured import read_tracked_shapes
 from warpcloth.track.calibration import calibrate_plane, read_image
 from warpcloth.track.camera import Camera, PlanePose
+from warpcloth.track.centreline import track_centreline
 from warpcloth.track.markers import track_markers
 from warpcloth.track.video import read_frames
 
@@ -49,6 +51,12 @@ def main():
         print(f"{name}: bias x {bias[0]:+.4f}, y {bias[1]:+.4f} {unit}; RMS x {rms[0]:.4f}, y {rms[1]:.4f} {unit}; "
               f"largest |error| {np.max(np.linalg.norm(flat, axis=1)):.4f} {unit}")
     print(f"reported uncertainty u: median {np.median(tracked.u_mm):.4f} mm, {np.median(tracked.u_px):.4f} px")
+    line = track_centreline(frames, read_image(DATA / "background.png", "--background"), mapping, s, 100.0,
+                            DATA / "rotation.avi")
+    flat = (line.mm - true_mm).reshape(-1, 2)
+    bias, rms = flat.mean(axis=0), np.sqrt(np.mean(flat**2, axis=0))
+    print(f"centreline (no markers; s from the free end): bias x {bias[0]:+.4f}, y {bias[1]:+.4f} mm; RMS x "
+          f"{rms[0]:.4f}, y {rms[1]:.4f} mm; largest |error| {np.max(np.linalg.norm(flat, axis=1)):.4f} mm")
 
 
 if __name__ == "__main__":
