@@ -200,6 +200,16 @@ def test_unreadable_and_missing_inputs_are_errors(tracked, tmp_path):
     one_line_error(track_cli(DATA / "rotation.avi", tmp_path), "plane.json", "not a plane file")
     one_line_error(run_cli(*CALIBRATE[:3], str(tmp_path / "none.png"), *CALIBRATE[3:], "-o", str(tmp_path / "p.json")),
                    "IMAGE", "does not exist")
+    one_line_error(run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tmp_path / "none.json"), *MARKERS,
+                           "-o", str(tmp_path / "out.csv")), "--plane", "does not exist")
+    plane = json.loads((tracked / "plane.json").read_text())
+    (tmp_path / "plane.json").write_text(json.dumps(plane | {"image_size_px": [640, 480]}))
+    one_line_error(track_cli(DATA / "rotation.avi", tmp_path), "--plane", "640 × 480 px", "768 × 720 px")
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    cv2.imwrite(str(tmp_path / "small.png"), np.zeros((10, 10), np.uint8))
+    one_line_error(run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tmp_path / "plane.json"), "--background",
+                           str(tmp_path / "small.png"), *MARKERS, "-o", str(tmp_path / "out.csv")),
+                   "--background", "10 × 10 px")
     assert not (tmp_path / "out.csv").exists() and not (tmp_path / "p.json").exists()
 
 
@@ -238,6 +248,20 @@ def test_a_background_model_that_holds_the_strip_is_an_error(tracked, tmp_path):
                    str(tmp_path / "out.csv"))
     one_line_error(done, "lost", "give --background")
     assert not (tmp_path / "out.csv").exists()
+
+
+def test_the_origin_corner_counts_from_the_top_left_however_the_corners_come(tracked, tmp_path, monkeypatch):
+    # findChessboardCorners may start its grid at any corner of the board: reversed, the
+    # same inner corner (counted from the top left as the board lies in the image) is found
+    import warpcloth.track.calibration as calibration
+
+    found = calibration._corners
+    monkeypatch.setattr(calibration, "_corners", lambda *a: found(*a)[::-1])
+    done = run_cli(*CALIBRATE, "-o", str(tmp_path / "p.json"))
+    assert done.returncode == 0, done.stderr
+    pixels = np.array([[200.0, 150.0], [400.0, 500.0], [600.0, 300.0]])
+    expected = read_plane(tracked / "plane.json").to_plane(pixels)
+    assert np.max(np.abs(read_plane(tmp_path / "p.json").to_plane(pixels) - expected)) < 1e-3
 
 
 def test_the_clamp_edge_given_in_pixels_places_the_same_plane(tracked, tmp_path):

@@ -100,15 +100,16 @@ def _corners(image: np.ndarray, path: Path, inner: tuple[int, int]) -> np.ndarra
     return cv2.cornerSubPix(image, corners, (5, 5), (-1, -1), criteria).reshape(-1, 2).astype(np.float64)
 
 
-def _level(corners: np.ndarray, inner: tuple[int, int], path: Path) -> np.ndarray:
-    # the plane view's corners ordered as the board lies in the image: rows left to right,
-    # rows downwards (findChessboardCorners may start from either end)
+def _level(corners: np.ndarray, inner: tuple[int, int]) -> np.ndarray:
+    # the plane view's corners ordered as the board lies in the image: along a row left to
+    # right, rows downwards (findChessboardCorners may start from any end). Relabelling a
+    # flat board's corners by a symmetry of their lattice is a rotation of the board, so
+    # the calibration is the same; only --origin-corner's counting is fixed by it.
     grid = corners.reshape(inner[1], inner[0], 2)
     if grid[0, -1, 0] < grid[0, 0, 0]:
-        grid = grid[::-1, ::-1]
+        grid = grid[:, ::-1]
     if grid[-1, 0, 1] < grid[0, 0, 1]:
-        raise DataFileError(path, "the plane view shows the board mirrored (its rows run upwards once they run "
-                            "left to right); image it as it is")
+        grid = grid[::-1]
     return grid.reshape(-1, 2)
 
 
@@ -149,7 +150,7 @@ def calibrate_plane(paths: list[str | Path], inner: tuple[int, int], square_mm: 
             raise DataFileError(path, f"is {image.shape[1]} × {image.shape[0]} px, the plane view {paths[0]} is "
                                 f"{size[0]} × {size[1]}: every image must come from the same camera setting")
     corners = [_corners(image, path, inner) for path, image in zip(paths, images, strict=True)]
-    corners[0] = _level(corners[0], inner, paths[0])
+    corners[0] = _level(corners[0], inner)
     board = np.zeros((inner[0] * inner[1], 3), np.float32)
     board[:, :2] = np.mgrid[0: inner[0], 0: inner[1]].T.reshape(-1, 2) * square_mm
     rms, matrix, distortion, rvecs, tvecs = cv2.calibrateCamera(
