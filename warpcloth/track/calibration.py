@@ -74,7 +74,7 @@ class PlaneMapping:
         return pixels.reshape(-1, 2)
 
     def mm_per_px(self, pixels: np.ndarray) -> np.ndarray:
-        """The local scale at each pixel ``[n, 2]``: √|det J| of the pixel → mm map."""
+        """The local scale at each pixel ``[n, 2]``: ``sqrt(abs(det J))`` of the pixel → mm map."""
         step = 0.5
         pixels = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
         du = (self.to_plane(pixels + [step, 0]) - self.to_plane(pixels - [step, 0])) / (2 * step)

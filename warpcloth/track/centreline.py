@@ -1,6 +1,6 @@
 """Without markers: the strip's centreline, sampled at given arc lengths.
 
-The strip (seen edge on) and the clamp differ from the background (|frame − background|
+The strip (seen edge on) and the clamp differ from the background (``|frame − background|``
 above the threshold) as one connected region. Its far end from the clamp is the free end:
 the pixel of the region farthest, along the region, from the pixel nearest the clamp's
 lowest point at rest (Dijkstra on the region's pixels, ``scipy.sparse.csgraph``); the path
