@@ -104,14 +104,10 @@ def test_the_centreline_without_markers_recovers_the_simulated_strip(centreline)
 
 
 def test_a_centreline_shorter_than_asked_is_an_error(tracked, first_frames, tmp_path):
-    small_video(tmp_path / "v.avi", first_frames, range(4))
-    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
-    done = run_cli("track", str(tmp_path / "v.avi"), "--plane", str(tmp_path / "plane.json"), "--background",
-                   str(DATA / "background.png"), "--centreline-s", "5:95:10", "--free-length-mm", "130",
-                   "--no-progress", "-o", str(tmp_path / "out.csv"))
+    clip = short_clip(first_frames, tracked, tmp_path)
+    done = track_with(clip, tmp_path, "--centreline-s", "5:95:10", "--free-length-mm", "130")
     one_line_error(done, "frame 0", "the centreline found is", "shorter than the 125 mm")
-    both = run_cli("track", str(tmp_path / "v.avi"), "--plane", str(tmp_path / "plane.json"), *MARKERS,
-                   "--centreline-s", "5:95:10", "-o", str(tmp_path / "out.csv"))
+    both = track_cli(clip, tmp_path, "--centreline-s", "5:95:10")
     one_line_error(both, "--marker-s", "one of them")
     assert not (tmp_path / "out.csv").exists()
 
@@ -159,9 +155,21 @@ def first_frames(tracked):
     return video.images[:4]
 
 
-def track_cli(video, where, *more):
+def track_with(video, where, *options):
+    """``warpcloth track VIDEO`` with where's plane.json and the bundled background, into where/out.csv."""
     return run_cli("track", str(video), "--plane", str(where / "plane.json"), "--background",
-                   str(DATA / "background.png"), *MARKERS, "-o", str(where / "out.csv"), *more)
+                   str(DATA / "background.png"), "--no-progress", "-o", str(where / "out.csv"), *options)
+
+
+def track_cli(video, where, *more):
+    return track_with(video, where, *MARKERS, *more)
+
+
+def short_clip(frames, tracked, where):
+    """The frames as where/v.avi, beside a copy of the calibrated plane.json."""
+    small_video(where / "v.avi", frames, range(len(frames)))
+    (where / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    return where / "v.avi"
 
 
 @pytest.mark.parametrize("s_mm", [45, 5])
@@ -174,19 +182,15 @@ def test_a_lost_marker_is_an_error(tracked, first_frames, tmp_path, s_mm):
     rows, cols = np.mgrid[0: frames.shape[1], 0: frames.shape[2]]
     hidden = np.hypot(cols - u, rows - v) < 12  # the marker covered in frame 2
     frames[2][hidden] = background[hidden]
-    small_video(tmp_path / "lost.avi", frames, range(4))
-    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
-    one_line_error(track_cli(tmp_path / "lost.avi", tmp_path), "frame 2", f"marker s = {s_mm} mm lost")
+    one_line_error(track_cli(short_clip(frames, tracked, tmp_path), tmp_path), "frame 2", f"marker s = {s_mm} mm lost")
     assert not (tmp_path / "out.csv").exists()
 
 
 def test_a_damaged_frame_is_an_error(tracked, first_frames, tmp_path):
-    small_video(tmp_path / "v.avi", first_frames, range(4))
-    data = bytearray((tmp_path / "v.avi").read_bytes())
+    data = bytearray(short_clip(first_frames, tracked, tmp_path).read_bytes())
     middle = int(len(data) * 0.6)
     data[middle: middle + 200] = bytes(200)
     (tmp_path / "damaged.avi").write_bytes(bytes(data))
-    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
     one_line_error(track_cli(tmp_path / "damaged.avi", tmp_path), "damaged.avi", "damaged")
     assert not (tmp_path / "out.csv").exists()
 
@@ -231,11 +235,8 @@ def test_a_calibration_that_does_not_fit_is_an_error(tmp_path):
 
 def test_markers_closer_than_their_arc_allows_are_an_error(tracked, first_frames, tmp_path):
     # --marker-s says 5 mm apart; the markers are 10 mm apart: a chord cannot exceed its arc
-    small_video(tmp_path / "v.avi", first_frames, range(4))
-    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
-    done = run_cli("track", str(tmp_path / "v.avi"), "--plane", str(tmp_path / "plane.json"), "--background",
-                   str(DATA / "background.png"), "--marker-s", "2.5:47.5:5", "--marker-diameter-mm", "2.4",
-                   "--no-progress", "-o", str(tmp_path / "out.csv"))
+    clip = short_clip(first_frames, tracked, tmp_path)
+    done = track_with(clip, tmp_path, "--marker-s", "2.5:47.5:5", "--marker-diameter-mm", "2.4")
     one_line_error(done, "frame 0", "marker s = 7.5 mm lost", "--marker-s or the plane's scale")
     assert not (tmp_path / "out.csv").exists()
 
