@@ -311,5 +311,8 @@ def make_example(out: str | Path, progress: bool = True) -> dict:
 
 
 if __name__ == "__main__":
-    make_example(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).resolve().parents[2] / "scenes" / "data"
-                 / "track")
+    import importlib.resources
+
+    # by default the bundled example itself (scenes/data/track/ of a checkout or an editable install)
+    make_example(sys.argv[1] if len(sys.argv) > 1 else Path(str(importlib.resources.files("warpcloth.scenes")))
+                 / "data" / "track")
