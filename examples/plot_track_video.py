@@ -27,6 +27,7 @@ import numpy as np
 
 from warpcloth.io.measured import read_tracked_shapes
 from warpcloth.track.calibration import calibrate_plane, read_image
+from warpcloth.track.centreline import track_centreline
 from warpcloth.track.markers import track_markers
 from warpcloth.track.overlay import overlay_figure
 from warpcloth.track.video import read_frames
@@ -72,3 +73,14 @@ ax.set_title("every marker in every frame")
 ax.legend()
 fig.tight_layout()
 plt.show()
+
+# %%
+# Without markers
+# ---------------
+# The strip's centreline at the same arc lengths (``--centreline-s``), measured along the
+# line from the free end (``--free-length-mm 100``): the same truth applies.
+line = track_centreline(frames, read_image(data / "background.png", "--background"), mapping, s_mm, 100.0,
+                        data / "rotation.avi")
+line_error = (line.mm - true_mm).reshape(-1, 2)
+print(f"centreline: bias x {line_error[:, 0].mean():+.4f} mm, y {line_error[:, 1].mean():+.4f} mm; RMS "
+      f"{np.sqrt(np.mean(line_error[:, 0] ** 2)):.4f}, {np.sqrt(np.mean(line_error[:, 1] ** 2)):.4f} mm")
