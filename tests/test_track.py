@@ -16,7 +16,7 @@ from conftest import run_cli
 from warpcloth.io.measured import read_measurement, read_tracked_shapes
 from warpcloth.track.calibration import read_plane
 from warpcloth.track.camera import Camera, PlanePose, rotation
-from warpcloth.track.video import read_frames, write_video
+from warpcloth.track.video import median_background, read_frames, write_video
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "scenes" / "data" / "track"
@@ -147,6 +147,13 @@ def test_dropped_and_duplicated_frames_are_reported_not_retimed(tmp_path):
     assert list(frames.index) == [0, 1, 2, 4]
     assert len(frames.dropped) == 1 and "1 frame(s) missing between frame 3" in frames.dropped[0]
     assert len(frames.duplicated) == 1 and "frame 3" in frames.duplicated[0]
+
+
+def test_the_median_background_samples_the_whole_recording():
+    # 1000 frames, frame i of grey level i // 4: at most 64 kept, every 16th (the stride
+    # doubled from 1 as they came), so the median is that of levels 0, 4, ..., 248
+    frames = ((i, i / 60, np.full((2, 2), i // 4, np.uint8)) for i in range(1000))
+    assert np.array_equal(median_background(frames), np.full((2, 2), np.median(np.arange(0, 1000, 16) // 4)))
 
 
 @pytest.fixture(scope="module")

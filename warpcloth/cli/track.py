@@ -163,7 +163,7 @@ def video_command(args: argparse.Namespace) -> int:
     from warpcloth.track.centreline import track_centreline
     from warpcloth.track.markers import track_markers
     from warpcloth.track.overlay import write_overlay, write_overlay_video
-    from warpcloth.track.video import read_frames
+    from warpcloth.track.video import FrameStream, median_background
 
     arcs = _what_to_track(args)
     what = "markers" if args.marker_s else "centreline points"
@@ -176,48 +176,51 @@ def video_command(args: argparse.Namespace) -> int:
             raise OptionError("--overlay-video", f"{args.overlay_video} must end in .avi")
         movie = new_result(args.overlay_video, args.overwrite, "--overlay-video")
     background = read_image(args.background, "--background") if args.background else None
-    frames = read_frames(args.video, progress=not args.no_progress)
-    size = frames.images.shape[2:0:-1]
+    frames = FrameStream(args.video)  # decoded as it is tracked: a long recording is never held whole
+    size = (frames.width, frames.height)
     if tuple(size) != tuple(mapping.image_size):
         raise OptionError("--plane", f"{args.plane} was calibrated for {mapping.image_size[0]} × "
                           f"{mapping.image_size[1]} px images, the video's frames are {size[0]} × {size[1]} px")
     if background is None:
-        background = np.median(frames.images, axis=0)
+        background = median_background(frames)
         source = "the median of the frames"
-    elif background.shape != frames.images.shape[1:]:
+    elif background.shape != (size[1], size[0]):
         raise OptionError("--background", f"{args.background} is {background.shape[1]} × {background.shape[0]} px, "
                           f"the video's frames are {size[0]} × {size[1]} px")
     else:
         source = str(args.background)
-    for note in (*frames.dropped, *frames.duplicated):
-        print(f"warpcloth track: warning: {args.video}: {note}", file=sys.stderr)
-    if args.overlay_frame is not None and args.overlay_frame >= len(frames.t):
-        raise OptionError("--overlay-frame", f"{args.overlay_frame} is not one of the {len(frames.t)} frames kept "
-                          f"(0 to {len(frames.t) - 1})")
     if args.marker_s:
         tracked = track_markers(frames, background, mapping, arcs, args.marker_diameter_mm, args.video,
                                 threshold_dn=args.threshold_dn, progress=not args.no_progress)
     else:
         tracked = track_centreline(frames, background, mapping, arcs, args.free_length_mm, args.video,
                                    threshold_dn=args.threshold_dn, progress=not args.no_progress)
+    dropped, duplicated, nominal = frames.dropped, frames.duplicated, frames.nominal_interval_s
+    for note in (*dropped, *duplicated):
+        print(f"warpcloth track: warning: {args.video}: {note}", file=sys.stderr)
+    kept = len(tracked.t)
+    if args.overlay_frame is not None and args.overlay_frame >= kept:
+        raise OptionError("--overlay-frame", f"{args.overlay_frame} is not one of the {kept} frames kept (0 to "
+                          f"{kept - 1})")
     video = file_checksum(args.video)
     header = [f"# warpcloth track {args.video} (sha256 {video['sha256']}), plane {args.plane}, background {source}",
-              f"# {len(arcs)} {what}, {len(frames.t)} frames; sensor noise {np.median(tracked.noise_dn):.3g} grey "
+              f"# {len(arcs)} {what}, {kept} frames; sensor noise {np.median(tracked.noise_dn):.3g} grey "
               "levels; u_px, u_mm: standard uncertainty of each coordinate from the sensor noise alone (the "
               "calibration's is in the plane file)",
-              *(f"# dropped: {note}" for note in frames.dropped),
-              *(f"# duplicated: {note}" for note in frames.duplicated),
+              *(f"# dropped: {note}" for note in dropped),
+              *(f"# duplicated: {note}" for note in duplicated),
               "frame,t_s,s_mm,x_mm,y_mm,u_px,u_mm"]
     write_text_atomically(out, "\n".join(header + tracked.csv_rows()) + "\n")
     if overlay is not None:
-        shown = args.overlay_frame if args.overlay_frame is not None else len(frames.t) // 2
-        write_overlay(overlay, frames.images[shown], tracked, shown)
+        shown = args.overlay_frame if args.overlay_frame is not None else kept // 2
+        image = next(image for position, (_, _, image) in enumerate(frames) if position == shown)
+        write_overlay(overlay, image, tracked, shown)
     if movie is not None:
-        write_overlay_video(movie, frames, tracked)
-    print(f"tracked {len(arcs)} {what} in {len(frames.t)} frames (t = {frames.t[0]:.6g} to {frames.t[-1]:.6g} s): "
+        write_overlay_video(movie, frames, tracked, nominal)
+    print(f"tracked {len(arcs)} {what} in {kept} frames (t = {tracked.t[0]:.6g} to {tracked.t[-1]:.6g} s): "
           f"median uncertainty {np.median(tracked.u_mm):.2g} mm ({np.median(tracked.u_px):.2g} px), sensor noise "
-          f"{np.median(tracked.noise_dn):.3g} grey levels; {len(frames.dropped)} gaps of dropped frames, "
-          f"{len(frames.duplicated)} duplicated frames left out")
+          f"{np.median(tracked.noise_dn):.3g} grey levels; {len(dropped)} gaps of dropped frames, "
+          f"{len(duplicated)} duplicated frames left out")
     print(f"wrote {', '.join(str(p) for p in (out, overlay, movie) if p is not None)}")
     return 0
 

@@ -26,7 +26,7 @@ from warpcloth.errors import DataFileError
 
 from .calibration import PlaneMapping
 from .markers import Tracked, noise_sigma
-from .video import Frames
+from .video import Frames, FrameStream
 
 __all__ = ["track_centreline"]
 
@@ -133,55 +133,70 @@ def _free_end(difference: np.ndarray, centre: np.ndarray, half_width: float) -> 
     return centre[0] + cross * direction
 
 
-def track_centreline(frames: Frames, background: np.ndarray, mapping: PlaneMapping, s_mm: np.ndarray,
+def _one_frame(image: np.ndarray, bg: np.ndarray, mapping: PlaneMapping, seed: np.ndarray, s_mm: np.ndarray,
+               free_length_mm: float, threshold_dn: float | None, where: str,
+               path: Path) -> tuple[np.ndarray, np.ndarray, float]:
+    # the centreline points (px), their σ (px) and the frame's noise
+    import cv2
+
+    difference = np.abs(bg - image.astype(np.float32))
+    noise = noise_sigma(bg - image)
+    threshold = threshold_dn if threshold_dn is not None else max(10.0 * noise, 5.0)
+    mask = difference > threshold
+    route = _region_path(mask, seed, where, path)
+    # the half-width: the distance to the region's edge at the middle of the strip, the
+    # largest within 9 px of the path (a shortest path runs along an edge)
+    inside = cv2.dilate(cv2.distanceTransform(mask.astype(np.uint8), cv2.DIST_L2, 5), np.ones((9, 9), np.uint8))
+    half_width = max(float(np.median(inside[route[:, 1].astype(int), route[:, 0].astype(int)][: len(route) // 2])),
+                     1.0)
+    centre = _resample(route, STEP_PX)
+    for _ in range(2):  # the second pass profiles across the first pass's centreline
+        centre, sigma = _refine(difference, centre, half_width, noise, threshold)
+    # near the free end a profile across sees no full band: start the line 3 half-widths in
+    inner = int(np.ceil(3 * half_width / STEP_PX))
+    centre, sigma = centre[inner:], sigma[inner:]
+    tip = _free_end(difference, centre, half_width)
+    # the refined points scatter across by ~0.1 px (the profile's sampling phase): summed
+    # over 1 px steps that would lengthen the arc by ~1 %, so the line is averaged over
+    # 11 px and its arc summed over 5 px chords (a curvature radius of 20 mm: −0.01 %)
+    kernel = np.ones(LINE_SMOOTH) / LINE_SMOOTH
+    centre = np.column_stack([np.convolve(np.pad(centre[:, k], LINE_SMOOTH // 2, mode="edge"), kernel, "valid")
+                              for k in range(2)])[::ARC_STRIDE]
+    sigma = sigma[::ARC_STRIDE] / np.sqrt(LINE_SMOOTH)
+    line_px = np.vstack([tip, centre])
+    line_mm = mapping.to_plane(line_px)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(line_mm, axis=0), axis=1))])
+    wanted = free_length_mm - np.asarray(s_mm)
+    if wanted.max() > arc[-1]:
+        raise DataFileError(path, f"{where}: the centreline found is {arc[-1]:.3g} mm long from the free end, "
+                            f"shorter than the {wanted.max():g} mm to s = {np.min(s_mm):g} mm (--centreline-s, "
+                            "--free-length-mm)")
+    points = np.column_stack([np.interp(wanted, arc, line_px[:, 0]), np.interp(wanted, arc, line_px[:, 1])])
+    return points, np.interp(wanted, arc, np.concatenate([[sigma[0]], sigma])), noise
+
+
+def track_centreline(frames: Frames | FrameStream, background: np.ndarray, mapping: PlaneMapping, s_mm: np.ndarray,
                      free_length_mm: float, path: str | Path, threshold_dn: float | None = None,
                      progress: bool = False) -> Tracked:
     """The centreline at arc lengths ``s_mm`` from the clamp's lowest point in every frame
-    (see the module docstring)."""
-    import cv2
+    (see the module docstring); ``frames`` gives ``(index, t, image)`` per frame."""
     from tqdm import tqdm
 
     path = Path(path)
     seed = mapping.to_pixels(np.zeros((1, 2)))[0]
-    n, m = len(frames.t), len(s_mm)
-    px, u, noise = np.zeros((n, m, 2)), np.zeros((n, m)), np.zeros(n)
     bg = background.astype(np.float32)
-    for f in tqdm(range(n), desc="tracking the centreline", unit=" frames", disable=not progress):
-        where = f"frame {frames.index[f]} (t = {frames.t[f]:.6g} s)"
-        difference = np.abs(bg - frames.images[f].astype(np.float32))
-        noise[f] = noise_sigma(bg - frames.images[f])
-        threshold = threshold_dn if threshold_dn is not None else max(10.0 * noise[f], 5.0)
-        mask = difference > threshold
-        route = _region_path(mask, seed, where, path)
-        # the half-width: the distance to the region's edge at the middle of the strip, the
-        # largest within 9 px of the path (a shortest path runs along an edge)
-        inside = cv2.dilate(cv2.distanceTransform(mask.astype(np.uint8), cv2.DIST_L2, 5), np.ones((9, 9), np.uint8))
-        half_width = max(float(np.median(inside[route[:, 1].astype(int), route[:, 0].astype(int)][: len(route) // 2])),
-                         1.0)
-        centre = _resample(route, STEP_PX)
-        for _ in range(2):  # the second pass profiles across the first pass's centreline
-            centre, sigma = _refine(difference, centre, half_width, noise[f], threshold)
-        # near the free end a profile across sees no full band: start the line 3 half-widths in
-        inner = int(np.ceil(3 * half_width / STEP_PX))
-        centre, sigma = centre[inner:], sigma[inner:]
-        tip = _free_end(difference, centre, half_width)
-        # the refined points scatter across by ~0.1 px (the profile's sampling phase): summed
-        # over 1 px steps that would lengthen the arc by ~1 %, so the line is averaged over
-        # 11 px and its arc summed over 5 px chords (a curvature radius of 20 mm: −0.01 %)
-        kernel = np.ones(LINE_SMOOTH) / LINE_SMOOTH
-        centre = np.column_stack([np.convolve(np.pad(centre[:, k], LINE_SMOOTH // 2, mode="edge"), kernel, "valid")
-                                  for k in range(2)])[::ARC_STRIDE]
-        sigma = sigma[::ARC_STRIDE] / np.sqrt(LINE_SMOOTH)
-        line_px = np.vstack([tip, centre])
-        line_mm = mapping.to_plane(line_px)
-        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(line_mm, axis=0), axis=1))])
-        wanted = free_length_mm - np.asarray(s_mm)
-        if wanted.max() > arc[-1]:
-            raise DataFileError(path, f"{where}: the centreline found is {arc[-1]:.3g} mm long from the free end, "
-                                f"shorter than the {wanted.max():g} mm to s = {np.min(s_mm):g} mm (--centreline-s, "
-                                "--free-length-mm)")
-        px[f] = np.column_stack([np.interp(wanted, arc, line_px[:, 0]), np.interp(wanted, arc, line_px[:, 1])])
-        u[f] = np.interp(wanted, arc, np.concatenate([[sigma[0]], sigma]))
+    index, t, px, u, noise = [], [], [], [], []
+    for i, time, image in tqdm(frames, total=frames.total, desc="tracking the centreline", unit=" frames",
+                               disable=not progress):
+        points, sigma, frame_noise = _one_frame(image, bg, mapping, seed, s_mm, free_length_mm, threshold_dn,
+                                                f"frame {i} (t = {time:.6g} s)", path)
+        index.append(i)
+        t.append(time)
+        px.append(points)
+        u.append(sigma)
+        noise.append(frame_noise)
+    px, u = np.array(px), np.array(u)
+    n, m = u.shape
     mm = mapping.to_plane(px.reshape(-1, 2)).reshape(n, m, 2)
     u_mm = u * mapping.mm_per_px(px.reshape(-1, 2)).reshape(n, m)
-    return Tracked(frames.index, frames.t, np.asarray(s_mm, dtype=float), px, mm, u, u_mm, noise)
+    return Tracked(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u, u_mm, np.array(noise))

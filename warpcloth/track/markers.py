@@ -29,7 +29,7 @@ import numpy as np
 from warpcloth.errors import DataFileError
 
 from .calibration import PlaneMapping
-from .video import Frames
+from .video import Frames, FrameStream
 
 __all__ = ["Tracked", "noise_sigma", "track_markers"]
 
@@ -138,35 +138,39 @@ def _chain(plane: np.ndarray, start: np.ndarray, reach: float, s_mm: np.ndarray,
     return np.array(order)
 
 
-def track_markers(frames: Frames, background: np.ndarray, mapping: PlaneMapping, s_mm: np.ndarray,
+def track_markers(frames: Frames | FrameStream, background: np.ndarray, mapping: PlaneMapping, s_mm: np.ndarray,
                   diameter_mm: float, path: str | Path, threshold_dn: float | None = None,
                   progress: bool = False) -> Tracked:
-    """Every marker in every frame (see the module docstring)."""
+    """Every marker in every frame (see the module docstring); ``frames`` gives
+    ``(index, t, image)`` per frame, in memory or streamed."""
     from tqdm import tqdm
 
     path = Path(path)
     centre_px = np.array([[mapping.image_size[0] / 2, mapping.image_size[1] / 2]])
     expected_area = np.pi * (0.5 * diameter_mm / float(mapping.mm_per_px(centre_px)[0])) ** 2
     areas = (AREA_RANGE[0] * expected_area, AREA_RANGE[1] * expected_area)
-    n, m = len(frames.t), len(s_mm)
-    px, sig, noise = np.zeros((n, m, 2)), np.zeros((n, m, 2)), np.zeros(n)
+    index, t, px, sig, noise = [], [], [], [], []
     previous = np.zeros(2)  # the clamp's lowest point at rest
     bg = background.astype(np.float64)
-    for f in tqdm(range(n), desc="tracking", unit=" frames", disable=not progress):
-        darkening = bg - frames.images[f]
-        noise[f] = noise_sigma(darkening)
-        threshold = threshold_dn if threshold_dn is not None else max(10.0 * noise[f], 5.0)
-        centres, sigmas = _blobs(darkening, threshold, areas, noise[f])
-        where = f"frame {frames.index[f]} (t = {frames.t[f]:.6g} s)"
+    for i, time, image in tqdm(frames, total=frames.total, desc="tracking", unit=" frames", disable=not progress):
+        darkening = bg - image
+        noise.append(noise_sigma(darkening))
+        threshold = threshold_dn if threshold_dn is not None else max(10.0 * noise[-1], 5.0)
+        centres, sigmas = _blobs(darkening, threshold, areas, noise[-1])
         plane = mapping.to_plane(centres) if len(centres) else centres
         # the first marker: near the clamp's lowest point at rest in the first frame, then
         # within half the spacing of where it was (it moves least: it is nearest the clamp)
-        reach = 0.5 * (s_mm[1] - s_mm[0]) + (s_mm[0] if f == 0 else 0.0)
-        order = _chain(plane, previous, reach, s_mm, where, path)
-        px[f], sig[f] = centres[order], sigmas[order]
+        reach = 0.5 * (s_mm[1] - s_mm[0]) + (s_mm[0] if not index else 0.0)
+        order = _chain(plane, previous, reach, s_mm, f"frame {i} (t = {time:.6g} s)", path)
+        index.append(i)
+        t.append(time)
+        px.append(centres[order])
+        sig.append(sigmas[order])
         previous = plane[order[0]]
+    px, sig = np.array(px), np.array(sig)
+    n, m = px.shape[:2]
     mm = mapping.to_plane(px.reshape(-1, 2)).reshape(n, m, 2)
     u_px = np.sqrt(0.5 * np.sum(sig**2, axis=2))
     u_mm = u_px * mapping.mm_per_px(px.reshape(-1, 2)).reshape(n, m)
-    return Tracked(frames.index, frames.t, np.asarray(s_mm, dtype=float), px, mm, u_px, u_mm, noise)
+    return Tracked(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u_px, u_mm, np.array(noise))
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .markers import Tracked
-from .video import Frames
+from .video import Frames, FrameStream
 
 __all__ = ["overlay_figure", "write_overlay", "write_overlay_video"]
 
@@ -62,18 +62,20 @@ def write_overlay(path: str | Path, image: np.ndarray, tracked: Tracked, frame: 
         plt.close(fig)
 
 
-def write_overlay_video(path: str | Path, frames: Frames, tracked: Tracked) -> None:
-    """Every kept frame with its tracked points circled and labelled (grey FFV1 in AVI),
-    written atomically; frames keep their times to the nearest nominal interval."""
+def write_overlay_video(path: str | Path, frames: Frames | FrameStream, tracked: Tracked,
+                        nominal_interval_s: float) -> None:
+    """The frames ``tracked`` was tracked from (``(index, t, image)`` each, in the same
+    order) with their points circled and labelled, as grey FFV1 in AVI, written atomically;
+    frames keep their times to the nearest nominal interval."""
     import cv2
 
     from warpcloth.io.atomic import write_atomically
 
     from .video import write_video
 
-    rate = Fraction(1 / frames.nominal_interval_s).limit_denominator(1001)
+    rate = Fraction(1 / nominal_interval_s).limit_denominator(1001)
     images = []
-    for f, image in enumerate(frames.images):
+    for f, (_, _, image) in enumerate(frames):
         drawn = image.copy()
         for m, s in enumerate(tracked.s_mm):
             centre = tuple(int(round(v * 16)) for v in tracked.px[f, m])
@@ -83,5 +85,5 @@ def write_overlay_video(path: str | Path, frames: Frames, tracked: Tracked) -> N
         cv2.putText(drawn, f"frame {tracked.frame[f]}  t = {tracked.t[f]:.4f} s", (10, 20), cv2.FONT_HERSHEY_SIMPLEX,
                     0.5, 255, 1, cv2.LINE_AA)
         images.append(drawn)
-    pts = np.rint(np.asarray(frames.t) * float(rate)).astype(int)
+    pts = np.rint(tracked.t * float(rate)).astype(int)
     write_atomically(path, lambda tmp: write_video(tmp, images, pts, 1 / rate))

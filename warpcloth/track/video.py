@@ -11,7 +11,7 @@ file and the frame.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -20,7 +20,7 @@ import numpy as np
 
 from warpcloth.errors import DataFileError, OptionError
 
-__all__ = ["Frames", "read_frames", "write_video"]
+__all__ = ["FrameStream", "Frames", "median_background", "read_frames", "write_video"]
 
 DROP_FACTOR = 1.5
 """A gap beyond this many nominal frame intervals is reported as dropped frames."""
@@ -29,7 +29,8 @@ DROP_FACTOR = 1.5
 @dataclass
 class Frames:
     """Decoded grey frames ``[frame, row, column]`` (uint8) with their times (s), the
-    index of each in the file's decode order, and what was found wrong with the timing."""
+    index of each in the file's decode order, and what was found wrong with the timing.
+    Iterating gives ``(index, t, image)`` per frame, as :class:`FrameStream` does."""
 
     images: np.ndarray
     t: np.ndarray
@@ -38,78 +39,119 @@ class Frames:
     dropped: list[str] = field(default_factory=list)
     duplicated: list[str] = field(default_factory=list)
 
+    @property
+    def total(self) -> int:
+        """How many frames there are."""
+        return len(self.t)
 
-def read_frames(path: str | Path, flag: str = "VIDEO", progress: bool = False) -> Frames:
-    """Every frame of the first video stream of ``path`` as grey images, with its time."""
-    import av
-    from tqdm import tqdm
+    def __iter__(self) -> Iterator[tuple[int, float, np.ndarray]]:
+        return zip(self.index.tolist(), self.t.tolist(), self.images, strict=True)
 
-    path = Path(path)
-    if not path.is_file():
-        raise OptionError(flag, f"{path} does not exist" if not path.exists() else f"{path} is not a file")
-    try:
-        container = av.open(str(path))
-    except (av.error.FFmpegError, UnicodeDecodeError) as exc:
-        raise DataFileError(path, f"cannot be read as a video ({exc})") from None
-    images, times, index = [], [], []
-    level = av.logging.get_level()
-    av.logging.set_level(av.logging.ERROR)  # a damaged frame is only logged by FFmpeg's decoders: catch it
-    try:
-        with container, av.logging.Capture() as logged:
-            if not container.streams.video:
-                raise DataFileError(path, "holds no video stream")
-            stream = container.streams.video[0]
-            frames = container.decode(stream)
-            with tqdm(total=stream.frames or None, desc="reading frames", unit=" frames", disable=not progress) as bar:
+
+class FrameStream:
+    """The frames of a video's first stream, decoded one at a time as it is iterated (a long
+    recording is never held whole): ``(index, t, image)`` per frame kept, duplicates left
+    out. After an iteration, :attr:`dropped`, :attr:`duplicated` and
+    :attr:`nominal_interval_s` describe its timing; each iteration decodes the file again."""
+
+    def __init__(self, path: str | Path, flag: str = "VIDEO") -> None:
+        import av
+
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise OptionError(flag, f"{self.path} does not exist" if not self.path.exists() else
+                              f"{self.path} is not a file")
+        try:
+            with av.open(str(self.path)) as container:
+                if not container.streams.video:
+                    raise DataFileError(self.path, "holds no video stream")
+                stream = container.streams.video[0]
+                self.width, self.height = stream.codec_context.width, stream.codec_context.height
+                self.total = stream.frames or None
+        except (av.error.FFmpegError, UnicodeDecodeError) as exc:
+            raise DataFileError(self.path, f"cannot be read as a video ({exc})") from None
+        self.times: list[Fraction] = []
+        self.duplicated: list[str] = []
+
+    def __iter__(self) -> Iterator[tuple[int, float, np.ndarray]]:
+        import av
+
+        self.times, self.duplicated = [], []
+        previous = None
+        level = av.logging.get_level()
+        av.logging.set_level(av.logging.ERROR)  # a damaged frame is only logged by FFmpeg's decoders: catch it
+        try:
+            with av.open(str(self.path)) as container, av.logging.Capture() as logged:
+                frames = container.decode(container.streams.video[0])
                 while True:
+                    i = len(self.times)
                     try:
                         frame = next(frames)
                     except StopIteration:
                         break
                     except av.error.FFmpegError as exc:
-                        after = float(times[-1]) if times else 0.0
-                        raise DataFileError(path, f"frame {len(images)} (after t = {after:g} s) cannot be decoded "
+                        after = float(self.times[-1]) if self.times else 0.0
+                        raise DataFileError(self.path, f"frame {i} (after t = {after:g} s) cannot be decoded "
                                             f"({exc}); the file is damaged") from None
+                    if frame.pts is None or frame.time_base is None:
+                        raise DataFileError(self.path, f"frame {i} has no timestamp; the container must give each "
+                                            "frame's time (re-mux it, e.g. to .avi or .mkv)")
+                    t = Fraction(frame.pts) * frame.time_base
                     if logged:
                         said = "; ".join(" ".join(entry[2].split()) for entry in logged)
-                        raise DataFileError(path, f"frame {len(images)} (t = {float(frame.pts * frame.time_base):g} s) "
-                                            f"or the one before it is damaged: the decoder says {said!r}")
-                    if frame.pts is None or frame.time_base is None:
-                        raise DataFileError(path, f"frame {len(images)} has no timestamp; the container must give "
-                                            "each frame's time (re-mux it, e.g. to .avi or .mkv)")
-                    images.append(frame.to_ndarray(format="gray"))
-                    times.append(Fraction(frame.pts) * frame.time_base)
-                    index.append(len(index))
-                    bar.update()
-    finally:
-        av.logging.set_level(level)
-    if len(images) < 2:
-        raise DataFileError(path, f"holds {len(images)} decodable frame(s); tracking needs at least two")
-    return _checked(path, np.stack(images), times, np.array(index))
+                        raise DataFileError(self.path, f"frame {i} (t = {float(t):g} s) or the one before it is "
+                                            f"damaged: the decoder says {said!r}")
+                    if self.times and t <= self.times[-1]:
+                        raise DataFileError(self.path, f"frame {i} has time {float(t):.6g} s, not after frame "
+                                            f"{i - 1}'s {float(self.times[-1]):.6g} s: the timestamps do not increase")
+                    self.times.append(t)
+                    image = frame.to_ndarray(format="gray")
+                    if previous is not None and np.array_equal(image, previous[1]):
+                        self.duplicated.append(f"frame {i} (t = {float(t):.6g} s) repeats frame {previous[0]} "
+                                               "exactly; left out")
+                        continue
+                    previous = (i, image)
+                    yield i, float(t), image
+        finally:
+            av.logging.set_level(level)
+        if len(self.times) < 2:
+            raise DataFileError(self.path, f"holds {len(self.times)} decodable frame(s); tracking needs at least two")
+
+    @property
+    def nominal_interval_s(self) -> float:
+        """The median interval between frames of the last iteration (s)."""
+        steps = sorted(b - a for a, b in zip(self.times, self.times[1:], strict=False))
+        return float(steps[len(steps) // 2])
+
+    @property
+    def dropped(self) -> list[str]:
+        """Gaps of more than 1.5 nominal intervals in the last iteration, one note each."""
+        steps = [b - a for a, b in zip(self.times, self.times[1:], strict=False)]
+        nominal = sorted(steps)[len(steps) // 2]
+        return [f"{round(step / nominal) - 1} frame(s) missing between frame {i} (t = {float(self.times[i]):.6g} s) "
+                f"and frame {i + 1} (t = {float(self.times[i + 1]):.6g} s), nominal interval {float(nominal):.6g} s"
+                for i, step in enumerate(steps) if step > DROP_FACTOR * nominal]
 
 
-def _checked(path: Path, images: np.ndarray, times: list[Fraction], index: np.ndarray) -> Frames:
-    steps = [b - a for a, b in zip(times, times[1:], strict=False)]
-    for i, step in enumerate(steps):
-        if step <= 0:
-            raise DataFileError(path, f"frame {i + 1} has time {float(times[i + 1]):.6g} s, not after frame {i}'s "
-                                f"{float(times[i]):.6g} s: the timestamps do not increase")
-    nominal = sorted(steps)[len(steps) // 2]
-    dropped = []
-    for i, step in enumerate(steps):
-        if step > DROP_FACTOR * nominal:
-            missing = round(step / nominal) - 1
-            dropped.append(f"{missing} frame(s) missing between frame {i} (t = {float(times[i]):.6g} s) and frame "
-                           f"{i + 1} (t = {float(times[i + 1]):.6g} s), nominal interval {float(nominal):.6g} s")
-    keep = [0]
-    duplicated = []
-    for i in range(1, len(images)):
-        if np.array_equal(images[i], images[keep[-1]]):
-            duplicated.append(f"frame {i} (t = {float(times[i]):.6g} s) repeats frame {keep[-1]} exactly; left out")
-        else:
-            keep.append(i)
-    t = np.array([float(times[i]) for i in keep])
-    return Frames(images[keep], t, index[keep], float(nominal), dropped, duplicated)
+def read_frames(path: str | Path, flag: str = "VIDEO") -> Frames:
+    """Every frame of the first video stream of ``path`` in memory (a short clip; tracking
+    streams a :class:`FrameStream`)."""
+    stream = FrameStream(path, flag)
+    index, t, images = zip(*stream, strict=True)
+    return Frames(np.stack(images), np.array(t), np.array(index), stream.nominal_interval_s, stream.dropped,
+                  stream.duplicated)
+
+
+def median_background(frames: Iterable[tuple[int, float, np.ndarray]], most: int = 64) -> np.ndarray:
+    """The per-pixel median of at most ``most`` frames spread over the whole recording (every
+    frame while there are fewer; the stride doubles as it grows), a fixed-camera background."""
+    kept, stride = [], 1
+    for position, (_, _, image) in enumerate(frames):
+        if position % stride == 0:
+            kept.append(image)
+            if len(kept) > most:
+                kept, stride = kept[::2], 2 * stride
+    return np.median(np.stack(kept), axis=0)
 
 
 def write_video(path: str | Path, images: Sequence[np.ndarray], pts: Sequence[int], time_base: Fraction) -> None:
