@@ -58,6 +58,7 @@ sphinx_gallery_conf = {
         "plot_kes_fit.py",
         "plot_bending_laws.py",
         "plot_calibration.py",
+        "plot_track_video.py",
         "plot_set_and_grip.py",
         "plot_sweep_heatmap.py",
         "plot_usd_export.py",

@@ -45,11 +45,11 @@ def site(tmp_path_factory):
     return work / "html"
 
 
-def test_there_are_the_eight_examples():
-    # issue 14's six, issue 15's bending-law comparison and issue 28's set and grip;
-    # docs/conf.py orders them (sphinx-gallery refuses a file it does not list)
+def test_there_are_the_nine_examples():
+    # issue 14's six, issue 15's bending-law comparison, issue 28's set and grip and issue
+    # 24's tracking; docs/conf.py orders them (sphinx-gallery refuses a file it does not list)
     wanted = ["plot_damped_swing", "plot_impulsive_rotation", "plot_kes_fit", "plot_bending_laws", "plot_calibration",
-              "plot_set_and_grip", "plot_sweep_heatmap", "plot_usd_export"]
+              "plot_track_video", "plot_set_and_grip", "plot_sweep_heatmap", "plot_usd_export"]
     assert sorted(wanted) == EXAMPLES
 
 

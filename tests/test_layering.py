@@ -15,10 +15,11 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = {"warpcloth": ROOT / "warpcloth", "warpcloth.kernels": ROOT / "kernels"}
 
-# The layers, lowest first: kernels < sim < scene < io < viz < runs < calibrate < sweeps < cli
-# (errors, units and metrics, the one ruler, sit beside all of them).
+# The layers, lowest first: kernels < sim < scene < io < viz < runs < track < calibrate < sweeps < cli
+# (errors, units and metrics, the one ruler, sit beside all of them). track sits above runs:
+# its synthetic camera films a simulation; nothing of the simulation imports it.
 ORDER = ("warpcloth.kernels", "warpcloth.sim", "warpcloth.scene", "warpcloth.io", "warpcloth.viz",
-         "warpcloth.runs", "warpcloth.calibrate", "warpcloth.sweeps", "warpcloth.cli")
+         "warpcloth.runs", "warpcloth.track", "warpcloth.calibrate", "warpcloth.sweeps", "warpcloth.cli")
 FORBIDDEN = {layer: ORDER[i + 1:] for i, layer in enumerate(ORDER) if layer != "warpcloth.kernels"}
 
 
@@ -150,7 +151,10 @@ def reachable(edges: dict[str, set[str]], start: str) -> set[str]:
 
 def test_the_graph_sees_the_layers(graph):
     # guards the test itself: it must find the packages and real edges between them
-    expected = {"warpcloth.sim.model", "warpcloth.kernels.strip", "warpcloth.scene.build", "warpcloth.cli.app"}
+    expected = {"warpcloth.sim.model", "warpcloth.kernels.strip", "warpcloth.scene.build", "warpcloth.cli.app",
+                "warpcloth.track.markers", "warpcloth.cli.track"}
     assert expected <= set(graph)
+    assert "warpcloth.track.calibration" in graph["warpcloth.track.markers"]
+    assert "warpcloth.runs" in graph["warpcloth.track.render"]
     assert "warpcloth.sim" in graph["warpcloth.scene.build"]
     assert "warpcloth.kernels.forces" in graph["warpcloth.kernels.strip"]

@@ -28,11 +28,11 @@ from warpcloth.errors import (
 )
 from warpcloth.sim.model import init_warp_quietly
 
-from . import analyse, fit, material, run, scene, sweep, view
+from . import analyse, fit, material, run, scene, sweep, track, view
 from .flags import as_option
 from .interrupt import EXIT_INTERRUPTED, interrupted_at_start
 
-COMMAND_GROUPS = (run, sweep, view, fit, material, analyse, scene)
+COMMAND_GROUPS = (run, sweep, view, fit, material, analyse, scene, track)
 """Each registers its subcommands with a ``handler`` (see :func:`main`)."""
 
 WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (OptionError, "error in option"),
@@ -58,7 +58,7 @@ def parser() -> argparse.ArgumentParser:
     """The argument parser of every command."""
     top = argparse.ArgumentParser(
         prog="warpcloth", description="Batched Warp simulation of hanging fabric strips: "
-        "run | sweep | export-usd | plot | render | fit | clamp | material | analyse | scene (--help on each).")
+        "run | sweep | export-usd | plot | render | fit | clamp | material | analyse | scene | track (--help on each).")
     top.add_argument("--version", action="version", version=f"warpcloth {_version()}")
     top.add_argument("--verbose", action="store_true", help="let Warp print its banner, module loads and CUDA notices")
     sub = top.add_subparsers(dest="command", required=True)
@@ -89,7 +89,7 @@ def show_warnings_as_lines(command: str) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``warpcloth`` command; returns the exit status."""
-    argv = sys.argv[1:] if argv is None else list(argv)
+    argv = track.route(sys.argv[1:] if argv is None else argv)
     try:
         init_warp_quietly(verbose="--verbose" in argv)  # before parsing: a --device option starts Warp
         args = parser().parse_args(argv)

@@ -9,7 +9,8 @@ form               columns                     units
 laser / tip trace  ``t, x``                    s, mm (displacement at the laser line)
 tracked shapes     ``frame, t, s, x, y``       -, s, mm (arc length of the marker from the
                                                clamp's lowest point), mm, mm (from the clamp's
-                                               lowest point at rest, y up)
+                                               lowest point at rest, y up); ``warpcloth
+                                               track`` adds ``u_px, u_mm`` (read, ignored)
 clamp encoder      ``t, theta``                s, rad (``angle_unit`` overrides the header)
 =================  ==========================  =============================================
 
@@ -46,6 +47,9 @@ __all__ = ["ClampAngleTrace", "LaserTrace", "TrackedShapes", "bundled_data", "re
 _LASER = ("t_s", "x_mm")
 _SHAPES = ("frame", "t_s", "s_mm", "x_mm", "y_mm")
 _ENCODER = ("t_s", "theta")
+UNCERTAINTY_COLUMNS = ("u_px", "u_mm")
+"""The columns ``warpcloth track`` adds after a tracked shape's five: each coordinate's
+standard uncertainty (px, mm). Read and ignored: a fit judges its RMS by the noise."""
 
 
 def read_table(path: str | Path, n_columns: int | None, what: str, argument: str,
@@ -250,7 +254,8 @@ def read_measurement(path: str | Path, argument: str = "path",
                             table.header_line)
     if n == 2:
         return _laser_trace(table)
-    if n == 5:
+    if n == 5 or (n == 7 and table.header is not None and tuple(table.header[5:7]) == UNCERTAINTY_COLUMNS):
         return _tracked_shapes(table)
     raise DataFileError(table.path, f"has {n} columns: a laser trace has 2 (t_s, x_mm), tracked shapes 5 "
-                        "(frame, t_s, s_mm, x_mm, y_mm)", int(table.lines[0]))
+                        "(frame, t_s, s_mm, x_mm, y_mm), or 7 as warpcloth track writes them (… u_px, u_mm)",
+                        int(table.lines[0]))

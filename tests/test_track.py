@@ -1,0 +1,292 @@
+"""warpcloth track against video it rendered itself: the bundled example
+(scenes/data/track/, made by ``python -m warpcloth.track.render``) is warpcloth's own
+simulation of the impulsive rotation filmed by a tilted, distorting, noisy camera; the
+tracker must recover the simulated markers, and a fit of the tracked shapes the rotation
+centre. Every failure mode is a one-line error, a non-zero exit and no shapes file."""
+
+import json
+from fractions import Fraction
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from conftest import run_cli
+
+from warpcloth.io.measured import read_measurement, read_tracked_shapes
+from warpcloth.track.calibration import read_plane
+from warpcloth.track.camera import Camera, PlanePose, rotation
+from warpcloth.track.video import median_background, read_frames, write_video
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "scenes" / "data" / "track"
+BOARDS = [str(DATA / f"board_{i}.png") for i in range(6)]
+CALIBRATE = ["track", "calibrate", *BOARDS, "--board", "11x10", "--square-mm", "10", "--origin-corner", "1,1"]
+MARKERS = ["--marker-s", "5:95:10", "--marker-diameter-mm", "2.4", "--no-progress"]
+TRUTH_DY_MM = 4.0  # scenes/data/track/truth.json
+
+
+def one_line_error(done, *words):
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+    for word in words:
+        assert word in lines[0], lines[0]
+
+
+@pytest.fixture(scope="module")
+def tracked(tmp_path_factory):
+    where = tmp_path_factory.mktemp("track")
+    cal = run_cli(*CALIBRATE, "-o", str(where / "plane.json"))
+    assert cal.returncode == 0, cal.stderr
+    done = run_cli("track", str(DATA / "rotation.avi"), "--plane", str(where / "plane.json"), "--background",
+                   str(DATA / "background.png"), *MARKERS, "-o", str(where / "shapes.csv"), "--overlay",
+                   str(where / "overlay.png"), "--overlay-video", str(where / "overlay.avi"))
+    assert done.returncode == 0, done.stderr
+    return where
+
+
+def test_calibration_recovers_the_camera(tracked):
+    plane = json.loads((tracked / "plane.json").read_text())
+    truth = json.loads((DATA / "truth.json").read_text())["camera"]
+    assert plane["reprojection_rms_px"] < 0.1
+    assert np.allclose(np.array(plane["camera_matrix"]), np.array(truth["matrix"]), atol=3.0)  # px, of f = 2300
+    assert plane["plane_view"]["rms_mm"] < 0.02
+
+
+def test_track_recovers_the_simulated_markers(tracked):
+    shapes, truth = read_tracked_shapes(tracked / "shapes.csv"), read_tracked_shapes(DATA / "truth.csv")
+    assert np.array_equal(shapes.frame, truth.frame) and np.array_equal(shapes.s, truth.s)
+    assert np.allclose(shapes.t, truth.t, atol=1e-9, rtol=0)  # the container's timestamps, exact
+    error_mm = np.column_stack([shapes.x - truth.x, shapes.y - truth.y]) * 1e3
+    bias, rms = error_mm.mean(axis=0), np.sqrt(np.mean(error_mm**2, axis=0))
+    # the issue's goals: bias ≤ 0.02 mm, RMS ≤ 0.1 mm per coordinate (measured: docs/calibration.md)
+    assert np.all(np.abs(bias) <= 0.02), bias
+    assert np.all(rms <= 0.1), rms
+    table = np.loadtxt(tracked / "shapes.csv", delimiter=",", comments="#", skiprows=3)
+    assert table.shape[1] == 7 and np.all(table[:, 5:] > 0)  # u_px, u_mm
+    assert (tracked / "overlay.png").stat().st_size > 10_000
+    movie = read_frames(tracked / "overlay.avi")
+    assert np.allclose(movie.t, truth.t[::10]) and not movie.dropped
+
+
+def test_fit_of_the_tracked_shapes_recovers_the_rotation_centre(tracked):
+    done = run_cli("fit", "impulsive_rotation", "--measured", str(tracked / "shapes.csv"), "--free",
+                   "gamma,rotation_centre_dy_mm", "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out",
+                   str(tracked / "fit"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    fit = json.loads((tracked / "fit" / "fit.json").read_text())
+    dy = fit["parameters"]["clamp.rotation_centre_dy_mm"]["value"]
+    assert abs(dy - TRUTH_DY_MM) <= 0.05, dy
+
+
+@pytest.fixture(scope="module")
+def centreline(tracked):
+    done = run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tracked / "plane.json"), "--background",
+                   str(DATA / "background.png"), "--centreline-s", "5:95:10", "--free-length-mm", "100",
+                   "--no-progress", "-o", str(tracked / "centreline.csv"))
+    assert done.returncode == 0, done.stderr
+    return tracked / "centreline.csv"
+
+
+def test_the_centreline_without_markers_recovers_the_simulated_strip(centreline):
+    # the same arc lengths as the markers, from the free end: the same truth
+    shapes, truth = read_tracked_shapes(centreline), read_tracked_shapes(DATA / "truth.csv")
+    error_mm = np.column_stack([shapes.x - truth.x, shapes.y - truth.y]) * 1e3
+    assert np.all(np.abs(error_mm.mean(axis=0)) <= 0.02), error_mm.mean(axis=0)
+    assert np.all(np.sqrt(np.mean(error_mm**2, axis=0)) <= 0.1)
+    done = run_cli("fit", "impulsive_rotation", "--measured", str(centreline), "--free",
+                   "gamma,rotation_centre_dy_mm", "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out",
+                   str(centreline.parent / "fit-centreline"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    fit = json.loads((centreline.parent / "fit-centreline" / "fit.json").read_text())
+    assert abs(fit["parameters"]["clamp.rotation_centre_dy_mm"]["value"] - TRUTH_DY_MM) <= 0.05
+
+
+def test_a_centreline_shorter_than_asked_is_an_error(tracked, first_frames, tmp_path):
+    clip = short_clip(first_frames, tracked, tmp_path)
+    done = track_with(clip, tmp_path, "--centreline-s", "5:95:10", "--free-length-mm", "130")
+    one_line_error(done, "frame 0", "the centreline found is", "shorter than the 125 mm")
+    both = track_cli(clip, tmp_path, "--centreline-s", "5:95:10")
+    one_line_error(both, "--marker-s", "one of them")
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_shapes_with_uncertainty_columns_read_as_shapes(tracked, tmp_path):
+    assert type(read_measurement(tracked / "shapes.csv")).__name__ == "TrackedShapes"
+    other = tmp_path / "seven.csv"
+    other.write_text("frame,t_s,s_mm,x_mm,y_mm,a,b\n0,0,0,0,0,1,1\n1,0.1,0,0,0,1,1\n")
+    with pytest.raises(ValueError, match="has 7 columns"):
+        read_measurement(other)
+
+
+def test_the_camera_model_is_opencvs():
+    # the renderer's own NumPy camera, checked against OpenCV's projection it does not call
+    camera = Camera(2000.0, 2010.0, 300.5, 250.2, (-0.25, 0.12, 6e-4, -4e-4, 0.01), 640, 480)
+    pose = PlanePose(rotation(-12.0, 20.0, 3.0), np.array([-20.0, 10.0, 450.0]))
+    xy = np.random.default_rng(1).uniform(-60, 60, (50, 2))
+    points = pose.to_camera(xy)
+    ours = camera.project(points)
+    theirs, _ = cv2.projectPoints(points, np.zeros(3), np.zeros(3), camera.matrix, np.array(camera.distortion))
+    assert np.max(np.abs(ours - theirs.reshape(-1, 2))) < 1e-9
+    back = pose.from_rays(*camera.rays(ours[:, 0], ours[:, 1]))
+    assert np.max(np.abs(np.column_stack(back) - xy)) < 1e-9
+
+
+def small_video(path, frames, pts):
+    write_video(path, frames, pts, Fraction(1, 60))
+
+
+def test_dropped_and_duplicated_frames_are_reported_not_retimed(tmp_path):
+    rng = np.random.default_rng(0)
+    images = [rng.integers(0, 255, (24, 32), dtype=np.uint8) for _ in range(5)]
+    images[3] = images[2].copy()  # a capture that repeated a frame
+    small_video(tmp_path / "v.avi", images, [0, 1, 2, 3, 5])  # one frame dropped before the last
+    frames = read_frames(tmp_path / "v.avi")
+    assert np.allclose(frames.t, [0, 1 / 60, 2 / 60, 5 / 60])
+    assert list(frames.index) == [0, 1, 2, 4]
+    assert len(frames.dropped) == 1 and "1 frame(s) missing between frame 3" in frames.dropped[0]
+    assert len(frames.duplicated) == 1 and "frame 3" in frames.duplicated[0]
+
+
+def test_the_median_background_samples_the_whole_recording():
+    # 1000 frames, frame i of grey level i // 4: at most 64 kept, every 16th (the stride
+    # doubled from 1 as they came), so the median is that of levels 0, 4, ..., 248
+    frames = ((i, i / 60, np.full((2, 2), i // 4, np.uint8)) for i in range(1000))
+    assert np.array_equal(median_background(frames), np.full((2, 2), np.median(np.arange(0, 1000, 16) // 4)))
+
+
+@pytest.fixture(scope="module")
+def first_frames(tracked):
+    video = read_frames(DATA / "rotation.avi")
+    return video.images[:4]
+
+
+def track_with(video, where, *options):
+    """``warpcloth track VIDEO`` with where's plane.json and the bundled background, into where/out.csv."""
+    return run_cli("track", str(video), "--plane", str(where / "plane.json"), "--background",
+                   str(DATA / "background.png"), "--no-progress", "-o", str(where / "out.csv"), *options)
+
+
+def track_cli(video, where, *more):
+    return track_with(video, where, *MARKERS, *more)
+
+
+def short_clip(frames, tracked, where):
+    """The frames as where/v.avi, beside a copy of the calibrated plane.json."""
+    small_video(where / "v.avi", frames, range(len(frames)))
+    (where / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    return where / "v.avi"
+
+
+@pytest.mark.parametrize("s_mm", [45, 5])
+def test_a_lost_marker_is_an_error(tracked, first_frames, tmp_path, s_mm):
+    frames = first_frames.copy()
+    background = cv2.imread(str(DATA / "background.png"), cv2.IMREAD_GRAYSCALE)
+    truth = read_tracked_shapes(DATA / "truth.csv")
+    at = (truth.frame == 2) & np.isclose(truth.s, s_mm * 1e-3)
+    u, v = read_plane(tracked / "plane.json").to_pixels(np.array([[truth.x[at][0], truth.y[at][0]]]) * 1e3)[0]
+    rows, cols = np.mgrid[0: frames.shape[1], 0: frames.shape[2]]
+    hidden = np.hypot(cols - u, rows - v) < 12  # the marker covered in frame 2
+    frames[2][hidden] = background[hidden]
+    one_line_error(track_cli(short_clip(frames, tracked, tmp_path), tmp_path), "frame 2", f"marker s = {s_mm} mm lost")
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_a_damaged_frame_is_an_error(tracked, first_frames, tmp_path):
+    data = bytearray(short_clip(first_frames, tracked, tmp_path).read_bytes())
+    middle = int(len(data) * 0.6)
+    data[middle: middle + 200] = bytes(200)
+    (tmp_path / "damaged.avi").write_bytes(bytes(data))
+    one_line_error(track_cli(tmp_path / "damaged.avi", tmp_path), "damaged.avi", "damaged")
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_unreadable_and_missing_inputs_are_errors(tracked, tmp_path):
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    (tmp_path / "noise.avi").write_bytes(np.random.default_rng(0).bytes(5000))
+    one_line_error(track_cli(tmp_path / "noise.avi", tmp_path), "noise.avi", "cannot be read as a video")
+    one_line_error(track_cli(tmp_path / "missing.avi", tmp_path), "VIDEO", "does not exist")
+    (tmp_path / "plane.json").write_text('{"format": "something else"}')
+    one_line_error(track_cli(DATA / "rotation.avi", tmp_path), "plane.json", "not a plane file")
+    one_line_error(run_cli(*CALIBRATE[:3], str(tmp_path / "none.png"), *CALIBRATE[3:], "-o", str(tmp_path / "p.json")),
+                   "IMAGE", "does not exist")
+    one_line_error(run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tmp_path / "none.json"), *MARKERS,
+                           "-o", str(tmp_path / "out.csv")), "--plane", "does not exist")
+    plane = json.loads((tracked / "plane.json").read_text())
+    (tmp_path / "plane.json").write_text(json.dumps(plane | {"image_size_px": [640, 480]}))
+    one_line_error(track_cli(DATA / "rotation.avi", tmp_path), "--plane", "640 × 480 px", "768 × 720 px")
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    cv2.imwrite(str(tmp_path / "small.png"), np.zeros((10, 10), np.uint8))
+    one_line_error(run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tmp_path / "plane.json"), "--background",
+                           str(tmp_path / "small.png"), *MARKERS, "-o", str(tmp_path / "out.csv")),
+                   "--background", "10 × 10 px")
+    assert not (tmp_path / "out.csv").exists() and not (tmp_path / "p.json").exists()
+
+
+def test_a_calibration_that_does_not_fit_is_an_error(tmp_path):
+    # one view taken at another zoom (1.2×): its reprojection error is 0.30 px against the
+    # others' 0.06 to 0.22 (the clean set: 0.05 to 0.07)
+    board = cv2.imread(BOARDS[3], cv2.IMREAD_GRAYSCALE)
+    zoom = cv2.getRotationMatrix2D((board.shape[1] / 2, board.shape[0] / 2), 0, 1.2)
+    cv2.imwrite(str(tmp_path / "zoomed.png"), cv2.warpAffine(board, zoom, board.shape[::-1],
+                                                             borderMode=cv2.BORDER_REPLICATE))
+    done = run_cli(*CALIBRATE[:2], *BOARDS[:3], str(tmp_path / "zoomed.png"), *BOARDS[4:], *CALIBRATE[8:], "-o",
+                   str(tmp_path / "p.json"), "--max-rms-px", "0.2")
+    one_line_error(done, "zoomed.png", "reprojection error 0.299 px", "exceeds --max-rms-px 0.2",
+                   "do not fit one camera")
+    one_line_error(run_cli(*CALIBRATE[:2], *BOARDS, "--board", "9x7", *CALIBRATE[10:], "-o", str(tmp_path / "p.json")),
+                   "board_0.png", "no chessboard of 9 × 7 inner corners")
+    assert not (tmp_path / "p.json").exists()
+
+
+def test_markers_closer_than_their_arc_allows_are_an_error(tracked, first_frames, tmp_path):
+    # --marker-s says 5 mm apart; the markers are 10 mm apart: a chord cannot exceed its arc
+    clip = short_clip(first_frames, tracked, tmp_path)
+    done = track_with(clip, tmp_path, "--marker-s", "2.5:47.5:5", "--marker-diameter-mm", "2.4")
+    one_line_error(done, "frame 0", "marker s = 7.5 mm lost", "--marker-s or the plane's scale")
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_a_background_model_that_holds_the_strip_is_an_error(tracked, tmp_path):
+    # without --background the model is the frames' median; in the bundled clip the clamp
+    # rests in its final pose for half the frames and the strip's root near it
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    done = run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tmp_path / "plane.json"), *MARKERS, "-o",
+                   str(tmp_path / "out.csv"))
+    one_line_error(done, "lost", "give --background")
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_the_origin_corner_counts_from_the_top_left_however_the_corners_come(tracked, tmp_path, monkeypatch):
+    # findChessboardCorners may start its grid at any corner of the board: reversed, the
+    # same inner corner (counted from the top left as the board lies in the image) is found
+    import warpcloth.track.calibration as calibration
+
+    found = calibration._corners
+    monkeypatch.setattr(calibration, "_corners", lambda *a: found(*a)[::-1])
+    done = run_cli(*CALIBRATE, "-o", str(tmp_path / "p.json"))
+    assert done.returncode == 0, done.stderr
+    pixels = np.array([[200.0, 150.0], [400.0, 500.0], [600.0, 300.0]])
+    expected = read_plane(tracked / "plane.json").to_plane(pixels)
+    assert np.max(np.abs(read_plane(tmp_path / "p.json").to_plane(pixels) - expected)) < 1e-3
+
+
+def test_the_clamp_edge_given_in_pixels_places_the_same_plane(tracked, tmp_path):
+    # the pixels of inner corners (1, 1) and (2, 1) of the plane view: the same frame as --origin-corner 1,1
+    corner = read_plane(tracked / "plane.json")
+    ends = corner.to_pixels(np.array([[0.0, 0.0], [10.0, 0.0]]))
+    edge = ",".join(f"{v:.4f}" for v in ends.ravel())
+    done = run_cli(*CALIBRATE[:12], "--clamp-edge-px", edge, "-o", str(tmp_path / "p.json"))
+    assert done.returncode == 0, done.stderr
+    pixels = np.array([[200.0, 150.0], [400.0, 500.0], [600.0, 300.0]])
+    assert np.max(np.abs(read_plane(tmp_path / "p.json").to_plane(pixels) - corner.to_plane(pixels))) < 1e-3
+
+
+def test_an_existing_result_is_kept(tracked, tmp_path):
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    (tmp_path / "out.csv").write_text("mine\n")
+    one_line_error(track_cli(DATA / "rotation.avi", tmp_path), "out.csv already exists", "--overwrite")
+    assert (tmp_path / "out.csv").read_text() == "mine\n"
+    one_line_error(run_cli(*CALIBRATE, "-o", str(tmp_path / "plane.json")), "plane.json already exists")
+    assert (tmp_path / "plane.json").read_bytes() == (tracked / "plane.json").read_bytes()

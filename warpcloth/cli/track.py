@@ -1,0 +1,226 @@
+"""``warpcloth track calibrate`` and ``warpcloth track VIDEO``: from lab video to tracked shapes."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+import numpy as np
+
+from warpcloth.errors import OptionError
+
+from .options import add_overwrite, at_least, figure_path, new_result, path_text, positive
+
+SUBCOMMANDS = ("calibrate", "video")
+
+
+def route(argv: Sequence[str]) -> list[str]:
+    """``warpcloth track VIDEO ...`` is ``warpcloth track video VIDEO ...``: argparse cannot
+    have a sub-command and a file in the same place, so the file's form is rewritten."""
+    argv = list(argv)
+    for i, word in enumerate(argv):
+        if not word.startswith("-"):
+            if word == "track" and i + 1 < len(argv) and argv[i + 1] not in (*SUBCOMMANDS, "-h", "--help"):
+                argv.insert(i + 1, "video")
+            break
+    return argv
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``track calibrate`` and ``track VIDEO``."""
+    track_p = sub.add_parser("track", help="markers in lab video → tracked shapes (frame, t, s, x, y) for fit",
+                             description="warpcloth track calibrate IMAGE... -o plane.json; then warpcloth track VIDEO "
+                             "--plane plane.json -o shapes.csv (short for: warpcloth track video VIDEO ...)")
+    track_sub = track_p.add_subparsers(dest="track_command", required=True)
+    cal = track_sub.add_parser("calibrate", help="camera, lens and the strip's plane from chessboard images")
+    cal.set_defaults(handler=calibrate_command)
+    cal.add_argument("images", nargs="+", metavar="IMAGE",
+                     help="board images, the first held in the strip's plane (the plane view), the others in other "
+                          "poses (for the lens distortion)")
+    cal.add_argument("-o", "--output", type=path_text, required=True, help="the plane file to write (.json)")
+    cal.add_argument("--board", required=True, metavar="COLUMNSxROWS",
+                     help="the chessboard's inner corners, e.g. 11x10 for a board of 12 × 11 squares")
+    cal.add_argument("--square-mm", type=positive, required=True, help="the side of a square, mm")
+    cal.add_argument("--origin-corner", metavar="I,J",
+                     help="the inner corner (column, row, from 0, top left in the plane view) at the clamp's lowest "
+                          "point, the board's rows level")
+    cal.add_argument("--clamp-edge-px", metavar="U1,V1,U2,V2",
+                     help="instead: two pixels of the plane view, the clamp's lowest point and a point along its lower "
+                          "edge towards +x")
+    cal.add_argument("--max-rms-px", type=positive, default=0.3,
+                     help="refuse a calibration whose reprojection RMS in any image exceeds this (default: 0.3 px; "
+                          "a clean calibration has a fraction of that, the bundled example 0.07)")
+    add_overwrite(cal, "plane file -o")
+    vid = track_sub.add_parser("video", help="track the markers (or the centreline) of a video (warpcloth track "
+                               "VIDEO ... for short)")
+    vid.set_defaults(handler=video_command)
+    vid.add_argument("video", metavar="VIDEO", help="the video (any container and codec FFmpeg reads; its timestamps "
+                     "are each frame's time)")
+    vid.add_argument("--plane", required=True, help="plane.json from warpcloth track calibrate")
+    vid.add_argument("--marker-s", metavar="S,S,...|FIRST:LAST:STEP",
+                     help="the markers' arc lengths from the clamp's lowest point, mm, in order along the strip")
+    vid.add_argument("--marker-diameter-mm", type=positive, help="the markers' diameter, mm (with --marker-s)")
+    vid.add_argument("--centreline-s", metavar="S,S,...|FIRST:LAST:STEP",
+                     help="instead of markers: the strip's centreline at these arc lengths from the clamp's lowest "
+                          "point, mm, measured from the free end (needs --free-length-mm)")
+    vid.add_argument("--free-length-mm", type=positive, help="the strip's free length, mm (with --centreline-s)")
+    vid.add_argument("-o", "--output", type=path_text, required=True, help="the tracked shapes to write (.csv)")
+    vid.add_argument("--background", metavar="IMAGE",
+                     help="a frame of the scene without the strip (default: the per-pixel median of the video's "
+                          "frames, a fixed-camera background model)")
+    vid.add_argument("--threshold-dn", type=positive, default=None,
+                     help="darkening below the background that counts as marker, grey levels (default: 10× the "
+                          "sensor noise estimated in each frame)")
+    vid.add_argument("--overlay", metavar="PNG", help="also write a figure of what was tracked")
+    vid.add_argument("--overlay-video", metavar="AVI",
+                     help="also write every frame with its tracked points circled (grey FFV1 in AVI)")
+    vid.add_argument("--overlay-frame", type=at_least(0), default=None,
+                     help="the frame the overlay shows (default: the middle one)")
+    vid.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_overwrite(vid, "output file -o (and --overlay, --overlay-video)")
+
+
+def _pair(text: str, option: str, sep: str) -> tuple[int, int]:
+    try:
+        a, b = (int(v) for v in text.lower().split(sep))
+    except ValueError:
+        raise OptionError(option, f"expected two whole numbers as A{sep}B, got {text!r}") from None
+    if a < 0 or b < 0:
+        raise OptionError(option, f"expected numbers ≥ 0, got {text!r}")
+    return a, b
+
+
+def marker_arcs(text: str, option: str = "--marker-s") -> np.ndarray:
+    """``--marker-s`` (or ``--centreline-s``): ``5,15,25`` or ``5:95:10`` (last included),
+    increasing, ≥ 0, at least two."""
+    try:
+        if ":" in text:
+            first, last, step = (float(v) for v in text.split(":"))
+            if step <= 0:
+                raise ValueError
+            arcs = np.arange(round((last - first) / step) + 1) * step + first
+        else:
+            arcs = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise OptionError(option, f"expected S,S,... or FIRST:LAST:STEP (mm, STEP > 0), got {text!r}") from None
+    if len(arcs) < 2 or not np.all(np.isfinite(arcs)) or arcs[0] < 0 or np.any(np.diff(arcs) <= 0):
+        raise OptionError(option, f"{text!r}: at least two arc lengths, ≥ 0 and increasing along the strip")
+    return arcs
+
+
+def _what_to_track(args: argparse.Namespace) -> np.ndarray:
+    # markers (--marker-s with their diameter) or the centreline (--centreline-s with the free length)
+    if bool(args.marker_s) == bool(args.centreline_s):
+        raise OptionError("--marker-s", "give --marker-s (markers) or --centreline-s (the centreline without markers), "
+                          "one of them")
+    if args.marker_s:
+        if args.marker_diameter_mm is None:
+            raise OptionError("--marker-diameter-mm", "is needed with --marker-s (the markers' diameter, mm)")
+        return marker_arcs(args.marker_s)
+    if args.free_length_mm is None:
+        raise OptionError("--free-length-mm", "is needed with --centreline-s (arc lengths are measured from the free "
+                          "end)")
+    arcs = marker_arcs(args.centreline_s, "--centreline-s")
+    if arcs[-1] > args.free_length_mm:
+        raise OptionError("--centreline-s", f"{arcs[-1]:g} mm lies beyond the free end (--free-length-mm "
+                          f"{args.free_length_mm:g})")
+    return arcs
+
+
+def calibrate_command(args: argparse.Namespace) -> int:
+    """Calibrate camera and plane, write plane.json."""
+    import json
+
+    from warpcloth.io.atomic import write_text_atomically
+    from warpcloth.io.provenance import provenance
+    from warpcloth.track.calibration import calibrate_plane
+
+    inner = _pair(args.board, "--board", "x")
+    if min(inner) < 2:
+        raise OptionError("--board", f"{args.board}: a chessboard has at least 2 × 2 inner corners")
+    corner = _pair(args.origin_corner, "--origin-corner", ",") if args.origin_corner else None
+    out = new_result(args.output, args.overwrite, "-o")
+    if out.suffix.lower() != ".json":
+        raise OptionError("-o", f"{out} must end in .json")
+    _, record = calibrate_plane(args.images, inner, args.square_mm, origin_corner=corner,
+                                clamp_edge_px=args.clamp_edge_px, max_rms_px=args.max_rms_px)
+    record["provenance"] = provenance(device="cpu")
+    write_text_atomically(out, json.dumps(record, indent=1) + "\n")
+    view = record["plane_view"]
+    print(f"{len(args.images)} board images: reprojection RMS {record['reprojection_rms_px']:.3g} px (worst image "
+          f"{max(v['rms_px'] for v in record['views']):.3g} px); plane view {view['rms_px']:.3g} px = "
+          f"{view['rms_mm']:.3g} mm, {view['mm_per_px'][0]:.3g} to {view['mm_per_px'][1]:.3g} mm/px")
+    print(f"wrote {out}")
+    return 0
+
+
+def video_command(args: argparse.Namespace) -> int:
+    """Track the markers of a video, write the shapes CSV (and the overlay)."""
+    from warpcloth.io.atomic import write_text_atomically
+    from warpcloth.io.provenance import file_checksum
+    from warpcloth.track.calibration import read_image, read_plane
+    from warpcloth.track.centreline import track_centreline
+    from warpcloth.track.markers import track_markers
+    from warpcloth.track.overlay import write_overlay, write_overlay_video
+    from warpcloth.track.video import FrameStream, median_background
+
+    arcs = _what_to_track(args)
+    what = "markers" if args.marker_s else "centreline points"
+    mapping = read_plane(args.plane, "--plane")
+    out = new_result(args.output, args.overwrite, "-o")
+    overlay = figure_path(args.overlay, args.overwrite, "--overlay") if args.overlay else None
+    movie = None
+    if args.overlay_video:
+        if not args.overlay_video.lower().endswith(".avi"):
+            raise OptionError("--overlay-video", f"{args.overlay_video} must end in .avi")
+        movie = new_result(args.overlay_video, args.overwrite, "--overlay-video")
+    background = read_image(args.background, "--background") if args.background else None
+    frames = FrameStream(args.video, "VIDEO")  # decoded as it is tracked: a long recording is never held whole
+    size = (frames.width, frames.height)
+    if tuple(size) != tuple(mapping.image_size):
+        raise OptionError("--plane", f"{args.plane} was calibrated for {mapping.image_size[0]} × "
+                          f"{mapping.image_size[1]} px images, the video's frames are {size[0]} × {size[1]} px")
+    if background is None:
+        background = median_background(frames)
+        source = "the median of the frames"
+    elif background.shape != (size[1], size[0]):
+        raise OptionError("--background", f"{args.background} is {background.shape[1]} × {background.shape[0]} px, "
+                          f"the video's frames are {size[0]} × {size[1]} px")
+    else:
+        source = str(args.background)
+    if args.marker_s:
+        tracked = track_markers(frames, background, mapping, arcs, args.marker_diameter_mm, args.video,
+                                threshold_dn=args.threshold_dn, progress=not args.no_progress)
+    else:
+        tracked = track_centreline(frames, background, mapping, arcs, args.free_length_mm, args.video,
+                                   threshold_dn=args.threshold_dn, progress=not args.no_progress)
+    dropped, duplicated, nominal = frames.dropped, frames.duplicated, frames.nominal_interval_s
+    for note in (*dropped, *duplicated):
+        print(f"warpcloth track: warning: {args.video}: {note}", file=sys.stderr)
+    kept = len(tracked.t)
+    if args.overlay_frame is not None and args.overlay_frame >= kept:
+        raise OptionError("--overlay-frame", f"{args.overlay_frame} is not one of the {kept} frames kept (0 to "
+                          f"{kept - 1})")
+    video = file_checksum(args.video)
+    header = [f"# warpcloth track {args.video} (sha256 {video['sha256']}), plane {args.plane}, background {source}",
+              f"# {len(arcs)} {what}, {kept} frames; sensor noise {np.median(tracked.noise_dn):.3g} grey "
+              "levels; u_px, u_mm: standard uncertainty of each coordinate from the sensor noise alone (the "
+              "calibration's is in the plane file)",
+              *(f"# dropped: {note}" for note in dropped),
+              *(f"# duplicated: {note}" for note in duplicated),
+              "frame,t_s,s_mm,x_mm,y_mm,u_px,u_mm"]
+    write_text_atomically(out, "\n".join(header + tracked.csv_rows()) + "\n")
+    if overlay is not None:
+        shown = args.overlay_frame if args.overlay_frame is not None else kept // 2
+        image = next(image for position, (_, _, image) in enumerate(frames) if position == shown)
+        write_overlay(overlay, image, tracked, shown)
+    if movie is not None:
+        write_overlay_video(movie, frames, tracked, nominal)
+    print(f"tracked {len(arcs)} {what} in {kept} frames (t = {tracked.t[0]:.6g} to {tracked.t[-1]:.6g} s): "
+          f"median uncertainty {np.median(tracked.u_mm):.2g} mm ({np.median(tracked.u_px):.2g} px), sensor noise "
+          f"{np.median(tracked.noise_dn):.3g} grey levels; {len(dropped)} gaps of dropped frames, "
+          f"{len(duplicated)} duplicated frames left out")
+    print(f"wrote {', '.join(str(p) for p in (out, overlay, movie) if p is not None)}")
+    return 0
+

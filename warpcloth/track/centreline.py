@@ -1,0 +1,202 @@
+"""Without markers: the strip's centreline, sampled at given arc lengths.
+
+The strip (seen edge on) and the clamp differ from the background (``|frame − background|``
+above the threshold) as one connected region. Its far end from the clamp is the free end:
+the pixel of the region farthest, along the region, from the pixel nearest the clamp's
+lowest point at rest (Dijkstra on the region's pixels, ``scipy.sparse.csgraph``); the path
+back from it runs along the strip. That path, smoothed, is refined across the strip: at
+each point the centre of the difference profile along the normal (±2.5 half-widths,
+sampled bilinearly), and at the free end where the profile along the strip falls to half
+its level. Arc length is measured along the refined centreline in the plane (mm), **from
+the free end**: a point at s from the clamp's lowest point is ``free_length − s`` from the
+free end, so s is the rest arc length only as far as the strip does not stretch.
+
+Without markers there is no identity to lose; what can fail is the region (no region
+reaching the clamp, or a centreline shorter than the arc asked for): an error naming the
+frame, never a sample where there is no strip.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from warpcloth.errors import DataFileError
+
+from .calibration import PlaneMapping
+from .markers import Tracked, noise_sigma
+from .video import Frames, FrameStream
+
+__all__ = ["track_centreline"]
+
+STEP_PX = 1.0
+SMOOTH = 7
+LINE_SMOOTH = 11  # points (px) averaged along the refined line before its arc is measured
+ARC_STRIDE = 5  # the arc is summed over chords this many points long
+PROFILE_HALF_WIDTHS = 2.5
+SEED_REACH_PX = 50
+
+
+def _region_path(mask: np.ndarray, seed: tuple[float, float], where: str, path: Path) -> np.ndarray:
+    # the pixels (x, y) from the free end back to the seed, along the region holding the seed
+    import cv2
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    n, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
+    ys, xs = np.nonzero(labels)
+    if not len(xs):
+        raise DataFileError(path, f"{where}: nothing differs from the background by the threshold: no strip")
+    nearest = int(np.argmin(np.hypot(xs - seed[0], ys - seed[1])))
+    if np.hypot(xs[nearest] - seed[0], ys[nearest] - seed[1]) > SEED_REACH_PX:
+        raise DataFileError(path, f"{where}: nothing differs from the background within {SEED_REACH_PX} px of the "
+                            "clamp's lowest point at rest: the strip or the clamp is not where the plane file puts "
+                            "them")
+    seed_pixel = (ys[nearest], xs[nearest])
+    ys, xs = np.nonzero(labels == labels[seed_pixel])
+    index = -np.ones(mask.shape, np.int64)
+    index[ys, xs] = np.arange(len(xs))
+    rows, cols, weights = [], [], []
+    for dy, dx in ((0, 1), (1, -1), (1, 0), (1, 1)):
+        y2, x2 = ys + dy, xs + dx
+        inside = (y2 < mask.shape[0]) & (x2 >= 0) & (x2 < mask.shape[1])
+        target = np.full(len(xs), -1)
+        target[inside] = index[y2[inside], x2[inside]]
+        ok = target >= 0
+        rows.append(np.arange(len(xs))[ok])
+        cols.append(target[ok])
+        weights.append(np.full(ok.sum(), np.hypot(dx, dy)))
+    graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
+                       shape=(len(xs), len(xs))).tocsr()
+    start = int(index[seed_pixel])
+    distance, predecessors = dijkstra(graph, directed=False, indices=start, return_predecessors=True)
+    node = int(np.argmax(np.where(np.isfinite(distance), distance, -1)))
+    chain = [node]
+    while predecessors[node] >= 0:
+        node = int(predecessors[node])
+        chain.append(node)
+    return np.column_stack([xs[chain], ys[chain]]).astype(np.float64)
+
+
+def _resample(points: np.ndarray, step: float) -> np.ndarray:
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+    at = np.arange(0.0, arc[-1], step)
+    return np.column_stack([np.interp(at, arc, points[:, 0]), np.interp(at, arc, points[:, 1])])
+
+
+def _sample(image: np.ndarray, points: np.ndarray) -> np.ndarray:
+    import cv2
+
+    width = 1024  # remap's maps are images: at most 32767 rows
+    n = len(points)
+    maps = np.zeros((-(-n // width) * width, 2), np.float32)
+    maps[:n] = points
+    maps = maps.reshape(-1, width, 2)
+    return cv2.remap(image, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR,
+                     borderMode=cv2.BORDER_REPLICATE).ravel()[:n]
+
+
+def _refine(difference: np.ndarray, path: np.ndarray, half_width: float, noise: float,
+            threshold: float) -> tuple[np.ndarray, np.ndarray]:
+    # each point moved to the centre of the profile across the strip; its σ from the noise
+    kernel = np.ones(SMOOTH) / SMOOTH
+    smooth = np.column_stack([np.convolve(np.pad(path[:, k], SMOOTH // 2, mode="edge"), kernel, "valid")
+                              for k in range(2)])
+    tangent = np.gradient(smooth, axis=0)
+    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+    normal = np.column_stack([-tangent[:, 1], tangent[:, 0]])
+    offsets = np.arange(-PROFILE_HALF_WIDTHS * half_width, PROFILE_HALF_WIDTHS * half_width + 0.25, 0.25)
+    across = smooth[:, None, :] + offsets[None, :, None] * normal[:, None, :]
+    weight = np.clip(_sample(difference, across.reshape(-1, 2)).reshape(len(smooth), -1) - 0.5 * threshold, 0, None)
+    total = weight.sum(axis=1)
+    shift = (weight * offsets).sum(axis=1) / total
+    # samples 0.25 px apart are correlated over a pixel: count each pixel once
+    sigma = noise * np.sqrt((weight > 0) @ (offsets**2) * 0.25) / (total * 0.25) if noise else np.zeros(len(total))
+    return smooth + shift[:, None] * normal, sigma
+
+
+def _free_end(difference: np.ndarray, centre: np.ndarray, half_width: float) -> np.ndarray:
+    # where the profile along the strip's direction, continued past its centreline, falls to
+    # half the strip's level; centre[0] is a full band's width inside the end
+    direction = centre[0] - centre[10]
+    direction /= np.linalg.norm(direction)
+    along = np.arange(0.0, 8 * half_width + 0.1, 0.1)
+    profile = _sample(difference, centre[0] + along[:, None] * direction)
+    level = float(np.median(_sample(difference, centre[:40])))
+    below = np.nonzero(profile < 0.5 * level)[0]
+    if not len(below) or below[0] == 0:
+        return centre[0]
+    k = int(below[0])
+    a, b = profile[k - 1], profile[k]
+    cross = along[k - 1] + (a - 0.5 * level) / (a - b) * (along[k] - along[k - 1])
+    return centre[0] + cross * direction
+
+
+def _one_frame(image: np.ndarray, bg: np.ndarray, mapping: PlaneMapping, seed: np.ndarray, s_mm: np.ndarray,
+               free_length_mm: float, threshold_dn: float | None, where: str,
+               path: Path) -> tuple[np.ndarray, np.ndarray, float]:
+    # the centreline points (px), their σ (px) and the frame's noise
+    import cv2
+
+    difference = np.abs(bg - image.astype(np.float32))
+    noise = noise_sigma(bg - image)
+    threshold = threshold_dn if threshold_dn is not None else max(10.0 * noise, 5.0)
+    mask = difference > threshold
+    route = _region_path(mask, seed, where, path)
+    # the half-width: the distance to the region's edge at the middle of the strip, the
+    # largest within 9 px of the path (a shortest path runs along an edge)
+    inside = cv2.dilate(cv2.distanceTransform(mask.astype(np.uint8), cv2.DIST_L2, 5), np.ones((9, 9), np.uint8))
+    half_width = max(float(np.median(inside[route[:, 1].astype(int), route[:, 0].astype(int)][: len(route) // 2])),
+                     1.0)
+    centre = _resample(route, STEP_PX)
+    for _ in range(2):  # the second pass profiles across the first pass's centreline
+        centre, sigma = _refine(difference, centre, half_width, noise, threshold)
+    # near the free end a profile across sees no full band: start the line 3 half-widths in
+    inner = int(np.ceil(3 * half_width / STEP_PX))
+    centre, sigma = centre[inner:], sigma[inner:]
+    tip = _free_end(difference, centre, half_width)
+    # the refined points scatter across by ~0.1 px (the profile's sampling phase): summed
+    # over 1 px steps that would lengthen the arc by ~1 %, so the line is averaged over
+    # 11 px and its arc summed over 5 px chords (a curvature radius of 20 mm: −0.01 %)
+    kernel = np.ones(LINE_SMOOTH) / LINE_SMOOTH
+    centre = np.column_stack([np.convolve(np.pad(centre[:, k], LINE_SMOOTH // 2, mode="edge"), kernel, "valid")
+                              for k in range(2)])[::ARC_STRIDE]
+    sigma = sigma[::ARC_STRIDE] / np.sqrt(LINE_SMOOTH)
+    line_px = np.vstack([tip, centre])
+    line_mm = mapping.to_plane(line_px)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(line_mm, axis=0), axis=1))])
+    wanted = free_length_mm - np.asarray(s_mm)
+    if wanted.max() > arc[-1]:
+        raise DataFileError(path, f"{where}: the centreline found is {arc[-1]:.3g} mm long from the free end, "
+                            f"shorter than the {wanted.max():g} mm to s = {np.min(s_mm):g} mm (--centreline-s, "
+                            "--free-length-mm)")
+    points = np.column_stack([np.interp(wanted, arc, line_px[:, 0]), np.interp(wanted, arc, line_px[:, 1])])
+    return points, np.interp(wanted, arc, np.concatenate([[sigma[0]], sigma])), noise
+
+
+def track_centreline(frames: Frames | FrameStream, background: np.ndarray, mapping: PlaneMapping, s_mm: np.ndarray,
+                     free_length_mm: float, path: str | Path, threshold_dn: float | None = None,
+                     progress: bool = False) -> Tracked:
+    """The centreline at arc lengths ``s_mm`` from the clamp's lowest point in every frame
+    (see the module docstring); ``frames`` gives ``(index, t, image)`` per frame."""
+    from tqdm import tqdm
+
+    path = Path(path)
+    seed = mapping.to_pixels(np.zeros((1, 2)))[0]
+    bg = background.astype(np.float32)
+    index, t, px, u, noise = [], [], [], [], []
+    for i, time, image in tqdm(frames, total=frames.total, desc="tracking the centreline", unit=" frames",
+                               disable=not progress):
+        points, sigma, frame_noise = _one_frame(image, bg, mapping, seed, s_mm, free_length_mm, threshold_dn,
+                                                f"frame {i} (t = {time:.6g} s)", path)
+        index.append(i)
+        t.append(time)
+        px.append(points)
+        u.append(sigma)
+        noise.append(frame_noise)
+    px, u = np.array(px), np.array(u)
+    n, m = u.shape
+    mm = mapping.to_plane(px.reshape(-1, 2)).reshape(n, m, 2)
+    u_mm = u * mapping.mm_per_px(px.reshape(-1, 2)).reshape(n, m)
+    return Tracked(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u, u_mm, np.array(noise))

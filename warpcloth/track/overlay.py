@@ -1,0 +1,89 @@
+"""What was tracked, to look at: a figure of one frame with every marker's path and that
+frame's markers on it, beside the tracked shapes in the clamp-edge frame; and a video of
+every frame with its points circled."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+
+from .markers import Tracked
+from .video import Frames, FrameStream
+
+__all__ = ["overlay_figure", "write_overlay", "write_overlay_video"]
+
+
+def overlay_figure(image: np.ndarray, tracked: Tracked, frame: int) -> object:
+    """A matplotlib figure: ``image`` (the frame at position ``frame`` of ``tracked``)
+    with each marker's pixel path over all frames and its position in this frame, and
+    every frame's shape in mm (the shown one in black)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5.6), width_ratios=(1.1, 1))
+    left.imshow(image, cmap="gray", vmin=0, vmax=255)
+    for m in range(len(tracked.s_mm)):
+        left.plot(tracked.px[:, m, 0], tracked.px[:, m, 1], "-", color="tab:orange", lw=0.7, alpha=0.8)
+    left.scatter(tracked.px[frame, :, 0], tracked.px[frame, :, 1], s=60, facecolors="none", edgecolors="tab:red",
+                 linewidths=1.0)
+    for m, s in enumerate(tracked.s_mm):
+        left.annotate(f"{s:g}", tracked.px[frame, m], xytext=(6, -6), textcoords="offset points", color="tab:red",
+                      fontsize=7)
+    left.set_title(f"frame {tracked.frame[frame]} at t = {tracked.t[frame]:.4f} s: markers (s in mm) and their paths")
+    left.set_axis_off()
+    for f in range(len(tracked.t)):
+        shown = f == frame
+        right.plot(tracked.mm[f, :, 0], tracked.mm[f, :, 1], "o-" if shown else "-", ms=3,
+                   color="black" if shown else plt.cm.viridis(f / max(len(tracked.t) - 1, 1)), lw=1.4 if shown else 0.8)
+    right.plot([0], [0], "s", color="tab:red", label="clamp's lowest point at rest")
+    right.set_aspect("equal")
+    right.set_xlabel("x (mm)")
+    right.set_ylabel("y (mm)")
+    right.set_title(f"tracked shapes, every frame (median uncertainty {np.median(tracked.u_mm) * 1e3:.2g} µm)")
+    right.legend(loc="lower left", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def write_overlay(path: str | Path, image: np.ndarray, tracked: Tracked, frame: int) -> None:
+    """The :func:`overlay_figure` as a PNG, written atomically."""
+    import matplotlib.pyplot as plt
+
+    from warpcloth.io.atomic import write_atomically
+
+    fig = overlay_figure(image, tracked, frame)
+    try:
+        write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=110))
+    finally:
+        plt.close(fig)
+
+
+def write_overlay_video(path: str | Path, frames: Frames | FrameStream, tracked: Tracked,
+                        nominal_interval_s: float) -> None:
+    """The frames ``tracked`` was tracked from (``(index, t, image)`` each, in the same
+    order) with their points circled and labelled, as grey FFV1 in AVI, written atomically;
+    frames keep their times to the nearest nominal interval."""
+    import cv2
+
+    from warpcloth.io.atomic import write_atomically
+
+    from .video import write_video
+
+    rate = Fraction(1 / nominal_interval_s).limit_denominator(1001)
+    images = []
+    for f, (_, _, image) in enumerate(frames):
+        drawn = image.copy()
+        for m, s in enumerate(tracked.s_mm):
+            centre = tuple(int(round(v * 16)) for v in tracked.px[f, m])
+            cv2.circle(drawn, centre, 8 * 16, 255, 1, cv2.LINE_AA, 4)
+            cv2.putText(drawn, f"{s:g}", (int(tracked.px[f, m, 0]) + 10, int(tracked.px[f, m, 1]) + 4),
+                        cv2.FONT_HERSHEY_SIMPLEX, 0.35, 255, 1, cv2.LINE_AA)
+        cv2.putText(drawn, f"frame {tracked.frame[f]}  t = {tracked.t[f]:.4f} s", (10, 20), cv2.FONT_HERSHEY_SIMPLEX,
+                    0.5, 255, 1, cv2.LINE_AA)
+        images.append(drawn)
+    pts = np.rint(tracked.t * float(rate)).astype(int)
+    write_atomically(path, lambda tmp: write_video(tmp, images, pts, 1 / rate))
