@@ -24,9 +24,10 @@ any branch of the dispatch:
 - ``hysteretic_moment(curvature, memory, p) -> M − D K`` (what ``follow`` left in the memory
   is all it may read, so probes can evaluate it without the reversal points).
 
-Only Warp and the standard library are imported here, so units are named, not imported:
-``LawParameter.unit`` is the name of a :mod:`warpcloth.units` constant, and the fitter the
-import path of a :class:`warpcloth.calibrate.kes.bending_fit.LawFitter`.
+Only Warp and the standard library are imported here, so units are not: a parameter's
+``kind`` says what it measures, and :mod:`warpcloth.units` (``BENDING_UNITS``,
+``SHEAR_UNITS``) what that is in KES units and SI; the fitter is named by the import path
+of a :class:`warpcloth.calibrate.kes.bending_fit.LawFitter`.
 """
 
 from __future__ import annotations
@@ -34,6 +35,12 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
+
+
+class LawRegistryError(ImportError):
+    """A bending law's description (built in, or from an installed package's entry point)
+    that cannot be used: the message names the law and what is wrong. The command line
+    prints it as one line."""
 
 
 @dataclass(frozen=True)
@@ -44,20 +51,15 @@ class LawParameter:
     """The SI name, the key in :class:`warpcloth.sim.LawParameters` (``dahl_moment``)."""
     scene_field: str
     """The [material] field of a scene, in KES units (``dahl_moment_gf_cm_per_cm``)."""
-    unit: str
-    """The :mod:`warpcloth.units` constant that converts the scene field to SI
-    (``MOMENT_GF_CM_PER_CM``); empty for a dimensionless parameter."""
     kind: str
     """What the parameter measures in the law's own variables (:data:`KINDS`): the same
     law describes bending (curvature K, moment per width M) and in-plane shear (shear
-    angle φ, shear force per width), so the kind says what its unit is in each
-    (:data:`warpcloth.units.SHEAR_UNITS`)."""
+    angle φ, shear force per width), so the kind gives its unit and its conversion to SI
+    in each (:data:`warpcloth.units.BENDING_UNITS`, :data:`warpcloth.units.SHEAR_UNITS`)."""
     alias: str
     """The short name ``warpcloth fit --free`` accepts (``Ms``)."""
     label: str
     """The symbol figures print (``M_s``)."""
-    unit_label: str
-    """The scene field's unit as figures print it (``gf·cm/cm``; empty if dimensionless)."""
     doc: str
     """One line for the scene reference (the law names are prefixed to it)."""
     default: float | Callable[[Mapping[str, Any]], float] | None
@@ -127,7 +129,6 @@ KINDS = ("moment", "curvature", "inverse_curvature", "number")
 curvature (bending) or angle (shear), their inverse, or a pure number."""
 
 BENDING_RIGIDITY = LawParameter(
-    name="bending_rigidity", scene_field="bending_rigidity_gf_cm2_per_cm", unit="RIGIDITY_GF_CM2_PER_CM",
-    kind="rigidity", alias="D", label="B = D", unit_label="gf·cm²/cm",
-    doc="D, slope of the centre line M = D K (every law)", default=0.0, ge=0)
+    name="bending_rigidity", scene_field="bending_rigidity_gf_cm2_per_cm", kind="rigidity", alias="D",
+    label="B = D", doc="D, slope of the centre line M = D K (every law)", default=0.0, ge=0)
 """D, the slope of the centre line M = D K: every law's first parameter, slot 0 of the packed vector."""

@@ -22,7 +22,7 @@ from typing import Any
 import warp as wp
 
 from . import bending_dahl, bending_frictional_couple, bending_masing, bending_tagawa2003
-from .law import BENDING_RIGIDITY, BendingLaw, LawParameter
+from .law import BENDING_RIGIDITY, KINDS, BendingLaw, LawParameter, LawRegistryError
 from .types import LAST_CURVATURE_SLOT, LAW_MEMORY_SLOTS, LAW_PARAMETER_SLOTS, precision
 
 ENTRY_POINT_GROUP = "warpcloth.bending_laws"
@@ -43,38 +43,47 @@ def _registered() -> tuple[BendingLaw, ...]:
         try:
             law = point.load()
         except Exception as exc:  # a broken plugin must name itself, not break every command anonymously
-            raise ImportError(f"the bending law {point.name!r} registered under {ENTRY_POINT_GROUP} as "
-                              f"{point.value!r} cannot be loaded: {exc}") from exc
+            raise LawRegistryError(f"the bending law {point.name!r} registered under {ENTRY_POINT_GROUP} as "
+                                   f"{point.value!r} cannot be loaded: {exc}") from exc
         if not isinstance(law, BendingLaw):
-            raise ImportError(f"the bending law {point.name!r} registered under {ENTRY_POINT_GROUP} as "
-                              f"{point.value!r} is a {type(law).__name__}, not a warpcloth.kernels.law.BendingLaw")
+            raise LawRegistryError(f"the bending law {point.name!r} registered under {ENTRY_POINT_GROUP} as "
+                                   f"{point.value!r} is a {type(law).__name__}, not a warpcloth.kernels.law.BendingLaw")
         laws.append(law)
     return tuple(laws)
 
 
 def checked_laws(laws: tuple[BendingLaw, ...]) -> tuple[BendingLaw, ...]:
     """``laws`` if their descriptions fit together (unique names, aliases and scene fields, a
-    parameter shared between laws described by one object, the packed vector and the memory
-    within the shared slots); else an ImportError naming the law and what clashes."""
+    parameter shared between laws described by one object, every kind known, the packed
+    vector and the memory within the shared slots); else a LawRegistryError naming the law
+    and what clashes."""
     names: set[str] = set()
     by_field: dict[str, LawParameter] = {BENDING_RIGIDITY.scene_field: BENDING_RIGIDITY}
     by_alias: dict[str, LawParameter] = {BENDING_RIGIDITY.alias: BENDING_RIGIDITY}
     for law in laws:
         if law.name in names:
-            raise ImportError(f"two bending laws are called {law.name!r}")
+            raise LawRegistryError(f"two bending laws are called {law.name!r}")
         names.add(law.name)
         if 1 + len(law.parameters) > LAW_SLOT:
-            raise ImportError(f"the {law.name} law has {len(law.parameters)} parameters after D; the packed vector "
-                              f"holds {LAW_SLOT - 1}")
+            raise LawRegistryError(f"the {law.name} law has {len(law.parameters)} parameters after D; the packed "
+                                   f"vector holds {LAW_SLOT - 1}")
+        own = [p.name for p in law.parameters]
+        if len(set(own)) != len(own) or BENDING_RIGIDITY.name in own:
+            raise LawRegistryError(f"the {law.name} law's parameters {', '.join(own)} repeat a name (D is every "
+                                   "law's first parameter already)")
+        unknown = [p.name for p in law.parameters if p.kind not in KINDS]
+        if unknown:
+            raise LawRegistryError(f"the {law.name} law's parameter {unknown[0]!r} has kind "
+                                   f"{law.parameter(unknown[0]).kind!r}; a kind is one of {', '.join(KINDS)}")
         if len(law.memory) != LAW_MEMORY_SLOTS:
-            raise ImportError(f"the {law.name} law's memory has {len(law.memory)} slots; every law has "
-                              f"{LAW_MEMORY_SLOTS}, the last curvature last")
+            raise LawRegistryError(f"the {law.name} law's memory has {len(law.memory)} slots; every law has "
+                                   f"{LAW_MEMORY_SLOTS}, the last curvature last")
         for p in law.parameters:
             for key, seen in ((p.scene_field, by_field), (p.alias, by_alias)):
                 other = seen.setdefault(key, p)
                 if other is not p:
-                    raise ImportError(f"the {law.name} law's parameter {p.name!r} takes {key!r}, which another "
-                                      "parameter has (a parameter two laws share is one LawParameter)")
+                    raise LawRegistryError(f"the {law.name} law's parameter {p.name!r} takes {key!r}, which another "
+                                           "parameter has (a parameter two laws share is one LawParameter)")
     return laws
 
 

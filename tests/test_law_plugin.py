@@ -75,9 +75,9 @@ LAW = BendingLaw(
     name="toy_jenkins",
     summary="a toy Jenkins element",
     parameters=(
-        LawParameter("toy_moment", "toy_moment_gf_cm_per_cm", "MOMENT_GF_CM_PER_CM", "moment", "My", "M_y", "gf·cm/cm",
+        LawParameter("toy_moment", "toy_moment_gf_cm_per_cm", "moment", "My", "M_y",
                      "M_y, the slider's yield moment", default=0.01, ge=0, amplitude=True),
-        LawParameter("toy_width", "toy_width_per_cm", "CURVATURE_PER_CM", "curvature", "Ky", "K_y", "cm⁻¹",
+        LawParameter("toy_width", "toy_width_per_cm", "curvature", "Ky", "K_y",
                      "K_y, the spring's curvature at yield", default=0.2, gt=0),
     ),
     pack=pack,
@@ -187,6 +187,34 @@ def test_the_command_line_knows_the_plugged_in_law(plugin, tmp_path):
     assert "material.toy_moment_gf_cm_per_cm" in done.stderr and "toy_jenkins" in done.stderr
     help_text = child(plugin, "-m", "warpcloth", "material", "fit-kes", "--help").stdout
     assert "toy_jenkins" in help_text
+
+
+def install(site: Path, module: str, law_source: str, fitter_source: str = TOY_FITTER) -> dict:
+    """An environment in which ``law_source`` is installed as the plugin ``module``."""
+    (site / f"{module}.py").write_text(law_source)
+    (site / "toy_jenkins_fit.py").write_text(fitter_source)
+    info = site / f"{module}-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {module}\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text(f"[warpcloth.bending_laws]\n{module} = {module}:LAW\n")
+    return {**os.environ, "PYTHONPATH": str(site)}
+
+
+@pytest.mark.parametrize(("law", "fitter", "command", "needle"), [
+    ("LAW = 42\n", TOY_FITTER, ["--help"],
+     "the bending law 'broken' registered under warpcloth.bending_laws as 'broken:LAW' is a int"),
+    (TOY_LAW.replace('"curvature", "Ky"', '"angle", "Ky"'), TOY_FITTER, ["--help"],
+     "the toy_jenkins law's parameter 'toy_width' has kind 'angle'; a kind is one of"),
+    (TOY_LAW, TOY_FITTER.replace('"toy_width_per_cm", "K_y"', '"toy_span_per_cm", "K_y"'),
+     ["material", "compare", "--bending", "kes_fb2_example"],
+     "the toy_jenkins bending law's KES fitter 'toy_jenkins_fit:FITTER' fits"),
+])
+def test_a_broken_plugin_is_one_line_naming_itself(tmp_path, law, fitter, command, needle):
+    env = install(tmp_path, "broken" if law.startswith("LAW = 42") else "toy_jenkins", law, fitter)
+    done = child(env, "-m", "warpcloth", *command, cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert needle in done.stderr and "Traceback" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1, done.stderr
 
 
 def test_a_broken_plugin_names_itself(tmp_path):

@@ -1,6 +1,7 @@
-"""The README runs as written: every command of its ``bash`` and ``python`` blocks, in order,
-in a scratch directory holding a copy of ``scenes/`` (the README's paragraph after the
-install block states the conventions this test applies; they are the constants below)."""
+"""The README and the user guide run as written: every command of their ``bash`` and
+``python`` blocks, the README's then the guide's, in order, in a scratch directory holding
+a copy of ``scenes/`` (the README's paragraph after the install block states the
+conventions this test applies; they are the constants below)."""
 
 import os
 import re
@@ -15,6 +16,7 @@ from conftest import run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
+GUIDE = ROOT / "docs" / "guide.md"
 
 SWEEP_SHORTER = "--set sweep.random.samples=8"  # appended to every `warpcloth sweep`
 SKIP = "not run by the README test"
@@ -84,8 +86,8 @@ def bash_steps(body):
 
 
 def readme_steps(text):
-    """Every step in README order. Of the first (install) block only its warpcloth
-    commands run: the block installs the package and runs this suite."""
+    """Every step in README order (the README, then the guide). Of the first (install)
+    block only its warpcloth commands run: the block installs the package and runs this suite."""
     found = list(BLOCK.finditer(text))
     assert found and found[0].group(1) == "bash", "the README starts with its install block"
     install = [part.strip() for line in found[0].group(2).splitlines() for part in line.split("&&")]
@@ -131,7 +133,7 @@ def test_readme_conventions_are_parsed():
 
 
 def test_readme_runs_as_written(tmp_path):
-    text = README.read_text(encoding="utf-8")
+    text = README.read_text(encoding="utf-8") + "\n" + GUIDE.read_text(encoding="utf-8")
     steps = readme_steps(text)
     searches = []
     shutil.copytree(ROOT / "scenes", tmp_path / "scenes", ignore=shutil.ignore_patterns("__pycache__"))
@@ -144,7 +146,7 @@ def test_readme_runs_as_written(tmp_path):
             f"README command:\n{step.shown}\nexited {done.returncode} (the README says {step.exit_code}); "
             f"output tail:\n{output[-TAIL_CHARS:]}")
         searches += [(step.shown, QUOTED.format(*m.groups())) for m in SEARCH.finditer(output)]
-    # the numbers the README quotes for its fits are the ones its fit commands print now
-    assert len(searches) >= 2, "the README's fit commands printed no launch and variant counts"
+    # the numbers the guide quotes for its fits are the ones its fit commands print now
+    assert len(searches) >= 2, "the guide's fit commands printed no launch and variant counts"
     for shown, quoted in searches:
-        assert quoted in text, f"README command:\n{shown}\nprinted {quoted!r}, which the README does not quote"
+        assert quoted in text, f"guide command:\n{shown}\nprinted {quoted!r}, which the guide does not quote"

@@ -45,7 +45,18 @@ PER_DEGREE = 1.0 / ANGLE_DEGREE
 SHEAR_RIGIDITY_GF_PER_CM_DEG = SHEAR_FORCE_GF_PER_CM / ANGLE_DEGREE
 """Shear rigidity per width (KES G): gf/(cm·degree) → N/(m·rad)."""
 
+BENDING_UNITS = {
+    "rigidity": ("RIGIDITY_GF_CM2_PER_CM", "gf·cm²/cm"),
+    "moment": ("MOMENT_GF_CM_PER_CM", "gf·cm/cm"),
+    "curvature": ("CURVATURE_PER_CM", "cm⁻¹"),
+    "inverse_curvature": ("LENGTH_CM", "cm"),
+    "number": ("", ""),
+}
+"""A law parameter's bending unit by its kind (:data:`warpcloth.kernels.law.KINDS`, and D's
+``rigidity``): the constant above that converts its scene field to SI, its unit as printed."""
+
 SHEAR_UNITS = {
+    "rigidity": ("gf_per_cm_deg", "SHEAR_RIGIDITY_GF_PER_CM_DEG", "gf/(cm·°)"),
     "moment": ("gf_per_cm", "SHEAR_FORCE_GF_PER_CM", "gf/cm"),
     "curvature": ("deg", "ANGLE_DEGREE", "°"),
     "inverse_curvature": ("per_deg", "PER_DEGREE", "1/°"),

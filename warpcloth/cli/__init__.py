@@ -10,15 +10,24 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from .interrupt import EXIT_INTERRUPTED, interrupted_at_start
+from .interrupt import EXIT_INTERRUPTED, EXIT_UNUSABLE_INPUT, interrupted_at_start
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``warpcloth`` command; returns the exit status."""
+    import sys
+
     try:
         from .app import main as run_command
     except KeyboardInterrupt:
         return interrupted_at_start()
+    except ImportError as exc:
+        from warpcloth.kernels.law import LawRegistryError
+
+        if not isinstance(exc, LawRegistryError):
+            raise
+        print(f"warpcloth: {exc}", file=sys.stderr)  # a broken law of an installed package
+        return EXIT_UNUSABLE_INPUT
     return run_command(argv)
 
 

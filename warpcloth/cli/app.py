@@ -26,18 +26,18 @@ from warpcloth.errors import (
     SceneError,
     WarpclothError,
 )
+from warpcloth.kernels.law import LawRegistryError
 from warpcloth.sim.model import init_warp_quietly
 
 from . import analyse, fit, material, run, scene, sweep, track, view
 from .flags import as_option
-from .interrupt import EXIT_INTERRUPTED, interrupted_at_start
+from .interrupt import EXIT_INTERRUPTED, EXIT_UNUSABLE_INPUT, interrupted_at_start
 
 COMMAND_GROUPS = (run, sweep, view, fit, material, analyse, scene, track)
 """Each registers its subcommands with a ``handler`` (see :func:`main`)."""
 
 WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (OptionError, "error in option"),
         (ResourceError, "too large"))
-EXIT_UNUSABLE_INPUT = 2
 EXIT_DIVERGED = 3
 STREAMING = ("run", "sweep")
 """Commands whose results stream to disk (the rest write each file whole, atomically)."""
@@ -111,6 +111,9 @@ def _run_handler(args: argparse.Namespace) -> int:
     except DivergenceError as exc:
         print(f"warpcloth {args.command}: {exc}", file=sys.stderr)
         return EXIT_DIVERGED
+    except LawRegistryError as exc:  # a law's fitter, loaded when first needed
+        print(f"warpcloth {args.command}: {exc}", file=sys.stderr)
+        return EXIT_UNUSABLE_INPUT
     except WarpclothError as exc:
         if isinstance(exc, ArgumentError):
             exc = as_option(exc)  # the library names its argument; the user typed an option

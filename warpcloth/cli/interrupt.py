@@ -1,11 +1,13 @@
-"""How the command line reports a Ctrl-C that came before a command started its work
-(shared by :func:`warpcloth.cli.main` and :mod:`.app`, so neither imports the other back)."""
+"""How the command line reports what stops it before a command starts its work — a
+Ctrl-C, or a broken law of an installed package — (shared by :func:`warpcloth.cli.main`
+and :mod:`.app`, so neither imports the other back)."""
 
 from __future__ import annotations
 
 import sys
 
 EXIT_INTERRUPTED = 130  # the shell's convention for SIGINT
+EXIT_UNUSABLE_INPUT = 2  # bad input of any kind: a scene, a data file, an option, a law's description
 
 
 def interrupted_at_start() -> int:

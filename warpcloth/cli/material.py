@@ -39,8 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                        + "; or all: fit every one, print their comparison and write the material of the one with "
                        f"the lowest AIC (default: {DEFAULT_BENDING_LAW})")
     kes_p.add_argument("--shear", metavar="FB1S.csv", help=f"also fit the fabric's in-plane shear: {SHEAR_HELP}; "
-                       "the material file gains a [shear] table (read by sheets, not by strips)")
-    kes_p.add_argument("--shear-law", default=DEFAULT_SHEAR_LAW, choices=tuple(BENDING_LAWS),
+                       "the material file gains a [shear] table (for the woven sheet being built, docs/model.md §17; "
+                       "strips ignore it)")
+    kes_p.add_argument("--shear-law", default=None, choices=tuple(BENDING_LAWS),
                        help=f"the law to fit to --shear (default: {DEFAULT_SHEAR_LAW})")
     kes_p.add_argument("-o", "--output", type=path_text, required=True, help="the material file to write (.toml)")
     kes_p.add_argument("--density-g-per-cm2", type=positive, default=None,
@@ -198,7 +199,10 @@ def _fit_kes(args: argparse.Namespace) -> int:
         raise OptionError("--divergence-strain", f"must be > 0, got {max_strain:g}")
     gauge = kes.KES_FB1_GAUGE_MM if args.gauge_length_mm is None else args.gauge_length_mm
     tensile = kes.read_tensile_csv(args.tensile, args.strain_unit, gauge, argument="--tensile")
-    shear = kes.fit_shear(kes.read_shear_csv(args.shear, argument="--shear"), args.shear_law) if args.shear else None
+    if args.shear_law is not None and not args.shear:
+        raise OptionError("--shear-law", f"{args.shear_law}: there is no --shear loop to fit it to")
+    shear_law = args.shear_law or DEFAULT_SHEAR_LAW
+    shear = kes.fit_shear(kes.read_shear_csv(args.shear, argument="--shear"), shear_law) if args.shear else None
     comparison = kes.compare_laws(kes.read_bending_csv(args.bending, argument="--bending"), laws)
     law = comparison.recommended
     fit = kes.fit_kes(tensile, comparison.loop, max_strain, bending_fit=comparison.fits[law])
@@ -206,7 +210,7 @@ def _fit_kes(args: argparse.Namespace) -> int:
     source = (f"fitted by warpcloth material fit-kes to {args.tensile} (KES-FB1) and {args.bending} (KES-FB2)"
               f"{chosen}; density {args.density_g_per_cm2:g} g/cm² given on the command line")
     if shear is not None:
-        source += f"; shear ({args.shear_law}) fitted to {args.shear} (KES-FB1 shear)"
+        source += f"; shear ({shear_law}) fitted to {args.shear} (KES-FB1 shear)"
     data = kes.material_file_data(fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain, shear)
     if len(laws) > 1:
         data["fit"] |= comparison.fit_table()

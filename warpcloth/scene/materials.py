@@ -25,7 +25,8 @@ MATERIAL_FILE_KEY = "material.from_file"
 
 def si_value(parameter: LawParameter, value: float) -> float:
     """A law parameter's scene value (KES units) in SI, by the unit its description names."""
-    return value * getattr(units, parameter.unit) if parameter.unit else value
+    factor = units.BENDING_UNITS[parameter.kind][0]
+    return value * getattr(units, factor) if factor else value
 
 
 def to_si(section: MaterialSection) -> MaterialSI:

@@ -1,7 +1,7 @@
 """The scene schema: what a scene file may say, field by field.
 
 A scene is a TOML file whose sections map onto the dataclasses below. Every field
-carries its unit in its name and a one-line description in its metadata (the README's
+carries its unit in its name and a one-line description in its metadata (the user guide's
 scene reference is the same information); ``per_strip`` fields may differ between the
 strips of one batch, the others split a sweep into batches. The default material is the
 bundled material file ``wool90-nylon10``: its numbers live there only.

@@ -22,7 +22,7 @@ import numpy as np
 from warpcloth import units
 from warpcloth.errors import ArgumentError
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
-from warpcloth.kernels.law import BendingLaw
+from warpcloth.kernels.law import BENDING_RIGIDITY, BendingLaw, LawRegistryError
 from warpcloth.scene import to_si
 from warpcloth.sim import moment_along_path
 
@@ -38,11 +38,17 @@ def _fitter_of(law: BendingLaw) -> LawFitter:
     module, _, attribute = law.fitter.partition(":")
     try:
         fitter = getattr(importlib.import_module(module), attribute)
-    except (ImportError, AttributeError) as exc:
-        raise ImportError(f"the {law.name} bending law names its KES fitter {law.fitter!r}, which cannot be "
+    except (ImportError, AttributeError) as exc:  # noqa: B014 - a broken fitter module, or no such name
+        raise LawRegistryError(f"the {law.name} bending law names its KES fitter {law.fitter!r}, which cannot be "
                           f"loaded: {exc}") from exc
     if not isinstance(fitter, LawFitter) or fitter.law != law.name:
-        raise ImportError(f"the {law.name} bending law's KES fitter {law.fitter!r} is not a LawFitter of that law")
+        raise LawRegistryError(f"the {law.name} bending law's KES fitter {law.fitter!r} is not a LawFitter of that law")
+    fields = {p.field for p in fitter.parameters}
+    expected = {BENDING_RIGIDITY.scene_field, *(p.scene_field for p in law.parameters)}
+    if fields != expected:
+        raise LawRegistryError(f"the {law.name} bending law's KES fitter {law.fitter!r} fits "
+                               f"{', '.join(sorted(fields))}; the law's [material] fields are "
+                               f"{', '.join(sorted(expected))}")
     return fitter
 
 

@@ -14,6 +14,7 @@ from warpcloth.io.atomic import write_text_atomically
 from warpcloth.scene import MaterialSection, material_fields, parse_shear, validate_material
 from warpcloth.units import check_plausible
 
+from .bending_fit import worst_status
 from .kes_fit import KesFit
 from .shear_fit import ShearFit
 from .tensile_fit import DIVERGENCE_STRAIN
@@ -51,6 +52,11 @@ def material_file_data(fit: KesFit, name: str, density_g_per_cm2: float, source:
         parse_shear(table, "the shear fit")
         data["shear"] = table
         data["fit"] |= shear.summary_table()
+        # the file's one status is the least trusted of its fits
+        status, problems = shear.verdict()
+        data["fit"]["status"] = worst_status(data["fit"]["status"], status)
+        if problems:
+            data["fit"]["problems"] = [*(data["fit"].get("problems") or []), *(f"shear: {p}" for p in problems)]
     return data
 
 

@@ -318,6 +318,48 @@ def tensile_loop(strain: np.ndarray, force: np.ndarray, source: str = "tensile d
     return loop
 
 
+@dataclass(frozen=True)
+class _CycleWords:
+    # How a loop's checks name its variable: ``x`` and its ``unit``, and what a fit of it needs.
+    x: str
+    symbol: str
+    unit: str
+    needs: str
+
+
+def _check_cycle(x: np.ndarray, rows: np.ndarray, label: str, source: str, words: _CycleWords) -> float:
+    # One cycle from rest to both signs of x and back; returns the largest |x|.
+    if len(x) < MIN_BENDING_POINTS:
+        raise DataFileError(source, f"the loop has {len(x)} point(s); {words.needs} needs at least "
+                            f"{MIN_BENDING_POINTS}")
+    x0 = float(np.max(np.abs(x)))
+    if not x0 > 0:
+        raise DataFileError(source, f"the {words.x} is 0 throughout")
+    low, high = float(x.min()), float(x.max())
+    s, u = words.symbol, words.unit
+    if high < LOOP_REACH * x0 or low > -LOOP_REACH * x0:
+        raise DataFileError(source, f"the loop does not reach both signs of {words.x}: {s} runs from {low:.4g} to "
+                            f"{high:.4g}{u}; a loop goes to +{s}0 and −{s}0 (each side at least {LOOP_REACH:.0%} of "
+                            f"the largest |{s}|)")
+    if abs(x[0]) > LOOP_CLOSURE * x0:
+        raise DataFileError(source, f"the loop starts at {s} = {x[0]:.4g}{u} ({label} {rows[0]}), not from rest: the "
+                            "model starts fresh at the first row, as the instrument's cycle does from 0; give the "
+                            "cycle from its start")
+    if abs(x[-1] - x[0]) > LOOP_CLOSURE * x0:
+        raise DataFileError(source, f"the loop does not close: it starts at {s} = {x[0]:.4g}{u} ({label} {rows[0]}) "
+                            f"and ends at {s} = {x[-1]:.4g}{u} ({label} {rows[-1]}); a loop returns to its start "
+                            f"(within {LOOP_CLOSURE:.0%} of the largest |{s}|, {x0:.4g}{u})")
+    return x0
+
+
+_BENDING_WORDS = _CycleWords("curvature", "K", " 1/cm", "fitting D, D1 and α along 0 → +K0 → −K0 → 0")
+_SHEAR_WORDS = _CycleWords("shear angle", "φ", "°", "fitting G and the hysteresis along 0 → +φ0 → −φ0 → 0")
+
+SHEAR_ANGLE_RANGE_DEG = (1.0, 45.0)
+"""A shear loop's largest |φ| must lie in this range (degree): KES-FB1 shears to ±8°; a
+loop below 1° is most likely in radians, one beyond 45° not a fabric's shear test."""
+
+
 def bending_loop(curvature: np.ndarray, moment: np.ndarray, source: str = "bending data",
                  rows: np.ndarray | None = None) -> BendingLoop:
     """A validated bending loop from arrays: curvature in 1/cm, moment per width in gf·cm/cm.
@@ -327,56 +369,20 @@ def bending_loop(curvature: np.ndarray, moment: np.ndarray, source: str = "bendi
     for :func:`tensile_loop`.
     """
     curvature, moment, rows, label = _paired(curvature, moment, rows, source, ("curvature", "moment"))
-    if len(curvature) < MIN_BENDING_POINTS:
-        raise DataFileError(source, f"the loop has {len(curvature)} point(s); fitting D, D1 and α along "
-                            f"0 → +K0 → −K0 → 0 needs at least {MIN_BENDING_POINTS}")
-    loop = BendingLoop(curvature, moment, rows, source, label)
-    k0 = loop.k0
-    if not k0 > 0:
-        raise DataFileError(source, "the curvature is 0 throughout")
-    low, high = float(curvature.min()), float(curvature.max())
-    if high < LOOP_REACH * k0 or low > -LOOP_REACH * k0:
-        raise DataFileError(source, f"the loop does not reach both signs of curvature: K runs from {low:.4g} to "
-                            f"{high:.4g} 1/cm; a KES-FB2 loop goes to +K0 and −K0 (each side at least "
-                            f"{LOOP_REACH:.0%} of the largest |K|)")
-    if abs(curvature[0]) > LOOP_CLOSURE * k0:
-        raise DataFileError(source, f"the loop starts at K = {curvature[0]:.4g} 1/cm ({label} {rows[0]}), not "
-                            "from rest: the model's hinge starts fresh at the first row, as a KES-FB2 cycle does "
-                            "from K = 0; give the cycle from its start")
-    gap = abs(curvature[-1] - curvature[0])
-    if gap > LOOP_CLOSURE * k0:
-        raise DataFileError(source, f"the loop does not close: it starts at K = {curvature[0]:.4g} 1/cm ({label} "
-                            f"{rows[0]}) and ends at K = {curvature[-1]:.4g} 1/cm ({label} {rows[-1]}); a KES-FB2 "
-                            f"loop returns to its start (within {LOOP_CLOSURE:.0%} of the largest |K|, {k0:.4g} "
-                            "1/cm)")
-    return loop
+    _check_cycle(curvature, rows, label, source, _BENDING_WORDS)
+    return BendingLoop(curvature, moment, rows, source, label)
 
 
 def shear_loop(angle: np.ndarray, force: np.ndarray, source: str = "shear data",
                rows: np.ndarray | None = None) -> ShearLoop:
     """A validated shear loop from arrays: angle in degrees, force per width in gf/cm; one
     cycle from rest to both signs of φ and back, as :func:`bending_loop` requires of a
-    bending loop (the same checks, in shear's words)."""
+    bending loop, its largest |φ| within :data:`SHEAR_ANGLE_RANGE_DEG`."""
     angle, force, rows, label = _paired(angle, force, rows, source, ("shear angle", "shear force"))
-    if len(angle) < MIN_BENDING_POINTS:
-        raise DataFileError(source, f"the loop has {len(angle)} point(s); fitting G and the hysteresis along "
-                            f"0 → +φ0 → −φ0 → 0 needs at least {MIN_BENDING_POINTS}")
-    loop = ShearLoop(angle, force, rows, source, label)
-    phi0 = loop.phi0
-    if not phi0 > 0:
-        raise DataFileError(source, "the shear angle is 0 throughout")
-    low, high = float(angle.min()), float(angle.max())
-    if high < LOOP_REACH * phi0 or low > -LOOP_REACH * phi0:
-        raise DataFileError(source, f"the loop does not reach both signs of shear: φ runs from {low:.4g} to "
-                            f"{high:.4g}°; a KES-FB1 shear loop goes to +φ0 and −φ0 (each side at least "
-                            f"{LOOP_REACH:.0%} of the largest |φ|)")
-    if phi0 > 45.0:
-        raise DataFileError(source, f"the largest shear angle is {phi0:.4g}°: is the angle in degrees? (KES-FB1 "
-                            "shears to ±8°; the column must be degrees)")
-    if abs(angle[0]) > LOOP_CLOSURE * phi0:
-        raise DataFileError(source, f"the loop starts at φ = {angle[0]:.4g}° ({label} {rows[0]}), not from rest; "
-                            "give the cycle from its start")
-    if abs(angle[-1] - angle[0]) > LOOP_CLOSURE * phi0:
-        raise DataFileError(source, f"the loop does not close: it starts at φ = {angle[0]:.4g}° ({label} {rows[0]}) "
-                            f"and ends at φ = {angle[-1]:.4g}° ({label} {rows[-1]})")
-    return loop
+    phi0 = _check_cycle(angle, rows, label, source, _SHEAR_WORDS)
+    low, high = SHEAR_ANGLE_RANGE_DEG
+    if not low <= phi0 <= high:
+        raise DataFileError(source, f"the largest shear angle is {phi0:.4g}°, outside {low:g}–{high:g}°: is the "
+                            "column in degrees? (KES-FB1 shears to ±8°; an angle in radians reads as a loop below "
+                            "1°: convert it, or head the column shear_angle_deg with the angle in degrees)")
+    return ShearLoop(angle, force, rows, source, label)

@@ -13,11 +13,13 @@ the data's 4th differences, the elastic line as the baseline, the search's edges
 The KES values G, 2HG and 2HG5 are computed from the data and, for the fitted law, along
 the standard cycle 0 → +φ0 → −φ0 → 0 (φ0 the loop's largest |φ|).
 
-None of the five laws can make a loop that widens away from φ = 0: their width at φ is
+None of the four laws can make a loop that widens away from φ = 0: their width at φ is
 2 M0 − D1 (e^{−α(φ0+φ)} + e^{−α(φ0−φ)}) (tagawa2003, masing) or saturates (dahl,
 frictional_couple), so a measured loop with 2HG5 > 2HG (common for woven fabrics, whose
-yarns jam as they shear) is not reproduced; the comparison of the KES values, printed
-and written, shows it, and its RMS makes it ``poor_fit`` where the noise is small.
+yarns jam as they shear) is not reproduced. The verdict therefore also compares the KES
+values: a fitted law that misses the data's G by more than :data:`KES_TOLERANCE`, or its
+2HG or 2HG5 by more than that plus twice the data's noise, is ``poor_fit``, however small
+its RMS.
 """
 
 from __future__ import annotations
@@ -31,10 +33,15 @@ from warpcloth.kernels.law import BENDING_RIGIDITY
 from warpcloth.scene import RIGIDITY_FIELD, ShearMaterial, shear_field
 from warpcloth.sim import shear_force_along_path
 
+from ..noise import difference_noise
 from .bending_fit import STATUS_ORDER, BendingFit, bending_problems
 from .kes_values import KES_SHEAR_STEP_DEG, ShearSummary, shear_summary, standard_cycle
 from .laws import DEFAULT_LAW, law_fitter
 from .readers import ShearLoop, shear_loop
+
+KES_TOLERANCE = 0.05
+"""A fitted shear law must reproduce the data's G, 2HG and 2HG5 within this fraction (the
+widths also within twice the data's noise, from its 4th differences)."""
 
 
 @dataclass(frozen=True)
@@ -57,6 +64,15 @@ class ShearFit:
         """Status and problems, as a bending fit's (``converged``, ``not_identifiable``,
         ``at_bound``, ``poor_fit``, ``failed``)."""
         found = bending_problems(self.law_fit, self.loop.as_law_loop(), "shear", "gf/cm", "Fs = G φ")
+        noise = difference_noise([self.loop.force])
+        for name, data, law in self.kes_comparison():
+            if data is None or law is None:
+                continue
+            allowed = KES_TOLERANCE * abs(data) + (2 * noise if name != "G" else 0.0)
+            if abs(law - data) > allowed:
+                found.append(("poor_fit", f"the fitted {self.shear.law} law's {name} {law:.4g} misses the data's "
+                              f"{data:.4g} by {100 * (law - data) / data:+.1f} % (allowed {allowed:.3g}): the law does "
+                              "not make this loop's shape"))
         found.sort(key=lambda problem: STATUS_ORDER.index(problem[0]))
         return (found[0][0] if found else "converged"), [message for _, message in found]
 

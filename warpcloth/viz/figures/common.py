@@ -78,7 +78,7 @@ def legend(ax: plt.Axes, **style: object) -> None:
 FIELD_LABELS = {
     "damping.gamma_per_s": ("γ", "s⁻¹"),
     # every bending law's parameters, D's included, as their descriptions label them
-    **{f"material.{p.scene_field}": (p.label, p.unit_label)
+    **{f"material.{p.scene_field}": (p.label, units.BENDING_UNITS[p.kind][1])
        for p in (BENDING_RIGIDITY, *(parameter for parameter, _ in LAW_PARAMETERS.values()))},
     "material.density_g_per_cm2": ("ρ_A", "g/cm²"),
     "material.bending_law": ("bending law", ""),
