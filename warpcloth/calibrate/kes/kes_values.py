@@ -11,7 +11,7 @@
 - 2HB (gf·cm/cm): mean over K = +1 and K = −1 1/cm of the hysteresis width
   M(rising) − M(falling), each read off a straight line through the branch's points
   within ±0.1 1/cm (linear interpolation where fewer than 3 points lie there).
-- G (gf/(cm·°)): as B, the mean slope dFs/dφ for 0.5 ≤ |φ| ≤ 5° of a KES-FB1 shear loop.
+- G (gf/(cm·°)): as B, the mean slope dFs/dφ for 0.5 ≤ ``|φ|`` ≤ 5° of a KES-FB1 shear loop.
 - 2HG, 2HG5 (gf/cm): as 2HB, the hysteresis width Fs(rising) − Fs(falling) at φ = ±0.5°
   and ±5°, each branch read off a line through its points within ±0.1° (docs/model.md §17.1).
 """
@@ -34,7 +34,7 @@ HB_WINDOW_PER_CM = 0.1
 """2HB: a branch's moment at ±1 1/cm is a line through its points within ± this (1/cm)."""
 
 G_RANGE_DEG = (0.5, 5.0)
-"""KES G: the |φ| range (degree) of the slopes that are averaged."""
+"""KES G: the ``|φ|`` range (degree) of the slopes that are averaged."""
 
 HG_ANGLES_DEG = (0.5, 5.0)
 """KES 2HG and 2HG5: the hysteresis width is read at φ = ± these (degree)."""

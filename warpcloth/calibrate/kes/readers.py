@@ -356,7 +356,7 @@ _BENDING_WORDS = _CycleWords("curvature", "K", " 1/cm", "fitting D, D1 and α al
 _SHEAR_WORDS = _CycleWords("shear angle", "φ", "°", "fitting G and the hysteresis along 0 → +φ0 → −φ0 → 0")
 
 SHEAR_ANGLE_RANGE_DEG = (1.0, 45.0)
-"""A shear loop's largest |φ| must lie in this range (degree): KES-FB1 shears to ±8°; a
+"""A shear loop's largest ``|φ|`` must lie in this range (degree): KES-FB1 shears to ±8°; a
 loop below 1° is most likely in radians, one beyond 45° not a fabric's shear test."""
 
 
@@ -377,7 +377,7 @@ def shear_loop(angle: np.ndarray, force: np.ndarray, source: str = "shear data",
                rows: np.ndarray | None = None) -> ShearLoop:
     """A validated shear loop from arrays: angle in degrees, force per width in gf/cm; one
     cycle from rest to both signs of φ and back, as :func:`bending_loop` requires of a
-    bending loop, its largest |φ| within :data:`SHEAR_ANGLE_RANGE_DEG`."""
+    bending loop, its largest ``|φ|`` within :data:`SHEAR_ANGLE_RANGE_DEG`."""
     angle, force, rows, label = _paired(angle, force, rows, source, ("shear angle", "shear force"))
     phi0 = _check_cycle(angle, rows, label, source, _SHEAR_WORDS)
     low, high = SHEAR_ANGLE_RANGE_DEG

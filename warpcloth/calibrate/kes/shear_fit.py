@@ -11,7 +11,7 @@ in gf/cm for the moment's, angles in degrees for curvatures; only the names chan
 the data's 4th differences, the elastic line as the baseline, the search's edges).
 
 The KES values G, 2HG and 2HG5 are computed from the data and, for the fitted law, along
-the standard cycle 0 → +φ0 → −φ0 → 0 (φ0 the loop's largest |φ|).
+the standard cycle 0 → +φ0 → −φ0 → 0 (φ0 the loop's largest ``|φ|``).
 
 None of the four laws can make a loop that widens away from φ = 0: their width at φ is
 2 M0 − D1 (e^{−α(φ0+φ)} + e^{−α(φ0−φ)}) (tagawa2003, masing) or saturates (dahl,
