@@ -1,9 +1,10 @@
 """What was tracked, to look at: a figure of one frame with every marker's path and that
 frame's markers on it, beside the tracked shapes in the clamp-edge frame; and a video of
-every frame with its points circled."""
+every frame with its points circled, at its own time."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from fractions import Fraction
 from pathlib import Path
 
@@ -63,27 +64,37 @@ def write_overlay(path: str | Path, image: np.ndarray, tracked: Tracked, frame: 
 
 
 def write_overlay_video(path: str | Path, frames: Frames | FrameStream, tracked: Tracked,
-                        nominal_interval_s: float) -> None:
+                        times: Sequence[Fraction]) -> float:
     """The frames ``tracked`` was tracked from (``(index, t, image)`` each, in the same
-    order) with their points circled and labelled, as grey FFV1 in AVI, written atomically;
-    frames keep their times to the nearest nominal interval."""
+    order, at the exact ``times`` s) with their points circled and labelled, as grey FFV1 in
+    AVI, encoded one at a time and written atomically. Each frame keeps its own time
+    where AVI can hold it (a time base of their common divisor, as coarse as 1/1000 s or
+    coarser: FFmpeg's AVI muxer replaces a finer one); returns by how much the times
+    written are off (s), 0 when exact."""
+    import math
+
     import cv2
 
     from warpcloth.io.atomic import write_atomically
 
     from .video import write_video
 
-    rate = Fraction(1 / nominal_interval_s).limit_denominator(1001)
-    images = []
-    for f, (_, _, image) in enumerate(frames):
-        drawn = image.copy()
-        for m, s in enumerate(tracked.s_mm):
-            centre = tuple(int(round(v * 16)) for v in tracked.px[f, m])
-            cv2.circle(drawn, centre, 8 * 16, 255, 1, cv2.LINE_AA, 4)
-            cv2.putText(drawn, f"{s:g}", (int(tracked.px[f, m, 0]) + 10, int(tracked.px[f, m, 1]) + 4),
-                        cv2.FONT_HERSHEY_SIMPLEX, 0.35, 255, 1, cv2.LINE_AA)
-        cv2.putText(drawn, f"frame {tracked.frame[f]}  t = {tracked.t[f]:.4f} s", (10, 20), cv2.FONT_HERSHEY_SIMPLEX,
-                    0.5, 255, 1, cv2.LINE_AA)
-        images.append(drawn)
-    pts = np.rint(tracked.t * float(rate)).astype(int)
-    write_atomically(path, lambda tmp: write_video(tmp, images, pts, 1 / rate))
+    # the coarsest time base of which every time is a whole multiple (keeps AVI's index small)
+    time_base = Fraction(math.gcd(*(t.numerator for t in times)), math.lcm(*(t.denominator for t in times)))
+
+    def drawn() -> Iterator[np.ndarray]:
+        for f, (_, _, image) in enumerate(frames):
+            image = image.copy()
+            for m, s in enumerate(tracked.s_mm):
+                centre = tuple(int(round(v * 16)) for v in tracked.px[f, m])
+                cv2.circle(image, centre, 8 * 16, 255, 1, cv2.LINE_AA, 4)
+                cv2.putText(image, f"{s:g}", (int(tracked.px[f, m, 0]) + 10, int(tracked.px[f, m, 1]) + 4),
+                            cv2.FONT_HERSHEY_SIMPLEX, 0.35, 255, 1, cv2.LINE_AA)
+            cv2.putText(image, f"frame {tracked.frame[f]}  t = {tracked.t[f]:.4f} s", (10, 20),
+                        cv2.FONT_HERSHEY_SIMPLEX, 0.5, 255, 1, cv2.LINE_AA)
+            yield image
+
+    written: list[Fraction] = []
+    write_atomically(path, lambda tmp: written.append(write_video(tmp, drawn(), [t / time_base for t in times],
+                                                                  time_base)))
+    return max(abs(float(t - round(t / written[0]) * written[0])) for t in times)
