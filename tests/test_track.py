@@ -373,12 +373,28 @@ def test_the_overlay_video_is_encoded_frame_by_frame_at_the_videos_own_times(tmp
                       px[..., 0], np.ones(n))
     tracemalloc.start()
     try:
-        off = write_overlay_video(tmp_path / "o.avi", frames, tracked, times)
+        write_overlay_video(tmp_path / "o.avi", frames, tracked, times)
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
     assert peak < 6 * np.prod(shape), peak  # held all, it would be 20 frames
     movie = read_frames(tmp_path / "o.avi")
-    assert off == 0 and [Fraction(t).limit_denominator(1000) for t in movie.t] == times
+    assert [Fraction(t).limit_denominator(1000) for t in movie.t] == times
     assert np.allclose(movie.t, np.array(stamps) / 1000, atol=1e-12, rtol=0)
     assert [int(np.median(image)) for image in movie.images] == [40 + i for i in range(n)]
+
+
+def test_overlay_video_times_finer_than_avi_holds_are_rounded_or_refused():
+    # FFmpeg's AVI muxer keeps a video time base of 1/1000 s at the finest (a finer one it
+    # replaces by 1/600 s): an MP4's 1/90000 clock is rounded to it and says by how much;
+    # 2000 frames/s cannot be held at all
+    from warpcloth.errors import ArgumentError
+    from warpcloth.track.overlay import avi_timing
+
+    assert avi_timing([Fraction(k, 60) for k in (3, 4, 6)]) == (Fraction(1, 60), [3, 4, 6], 0.0)
+    time_base, pts, off = avi_timing([Fraction(k, 90000) for k in (1500, 3001, 4500)])
+    assert time_base == Fraction(1, 1000) and pts == [17, 33, 50]
+    assert off == pytest.approx(31 / 90000, rel=1e-12)  # 3001/90000 s written as 33 ms
+    with pytest.raises(ArgumentError, match="^overlay_video: frames less than 0.001 s apart") as raised:
+        avi_timing([Fraction(k, 2000) for k in range(4)])
+    assert raised.value.argument == "overlay_video"

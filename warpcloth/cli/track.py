@@ -192,7 +192,7 @@ def video_command(args: argparse.Namespace) -> int:
     from warpcloth.track.calibration import read_image, read_plane
     from warpcloth.track.centreline import track_centreline
     from warpcloth.track.markers import track_markers
-    from warpcloth.track.overlay import write_overlay, write_overlay_video
+    from warpcloth.track.overlay import avi_timing, write_overlay, write_overlay_video
     from warpcloth.track.video import FrameStream, median_background
 
     arcs = _what_to_track(args)
@@ -224,6 +224,7 @@ def video_command(args: argparse.Namespace) -> int:
                                    threshold_dn=args.threshold_dn, progress=not args.no_progress)
     dropped, duplicated = frames.dropped, frames.duplicated
     times = [frames.times[i] for i in tracked.frame]  # exact, before the overlay's pass decodes them again
+    off = avi_timing(times)[2] if movie is not None else 0.0  # AVI refuses > 1000 frames/s: before writing
     for note in (*dropped, *duplicated):
         print(f"warpcloth track: warning: {args.video}: {note}", file=sys.stderr)
     kept = len(tracked.t)
@@ -244,9 +245,9 @@ def video_command(args: argparse.Namespace) -> int:
         image = next(image for position, (_, _, image) in enumerate(frames) if position == shown)
         write_overlay(overlay, image, tracked, shown)
     if movie is not None:
-        off = write_overlay_video(movie, frames, tracked, times)
+        write_overlay_video(movie, frames, tracked, times)
         if off:
-            print(f"warpcloth track: warning: {movie}: AVI cannot hold the video's time base here; frame times are "
+            print(f"warpcloth track: warning: {movie}: AVI holds no time base finer than 1/1000 s; frame times are "
                   f"rounded, by up to {off:.3g} s", file=sys.stderr)
     print(f"tracked {len(arcs)} {what} in {kept} frames (t = {tracked.t[0]:.6g} to {tracked.t[-1]:.6g} s): "
           f"median uncertainty {np.median(tracked.u_mm):.2g} mm ({np.median(tracked.u_px):.2g} px), sensor noise "

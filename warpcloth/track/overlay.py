@@ -10,10 +10,12 @@ from pathlib import Path
 
 import numpy as np
 
+from warpcloth.errors import ArgumentError
+
 from .markers import Tracked
 from .video import Frames, FrameStream
 
-__all__ = ["overlay_figure", "write_overlay", "write_overlay_video"]
+__all__ = ["FINEST_AVI_S", "avi_timing", "overlay_figure", "write_overlay", "write_overlay_video"]
 
 
 def overlay_figure(image: np.ndarray, tracked: Tracked, frame: int) -> object:
@@ -63,24 +65,39 @@ def write_overlay(path: str | Path, image: np.ndarray, tracked: Tracked, frame: 
         plt.close(fig)
 
 
-def write_overlay_video(path: str | Path, frames: Frames | FrameStream, tracked: Tracked,
-                        times: Sequence[Fraction]) -> float:
-    """The frames ``tracked`` was tracked from (``(index, t, image)`` each, in the same
-    order, at the exact ``times`` s) with their points circled and labelled, as grey FFV1 in
-    AVI, encoded one at a time and written atomically. Each frame keeps its own time
-    where AVI can hold it (a time base of their common divisor, as coarse as 1/1000 s or
-    coarser: FFmpeg's AVI muxer replaces a finer one); returns by how much the times
-    written are off (s), 0 when exact."""
+FINEST_AVI_S = Fraction(1, 1000)
+"""The finest video time base FFmpeg's AVI muxer keeps (a finer one it replaces by 1/600 s)."""
+
+
+def avi_timing(times: Sequence[Fraction]) -> tuple[Fraction, list[int], float]:
+    """How AVI holds frames at ``times`` (s, exact): the time base (their common divisor,
+    the coarsest that keeps every time, or :data:`FINEST_AVI_S` where that is finer), each
+    frame's stamp in it, and by how much the times are rounded (s, 0 when exact). Frames
+    closer than that time base cannot be held: an error, before anything is written."""
     import math
 
+    exact = Fraction(math.gcd(*(t.numerator for t in times)), math.lcm(*(t.denominator for t in times)))
+    time_base = max(exact, FINEST_AVI_S)
+    pts = [round(t / time_base) for t in times]
+    if any(b <= a for a, b in zip(pts, pts[1:], strict=False)):
+        raise ArgumentError("overlay_video", f"frames less than {float(FINEST_AVI_S):g} s apart: an AVI written by "
+                            "FFmpeg holds at most 1000 frames/s (leave --overlay-video out, or use --overlay)")
+    return time_base, pts, max(abs(float(t - p * time_base)) for t, p in zip(times, pts, strict=True))
+
+
+def write_overlay_video(path: str | Path, frames: Frames | FrameStream, tracked: Tracked,
+                        times: Sequence[Fraction]) -> None:
+    """The frames ``tracked`` was tracked from (``(index, t, image)`` each, in the same
+    order, at the exact ``times`` s) with their points circled and labelled, as grey FFV1 in
+    AVI, encoded one at a time and written atomically, each frame at its own time as far as
+    AVI holds it (:func:`avi_timing`)."""
     import cv2
 
     from warpcloth.io.atomic import write_atomically
 
     from .video import write_video
 
-    # the coarsest time base of which every time is a whole multiple (keeps AVI's index small)
-    time_base = Fraction(math.gcd(*(t.numerator for t in times)), math.lcm(*(t.denominator for t in times)))
+    time_base, pts, _ = avi_timing(times)
 
     def drawn() -> Iterator[np.ndarray]:
         for f, (_, _, image) in enumerate(frames):
@@ -94,7 +111,4 @@ def write_overlay_video(path: str | Path, frames: Frames | FrameStream, tracked:
                         cv2.FONT_HERSHEY_SIMPLEX, 0.5, 255, 1, cv2.LINE_AA)
             yield image
 
-    written: list[Fraction] = []
-    write_atomically(path, lambda tmp: written.append(write_video(tmp, drawn(), [t / time_base for t in times],
-                                                                  time_base)))
-    return max(abs(float(t - round(t / written[0]) * written[0])) for t in times)
+    write_atomically(path, lambda tmp: write_video(tmp, drawn(), pts, time_base))

@@ -155,12 +155,11 @@ def median_background(frames: Iterable[tuple[int, float, np.ndarray]], most: int
     return np.median(np.stack(kept), axis=0)
 
 
-def write_video(path: str | Path, images: Iterable[np.ndarray], pts: Sequence[int], time_base: Fraction) -> Fraction:
+def write_video(path: str | Path, images: Iterable[np.ndarray], pts: Sequence[int], time_base: Fraction) -> None:
     """Grey uint8 frames to ``path`` (FFV1, lossless, in AVI: its time base is exact at any
-    frame rate, unlike Matroska's millisecond clock), frame i at ``pts[i] · time_base`` s,
-    each encoded as it comes (``images`` may be a generator: none is held). Returns the
-    time base the muxer kept (FFmpeg's AVI muxer replaces one finer than 1/1000 s, and the
-    times are rounded to it)."""
+    frame rate up to 1000 frames/s, unlike Matroska's millisecond clock; FFmpeg replaces a
+    finer one by 1/600 s), frame i at ``pts[i] · time_base`` s, each encoded as it comes
+    (``images`` may be a generator: none is held)."""
     import av
 
     with av.open(str(path), "w", format="avi") as container:
@@ -186,4 +185,3 @@ def write_video(path: str | Path, images: Iterable[np.ndarray], pts: Sequence[in
                 container.mux(packet)
         for packet in stream.encode():
             container.mux(packet)
-    return stream.time_base
