@@ -30,8 +30,8 @@ FORMAT = "warpcloth plane 1"
 
 MIN_IMAGES = 3
 MIN_EDGE_PX = 10
-"""--clamp-edge-px's two pixels at least this far apart: a click's half-pixel error then
-turns the x axis by at most ~3°."""
+"""--clamp-edge-px's two pixels at least this far apart: a half-pixel error in either then
+turns the x axis by at most atan(0.5 / 10) ≈ 3°."""
 
 
 def read_image(path: str | Path, argument: str = "path") -> np.ndarray:
