@@ -290,3 +290,111 @@ def test_an_existing_result_is_kept(tracked, tmp_path):
     assert (tmp_path / "out.csv").read_text() == "mine\n"
     one_line_error(run_cli(*CALIBRATE, "-o", str(tmp_path / "plane.json")), "plane.json already exists")
     assert (tmp_path / "plane.json").read_bytes() == (tracked / "plane.json").read_bytes()
+
+
+@pytest.fixture
+def not_tracked(monkeypatch):
+    """Tracking refused: a check that must come before the video is tracked fails the test."""
+    import warpcloth.track.markers as markers
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the video was tracked before the options were checked")
+    monkeypatch.setattr(markers, "track_markers", refuse)
+
+
+def test_outputs_that_would_replace_each_other_are_refused(tracked, tmp_path, not_tracked):
+    # `-o same.png --overlay same.png` wrote the figure over the shapes file, exit 0
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    video = DATA / "rotation.avi"
+    same = run_cli("track", video, "--plane", tmp_path / "plane.json", *MARKERS, "-o", tmp_path / "same.png",
+                   "--overlay", tmp_path / "same.png")
+    one_line_error(same, "--overlay", "same.png is also -o's file")
+    movie = run_cli("track", video, "--plane", tmp_path / "plane.json", *MARKERS, "-o", tmp_path / "s.csv",
+                    "--overlay-video", tmp_path / "s.csv")
+    one_line_error(movie, "--overlay-video", "s.csv is also -o's file")
+    done = run_cli("track", video, "--plane", tmp_path / "plane.json", *MARKERS, "-o", tmp_path / "shapes.txt")
+    one_line_error(done, "-o", "shapes.txt must end in .csv")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plane.json"]
+
+
+@pytest.mark.parametrize(("edge", "words"), [("1,2,1,2", ("0 px apart", "at least 10 px")),
+                                             ("1e9,2,3,2", ("outside the 768 × 720 px plane view",))])
+def test_a_clamp_edge_of_one_point_or_outside_the_image_is_an_error(tmp_path, edge, words):
+    # two equal pixels wrote a plane file of NaN (exit 0); a pixel outside the image was taken
+    done = run_cli(*CALIBRATE[:12], "--clamp-edge-px", edge, "-o", str(tmp_path / "p.json"))
+    one_line_error(done, "--clamp-edge-px", edge, *words)
+    assert not (tmp_path / "p.json").exists()
+
+
+def test_a_plane_file_is_never_written_with_numbers_that_are_not_finite(tmp_path, monkeypatch):
+    import warpcloth.track.calibration as calibration
+
+    monkeypatch.setattr(calibration, "_pixel_pair", lambda *a: np.array([[300.0, 300.0], [300.0, 300.0]]))
+    done = run_cli(*CALIBRATE[:12], "--clamp-edge-px", "300,300,300,300", "-o", str(tmp_path / "p.json"))
+    one_line_error(done, "board_0.png", "not finite")
+    assert not (tmp_path / "p.json").exists()
+
+
+def test_a_range_of_arc_lengths_ends_at_its_last(tracked, tmp_path, not_tracked):
+    from warpcloth.cli.track import marker_arcs
+
+    assert marker_arcs("5:95:10").tolist() == [5.0 + 10 * i for i in range(10)]
+    assert marker_arcs("0.05:0.95:0.1")[-1] == 0.95  # within rounding: 0.9 / 0.1 is 8.999...
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    for text, words in (("5:95:7", ("'5:95:7'", "STEP 7 does not divide LAST − FIRST = 90 mm")),
+                        ("5:95:20", ("'5:95:20'", "does not divide")),
+                        ("95:5:10", ("FIRST < LAST", "'95:5:10'")), ("5:95:0", ("STEP > 0", "'5:95:0'"))):
+        done = track_with(DATA / "rotation.avi", tmp_path, "--marker-s", text, "--marker-diameter-mm", "2.4")
+        one_line_error(done, "--marker-s", *words)
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_an_overlay_frame_beyond_the_video_is_refused_before_tracking(tracked, tmp_path, not_tracked):
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    done = track_cli(DATA / "rotation.avi", tmp_path, "--overlay", tmp_path / "o.png", "--overlay-frame", "100000")
+    one_line_error(done, "--overlay-frame", "100000", "rotation.avi, which has 16", "0 to 15")
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_the_overlay_video_is_encoded_frame_by_frame_at_the_videos_own_times(tmp_path):
+    # frames at a jittered 60 frames/s on a millisecond clock, the first not at 0: each one
+    # read back at its own time, and no more than a few frames in memory at once
+    import tracemalloc
+
+    from warpcloth.track.markers import Tracked
+    from warpcloth.track.overlay import write_overlay_video
+
+    stamps = [100, 117, 133, 150, 167, 183, 200, 217, 233, 250, 267, 283, 300, 317, 333, 350, 367, 383, 400, 417]
+    times = [Fraction(k, 1000) for k in stamps]
+    n, shape = len(times), (240, 320)
+    frames = ((i, float(t), np.full(shape, 40 + i, np.uint8)) for i, t in enumerate(times))
+    px = np.tile([[50.0, 60.0], [120.0, 80.0]], (n, 1, 1))
+    tracked = Tracked(np.arange(n), np.array(times, dtype=float), np.array([5.0, 15.0]), px, px, px[..., 0],
+                      px[..., 0], np.ones(n))
+    tracemalloc.start()
+    try:
+        write_overlay_video(tmp_path / "o.avi", frames, tracked, times)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 6 * np.prod(shape), peak  # held all, it would be 20 frames
+    movie = read_frames(tmp_path / "o.avi")
+    assert [Fraction(t).limit_denominator(1000) for t in movie.t] == times
+    assert np.allclose(movie.t, np.array(stamps) / 1000, atol=1e-12, rtol=0)
+    assert [int(np.median(image)) for image in movie.images] == [40 + i for i in range(n)]
+
+
+def test_overlay_video_times_finer_than_avi_holds_are_rounded_or_refused():
+    # FFmpeg's AVI muxer keeps a video time base of 1/1000 s at the finest (a finer one it
+    # replaces by 1/600 s): an MP4's 1/90000 clock is rounded to it and says by how much;
+    # 2000 frames/s cannot be held at all
+    from warpcloth.errors import ArgumentError
+    from warpcloth.track.overlay import avi_timing
+
+    assert avi_timing([Fraction(k, 60) for k in (3, 4, 6)]) == (Fraction(1, 60), [3, 4, 6], 0.0)
+    time_base, pts, off = avi_timing([Fraction(k, 90000) for k in (1500, 3001, 4500)])
+    assert time_base == Fraction(1, 1000) and pts == [17, 33, 50]
+    assert off == pytest.approx(31 / 90000, rel=1e-12)  # 3001/90000 s written as 33 ms
+    with pytest.raises(ArgumentError, match="^overlay_video: frames less than 0.001 s apart") as raised:
+        avi_timing([Fraction(k, 2000) for k in range(4)])
+    assert raised.value.argument == "overlay_video"

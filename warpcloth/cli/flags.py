@@ -39,6 +39,7 @@ FLAGS = {
     "names": "--free",
     "out": "--out",
     "out_file": "-o",
+    "overlay_video": "--overlay-video",
     "paths": "IMAGE",
     "ribbon": "--ribbon",
     "scheduler": "--scheduler",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -92,18 +93,25 @@ def _pair(text: str, option: str, sep: str) -> tuple[int, int]:
 
 
 def marker_arcs(text: str, option: str = "--marker-s") -> np.ndarray:
-    """``--marker-s`` (or ``--centreline-s``): ``5,15,25`` or ``5:95:10`` (last included),
-    increasing, ≥ 0, at least two."""
+    """``--marker-s`` (or ``--centreline-s``): ``5,15,25`` or ``5:95:10`` (FIRST to LAST
+    included, STEP dividing LAST − FIRST), increasing, ≥ 0, at least two."""
     try:
-        if ":" in text:
-            first, last, step = (float(v) for v in text.split(":"))
-            if step <= 0:
-                raise ValueError
-            arcs = np.arange(round((last - first) / step) + 1) * step + first
-        else:
-            arcs = np.array([float(v) for v in text.split(",")])
+        values = [float(v) for v in text.split(":" if ":" in text else ",")]
+        if ":" in text and (len(values) != 3 or not np.all(np.isfinite(values)) or not values[0] < values[1]
+                            or not values[2] > 0):
+            raise ValueError
     except ValueError:
-        raise OptionError(option, f"expected S,S,... or FIRST:LAST:STEP (mm, STEP > 0), got {text!r}") from None
+        raise OptionError(option, f"expected S,S,... or FIRST:LAST:STEP (mm, FIRST < LAST, STEP > 0), got "
+                          f"{text!r}") from None
+    if ":" in text:
+        first, last, step = values
+        steps = (last - first) / step
+        # a STEP that does not reach LAST exactly would move the last point silently
+        if not abs(steps - round(steps)) <= 1e-9 * max(steps, 1.0):
+            raise OptionError(option, f"{text!r}: STEP {step:g} does not divide LAST − FIRST = {last - first:g} mm "
+                              "(LAST is the last arc length)")
+        values = np.linspace(first, last, round(steps) + 1)
+    arcs = np.array(values)
     if len(arcs) < 2 or not np.all(np.isfinite(arcs)) or arcs[0] < 0 or np.any(np.diff(arcs) <= 0):
         raise OptionError(option, f"{text!r}: at least two arc lengths, ≥ 0 and increasing along the strip")
     return arcs
@@ -155,6 +163,28 @@ def calibrate_command(args: argparse.Namespace) -> int:
     return 0
 
 
+def _outputs(args: argparse.Namespace) -> tuple[Path, Path | None, Path | None]:
+    # the shapes file, the overlay figure and the overlay video: distinct, each of its kind, each new
+    named = {option: Path(text) for option, text in (("-o", args.output), ("--overlay", args.overlay),
+                                                      ("--overlay-video", args.overlay_video)) if text}
+    seen: dict[Path, str] = {}
+    for option, path in named.items():
+        where = path.resolve()
+        if where in seen:
+            raise OptionError(option, f"{path} is also {seen[where]}'s file; each output needs a path of its own")
+        seen[where] = option
+    if named["-o"].suffix.lower() != ".csv":
+        raise OptionError("-o", f"{named['-o']} must end in .csv (the tracked shapes)")
+    out = new_result(named["-o"], args.overwrite, "-o")
+    overlay = figure_path(named["--overlay"], args.overwrite, "--overlay") if args.overlay else None
+    movie = None
+    if args.overlay_video:
+        if named["--overlay-video"].suffix.lower() != ".avi":
+            raise OptionError("--overlay-video", f"{args.overlay_video} must end in .avi")
+        movie = new_result(named["--overlay-video"], args.overwrite, "--overlay-video")
+    return out, overlay, movie
+
+
 def video_command(args: argparse.Namespace) -> int:
     """Track the markers of a video, write the shapes CSV (and the overlay)."""
     from warpcloth.io.atomic import write_text_atomically
@@ -162,21 +192,18 @@ def video_command(args: argparse.Namespace) -> int:
     from warpcloth.track.calibration import read_image, read_plane
     from warpcloth.track.centreline import track_centreline
     from warpcloth.track.markers import track_markers
-    from warpcloth.track.overlay import write_overlay, write_overlay_video
+    from warpcloth.track.overlay import avi_timing, write_overlay, write_overlay_video
     from warpcloth.track.video import FrameStream, median_background
 
     arcs = _what_to_track(args)
     what = "markers" if args.marker_s else "centreline points"
     mapping = read_plane(args.plane, "--plane")
-    out = new_result(args.output, args.overwrite, "-o")
-    overlay = figure_path(args.overlay, args.overwrite, "--overlay") if args.overlay else None
-    movie = None
-    if args.overlay_video:
-        if not args.overlay_video.lower().endswith(".avi"):
-            raise OptionError("--overlay-video", f"{args.overlay_video} must end in .avi")
-        movie = new_result(args.overlay_video, args.overwrite, "--overlay-video")
+    out, overlay, movie = _outputs(args)
     background = read_image(args.background, "--background") if args.background else None
     frames = FrameStream(args.video, "VIDEO")  # decoded as it is tracked: a long recording is never held whole
+    if args.overlay_frame is not None and args.overlay_frame >= frames.total:
+        raise OptionError("--overlay-frame", f"{args.overlay_frame} is not a frame of {args.video}, which has "
+                          f"{frames.total} in its container (0 to {frames.total - 1})")
     size = (frames.width, frames.height)
     if tuple(size) != tuple(mapping.image_size):
         raise OptionError("--plane", f"{args.plane} was calibrated for {mapping.image_size[0]} × "
@@ -195,7 +222,9 @@ def video_command(args: argparse.Namespace) -> int:
     else:
         tracked = track_centreline(frames, background, mapping, arcs, args.free_length_mm, args.video,
                                    threshold_dn=args.threshold_dn, progress=not args.no_progress)
-    dropped, duplicated, nominal = frames.dropped, frames.duplicated, frames.nominal_interval_s
+    dropped, duplicated = frames.dropped, frames.duplicated
+    times = [frames.times[i] for i in tracked.frame]  # exact, before the overlay's pass decodes them again
+    off = avi_timing(times)[2] if movie is not None else 0.0  # AVI refuses > 1000 frames/s: before writing
     for note in (*dropped, *duplicated):
         print(f"warpcloth track: warning: {args.video}: {note}", file=sys.stderr)
     kept = len(tracked.t)
@@ -216,7 +245,10 @@ def video_command(args: argparse.Namespace) -> int:
         image = next(image for position, (_, _, image) in enumerate(frames) if position == shown)
         write_overlay(overlay, image, tracked, shown)
     if movie is not None:
-        write_overlay_video(movie, frames, tracked, nominal)
+        write_overlay_video(movie, frames, tracked, times)
+        if off:
+            print(f"warpcloth track: warning: {movie}: AVI holds no time base finer than 1/1000 s; frame times are "
+                  f"rounded, by up to {off:.3g} s", file=sys.stderr)
     print(f"tracked {len(arcs)} {what} in {kept} frames (t = {tracked.t[0]:.6g} to {tracked.t[-1]:.6g} s): "
           f"median uncertainty {np.median(tracked.u_mm):.2g} mm ({np.median(tracked.u_px):.2g} px), sensor noise "
           f"{np.median(tracked.noise_dn):.3g} grey levels; {len(dropped)} gaps of dropped frames, "

@@ -29,6 +29,9 @@ FORMAT = "warpcloth plane 1"
 """The ``format`` of a plane.json this code writes and reads."""
 
 MIN_IMAGES = 3
+MIN_EDGE_PX = 10
+"""--clamp-edge-px's two pixels at least this far apart: a half-pixel error in either then
+turns the x axis by at most atan(0.5 / 10) ≈ 3°."""
 
 
 def read_image(path: str | Path, argument: str = "path") -> np.ndarray:
@@ -113,7 +116,8 @@ def _level(corners: np.ndarray, inner: tuple[int, int]) -> np.ndarray:
     return grid.reshape(-1, 2)
 
 
-def _pixel_pair(text: str) -> np.ndarray:
+def _pixel_pair(text: str, size: tuple[int, int]) -> np.ndarray:
+    # two pixels of the plane view (width, height ``size``), far enough apart to give the x axis
     try:
         values = [float(v) for v in text.split(",")]
     except ValueError:
@@ -121,7 +125,23 @@ def _pixel_pair(text: str) -> np.ndarray:
     if len(values) != 4 or not np.all(np.isfinite(values)):
         raise ArgumentError("clamp_edge_px", f"expected U1,V1,U2,V2 (pixels: the clamp's lowest point, then a point "
                           f"along its lower edge towards +x), got {text!r}")
-    return np.array(values).reshape(2, 2)
+    ends = np.array(values).reshape(2, 2)
+    if np.any(ends < 0) or np.any(ends > np.array(size) - 1):
+        raise ArgumentError("clamp_edge_px", f"{text}: a pixel outside the {size[0]} × {size[1]} px plane view (u 0 "
+                          f"to {size[0] - 1}, v 0 to {size[1] - 1})")
+    if np.linalg.norm(ends[1] - ends[0]) < MIN_EDGE_PX:
+        raise ArgumentError("clamp_edge_px", f"{text}: the two pixels are {np.linalg.norm(ends[1] - ends[0]):.3g} px "
+                          f"apart; at least {MIN_EDGE_PX} px are needed to give the edge's direction")
+    return ends
+
+
+def _all_finite(value: object) -> bool:
+    # every number in a (nested) record
+    if isinstance(value, dict):
+        return all(_all_finite(v) for v in value.values())
+    if isinstance(value, list | tuple):
+        return all(_all_finite(v) for v in value)
+    return not isinstance(value, float) or bool(np.isfinite(value))
 
 
 def calibrate_plane(paths: list[str | Path], inner: tuple[int, int], square_mm: float, *,
@@ -141,7 +161,6 @@ def calibrate_plane(paths: list[str | Path], inner: tuple[int, int], square_mm: 
     if origin_corner is not None and not (0 <= origin_corner[0] < inner[0] and 0 <= origin_corner[1] < inner[1]):
         raise ArgumentError("origin_corner", f"{origin_corner[0]},{origin_corner[1]} is not an inner corner of the "
                           f"{inner[0]} × {inner[1]} board (0 to {inner[0] - 1}, 0 to {inner[1] - 1})")
-    edge = None if clamp_edge_px is None else _pixel_pair(clamp_edge_px)
     paths = [Path(p) for p in paths]
     images = [read_image(p, "paths") for p in paths]
     size = images[0].shape[::-1]
@@ -149,6 +168,7 @@ def calibrate_plane(paths: list[str | Path], inner: tuple[int, int], square_mm: 
         if image.shape[::-1] != size:
             raise DataFileError(path, f"is {image.shape[1]} × {image.shape[0]} px, the plane view {paths[0]} is "
                                 f"{size[0]} × {size[1]}: every image must come from the same camera setting")
+    edge = None if clamp_edge_px is None else _pixel_pair(clamp_edge_px, size)
     corners = [_corners(image, path, inner) for path, image in zip(paths, images, strict=True)]
     corners[0] = _level(corners[0], inner)
     board = np.zeros((inner[0] * inner[1], 3), np.float32)
@@ -194,6 +214,9 @@ def calibrate_plane(paths: list[str | Path], inner: tuple[int, int], square_mm: 
                              "mm_per_px": [float(scale.min()), float(scale.max())]},
               "views": [{"image": str(p), "sha256": hashlib.sha256(p.read_bytes()).hexdigest(), "rms_px": v}
                         for p, v in zip(paths, view_rms, strict=True)]}
+    if not _all_finite(record):
+        raise DataFileError(paths[0], "the calibration gives numbers that are not finite (a degenerate plane view or "
+                            "clamp edge); no plane file is written")
     return mapping, record
 
 

@@ -1,18 +1,21 @@
 """What was tracked, to look at: a figure of one frame with every marker's path and that
 frame's markers on it, beside the tracked shapes in the clamp-edge frame; and a video of
-every frame with its points circled."""
+every frame with its points circled, at its own time."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
 
+from warpcloth.errors import ArgumentError
+
 from .markers import Tracked
 from .video import Frames, FrameStream
 
-__all__ = ["overlay_figure", "write_overlay", "write_overlay_video"]
+__all__ = ["FINEST_AVI_S", "avi_timing", "overlay_figure", "write_overlay", "write_overlay_video"]
 
 
 def overlay_figure(image: np.ndarray, tracked: Tracked, frame: int) -> object:
@@ -62,28 +65,50 @@ def write_overlay(path: str | Path, image: np.ndarray, tracked: Tracked, frame: 
         plt.close(fig)
 
 
+FINEST_AVI_S = Fraction(1, 1000)
+"""The finest video time base FFmpeg's AVI muxer keeps (a finer one it replaces by 1/600 s)."""
+
+
+def avi_timing(times: Sequence[Fraction]) -> tuple[Fraction, list[int], float]:
+    """How AVI holds frames at ``times`` (s, exact): the time base (their common divisor,
+    the coarsest that keeps every time, or :data:`FINEST_AVI_S` where that is finer), each
+    frame's stamp in it, and by how much the times are rounded (s, 0 when exact). Frames
+    closer than that time base cannot be held: an error, before anything is written."""
+    import math
+
+    exact = Fraction(math.gcd(*(t.numerator for t in times)), math.lcm(*(t.denominator for t in times)))
+    time_base = max(exact, FINEST_AVI_S)
+    pts = [round(t / time_base) for t in times]
+    if any(b <= a for a, b in zip(pts, pts[1:], strict=False)):
+        raise ArgumentError("overlay_video", f"frames less than {float(FINEST_AVI_S):g} s apart: an AVI written by "
+                            "FFmpeg holds at most 1000 frames/s (leave --overlay-video out, or use --overlay)")
+    return time_base, pts, max(abs(float(t - p * time_base)) for t, p in zip(times, pts, strict=True))
+
+
 def write_overlay_video(path: str | Path, frames: Frames | FrameStream, tracked: Tracked,
-                        nominal_interval_s: float) -> None:
+                        times: Sequence[Fraction]) -> None:
     """The frames ``tracked`` was tracked from (``(index, t, image)`` each, in the same
-    order) with their points circled and labelled, as grey FFV1 in AVI, written atomically;
-    frames keep their times to the nearest nominal interval."""
+    order, at the exact ``times`` s) with their points circled and labelled, as grey FFV1 in
+    AVI, encoded one at a time and written atomically, each frame at its own time as far as
+    AVI holds it (:func:`avi_timing`)."""
     import cv2
 
     from warpcloth.io.atomic import write_atomically
 
     from .video import write_video
 
-    rate = Fraction(1 / nominal_interval_s).limit_denominator(1001)
-    images = []
-    for f, (_, _, image) in enumerate(frames):
-        drawn = image.copy()
-        for m, s in enumerate(tracked.s_mm):
-            centre = tuple(int(round(v * 16)) for v in tracked.px[f, m])
-            cv2.circle(drawn, centre, 8 * 16, 255, 1, cv2.LINE_AA, 4)
-            cv2.putText(drawn, f"{s:g}", (int(tracked.px[f, m, 0]) + 10, int(tracked.px[f, m, 1]) + 4),
-                        cv2.FONT_HERSHEY_SIMPLEX, 0.35, 255, 1, cv2.LINE_AA)
-        cv2.putText(drawn, f"frame {tracked.frame[f]}  t = {tracked.t[f]:.4f} s", (10, 20), cv2.FONT_HERSHEY_SIMPLEX,
-                    0.5, 255, 1, cv2.LINE_AA)
-        images.append(drawn)
-    pts = np.rint(tracked.t * float(rate)).astype(int)
-    write_atomically(path, lambda tmp: write_video(tmp, images, pts, 1 / rate))
+    time_base, pts, _ = avi_timing(times)
+
+    def drawn() -> Iterator[np.ndarray]:
+        for f, (_, _, image) in enumerate(frames):
+            image = image.copy()
+            for m, s in enumerate(tracked.s_mm):
+                centre = tuple(int(round(v * 16)) for v in tracked.px[f, m])
+                cv2.circle(image, centre, 8 * 16, 255, 1, cv2.LINE_AA, 4)
+                cv2.putText(image, f"{s:g}", (int(tracked.px[f, m, 0]) + 10, int(tracked.px[f, m, 1]) + 4),
+                            cv2.FONT_HERSHEY_SIMPLEX, 0.35, 255, 1, cv2.LINE_AA)
+            cv2.putText(image, f"frame {tracked.frame[f]}  t = {tracked.t[f]:.4f} s", (10, 20),
+                        cv2.FONT_HERSHEY_SIMPLEX, 0.5, 255, 1, cv2.LINE_AA)
+            yield image
+
+    write_atomically(path, lambda tmp: write_video(tmp, drawn(), pts, time_base))

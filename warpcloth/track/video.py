@@ -67,7 +67,8 @@ class FrameStream:
                     raise DataFileError(self.path, "holds no video stream")
                 stream = container.streams.video[0]
                 self.width, self.height = stream.codec_context.width, stream.codec_context.height
-                self.total = stream.frames or None
+                # the container's count, else its packets counted (read, not decoded)
+                self.total = stream.frames or sum(1 for packet in container.demux(stream) if packet.size)
         except (av.error.FFmpegError, UnicodeDecodeError) as exc:
             raise DataFileError(self.path, f"cannot be read as a video ({exc})") from None
         self.times: list[Fraction] = []
@@ -154,20 +155,30 @@ def median_background(frames: Iterable[tuple[int, float, np.ndarray]], most: int
     return np.median(np.stack(kept), axis=0)
 
 
-def write_video(path: str | Path, images: Sequence[np.ndarray], pts: Sequence[int], time_base: Fraction) -> None:
+def write_video(path: str | Path, images: Iterable[np.ndarray], pts: Sequence[int], time_base: Fraction) -> None:
     """Grey uint8 frames to ``path`` (FFV1, lossless, in AVI: its time base is exact at any
-    frame rate, unlike Matroska's millisecond clock), frame i at ``pts[i] · time_base`` s."""
+    frame rate up to 1000 frames/s, unlike Matroska's millisecond clock; FFmpeg replaces a
+    finer one by 1/600 s), frame i at ``pts[i] · time_base`` s, each encoded as it comes
+    (``images`` may be a generator: none is held)."""
     import av
 
     with av.open(str(path), "w", format="avi") as container:
         # FFV1 version 3 with slice CRCs, every frame a key frame: damage is caught where it is
         stream = container.add_stream("ffv1", rate=Fraction(1) / time_base)
         stream.codec_context.options = {"level": "3", "slicecrc": "1", "context": "1", "g": "1"}
-        stream.height, stream.width = images[0].shape
         stream.pix_fmt = "gray"
         stream.time_base = time_base
         stream.codec_context.time_base = time_base
-        for image, stamp in zip(images, pts, strict=True):
+        for i, (image, stamp) in enumerate(zip(images, pts, strict=True)):
+            if i == 0:
+                stream.height, stream.width = image.shape
+                if stamp > 0:
+                    # AVI has no start time: a frame's time is its slot, so the first is
+                    # moved to its own by an empty slot at 0 (the muxer fills the rest)
+                    lead = av.Packet(0)
+                    lead.pts = lead.dts = 0
+                    lead.time_base, lead.stream = time_base, stream
+                    container.mux(lead)
             frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(image, dtype=np.uint8), format="gray")
             frame.pts, frame.time_base = int(stamp), time_base
             for packet in stream.encode(frame):
