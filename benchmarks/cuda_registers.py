@@ -91,8 +91,12 @@ def ptxas_usage(tool: str, ptx: Path, arch: int, scratch: Path) -> dict[str, dic
     """``{entry: {"registers", "stack", "spill_stores", "spill_loads"}}`` from ``ptxas -v``."""
     clean = scratch / f"{ptx.stem}.ptx"
     clean.write_bytes(ptx.read_bytes().rstrip(b"\0"))  # Warp writes the C string's terminating NUL
-    result = subprocess.run([tool, "-v", f"-arch=sm_{arch}", "-O3", str(clean), "-o", str(scratch / "out.cubin")],
-                            check=True, capture_output=True, text=True)
+    result = subprocess.run(
+        [tool, "-v", f"-arch=sm_{arch}", "-O3", str(clean), "-o", str(scratch / "out.cubin")],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     usage, function, entry = {}, None, None
     for line in (result.stdout + result.stderr).splitlines():
         if match := re.search(r"Compiling entry function '(\S+)'", line):
@@ -100,8 +104,9 @@ def ptxas_usage(tool: str, ptx: Path, arch: int, scratch: Path) -> dict[str, dic
             usage[entry] = {}
         elif match := re.search(r"Function properties for (\S+)", line):
             function = match.group(1)
-        elif function in usage and (match := re.search(
-                r"(\d+) bytes stack frame, (\d+) bytes spill stores, (\d+) bytes spill loads", line)):
+        elif function in usage and (
+            match := re.search(r"(\d+) bytes stack frame, (\d+) bytes spill stores, (\d+) bytes spill loads", line)
+        ):
             usage[function].update(stack=int(match[1]), spill_stores=int(match[2]), spill_loads=int(match[3]))
         elif entry and (match := re.search(r"Used (\d+) registers", line)):
             usage[entry]["registers"] = int(match[1])
@@ -131,9 +136,11 @@ def occupancy_rows(name: str, arch: int, registers: int) -> list[str]:
             blocks = math.ceil(b / block_dim)
             busy = min(sms, blocks)
             warps = min(math.ceil(b / 32), resident * sms * math.ceil(block_dim / 32))
-            rows.append(f"| {name:<30} | {gpu:<9} | {registers:>4} | {block_dim:>5} | {resident:>10} | {b:>6} | "
-                        f"{blocks:>6} | {busy:>4}/{sms} | {blocks / (resident * sms):5.2f} | "
-                        f"{warps / (sms * WARP_SLOTS):10.1%} |")
+            rows.append(
+                f"| {name:<30} | {gpu:<9} | {registers:>4} | {block_dim:>5} | {resident:>10} | {b:>6} | "
+                f"{blocks:>6} | {busy:>4}/{sms} | {blocks / (resident * sms):5.2f} | "
+                f"{warps / (sms * WARP_SLOTS):10.1%} |"
+            )
     return rows
 
 
@@ -150,17 +157,25 @@ def main() -> None:
     nvrtc = wp._src.context.runtime.toolkit_version
     if ptxas and ptxas_release(ptxas) < nvrtc:
         # An older ptxas rejects the PTX ISA of a newer NVRTC (".version 9.4" from CUDA 13.4).
-        print(f"not using {ptxas}: CUDA {'.'.join(map(str, ptxas_release(ptxas)))} is older than Warp's NVRTC "
-              f"(CUDA {'.'.join(map(str, nvrtc))}); pip install nvidia-cuda-nvcc or pass --ptxas")
+        print(
+            f"not using {ptxas}: CUDA {'.'.join(map(str, ptxas_release(ptxas)))} is older than Warp's NVRTC "
+            f"(CUDA {'.'.join(map(str, nvrtc))}); pip install nvidia-cuda-nvcc or pass --ptxas"
+        )
         ptxas = None
     if not cuobjdump and not ptxas:
-        raise SystemExit("neither cuobjdump nor ptxas found: pip install nvidia-cuda-cuobjdump (and "
-                         "nvidia-cuda-nvcc for spill counts), or pass --cuobjdump / --ptxas")
-    print(f"warp {wp.__version__}, NVRTC of CUDA {'.'.join(map(str, nvrtc))}; "
-          f"cuobjdump: {cuobjdump or '-'}; ptxas: {ptxas or '-'}")
+        raise SystemExit(
+            "neither cuobjdump nor ptxas found: pip install nvidia-cuda-cuobjdump (and "
+            "nvidia-cuda-nvcc for spill counts), or pass --cuobjdump / --ptxas"
+        )
+    print(
+        f"warp {wp.__version__}, NVRTC of CUDA {'.'.join(map(str, nvrtc))}; "
+        f"cuobjdump: {cuobjdump or '-'}; ptxas: {ptxas or '-'}"
+    )
     print("registers per thread; stack, local and spills in bytes per thread")
-    header = f"| {'kernel':<42} | {'arch':<5} | {'registers':>9} | {'stack':>5} | {'local':>5} | " \
-             f"{'spill stores':>12} | {'spill loads':>11} |"
+    header = (
+        f"| {'kernel':<42} | {'arch':<5} | {'registers':>9} | {'stack':>5} | {'local':>5} | "
+        f"{'spill stores':>12} | {'spill loads':>11} |"
+    )
     print(header)
     print("|" + "|".join("-" * len(cell) for cell in header.split("|")[1:-1]) + "|")
     occupancy = []
@@ -168,8 +183,11 @@ def main() -> None:
         folder = Path(folder)
         for name, kernel in variants().items():
             cubins = wp.compile_aot_module(kernel.module, arch=args.archs, module_dir=folder, use_ptx=False)
-            ptxs = wp.compile_aot_module(kernel.module, arch=args.archs, module_dir=folder, use_ptx=True) \
-                if ptxas else [None] * len(args.archs)
+            ptxs = (
+                wp.compile_aot_module(kernel.module, arch=args.archs, module_dir=folder, use_ptx=True)
+                if ptxas
+                else [None] * len(args.archs)
+            )
             entry = f"{kernel.get_mangled_name()}_cuda_kernel_forward"
             for arch, cubin, ptx in zip(args.archs, cubins, ptxs, strict=True):
                 binary = cuobjdump_usage(cuobjdump, cubin)[entry] if cuobjdump else {}
@@ -181,15 +199,19 @@ def main() -> None:
                 def cell(value: object, width: int) -> str:
                     return f"{'-' if value is None else value:>{width}}"
 
-                print(f"| {name:<42} | sm_{arch:<2} | {cell(registers, 9)} | "
-                      f"{cell(binary.get('STACK', assembled.get('stack')), 5)} | {cell(binary.get('LOCAL'), 5)} | "
-                      f"{cell(assembled.get('spill_stores'), 12)} | {cell(assembled.get('spill_loads'), 11)} |")
+                print(
+                    f"| {name:<42} | sm_{arch:<2} | {cell(registers, 9)} | "
+                    f"{cell(binary.get('STACK', assembled.get('stack')), 5)} | {cell(binary.get('LOCAL'), 5)} | "
+                    f"{cell(assembled.get('spill_stores'), 12)} | {cell(assembled.get('spill_loads'), 11)} |"
+                )
                 count = binary.get("REG", assembled.get("registers"))
                 if name.startswith("advance") and arch in SMS and count is not None:
                     occupancy += occupancy_rows(name, arch, count)
     print("\noccupancy of the strip kernel (one thread per strip), from the registers above")
-    print(f"| {'kernel':<30} | {'GPU':<9} | {'regs':>4} | {'block':>5} | {'blocks/SM':>10} | {'B':>6} | "
-          f"{'blocks':>6} | {'SMs busy':>8} | {'waves':>5} | {'warp slots':>10} |")
+    print(
+        f"| {'kernel':<30} | {'GPU':<9} | {'regs':>4} | {'block':>5} | {'blocks/SM':>10} | {'B':>6} | "
+        f"{'blocks':>6} | {'SMs busy':>8} | {'waves':>5} | {'warp slots':>10} |"
+    )
     print("|" + "|".join(["---"] * 10) + "|")
     for row in occupancy:
         print(row)

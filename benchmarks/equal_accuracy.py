@@ -63,24 +63,28 @@ def strips_to_check(samples: int, record: float, elastic: bool) -> list[list[str
     d1 = [s.material.hysteresis_d1_gf_cm_per_cm for s in scenes]
     d = [s.material.bending_rigidity_gf_cm2_per_cm for s in scenes]
     picks = [int(np.argmax(d1)), int(np.argmin(d))]
-    return [[]] + [[f"material.{name}={getattr(scenes[i].material, name)!r}"
-                    for name in ("bending_rigidity_gf_cm2_per_cm", "hysteresis_d1_gf_cm_per_cm",
-                                 "hysteresis_alpha_cm")] + [f"damping.gamma_per_s={scenes[i].damping.gamma_per_s!r}"]
-                   for i in picks]
+    return [[]] + [
+        [
+            f"material.{name}={getattr(scenes[i].material, name)!r}"
+            for name in ("bending_rigidity_gf_cm2_per_cm", "hysteresis_d1_gf_cm_per_cm", "hysteresis_alpha_cm")
+        ]
+        + [f"damping.gamma_per_s={scenes[i].damping.gamma_per_s!r}"]
+        for i in picks
+    ]
 
 
 def equal_accuracy_dt(strips: list[list[str]], record: float) -> dict[str, tuple[float, float]]:
     """Largest ladder dt of each scheme within the tolerance on every strip, and its worst error."""
     base = [f"run.duration_s={record!r}"]
-    references = in_parallel([wc.load_scene("damped_swing", [*base, *stepping("semi_implicit", REFERENCE_DT), *s])
-                              for s in strips])
+    references = in_parallel(
+        [wc.load_scene("damped_swing", [*base, *stepping("semi_implicit", REFERENCE_DT), *s]) for s in strips]
+    )
     tips = [r.probe("tip_x", 0) for r in references]
     chosen = {}
     for scheme, ladder in LADDERS.items():
         for dt in ladder:
             try:
-                runs = in_parallel([wc.load_scene("damped_swing", [*base, *stepping(scheme, dt), *s])
-                                    for s in strips])
+                runs = in_parallel([wc.load_scene("damped_swing", [*base, *stepping(scheme, dt), *s]) for s in strips])
             except wc.SceneError:
                 print(f"  {scheme:>13} dt = {dt:8.2g} s: refused (above the scheme's stability limit)")
                 break
@@ -124,8 +128,10 @@ def main() -> None:
     cores = min(2, os.cpu_count() or 1)
     wp.config.log_level = logging.WARNING
     wp.init()
-    print(f"machine: {machine()}; warp {wp.__version__} (cpu), numba {numba.__version__}, numpy {np.__version__}; "
-          f"load average at start {os.getloadavg()[0]:.2f}")
+    print(
+        f"machine: {machine()}; warp {wp.__version__} (cpu), numba {numba.__version__}, numpy {np.__version__}; "
+        f"load average at start {os.getloadavg()[0]:.2f}"
+    )
     try:
         import pyelastica_compare as pe
     except ImportError:
@@ -135,8 +141,10 @@ def main() -> None:
     # ---- 1. the equal-accuracy dt ----
     chosen = {}
     for label, elastic in (("hysteretic (bundled)", False), ("elastic (D1 = 0)", True)):
-        print(f"\n1. equal-accuracy dt, damped swing, {label} material, {record:g} s record; "
-              f"reference semi_implicit at dt = {REFERENCE_DT:g} s")
+        print(
+            f"\n1. equal-accuracy dt, damped swing, {label} material, {record:g} s record; "
+            f"reference semi_implicit at dt = {REFERENCE_DT:g} s"
+        )
         chosen[elastic] = equal_accuracy_dt(strips_to_check(samples, record, elastic), record)
         for scheme in LADDERS:
             if scheme in chosen[elastic]:
@@ -154,8 +162,10 @@ def main() -> None:
     for scheme in LADDERS:
         warpcloth_wall(free_runs(4, 0.002, 2, stepping(scheme, dt_semi)), x0, 1)
     gap_numpy, gap_numba = same_arithmetic(samples, dt_semi, x0)
-    print(f"\nsame arithmetic at dt = {dt_semi:g} s, 0.2 s from a displaced start: NumPy's final tip "
-          f"{gap_numpy:.1e} m, Numba's at every probe {gap_numba:.1e} m from warpcloth's")
+    print(
+        f"\nsame arithmetic at dt = {dt_semi:g} s, 0.2 s from a displaced start: NumPy's final tip "
+        f"{gap_numpy:.1e} m, Numba's at every probe {gap_numba:.1e} m from warpcloth's"
+    )
 
     # ---- 2. throughput at equal accuracy ----
     rows = []
@@ -165,8 +175,7 @@ def main() -> None:
             for scheme, (dt, _worst) in chosen[elastic].items():
                 extra = [*stepping(scheme, dt), *(ELASTIC if elastic else [])]
                 for threads in (1, cores):
-                    rate = warpcloth_rate(samples, b, max(200, int(budget * 1e6 * threads / b)), dt, x0, threads,
-                                          extra)
+                    rate = warpcloth_rate(samples, b, max(200, int(budget * 1e6 * threads / b)), dt, x0, threads, extra)
                     cells.append((f"warpcloth {scheme}, {threads} thread{'s' * (threads > 1)}", elastic, dt, rate))
         extra = stepping("semi_implicit", dt_semi)
         numpy_steps = max(50, int(budget * 3e5 / b))
@@ -181,35 +190,49 @@ def main() -> None:
             peer = NumbaStrips(free_runs(samples, n_steps * dt_semi, b, extra), np.repeat(x0[:, None, :], b, axis=1))
             start = time.perf_counter()
             peer.run(n_steps)
-            cells.append((f"Numba, {threads} thread{'s' * (threads > 1)}", False, dt_semi,
-                          b * n_steps / (time.perf_counter() - start)))
+            cells.append(
+                (
+                    f"Numba, {threads} thread{'s' * (threads > 1)}",
+                    False,
+                    dt_semi,
+                    b * n_steps / (time.perf_counter() - start),
+                )
+            )
         if pe is not None:
             problem = pe.make_problem()
             pe_dt = pe.largest_stable_dt(lambda dt, p=problem: pe.run_pyelastica(p, 20, dt, 0.02).stable, 2e-6)
             trace = pe.run_pyelastica(problem, 20, pe_dt, max(20, int(budget * 1.5e5 / b)) * pe_dt, n_rods=b)
             cells.append(("PyElastica (Cosserat rod)", True, pe_dt, trace.element_steps / 20 / trace.wall))
         base = next(rate for name, elastic, _dt, rate in cells if name.startswith("warpcloth semi") and not elastic)
-        print(f"\n2. B = {b}: {'implementation':<34} {'material':<11} {'dt (s)':>8} {'strip-steps/s':>14} "
-              f"{'wall per sim s':>15} {'less wall than semi 1T':>23}")
+        print(
+            f"\n2. B = {b}: {'implementation':<34} {'material':<11} {'dt (s)':>8} {'strip-steps/s':>14} "
+            f"{'wall per sim s':>15} {'less wall than semi 1T':>23}"
+        )
         for name, elastic, dt, rate in cells:
             wall = b / (rate * dt)
-            print(f"   {'':>6} {name:<34} {'elastic' if elastic else 'hysteretic':<11} {dt:8.2g} {rate:14.3e} "
-                  f"{wall:13.3g} s {rate * dt / (base * dt_semi):22.3g}×")
+            print(
+                f"   {'':>6} {name:<34} {'elastic' if elastic else 'hysteretic':<11} {dt:8.2g} {rate:14.3e} "
+                f"{wall:13.3g} s {rate * dt / (base * dt_semi):22.3g}×"
+            )
             rows.append((b, name, elastic, dt, rate))
 
     # ---- 3. the bundled sweep at equal accuracy ----
     print(f"\n3. the bundled sweep, {samples} variants, {record:g} s record, hold replicated, {cores} threads")
     walls = {}
     today = sweep_scenes(samples, record)[1][0].integrator.dt_s
-    for label, scheme, dt in (("scene default", "semi_implicit", today),
-                              *((scheme, scheme, dt) for scheme, (dt, _w) in chosen[False].items())):
+    for label, scheme, dt in (
+        ("scene default", "semi_implicit", today),
+        *((scheme, scheme, dt) for scheme, (dt, _w) in chosen[False].items()),
+    ):
         sweep, _scenes = sweep_scenes(samples, record, stepping(scheme, dt))
         with tempfile.TemporaryDirectory() as tmp:
             start = time.perf_counter()
             wc.run_sweep(sweep, Path(tmp) / "sweep", workers=cores)
             walls[label] = time.perf_counter() - start
-        print(f"   warpcloth {label:<14} dt = {dt:8.2g} s: {walls[label]:7.2f} s "
-              f"({walls['scene default'] / walls[label]:.2f}× less than the scene default)")
+        print(
+            f"   warpcloth {label:<14} dt = {dt:8.2g} s: {walls[label]:7.2f} s "
+            f"({walls['scene default'] / walls[label]:.2f}× less than the scene default)"
+        )
     _sweep, scenes = sweep_scenes(samples, record, stepping("semi_implicit", dt_semi))
     numba.set_num_threads(cores)
     start = time.perf_counter()
@@ -217,14 +240,18 @@ def main() -> None:
     numba_wall = time.perf_counter() - start
     steps = round((scenes[0].run.duration_s + scenes[0].preroll) / dt_semi)
     best = min(walls.values())
-    print(f"   Numba {cores} threads      dt = {dt_semi:8.2g} s: {numba_wall:7.2f} s "
-          f"(warpcloth's best is {best / numba_wall:.2f}× the Numba peer's wall)")
+    print(
+        f"   Numba {cores} threads      dt = {dt_semi:8.2g} s: {numba_wall:7.2f} s "
+        f"(warpcloth's best is {best / numba_wall:.2f}× the Numba peer's wall)"
+    )
     for _b, name, _elastic, dt, rate in (r for r in rows if r[0] == args.sizes[0]):
         if name == "NumPy":
             print(f"   NumPy (from its rate)  dt = {dt:8.2g} s: {samples * steps / rate:7.1f} s")
         if name.startswith("PyElastica"):
-            print(f"   PyElastica (elastic rate; no hysteretic law) dt = {dt:.2g} s: "
-                  f"{samples * (scenes[0].run.duration_s + scenes[0].preroll) / dt / rate:7.0f} s")
+            print(
+                f"   PyElastica (elastic rate; no hysteretic law) dt = {dt:.2g} s: "
+                f"{samples * (scenes[0].run.duration_s + scenes[0].preroll) / dt / rate:7.0f} s"
+            )
     print(f"load average at the end: {os.getloadavg()[0]:.2f}")
 
 

@@ -34,8 +34,14 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def swing(scheme: str, precision: str, duration: float, dt: float | None = None, law: str = "tagawa2003") -> wc.Scene:
-    fields = {"run.duration_s": duration, "integrator.scheme": scheme, "integrator.precision": precision,
-              "release.move_time_s": 0.1, "release.settle_time_s": 0.0, "material.bending_law": law}
+    fields = {
+        "run.duration_s": duration,
+        "integrator.scheme": scheme,
+        "integrator.precision": precision,
+        "release.move_time_s": 0.1,
+        "release.settle_time_s": 0.0,
+        "material.bending_law": law,
+    }
     if dt is not None:
         fields["integrator.dt_s"] = dt
     elif scheme == "imex":
@@ -54,8 +60,11 @@ def rate(scene: wc.Scene, batch: int, device: str) -> tuple[float, float, float]
 
 def agreement(device: str) -> None:
     print("\n1. agreement, GPU against CPU (float64)")
-    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(ROOT / "tests" /
-                           "test_gpu.py")], capture_output=True, text=True)
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(ROOT / "tests" / "test_gpu.py")],
+        capture_output=True,
+        text=True,
+    )
     print("   tests/test_gpu.py:", done.stdout.strip().splitlines()[-1] if done.stdout.strip() else done.stderr[-300:])
     for scheme in ("semi_implicit", "imex"):
         for law in ("tagawa2003", "dahl", "frictional_couple"):
@@ -85,8 +94,10 @@ def paper_faithful(device: str, batch: int) -> None:
     scene = swing("semi_implicit", "float64", duration, dt=1e-7)
     strips, _, wall = rate(scene, batch, device)
     strip_seconds = batch * duration
-    print(f"   {batch} strips × {duration} s in {wall:.2f} s: 10 000 strip-seconds would take "
-          f"{wall * 1e4 / strip_seconds:.0f} s (scaled from this run; the paper: 210 s for one)")
+    print(
+        f"   {batch} strips × {duration} s in {wall:.2f} s: 10 000 strip-seconds would take "
+        f"{wall * 1e4 / strip_seconds:.0f} s (scaled from this run; the paper: 210 s for one)"
+    )
 
 
 def main() -> int:

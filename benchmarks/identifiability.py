@@ -36,9 +36,14 @@ from warpcloth.scene import read_scene_file, set_field
 
 TRUTH = {"strip.rest_curvature_per_cm": 0.1, "clamp.grip_length_mm": 10.0, "clamp.grip_bending_factor": 3.0}
 NAMES = ("D", "D1", "gamma", "K_rest", "grip_factor", "grip_length")
-SHORT = {"material.bending_rigidity_gf_cm2_per_cm": "D", "material.hysteresis_d1_gf_cm_per_cm": "D1",
-         "damping.gamma_per_s": "γ", "strip.rest_curvature_per_cm": "K_rest", "clamp.grip_bending_factor": "grip",
-         "clamp.grip_length_mm": "ℓ_g"}
+SHORT = {
+    "material.bending_rigidity_gf_cm2_per_cm": "D",
+    "material.hysteresis_d1_gf_cm_per_cm": "D1",
+    "damping.gamma_per_s": "γ",
+    "strip.rest_curvature_per_cm": "K_rest",
+    "clamp.grip_bending_factor": "grip",
+    "clamp.grip_length_mm": "ℓ_g",
+}
 
 
 def raw(name: str, fields: dict) -> dict:
@@ -53,8 +58,11 @@ def markers(result: wc.RunResult, scene: wc.Scene, frames: slice = slice(None)) 
     """Markers every 10 mm below the clamp edge at the recorded frames (noise-free: the
     Jacobian does not depend on the noise, only its weight does)."""
     nc, h = scene.n_clamped, scene.spacing
-    rows = [(f, t, s, *result.frames[f, 0, nc - 1 + round(s / h)])
-            for f, t in list(enumerate(result.frame_times))[frames] for s in np.arange(0.01, 0.1001, 0.01)]
+    rows = [
+        (f, t, s, *result.frames[f, 0, nc - 1 + round(s / h)])
+        for f, t in list(enumerate(result.frame_times))[frames]
+        for s in np.arange(0.01, 0.1001, 0.01)
+    ]
     d = np.array(rows)
     return TrackedShapes(d[:, 0].astype(int), d[:, 1], d[:, 2], d[:, 3], d[:, 4])
 
@@ -64,8 +72,12 @@ def experiments(rotation_spacing: float) -> dict[str, tuple[dict, object, float]
     swing = raw("damped_swing", {"release.settle_time_s": 0.5, "run.duration_s": 1.2})
     result = wc.simulate(wc.scene_from_dict(copy.deepcopy(swing)))
     trace = LaserTrace(result.t[::2], result.probe("laser_x", 0)[::2])
-    settle = {"release.enabled": True, "release.hold_free_end": False, "release.move_time_s": 0.1,
-              "release.settle_time_s": 1.0}
+    settle = {
+        "release.enabled": True,
+        "release.hold_free_end": False,
+        "release.move_time_s": 0.1,
+        "release.settle_time_s": 1.0,
+    }
     rotation = raw("impulsive_rotation", {**settle, "run.duration_s": 0.3, "strip.spacing_mm": rotation_spacing})
     scene = wc.scene_from_dict(copy.deepcopy(rotation))
     rotated = markers(wc.simulate(scene), scene)
@@ -73,32 +85,45 @@ def experiments(rotation_spacing: float) -> dict[str, tuple[dict, object, float]
     scene = wc.scene_from_dict(copy.deepcopy(static))
     still = markers(wc.simulate(scene), scene)
     turn, ramp = np.pi / 2, 0.5  # a cubic smoothstep to horizontal, as tests/test_elastica.py turns it
-    cantilever = raw("damped_swing", {"release.enabled": False, "run.duration_s": 2.5, "damping.gamma_per_s": 5.0,
-                                      "clamp.motion": "piecewise"})
-    cantilever["clamp"]["segments"] = [{"t_start_s": 0.0, "t_end_s": ramp, "theta_coefficients_si":
-                                        [0.0, 0.0, 3 * turn / ramp**2, -2 * turn / ramp**3]}]
+    cantilever = raw(
+        "damped_swing",
+        {"release.enabled": False, "run.duration_s": 2.5, "damping.gamma_per_s": 5.0, "clamp.motion": "piecewise"},
+    )
+    cantilever["clamp"]["segments"] = [
+        {
+            "t_start_s": 0.0,
+            "t_end_s": ramp,
+            "theta_coefficients_si": [0.0, 0.0, 3 * turn / ramp**2, -2 * turn / ramp**3],
+        }
+    ]
     scene = wc.scene_from_dict(copy.deepcopy(cantilever))
     horizontal = markers(wc.simulate(scene), scene, slice(-7, None))
-    return {"swing": (swing, trace, 2e-4), "rotation": (rotation, rotated, 3e-4), "static": (static, still, 3e-4),
-            "cantilever": (cantilever, horizontal, 3e-4)}
+    return {
+        "swing": (swing, trace, 2e-4),
+        "rotation": (rotation, rotated, 3e-4),
+        "static": (static, still, 3e-4),
+        "cantilever": (cantilever, horizontal, 3e-4),
+    }
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rotation-spacing", type=float, default=2.5, help="h of the rotation (mm; the scene's 2.5)")
     args = parser.parse_args()
-    print(f"machine: {platform.machine()}, {platform.system()}, warp {wp.__version__}, float64, "
-          f"truth {TRUTH}")
+    print(f"machine: {platform.machine()}, {platform.system()}, warp {wp.__version__}, float64, truth {TRUTH}")
     tic = time.perf_counter()
     runs = experiments(args.rotation_spacing)
     combos = [c for r in range(1, len(runs) + 1) for c in itertools.combinations(runs, r)]
-    blocks = {name: weighted_jacobian(base, measured, noise, list(NAMES)) for name, (base, measured, noise)
-              in runs.items()}
+    blocks = {
+        name: weighted_jacobian(base, measured, noise, list(NAMES)) for name, (base, measured, noise) in runs.items()
+    }
     tables = {combo: identifiability([blocks[name] for name in combo]) for combo in combos}
     print(f"({time.perf_counter() - tic:.0f} s)\n")
     header = f"{'experiments':<40}" + "".join(f"{SHORT[f]:>10}" for f in tables[combos[0]].names)
-    print("σ of each parameter (D, D1 in gf·cm(²)/cm, γ in 1/s, K_rest in 1/cm, ℓ_g in mm) and the pairs the data "
-          "do not separate (|correlation| > 0.95):\n")
+    print(
+        "σ of each parameter (D, D1 in gf·cm(²)/cm, γ in 1/s, K_rest in 1/cm, ℓ_g in mm) and the pairs the data "
+        "do not separate (|correlation| > 0.95):\n"
+    )
     print(header)
     for combo, table in tables.items():
         pairs = ", ".join(f"{SHORT[a]}–{SHORT[b]} {c:+.3f}" for a, b, c in table.not_identifiable) or "none"

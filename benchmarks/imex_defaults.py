@@ -84,8 +84,10 @@ def scheme_ladders(args: argparse.Namespace) -> None:
             best, stable = {}, {}
             default, default_wall = simulate(at(scene, "semi_implicit", wc.load_scene(scene).integrator.dt_s, extra))
             scene_wall = {scene: default_wall / duration}
-            print(f"{'(scene dt)':>14} {wc.load_scene(scene).integrator.dt_s:8.2g} {error_of(default, tip):24.3%} "
-                  f"{default_wall / duration:13.3f} s")
+            print(
+                f"{'(scene dt)':>14} {wc.load_scene(scene).integrator.dt_s:8.2g} {error_of(default, tip):24.3%} "
+                f"{default_wall / duration:13.3f} s"
+            )
             for scheme in ("semi_implicit", "imex"):
                 for dt in LADDER:
                     try:
@@ -103,11 +105,14 @@ def scheme_ladders(args: argparse.Namespace) -> None:
                     if error <= args.tolerance:
                         best[scheme] = (dt, wall / duration)
             for scheme, (dt, wall) in best.items():
-                print(f"  {scheme}: largest dt within {args.tolerance:.1%}: {dt:g} s ({wall:.3f} s wall per "
-                      "simulated s)")
+                print(
+                    f"  {scheme}: largest dt within {args.tolerance:.1%}: {dt:g} s ({wall:.3f} s wall per simulated s)"
+                )
             if "semi_implicit" in best and "imex" in best:
-                print(f"  imex at its dt against semi_implicit at the scene's dt: "
-                      f"{scene_wall[scene] / best['imex'][1]:.1f}x less wall per simulated s")
+                print(
+                    f"  imex at its dt against semi_implicit at the scene's dt: "
+                    f"{scene_wall[scene] / best['imex'][1]:.1f}x less wall per simulated s"
+                )
             if not best:
                 print(f"  no scheme within {args.tolerance:.1%} on this ladder")
             if "imex" in best:
@@ -127,14 +132,18 @@ def implicit_bending_bound(scene: wc.Scene, ladder: list[tuple[float, float | No
     (dt1, e1), (dt2, e2) = runs[-2], runs[-1]
     order = math.log(e2 / e1) / math.log(dt2 / dt1)
     if not order > 0:
-        print(f"  implicit bending: imex is stable to {limit:.3g} s and its error does not grow with dt there "
-              f"({e1:.3%} → {e2:.3%}): no extrapolation")
+        print(
+            f"  implicit bending: imex is stable to {limit:.3g} s and its error does not grow with dt there "
+            f"({e1:.3%} → {e2:.3%}): no extrapolation"
+        )
         return
     at_tolerance = dt2 * (TOLERANCE / e2) ** (1.0 / order)
-    print(f"  implicit bending: imex is stable to {limit:.3g} s (explicit bending, ∝ h²); its error grows as "
-          f"dt^{order:.2f} ({e1:.3%} → {e2:.3%}), reaching {TOLERANCE:.1%} at ≈ {at_tolerance:.3g} s: an implicit "
-          f"bending step could take about {at_tolerance / limit:.2f}× larger steps at equal accuracy (extrapolated), "
-          "before the cost of its banded solve")
+    print(
+        f"  implicit bending: imex is stable to {limit:.3g} s (explicit bending, ∝ h²); its error grows as "
+        f"dt^{order:.2f} ({e1:.3%} → {e2:.3%}), reaching {TOLERANCE:.1%} at ≈ {at_tolerance:.3g} s: an implicit "
+        f"bending step could take about {at_tolerance / limit:.2f}× larger steps at equal accuracy (extrapolated), "
+        "before the cost of its banded solve"
+    )
 
 
 def in_parallel(scenes: list[wc.Scene]) -> list[wc.RunResult]:
@@ -153,33 +162,54 @@ def in_parallel(scenes: list[wc.Scene]) -> list[wc.RunResult]:
 
 
 def library_limits(reference_dt: float) -> None:
-    print("\nthe scene dt against each bundled material's stretching limit h·√(ρ_A/a1)/cos(π/4N) "
-          "(semi_implicit), confirmed by 0.2 s undamped runs without the release (the rotation's clamp drive "
-          "kept) at 0.98 and 1.02 of it; "
-          f"and the scene as bundled with that material at its dt against dt = {reference_dt:g} s")
-    print(f"{'scene':>20} {'material':>20} {'limit (s)':>10} {'scene dt / limit':>17} {'0.98×':>8} {'1.02×':>9} "
-          f"{'error at scene dt':>18}")
+    print(
+        "\nthe scene dt against each bundled material's stretching limit h·√(ρ_A/a1)/cos(π/4N) "
+        "(semi_implicit), confirmed by 0.2 s undamped runs without the release (the rotation's clamp drive "
+        "kept) at 0.98 and 1.02 of it; "
+        f"and the scene as bundled with that material at its dt against dt = {reference_dt:g} s"
+    )
+    print(
+        f"{'scene':>20} {'material':>20} {'limit (s)':>10} {'scene dt / limit':>17} {'0.98×':>8} {'1.02×':>9} "
+        f"{'error at scene dt':>18}"
+    )
     for scene in ("damped_swing", "impulsive_rotation"):
         full = [wc.load_scene(scene, [f'material.from_file="{material}"']) for material in LIBRARY]
-        references = in_parallel([dataclasses.replace(s, integrator=dataclasses.replace(s.integrator,
-                                                                                         dt_s=reference_dt))
-                                  for s in full])
+        references = in_parallel(
+            [dataclasses.replace(s, integrator=dataclasses.replace(s.integrator, dt_s=reference_dt)) for s in full]
+        )
         runs = in_parallel(full)
         for material, run, reference in zip(LIBRARY, runs, references, strict=True):
-            base = wc.load_scene(scene, [f'material.from_file="{material}"', "release.enabled=false",
-                                         "damping.gamma_per_s=0.0", "run.duration_s=0.2"])
-            limit = SemiImplicitEulerSolver.step_limit(to_si(base.material), base.spacing,
-                                                       base.n_nodes - base.n_clamped)
+            base = wc.load_scene(
+                scene,
+                [
+                    f'material.from_file="{material}"',
+                    "release.enabled=false",
+                    "damping.gamma_per_s=0.0",
+                    "run.duration_s=0.2",
+                ],
+            )
+            limit = SemiImplicitEulerSolver.step_limit(
+                to_si(base.material), base.spacing, base.n_nodes - base.n_clamped
+            )
             batch = build_batch([base])  # the simulation core takes any dt; the scene layer refuses
             outcome = []
             for fraction in (0.98, 1.02):
                 solver = SemiImplicitEulerSolver(batch.model, dt=fraction * limit)
-                hanging = simulate_batch(batch.model, batch.control, solver, batch.recorder, on_divergence="record",
-                                         keep_frames=False, threads=1)
+                hanging = simulate_batch(
+                    batch.model,
+                    batch.control,
+                    solver,
+                    batch.recorder,
+                    on_divergence="record",
+                    keep_frames=False,
+                    threads=1,
+                )
                 outcome.append("diverged" if hanging.diverged else "stable")
             error = error_of(run, reference.probe("tip_x", 0)) if not run.diverged else math.nan
-            print(f"{scene:>20} {material:>20} {limit:10.3g} {base.integrator.dt_s / limit:17.2f} "
-                  f"{outcome[0]:>8} {outcome[1]:>9} {error:17.3%}")
+            print(
+                f"{scene:>20} {material:>20} {limit:10.3g} {base.integrator.dt_s / limit:17.2f} "
+                f"{outcome[0]:>8} {outcome[1]:>9} {error:17.3%}"
+            )
 
 
 def main() -> None:
@@ -187,13 +217,19 @@ def main() -> None:
     parser.add_argument("--reference-dt", type=float, default=1e-7)
     parser.add_argument("--materials", nargs="+", default=["default", "elastic"], choices=["default", "elastic"])
     parser.add_argument("--law", default="tagawa2003", help="the bending law of every run (default tagawa2003)")
-    parser.add_argument("--tolerance", type=float, default=TOLERANCE,
-                        help=f"largest |Δ tip x| / excursion accepted (default {TOLERANCE:g})")
+    parser.add_argument(
+        "--tolerance",
+        type=float,
+        default=TOLERANCE,
+        help=f"largest |Δ tip x| / excursion accepted (default {TOLERANCE:g})",
+    )
     parser.add_argument("--parts", nargs="+", default=["ladders", "library"], choices=["ladders", "library"])
     args = parser.parse_args()
     version = importlib.metadata.version("warpcloth")
-    print(f"{platform.processor() or platform.machine()}, warpcloth {version}, Warp {wp.__version__}, "
-          "one strip, one thread")
+    print(
+        f"{platform.processor() or platform.machine()}, warpcloth {version}, Warp {wp.__version__}, "
+        "one strip, one thread"
+    )
     if "ladders" in args.parts:
         scheme_ladders(args)
     if "library" in args.parts:

@@ -28,23 +28,41 @@ SPACINGS = (5.0, 2.5, 1.25, 0.625)
 
 def run(law: str, h: float, duration: float) -> dict:
     dt = 1e-5 * h / 5.0
-    scene = wc.load_scene("damped_swing", [f'material.bending_law="{law}"', f"strip.spacing_mm={h}",
-                                           f"integrator.dt_s={dt}", f"run.duration_s={duration}"])
+    scene = wc.load_scene(
+        "damped_swing",
+        [
+            f'material.bending_law="{law}"',
+            f"strip.spacing_mm={h}",
+            f"integrator.dt_s={dt}",
+            f"run.duration_s={duration}",
+        ],
+    )
     tic = time.perf_counter()
     result = wc.simulate(scene)
     wall = time.perf_counter() - tic
     summary = swing_summary(result.t, result.probe("laser_x", 0), result.probe("tip_x", 0))
     tip = np.stack([result.probe("tip_x", 0), result.probe("tip_y", 0)], axis=-1)
-    return {"h": h, "dt": dt, "wall": wall, "decrement": summary["mean_log_decrement"],
-            "work": float(result.probe("hysteresis_work", 0)[-1]), "tip": tip, "t": result.t,
-            "memory": result.reversal_memory}
+    return {
+        "h": h,
+        "dt": dt,
+        "wall": wall,
+        "decrement": summary["mean_log_decrement"],
+        "work": float(result.probe("hysteresis_work", 0)[-1]),
+        "tip": tip,
+        "t": result.t,
+        "memory": result.reversal_memory,
+    }
 
 
 def twin(law: str, h: float, duration: float) -> float:
     """Largest tip-path difference (m) between the swing and its twin released 1e-12 m further out."""
     dt = 1e-5 * h / 5.0
-    common = [f'material.bending_law="{law}"', f"strip.spacing_mm={h}", f"integrator.dt_s={dt}",
-              f"run.duration_s={duration}"]
+    common = [
+        f'material.bending_law="{law}"',
+        f"strip.spacing_mm={h}",
+        f"integrator.dt_s={dt}",
+        f"run.duration_s={duration}",
+    ]
     scenes = [wc.load_scene("damped_swing", [*common, f"release.hold_x_mm={x!r}"]) for x in (50.0, 50.0 + 1e-9)]
     result = wc.simulate(scenes)
     return float(np.nanmax(np.abs(result.probe("tip_x", 0) - result.probe("tip_x", 1))))
@@ -57,13 +75,17 @@ def main() -> None:
     parser.add_argument("--spacings", nargs="+", type=float, default=list(SPACINGS))
     parser.add_argument("--twin", type=float, default=None, help="also run the 1e-12 m twin at this spacing (mm)")
     args = parser.parse_args()
-    print(f"machine: {platform.machine()}, {platform.system()}, {platform.processor() or 'cpu'}; "
-          f"damped swing, {args.duration:g} s after release, dt = 1e-5 s x h / 5 mm, float64")
+    print(
+        f"machine: {platform.machine()}, {platform.system()}, {platform.processor() or 'cpu'}; "
+        f"damped swing, {args.duration:g} s after release, dt = 1e-5 s x h / 5 mm, float64"
+    )
     for law in args.laws:
         runs = [run(law, h, args.duration) for h in args.spacings]
         print(f"\n{law}")
-        print("  h (mm)   dt (s)    wall (s)  mean log decr   Δ decr      hyst. work (µJ)  Δ work (µJ)  "
-              "tip Δ to h/2 (mm)  order  memory")
+        print(
+            "  h (mm)   dt (s)    wall (s)  mean log decr   Δ decr      hyst. work (µJ)  Δ work (µJ)  "
+            "tip Δ to h/2 (mm)  order  memory"
+        )
         previous_tip_diff = None
         for i, r in enumerate(runs):
             d_decr = r["decrement"] - runs[i - 1]["decrement"] if i else math.nan
@@ -77,19 +99,29 @@ def main() -> None:
                     order = math.log2(previous_tip_diff / tip_diff)
                 previous_tip_diff = tip_diff
             memory = r["memory"]
-            mem = f"deepest {max(memory['deepest'])}/{memory['capacity']}, overflows {sum(memory['overflows'])}" \
-                if memory else "-"
-            print(f"  {r['h']:6.3f}   {r['dt']:.3g}  {r['wall']:8.1f}  {r['decrement']:.5f}     {d_decr:+.2e}   "
-                  f"{r['work'] * 1e6:10.3f}       {d_work:+.3f}       {tip_diff:10.3f}       {order:5.2f}  {mem}")
+            mem = (
+                f"deepest {max(memory['deepest'])}/{memory['capacity']}, overflows {sum(memory['overflows'])}"
+                if memory
+                else "-"
+            )
+            print(
+                f"  {r['h']:6.3f}   {r['dt']:.3g}  {r['wall']:8.1f}  {r['decrement']:.5f}     {d_decr:+.2e}   "
+                f"{r['work'] * 1e6:10.3f}       {d_work:+.3f}       {tip_diff:10.3f}       {order:5.2f}  {mem}"
+            )
         diffs = [runs[i]["decrement"] - runs[i - 1]["decrement"] for i in range(1, len(runs))]
         works = [runs[i]["work"] - runs[i - 1]["work"] for i in range(1, len(runs))]
         if len(diffs) >= 2:
-            print("  ratios of successive differences: decrement "
-                  + ", ".join(f"{diffs[i - 1] / diffs[i]:.2f}" for i in range(1, len(diffs)))
-                  + "; hysteresis work " + ", ".join(f"{works[i - 1] / works[i]:.2f}" for i in range(1, len(works))))
+            print(
+                "  ratios of successive differences: decrement "
+                + ", ".join(f"{diffs[i - 1] / diffs[i]:.2f}" for i in range(1, len(diffs)))
+                + "; hysteresis work "
+                + ", ".join(f"{works[i - 1] / works[i]:.2f}" for i in range(1, len(works)))
+            )
         if args.twin:
-            print(f"  1e-12 m twin at h = {args.twin} mm: tip paths differ by at most "
-                  f"{twin(law, args.twin, args.duration):.3g} m")
+            print(
+                f"  1e-12 m twin at h = {args.twin} mm: tip paths differ by at most "
+                f"{twin(law, args.twin, args.duration):.3g} m"
+            )
 
 
 if __name__ == "__main__":

@@ -50,10 +50,18 @@ def warpcloth_states(curvature: np.ndarray) -> np.ndarray:
     from warpcloth.scene import to_si
     from warpcloth.sim import moment_along_path
 
-    material = to_si(wc.load_scene("damped_swing", {
-        "material.bending_law": "dahl", "material.bending_rigidity_gf_cm2_per_cm": 0.0,
-        "material.dahl_moment_gf_cm_per_cm": SIGMA_MAX / 9.80665e-3, "material.dahl_curvature_per_cm": TAU / 100,
-        "material.dahl_exponent": 1.0}).material)
+    material = to_si(
+        wc.load_scene(
+            "damped_swing",
+            {
+                "material.bending_law": "dahl",
+                "material.bending_rigidity_gf_cm2_per_cm": 0.0,
+                "material.dahl_moment_gf_cm_per_cm": SIGMA_MAX / 9.80665e-3,
+                "material.dahl_curvature_per_cm": TAU / 100,
+                "material.dahl_exponent": 1.0,
+            },
+        ).material
+    )
     moment, _ = moment_along_path(material, curvature)
     return moment
 
@@ -69,5 +77,7 @@ if __name__ == "__main__":
         k = saved["curvature"].astype(np.float32).astype(np.float64)
         ours = warpcloth_states(k)
         gap = np.abs(ours - saved["sigma"]).max()
-        print(f"{len(k)} samples, {int(np.sum(np.diff(np.sign(np.diff(k))) != 0))} reversals: largest |Δσ| = "
-              f"{gap:.3g} N = {gap / SIGMA_MAX:.2e} of σ_max (Newton computes in float32)")
+        print(
+            f"{len(k)} samples, {int(np.sum(np.diff(np.sign(np.diff(k))) != 0))} reversals: largest |Δσ| = "
+            f"{gap:.3g} N = {gap / SIGMA_MAX:.2e} of σ_max (Newton computes in float32)"
+        )

@@ -148,8 +148,9 @@ def vector_exp(typingctx, array, start):
         data = context.make_array(signature.args[0])(context, builder, args[0]).data
         vector = ir.VectorType(ir.DoubleType(), VECTOR_EXP)
         pointer = builder.bitcast(builder.gep(data, [args[1]]), vector.as_pointer())
-        function = cgutils.get_or_insert_function(builder.module, ir.FunctionType(vector, [vector]),
-                                                  LIBMVEC_EXP[VECTOR_EXP])
+        function = cgutils.get_or_insert_function(
+            builder.module, ir.FunctionType(vector, [vector]), LIBMVEC_EXP[VECTOR_EXP]
+        )
         builder.store(builder.call(function, [builder.load(pointer, align=8)]), pointer, align=8)
         return context.get_dummy_value()
 
@@ -196,8 +197,13 @@ def fresh_hinges(px, py, nc, edge_scale, law, masing, hinges, points):
         for s in range(b):
             e1x, e1y = px[i, s] - px[i - 1, s], py[i, s] - py[i - 1, s]
             e2x, e2y = px[i + 1, s] - px[i, s], py[i + 1, s] - py[i, s]
-            k = (2.0 * (e1x * e2y - e1y * e2x) * (1.0 / norm(e1x, e1y)) * (1.0 / norm(e2x, e2y))
-                 / norm(e1x + e2x, e1y + e2y))
+            k = (
+                2.0
+                * (e1x * e2y - e1y * e2x)
+                * (1.0 / norm(e1x, e1y))
+                * (1.0 / norm(e2x, e2y))
+                / norm(e1x + e2x, e1y + e2y)
+            )
             if j == 0:
                 k = k * edge_scale[s]
             d1, alpha, k0, m0 = law[1, s], law[2, s], law[3, s], law[4, s]
@@ -307,9 +313,40 @@ PLANES = 19
 
 
 @njit(error_model="numpy", cache=True)
-def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinges, points, overflows, deepest,
-                  tensile, law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt,
-                  max_strain, release_step, move_steps, tip_x, tip_y, failed):
+def advance_block(
+    s0,
+    s1,
+    step0,
+    step1,
+    out_steps,
+    px,
+    py,
+    vx,
+    vy,
+    masing,
+    hinges,
+    points,
+    overflows,
+    deepest,
+    tensile,
+    law,
+    width,
+    node_mass,
+    gamma,
+    settle_gamma,
+    edge_scale,
+    hold,
+    nc,
+    l0,
+    gravity,
+    dt,
+    max_strain,
+    release_step,
+    move_steps,
+    tip_x,
+    tip_y,
+    failed,
+):
     """Strips s0 … s1−1 (at most LANES) from step0 to step1 (semi-implicit Euler,
     docs/model.md §9.1), in the block array W described above.
 
@@ -338,11 +375,19 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinge
                 W[np.uintp(h), HB + q, lane] = hinges[q, h, s]
         if masing and lane >= used:
             points[s0 + lane] = points[s]
-        W[P, A1, lane], W[P, A2, lane], W[P, A3, lane], W[P, A4, lane] = (tensile[0, s], tensile[1, s],
-                                                                          tensile[2, s], tensile[3, s])
+        W[P, A1, lane], W[P, A2, lane], W[P, A3, lane], W[P, A4, lane] = (
+            tensile[0, s],
+            tensile[1, s],
+            tensile[2, s],
+            tensile[3, s],
+        )
         W[P, RIGIDITY, lane], W[P, D1, lane], W[P, ALPHA, lane] = law[0, s], law[1, s], law[2, s]
-        W[P, K0, lane], W[P, M0, lane], W[P, WIDTH, lane], W[P, SCALE, lane] = (law[3, s], law[4, s], width[s],
-                                                                                edge_scale[s])
+        W[P, K0, lane], W[P, M0, lane], W[P, WIDTH, lane], W[P, SCALE, lane] = (
+            law[3, s],
+            law[4, s],
+            width[s],
+            edge_scale[s],
+        )
         W[P, MASS, lane], W[P, GAMMA, lane], W[P, SETTLE, lane] = node_mass[s], gamma[s], settle_gamma[s]
         # The held end's polar path (§8) is fixed per strip: its ends once, as warpcloth's
         # held_free_end computes them every substep (same operations, same values).
@@ -425,8 +470,18 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinge
                 if rare:
                     for lane in range(LANES):
                         if W[T, SCALAR, lane] != 0.0:
-                            masing_follow(W[T, KK, lane], W, h, lane, points, overflows, deepest, s0 + lane,
-                                          W[P, D1, lane], W[P, ALPHA, lane])
+                            masing_follow(
+                                W[T, KK, lane],
+                                W,
+                                h,
+                                lane,
+                                points,
+                                overflows,
+                                deepest,
+                                s0 + lane,
+                                W[P, D1, lane],
+                                W[P, ALPHA, lane],
+                            )
                 for lane in range(LANES):
                     W[T, EX, lane] = W[h, TR, lane] * (W[T, KK, lane] - W[h, HC, lane])
             else:
@@ -440,8 +495,15 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinge
                         if (W[T, KK, lane] - W[h, HK, lane]) * hb < 0.0:
                             hb = -hb
                             W[h, HB, lane] = hb
-                            W[h, HC, lane] = centre_through(W[h, HK, lane], W[h, HH, lane], hb, W[P, D1, lane],
-                                                            W[P, ALPHA, lane], W[P, K0, lane], W[P, M0, lane])
+                            W[h, HC, lane] = centre_through(
+                                W[h, HK, lane],
+                                W[h, HH, lane],
+                                hb,
+                                W[P, D1, lane],
+                                W[P, ALPHA, lane],
+                                W[P, K0, lane],
+                                W[P, M0, lane],
+                            )
                 for lane in range(LANES):
                     u_ = W[T, KK, lane] - W[h, HC, lane]
                     w = W[P, K0, lane] + u_ if W[h, HB, lane] > 0.0 else W[P, K0, lane] - u_
@@ -544,14 +606,75 @@ def advance_block(s0, s1, step0, step1, out_steps, px, py, vx, vy, masing, hinge
 
 
 @njit(parallel=True, error_model="numpy", cache=True)
-def advance(blocks, step0, step1, out_steps, px, py, vx, vy, masing, hinges, points, overflows, deepest, tensile,
-            law, width, node_mass, gamma, settle_gamma, edge_scale, hold, nc, l0, gravity, dt, max_strain,
-            release_step, move_steps, tip_x, tip_y, failed):
+def advance(
+    blocks,
+    step0,
+    step1,
+    out_steps,
+    px,
+    py,
+    vx,
+    vy,
+    masing,
+    hinges,
+    points,
+    overflows,
+    deepest,
+    tensile,
+    law,
+    width,
+    node_mass,
+    gamma,
+    settle_gamma,
+    edge_scale,
+    hold,
+    nc,
+    l0,
+    gravity,
+    dt,
+    max_strain,
+    release_step,
+    move_steps,
+    tip_x,
+    tip_y,
+    failed,
+):
     """Every block of strips (``blocks[b]`` … ``blocks[b + 1]``) on the cores: prange."""
     for b in prange(blocks.shape[0] - 1):
-        advance_block(blocks[b], blocks[b + 1], step0, step1, out_steps, px, py, vx, vy, masing, hinges, points,
-                      overflows, deepest, tensile, law, width, node_mass, gamma, settle_gamma, edge_scale, hold,
-                      nc, l0, gravity, dt, max_strain, release_step, move_steps, tip_x, tip_y, failed)
+        advance_block(
+            blocks[b],
+            blocks[b + 1],
+            step0,
+            step1,
+            out_steps,
+            px,
+            py,
+            vx,
+            vy,
+            masing,
+            hinges,
+            points,
+            overflows,
+            deepest,
+            tensile,
+            law,
+            width,
+            node_mass,
+            gamma,
+            settle_gamma,
+            edge_scale,
+            hold,
+            nc,
+            l0,
+            gravity,
+            dt,
+            max_strain,
+            release_step,
+            move_steps,
+            tip_x,
+            tip_y,
+            failed,
+        )
 
 
 class NumbaStrips:
@@ -611,11 +734,39 @@ class NumbaStrips:
     def run(self, steps: int | None = None) -> None:
         """Advance ``steps`` substeps (default: to the last output step)."""
         end = int(self.out_steps[-1]) if steps is None else self.step + steps
-        advance(self.blocks(numba.get_num_threads()), self.step, end, self.out_steps, self.px, self.py, self.vx,
-                self.vy, self.masing, self.hinges, self.points, self.overflows, self.deepest, self.tensile, self.law,
-                self.width, self.node_mass, self.gamma, self.settle_gamma, self.edge_scale, self.hold, self.nc,
-                self.l0, self.gravity, self.dt, self.max_strain, self.release_step, self.move_steps, self.tip_x,
-                self.tip_y, self.failed)
+        advance(
+            self.blocks(numba.get_num_threads()),
+            self.step,
+            end,
+            self.out_steps,
+            self.px,
+            self.py,
+            self.vx,
+            self.vy,
+            self.masing,
+            self.hinges,
+            self.points,
+            self.overflows,
+            self.deepest,
+            self.tensile,
+            self.law,
+            self.width,
+            self.node_mass,
+            self.gamma,
+            self.settle_gamma,
+            self.edge_scale,
+            self.hold,
+            self.nc,
+            self.l0,
+            self.gravity,
+            self.dt,
+            self.max_strain,
+            self.release_step,
+            self.move_steps,
+            self.tip_x,
+            self.tip_y,
+            self.failed,
+        )
         self.step = end
 
     def kept_tips(self) -> tuple[np.ndarray, np.ndarray]:
@@ -626,8 +777,9 @@ class NumbaStrips:
 
 def sweep_scenes(samples: int, record: float, overrides: list[str] = ()) -> tuple[object, list[wc.Scene]]:
     """The bundled damped-swing sweep cut to ``samples`` variants and a ``record`` s record."""
-    sweep = wc.load_sweep("damped_swing_sweep", [f"sweep.random.samples={samples}", f"run.duration_s={record}",
-                                                 *overrides])
+    sweep = wc.load_sweep(
+        "damped_swing_sweep", [f"sweep.random.samples={samples}", f"run.duration_s={record}", *overrides]
+    )
     return sweep, list(sweep.scenes)
 
 
@@ -647,8 +799,13 @@ def warpcloth_wall(scenes: list[wc.Scene], x0: np.ndarray, threads: int) -> tupl
 
     def one(part: list[int]) -> None:
         # one launch a Python thread: the threads here are the ones being measured
-        result = wc.simulate([scenes[i] for i in part], initial_positions=np.repeat(x0[:, None, :], len(part), axis=1),
-                             keep_frames=False, on_divergence="record", threads=1)
+        result = wc.simulate(
+            [scenes[i] for i in part],
+            initial_positions=np.repeat(x0[:, None, :], len(part), axis=1),
+            keep_frames=False,
+            on_divergence="record",
+            threads=1,
+        )
         done.append(result.strip_steps)
 
     start = time.perf_counter()
@@ -660,14 +817,16 @@ def warpcloth_wall(scenes: list[wc.Scene], x0: np.ndarray, threads: int) -> tupl
     return time.perf_counter() - start, sum(done)
 
 
-def warpcloth_rate(samples: int, b: int, steps: int, dt: float, x0: np.ndarray, threads: int,
-                   extra: list[str] = ()) -> float:
+def warpcloth_rate(
+    samples: int, b: int, steps: int, dt: float, x0: np.ndarray, threads: int, extra: list[str] = ()
+) -> float:
     """warpcloth's stepping rate (strip-steps/s) on ``b`` strips: the wall of a run of
     about ``steps`` steps less that of a one-sample run, so building the batch (about
     0.1 ms a strip, in the sweep's wall below) is left out as it is for the others."""
     interval = free_runs(samples, 1.0, 1, extra)[0].output_interval
     long_wall, long_steps = warpcloth_wall(
-        free_runs(samples, max(2, round(steps * dt / interval)) * interval, b, extra), x0, threads)
+        free_runs(samples, max(2, round(steps * dt / interval)) * interval, b, extra), x0, threads
+    )
     short_wall, short_steps = warpcloth_wall(free_runs(samples, interval, b, extra), x0, threads)
     return (long_steps - short_steps) / (long_wall - short_wall)
 
@@ -712,8 +871,11 @@ def warpcloth_tips(scenes: list[wc.Scene]) -> tuple[np.ndarray, str]:
     tips = result.probe("tip_x").copy()
     tips[:, [d["strip"] for d in result.diverged]] = math.inf
     memory = result.reversal_memory
-    held = (f"; deepest {np.max(memory['deepest'])} of {memory['capacity']}, {np.sum(memory['overflows'])} "
-            "overflows") if memory else ""
+    held = (
+        (f"; deepest {np.max(memory['deepest'])} of {memory['capacity']}, {np.sum(memory['overflows'])} overflows")
+        if memory
+        else ""
+    )
     return tips, held
 
 
@@ -726,8 +888,11 @@ def numba_tips(scenes: list[wc.Scene]) -> tuple[np.ndarray, str]:
     tips = peer.kept_tips()[0].copy()
     tips[:, peer.failed >= 0] = math.inf
     b = peer.n_strips
-    held = (f"; deepest {peer.deepest[:b].max()} of {peer.capacity}, {peer.overflows[:b].sum()} overflows"
-            if peer.masing else "")
+    held = (
+        f"; deepest {peer.deepest[:b].max()} of {peer.capacity}, {peer.overflows[:b].sum()} overflows"
+        if peer.masing
+        else ""
+    )
     return tips, held
 
 
@@ -756,16 +921,24 @@ def equal_accuracy(args: argparse.Namespace, law: list[str], samples: int) -> No
     reference at ``--reference-dt`` (computed by the port, which agrees with warpcloth to
     rounding, part 1), the largest dt of each within ``--tolerance``, then the walls."""
     record = args.record
-    print(f"\n---- equal accuracy on the {samples}-variant sweep ({' '.join(law) or 'tagawa2003'}; "
-          f"{record:g} s record; tolerance {args.tolerance:.2%} of each variant's excursion, worst variant) ----")
+    print(
+        f"\n---- equal accuracy on the {samples}-variant sweep ({' '.join(law) or 'tagawa2003'}; "
+        f"{record:g} s record; tolerance {args.tolerance:.2%} of each variant's excursion, worst variant) ----"
+    )
     start = time.perf_counter()
-    reference, _held = numba_tips(sweep_scenes(samples, record,
-                                               [*law, *stepping("semi_implicit", args.reference_dt)])[1])
-    print(f"reference: semi_implicit dt = {args.reference_dt:g} s by the Numba port, "
-          f"{time.perf_counter() - start:.0f} s wall")
+    reference, _held = numba_tips(
+        sweep_scenes(samples, record, [*law, *stepping("semi_implicit", args.reference_dt)])[1]
+    )
+    print(
+        f"reference: semi_implicit dt = {args.reference_dt:g} s by the Numba port, "
+        f"{time.perf_counter() - start:.0f} s wall"
+    )
     scene_dt = sweep_scenes(1, record, law)[1][0].integrator.dt_s
-    ladders = {("warpcloth", "semi_implicit"): args.explicit_ladder, ("numba", "semi_implicit"): args.explicit_ladder,
-               ("warpcloth", "imex"): args.imex_ladder}
+    ladders = {
+        ("warpcloth", "semi_implicit"): args.explicit_ladder,
+        ("numba", "semi_implicit"): args.explicit_ladder,
+        ("warpcloth", "imex"): args.imex_ladder,
+    }
     best: dict[tuple[str, str], float] = {}
     tips: dict[tuple[str, str, float], np.ndarray] = {}
     for (impl, scheme), ladder in ladders.items():
@@ -778,8 +951,10 @@ def equal_accuracy(args: argparse.Namespace, law: list[str], samples: int) -> No
             tips[impl, scheme, dt], held = (warpcloth_tips if impl == "warpcloth" else numba_tips)(scenes)
             errors = tip_errors(tips[impl, scheme, dt], reference)
             worst = int(np.argmax(errors))
-            print(f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: worst {errors[worst]:.3%} (variant {worst}), "
-                  f"median {np.median(errors):.3%}{held}")
+            print(
+                f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: worst {errors[worst]:.3%} (variant {worst}), "
+                f"median {np.median(errors):.3%}{held}"
+            )
             if errors[worst] <= args.tolerance:
                 best[impl, scheme] = dt
     print("largest dt within the tolerance: " + ", ".join(f"{i} {s} {dt:g} s" for (i, s), dt in best.items()))
@@ -791,16 +966,20 @@ def equal_accuracy(args: argparse.Namespace, law: list[str], samples: int) -> No
         # The reference's own error: the variants worst at the chosen imex step, again
         # against a finer explicit solution.
         errors = tip_errors(tips["warpcloth", "imex", best["warpcloth", "imex"]], reference)
-        worst = np.sort(np.argsort(errors)[-args.check_worst:])
+        worst = np.sort(np.argsort(errors)[-args.check_worst :])
         start = time.perf_counter()
         finer_scenes = sweep_scenes(samples, record, [*law, *stepping("semi_implicit", args.check_dt)])[1]
         finer, _held = numba_tips([finer_scenes[i] for i in worst])
-        print(f"check: the {len(worst)} variants worst under imex at {best['warpcloth', 'imex']:.4g} s against "
-              f"semi_implicit dt = {args.check_dt:g} s ({time.perf_counter() - start:.0f} s wall); the reference "
-              f"is off it by {tip_errors(reference[:, worst], finer).max():.4%} at most")
+        print(
+            f"check: the {len(worst)} variants worst under imex at {best['warpcloth', 'imex']:.4g} s against "
+            f"semi_implicit dt = {args.check_dt:g} s ({time.perf_counter() - start:.0f} s wall); the reference "
+            f"is off it by {tip_errors(reference[:, worst], finer).max():.4%} at most"
+        )
         for (impl, scheme, dt), run in tips.items():
-            print(f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: worst of these "
-                  f"{tip_errors(run[:, worst], finer).max():.3%}")
+            print(
+                f"  {impl:>9} {scheme:>13} dt = {dt:8.3g} s: worst of these "
+                f"{tip_errors(run[:, worst], finer).max():.3%}"
+            )
     runs = [("warpcloth", "semi_implicit", scene_dt)] + [(i, s, dt) for (i, s), dt in best.items()]
     walls: dict[tuple[str, str, float], list[float]] = {run: [] for run in runs}
     loads = []
@@ -809,13 +988,17 @@ def equal_accuracy(args: argparse.Namespace, law: list[str], samples: int) -> No
             loads.append(os.getloadavg()[0])
             walls[run].append(sweep_wall(run[0], samples, record, [*law, *stepping(run[1], run[2])]))
     numba_row = next((run for run in runs if run[0] == "numba"), None)
-    print(f"\nwalls on 2 threads, {args.repeats} repeats interleaved (load average 1 min "
-          f"{min(loads):.1f}–{max(loads):.1f}; this run uses 2):")
+    print(
+        f"\nwalls on 2 threads, {args.repeats} repeats interleaved (load average 1 min "
+        f"{min(loads):.1f}–{max(loads):.1f}; this run uses 2):"
+    )
     print(f"{'implementation':<10} {'scheme':<14} {'dt (s)':>8} {'median wall':>12} {'walls':>26} {'vs Numba':>9}")
     for run, times in walls.items():
         ratio = np.median(times) / np.median(walls[numba_row]) if numba_row else math.nan
-        print(f"{run[0]:<10} {run[1]:<14} {run[2]:>8.3g} {np.median(times):>10.2f} s "
-              f"{' '.join(f'{t:.2f}' for t in times):>26} {ratio:>8.2f}×")
+        print(
+            f"{run[0]:<10} {run[1]:<14} {run[2]:>8.3g} {np.median(times):>10.2f} s "
+            f"{' '.join(f'{t:.2f}' for t in times):>26} {ratio:>8.2f}×"
+        )
 
 
 def main() -> None:
@@ -825,26 +1008,52 @@ def main() -> None:
     parser.add_argument("--record", type=float, default=1.0, help="sweep record after the release, s")
     parser.add_argument("--sizes", type=int, nargs="+", default=[1, 16, 200, 1024])
     parser.add_argument("--libm-exp", action="store_true", help="glibc's scalar exp (Warp's) instead of libmvec's")
-    parser.add_argument("--law", choices=("tagawa2003", "masing"), default="tagawa2003",
-                        help="material.bending_law of every variant (default: the sweep's, tagawa2003)")
-    parser.add_argument("--parts", nargs="+", choices=("agreement", "tables", "equal-accuracy"),
-                        default=["agreement", "tables"], help="what to run (default: agreement tables)")
+    parser.add_argument(
+        "--law",
+        choices=("tagawa2003", "masing"),
+        default="tagawa2003",
+        help="material.bending_law of every variant (default: the sweep's, tagawa2003)",
+    )
+    parser.add_argument(
+        "--parts",
+        nargs="+",
+        choices=("agreement", "tables", "equal-accuracy"),
+        default=["agreement", "tables"],
+        help="what to run (default: agreement tables)",
+    )
     parser.add_argument("--reference-dt", type=float, default=1e-6, help="equal accuracy: the explicit reference's dt")
     parser.add_argument("--tolerance", type=float, default=2e-3, help="equal accuracy: of the excursion (0.2 %%)")
     # Steps that divide the 1/600 s probe interval (and the 1.3 s hold), so that no sample
     # is off its time by up to dt/2, which at 4e-4 s alone is ~0.1 % of the excursion.
-    parser.add_argument("--explicit-ladder", type=float, nargs="+", default=[1 / (600 * n) for n in (40, 34, 33)],
-                        help="equal accuracy: semi_implicit steps, s (default 1/(600 n), n = 40, 34, 33)")
-    parser.add_argument("--imex-ladder", type=float, nargs="+",
-                        default=[1 / (600 * n) for n in (16, 12, 10, 8, 7, 6, 5, 4)],
-                        help="equal accuracy: imex steps, s (default 1/(600 n), n = 16, 12, 10, 8, 7, 6, 5, 4)")
+    parser.add_argument(
+        "--explicit-ladder",
+        type=float,
+        nargs="+",
+        default=[1 / (600 * n) for n in (40, 34, 33)],
+        help="equal accuracy: semi_implicit steps, s (default 1/(600 n), n = 40, 34, 33)",
+    )
+    parser.add_argument(
+        "--imex-ladder",
+        type=float,
+        nargs="+",
+        default=[1 / (600 * n) for n in (16, 12, 10, 8, 7, 6, 5, 4)],
+        help="equal accuracy: imex steps, s (default 1/(600 n), n = 16, 12, 10, 8, 7, 6, 5, 4)",
+    )
     parser.add_argument("--repeats", type=int, default=3, help="equal accuracy: timed repeats of each wall")
-    parser.add_argument("--check-dt", type=float, default=0.0,
-                        help="equal accuracy: recheck the worst variants against this finer explicit dt (0: no)")
+    parser.add_argument(
+        "--check-dt",
+        type=float,
+        default=0.0,
+        help="equal accuracy: recheck the worst variants against this finer explicit dt (0: no)",
+    )
     parser.add_argument("--check-worst", type=int, default=32, help="equal accuracy: how many variants to recheck")
-    parser.add_argument("--sweep-wall", nargs=3, metavar=("IMPL", "SCHEME", "DT"),
-                        help="only time one sweep (IMPL warpcloth or numba), nothing warmed up: for timing "
-                             "the whole process from outside")
+    parser.add_argument(
+        "--sweep-wall",
+        nargs=3,
+        metavar=("IMPL", "SCHEME", "DT"),
+        help="only time one sweep (IMPL warpcloth or numba), nothing warmed up: for timing "
+        "the whole process from outside",
+    )
     args = parser.parse_args()
     global VECTOR_EXP
     VECTOR_EXP = 0 if args.libm_exp else VECTOR_EXP  # read when Numba compiles, i.e. at the first call
@@ -871,14 +1080,17 @@ def main() -> None:
         peer.run()
     x0 = displaced_start(warm[0])
     warpcloth_wall(free_runs(4, 0.002, 2, law), x0, 1)
-    print(f"machine: {machine()}; warp {wp.__version__} (cpu), numba {numba.__version__} "
-          f"(threading layer {numba.threading_layer()}), numpy {np.__version__}; exp: "
-          f"{f'libmvec {VECTOR_EXP}-wide' if VECTOR_EXP else 'glibc scalar'}; compile excluded (everything warmed "
-          "up first)")
+    print(
+        f"machine: {machine()}; warp {wp.__version__} (cpu), numba {numba.__version__} "
+        f"(threading layer {numba.threading_layer()}), numpy {np.__version__}; exp: "
+        f"{f'libmvec {VECTOR_EXP}-wide' if VECTOR_EXP else 'glibc scalar'}; compile excluded (everything warmed "
+        "up first)"
+    )
     with tempfile.TemporaryDirectory() as tmp:
         for scheme in ("semi_implicit", "imex"):
-            wc.run_sweep(sweep_scenes(4, 0.01, [*law, *stepping(scheme, 1e-5)])[0], Path(tmp) / scheme,
-                         workers=min(2, cores))
+            wc.run_sweep(
+                sweep_scenes(4, 0.01, [*law, *stepping(scheme, 1e-5)])[0], Path(tmp) / scheme, workers=min(2, cores)
+            )
 
     # ---- 1. the sweep: agreement and wall time, warpcloth on 2 threads vs Numba on 2 ----
     sweep, scenes = sweep_scenes(samples, args.record, law)
@@ -895,18 +1107,24 @@ def main() -> None:
             gap, excursion = agreement(Path(tmp) / "sweep", peer)
             summary = pd.read_parquet(Path(tmp) / "sweep" / "summary.parquet")
         steps = int(peer.out_steps[-1])
-        print(f"\nagreement: {samples} variants of damped_swing_sweep (D, D1, α, γ varied; law {args.law}), "
-              f"hold and release replicated, {args.record:g} s record, tip x and y at {peer.kept} samples each: "
-              f"largest gap {gap:.2e} m (tip excursion {excursion * 1e3:.0f} mm); Numba strips failing the "
-              f"strain/fold check: {(peer.failed >= 0).sum()}")
+        print(
+            f"\nagreement: {samples} variants of damped_swing_sweep (D, D1, α, γ varied; law {args.law}), "
+            f"hold and release replicated, {args.record:g} s record, tip x and y at {peer.kept} samples each: "
+            f"largest gap {gap:.2e} m (tip excursion {excursion * 1e3:.0f} mm); Numba strips failing the "
+            f"strain/fold check: {(peer.failed >= 0).sum()}"
+        )
         if peer.masing:
             ours = summary["reversal_overflows"].to_numpy() if "reversal_overflows" in summary else "none recorded"
-            print(f"reversal memory ({peer.capacity} points): Numba deepest {peer.deepest[:samples].max()}, "
-                  f"overflows {peer.overflows[:samples].sum()}; warpcloth's sweep overflows "
-                  f"{np.sum(ours) if not isinstance(ours, str) else ours}")
-        print(f"sweep wall ({samples} variants, {steps} steps each = {steps * scenes[0].integrator.dt_s:.2f} s "
-              f"simulated incl. the hold): warpcloth run_sweep 2 threads {warp_sweep:.2f} s, "
-              f"Numba 2 threads {numba_sweep:.2f} s: Numba {warp_sweep / numba_sweep:.2f}× faster")
+            print(
+                f"reversal memory ({peer.capacity} points): Numba deepest {peer.deepest[:samples].max()}, "
+                f"overflows {peer.overflows[:samples].sum()}; warpcloth's sweep overflows "
+                f"{np.sum(ours) if not isinstance(ours, str) else ours}"
+            )
+        print(
+            f"sweep wall ({samples} variants, {steps} steps each = {steps * scenes[0].integrator.dt_s:.2f} s "
+            f"simulated incl. the hold): warpcloth run_sweep 2 threads {warp_sweep:.2f} s, "
+            f"Numba 2 threads {numba_sweep:.2f} s: Numba {warp_sweep / numba_sweep:.2f}× faster"
+        )
 
     # The cores may be shared: a busy core shows as 2-thread rows no faster than 1-thread ones.
     print(f"load average before the tables: {os.getloadavg()[0]:.2f} (this run uses up to 2)")
@@ -920,8 +1138,9 @@ def main() -> None:
         equal_accuracy(args, law, samples)
 
 
-def throughput_tables(args: argparse.Namespace, law: list[str], samples: int, dt: float, x0: np.ndarray,
-                      cores: int) -> None:
+def throughput_tables(
+    args: argparse.Namespace, law: list[str], samples: int, dt: float, x0: np.ndarray, cores: int
+) -> None:
     """Strip-steps/s and wall per simulated second of every implementation at each size."""
     budget = 0.25 if args.quick else 1.0  # target wall seconds per table cell
     print(f"\n{'B':>5} {'implementation':<22} {'strip-steps/s':>14} {'wall per sim s':>15} {'vs warpcloth 1T':>16}")
@@ -930,8 +1149,13 @@ def throughput_tables(args: argparse.Namespace, law: list[str], samples: int, dt
         base = None
         results = []
         # Steps per cell sized from a rough rate so each cell takes about `budget` s.
-        guess = {"warpcloth 1 thread": 1e6, "warpcloth 2 threads": 2e6, "numpy": min(3e5, 1e4 * b),
-                 "numba 1 thread": 3e6, "numba 2 threads": 6e6}
+        guess = {
+            "warpcloth 1 thread": 1e6,
+            "warpcloth 2 threads": 2e6,
+            "numpy": min(3e5, 1e4 * b),
+            "numba 1 thread": 3e6,
+            "numba 2 threads": 6e6,
+        }
         for name, rate in guess.items():
             threads = 2 if "2" in name else 1
             if threads > min(b, cores) or (name == "numpy" and law):  # NumPy has the paper's law only
@@ -961,7 +1185,6 @@ def throughput_tables(args: argparse.Namespace, law: list[str], samples: int, dt
             else:
                 print(f"{b:>5} {name:<22} {rate:>14.3e} {b / (rate * dt):>13.3g} s {rate / base:>15.2f}×")
             rows.append((b, name, rate))
-
 
 
 if __name__ == "__main__":

@@ -58,8 +58,12 @@ class NumpyStrips:
         e = np.diff(self.x[:, self.nc - 2 :], axis=1)
         e1, e2 = e[:, :-1], e[:, 1:]
         cross = e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0]
-        return self.edge_scale * 2 * cross / (np.linalg.norm(e1, axis=-1) * np.linalg.norm(e2, axis=-1)
-                                              * np.linalg.norm(e1 + e2, axis=-1))
+        return (
+            self.edge_scale
+            * 2
+            * cross
+            / (np.linalg.norm(e1, axis=-1) * np.linalg.norm(e2, axis=-1) * np.linalg.norm(e1 + e2, axis=-1))
+        )
 
     def offset(self, u: np.ndarray, branch: np.ndarray) -> np.ndarray:
         rising = self.m0 - self.d1 * np.exp(-self.alpha * (self.k0 + u))
@@ -133,8 +137,7 @@ def main() -> None:
     dt = scene.integrator.dt_s
 
     # Same trajectory: 0.05 s from the displaced start, tip position compared.
-    check = wc.load_scene("damped_swing", ["release.enabled=false", "damping.gamma_per_s=0.3",
-                                           "run.duration_s=0.05"])
+    check = wc.load_scene("damped_swing", ["release.enabled=false", "damping.gamma_per_s=0.3", "run.duration_s=0.05"])
     reference = wc.simulate(check, initial_positions=x0[:, None, :])
     baseline = NumpyStrips(check, 1, x0)
     for _ in range(round(0.05 / dt)):
@@ -150,8 +153,9 @@ def main() -> None:
         for _ in range(args.steps):
             strips.step()
         numpy_rate = batch * args.steps / (time.perf_counter() - start)
-        timed = wc.load_scene("damped_swing", ["release.enabled=false", "damping.gamma_per_s=0.3",
-                                               f"run.duration_s={args.steps * dt}"])
+        timed = wc.load_scene(
+            "damped_swing", ["release.enabled=false", "damping.gamma_per_s=0.3", f"run.duration_s={args.steps * dt}"]
+        )
         start = time.perf_counter()
         wc.simulate([timed] * batch, initial_positions=np.repeat(x0[:, None, :], batch, axis=1), keep_frames=False)
         warp_rate = batch * args.steps / (time.perf_counter() - start)

@@ -20,8 +20,10 @@ import warpcloth as wc
 
 
 def timed(batch: int, sim_time: float, device: str) -> float:
-    scene = wc.load_scene("damped_swing", ["integrator.dt_s=1e-7", "release.enabled=false",
-                                           f"run.duration_s={sim_time}", "integrator.precision=float64"])
+    scene = wc.load_scene(
+        "damped_swing",
+        ["integrator.dt_s=1e-7", "release.enabled=false", f"run.duration_s={sim_time}", "integrator.precision=float64"],
+    )
     wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.001", "release.enabled=false"]), device=device)
     start = time.perf_counter()
     wc.simulate([scene] * batch, device=device, keep_frames=False)
@@ -41,8 +43,10 @@ def main() -> None:
     print(f"1 strip, 1 simulated second: {one:.1f} s wall")
     many = timed(args.batch, args.batch_sim_time, args.device)
     per_second = many / args.batch_sim_time
-    print(f"{args.batch} strips, {args.batch_sim_time} simulated s: {many:.1f} s wall "
-          f"→ {per_second:.0f} s ({per_second / 3600:.2f} h) per simulated second (extrapolated)")
+    print(
+        f"{args.batch} strips, {args.batch_sim_time} simulated s: {many:.1f} s wall "
+        f"→ {per_second:.0f} s ({per_second / 3600:.2f} h) per simulated second (extrapolated)"
+    )
     print(f"per-strip cost at batch {args.batch} vs batch 1: {per_second / args.batch / one:.2f}x")
 
 

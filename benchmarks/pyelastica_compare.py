@@ -91,14 +91,30 @@ def make_problem() -> Problem:
     gamma = m.density * g * length**3 / m.bending_rigidity
     lam, shape = hanging_beam_mode(gamma)
     period = 2 * math.pi / (lam * math.sqrt(m.bending_rigidity / (m.density * length**4)))
-    return Problem(length, width, g, scene.output_interval, rigidity, axial, line_density, radius, youngs,
-                   youngs / (2 * (1 + NU)), line_density / area, gamma, shape, period)
+    return Problem(
+        length,
+        width,
+        g,
+        scene.output_interval,
+        rigidity,
+        axial,
+        line_density,
+        radius,
+        youngs,
+        youngs / (2 * (1 + NU)),
+        line_density / area,
+        gamma,
+        shape,
+        period,
+    )
 
 
 def wc_scene(spacing_mm: float, dt: float, span: float) -> wc.Scene:
     """The linear-elastic hanging strip at a spacing and step, run for ``span`` seconds."""
-    return wc.load_scene("damped_swing", [*BASE, f"strip.spacing_mm={spacing_mm!r}", f"integrator.dt_s={dt!r}",
-                                          f"run.duration_s={span!r}"])
+    return wc.load_scene(
+        "damped_swing",
+        [*BASE, f"strip.spacing_mm={spacing_mm!r}", f"integrator.dt_s={dt!r}", f"run.duration_s={span!r}"],
+    )
 
 
 def wc_start(scene: wc.Scene, problem: Problem, batch: int) -> np.ndarray:
@@ -130,8 +146,9 @@ def run_warpcloth(problem: Problem, spacing_mm: float, dt: float, span: float, b
     state = built.model.state()
     state.set_positions(wc_start(scene, problem, batch))
     solver = SemiImplicitEulerSolver(built.model, dt=dt, divergence_strain=scene.integrator.divergence_strain)
-    result = simulate_batch(built.model, built.control, solver, built.recorder, state, on_divergence="record",
-                            keep_frames=False)
+    result = simulate_batch(
+        built.model, built.control, solver, built.recorder, state, on_divergence="record", keep_frames=False
+    )
     tip = result.probe("tip_x", 0)
     free_segments = scene.n_nodes - scene.n_clamped
     stable = not result.diverged and bool(np.all(np.abs(tip) < 2 * AMPLITUDE))
@@ -142,8 +159,9 @@ class _Simulator(ea.BaseSystemCollection, ea.Constraints, ea.Forcing):
     pass
 
 
-def build_pyelastica(problem: Problem, n_elements: int, n_rods: int = 1,
-                     straight_directors: bool = False) -> tuple[_Simulator, list[ea.CosseratRod]]:
+def build_pyelastica(
+    problem: Problem, n_elements: int, n_rods: int = 1, straight_directors: bool = False
+) -> tuple[_Simulator, list[ea.CosseratRod]]:
     """``n_rods`` identical clamped rods in one simulator, started in the mode shape."""
     root = logging.getLogger()
     level = root.level
@@ -153,8 +171,16 @@ def build_pyelastica(problem: Problem, n_elements: int, n_rods: int = 1,
         rods = []
         for _ in range(n_rods):
             rod = ea.CosseratRod.straight_rod(
-                n_elements, np.zeros(3), np.array([0.0, -1.0, 0.0]), np.array([0.0, 0.0, 1.0]), problem.length,
-                problem.radius, problem.density, youngs_modulus=problem.youngs, shear_modulus=problem.shear)
+                n_elements,
+                np.zeros(3),
+                np.array([0.0, -1.0, 0.0]),
+                np.array([0.0, 0.0, 1.0]),
+                problem.length,
+                problem.radius,
+                problem.density,
+                youngs_modulus=problem.youngs,
+                shear_modulus=problem.shear,
+            )
             sim.append(rod)
             sim.constrain(rod).using(ea.OneEndFixedBC, constrained_position_idx=(0,), constrained_director_idx=(0,))
             sim.add_forcing_to(rod).using(ea.GravityForces, acc_gravity=np.array([0.0, -problem.gravity, 0.0]))
@@ -177,8 +203,9 @@ def build_pyelastica(problem: Problem, n_elements: int, n_rods: int = 1,
     return sim, rods
 
 
-def run_pyelastica(problem: Problem, n_elements: int, dt: float, span: float, n_rods: int = 1,
-                   straight_directors: bool = False) -> Trace:
+def run_pyelastica(
+    problem: Problem, n_elements: int, dt: float, span: float, n_rods: int = 1, straight_directors: bool = False
+) -> Trace:
     """Step PositionVerlet for ``span`` seconds; the tip of rod 0 is sampled at warpcloth's probe rate."""
     sim, rods = build_pyelastica(problem, n_elements, n_rods, straight_directors)
     stepper = ea.PositionVerlet()
@@ -260,14 +287,14 @@ def confirmed(run: Callable[[float], Trace], dt: float) -> tuple[float, Trace]:
     raise RuntimeError(f"no stable dt found down to {dt:.3g} s")
 
 
-def accuracy_row(code: str, resolution: str, dt: float, trace: Trace, wall: float, span: float,
-                 problem: Problem) -> Row:
+def accuracy_row(
+    code: str, resolution: str, dt: float, trace: Trace, wall: float, span: float, problem: Problem
+) -> Row:
     """Period, error vs the exact T and mode cleanliness of a finished run."""
     if not trace.stable:
         raise RuntimeError(f"{code} {resolution} at dt = {dt:.3g} s diverged in the period run")
     period = first_period(trace.t, trace.tip_x, level=0.0)
-    return Row(code, resolution, dt, wall / span, period, period / problem.period - 1,
-               mode_residual(trace, period))
+    return Row(code, resolution, dt, wall / span, period, period / problem.period - 1, mode_residual(trace, period))
 
 
 def main() -> None:
@@ -289,14 +316,22 @@ def main() -> None:
     wp.init()
     problem = make_problem()
     p = problem
-    print(f"machine: {platform.machine()}, {platform.system()}, device cpu (warp {wp.__version__}, float64), "
-          f"pyelastica {ELASTICA_VERSION} (numba), numpy {np.__version__}")
-    print(f"strip: L = {p.length * 1e3:g} mm, W = {p.width * 1e3:g} mm, EI = B·W = {p.rigidity:.4e} N·m², "
-          f"EA = a1·W = {p.axial:.4e} N, ρ_A·W = {p.line_density:.4e} kg/m")
-    print(f"round rod for PyElastica: r = 2√(EI/EA) = {p.radius * 1e3:.4f} mm, E = {p.youngs:.4e} Pa, "
-          f"G = E/(2(1+{NU})) = {p.shear:.4e} Pa, ρ = {p.density:.4e} kg/m³; no damper")
-    print(f"exact: γ = {p.gamma:.1f}, T = {p.period:.5f} s; start at rest in W(ξ), tip amplitude "
-          f"{AMPLITUDE * 1e3:g} mm; timings best of {args.repeat}")
+    print(
+        f"machine: {platform.machine()}, {platform.system()}, device cpu (warp {wp.__version__}, float64), "
+        f"pyelastica {ELASTICA_VERSION} (numba), numpy {np.__version__}"
+    )
+    print(
+        f"strip: L = {p.length * 1e3:g} mm, W = {p.width * 1e3:g} mm, EI = B·W = {p.rigidity:.4e} N·m², "
+        f"EA = a1·W = {p.axial:.4e} N, ρ_A·W = {p.line_density:.4e} kg/m"
+    )
+    print(
+        f"round rod for PyElastica: r = 2√(EI/EA) = {p.radius * 1e3:.4f} mm, E = {p.youngs:.4e} Pa, "
+        f"G = E/(2(1+{NU})) = {p.shear:.4e} Pa, ρ = {p.density:.4e} kg/m³; no damper"
+    )
+    print(
+        f"exact: γ = {p.gamma:.1f}, T = {p.period:.5f} s; start at rest in W(ξ), tip amplitude "
+        f"{AMPLITUDE * 1e3:g} mm; timings best of {args.repeat}"
+    )
 
     # Warm up: compile the Warp kernels and PyElastica's numba functions before any timing.
     run_warpcloth(p, 5.0, EQUAL_DT, 0.01)
@@ -309,18 +344,25 @@ def main() -> None:
         ("warpcloth", 1, lambda: run_warpcloth(p, 5.0, EQUAL_DT, 0.05 if quick else 0.1)),
         ("warpcloth", args.batch, lambda: run_warpcloth(p, 5.0, EQUAL_DT, 0.005 if quick else 0.01, args.batch)),
         ("PyElastica", 1, lambda: run_pyelastica(p, n_free, EQUAL_DT, 0.02 if quick else 0.05)),
-        ("PyElastica", args.pe_rods,
-         lambda: run_pyelastica(p, n_free, EQUAL_DT, 0.002 if quick else 0.005, args.pe_rods)),
+        (
+            "PyElastica",
+            args.pe_rods,
+            lambda: run_pyelastica(p, n_free, EQUAL_DT, 0.002 if quick else 0.005, args.pe_rods),
+        ),
     ]
     rates = {}
     for code, strips, run in runs:
         trace, wall = timed(run, args.repeat)
         rates[code, strips] = trace.element_steps / wall
     pe_one, pe_many = rates["PyElastica", 1], rates["PyElastica", args.pe_rods]
-    print(f"\n1. Equal dt = {EQUAL_DT:g} s, h = 5 mm / {n_free} elements "
-          f"(element-steps = {n_free} free segments × steps × strips)")
-    print(f"{'code':>10} {'strips':>6} {'element-steps/s':>16} {'vs PyElastica 1 rod':>20} "
-          f"{f'vs PyElastica {args.pe_rods} rods':>21}")
+    print(
+        f"\n1. Equal dt = {EQUAL_DT:g} s, h = 5 mm / {n_free} elements "
+        f"(element-steps = {n_free} free segments × steps × strips)"
+    )
+    print(
+        f"{'code':>10} {'strips':>6} {'element-steps/s':>16} {'vs PyElastica 1 rod':>20} "
+        f"{f'vs PyElastica {args.pe_rods} rods':>21}"
+    )
     for (code, strips), rate in rates.items():
         print(f"{code:>10} {strips:>6} {rate:>16.3e} {rate / pe_one:>19.1f}x {rate / pe_many:>20.1f}x")
 
@@ -329,17 +371,23 @@ def main() -> None:
     dt_max: dict[tuple[str, float], float] = {}
     for h in wc_spacings:
         dt_max["warpcloth", h] = largest_stable_dt(
-            lambda dt, h=h: run_warpcloth(p, h, dt, stability_span).stable, 1e-5 * h / 5)
+            lambda dt, h=h: run_warpcloth(p, h, dt, stability_span).stable, 1e-5 * h / 5
+        )
         estimate = h * 1e-3 * math.sqrt(p.line_density / p.axial)  # 2/ω, ω = (2/h)√(EA/(ρ_A W))
-        print(f"warpcloth  h = {h:g} mm: {dt_max['warpcloth', h]:.3e} s "
-              f"(axial mode estimate h√(ρ_A W/EA) = {estimate:.3e} s)")
+        print(
+            f"warpcloth  h = {h:g} mm: {dt_max['warpcloth', h]:.3e} s "
+            f"(axial mode estimate h√(ρ_A W/EA) = {estimate:.3e} s)"
+        )
     kappa_g = 27 / 28 * p.shear  # PyElastica's Timoshenko shear factor
     estimate = p.radius * math.sqrt(p.density / kappa_g)  # 2/ω, ω² = κGA/(ρI) = (4/r²)(κG/ρ)
     for n in pe_elements:
         dt_max["PyElastica", n] = largest_stable_dt(
-            lambda dt, n=n: run_pyelastica(p, n, dt, stability_span).stable, 1e-6)
-        print(f"PyElastica {n} elements: {dt_max['PyElastica', n]:.3e} s "
-              f"(shear-rotation estimate r√(ρ/κG) = {estimate:.3e} s)")
+            lambda dt, n=n: run_pyelastica(p, n, dt, stability_span).stable, 1e-6
+        )
+        print(
+            f"PyElastica {n} elements: {dt_max['PyElastica', n]:.3e} s "
+            f"(shear-rotation estimate r√(ρ/κG) = {estimate:.3e} s)"
+        )
 
     # 3. Wall time per simulated second and first-period error, each at its largest stable dt
     # (confirmed on the full period run; stepped down by 1 % if that run is not stable after all).
@@ -357,8 +405,7 @@ def main() -> None:
         if h == 5.0:
             trace = run_warpcloth(p, h, default, span)
             _, wall = timed(lambda h=h: run_warpcloth(p, h, default, timing_span), args.repeat)
-            rows.append(accuracy_row("warpcloth", f"h = {h:g} mm, scene dt", default, trace, wall,
-                                     timing_span, p))
+            rows.append(accuracy_row("warpcloth", f"h = {h:g} mm, scene dt", default, trace, wall, timing_span, p))
     for n in pe_elements:
         dt, trace = confirmed(lambda dt, n=n: run_pyelastica(p, n, dt, span), dt_max["PyElastica", n])
         dt_max["PyElastica", n] = dt
@@ -373,21 +420,33 @@ def main() -> None:
         dt, check = confirmed(lambda dt: run_pyelastica(p, n0, dt, span, straight_directors=True), first_dt)
         checks.append(accuracy_row("PyElastica", "straight directors", dt, check, check.wall, span, p))
 
-    print(f"\n3. At the largest stable dt: wall time per simulated second (best of {args.repeat}; warpcloth timed "
-          f"on {10 * span:g} s, PyElastica on the {span:g} s period run); first period from a {span:g} s run")
-    print(f"{'code':>10} {'resolution':>24} {'dt [s]':>10} {'wall/sim s':>11} {'period [s]':>11} {'error':>8} "
-          f"{'non-mode rms':>13}")
+    print(
+        f"\n3. At the largest stable dt: wall time per simulated second (best of {args.repeat}; warpcloth timed "
+        f"on {10 * span:g} s, PyElastica on the {span:g} s period run); first period from a {span:g} s run"
+    )
+    print(
+        f"{'code':>10} {'resolution':>24} {'dt [s]':>10} {'wall/sim s':>11} {'period [s]':>11} {'error':>8} "
+        f"{'non-mode rms':>13}"
+    )
     for r in rows:
-        print(f"{r.code:>10} {r.resolution:>24} {r.dt:>10.3e} {r.wall_per_s:>11.4f} {r.period:>11.5f} "
-              f"{r.error:>+8.3%} {r.residual:>13.2e}")
+        print(
+            f"{r.code:>10} {r.resolution:>24} {r.dt:>10.3e} {r.wall_per_s:>11.4f} {r.period:>11.5f} "
+            f"{r.error:>+8.3%} {r.residual:>13.2e}"
+        )
     for c in checks:
-        print(f"(PyElastica {n0} elements started with straight directors instead, dt = {c.dt:.3e} s: "
-              f"period {c.period:.5f} s, error {c.error:+.3%}, non-mode rms {c.residual:.2e})")
+        print(
+            f"(PyElastica {n0} elements started with straight directors instead, dt = {c.dt:.3e} s: "
+            f"period {c.period:.5f} s, error {c.error:+.3%}, non-mode rms {c.residual:.2e})"
+        )
 
-    print("\nWall-time ratio PyElastica / warpcloth, each at its max dt: warpcloth at the same resolution "
-          "(h = L/n), and at the coarsest spacing whose |period error| ≤ PyElastica's")
-    print(f"{'PyElastica':>12} {'error':>8} | {'same h':>9} {'error':>8} {'ratio':>6} | {'|err| ≤':>9} {'error':>8} "
-          f"{'ratio':>6}")
+    print(
+        "\nWall-time ratio PyElastica / warpcloth, each at its max dt: warpcloth at the same resolution "
+        "(h = L/n), and at the coarsest spacing whose |period error| ≤ PyElastica's"
+    )
+    print(
+        f"{'PyElastica':>12} {'error':>8} | {'same h':>9} {'error':>8} {'ratio':>6} | {'|err| ≤':>9} {'error':>8} "
+        f"{'ratio':>6}"
+    )
     for n, pe in pe_max.items():
         same = next((wc_max[h] for h in wc_max if math.isclose(h * n, p.length * 1e3)), None)
         better = [h for h in wc_max if abs(wc_max[h].error) <= abs(pe.error)]

@@ -37,8 +37,10 @@ def main() -> None:
     args = parser.parse_args()
     print(f"machine: {platform.processor() or platform.machine()}, Python {platform.python_version()}")
     reference = fine_rotation_markers(noise_m=0.0)
-    for label, other in (("dt / 2", fine_rotation_markers(noise_m=0.0, dt_factor=0.5)),
-                         ("h = 0.625 mm", fine_rotation_markers(0.625, noise_m=0.0))):
+    for label, other in (
+        ("dt / 2", fine_rotation_markers(noise_m=0.0, dt_factor=0.5)),
+        ("h = 0.625 mm", fine_rotation_markers(0.625, noise_m=0.0)),
+    ):
         change = np.hypot(other.x - reference.x, other.y - reference.y).max()
         print(f"reference h = 1.25 mm, dt = 2.5e-6 s: the markers move at most {change * 1e3:.4f} mm with {label}")
     measured = fine_rotation_markers()
@@ -47,12 +49,16 @@ def main() -> None:
         free = free_parameters("gamma,rotation_centre_dy_mm,D1", scene_from_dict(base))
         started = time.perf_counter()
         fit = fit_motion(base, measured, free, progress=False, noise=1e-4)
-        errors = ", ".join(f"{name.split('.')[-1]} {value:.5g} ± {fit.sigma[name]:.2g} "
-                           f"({(value / SPACING_TRUTH[name] - 1) * 100:+.2f} %, "
-                           f"{(value - SPACING_TRUTH[name]) / fit.sigma[name]:+.1f} σ)"
-                           for name, value in fit.parameters.items())
-        print(f"h = {h:g} mm: {errors}; RMS {fit.rms * 1e3:.4f} mm ({fit.rms / 1e-4:.2f}× the noise), {fit.status}, "
-              f"{time.perf_counter() - started:.0f} s")
+        errors = ", ".join(
+            f"{name.split('.')[-1]} {value:.5g} ± {fit.sigma[name]:.2g} "
+            f"({(value / SPACING_TRUTH[name] - 1) * 100:+.2f} %, "
+            f"{(value - SPACING_TRUTH[name]) / fit.sigma[name]:+.1f} σ)"
+            for name, value in fit.parameters.items()
+        )
+        print(
+            f"h = {h:g} mm: {errors}; RMS {fit.rms * 1e3:.4f} mm ({fit.rms / 1e-4:.2f}× the noise), {fit.status}, "
+            f"{time.perf_counter() - started:.0f} s"
+        )
 
 
 if __name__ == "__main__":

@@ -43,10 +43,15 @@ def main() -> None:
         print(f"workers 0 (baseline): {base:.2f} s")
         for workers in range(1, (os.cpu_count() or 1) + 1):
             wall, summary = timed(workers, args.samples, args.duration, root)
-            same = all(np.array_equal(summary[c].to_numpy(), reference[c].to_numpy(), equal_nan=True)
-                       for c in reference.columns if reference[c].dtype != object)
-            print(f"workers {workers} (threads): {wall:.2f} s, {base / wall:.2f}× the baseline; "
-                  f"summary bitwise equal: {same}")
+            same = all(
+                np.array_equal(summary[c].to_numpy(), reference[c].to_numpy(), equal_nan=True)
+                for c in reference.columns
+                if reference[c].dtype != object
+            )
+            print(
+                f"workers {workers} (threads): {wall:.2f} s, {base / wall:.2f}× the baseline; "
+                f"summary bitwise equal: {same}"
+            )
 
 
 if __name__ == "__main__":

@@ -44,8 +44,10 @@ def main() -> None:
     args = parser.parse_args()
     wp.config.log_level = logging.WARNING
     wp.init()
-    print(f"machine: {platform.processor() or platform.machine()}, {platform.system()}, device {args.device}, "
-          f"warp {wp.__version__}")
+    print(
+        f"machine: {platform.processor() or platform.machine()}, {platform.system()}, device {args.device}, "
+        f"warp {wp.__version__}"
+    )
     for name in args.scenes:
         for precision in args.precisions:
             print(f"\n{name}, {precision}: {args.sim_time} s simulated per run")

@@ -27,36 +27,44 @@ DATA = Path(__file__).resolve().parents[1] / "scenes" / "data" / "track"
 
 def main():
     described = json.loads((DATA / "truth.json").read_text())
-    mapping, record = calibrate_plane([DATA / f"board_{i}.png" for i in range(6)], (11, 10), 10.0,
-                                      origin_corner=(1, 1))
+    mapping, record = calibrate_plane([DATA / f"board_{i}.png" for i in range(6)], (11, 10), 10.0, origin_corner=(1, 1))
     frames = read_frames(DATA / "rotation.avi")
     s = np.array(described["example"]["marker_s_mm"])
-    tracked = track_markers(frames, read_image(DATA / "background.png", "--background"), mapping, s, 2.4,
-                            DATA / "rotation.avi")
+    tracked = track_markers(
+        frames, read_image(DATA / "background.png", "--background"), mapping, s, 2.4, DATA / "rotation.avi"
+    )
     truth = read_tracked_shapes(DATA / "truth.csv")
     true_mm = np.column_stack([truth.x, truth.y]).reshape(len(frames.t), len(s), 2) * 1e3
     error_mm = tracked.mm - true_mm
     cam = described["camera"]
     k = np.array(cam["matrix"])
     camera = Camera(k[0, 0], k[1, 1], k[0, 2], k[1, 2], tuple(cam["distortion"]), *cam["image_size_px"])
-    plane = PlanePose(np.array(described["strip_plane"]["rotation"]),
-                      np.array(described["strip_plane"]["translation_mm"]))
+    plane = PlanePose(
+        np.array(described["strip_plane"]["rotation"]), np.array(described["strip_plane"]["translation_mm"])
+    )
     true_px = camera.project(plane.to_camera(true_mm * [1, -1]))  # plane coordinates (x, −y)
     error_px = tracked.px - true_px
-    print(f"calibration: reprojection RMS {record['reprojection_rms_px']:.4f} px, plane view "
-          f"{record['plane_view']['rms_mm']:.4f} mm")
+    print(
+        f"calibration: reprojection RMS {record['reprojection_rms_px']:.4f} px, plane view "
+        f"{record['plane_view']['rms_mm']:.4f} mm"
+    )
     for name, error, unit in (("plane (centroid + calibration)", error_mm, "mm"), ("image (centroid)", error_px, "px")):
         flat = error.reshape(-1, 2)
         bias, rms = flat.mean(axis=0), np.sqrt(np.mean(flat**2, axis=0))
-        print(f"{name}: bias x {bias[0]:+.4f}, y {bias[1]:+.4f} {unit}; RMS x {rms[0]:.4f}, y {rms[1]:.4f} {unit}; "
-              f"largest |error| {np.max(np.linalg.norm(flat, axis=1)):.4f} {unit}")
+        print(
+            f"{name}: bias x {bias[0]:+.4f}, y {bias[1]:+.4f} {unit}; RMS x {rms[0]:.4f}, y {rms[1]:.4f} {unit}; "
+            f"largest |error| {np.max(np.linalg.norm(flat, axis=1)):.4f} {unit}"
+        )
     print(f"reported uncertainty u: median {np.median(tracked.u_mm):.4f} mm, {np.median(tracked.u_px):.4f} px")
-    line = track_centreline(frames, read_image(DATA / "background.png", "--background"), mapping, s, 100.0,
-                            DATA / "rotation.avi")
+    line = track_centreline(
+        frames, read_image(DATA / "background.png", "--background"), mapping, s, 100.0, DATA / "rotation.avi"
+    )
     flat = (line.mm - true_mm).reshape(-1, 2)
     bias, rms = flat.mean(axis=0), np.sqrt(np.mean(flat**2, axis=0))
-    print(f"centreline (no markers; s from the free end): bias x {bias[0]:+.4f}, y {bias[1]:+.4f} mm; RMS x "
-          f"{rms[0]:.4f}, y {rms[1]:.4f} mm; largest |error| {np.max(np.linalg.norm(flat, axis=1)):.4f} mm")
+    print(
+        f"centreline (no markers; s from the free end): bias x {bias[0]:+.4f}, y {bias[1]:+.4f} mm; RMS x "
+        f"{rms[0]:.4f}, y {rms[1]:.4f} mm; largest |error| {np.max(np.linalg.norm(flat, axis=1)):.4f} mm"
+    )
 
 
 if __name__ == "__main__":

@@ -44,8 +44,9 @@ QUARTIC = (2.0, 30.0, 900.0, 2e4)  # issue 12's general start (a1 … a4), break
 def moving_coefficients() -> tuple[float, float, float]:
     """a, b, c of the moving record's quartic (rad/s^k)."""
     t1 = BREAK_S
-    b, c = np.linalg.solve([[3 * t1**2, 4 * t1**3], [6 * t1, 12 * t1**2]],
-                           [LINE_RAD_PER_S - 2 * A_RAD_PER_S2 * t1, -2 * A_RAD_PER_S2])
+    b, c = np.linalg.solve(
+        [[3 * t1**2, 4 * t1**3], [6 * t1, 12 * t1**2]], [LINE_RAD_PER_S - 2 * A_RAD_PER_S2 * t1, -2 * A_RAD_PER_S2]
+    )
     return A_RAD_PER_S2, float(b), float(c)
 
 
@@ -112,8 +113,9 @@ def kes_ratios(seeds: int) -> dict[str, list[float]]:
             b = bending.copy()
             b[:, 1] += rng.normal(0.0, kes_data.BENDING_NOISE_GF_CM_PER_CM, len(b))
             np.savetxt(Path(tmp) / "t.csv", t, delimiter=",", header="strain_percent,force_gf_per_cm", comments="")
-            np.savetxt(Path(tmp) / "b.csv", b, delimiter=",", header="curvature_per_cm,moment_gf_cm_per_cm",
-                       comments="")
+            np.savetxt(
+                Path(tmp) / "b.csv", b, delimiter=",", header="curvature_per_cm,moment_gf_cm_per_cm", comments=""
+            )
             tl, bl = read_tensile_csv(Path(tmp) / "t.csv"), read_bending_csv(Path(tmp) / "b.csv")
             out["tensile quartic"].append(fit_tensile(tl).rms_gf_per_cm / difference_noise([tl.force]))
             noise = difference_noise([bl.moment])
@@ -127,14 +129,22 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=20)
     args = parser.parse_args()
-    print(f"machine: {platform.processor() or platform.machine()}, Python {platform.python_version()}; "
-          f"threshold POOR_FIT_FACTOR = {POOR_FIT_FACTOR}; {args.seeds} seeds; min / median / max of RMS / noise")
+    print(
+        f"machine: {platform.processor() or platform.machine()}, Python {platform.python_version()}; "
+        f"threshold POOR_FIT_FACTOR = {POOR_FIT_FACTOR}; {args.seeds} seeds; min / median / max of RMS / noise"
+    )
     for n in (60, 100, 200, 500):
-        ratios = np.array([float(np.sqrt(np.mean(x**2))) / difference_noise([x])
-                           for x in (np.random.default_rng(seed).normal(0, 1.0, n) for seed in range(5000))])
-        print(f"white noise alone, n = {n} (5000 seeds): sd {ratios.std():.3f}, max {ratios.max():.3f}, "
-              f"share above {POOR_FIT_FACTOR}: {np.mean(ratios > POOR_FIT_FACTOR):.4f}, above 1.3: "
-              f"{np.mean(ratios > 1.3):.4f}")
+        ratios = np.array(
+            [
+                float(np.sqrt(np.mean(x**2))) / difference_noise([x])
+                for x in (np.random.default_rng(seed).normal(0, 1.0, n) for seed in range(5000))
+            ]
+        )
+        print(
+            f"white noise alone, n = {n} (5000 seeds): sd {ratios.std():.3f}, max {ratios.max():.3f}, "
+            f"share above {POOR_FIT_FACTOR}: {np.mean(ratios > POOR_FIT_FACTOR):.4f}, above 1.3: "
+            f"{np.mean(ratios > 1.3):.4f}"
+        )
     t = np.round(np.arange(0.0, 0.2, 1e-3), 6)
     t30 = np.round(np.arange(-0.03, 0.2, 1e-3), 6)
     t12 = np.round(np.arange(-0.02, 0.2, 1e-3), 6)
@@ -144,12 +154,15 @@ def main() -> None:
         "clamp, the same after 30 ms of rest (right)": clamp_ratios(moving_record(t30), t30, args.seeds),
         "clamp, issue 12's rest-first quartic (right)": clamp_ratios(rest_first_record(t12), t12, args.seeds),
         "clamp, moving record, rest-first forms only (wrong)": clamp_ratios(moving_record(t), t, args.seeds, at_rest),
-        "clamp, moving record + a 30 Hz ripple of 1 mrad (wrong)": clamp_ratios(moving_record(t) + ripple(t, 1e-3), t,
-                                                                               args.seeds),
-        "clamp, moving record + a 30 Hz ripple of 2 mrad (wrong)": clamp_ratios(moving_record(t) + ripple(t, 2e-3), t,
-                                                                               args.seeds),
-        "clamp, an oscillating clamp 0.3 sin(100 t) (wrong)": clamp_ratios(0.3 * np.sin(100 * np.clip(t12, 0, None)),
-                                                                          t12, min(args.seeds, 5)),
+        "clamp, moving record + a 30 Hz ripple of 1 mrad (wrong)": clamp_ratios(
+            moving_record(t) + ripple(t, 1e-3), t, args.seeds
+        ),
+        "clamp, moving record + a 30 Hz ripple of 2 mrad (wrong)": clamp_ratios(
+            moving_record(t) + ripple(t, 2e-3), t, args.seeds
+        ),
+        "clamp, an oscillating clamp 0.3 sin(100 t) (wrong)": clamp_ratios(
+            0.3 * np.sin(100 * np.clip(t12, 0, None)), t12, min(args.seeds, 5)
+        ),
     }
     rows |= {f"KES, {name}": r for name, r in kes_ratios(args.seeds).items()}
     for name, ratios in rows.items():

@@ -68,8 +68,12 @@ duration = {"run.duration_s": 1.0} if QUICK else {}
 scenes = []
 for law, fit in comparison.fits.items():
     material = kes.fit_kes(tensile, bending, bending_fit=fit)
-    data = kes.material_file_data(material, f"wool-{law}", 2.03e-2, source="fitted in examples/plot_bending_laws.py "
-                                  "to the bundled kes_fb1_example and kes_fb2_example")
+    data = kes.material_file_data(
+        material,
+        f"wool-{law}",
+        2.03e-2,
+        source="fitted in examples/plot_bending_laws.py to the bundled kes_fb1_example and kes_fb2_example",
+    )
     path = kes.write_material_file(workdir / f"{law}.toml", data)
     scenes.append(wc.load_scene("damped_swing", {"material.from_file": str(path)} | duration))
 result = wc.simulate(scenes)
@@ -91,13 +95,20 @@ half_cycles = min(len(s["log_decrement"]) for s in swings.values())
 print(f"{'law':<18} {'ΔAIC':>7} {'first period (s)':>17} {'first amplitude (mm)':>21}  log decrement per half-cycle")
 for law, swing in swings.items():
     decrements = " ".join(f"{d:.3f}" for d in swing["log_decrement"][:half_cycles])
-    print(f"{law:<18} {comparison.delta_aic()[law]:>7.2f} {swing['first_period_s']:>17.4f} "
-          f"{swing['first_amplitude_m'] * 1e3:>21.2f}  {decrements}")
+    print(
+        f"{law:<18} {comparison.delta_aic()[law]:>7.2f} {swing['first_period_s']:>17.4f} "
+        f"{swing['first_amplitude_m'] * 1e3:>21.2f}  {decrements}"
+    )
 
 fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
 for j, (law, swing) in enumerate(swings.items()):
-    left.plot(result.t, result.probe("laser_x", j) * 1e3, color=f"C{j}", lw=1.0,
-              label=f"{law}: T = {swing['first_period_s']:.4f} s")
+    left.plot(
+        result.t,
+        result.probe("laser_x", j) * 1e3,
+        color=f"C{j}",
+        lw=1.0,
+        label=f"{law}: T = {swing['first_period_s']:.4f} s",
+    )
     right.plot(np.arange(half_cycles), swing["log_decrement"][:half_cycles], "o-", color=f"C{j}", ms=4, label=law)
 left.set(xlabel="time after release (s)", ylabel="laser-line crossing x (mm)", title="the damped swing")
 left.legend(fontsize=8)

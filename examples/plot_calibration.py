@@ -67,8 +67,9 @@ fit = fit_motion(base, measured, free, space_filling=8 if QUICK else None, progr
 print(f"status: {fit.status} {fit.problems or ''}")
 for name, value in fit.parameters.items():
     print(f"  {name} = {value:.5g} ± {fit.sigma[name]:.2g}   (truth {TRUTH[name]:g})")
-print(f"RMS {fit.rms * 1e3:.3f} mm = {fit.rms / fit.noise:.2f}× the noise {fit.noise * 1e3:.3f} mm "
-      f"({fit.noise_source})")
+print(
+    f"RMS {fit.rms * 1e3:.3f} mm = {fit.rms / fit.noise:.2f}× the noise {fit.noise * 1e3:.3f} mm ({fit.noise_source})"
+)
 print(f"correlation γ–D1: {fit.correlation[0][1]:+.2f}")
 print(f"{fit.launches} launches, {fit.variants} variants, {fit.wall_time_s:.1f} s")
 

@@ -42,8 +42,10 @@ workdir = Path(tempfile.mkdtemp(prefix="warpcloth-swing-"))
 
 result = wc.run("damped_swing", overrides, out=workdir / "damped_swing")
 scene = result.scenes[0]
-print(f"{result.strip_steps:.3g} strip-steps in {result.wall_time_s:.2f} s; "
-      f"{len(result.t)} probe samples, {len(result.frame_times)} shape frames")
+print(
+    f"{result.strip_steps:.3g} strip-steps in {result.wall_time_s:.2f} s; "
+    f"{len(result.t)} probe samples, {len(result.frame_times)} shape frames"
+)
 
 # %%
 # Measure the swing as the lab does
@@ -59,8 +61,10 @@ laser = result.probe("laser_x", 0)
 summary = swing_summary(result.t, laser, result.probe("tip_x", 0))
 print(f"first period     {summary['first_period_s']:.4f} s")
 print(f"first amplitude  {summary['first_amplitude_m'] * 1e3:.2f} mm")
-print(f"mean log decrement {summary['mean_log_decrement']:.4f} per half-cycle over "
-      f"{summary['n_half_cycles'] - 1} ratios of {summary['n_half_cycles']} half-cycles")
+print(
+    f"mean log decrement {summary['mean_log_decrement']:.4f} per half-cycle over "
+    f"{summary['n_half_cycles'] - 1} ratios of {summary['n_half_cycles']} half-cycles"
+)
 viscous = scene.damping.gamma_per_s * summary["first_period_s"] / 4
 print(f"viscous part alone: γT/4 = {viscous:.4f} per half-cycle")
 for i, (a, d) in enumerate(zip(summary["half_cycle_amplitude_m"], summary["log_decrement"], strict=False)):
@@ -81,13 +85,15 @@ nc = scene.n_clamped
 laser_y = scene.output.laser_height_mm
 
 fig, axes = plt.subplots(1, 2, figsize=(10, 5.2), sharey=True)
-for ax, frames, title in ((axes[0], first_swing, "first swing, every 1/60 s"),
-                          (axes[1], at_turns, "at the turning points")):
+for ax, frames, title in (
+    (axes[0], first_swing, "first swing, every 1/60 s"),
+    (axes[1], at_turns, "at the turning points"),
+):
     times = result.frame_times[frames]
     colour = plt.Normalize(times.min(), times.max())
     for f, when in zip(frames, times, strict=True):
         xy = result.frames[f, 0] * 1e3
-        ax.plot(xy[nc - 1:, 0], xy[nc - 1:, 1], color=plt.cm.viridis(colour(when)), lw=1.3)
+        ax.plot(xy[nc - 1 :, 0], xy[nc - 1 :, 1], color=plt.cm.viridis(colour(when)), lw=1.3)
         ax.plot(xy[:nc, 0], xy[:nc, 1], color="0.3", lw=5, solid_capstyle="butt")
     ax.axhline(laser_y, color="C3", ls="--", lw=0.8)
     ax.annotate("laser line", (-45, laser_y + 2), color="C3", fontsize=8)
@@ -110,9 +116,12 @@ top.plot(result.t, laser * 1e3, lw=1.2, label=f"laser line ({laser_y:g} mm)")
 top.plot(result.t, result.probe("tip_x", 0) * 1e3, "--", lw=0.8, alpha=0.7, label="free end x")
 top.plot(turn_t, turn_x * 1e3, "k.", ms=6, label="turning points")
 top.axhline(0, color="0.6", lw=0.6)
-top.set(xlabel="time after release t (s)", ylabel="x (mm)",
-        title=f"first period {summary['first_period_s']:.4f} s, first amplitude "
-              f"{summary['first_amplitude_m'] * 1e3:.1f} mm")
+top.set(
+    xlabel="time after release t (s)",
+    ylabel="x (mm)",
+    title=f"first period {summary['first_period_s']:.4f} s, first amplitude "
+    f"{summary['first_amplitude_m'] * 1e3:.1f} mm",
+)
 top.legend(fontsize=7, loc="upper right")
 amplitude = np.array(summary["half_cycle_amplitude_m"][:-1]) * 1e3
 bottom.plot(amplitude, summary["log_decrement"], "o-", ms=4)

@@ -33,10 +33,13 @@ overrides = {"run.duration_s": 0.25} if QUICK else {}
 result = wc.run("impulsive_rotation", overrides)
 scene = result.scenes[0]
 for segment in scene.clamp.segments:
-    print(f"θ(t) on [{segment.t_start_s:g}, {segment.t_end_s:g}] s: coefficients "
-          f"{segment.theta_coefficients_si} rad/s^k")
-print(f"h = {scene.strip.spacing_mm:g} mm ({scene.n_nodes} nodes, {scene.n_clamped} in the clamp), "
-      f"dt = {scene.integrator.dt_s:g} s: {result.strip_steps:.3g} strip-steps in {result.wall_time_s:.2f} s")
+    print(
+        f"θ(t) on [{segment.t_start_s:g}, {segment.t_end_s:g}] s: coefficients {segment.theta_coefficients_si} rad/s^k"
+    )
+print(
+    f"h = {scene.strip.spacing_mm:g} mm ({scene.n_nodes} nodes, {scene.n_clamped} in the clamp), "
+    f"dt = {scene.integrator.dt_s:g} s: {result.strip_steps:.3g} strip-steps in {result.wall_time_s:.2f} s"
+)
 
 # %%
 # How far the strip lags behind the clamp
@@ -67,13 +70,15 @@ print(f"free end fastest at t = {t[fastest]:.4f} s: {speed[fastest]:.3f} m/s")
 t_stop = scene.clamp.segments[-1].t_end_s
 centre = (scene.clamp.rotation_centre_dx_mm, scene.clamp.rotation_centre_dy_mm)
 fig, axes = plt.subplots(1, 2, figsize=(8.5, 5.4), sharey=True)
-for ax, chosen, title in ((axes[0], result.frame_times <= t_stop + 1e-9, "while the clamp turns"),
-                          (axes[1], result.frame_times > t_stop, "after the clamp stops")):
+for ax, chosen, title in (
+    (axes[0], result.frame_times <= t_stop + 1e-9, "while the clamp turns"),
+    (axes[1], result.frame_times > t_stop, "after the clamp stops"),
+):
     frames = np.flatnonzero(chosen)
     colour = plt.Normalize(result.frame_times[frames].min(), result.frame_times[frames].max())
     for f in frames:
         xy = result.frames[f, 0] * 1e3
-        ax.plot(xy[nc - 1:, 0], xy[nc - 1:, 1], color=plt.cm.viridis(colour(result.frame_times[f])), lw=1.2)
+        ax.plot(xy[nc - 1 :, 0], xy[nc - 1 :, 1], color=plt.cm.viridis(colour(result.frame_times[f])), lw=1.2)
         ax.plot(xy[:nc, 0], xy[:nc, 1], color="0.3", lw=4, solid_capstyle="butt")
     ax.plot(*centre, "k+", ms=10)
     ax.set(title=title, xlabel="x from the clamp edge (mm)", aspect="equal")

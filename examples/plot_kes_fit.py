@@ -54,17 +54,23 @@ truth = read_material_file("wool90-nylon10")["material"]
 status, problems = fit.verdict()
 print(f"status: {status} {problems or ''}")
 b = fit.bending
-print(f"tensile a1..a4 = {', '.join(f'{a:.5g}' for a in fit.tensile.coefficients)} gf/cm, "
-      f"RMS {fit.tensile.rms_gf_per_cm:.3g} gf/cm")
-for name, value, key in (("D", b.rigidity_gf_cm2_per_cm, "bending_rigidity_gf_cm2_per_cm"),
-                         ("D1", b.d1_gf_cm_per_cm, "hysteresis_d1_gf_cm_per_cm"),
-                         ("alpha", b.alpha_cm, "hysteresis_alpha_cm"),
-                         ("K0", b.k0_per_cm, "hysteresis_k0_per_cm")):
+print(
+    f"tensile a1..a4 = {', '.join(f'{a:.5g}' for a in fit.tensile.coefficients)} gf/cm, "
+    f"RMS {fit.tensile.rms_gf_per_cm:.3g} gf/cm"
+)
+for name, value, key in (
+    ("D", b.rigidity_gf_cm2_per_cm, "bending_rigidity_gf_cm2_per_cm"),
+    ("D1", b.d1_gf_cm_per_cm, "hysteresis_d1_gf_cm_per_cm"),
+    ("alpha", b.alpha_cm, "hysteresis_alpha_cm"),
+    ("K0", b.k0_per_cm, "hysteresis_k0_per_cm"),
+):
     print(f"{name:>5} = {value:.5g}   (truth {truth[key]:g})")
 print(f"bending RMS {b.rms_gf_cm_per_cm:.4g} gf·cm/cm ({b.rms_relative:.2%} of the moment range)")
 tk, bk = fit.tensile_kes, fit.bending_kes
-print(f"KES values: EMT {tk.emt_percent:.3g} %, WT {tk.wt_gf_cm_per_cm2:.3g} gf·cm/cm², LT {tk.lt:.3g}, "
-      f"RT {tk.rt_percent:.3g} %, B {bk.b_gf_cm2_per_cm:.4g} gf·cm²/cm, 2HB {bk.hb2_gf_cm_per_cm:.4g} gf·cm/cm")
+print(
+    f"KES values: EMT {tk.emt_percent:.3g} %, WT {tk.wt_gf_cm_per_cm2:.3g} gf·cm/cm², LT {tk.lt:.3g}, "
+    f"RT {tk.rt_percent:.3g} %, B {bk.b_gf_cm2_per_cm:.4g} gf·cm²/cm, 2HB {bk.hb2_gf_cm_per_cm:.4g} gf·cm/cm"
+)
 
 # %%
 # The fit against the data
@@ -81,15 +87,21 @@ fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.3))
 left.plot(tensile.strain * 100, tensile.force, ".", ms=3, color="0.5", label="KES-FB1 data")
 left.plot(strain * 100, fit.tensile(strain), "C3", lw=1.5, label="fitted quartic")
 left.plot(strain * 100, true_force, "k--", lw=0.8, label="true law")
-left.set(xlabel="strain ε (%)", ylabel="force per width T (gf/cm)",
-         title=f"tensile: EMT {tk.emt_percent:.3g} %, LT {tk.lt:.3g}, RT {tk.rt_percent:.3g} %")
+left.set(
+    xlabel="strain ε (%)",
+    ylabel="force per width T (gf/cm)",
+    title=f"tensile: EMT {tk.emt_percent:.3g} %, LT {tk.lt:.3g}, RT {tk.rt_percent:.3g} %",
+)
 left.legend(fontsize=8)
 right.plot(bending.curvature, bending.moment, ".", ms=3, color="0.5", label="KES-FB2 data")
 right.plot(bending.curvature, b.moment, "C3", lw=1.2, label="fitted law along the path")
 right.axhline(0, color="0.8", lw=0.5)
 right.axvline(0, color="0.8", lw=0.5)
-right.set(xlabel="curvature K (1/cm)", ylabel="moment per width M (gf·cm/cm)",
-          title=f"bending: B {bk.b_gf_cm2_per_cm:.3g} gf·cm²/cm, 2HB {bk.hb2_gf_cm_per_cm:.3g} gf·cm/cm")
+right.set(
+    xlabel="curvature K (1/cm)",
+    ylabel="moment per width M (gf·cm/cm)",
+    title=f"bending: B {bk.b_gf_cm2_per_cm:.3g} gf·cm²/cm, 2HB {bk.hb2_gf_cm_per_cm:.3g} gf·cm/cm",
+)
 right.legend(fontsize=8)
 fig.tight_layout()
 
@@ -99,8 +111,12 @@ fig.tight_layout()
 # KES data do not contain the mass per area: it is weighed and given (here the default
 # material's 2.03e-2 g/cm²). The file holds a ``[material]`` table a scene reads with
 # ``material.from_file``, and a ``[fit]`` table with the verdict, residuals and KES values.
-data = kes.material_file_data(fit, "wool-fitted", 2.03e-2, source="fitted in examples/plot_kes_fit.py to the "
-                              "bundled kes_fb1_example and kes_fb2_example")
+data = kes.material_file_data(
+    fit,
+    "wool-fitted",
+    2.03e-2,
+    source="fitted in examples/plot_kes_fit.py to the bundled kes_fb1_example and kes_fb2_example",
+)
 path = kes.write_material_file(workdir / "wool-fitted.toml", data)
 print(path.read_text())
 
@@ -114,7 +130,9 @@ duration = {"run.duration_s": 1.0} if QUICK else {}
 for label, material in (("true material", "wool90-nylon10"), ("fitted material", str(path))):
     run = wc.run("damped_swing", {"material.from_file": material} | duration)
     swing = swing_summary(run.t, run.probe("laser_x", 0))
-    print(f"{label:>16}: first period {swing['first_period_s']:.4f} s, "
-          f"first amplitude {swing['first_amplitude_m'] * 1e3:.2f} mm")
+    print(
+        f"{label:>16}: first period {swing['first_period_s']:.4f} s, "
+        f"first amplitude {swing['first_amplitude_m'] * 1e3:.2f} mm"
+    )
 shutil.rmtree(workdir)
 plt.show()

@@ -37,8 +37,11 @@ TRUTH = {"damping.gamma_per_s": 0.55, "strip.rest_curvature_per_cm": 0.1, "clamp
 NOISE = 2e-4  # m
 
 base = read_scene_file("damped_swing")  # the raw scene the fits vary: no set, no grip factor
-for key, value in {"release.settle_time_s": 0.3, "run.duration_s": 0.8 if QUICK else 1.2,
-                   "clamp.grip_length_mm": 10.0}.items():
+for key, value in {
+    "release.settle_time_s": 0.3,
+    "run.duration_s": 0.8 if QUICK else 1.2,
+    "clamp.grip_length_mm": 10.0,
+}.items():
     set_field(base, key, value)
 truth = copy.deepcopy(base)
 for key, value in TRUTH.items():
@@ -56,8 +59,7 @@ print(f"{len(t)} samples over {t[-1]:.2f} s")
 # (9.5× the noise), D = 0.139 (+39 %), D1 = 0.082, γ = 0.477 /s, D and D1 correlated
 # beyond 0.95. The verdict says so: this is not a fit.
 settings = {"space_filling": 8 if QUICK else None, "progress": False, "noise": NOISE}
-without = fit_motion(base, measured, free_parameters("gamma,D,D1", wc.scene_from_dict(copy.deepcopy(base))),
-                     **settings)
+without = fit_motion(base, measured, free_parameters("gamma,D,D1", wc.scene_from_dict(copy.deepcopy(base))), **settings)
 print(f"without: {without.status}, RMS {without.rms * 1e3:.3f} mm = {without.rms / NOISE:.1f}× the noise")
 for problem in without.problems:
     print("  " + problem)
@@ -70,8 +72,9 @@ for name, value in without.parameters.items():
 # γ, K_rest and the grip factor free (D and D1 at the KES values, the zone's 10 mm from
 # the clamp): the full example measures γ = 0.5505 ± 0.0017, K_rest = 0.0993 ± 0.0006
 # 1/cm, grip 3.003 ± 0.010, RMS = the noise: converged, the truth within its σ.
-with_them = fit_motion(base, measured, free_parameters("gamma,K_rest,grip_factor",
-                                                       wc.scene_from_dict(copy.deepcopy(base))), **settings)
+with_them = fit_motion(
+    base, measured, free_parameters("gamma,K_rest,grip_factor", wc.scene_from_dict(copy.deepcopy(base))), **settings
+)
 print(f"with: {with_them.status}, RMS {with_them.rms * 1e3:.3f} mm = {with_them.rms / NOISE:.2f}× the noise")
 for name, value in with_them.parameters.items():
     print(f"  {name} = {value:.5g} ± {with_them.sigma[name]:.2g}   (truth {TRUTH[name]:g})")

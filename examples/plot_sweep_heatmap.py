@@ -45,8 +45,9 @@ raw = read_scene_file("damped_swing")
 raw["run"]["duration_s"] = 1.0 if QUICK else 2.0
 if QUICK:  # the longest stable, accurate step (docs/model.md §9.6): 4.5× fewer than the scene's
     raw["integrator"]["dt_s"] = "auto"
-raw["sweep"] = {"grid": {GAMMA: np.linspace(0.0, 1.0, n).round(3).tolist(),
-                         D1: np.linspace(0.0, 0.08, n).round(4).tolist()}}
+raw["sweep"] = {
+    "grid": {GAMMA: np.linspace(0.0, 1.0, n).round(3).tolist(), D1: np.linspace(0.0, 0.08, n).round(4).tolist()}
+}
 sweep = wc.expand(raw)
 print(f"{len(sweep.scenes)} variants; the first: {sweep.assignments[0]}, the last: {sweep.assignments[-1]}")
 
@@ -81,9 +82,11 @@ print(table.round(3).to_string())
 fig = sweep_figure(summary, "first_period_s", GAMMA, D1)
 fig.tight_layout()
 periods = summary.pivot_table(index=D1, columns=GAMMA, values="first_period_s")
-print(f"first period: {periods.min().min():.4f} to {periods.max().max():.4f} s; "
-      f"spread across γ at D1 = {periods.index[-1]:g}: {np.ptp(periods.iloc[-1].to_numpy()) * 1e3:.1f} ms, "
-      f"across D1 at γ = {periods.columns[0]:g}: {np.ptp(periods.iloc[:, 0].to_numpy()) * 1e3:.1f} ms")
+print(
+    f"first period: {periods.min().min():.4f} to {periods.max().max():.4f} s; "
+    f"spread across γ at D1 = {periods.index[-1]:g}: {np.ptp(periods.iloc[-1].to_numpy()) * 1e3:.1f} ms, "
+    f"across D1 at γ = {periods.columns[0]:g}: {np.ptp(periods.iloc[:, 0].to_numpy()) * 1e3:.1f} ms"
+)
 
 shutil.rmtree(workdir)
 plt.show()

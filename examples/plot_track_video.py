@@ -33,10 +33,11 @@ from warpcloth.track.overlay import overlay_figure
 from warpcloth.track.video import read_frames
 
 data = Path(str(importlib.resources.files("warpcloth.scenes") / "data" / "track"))
-mapping, record = calibrate_plane([data / f"board_{i}.png" for i in range(6)], (11, 10), 10.0,
-                                  origin_corner=(1, 1))
-print(f"reprojection RMS {record['reprojection_rms_px']:.3f} px; plane view {record['plane_view']['rms_mm']:.4f} mm, "
-      f"{record['plane_view']['mm_per_px'][0]:.3f} to {record['plane_view']['mm_per_px'][1]:.3f} mm/px")
+mapping, record = calibrate_plane([data / f"board_{i}.png" for i in range(6)], (11, 10), 10.0, origin_corner=(1, 1))
+print(
+    f"reprojection RMS {record['reprojection_rms_px']:.3f} px; plane view {record['plane_view']['rms_mm']:.4f} mm, "
+    f"{record['plane_view']['mm_per_px'][0]:.3f} to {record['plane_view']['mm_per_px'][1]:.3f} mm/px"
+)
 
 # %%
 # Track the markers
@@ -45,10 +46,13 @@ print(f"reprojection RMS {record['reprojection_rms_px']:.3f} px; plane view {rec
 # the strip. Each frame's time is the container's timestamp.
 frames = read_frames(data / "rotation.avi")
 s_mm = np.arange(5.0, 96.0, 10.0)
-tracked = track_markers(frames, read_image(data / "background.png", "--background"), mapping, s_mm, 2.4,
-                        data / "rotation.avi")
-print(f"{len(frames.t)} frames, {len(frames.dropped)} gaps, {len(frames.duplicated)} duplicates; "
-      f"median uncertainty {np.median(tracked.u_mm) * 1e3:.2f} µm")
+tracked = track_markers(
+    frames, read_image(data / "background.png", "--background"), mapping, s_mm, 2.4, data / "rotation.avi"
+)
+print(
+    f"{len(frames.t)} frames, {len(frames.dropped)} gaps, {len(frames.duplicated)} duplicates; "
+    f"median uncertainty {np.median(tracked.u_mm) * 1e3:.2f} µm"
+)
 middle = len(frames.t) // 2
 overlay_figure(frames.images[middle], tracked, middle)
 plt.show()
@@ -65,8 +69,13 @@ bias, rms = error.reshape(-1, 2).mean(axis=0), np.sqrt(np.mean(error.reshape(-1,
 print(f"bias x {bias[0]:+.4f} mm, y {bias[1]:+.4f} mm; RMS x {rms[0]:.4f} mm, y {rms[1]:.4f} mm")
 fig, ax = plt.subplots(figsize=(7, 3.5))
 ax.plot(tracked.t, np.linalg.norm(error, axis=2) * 1e3, ".", color="tab:blue", alpha=0.6)
-ax.plot(tracked.t, np.median(tracked.u_mm, axis=1) * 1e3 * np.sqrt(2), "-", color="tab:red",
-        label="reported uncertainty (both coordinates)")
+ax.plot(
+    tracked.t,
+    np.median(tracked.u_mm, axis=1) * 1e3 * np.sqrt(2),
+    "-",
+    color="tab:red",
+    label="reported uncertainty (both coordinates)",
+)
 ax.set_xlabel("t (s)")
 ax.set_ylabel("|tracked − simulated| (µm)")
 ax.set_title("every marker in every frame")
@@ -79,8 +88,11 @@ plt.show()
 # ---------------
 # The strip's centreline at the same arc lengths (``--centreline-s``), measured along the
 # line from the free end (``--free-length-mm 100``): the same truth applies.
-line = track_centreline(frames, read_image(data / "background.png", "--background"), mapping, s_mm, 100.0,
-                        data / "rotation.avi")
+line = track_centreline(
+    frames, read_image(data / "background.png", "--background"), mapping, s_mm, 100.0, data / "rotation.avi"
+)
 line_error = (line.mm - true_mm).reshape(-1, 2)
-print(f"centreline: bias x {line_error[:, 0].mean():+.4f} mm, y {line_error[:, 1].mean():+.4f} mm; RMS "
-      f"{np.sqrt(np.mean(line_error[:, 0] ** 2)):.4f}, {np.sqrt(np.mean(line_error[:, 1] ** 2)):.4f} mm")
+print(
+    f"centreline: bias x {line_error[:, 0].mean():+.4f} mm, y {line_error[:, 1].mean():+.4f} mm; RMS "
+    f"{np.sqrt(np.mean(line_error[:, 0] ** 2)):.4f}, {np.sqrt(np.mean(line_error[:, 1] ** 2)):.4f} mm"
+)

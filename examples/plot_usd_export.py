@@ -49,9 +49,11 @@ print(f"{stage_file.name}: {stage_file.stat().st_size / 1e3:.0f} kB for {len(rec
 # records where the numbers come from (warpcloth, Warp and NumPy versions, the command,
 # the date, the device).
 stage = Usd.Stage.Open(str(stage_file))
-print(f"upAxis {UsdGeom.GetStageUpAxis(stage)}, metersPerUnit {UsdGeom.GetStageMetersPerUnit(stage)}, "
-      f"timeCodesPerSecond {stage.GetTimeCodesPerSecond()}, time codes {stage.GetStartTimeCode():g} to "
-      f"{stage.GetEndTimeCode():g}, defaultPrim {stage.GetDefaultPrim().GetPath()}")
+print(
+    f"upAxis {UsdGeom.GetStageUpAxis(stage)}, metersPerUnit {UsdGeom.GetStageMetersPerUnit(stage)}, "
+    f"timeCodesPerSecond {stage.GetTimeCodesPerSecond()}, time codes {stage.GetStartTimeCode():g} to "
+    f"{stage.GetEndTimeCode():g}, defaultPrim {stage.GetDefaultPrim().GetPath()}"
+)
 for prim in stage.Traverse():
     print(f"  {prim.GetPath()!s:32} {prim.GetTypeName() or '(group)'}")
 print("layer metadata:", sorted(stage.GetRootLayer().customLayerData))
@@ -70,8 +72,9 @@ primvars = UsdGeom.PrimvarsAPI(curves.GetPrim())
 for name in ("damping:gamma_per_s", "clamp:rotation_centre_dy_mm", "material:hysteresis_d1_gf_cm_per_cm"):
     value = np.atleast_1d(primvars.GetPrimvar(f"warpcloth:{name}").Get())  # constant: one value per prim
     print(f"  primvars:warpcloth:{name} = {value[0]:g}")
-deviation = max(np.abs(np.array(curves.GetPointsAttr().Get(code))[:, :2] - recording.frames[int(code), 0]).max()
-                for code in samples)
+deviation = max(
+    np.abs(np.array(curves.GetPointsAttr().Get(code))[:, :2] - recording.frames[int(code), 0]).max() for code in samples
+)
 print(f"largest difference from the recorded frames: {deviation:.2g} m")
 
 # %%
@@ -99,12 +102,20 @@ for colour, code in zip(plt.cm.viridis(np.linspace(0, 1, len(codes))), codes, st
     flat.fill(outline[:, 0], outline[:, 1], color=colour, alpha=0.35)
     if code in codes[::2]:  # every other frame, so the ribbons do not hide each other
         vertices = np.array(ribbon.GetPointsAttr().Get(code)) * 1e3
-        space.add_collection3d(Poly3DCollection([vertices[face][:, [0, 2, 1]] for face in indices], color=colour,
-                                                alpha=0.6, lw=0))
+        space.add_collection3d(
+            Poly3DCollection([vertices[face][:, [0, 2, 1]] for face in indices], color=colour, alpha=0.6, lw=0)
+        )
 flat.set(xlabel="x (mm)", ylabel="y (mm)", aspect="equal", title="curves and clamp from the stage")
 flat.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.02, 1))
-space.set(xlim=(-60, 60), ylim=(-30, 30), zlim=(-110, 25), xlabel="x (mm)", ylabel="z (mm)", zlabel="y (mm)",
-          title="ribbons from the stage")
+space.set(
+    xlim=(-60, 60),
+    ylim=(-30, 30),
+    zlim=(-110, 25),
+    xlabel="x (mm)",
+    ylabel="z (mm)",
+    zlabel="y (mm)",
+    title="ribbons from the stage",
+)
 space.set_box_aspect((120, 60, 135))
 fig.tight_layout()
 

@@ -73,12 +73,28 @@ LAW = BendingLaw(
     name="frictional_couple",
     summary="Grosberg's frictional couple",
     parameters=(
-        LawParameter("friction_moment", "friction_moment_gf_cm_per_cm", "moment", "Mf", "M_f",
-                     "M_f, the frictional couple (0 = elastic; 2HB = 2 M_f)",
-                     default=default_loop_asymptote, ge=0, amplitude=True),
-        LawParameter("friction_width", "friction_width_per_cm", "curvature", "Kw", "K_w",
-                     "K_w, curvature change over which the couple reverses (half of it each way; → 0: Grosberg's "
-                     "M_f sign(dK/dt))", default=default_curvature_scale, gt=0),
+        LawParameter(
+            "friction_moment",
+            "friction_moment_gf_cm_per_cm",
+            "moment",
+            "Mf",
+            "M_f",
+            "M_f, the frictional couple (0 = elastic; 2HB = 2 M_f)",
+            default=default_loop_asymptote,
+            ge=0,
+            amplitude=True,
+        ),
+        LawParameter(
+            "friction_width",
+            "friction_width_per_cm",
+            "curvature",
+            "Kw",
+            "K_w",
+            "K_w, curvature change over which the couple reverses (half of it each way; → 0: Grosberg's "
+            "M_f sign(dK/dt))",
+            default=default_curvature_scale,
+            gt=0,
+        ),
     ),
     pack=packed_parameters,
     memory=("hysteretic_moment", "direction", "previous_curvature"),  # h (N), +1 / −1, K (1/m)

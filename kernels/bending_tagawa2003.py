@@ -138,13 +138,37 @@ def build(scalar: Any) -> LawFunctions:
 
 
 LOOP_PARAMETERS = (
-    LawParameter("hysteresis_d1", "hysteresis_d1_gf_cm_per_cm", "moment", "D1", "D1",
-                 "D1, hysteresis amplitude (0 = elastic)", default=None, ge=0, amplitude=True),
-    LawParameter("hysteresis_alpha", "hysteresis_alpha_cm", "inverse_curvature", "alpha", "α",
-                 "α, steepness of the hysteresis branches", default=None, gt=0),
-    LawParameter("hysteresis_k0", "hysteresis_k0_per_cm", "curvature", "K0", "K0",
-                 "K0, curvature where the KES loop closes (masing: only there, not in the dynamics)",
-                 default=None, gt=0),
+    LawParameter(
+        "hysteresis_d1",
+        "hysteresis_d1_gf_cm_per_cm",
+        "moment",
+        "D1",
+        "D1",
+        "D1, hysteresis amplitude (0 = elastic)",
+        default=None,
+        ge=0,
+        amplitude=True,
+    ),
+    LawParameter(
+        "hysteresis_alpha",
+        "hysteresis_alpha_cm",
+        "inverse_curvature",
+        "alpha",
+        "α",
+        "α, steepness of the hysteresis branches",
+        default=None,
+        gt=0,
+    ),
+    LawParameter(
+        "hysteresis_k0",
+        "hysteresis_k0_per_cm",
+        "curvature",
+        "K0",
+        "K0",
+        "K0, curvature where the KES loop closes (masing: only there, not in the dynamics)",
+        default=None,
+        gt=0,
+    ),
 )
 """The paper's loop (D1, α, K0), read by this law and by masing (the same major loop)."""
 

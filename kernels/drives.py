@@ -72,8 +72,9 @@ def build(scalar: Any) -> SimpleNamespace:
         return theta, rate
 
     @wp.func
-    def held_free_end(control: StripControl, root: vec2, rest_tip: vec2, s: int, step: int, move_steps: int,
-                      dt: scalar):
+    def held_free_end(
+        control: StripControl, root: vec2, rest_tip: vec2, s: int, step: int, move_steps: int, dt: scalar
+    ):
         # The free end is carried from its hanging position to the hold target along a
         # polar path about the clamp's lowest point (radius and angle blended by a C²
         # smootherstep), so no segment is stretched on the way; then it stays there.

@@ -59,8 +59,18 @@ def build(scalar: Any) -> SimpleNamespace:
         return one / model.node_mass[s]
 
     @wp.func
-    def end_velocity(model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int,
-                     i: int, step: int, held: bool, gamma: scalar, t_next: scalar):
+    def end_velocity(
+        model: StripModel,
+        control: StripControl,
+        stepping: Stepping,
+        state: StripState,
+        s: int,
+        i: int,
+        step: int,
+        held: bool,
+        gamma: scalar,
+        t_next: scalar,
+    ):
         # The node's velocity at the step's end without the corrections: explicit
         # semi-implicit for a free node, the prescribed displacement over dt for the
         # clamp-edge node and the held free end.
@@ -76,8 +86,15 @@ def build(scalar: Any) -> SimpleNamespace:
             sn = wp.sin(theta)
             return (centre + mat22(c, -sn, sn, c) * (model.rest_position[i, s] - centre) - x) / dt
         if held and i == n - 1:
-            x_new, v_new = held_free_end(control, model.rest_position[model.n_clamped - 1, s],
-                                         model.rest_position[i, s], s, step + 1, stepping.move_steps, dt)
+            x_new, v_new = held_free_end(
+                control,
+                model.rest_position[model.n_clamped - 1, s],
+                model.rest_position[i, s],
+                s,
+                step + 1,
+                stepping.move_steps,
+                dt,
+            )
             return (x_new - x) / dt
         m = model.node_mass[s]
         if i == n - 1:
@@ -95,8 +112,17 @@ def build(scalar: Any) -> SimpleNamespace:
         return e / length, length
 
     @wp.func
-    def stretching_corrections(model: StripModel, control: StripControl, stepping: Stepping, state: StripState,
-                               s: int, step: int, held: bool, gamma: scalar, t_next: scalar):
+    def stretching_corrections(
+        model: StripModel,
+        control: StripControl,
+        stepping: Stepping,
+        state: StripState,
+        s: int,
+        step: int,
+        held: bool,
+        gamma: scalar,
+        t_next: scalar,
+    ):
         """Store each node's implicit tension correction F^corr in ``state.correction``."""
         n = model.n_nodes
         first = model.n_clamped - 1  # the clamp-edge node: segment `first` is the first free one

@@ -45,6 +45,7 @@ def build(scalar: Any) -> SimpleNamespace:
         v_new = v + f * (dt / m)
         return x + v * dt, v_new
 
-    return SimpleNamespace(Stepping=Stepping,
-                           schemes={"semi_implicit": semi_implicit_euler, "forward": forward_euler,
-                                    "imex": semi_implicit_euler})
+    return SimpleNamespace(
+        Stepping=Stepping,
+        schemes={"semi_implicit": semi_implicit_euler, "forward": forward_euler, "imex": semi_implicit_euler},
+    )

@@ -120,8 +120,9 @@ class BendingLaw:
         for p in self.parameters:
             if p.name == name:
                 return p
-        raise KeyError(f"the {self.name} law has no parameter {name!r}; it has "
-                       f"{', '.join(q.name for q in self.parameters)}")
+        raise KeyError(
+            f"the {self.name} law has no parameter {name!r}; it has {', '.join(q.name for q in self.parameters)}"
+        )
 
 
 KINDS = ("moment", "curvature", "inverse_curvature", "number")
@@ -129,6 +130,13 @@ KINDS = ("moment", "curvature", "inverse_curvature", "number")
 curvature (bending) or angle (shear), their inverse, or a pure number."""
 
 BENDING_RIGIDITY = LawParameter(
-    name="bending_rigidity", scene_field="bending_rigidity_gf_cm2_per_cm", kind="rigidity", alias="D",
-    label="B = D", doc="D, slope of the centre line M = D K (every law)", default=0.0, ge=0)
+    name="bending_rigidity",
+    scene_field="bending_rigidity_gf_cm2_per_cm",
+    kind="rigidity",
+    alias="D",
+    label="B = D",
+    doc="D, slope of the centre line M = D K (every law)",
+    default=0.0,
+    ge=0,
+)
 """D, the slope of the centre line M = D K: every law's first parameter, slot 0 of the packed vector."""

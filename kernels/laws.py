@@ -43,11 +43,15 @@ def _registered() -> tuple[BendingLaw, ...]:
         try:
             law = point.load()
         except Exception as exc:  # a broken plugin must name itself, not break every command anonymously
-            raise LawRegistryError(f"the bending law {point.name!r} registered under {ENTRY_POINT_GROUP} as "
-                                   f"{point.value!r} cannot be loaded: {exc}") from exc
+            raise LawRegistryError(
+                f"the bending law {point.name!r} registered under {ENTRY_POINT_GROUP} as "
+                f"{point.value!r} cannot be loaded: {exc}"
+            ) from exc
         if not isinstance(law, BendingLaw):
-            raise LawRegistryError(f"the bending law {point.name!r} registered under {ENTRY_POINT_GROUP} as "
-                                   f"{point.value!r} is a {type(law).__name__}, not a warpcloth.kernels.law.BendingLaw")
+            raise LawRegistryError(
+                f"the bending law {point.name!r} registered under {ENTRY_POINT_GROUP} as "
+                f"{point.value!r} is a {type(law).__name__}, not a warpcloth.kernels.law.BendingLaw"
+            )
         laws.append(law)
     return tuple(laws)
 
@@ -65,25 +69,35 @@ def checked_laws(laws: tuple[BendingLaw, ...]) -> tuple[BendingLaw, ...]:
             raise LawRegistryError(f"two bending laws are called {law.name!r}")
         names.add(law.name)
         if 1 + len(law.parameters) > LAW_SLOT:
-            raise LawRegistryError(f"the {law.name} law has {len(law.parameters)} parameters after D; the packed "
-                                   f"vector holds {LAW_SLOT - 1}")
+            raise LawRegistryError(
+                f"the {law.name} law has {len(law.parameters)} parameters after D; the packed "
+                f"vector holds {LAW_SLOT - 1}"
+            )
         own = [p.name for p in law.parameters]
         if len(set(own)) != len(own) or BENDING_RIGIDITY.name in own:
-            raise LawRegistryError(f"the {law.name} law's parameters {', '.join(own)} repeat a name (D is every "
-                                   "law's first parameter already)")
+            raise LawRegistryError(
+                f"the {law.name} law's parameters {', '.join(own)} repeat a name (D is every "
+                "law's first parameter already)"
+            )
         unknown = [p.name for p in law.parameters if p.kind not in KINDS]
         if unknown:
-            raise LawRegistryError(f"the {law.name} law's parameter {unknown[0]!r} has kind "
-                                   f"{law.parameter(unknown[0]).kind!r}; a kind is one of {', '.join(KINDS)}")
+            raise LawRegistryError(
+                f"the {law.name} law's parameter {unknown[0]!r} has kind "
+                f"{law.parameter(unknown[0]).kind!r}; a kind is one of {', '.join(KINDS)}"
+            )
         if len(law.memory) != LAW_MEMORY_SLOTS:
-            raise LawRegistryError(f"the {law.name} law's memory has {len(law.memory)} slots; every law has "
-                                   f"{LAW_MEMORY_SLOTS}, the last curvature last")
+            raise LawRegistryError(
+                f"the {law.name} law's memory has {len(law.memory)} slots; every law has "
+                f"{LAW_MEMORY_SLOTS}, the last curvature last"
+            )
         for p in law.parameters:
             for key, seen in ((p.scene_field, by_field), (p.alias, by_alias)):
                 other = seen.setdefault(key, p)
                 if other is not p:
-                    raise LawRegistryError(f"the {law.name} law's parameter {p.name!r} takes {key!r}, which another "
-                                           "parameter has (a parameter two laws share is one LawParameter)")
+                    raise LawRegistryError(
+                        f"the {law.name} law's parameter {p.name!r} takes {key!r}, which another "
+                        "parameter has (a parameter two laws share is one LawParameter)"
+                    )
     return laws
 
 

@@ -35,11 +35,20 @@ PROBE_INDEX = {name: i for i, name in enumerate(PROBE_FIELDS)}
 """Slot of each probe quantity."""
 
 PROBE_UNITS = {
-    "tip_x": "m", "tip_y": "m", "tip_speed": "m/s",
+    "tip_x": "m",
+    "tip_y": "m",
+    "tip_speed": "m/s",
     "laser_x": "m (NaN when the strip misses the line)",
-    "clamp_angle": "rad", "kinetic": "J", "gravitational": "J", "tensile": "J",
-    "bending_elastic_work": "J", "hysteresis_work": "J", "damping_work": "J", "drive_work": "J",
-    "loop_curvature": "1/m (output.loop_hinge_mm)", "loop_moment": "N·m/m (moment per width)",
+    "clamp_angle": "rad",
+    "kinetic": "J",
+    "gravitational": "J",
+    "tensile": "J",
+    "bending_elastic_work": "J",
+    "hysteresis_work": "J",
+    "damping_work": "J",
+    "drive_work": "J",
+    "loop_curvature": "1/m (output.loop_hinge_mm)",
+    "loop_moment": "N·m/m (moment per width)",
 }
 """SI unit of each probe quantity, as written into a run directory's meta.json."""
 
@@ -56,8 +65,13 @@ def build(scalar: Any) -> SimpleNamespace:
     Stepping = integrators.build(scalar).Stepping
     tensile_energy = tensile.build(scalar).energy_per_width
     slot = SimpleNamespace(**PROBE_INDEX)
-    TIP_X, TIP_Y, TIP_SPEED, LASER_X, CLAMP_ANGLE = slot.tip_x, slot.tip_y, slot.tip_speed, slot.laser_x, \
-        slot.clamp_angle
+    TIP_X, TIP_Y, TIP_SPEED, LASER_X, CLAMP_ANGLE = (
+        slot.tip_x,
+        slot.tip_y,
+        slot.tip_speed,
+        slot.laser_x,
+        slot.clamp_angle,
+    )
     KINETIC, GRAVITATIONAL, TENSILE = slot.kinetic, slot.gravitational, slot.tensile
     BENDING_ELASTIC_WORK, HYSTERESIS_WORK = slot.bending_elastic_work, slot.hysteresis_work
     DAMPING_WORK, DRIVE_WORK = slot.damping_work, slot.drive_work
@@ -140,8 +154,9 @@ def build(scalar: Any) -> SimpleNamespace:
             probes[k, LOOP_CURVATURE, s] = curvature + rest
         else:
             probes[k, LOOP_CURVATURE, s] = curvature
-        probes[k, LOOP_MOMENT, s] = law.elastic_moment(curvature, p) * grip[0] + \
-            law.hysteretic_moment(curvature, memory, p) * grip[1]
+        probes[k, LOOP_MOMENT, s] = (
+            law.elastic_moment(curvature, p) * grip[0] + law.hysteretic_moment(curvature, memory, p) * grip[1]
+        )
         return kinetic + gravitational + tensile + work[0] + work[1] + work[2]
 
     return SimpleNamespace(ProbeSettings=ProbeSettings, record_probes=record_probes)

@@ -89,13 +89,19 @@ def build(scalar: Any, scheme: str) -> StripKernels:
         return f
 
     @wp.func
-    def carry_held_end(model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int,
-                       step: int, work: vec4):
+    def carry_held_end(
+        model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int, step: int, work: vec4
+    ):
         # The held free end moves as prescribed; the internal forces do work on it.
         i = model.n_nodes - 1
         x_new, v_new = held_free_end(
-            control, model.rest_position[model.n_clamped - 1, s], model.rest_position[i, s], s, step + 1,
-            stepping.move_steps, stepping.dt,
+            control,
+            model.rest_position[model.n_clamped - 1, s],
+            model.rest_position[i, s],
+            s,
+            step + 1,
+            stepping.move_steps,
+            stepping.dt,
         )
         sweep = (state.velocity[i, s] + v_new) * (half * stepping.dt)
         f_int = internal_force(state, i, s)
@@ -105,8 +111,9 @@ def build(scalar: Any, scheme: str) -> StripKernels:
         return work
 
     @wp.func
-    def advance_free_nodes(model: StripModel, stepping: Stepping, state: StripState, s: int, last: int,
-                           gamma: scalar, work: vec4):
+    def advance_free_nodes(
+        model: StripModel, stepping: Stepping, state: StripState, s: int, last: int, gamma: scalar, work: vec4
+    ):
         # Nodes below the clamp, up to ``last``, by the scheme's node update under their
         # internal forces, damping and gravity; the free end carries half a node's mass.
         n = model.n_nodes
@@ -132,8 +139,15 @@ def build(scalar: Any, scheme: str) -> StripKernels:
         return work
 
     @wp.func
-    def move_clamp(model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int,
-                   t_next: scalar, work: vec4):
+    def move_clamp(
+        model: StripModel,
+        control: StripControl,
+        stepping: Stepping,
+        state: StripState,
+        s: int,
+        t_next: scalar,
+        work: vec4,
+    ):
         # Clamp nodes follow the rigid rotation; only the two above the edge carry forces.
         dt = stepping.dt
         theta, rate = clamp_angle(control, s, t_next)
@@ -168,8 +182,7 @@ def build(scalar: Any, scheme: str) -> StripKernels:
         return work
 
     @wp.func
-    def substep(model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int,
-                step: int):
+    def substep(model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int, step: int):
         # The passes of one step: internal forces at x_n, the implicit tension correction
         # (imex), the free nodes, the held end, the clamp, then the work tally.
         code, index, value = accumulate_internal_forces(model, stepping, state, s)

@@ -40,5 +40,6 @@ def build(scalar: Any) -> SimpleNamespace:
         e = wp.abs(strain)
         return a[0] + e * (scalar(2.0) * a[1] + e * (scalar(3.0) * a[2] + e * scalar(4.0) * a[3]))
 
-    return SimpleNamespace(force_per_width=force_per_width, energy_per_width=energy_per_width,
-                           stiffness_per_width=stiffness_per_width)
+    return SimpleNamespace(
+        force_per_width=force_per_width, energy_per_width=energy_per_width, stiffness_per_width=stiffness_per_width
+    )

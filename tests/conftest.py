@@ -94,8 +94,11 @@ def run_cli(*args, cwd=None, timeout=None):
     return subprocess.CompletedProcess(list(args), code, out.getvalue(), err.getvalue())
 
 
-SPACING_TRUTH = {"clamp.rotation_centre_dy_mm": 2.8, "damping.gamma_per_s": 0.4,
-                 "material.hysteresis_d1_gf_cm_per_cm": 0.05}
+SPACING_TRUTH = {
+    "clamp.rotation_centre_dy_mm": 2.8,
+    "damping.gamma_per_s": 0.4,
+    "material.hysteresis_d1_gf_cm_per_cm": 0.05,
+}
 """The parameters of the fine reference of the impulsive rotation (issue 22)."""
 
 
@@ -105,8 +108,12 @@ def rotation_scene_data(spacing_mm: float, duration_s: float = 0.25) -> dict:
     from warpcloth.scene import read_scene_file, set_field
 
     data = read_scene_file("impulsive_rotation")
-    for name, value in {"material.bending_law": "masing", "run.duration_s": duration_s,
-                        "strip.spacing_mm": spacing_mm, "integrator.dt_s": 5e-6 * spacing_mm / 2.5}.items():
+    for name, value in {
+        "material.bending_law": "masing",
+        "run.duration_s": duration_s,
+        "strip.spacing_mm": spacing_mm,
+        "integrator.dt_s": 5e-6 * spacing_mm / 2.5,
+    }.items():
         set_field(data, name, value)
     return data
 
@@ -131,5 +138,10 @@ def fine_rotation_markers(spacing_mm: float = 1.25, noise_m: float = 1e-4, seed:
     node = scene.n_clamped - 1 + np.round(s / scene.spacing).astype(int)
     frames = len(result.frame_times)
     xy = result.frames[:, 0, node].reshape(-1, 2) + np.random.default_rng(seed).normal(0, noise_m, (frames * len(s), 2))
-    return TrackedShapes(np.repeat(np.arange(frames), len(s)), np.repeat(result.frame_times, len(s)),
-                         np.tile(s, frames), xy[:, 0], xy[:, 1])
+    return TrackedShapes(
+        np.repeat(np.arange(frames), len(s)),
+        np.repeat(result.frame_times, len(s)),
+        np.tile(s, frames),
+        xy[:, 0],
+        xy[:, 1],
+    )

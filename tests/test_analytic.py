@@ -40,10 +40,18 @@ def test_heavy_chain_first_period():
     # 1 mm tip amplitude (1 % of L: the nonlinear period shift is O(amplitude²) ~ 1e-4).
     # The 1 % tolerance is the issue's; the discrete 40-segment chain's own error is
     # O(h/L) (the half mass at the free end), measured 0.29 %.
-    scene = wc.load_scene("damped_swing", overrides(
-        strip__spacing_mm=2.5, material__bending_rigidity_gf_cm2_per_cm=0.0,
-        material__hysteresis_d1_gf_cm_per_cm=0.0, damping__gamma_per_s=0.0, release__enabled=False,
-        run__duration_s=0.75, integrator__dt_s=1e-5))
+    scene = wc.load_scene(
+        "damped_swing",
+        overrides(
+            strip__spacing_mm=2.5,
+            material__bending_rigidity_gf_cm2_per_cm=0.0,
+            material__hysteresis_d1_gf_cm_per_cm=0.0,
+            damping__gamma_per_s=0.0,
+            release__enabled=False,
+            run__duration_s=0.75,
+            integrator__dt_s=1e-5,
+        ),
+    )
     length = scene.strip.free_length_mm * 1e-3
     z0 = 2.404825557695773
 
@@ -58,10 +66,19 @@ def test_heavy_chain_first_period():
 
 def beam_period_error(spacing_mm: float) -> float:
     """Relative error of the first beam period at a given spacing."""
-    scene = wc.load_scene("damped_swing", overrides(
-        strip__spacing_mm=spacing_mm, run__gravity_m_per_s2=0.0, material__hysteresis_d1_gf_cm_per_cm=0.0,
-        damping__gamma_per_s=0.0, release__enabled=False, run__duration_s=3.4,
-        integrator__dt_s=4e-6 * spacing_mm, clamp__edge_hinge="paper"))
+    scene = wc.load_scene(
+        "damped_swing",
+        overrides(
+            strip__spacing_mm=spacing_mm,
+            run__gravity_m_per_s2=0.0,
+            material__hysteresis_d1_gf_cm_per_cm=0.0,
+            damping__gamma_per_s=0.0,
+            release__enabled=False,
+            run__duration_s=3.4,
+            integrator__dt_s=4e-6 * spacing_mm,
+            clamp__edge_hinge="paper",
+        ),
+    )
     length = scene.strip.free_length_mm * 1e-3
     bl = 1.875104068711961
     sigma = (math.sinh(bl) - math.sin(bl)) / (math.cosh(bl) + math.cos(bl))
@@ -110,10 +127,18 @@ def hanging_strip_period_error(spacing_mm: float) -> float:
     """Relative error of the linear-elastic hanging strip's first period."""
     from warpcloth.calibrate.references import hanging_beam_mode
 
-    scene = wc.load_scene("damped_swing", overrides(
-        strip__spacing_mm=spacing_mm, material__hysteresis_d1_gf_cm_per_cm=0.0, damping__gamma_per_s=0.0,
-        release__enabled=False, run__duration_s=0.7, integrator__dt_s=4e-6 * spacing_mm,
-        clamp__edge_hinge="paper"))
+    scene = wc.load_scene(
+        "damped_swing",
+        overrides(
+            strip__spacing_mm=spacing_mm,
+            material__hysteresis_d1_gf_cm_per_cm=0.0,
+            damping__gamma_per_s=0.0,
+            release__enabled=False,
+            run__duration_s=0.7,
+            integrator__dt_s=4e-6 * spacing_mm,
+            clamp__edge_hinge="paper",
+        ),
+    )
     length = scene.strip.free_length_mm * 1e-3
     material = to_si(scene.material)
     rigidity = material.bending_rigidity
@@ -121,8 +146,10 @@ def hanging_strip_period_error(spacing_mm: float) -> float:
     lam, shape = hanging_beam_mode(gamma)
     exact = 2 * math.pi / (lam * math.sqrt(rigidity / (material.density * length**4)))
     period = measured_period(scene, lambda s: shape(s / length) * (s > 0), 1e-3)
-    print(f"hanging beam γ = {gamma:.1f}, h = {spacing_mm} mm: period {period:.5f} s vs {exact:.5f} s "
-          f"({period / exact - 1:+.3%})")
+    print(
+        f"hanging beam γ = {gamma:.1f}, h = {spacing_mm} mm: period {period:.5f} s vs {exact:.5f} s "
+        f"({period / exact - 1:+.3%})"
+    )
     return period / exact - 1
 
 

@@ -15,16 +15,25 @@ from warpcloth.scene.step import STABILITY_MARGIN, choose_step, describe_step, r
 from warpcloth.sim.stability import is_hysteretic, stiffest_tangent
 
 
-@pytest.mark.parametrize("name, grip, expected", [
-    ("damped_swing", {}, 1.743e-3), ("impulsive_rotation", {}, 4.461e-4),
-    ("damped_swing", {"clamp.grip_length_mm": 20.0, "clamp.grip_bending_factor": 3.0}, 1.133e-3),
-    ("impulsive_rotation", {"clamp.grip_length_mm": 20.0, "clamp.grip_bending_factor": 3.0}, 2.667e-4)])
+@pytest.mark.parametrize(
+    "name, grip, expected",
+    [
+        ("damped_swing", {}, 1.743e-3),
+        ("impulsive_rotation", {}, 4.461e-4),
+        ("damped_swing", {"clamp.grip_length_mm": 20.0, "clamp.grip_bending_factor": 3.0}, 1.133e-3),
+        ("impulsive_rotation", {"clamp.grip_length_mm": 20.0, "clamp.grip_bending_factor": 3.0}, 2.667e-4),
+    ],
+)
 def test_the_bending_estimate_is_where_an_elastic_imex_run_stops_being_stable(name, grip, expected):
     # Elastic (D1 = 0), stretching implicit: explicit bending and the tension's transverse
     # stiffness are what is left. The linearised hanging chain, with the grip's stiffer
     # root hinges where there is one, says where the run stops being stable, within 3 %.
-    fields = dict(material__hysteresis_d1_gf_cm_per_cm=0.0, integrator__scheme="imex",
-                  output__frame_rate_hz=10.0, output__probes_per_frame=1)
+    fields = dict(
+        material__hysteresis_d1_gf_cm_per_cm=0.0,
+        integrator__scheme="imex",
+        output__frame_rate_hz=10.0,
+        output__probes_per_frame=1,
+    )
     extra = [f"{k}={v!r}" for k, v in grip.items()]
     scene = wc.load_scene(name, overrides(**fields) + extra)
     limit = choose_step(requesting_auto([scene])).bound.seconds
@@ -39,15 +48,18 @@ def test_the_law_tangent_and_loop_come_from_the_law_kernel():
     material = to_si(scene.material)
     # a Masing branch starts at slope D + α·D1 (docs/model.md §4.10)
     assert stiffest_tangent(material) == pytest.approx(
-        material.bending_rigidity + material.bending.hysteresis_alpha * material.bending.hysteresis_d1, rel=1e-6)
+        material.bending_rigidity + material.bending.hysteresis_alpha * material.bending.hysteresis_d1, rel=1e-6
+    )
     assert is_hysteretic(material)
     assert not is_hysteretic(dataclasses.replace(material, bending=material.bending.replace(hysteresis_d1=0.0)))
 
 
 def test_auto_divides_the_probe_interval_and_stays_under_both_bounds():
     for scheme in ("semi_implicit", "imex"):
-        scene = wc.load_scene("damped_swing", overrides(integrator__dt_s="auto", integrator__scheme=scheme,
-                                                         material__bending_law="masing"))
+        scene = wc.load_scene(
+            "damped_swing",
+            overrides(integrator__dt_s="auto", integrator__scheme=scheme, material__bending_law="masing"),
+        )
         dt = scene.integrator.dt_s
         assert scene.integrator.dt_chosen_by == "auto"
         steps = scene.output_interval / dt
@@ -96,17 +108,22 @@ def test_a_sweep_shares_one_auto_step_the_strictest_variant_sets():
 
 def test_a_step_auto_chose_for_another_scene_is_refused_not_reused(tmp_path):
     # a recorded auto scene rerun at a finer spacing would keep a step 5× too long for it
-    scene = wc.load_scene("damped_swing", overrides(integrator__dt_s="auto", run__duration_s=0.02,
-                                                    release__settle_time_s=0.01))
+    scene = wc.load_scene(
+        "damped_swing", overrides(integrator__dt_s="auto", run__duration_s=0.02, release__settle_time_s=0.01)
+    )
     wc.simulate(scene, out=tmp_path / "run")
-    with pytest.raises(SceneError, match=r"integrator\.dt_s: 4\.5045e-05 s was chosen by dt_s = \"auto\" for another "
-                                         r"scene .* auto chooses 1\.1"):
+    with pytest.raises(
+        SceneError,
+        match=r"integrator\.dt_s: 4\.5045e-05 s was chosen by dt_s = \"auto\" for another "
+        r"scene .* auto chooses 1\.1",
+    ):
         wc.load_scene(tmp_path / "run" / "scene.toml", ["strip.spacing_mm=1.25"])
     again = wc.load_scene(tmp_path / "run" / "scene.toml", ["strip.spacing_mm=1.25", 'integrator.dt_s="auto"'])
     assert again.integrator.dt_s < scene.integrator.dt_s / 3
     # and a Scene still asking for auto (made in Python) has its step chosen by simulate
-    asking = dataclasses.replace(scene, integrator=dataclasses.replace(scene.integrator, dt_s="auto",
-                                                                       dt_chosen_by="scene"))
+    asking = dataclasses.replace(
+        scene, integrator=dataclasses.replace(scene.integrator, dt_s="auto", dt_chosen_by="scene")
+    )
     assert wc.simulate(asking).strip_steps == wc.simulate(scene).strip_steps
 
 
@@ -116,8 +133,10 @@ def test_auto_is_refused_where_no_step_is_both_stable_and_accurate():
     # the paper's law keeps a floor under imex that no dt removes (§9.5)
     with pytest.raises(SceneError, match=r"integrator\.dt_s.*no accurate imex step for the tagawa2003"):
         wc.load_scene("damped_swing", overrides(integrator__dt_s="auto", integrator__scheme="imex"))
-    elastic = wc.load_scene("damped_swing", overrides(integrator__dt_s="auto", integrator__scheme="imex",
-                                                      material__hysteresis_d1_gf_cm_per_cm=0.0))
+    elastic = wc.load_scene(
+        "damped_swing",
+        overrides(integrator__dt_s="auto", integrator__scheme="imex", material__hysteresis_d1_gf_cm_per_cm=0.0),
+    )
     assert math.isclose(elastic.integrator.dt_s, elastic.output_interval / 9)
     with pytest.raises(SceneError, match=r"expected a number or 'auto', got 'fast'"):
         wc.load_scene("damped_swing", overrides(integrator__dt_s="fast"))

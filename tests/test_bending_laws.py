@@ -15,15 +15,19 @@ PER_CM = 100.0  # 1/cm → 1/m
 
 
 def material(law, **fields):
-    return to_si(wc.load_scene("damped_swing", {"material.bending_law": law,
-                                                **{f"material.{k}": v for k, v in fields.items()}}).material)
+    return to_si(
+        wc.load_scene(
+            "damped_swing", {"material.bending_law": law, **{f"material.{k}": v for k, v in fields.items()}}
+        ).material
+    )
 
 
 def kes_path(k0_per_cm=2.5, samples=2000):
     """0 → K0 → −K0 → K0, 1/m (a KES-FB2 cycle)."""
     k0 = k0_per_cm * PER_CM
-    return np.concatenate([np.linspace(0, k0, samples), np.linspace(k0, -k0, 2 * samples)[1:],
-                           np.linspace(-k0, k0, 2 * samples)[1:]])
+    return np.concatenate(
+        [np.linspace(0, k0, samples), np.linspace(k0, -k0, 2 * samples)[1:], np.linspace(-k0, k0, 2 * samples)[1:]]
+    )
 
 
 def wandering_path(seed=0, n=4000):
@@ -58,8 +62,12 @@ def test_dahl_with_exponent_one_is_the_papers_law():
     # On a branch the paper's offset obeys dh/dK = α (M0 − s h): Dahl with n = 1,
     # M_s = M0, K_s = 1/α; at a reversal both keep h and flip s (docs/model.md §4.8)
     paper = material("tagawa2003")
-    dahl = material("dahl", dahl_moment_gf_cm_per_cm=loop_asymptote_of(paper) / GF_CM,
-                    dahl_curvature_per_cm=1 / (paper.bending.hysteresis_alpha * PER_CM), dahl_exponent=1.0)
+    dahl = material(
+        "dahl",
+        dahl_moment_gf_cm_per_cm=loop_asymptote_of(paper) / GF_CM,
+        dahl_curvature_per_cm=1 / (paper.bending.hysteresis_alpha * PER_CM),
+        dahl_exponent=1.0,
+    )
     for path in (kes_path(), wandering_path(1), kes_path()[::97]):
         m, _ = moment_along_path([paper, dahl], path)
         assert np.abs(m[:, 0] - m[:, 1]).max() < 1e-12 * np.abs(m[:, 0]).max()
@@ -91,8 +99,9 @@ def test_dahl_shape_exponent_against_an_integrated_ode(n):
 
 def legs(nodes, steps):
     """A path through the curvature ``nodes`` (1/m) in ``steps`` equal steps per leg."""
-    return np.concatenate([nodes[:1]] + [np.linspace(a, b, steps + 1)[1:] for a, b in zip(nodes[:-1], nodes[1:],
-                                                                                         strict=True)])
+    return np.concatenate(
+        [nodes[:1]] + [np.linspace(a, b, steps + 1)[1:] for a, b in zip(nodes[:-1], nodes[1:], strict=True)]
+    )
 
 
 def test_dahl_sampling_does_not_change_the_loop():
@@ -140,10 +149,15 @@ def test_frictional_couple_is_dahls_zero_exponent_limit():
     assert np.abs(m[:, 0] - m[:, 1]).max() < 1e-12 * np.abs(m[:, 0]).max()
 
 
-@pytest.mark.parametrize("law, field", [("tagawa2003", "hysteresis_d1_gf_cm_per_cm"),
-                                        ("dahl", "dahl_moment_gf_cm_per_cm"),
-                                        ("frictional_couple", "friction_moment_gf_cm_per_cm"),
-                                        ("masing", "hysteresis_d1_gf_cm_per_cm")])
+@pytest.mark.parametrize(
+    "law, field",
+    [
+        ("tagawa2003", "hysteresis_d1_gf_cm_per_cm"),
+        ("dahl", "dahl_moment_gf_cm_per_cm"),
+        ("frictional_couple", "friction_moment_gf_cm_per_cm"),
+        ("masing", "hysteresis_d1_gf_cm_per_cm"),
+    ],
+)
 def test_each_law_is_elastic_without_its_hysteresis_and_continuous_with_it(law, field):
     path = wandering_path(4)
     elastic = material(law, **{field: 0.0})
@@ -155,10 +169,12 @@ def test_each_law_is_elastic_without_its_hysteresis_and_continuous_with_it(law, 
     # continuous: no step larger than the steepest branch allows (right after a reversal
     # from saturation: D + 2 α M0, D + 2^n M_s / K_s, D + M_f / K_w, D + α D1)
     b = hysteretic.bending
-    steepest = {"tagawa2003": lambda: 2 * loop_asymptote_of(hysteretic) / b.hysteresis_alpha ** -1,
-                "dahl": lambda: 2 ** b.dahl_exponent * b.dahl_moment / b.dahl_curvature,
-                "frictional_couple": lambda: b.friction_moment / b.friction_width,
-                "masing": lambda: b.hysteresis_alpha * b.hysteresis_d1}[law]()
+    steepest = {
+        "tagawa2003": lambda: 2 * loop_asymptote_of(hysteretic) / b.hysteresis_alpha**-1,
+        "dahl": lambda: 2**b.dahl_exponent * b.dahl_moment / b.dahl_curvature,
+        "frictional_couple": lambda: b.friction_moment / b.friction_width,
+        "masing": lambda: b.hysteresis_alpha * b.hysteresis_d1,
+    }[law]()
     bound = (hysteretic.bending_rigidity + steepest) * np.abs(np.diff(path))
     assert np.all(np.abs(np.diff(m)) <= 1.000001 * bound)
     # the tangent is the slope of the branch being followed
@@ -169,17 +185,24 @@ def test_each_law_is_elastic_without_its_hysteresis_and_continuous_with_it(law, 
 
 def test_the_laws_run_in_one_batch_as_each_alone():
     laws = ["tagawa2003", "dahl", "frictional_couple", "masing"]
-    scenes = [wc.load_scene("damped_swing", overrides(run__duration_s=0.3, material__bending_law=law,
-                                                       material__dahl_exponent=2.0 if law == "dahl" else 1.0))
-              for law in laws]
+    scenes = [
+        wc.load_scene(
+            "damped_swing",
+            overrides(
+                run__duration_s=0.3, material__bending_law=law, material__dahl_exponent=2.0 if law == "dahl" else 1.0
+            ),
+        )
+        for law in laws
+    ]
     together = wc.simulate(scenes)
     for j, scene in enumerate(scenes):
         alone = wc.simulate(scene)
         assert np.array_equal(together.probes[..., j], alone.probes[..., 0], equal_nan=True), laws[j]
         assert np.array_equal(together.frames[:, j], alone.frames[:, 0]), laws[j]
     # the default Dahl material is the paper's exactly (n = 1, M_s = M0, K_s = 1/α)
-    default_dahl = wc.simulate(wc.load_scene("damped_swing", overrides(run__duration_s=0.3,
-                                                                        material__bending_law="dahl")))
+    default_dahl = wc.simulate(
+        wc.load_scene("damped_swing", overrides(run__duration_s=0.3, material__bending_law="dahl"))
+    )
     assert np.abs(default_dahl.probe("tip_x", 0) - together.probe("tip_x", 0)).max() < 1e-12
     assert together.parameters["material.dahl_exponent"].tolist() == [1.0, 2.0, 1.0, 1.0]
 
@@ -189,8 +212,12 @@ def test_the_energy_budget_closes_with_each_law(law):
     # as test_energy.py's hysteretic swing: the sum of every term stays within 0.05 % of
     # the peak kinetic energy, and the law really dissipates
     shape = {"material__dahl_exponent": 0.5} if law == "dahl" else {}
-    scene = wc.load_scene("damped_swing", overrides(run__duration_s=2.0, integrator__dt_s=1e-5,
-                                                    damping__gamma_per_s=0.3, material__bending_law=law, **shape))
+    scene = wc.load_scene(
+        "damped_swing",
+        overrides(
+            run__duration_s=2.0, integrator__dt_s=1e-5, damping__gamma_per_s=0.3, material__bending_law=law, **shape
+        ),
+    )
     result = wc.simulate(scene)
     total = result.energy_total()[:, 0]
     scale = result.probe("kinetic", 0).max()
@@ -204,14 +231,21 @@ def test_a_laws_parameters_are_fitted_only_for_that_law():
 
     dahl = wc.load_scene("damped_swing", {"material.bending_law": "dahl"})
     fitted = free_parameters("gamma,Ms,n", dahl)
-    assert [p.field for p in fitted] == ["damping.gamma_per_s", "material.dahl_moment_gf_cm_per_cm",
-                                         "material.dahl_exponent"]
+    assert [p.field for p in fitted] == [
+        "damping.gamma_per_s",
+        "material.dahl_moment_gf_cm_per_cm",
+        "material.dahl_exponent",
+    ]
     assert fitted[1].lower == 0.0 and fitted[1].upper == pytest.approx(4 * dahl.material.dahl_moment_gf_cm_per_cm)
-    with pytest.raises(ArgumentError, match=r"names: D1 \(material.hysteresis_d1_gf_cm_per_cm\) is a parameter of "
-                                          r"the tagawa2003 or masing bending law, but the scene's material uses dahl"):
+    with pytest.raises(
+        ArgumentError,
+        match=r"names: D1 \(material.hysteresis_d1_gf_cm_per_cm\) is a parameter of "
+        r"the tagawa2003 or masing bending law, but the scene's material uses dahl",
+    ):
         free_parameters("gamma,D1", dahl)
-    with pytest.raises(ArgumentError, match="Mf .* frictional_couple bending law, but the scene's material uses "
-                                          "tagawa2003"):
+    with pytest.raises(
+        ArgumentError, match="Mf .* frictional_couple bending law, but the scene's material uses tagawa2003"
+    ):
         free_parameters("Mf", wc.load_scene("damped_swing"))
 
 
@@ -249,7 +283,9 @@ def test_a_material_files_law_must_be_a_law_name(tmp_path):
     from warpcloth.errors import SceneError
 
     path = tmp_path / "m.toml"
-    path.write_text('[material]\nname = "x"\nsource = "test"\nbending_law = ["dahl"]\ndensity_g_per_cm2 = 0.02\n'
-                    'tensile_gf_per_cm = [2000.0, 0.0, 0.0, 2.93e7]\nbending_rigidity_gf_cm2_per_cm = 0.1\n')
+    path.write_text(
+        '[material]\nname = "x"\nsource = "test"\nbending_law = ["dahl"]\ndensity_g_per_cm2 = 0.02\n'
+        "tensile_gf_per_cm = [2000.0, 0.0, 0.0, 2.93e7]\nbending_rigidity_gf_cm2_per_cm = 0.1\n"
+    )
     with pytest.raises(SceneError, match=r"m.toml: material.bending_law must be one of .*; got \['dahl'\]"):
         wc.load_scene("damped_swing", {"material.from_file": str(path)})

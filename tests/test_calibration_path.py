@@ -21,6 +21,7 @@ QUARTIC = (2.0, 30.0, 900.0, 2e4)  # a1 … a4 (rad/s^k), the general start of i
 
 def motion(t, onset=0.0, quartic=QUARTIC, break_s=0.05, second=None, stop=None):
     """θ(t) computed directly: rest, the quartic, lines continuing its slope, a stop."""
+
     def q(x):
         return sum(a * x ** (k + 1) for k, a in enumerate(quartic))
 
@@ -39,8 +40,10 @@ def motion(t, onset=0.0, quartic=QUARTIC, break_s=0.05, second=None, stop=None):
 CASES = {
     "general quartic, never stops": ({}, "quartic, line"),
     "t⁴ start, line, stop": ({"quartic": (0.0, 0.0, 0.0, 3.2e4), "stop": 0.12}, "quartic, line, rest"),
-    "two lines, stop": ({"quartic": (0.0, 0.0, 0.0, 3.2e4), "second": (0.09, -8.0), "stop": 0.14},
-                        "quartic, line, line, rest"),
+    "two lines, stop": (
+        {"quartic": (0.0, 0.0, 0.0, 3.2e4), "second": (0.09, -8.0), "stop": 0.14},
+        "quartic, line, line, rest",
+    ),
     "general quartic, two lines, never stops": ({"second": (0.11, 5.0)}, "quartic, line, line"),
 }
 
@@ -113,12 +116,21 @@ def test_an_encoder_no_form_describes_is_a_poor_fit_and_the_command_says_so(tmp_
     fit = fit_clamp_motion(T, wobble)
     assert fit.status == "poor_fit" and "× the encoder's noise" in fit.problems[0]
     encoder = tmp_path / "wobble.csv"
-    encoder.write_text("t_ms,theta_rad\n" + "\n".join(f"{t * 1e3:.3f},{v:.6f}" for t, v in zip(T, wobble,
-                                                                                               strict=True)))
+    encoder.write_text("t_ms,theta_rad\n" + "\n".join(f"{t * 1e3:.3f},{v:.6f}" for t, v in zip(T, wobble, strict=True)))
 
     def cli(*extra):
-        return run_cli("clamp", "fit-angle", str(encoder), "--scene", "impulsive_rotation", "-o", "w.toml",
-                       "--overwrite", *extra, cwd=tmp_path)
+        return run_cli(
+            "clamp",
+            "fit-angle",
+            str(encoder),
+            "--scene",
+            "impulsive_rotation",
+            "-o",
+            "w.toml",
+            "--overwrite",
+            *extra,
+            cwd=tmp_path,
+        )
 
     done = cli()
     assert done.returncode == 6 and "not a fit (poor_fit)" in done.stderr and "--accept" in done.stderr
@@ -151,8 +163,11 @@ def test_header_units_are_honoured(tmp_path):
     np.testing.assert_allclose(read_measurement(metres).x, [0.001, 0.002])
     bad = tmp_path / "bad.csv"
     bad.write_text("t_min,x_mm\n0,1\n1,2\n")
-    with pytest.raises(wc.DataFileError, match=r"bad.csv, line 1: column 1 is headed 't_min': 'min' is not a time "
-                       r"unit \(known: s, ms, us, µs\)"):
+    with pytest.raises(
+        wc.DataFileError,
+        match=r"bad.csv, line 1: column 1 is headed 't_min': 'min' is not a time "
+        r"unit \(known: s, ms, us, µs\)",
+    ):
         read_measurement(bad)
 
 
@@ -180,24 +195,38 @@ def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path, en
     # dense cubic table (an independent path from the fitted pieces); markers with 0.1 mm
     # noise. clamp fit-angle, then fit γ, dy, D1 from the command line.
     encoder_t, quartic, break_s = ENCODERS[encoder]
-    truth = {"clamp.rotation_centre_dy_mm": 2.8, "damping.gamma_per_s": 0.4,
-             "material.hysteresis_d1_gf_cm_per_cm": 0.05}
+    truth = {
+        "clamp.rotation_centre_dy_mm": 2.8,
+        "damping.gamma_per_s": 0.4,
+        "material.hysteresis_d1_gf_cm_per_cm": 0.05,
+    }
     table_t = np.linspace(0.0, 0.3, 601)
     theta = motion(table_t, quartic=quartic, break_s=break_s)
-    measured_scene = wc.load_scene("impulsive_rotation", [
-        "run.duration_s=0.25", 'clamp.motion="table"', 'clamp.interpolation="cubic"',
-        f"clamp.table_t_s={table_t.tolist()}", f"clamp.table_theta_rad={theta.tolist()}",
-        *(f"{k}={v}" for k, v in truth.items())])
+    measured_scene = wc.load_scene(
+        "impulsive_rotation",
+        [
+            "run.duration_s=0.25",
+            'clamp.motion="table"',
+            'clamp.interpolation="cubic"',
+            f"clamp.table_t_s={table_t.tolist()}",
+            f"clamp.table_theta_rad={theta.tolist()}",
+            *(f"{k}={v}" for k, v in truth.items()),
+        ],
+    )
     result = wc.simulate(measured_scene)
     rng = np.random.default_rng(12)
     nc, h = measured_scene.n_clamped, measured_scene.spacing
-    rows = [f"{f},{t:.6f},{s:g},{x:.5f},{y:.5f}" for f, t in enumerate(result.frame_times)
-            for s in range(0, 101, 10)
-            for x, y in [(result.frames[f, 0, nc - 1 + round(s * 1e-3 / h)] * 1e3 + rng.normal(0, 0.1, 2))]]
+    rows = [
+        f"{f},{t:.6f},{s:g},{x:.5f},{y:.5f}"
+        for f, t in enumerate(result.frame_times)
+        for s in range(0, 101, 10)
+        for x, y in [(result.frames[f, 0, nc - 1 + round(s * 1e-3 / h)] * 1e3 + rng.normal(0, 0.1, 2))]
+    ]
     (tmp_path / "markers.csv").write_text("frame,t_s,s_mm,x_mm,y_mm\n" + "\n".join(rows) + "\n")
     reading = motion(encoder_t, quartic=quartic, break_s=break_s) - 0.0004 + rng.normal(0, 1e-3, len(encoder_t))
-    (tmp_path / "encoder.csv").write_text("t_s,theta_rad\n" + "\n".join(
-        f"{t:.4f},{v:.6f}" for t, v in zip(encoder_t, reading, strict=True)))
+    (tmp_path / "encoder.csv").write_text(
+        "t_s,theta_rad\n" + "\n".join(f"{t:.4f},{v:.6f}" for t, v in zip(encoder_t, reading, strict=True))
+    )
 
     def cli(*args):
         return run_cli(*args, cwd=tmp_path)
@@ -206,14 +235,28 @@ def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path, en
     assert done.returncode == 0 and "status: converged" in done.stdout, done.stdout + done.stderr
     assert ("moving from the first sample" in done.stdout) == (encoder_t[0] == 0.0), done.stdout
     print(done.stdout)
-    done = cli("fit", "measured.toml", "--measured", "markers.csv", "--free", "gamma,rotation_centre_dy_mm,D1",
-               "--set", "run.duration_s=0.25", "--out", "fit", "--no-progress")
+    done = cli(
+        "fit",
+        "measured.toml",
+        "--measured",
+        "markers.csv",
+        "--free",
+        "gamma,rotation_centre_dy_mm,D1",
+        "--set",
+        "run.duration_s=0.25",
+        "--out",
+        "fit",
+        "--no-progress",
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     fitted = json.loads((tmp_path / "fit" / "fit.json").read_text())
     assert fitted["status"] == "converged"
     value = {k: v["value"] for k, v in fitted["parameters"].items()}
-    print("fit:", {k: f"{v['value']:.5g} ± {v['sigma']:.2g}" for k, v in fitted["parameters"].items()},
-          f"RMS {fitted['rms_mm']:.3g} mm, noise {fitted['noise_mm']:.3g} mm")
+    print(
+        "fit:",
+        {k: f"{v['value']:.5g} ± {v['sigma']:.2g}" for k, v in fitted["parameters"].items()},
+        f"RMS {fitted['rms_mm']:.3g} mm, noise {fitted['noise_mm']:.3g} mm",
+    )
     assert abs(value["clamp.rotation_centre_dy_mm"] - 2.8) < 0.05
     assert abs(value["damping.gamma_per_s"] / 0.4 - 1) < 0.05
     assert abs(value["material.hysteresis_d1_gf_cm_per_cm"] / 0.05 - 1) < 0.02
@@ -225,13 +268,17 @@ def test_a_clamp_motion_the_model_cannot_describe_stops_the_path_at_its_first_st
     # the noise; the clamp fit's old 3× called it converged), so `clamp fit-angle`, the
     # documented path's first step, ends poor_fit (exit 6) before any motion fit.
     t = np.round(np.arange(0.0, 0.2, 1e-3), 6)
-    reading = (motion(t, quartic=moving_quartic(), break_s=MOVING_BREAK_S)
-               + 2e-3 * np.sin(2 * np.pi * 30 * np.clip(t - MOVING_BREAK_S, 0, None))
-               + np.random.default_rng(5).normal(0, 1e-3, len(t)))
-    (tmp_path / "rippled.csv").write_text("t_s,theta_rad\n" + "\n".join(f"{a:.4f},{v:.6f}" for a, v in zip(
-        t, reading, strict=True)))
-    done = run_cli("clamp", "fit-angle", "rippled.csv", "--scene", "impulsive_rotation", "-o", "rippled.toml",
-                   cwd=tmp_path)
+    reading = (
+        motion(t, quartic=moving_quartic(), break_s=MOVING_BREAK_S)
+        + 2e-3 * np.sin(2 * np.pi * 30 * np.clip(t - MOVING_BREAK_S, 0, None))
+        + np.random.default_rng(5).normal(0, 1e-3, len(t))
+    )
+    (tmp_path / "rippled.csv").write_text(
+        "t_s,theta_rad\n" + "\n".join(f"{a:.4f},{v:.6f}" for a, v in zip(t, reading, strict=True))
+    )
+    done = run_cli(
+        "clamp", "fit-angle", "rippled.csv", "--scene", "impulsive_rotation", "-o", "rippled.toml", cwd=tmp_path
+    )
     assert done.returncode == 6 and "status: poor_fit" in done.stdout, done.stdout + done.stderr
     assert "1.8× the encoder's noise" in done.stderr and "Traceback" not in done.stderr
 
@@ -314,11 +361,14 @@ class WellObjective:
         return {"x": float(u[0])}
 
 
-@pytest.mark.parametrize("name, cost, expected", [
-    ("two wells", lambda u: min((u[0] - 0.2) ** 2, (u[0] - 0.8) ** 2 + 1e-4) + 1e-6, [0.8]),
-    ("one well", lambda u: (u[0] - 0.3) ** 2 + 1e-6, []),
-    ("a flat valley", lambda u: 1e-3 + 1e-5 * u[0], []),
-])
+@pytest.mark.parametrize(
+    "name, cost, expected",
+    [
+        ("two wells", lambda u: min((u[0] - 0.2) ** 2, (u[0] - 0.8) ** 2 + 1e-4) + 1e-6, [0.8]),
+        ("one well", lambda u: (u[0] - 0.3) ** 2 + 1e-6, []),
+        ("a flat valley", lambda u: 1e-3 + 1e-5 * u[0], []),
+    ],
+)
 def test_separate_basins_of_the_space_filling_stage_are_reported(name, cost, expected):
     from warpcloth.calibrate.motion_fit import _other_minima
 
@@ -331,9 +381,22 @@ def test_separate_basins_of_the_space_filling_stage_are_reported(name, cost, exp
 def test_a_wrong_clamp_motion_is_not_reported_as_a_fit(tmp_path):
     # The bundled markers (rotation at 16 rad/s) fitted with the clamp's speed set 25 %
     # low: the best γ, dy (6.98 mm against the truth 4.0) leave an RMS 2.0× the noise.
-    done = run_cli("fit", "impulsive_rotation", "--measured", "impulsive_rotation_shapes", "--free",
-                   "gamma,rotation_centre_dy_mm", "--align-start", "0.01", "--set",
-                   "clamp.segments.1.theta_coefficients_si.1=12.0", "--out", "wrong", "--no-progress", cwd=tmp_path)
+    done = run_cli(
+        "fit",
+        "impulsive_rotation",
+        "--measured",
+        "impulsive_rotation_shapes",
+        "--free",
+        "gamma,rotation_centre_dy_mm",
+        "--align-start",
+        "0.01",
+        "--set",
+        "clamp.segments.1.theta_coefficients_si.1=12.0",
+        "--out",
+        "wrong",
+        "--no-progress",
+        cwd=tmp_path,
+    )
     assert done.returncode == 6 and "not a fit (poor_fit)" in done.stderr, done.stdout + done.stderr
     assert json.loads((tmp_path / "wrong" / "fit.json").read_text())["status"] == "poor_fit"
 

@@ -52,11 +52,20 @@ def period_errors():
         scenes, starts, exact = [], [], []
         for rigidity in (d for g, d in CASES if g == gravity):
             for edge in EDGES:
-                scene = wc.load_scene("damped_swing", overrides(
-                    strip__spacing_mm=h, material__hysteresis_d1_gf_cm_per_cm=0.0,
-                    material__bending_rigidity_gf_cm2_per_cm=rigidity, damping__gamma_per_s=0.0,
-                    release__enabled=False, run__duration_s=3.6 if gravity == 0.0 else 0.7,
-                    run__gravity_m_per_s2=gravity, integrator__dt_s=4e-6 * h, clamp__edge_hinge=edge))
+                scene = wc.load_scene(
+                    "damped_swing",
+                    overrides(
+                        strip__spacing_mm=h,
+                        material__hysteresis_d1_gf_cm_per_cm=0.0,
+                        material__bending_rigidity_gf_cm2_per_cm=rigidity,
+                        damping__gamma_per_s=0.0,
+                        release__enabled=False,
+                        run__duration_s=3.6 if gravity == 0.0 else 0.7,
+                        run__gravity_m_per_s2=gravity,
+                        integrator__dt_s=4e-6 * h,
+                        clamp__edge_hinge=edge,
+                    ),
+                )
                 material = to_si(scene.material)
                 length = scene.strip.free_length_mm * 1e-3
                 gamma = material.density * gravity * length**3 / material.bending_rigidity
@@ -71,8 +80,10 @@ def period_errors():
             key = (gravity, scene.material.bending_rigidity_gf_cm2_per_cm, scene.clamp.edge_hinge)
             errors.setdefault(key, []).append(period / exact[j] - 1)
     for key, values in errors.items():
-        print(f"g = {key[0]}, D = {key[1]} gf·cm²/cm, {key[2]}: period error {', '.join(f'{v:+.3%}' for v in values)} "
-              f"at h = {SPACINGS_MM} mm")
+        print(
+            f"g = {key[0]}, D = {key[1]} gf·cm²/cm, {key[2]}: period error {', '.join(f'{v:+.3%}' for v in values)} "
+            f"at h = {SPACINGS_MM} mm"
+        )
     return errors
 
 

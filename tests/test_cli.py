@@ -26,8 +26,20 @@ def warpcloth_cli(*args, cwd):
 
 def test_run_writes_a_complete_run_directory(tmp_path):
     out = tmp_path / "swing"
-    done = warpcloth_cli("run", "damped_swing", "--out", str(out), "--set", "run.duration_s=0.8",
-                         "--set", "release.settle_time_s=0.2", "--no-progress", "--usd", "swing.usda", cwd=tmp_path)
+    done = warpcloth_cli(
+        "run",
+        "damped_swing",
+        "--out",
+        str(out),
+        "--set",
+        "run.duration_s=0.8",
+        "--set",
+        "release.settle_time_s=0.2",
+        "--no-progress",
+        "--usd",
+        "swing.usda",
+        cwd=tmp_path,
+    )
     assert done.returncode == 0, done.stderr
     assert "endTimeCode = 48" in (tmp_path / "swing.usda").read_text()  # 49 frames
     assert "first period 0.5" in done.stdout and "turning points" in done.stdout
@@ -51,8 +63,9 @@ def test_run_writes_a_complete_run_directory(tmp_path):
 
 
 def test_bad_scene_is_a_clear_error_before_running(tmp_path):
-    done = warpcloth_cli("run", "damped_swing", "--set", "strip.spacing_mm=-1", "--out", str(tmp_path / "x"),
-                         cwd=tmp_path)
+    done = warpcloth_cli(
+        "run", "damped_swing", "--set", "strip.spacing_mm=-1", "--out", str(tmp_path / "x"), cwd=tmp_path
+    )
     assert done.returncode == 2
     assert "strip.spacing_mm: must be > 0, got -1" in done.stderr
     assert not (tmp_path / "x").exists()
@@ -60,9 +73,22 @@ def test_bad_scene_is_a_clear_error_before_running(tmp_path):
 
 def test_divergence_is_reported_and_the_record_kept(tmp_path):
     out = tmp_path / "fwd"
-    done = warpcloth_cli("run", "damped_swing", "--out", str(out), "--no-progress",
-                         "--set", "integrator.scheme=forward", "--set", "integrator.dt_s=2e-5",
-                         "--set", "release.enabled=false", "--set", "damping.gamma_per_s=0", cwd=tmp_path)
+    done = warpcloth_cli(
+        "run",
+        "damped_swing",
+        "--out",
+        str(out),
+        "--no-progress",
+        "--set",
+        "integrator.scheme=forward",
+        "--set",
+        "integrator.dt_s=2e-5",
+        "--set",
+        "release.enabled=false",
+        "--set",
+        "damping.gamma_per_s=0",
+        cwd=tmp_path,
+    )
     assert done.returncode == 3
     assert "strip 0 diverged after t = 0, at t =" in done.stderr and "tensile strain" in done.stderr
     meta = json.loads((out / "meta.json").read_text())
@@ -74,18 +100,26 @@ def test_divergence_is_reported_and_the_record_kept(tmp_path):
 def test_wheel_maps_kernels_and_scenes_into_the_warpcloth_namespace(tmp_path):
     # kernels/ must not install as a top-level "kernels" (a different PyPI package).
     root = wc.__file__.rsplit("/warpcloth/", 1)[0]
-    done = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(tmp_path), root],
-                          capture_output=True, text=True, timeout=300)
+    done = subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(tmp_path), root],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stderr
     (wheel,) = tmp_path.glob("warpcloth-*.whl")
     names = zipfile.ZipFile(wheel).namelist()
     # every module of the source tree is in the wheel (a subpackage missing from
     # pyproject's list would install a package that cannot import itself)
     root_path = Path(root)
-    sources = {f"warpcloth/{p.relative_to(root_path / 'warpcloth').as_posix()}"
-               for p in (root_path / "warpcloth").rglob("*.py")}
-    sources |= {f"warpcloth/kernels/{p.relative_to(root_path / 'kernels').as_posix()}"
-                for p in (root_path / "kernels").rglob("*.py")}
+    sources = {
+        f"warpcloth/{p.relative_to(root_path / 'warpcloth').as_posix()}"
+        for p in (root_path / "warpcloth").rglob("*.py")
+    }
+    sources |= {
+        f"warpcloth/kernels/{p.relative_to(root_path / 'kernels').as_posix()}"
+        for p in (root_path / "kernels").rglob("*.py")
+    }
     assert sources - set(names) == set()
     assert "warpcloth/kernels/strip.py" in names and "warpcloth/calibrate/kes/readers.py" in names
     assert "warpcloth/scenes/damped_swing.toml" in names and "warpcloth/scenes/impulsive_rotation.toml" in names
@@ -104,16 +138,24 @@ def test_progress_bar_shows_simulated_time_rate_and_eta(capsys):
     assert "0.050/0.050 s sim" in err and "strip-steps/s" in err and "<" in err  # elapsed<remaining
 
 
-@pytest.mark.parametrize("args, message", [
-    (("sweep", "damped_swing_sweep", "--max-batch", "0"), "argument --max-batch: 0 must be at least 1"),
-    (("sweep", "damped_swing_sweep", "--workers", "-1"), "argument --workers: -1 must be at least 0"),
-    (("plot", "runs/x", "--times", "nan"), "argument --times: 'nan' is not a finite number"),
-    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--align-start", "inf"),
-     "argument --align-start: 'inf' is not a finite number"),
-    (("render", "runs/x", "--stride", "0"), "argument --stride: 0 must be at least 1"),
-    (("run", "impulsive_rotation", "--device", "gpu7"), "argument --device: 'gpu7' is not a device of this machine"),
-    (("run", "impulsive_rotation", "--usd", "stage.txt"), "--usd: stage.txt must end in one of .usd, .usda, .usdc"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (("sweep", "damped_swing_sweep", "--max-batch", "0"), "argument --max-batch: 0 must be at least 1"),
+        (("sweep", "damped_swing_sweep", "--workers", "-1"), "argument --workers: -1 must be at least 0"),
+        (("plot", "runs/x", "--times", "nan"), "argument --times: 'nan' is not a finite number"),
+        (
+            ("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--align-start", "inf"),
+            "argument --align-start: 'inf' is not a finite number",
+        ),
+        (("render", "runs/x", "--stride", "0"), "argument --stride: 0 must be at least 1"),
+        (
+            ("run", "impulsive_rotation", "--device", "gpu7"),
+            "argument --device: 'gpu7' is not a device of this machine",
+        ),
+        (("run", "impulsive_rotation", "--usd", "stage.txt"), "--usd: stage.txt must end in one of .usd, .usda, .usdc"),
+    ],
+)
 def test_bad_options_are_refused_before_anything_runs(tmp_path, args, message):
     done = warpcloth_cli(*args, "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert done.returncode == 2 and message in done.stderr, done.stderr
@@ -124,8 +166,16 @@ def test_bad_options_are_refused_before_anything_runs(tmp_path, args, message):
 def test_an_unwritable_output_is_one_line_not_a_traceback(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("not a directory")
-    done = warpcloth_cli("run", "impulsive_rotation", "--set", "run.duration_s=0.01", "--no-progress",
-                         "--out", str(blocker / "run"), cwd=tmp_path)
+    done = warpcloth_cli(
+        "run",
+        "impulsive_rotation",
+        "--set",
+        "run.duration_s=0.01",
+        "--no-progress",
+        "--out",
+        str(blocker / "run"),
+        cwd=tmp_path,
+    )
     assert done.returncode == 5 and "I/O error: Not a directory" in done.stderr and "Traceback" not in done.stderr
     assert str(blocker / "run") in done.stderr or str(blocker) in done.stderr
 
@@ -139,16 +189,26 @@ def test_an_existing_run_is_never_replaced_silently(tmp_path):
     first = ("run", "impulsive_rotation", "--set", "run.duration_s=0.02", "--no-progress", "--out", str(out))
     assert warpcloth_cli(*first, cwd=tmp_path).returncode == 0
     before = run_files(out)
-    again = warpcloth_cli("run", "impulsive_rotation", "--set", "run.duration_s=0.03", "--no-progress",
-                          "--out", str(out), cwd=tmp_path)
+    again = warpcloth_cli(
+        "run", "impulsive_rotation", "--set", "run.duration_s=0.03", "--no-progress", "--out", str(out), cwd=tmp_path
+    )
     assert again.returncode == 2 and f"--out: {out} already holds a run" in again.stderr
     assert run_files(out) == before  # untouched, byte for byte
     with pytest.raises(wc.ArgumentError, match="^out: .* already holds a run"):
         wc.simulate(wc.load_scene("impulsive_rotation"), out=out)
     sweep = warpcloth_cli("sweep", "damped_swing_sweep", "--out", str(out), "--workers", "0", cwd=tmp_path)
     assert sweep.returncode == 2 and "already holds a run" in sweep.stderr
-    replaced = warpcloth_cli("run", "impulsive_rotation", "--set", "run.duration_s=0.03", "--no-progress",
-                             "--out", str(out), "--overwrite", cwd=tmp_path)
+    replaced = warpcloth_cli(
+        "run",
+        "impulsive_rotation",
+        "--set",
+        "run.duration_s=0.03",
+        "--no-progress",
+        "--out",
+        str(out),
+        "--overwrite",
+        cwd=tmp_path,
+    )
     assert replaced.returncode == 0, replaced.stderr
     assert wc.load_scene(out / "scene.toml").run.duration_s == 0.03
     assert json.loads((out / "meta.json").read_text())["complete"]
@@ -159,19 +219,49 @@ def test_a_killed_overwrite_leaves_the_old_run_whole(tmp_path):
     # A real SIGKILL while the replacing run is streaming: the old run is byte-identical,
     # the new one sits only in a hidden staging directory marked incomplete.
     out = tmp_path / "swing"
-    assert warpcloth_cli("run", "impulsive_rotation", "--set", "run.duration_s=0.02", "--no-progress",
-                         "--out", str(out), cwd=tmp_path).returncode == 0
+    assert (
+        warpcloth_cli(
+            "run",
+            "impulsive_rotation",
+            "--set",
+            "run.duration_s=0.02",
+            "--no-progress",
+            "--out",
+            str(out),
+            cwd=tmp_path,
+        ).returncode
+        == 0
+    )
     before = run_files(out)
-    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set",
-                             "run.duration_s=600", "--no-progress", "--out", str(out), "--overwrite"], cwd=tmp_path,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "warpcloth.cli",
+            "run",
+            "damped_swing",
+            "--set",
+            "run.duration_s=600",
+            "--no-progress",
+            "--out",
+            str(out),
+            "--overwrite",
+        ],
+        cwd=tmp_path,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         deadline = time.monotonic() + 120
         staging = []
         while time.monotonic() < deadline and not staging:
-            staging = [p for p in tmp_path.iterdir()
-                       if p.name.startswith(".swing.new-") and (p / "probes.csv").is_file()
-                       and (p / "probes.csv").stat().st_size > 1000]
+            staging = [
+                p
+                for p in tmp_path.iterdir()
+                if p.name.startswith(".swing.new-")
+                and (p / "probes.csv").is_file()
+                and (p / "probes.csv").stat().st_size > 1000
+            ]
             time.sleep(0.2)
         assert staging, "the replacing run never started streaming"
     finally:
@@ -188,10 +278,27 @@ def test_result_files_are_refused_when_present_unless_overwrite(tmp_path):
     assert warpcloth_cli(*run, cwd=tmp_path).returncode == 0
     commands = {
         "stage.usda": ("export-usd", "r", "-o", "stage.usda"),
-        "mat.toml": ("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example",
-                     "-o", "mat.toml", "--density-g-per-cm2", "2.03e-2"),
-        "fitted.toml": ("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation",
-                        "-o", "fitted.toml"),
+        "mat.toml": (
+            "material",
+            "fit-kes",
+            "--tensile",
+            "kes_fb1_example",
+            "--bending",
+            "kes_fb2_example",
+            "-o",
+            "mat.toml",
+            "--density-g-per-cm2",
+            "2.03e-2",
+        ),
+        "fitted.toml": (
+            "clamp",
+            "fit-angle",
+            "impulsive_rotation_encoder",
+            "--scene",
+            "impulsive_rotation",
+            "-o",
+            "fitted.toml",
+        ),
     }
     for name, command in commands.items():
         (tmp_path / name).write_text("a result someone kept\n")
@@ -228,10 +335,26 @@ def test_a_torn_tail_is_never_read_as_data(tmp_path):
 
 def test_ctrl_c_is_one_line_and_keeps_what_was_written(tmp_path):
     out = tmp_path / "r"
-    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set",
-                             "run.duration_s=600",  # interrupted long before its end, on however loaded a machine
-                             "--no-progress", "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, preexec_fn=interruptible)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "warpcloth.cli",
+            "run",
+            "damped_swing",
+            "--set",
+            "run.duration_s=600",  # interrupted long before its end, on however loaded a machine
+            "--no-progress",
+            "--out",
+            str(out),
+        ],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=interruptible,
+    )
+
     def committed_frames():
         try:
             return json.loads((out / "meta.json").read_text())["committed"]["frames"]
@@ -268,9 +391,16 @@ def test_a_damaged_run_directory_is_named_not_a_traceback(tmp_path, damage):
 def test_version_provenance_and_dict_overrides(tmp_path):
     done = warpcloth_cli("--version", cwd=tmp_path)
     assert done.returncode == 0 and done.stdout.startswith("warpcloth ")
-    result = wc.run("damped_swing", {"damping.gamma_per_s": 0.5, "run.duration_s": 0.05,
-                                     "release.settle_time_s": 0.05, "clamp.edge_hinge": "paper"},
-                    out=tmp_path / "r")
+    result = wc.run(
+        "damped_swing",
+        {
+            "damping.gamma_per_s": 0.5,
+            "run.duration_s": 0.05,
+            "release.settle_time_s": 0.05,
+            "clamp.edge_hinge": "paper",
+        },
+        out=tmp_path / "r",
+    )
     assert result.scenes[0].damping.gamma_per_s == 0.5 and result.scenes[0].clamp.edge_hinge == "paper"
     provenance = json.loads((tmp_path / "r" / "meta.json").read_text())["provenance"]
     assert provenance["warp"] == wp.__version__ and provenance["device"] == "cpu" and provenance["date_utc"]
@@ -347,9 +477,13 @@ def test_every_option_with_a_default_states_it_in_its_help():
     # None or empty is either an input or says what its absence means (checked by hand)
     import argparse
 
-    silent = [f"{command} {option} (default {action.default!r})" for command, option, action in cli_options()
-              if not isinstance(action, (argparse._HelpAction, argparse._VersionAction, argparse._StoreTrueAction))
-              and action.default not in (None, [], False) and "(default" not in (action.help or "")]
+    silent = [
+        f"{command} {option} (default {action.default!r})"
+        for command, option, action in cli_options()
+        if not isinstance(action, (argparse._HelpAction, argparse._VersionAction, argparse._StoreTrueAction))
+        and action.default not in (None, [], False)
+        and "(default" not in (action.help or "")
+    ]
     assert not silent, f"options whose help does not state their default: {silent}"
 
 
@@ -361,15 +495,21 @@ def test_fit_help_states_the_default_bounds(capsys):
         main(["fit", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "see README" not in text
-    assert ("--bounds BOUNDS name=LOW:HIGH,... (default: a rotation centre or hold position ± 10 mm around the "
-            "scene's value; gamma 0 to max(4× the scene's, 2 /s); a hysteresis amplitude D1, Ms or Mf 0 to 4×; any "
-            "other ¼× to 4×") in text
+    assert (
+        "--bounds BOUNDS name=LOW:HIGH,... (default: a rotation centre or hold position ± 10 mm around the "
+        "scene's value; gamma 0 to max(4× the scene's, 2 /s); a hysteresis amplitude D1, Ms or Mf 0 to 4×; any "
+        "other ¼× to 4×"
+    ) in text
     # and they are the bounds the fit takes
-    scene = wc.load_scene("impulsive_rotation", {"material.hysteresis_d1_gf_cm_per_cm": 0.04,
-                                                 "damping.gamma_per_s": 0.3})
+    scene = wc.load_scene(
+        "impulsive_rotation", {"material.hysteresis_d1_gf_cm_per_cm": 0.04, "damping.gamma_per_s": 0.3}
+    )
     bounds = {p.field: (p.lower, p.upper) for p in free_parameters("rotation_centre_dy_mm,gamma,D1,D", scene)}
     dy = scene.clamp.rotation_centre_dy_mm
     d = scene.material.bending_rigidity_gf_cm2_per_cm
-    assert bounds == {"clamp.rotation_centre_dy_mm": (dy - 10, dy + 10), "damping.gamma_per_s": (0.0, 2.0),
-                      "material.hysteresis_d1_gf_cm_per_cm": (0.0, 0.16),
-                      "material.bending_rigidity_gf_cm2_per_cm": (d / 4, 4 * d)}
+    assert bounds == {
+        "clamp.rotation_centre_dy_mm": (dy - 10, dy + 10),
+        "damping.gamma_per_s": (0.0, 2.0),
+        "material.hysteresis_d1_gf_cm_per_cm": (0.0, 0.16),
+        "material.bending_rigidity_gf_cm2_per_cm": (d / 4, 4 * d),
+    }

@@ -41,8 +41,10 @@ def test_spacing_convergence():
     # root multiply with refinement (93, 368, 1647 in the first second at 5, 2.5, 1.25 mm)
     # and the tagawa2003 law opens a fresh branch at each (docs/model.md §15.6).
     for d1, (low, high) in ((0.0, (1.8, 2.3)), (0.04, (0.8, 1.2))):
-        runs = {h: tip_x(strip__spacing_mm=h, integrator__dt_s=2.5e-6, material__hysteresis_d1_gf_cm_per_cm=d1)
-                for h in (5.0, 2.5, 1.25)}
+        runs = {
+            h: tip_x(strip__spacing_mm=h, integrator__dt_s=2.5e-6, material__hysteresis_d1_gf_cm_per_cm=d1)
+            for h in (5.0, 2.5, 1.25)
+        }
         p = observed_order(runs[5.0], runs[2.5], runs[1.25])
         print(f"D1 = {d1}: observed order in h: {p:.2f}")
         assert low < p < high
@@ -62,8 +64,10 @@ def test_impulsive_rotation_converges_in_dt_and_h():
     # (0.91, 0.51, 1.24 mm).
     default, fine = rotation_tip_x(), rotation_tip_x(integrator__dt_s=1.25e-6)
     assert np.max(np.abs(default - fine)) < 1e-5
-    runs = {h: rotation_tip_x(strip__spacing_mm=h, integrator__dt_s=1.25e-6, material__hysteresis_d1_gf_cm_per_cm=0.0)
-            for h in (5.0, 2.5, 1.25)}
+    runs = {
+        h: rotation_tip_x(strip__spacing_mm=h, integrator__dt_s=1.25e-6, material__hysteresis_d1_gf_cm_per_cm=0.0)
+        for h in (5.0, 2.5, 1.25)
+    }
     p = observed_order(runs[5.0], runs[2.5], runs[1.25])
     print(f"rotation, D1 = 0: observed order in h: {p:.2f}")
     assert 0.9 < p < 2.2

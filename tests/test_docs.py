@@ -23,8 +23,12 @@ def test_every_scene_field_is_documented():
 
 def test_readme_starts_with_the_two_commands():
     lines = README.read_text().splitlines()
-    assert lines[:4] == ["```bash", "pip install . && warpcloth run damped_swing",
-                         "pip install -e '.[test]' && pytest", "```"]
+    assert lines[:4] == [
+        "```bash",
+        "pip install . && warpcloth run damped_swing",
+        "pip install -e '.[test]' && pytest",
+        "```",
+    ]
 
 
 def test_the_readme_is_a_landing_page():

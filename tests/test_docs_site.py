@@ -32,15 +32,35 @@ MISSING_TOOLS = [name for name in DOC_TOOLS if importlib.util.find_spec(name) is
 @pytest.fixture(scope="module")
 def site(tmp_path_factory):
     if MISSING_TOOLS:
-        pytest.skip(f"the documentation tools are not installed ({', '.join(MISSING_TOOLS)} not importable): "
-                    "pip install -e '.[docs]'")
+        pytest.skip(
+            f"the documentation tools are not installed ({', '.join(MISSING_TOOLS)} not importable): "
+            "pip install -e '.[docs]'"
+        )
     work = tmp_path_factory.mktemp("docs-site")
-    shutil.copytree(ROOT / "docs", work / "docs",
-                    ignore=shutil.ignore_patterns("_build", "auto_examples", "sg_execution_times.rst", "__pycache__"))
+    shutil.copytree(
+        ROOT / "docs",
+        work / "docs",
+        ignore=shutil.ignore_patterns("_build", "auto_examples", "sg_execution_times.rst", "__pycache__"),
+    )
     shutil.copytree(ROOT / "examples", work / "examples", ignore=shutil.ignore_patterns("__pycache__"))
-    build = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
-                            str(work / "docs"), str(work / "html")],
-                           env=os.environ | QUICK, capture_output=True, text=True, timeout=600)
+    build = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "sphinx",
+            "-W",
+            "--keep-going",
+            "-q",
+            "-b",
+            "html",
+            str(work / "docs"),
+            str(work / "html"),
+        ],
+        env=os.environ | QUICK,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert build.returncode == 0, f"sphinx-build failed:\n{build.stdout[-6000:]}\n{build.stderr[-6000:]}"
     return work / "html"
 
@@ -48,8 +68,17 @@ def site(tmp_path_factory):
 def test_there_are_the_nine_examples():
     # issue 14's six, issue 15's bending-law comparison, issue 28's set and grip and issue
     # 24's tracking; docs/conf.py orders them (sphinx-gallery refuses a file it does not list)
-    wanted = ["plot_damped_swing", "plot_impulsive_rotation", "plot_kes_fit", "plot_bending_laws", "plot_calibration",
-              "plot_track_video", "plot_set_and_grip", "plot_sweep_heatmap", "plot_usd_export"]
+    wanted = [
+        "plot_damped_swing",
+        "plot_impulsive_rotation",
+        "plot_kes_fit",
+        "plot_bending_laws",
+        "plot_calibration",
+        "plot_track_video",
+        "plot_set_and_grip",
+        "plot_sweep_heatmap",
+        "plot_usd_export",
+    ]
     assert sorted(wanted) == EXAMPLES
 
 
@@ -67,8 +96,12 @@ def test_every_example_page_shows_its_output_and_figures(site, example):
 
 def test_the_scene_reference_lists_every_field(site):
     text = (site / "scene_reference.html").read_text()
-    missing = [f"{section}.{f.name}" for section, tp in typing.get_type_hints(Scene).items()
-               for f in dataclasses.fields(tp) if f"{section}.{f.name}" not in text]
+    missing = [
+        f"{section}.{f.name}"
+        for section, tp in typing.get_type_hints(Scene).items()
+        for f in dataclasses.fields(tp)
+        if f"{section}.{f.name}" not in text
+    ]
     assert not missing, f"fields missing from the generated scene reference: {missing}"
 
 
@@ -80,8 +113,14 @@ def test_the_api_reference_documents_the_top_level_api(site):
 
 
 def test_an_example_runs_as_a_plain_script(tmp_path):
-    run = subprocess.run([sys.executable, str(ROOT / "examples" / "plot_damped_swing.py")], cwd=tmp_path,
-                         env=os.environ | QUICK, capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "plot_damped_swing.py")],
+        cwd=tmp_path,
+        env=os.environ | QUICK,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr[-4000:]
     assert re.search(r"first period\s+0\.5\d+ s", run.stdout), run.stdout
     assert not any(tmp_path.iterdir()), "the example wrote into the directory it was started in"

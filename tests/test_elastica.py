@@ -30,15 +30,26 @@ def horizontal_scene(kappa: float, edge: str, spacing_mm: float, *extra: str) ->
     rigidity = density * 9.80665 * LENGTH_M**3 / kappa
     omega = 1.875104068711961**2 * math.sqrt(rigidity / (density * LENGTH_M**4))
     turn = math.pi / 2
-    segment = (f"[{{t_start_s = 0.0, t_end_s = {RAMP_S}, theta_coefficients_si = "
-               f"[0.0, 0.0, {3 * turn / RAMP_S**2!r}, {-2 * turn / RAMP_S**3!r}]}}]")
-    return wc.load_scene("damped_swing", overrides(
-        strip__spacing_mm=spacing_mm, material__hysteresis_d1_gf_cm_per_cm=0.0,
-        material__bending_rigidity_gf_cm2_per_cm=rigidity / units.RIGIDITY_GF_CM2_PER_CM,
-        damping__gamma_per_s=2 * omega, release__enabled=False, run__duration_s=2.5, clamp__edge_hinge=edge,
-        # a static shape: the step need only be stable (elastic, so imex's auto step is)
-        integrator__scheme="imex", integrator__dt_s="auto") + ['clamp.motion="piecewise"',
-                                                               f"clamp.segments={segment}", *extra])
+    segment = (
+        f"[{{t_start_s = 0.0, t_end_s = {RAMP_S}, theta_coefficients_si = "
+        f"[0.0, 0.0, {3 * turn / RAMP_S**2!r}, {-2 * turn / RAMP_S**3!r}]}}]"
+    )
+    return wc.load_scene(
+        "damped_swing",
+        overrides(
+            strip__spacing_mm=spacing_mm,
+            material__hysteresis_d1_gf_cm_per_cm=0.0,
+            material__bending_rigidity_gf_cm2_per_cm=rigidity / units.RIGIDITY_GF_CM2_PER_CM,
+            damping__gamma_per_s=2 * omega,
+            release__enabled=False,
+            run__duration_s=2.5,
+            clamp__edge_hinge=edge,
+            # a static shape: the step need only be stable (elastic, so imex's auto step is)
+            integrator__scheme="imex",
+            integrator__dt_s="auto",
+        )
+        + ['clamp.motion="piecewise"', f"clamp.segments={segment}", *extra],
+    )
 
 
 @pytest.fixture(scope="module")
@@ -61,8 +72,11 @@ def settled():
 def errors(settled, kappa, edge, quantity):
     exact = heavy_elastica(kappa)[("tip_drop", "tip_angle")[quantity]]
     values = [settled[(kappa, edge, h)][quantity] / exact - 1 for h in SPACINGS]
-    print(f"κ = {kappa:g}, {edge}, {('tip drop', 'tip angle')[quantity]}: "
-          + ", ".join(f"{v:+.4%}" for v in values) + f" at h = {tuple(SPACINGS)} mm")
+    print(
+        f"κ = {kappa:g}, {edge}, {('tip drop', 'tip angle')[quantity]}: "
+        + ", ".join(f"{v:+.4%}" for v in values)
+        + f" at h = {tuple(SPACINGS)} mm"
+    )
     return values
 
 

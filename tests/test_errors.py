@@ -28,8 +28,10 @@ def test_a_library_caller_reads_the_argument_it_wrote(tmp_path):
 def test_the_command_line_names_the_option_with_the_same_message(capsys):
     # analyse(source, t_from=...) refuses t_from; `warpcloth analyse INPUT --from` says --from
     assert main(["analyse", "damped_swing_laser", "--from", "100"]) == 2
-    assert capsys.readouterr().err == ("warpcloth analyse: error in option: --from: 100 s is not before the "
-                                       "window's end 1.5 s (the end of damped_swing_laser)\n")
+    assert capsys.readouterr().err == (
+        "warpcloth analyse: error in option: --from: 100 s is not before the "
+        "window's end 1.5 s (the end of damped_swing_laser)\n"
+    )
     assert main(["analyse", "no_such_laser"]) == 2
     assert "error in option: INPUT: cannot read the measured motion file no_such_laser" in capsys.readouterr().err
     converted = as_option(ArgumentError("t_from", "1 s is not before the window's end"))
@@ -61,8 +63,12 @@ def _named_arguments() -> dict[str, list[str]]:
                 defaults = [None] * (len(node.args.args) - len(node.args.defaults)) + node.args.defaults
                 defaults += node.args.kw_defaults
                 names += [d for a, d in zip(args, defaults, strict=True) if a.arg == "argument" and d is not None]
-            elif (isinstance(node, ast.For) and isinstance(node.target, ast.Tuple)
-                  and getattr(node.target.elts[0], "id", None) == "argument" and isinstance(node.iter, ast.Tuple)):
+            elif (
+                isinstance(node, ast.For)
+                and isinstance(node.target, ast.Tuple)
+                and getattr(node.target.elts[0], "id", None) == "argument"
+                and isinstance(node.iter, ast.Tuple)
+            ):
                 names += [item.elts[0] for item in node.iter.elts if isinstance(item, ast.Tuple)]
             for name in names:
                 if isinstance(name, ast.Constant) and name.value is None:
@@ -78,8 +84,11 @@ def _named_arguments() -> dict[str, list[str]]:
 def test_every_argument_the_library_names_has_an_option_or_is_library_only():
     found = _named_arguments()
     assert {"variants", "workers", "t_from", "name_or_path", "out"} <= set(found)  # the scan sees the library
-    unmapped = {name: where for name, where in found.items()
-                if name not in FLAGS and name not in LIBRARY_ONLY and not name.startswith("--")}
+    unmapped = {
+        name: where
+        for name, where in found.items()
+        if name not in FLAGS and name not in LIBRARY_ONLY and not name.startswith("--")
+    }
     assert unmapped == {}
     assert not set(FLAGS) & LIBRARY_ONLY
     assert set(FLAGS) | LIBRARY_ONLY <= set(found), "a mapping for an argument nothing names"
@@ -91,6 +100,9 @@ def test_only_the_command_line_raises_option_errors():
         inside = path.relative_to(PACKAGE).parts
         if inside[0] == "cli":
             continue
-        raised += [f"{path.name}:{node.lineno}" for node in ast.walk(ast.parse(path.read_text()))
-                   if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "OptionError"]
+        raised += [
+            f"{path.name}:{node.lineno}"
+            for node in ast.walk(ast.parse(path.read_text()))
+            if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "OptionError"
+        ]
     assert raised == []

@@ -35,17 +35,34 @@ def limited_cli(*args, cwd, max_file_bytes):
     """``warpcloth ARGS`` in a child whose files may not grow past ``max_file_bytes``
     (writes beyond fail with EFBIG: Python ignores SIGXFSZ)."""
     kernels_compiled()
+
     def limit():
         resource.setrlimit(resource.RLIMIT_FSIZE, (max_file_bytes, max_file_bytes))
-    return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=300, preexec_fn=limit)
+
+    return subprocess.run(
+        [sys.executable, "-m", "warpcloth.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=300,
+        preexec_fn=limit,
+    )
 
 
 def test_a_disk_that_fills_during_a_run_is_exit_5_and_leaves_the_committed_part(tmp_path):
     # 30 s of the swing: 0.7 MB of frames (reserved at the start) and ~7 MB of probe rows
     # in chunks of growing size; a 3 MB limit stops it while it streams probes.
-    done = limited_cli("run", "damped_swing", "--set", "run.duration_s=30", "--out", "r", "--no-progress",
-                       cwd=tmp_path, max_file_bytes=3_000_000)
+    done = limited_cli(
+        "run",
+        "damped_swing",
+        "--set",
+        "run.duration_s=30",
+        "--out",
+        "r",
+        "--no-progress",
+        cwd=tmp_path,
+        max_file_bytes=3_000_000,
+    )
     assert done.returncode == 5, done.stderr
     assert "I/O error: File too large" in done.stderr and "what was committed before is kept" in done.stderr
     assert "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1
@@ -67,11 +84,11 @@ def test_a_disk_too_small_for_the_frames_fails_before_any_kernel_runs(tmp_path):
 
 
 def test_a_full_disk_never_destroys_the_result_being_replaced(tmp_path):
-    wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.2", "release.settle_time_s=0.1"]),
-                out=tmp_path / "r")
+    wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.2", "release.settle_time_s=0.1"]), out=tmp_path / "r")
     before = {p.name: p.read_bytes() for p in (tmp_path / "r").iterdir()}
-    done = limited_cli("run", "damped_swing", "--out", "r", "--overwrite", "--no-progress", cwd=tmp_path,
-                       max_file_bytes=300_000)
+    done = limited_cli(
+        "run", "damped_swing", "--out", "r", "--overwrite", "--no-progress", cwd=tmp_path, max_file_bytes=300_000
+    )
     assert done.returncode == 5, done.stderr
     assert {p.name: p.read_bytes() for p in (tmp_path / "r").iterdir()} == before
     assert load_recording(tmp_path / "r").complete
@@ -82,13 +99,25 @@ def test_a_full_disk_never_truncates_an_existing_file(tmp_path, stage):
     # material fit-kes and export-usd replace their output only once the new one is whole.
     if stage == "material":
         target = tmp_path / "m.toml"
-        args = ("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example",
-                "--density-g-per-cm2", "0.02", "-o", str(target), "--overwrite")
+        args = (
+            "material",
+            "fit-kes",
+            "--tensile",
+            "kes_fb1_example",
+            "--bending",
+            "kes_fb2_example",
+            "--density-g-per-cm2",
+            "0.02",
+            "-o",
+            str(target),
+            "--overwrite",
+        )
         target.write_text("# an existing material file\n" + "x = 1\n" * 10)
         limit = 200
     else:
-        wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.2", "release.settle_time_s=0.1"]),
-                    out=tmp_path / "r")
+        wc.simulate(
+            wc.load_scene("damped_swing", ["run.duration_s=0.2", "release.settle_time_s=0.1"]), out=tmp_path / "r"
+        )
         target = tmp_path / "s.usda"
         target.write_text("#usda 1.0\n")
         args = ("export-usd", str(tmp_path / "r"), "-o", str(target), "--overwrite")
@@ -101,10 +130,24 @@ def test_a_full_disk_never_truncates_an_existing_file(tmp_path, stage):
 
 def test_a_run_killed_while_streaming_reads_back_its_committed_part(tmp_path):
     out = tmp_path / "r"
-    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set",
-                             "run.duration_s=600",  # interrupted long before its end, on however loaded a machine
-                             "--no-progress", "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "warpcloth.cli",
+            "run",
+            "damped_swing",
+            "--set",
+            "run.duration_s=600",  # interrupted long before its end, on however loaded a machine
+            "--no-progress",
+            "--out",
+            str(out),
+        ],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+
     def committed(key):
         try:
             return json.loads((out / "meta.json").read_text())["committed"][key]
@@ -128,8 +171,11 @@ ABSURD = ["run.duration_s=20000", "output.probes_per_frame=1666"]  # 2e9 probe s
 
 
 def test_work_too_large_for_memory_is_refused_with_its_numbers_and_knobs(tmp_path):
-    with pytest.raises(wc.ResourceError, match=r"would take [0-9.]+ [GT]B of memory, more than 50% of the .* "
-                       r"available; record less \(output.probes_per_frame, output.frame_rate_hz, run.duration_s\)"):
+    with pytest.raises(
+        wc.ResourceError,
+        match=r"would take [0-9.]+ [GT]B of memory, more than 50% of the .* "
+        r"available; record less \(output.probes_per_frame, output.frame_rate_hz, run.duration_s\)",
+    ):
         wc.simulate(wc.load_scene("damped_swing", ABSURD))
     from warpcloth.sim.resources import check_memory
 
@@ -139,9 +185,22 @@ def test_work_too_large_for_memory_is_refused_with_its_numbers_and_knobs(tmp_pat
 
 
 def test_work_too_large_for_memory_is_refused_by_the_command_too(tmp_path):
-    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--out", "big",
-                           *(a for s in ABSURD for a in ("--set", s))], capture_output=True, text=True, cwd=tmp_path,
-                          timeout=300)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "warpcloth.cli",
+            "run",
+            "damped_swing",
+            "--out",
+            "big",
+            *(a for s in ABSURD for a in ("--set", s)),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=300,
+    )
     assert done.returncode == 2 and "warpcloth run: too large: the recorded probes and frames" in done.stderr
     assert "Traceback" not in done.stderr and not (tmp_path / "big").exists()
 
@@ -152,8 +211,11 @@ def test_output_too_large_for_the_disk_is_refused_before_anything_is_written(tmp
     from warpcloth.io.run_dir import RunWriter
 
     scene = wc.load_scene("damped_swing", ["output.probes_per_frame=1666"])
-    with pytest.raises(wc.ResourceError, match=r"the run's frames.npy and probes.csv would write [0-9.]+ TB to "
-                       r".*big, whose file system has [0-9.]+ [kMGT]?B free; free space, choose another --out"):
+    with pytest.raises(
+        wc.ResourceError,
+        match=r"the run's frames.npy and probes.csv would write [0-9.]+ TB to "
+        r".*big, whose file system has [0-9.]+ [kMGT]?B free; free space, choose another --out",
+    ):
         RunWriter(tmp_path / "big", [scene], scene.n_nodes, np.zeros(2_000_000))
     assert not (tmp_path / "big").exists()
     from warpcloth.sim.resources import check_disk
@@ -163,9 +225,23 @@ def test_output_too_large_for_the_disk_is_refused_before_anything_is_written(tmp
 
 def test_a_huge_sweep_is_refused_before_it_is_expanded(tmp_path):
     started = time.monotonic()
-    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "sweep", "damped_swing_sweep", "--set",
-                           "sweep.random.samples=1000000", "--out", "s"], capture_output=True, text=True, cwd=tmp_path,
-                          timeout=300)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "warpcloth.cli",
+            "sweep",
+            "damped_swing_sweep",
+            "--set",
+            "sweep.random.samples=1000000",
+            "--out",
+            "s",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=300,
+    )
     assert done.returncode == 2 and "the sweep has 1000000 variants, more than 100000" in done.stderr
     assert "--max-variants" in done.stderr and not (tmp_path / "s").exists()
     assert time.monotonic() - started < 60  # not minutes of expansion first
@@ -176,14 +252,27 @@ def test_a_huge_sweep_is_refused_before_it_is_expanded(tmp_path):
 def test_two_runs_started_into_one_directory_never_interleave(tmp_path):
     # Started together, both may find --out empty; exactly one writes it, the other is
     # refused, and what is left is one complete run equal to a run made alone.
-    args = [sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set", "run.duration_s=1",
-            "--no-progress", "--out", "r"]
-    procs = [subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-             for _ in range(2)]
+    args = [
+        sys.executable,
+        "-m",
+        "warpcloth.cli",
+        "run",
+        "damped_swing",
+        "--set",
+        "run.duration_s=1",
+        "--no-progress",
+        "--out",
+        "r",
+    ]
+    procs = [
+        subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for _ in range(2)
+    ]
     outcomes = sorted((p.wait(timeout=300), p.communicate()[1]) for p in procs)
     assert outcomes[0][0] == 0 and outcomes[1][0] == 2, outcomes
-    assert ("is being written by another warpcloth process" in outcomes[1][1]
-            or "already holds" in outcomes[1][1]), outcomes[1][1]
+    assert "is being written by another warpcloth process" in outcomes[1][1] or "already holds" in outcomes[1][1], (
+        outcomes[1][1]
+    )
     recording = load_recording(tmp_path / "r")
     alone = wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=1"]))
     assert recording.complete and len(recording.probes) == len(alone.t)
@@ -192,24 +281,61 @@ def test_two_runs_started_into_one_directory_never_interleave(tmp_path):
 
 def test_an_overwrite_never_pulls_a_directory_from_under_a_running_writer(tmp_path):
     out = tmp_path / "r"
-    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set",
-                             "run.duration_s=600",  # interrupted long before its end, on however loaded a machine
-                             "--no-progress", "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, preexec_fn=interruptible)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "warpcloth.cli",
+            "run",
+            "damped_swing",
+            "--set",
+            "run.duration_s=600",  # interrupted long before its end, on however loaded a machine
+            "--no-progress",
+            "--out",
+            str(out),
+        ],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        preexec_fn=interruptible,
+    )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and not (out / ".writing").is_file():
         time.sleep(0.05)
-    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--set", "run.duration_s=0.1",
-                           "--no-progress", "--out", str(out), "--overwrite"], capture_output=True, text=True,
-                          timeout=300)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "warpcloth.cli",
+            "run",
+            "damped_swing",
+            "--set",
+            "run.duration_s=0.1",
+            "--no-progress",
+            "--out",
+            str(out),
+            "--overwrite",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     proc.send_signal(signal.SIGINT)
     proc.communicate(timeout=60)
     assert done.returncode == 2 and f"is being written by another warpcloth process (pid {proc.pid})" in done.stderr
     assert json.loads((out / "meta.json").read_text())["n_variants"] == 1 and not load_recording(out).complete
 
 
-@pytest.mark.parametrize("damage", ["a digit changed to a letter", "frames.npy truncated", "rows miscounted",
-                                    "complete is a string", "frames of another shape"])
+@pytest.mark.parametrize(
+    "damage",
+    [
+        "a digit changed to a letter",
+        "frames.npy truncated",
+        "rows miscounted",
+        "complete is a string",
+        "frames of another shape",
+    ],
+)
 def test_a_damaged_complete_run_is_refused_by_name(tmp_path, damage):
     out = tmp_path / "r"
     wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.1", "release.settle_time_s=0.1"]), out=out)
@@ -237,27 +363,65 @@ def test_a_damaged_complete_run_is_refused_by_name(tmp_path, damage):
         load_recording(out)
 
 
-@pytest.mark.parametrize("args, message", [
-    (("run", "./damped_swing"), "damped_swing: no such scene file (a path, because it has a directory part"),
-    (("run", "damped_swing", "--set", "strip.spacing_mm=1e-7"), "1e-05 s is above the semi_implicit scheme's "
-                                                                "stability limit 1.017e-12 s"),
-    (("run", "damped_swing", "--set", "strip.spacing_mm=1e-7", "--set", 'integrator.scheme="imex"'),
-     "too large: the state of 1 strip(s) of"),
-    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--bounds", "gamma=-5:1"),
-     "--bounds: gamma = -5 is not a valid scene: damping.gamma_per_s: must be ≥ 0"),
-    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--set", "damping.gamma_per_s=-1"),
-     "damping.gamma_per_s: must be ≥ 0, got -1 (set by the override damping.gamma_per_s=-1)"),
-    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma,gamma"), "is named twice"),
-    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--align-start", "1e9"),
-     "--align-start: 1e+09 s is longer than the measured record"),
-    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--space-filling", "100000000"),
-     "--space-filling: 100000000 variants in one launch is more than 10000"),
-    (("sweep", "damped_swing_sweep", "--workers", "100000"), "--workers: 100000 threads on"),
-    (("sweep", "damped_swing_sweep", "--scheduler", "notanaddress"), "--scheduler: 'notanaddress' is not a"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (("run", "./damped_swing"), "damped_swing: no such scene file (a path, because it has a directory part"),
+        (
+            ("run", "damped_swing", "--set", "strip.spacing_mm=1e-7"),
+            "1e-05 s is above the semi_implicit scheme's stability limit 1.017e-12 s",
+        ),
+        (
+            ("run", "damped_swing", "--set", "strip.spacing_mm=1e-7", "--set", 'integrator.scheme="imex"'),
+            "too large: the state of 1 strip(s) of",
+        ),
+        (
+            ("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--bounds", "gamma=-5:1"),
+            "--bounds: gamma = -5 is not a valid scene: damping.gamma_per_s: must be ≥ 0",
+        ),
+        (
+            (
+                "fit",
+                "damped_swing",
+                "--measured",
+                "damped_swing_laser",
+                "--free",
+                "gamma",
+                "--set",
+                "damping.gamma_per_s=-1",
+            ),
+            "damping.gamma_per_s: must be ≥ 0, got -1 (set by the override damping.gamma_per_s=-1)",
+        ),
+        (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma,gamma"), "is named twice"),
+        (
+            ("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--align-start", "1e9"),
+            "--align-start: 1e+09 s is longer than the measured record",
+        ),
+        (
+            (
+                "fit",
+                "damped_swing",
+                "--measured",
+                "damped_swing_laser",
+                "--free",
+                "gamma",
+                "--space-filling",
+                "100000000",
+            ),
+            "--space-filling: 100000000 variants in one launch is more than 10000",
+        ),
+        (("sweep", "damped_swing_sweep", "--workers", "100000"), "--workers: 100000 threads on"),
+        (("sweep", "damped_swing_sweep", "--scheduler", "notanaddress"), "--scheduler: 'notanaddress' is not a"),
+    ],
+)
 def test_inputs_that_once_crashed_hung_or_misled_are_named(tmp_path, args, message):
-    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", *args, "--out", str(tmp_path / "o")],
-                          capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-m", "warpcloth.cli", *args, "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
+    )
     assert done.returncode == 2 and message in done.stderr, done.stderr
     assert "Traceback" not in done.stderr and not (tmp_path / "o").exists()
 
@@ -266,8 +430,12 @@ def test_overwrite_replaces_a_run_never_other_files(tmp_path):
     keep = tmp_path / "notes"
     keep.mkdir()
     (keep / "thesis.tex").write_text("months of work")
-    done = subprocess.run([sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--out", str(keep),
-                           "--overwrite"], capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-m", "warpcloth.cli", "run", "damped_swing", "--out", str(keep), "--overwrite"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 2 and "--overwrite replaces only a run directory, never other files" in done.stderr
     assert (keep / "thesis.tex").read_text() == "months of work"
 
@@ -275,10 +443,27 @@ def test_overwrite_replaces_a_run_never_other_files(tmp_path):
 def test_ctrl_c_stops_a_threaded_sweep_promptly_and_it_resumes(tmp_path):
     # Batches on two threads: Ctrl-C drops the batches not started (the running ones
     # finish their files), exits 130 within a batch's time, and a rerun completes the rest.
-    args = [sys.executable, "-m", "warpcloth.cli", "sweep", "damped_swing_sweep", "--set", "sweep.random.samples=40",
-            "--set", "run.duration_s=3", "--max-batch", "4", "--workers", "2", "--no-progress", "--out", "s"]
-    proc = subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=interruptible)
+    args = [
+        sys.executable,
+        "-m",
+        "warpcloth.cli",
+        "sweep",
+        "damped_swing_sweep",
+        "--set",
+        "sweep.random.samples=40",
+        "--set",
+        "run.duration_s=3",
+        "--max-batch",
+        "4",
+        "--workers",
+        "2",
+        "--no-progress",
+        "--out",
+        "s",
+    ]
+    proc = subprocess.Popen(
+        args, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=interruptible
+    )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and len(list((tmp_path / "s" / "summary").glob("*.parquet"))) < 2:
         time.sleep(0.1)
@@ -307,19 +492,38 @@ def test_figures_are_results_too(tmp_path):
     assert {p.name: p.read_bytes() for p in (tmp_path / "r" / "figures").iterdir()} == before
     assert cli("plot", "r", "--overwrite").returncode == 0
     (tmp_path / "c.png").write_bytes(b"an existing figure")
-    done = cli("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation", "-o", "m.toml",
-               "--plot", "c.png")
+    done = cli(
+        "clamp",
+        "fit-angle",
+        "impulsive_rotation_encoder",
+        "--scene",
+        "impulsive_rotation",
+        "-o",
+        "m.toml",
+        "--plot",
+        "c.png",
+    )
     assert done.returncode == 2 and (tmp_path / "c.png").read_bytes() == b"an existing figure"
-    done = cli("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation", "-o", "m.toml",
-               "--plot", "figure")
+    done = cli(
+        "clamp",
+        "fit-angle",
+        "impulsive_rotation_encoder",
+        "--scene",
+        "impulsive_rotation",
+        "-o",
+        "m.toml",
+        "--plot",
+        "figure",
+    )
     assert done.returncode == 2 and "--plot: figure must be a file ending in .png" in done.stderr
     assert not list(tmp_path.rglob(".*.tmp*"))
 
 
 def cli(*args, cwd, timeout=300):
     """``warpcloth ARGS`` in a child process, run to its end."""
-    return subprocess.run([sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "warpcloth.cli", *args], capture_output=True, text=True, cwd=cwd, timeout=timeout
+    )
 
 
 def one_line_error(done, status):
@@ -328,15 +532,24 @@ def one_line_error(done, status):
     assert len(done.stderr.strip().splitlines()) == 1, done.stderr
 
 
-@pytest.mark.parametrize("command, delay_s", [
-    (("run", "damped_swing", "--set", "run.duration_s=600", "--out", "r"), 0.1),  # importing the modules
-    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--out", "f"), 0.7),
-])
+@pytest.mark.parametrize(
+    "command, delay_s",
+    [
+        (("run", "damped_swing", "--set", "run.duration_s=600", "--out", "r"), 0.1),  # importing the modules
+        (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--out", "f"), 0.7),
+    ],
+)
 def test_ctrl_c_while_starting_is_exit_130_and_one_line(tmp_path, command, delay_s):
     # Whether it lands in the imports, Warp's start or the first step of the work, an early
     # Ctrl-C is exit 130 with one line, never a KeyboardInterrupt traceback.
-    proc = subprocess.Popen([sys.executable, "-m", "warpcloth.cli", *command, "--no-progress"], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=interruptible)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "warpcloth.cli", *command, "--no-progress"],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=interruptible,
+    )
     time.sleep(delay_s)
     proc.send_signal(signal.SIGINT)
     _, stderr = proc.communicate(timeout=120)
@@ -346,25 +559,52 @@ def test_ctrl_c_while_starting_is_exit_130_and_one_line(tmp_path, command, delay
 
 def holding(marker):
     """A child process that holds ``marker`` as a writer does (until killed)."""
-    proc = subprocess.Popen([sys.executable, "-c", "import sys, time\nfrom warpcloth.io.writing import hold\n"
-                             f"assert hold({str(marker)!r}) is None\nprint('held', flush=True)\ntime.sleep(300)"],
-                            stdout=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import sys, time\nfrom warpcloth.io.writing import hold\n"
+            f"assert hold({str(marker)!r}) is None\nprint('held', flush=True)\ntime.sleep(300)",
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     assert proc.stdout.readline().strip() == "held"
     return proc
 
 
-@pytest.mark.parametrize("args, result", [
-    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--out", "f"), "f"),
-    (("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation", "-o", "c.toml"), "c.toml"),
-    (("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example", "--density-g-per-cm2",
-      "0.02", "-o", "m.toml"), "m.toml"),
-    (("export-usd", "r", "-o", "s.usda"), "s.usda"),
-    (("plot", "r", "--out", "figs"), "figs"),
-])
+@pytest.mark.parametrize(
+    "args, result",
+    [
+        (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--out", "f"), "f"),
+        (
+            ("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation", "-o", "c.toml"),
+            "c.toml",
+        ),
+        (
+            (
+                "material",
+                "fit-kes",
+                "--tensile",
+                "kes_fb1_example",
+                "--bending",
+                "kes_fb2_example",
+                "--density-g-per-cm2",
+                "0.02",
+                "-o",
+                "m.toml",
+            ),
+            "m.toml",
+        ),
+        (("export-usd", "r", "-o", "s.usda"), "s.usda"),
+        (("plot", "r", "--out", "figs"), "figs"),
+    ],
+)
 def test_a_result_another_process_is_writing_is_refused_by_every_command(tmp_path, args, result):
     if "r" in args:
-        wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.1", "release.settle_time_s=0.1"]),
-                    out=tmp_path / "r")
+        wc.simulate(
+            wc.load_scene("damped_swing", ["run.duration_s=0.1", "release.settle_time_s=0.1"]), out=tmp_path / "r"
+        )
     from warpcloth.io.writing import marker_of
 
     writer = holding(marker_of(tmp_path / result))
@@ -383,10 +623,27 @@ def test_a_result_another_process_is_writing_is_refused_by_every_command(tmp_pat
 
 
 def test_two_material_fits_into_one_new_file_never_replace_each_other(tmp_path):
-    args = [sys.executable, "-m", "warpcloth.cli", "material", "fit-kes", "--tensile", "kes_fb1_example", "--bending",
-            "kes_fb2_example", "--density-g-per-cm2", "0.02", "-o", "m.toml"]
-    procs = [subprocess.Popen([*args, "--name", name], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True) for name in ("first", "second")]
+    args = [
+        sys.executable,
+        "-m",
+        "warpcloth.cli",
+        "material",
+        "fit-kes",
+        "--tensile",
+        "kes_fb1_example",
+        "--bending",
+        "kes_fb2_example",
+        "--density-g-per-cm2",
+        "0.02",
+        "-o",
+        "m.toml",
+    ]
+    procs = [
+        subprocess.Popen(
+            [*args, "--name", name], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+        for name in ("first", "second")
+    ]
     outcomes = [(p.wait(timeout=300), p.communicate()[1]) for p in procs]
     assert sorted(code for code, _ in outcomes) == [0, 2], outcomes
     refused = next(err for code, err in outcomes if code == 2)
@@ -395,16 +652,25 @@ def test_two_material_fits_into_one_new_file_never_replace_each_other(tmp_path):
     assert f'name = "{winner}"' in (tmp_path / "m.toml").read_text()
 
 
-@pytest.mark.parametrize("args, message", [
-    (("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=30000000", "--max-variants", "100000000000"),
-     "too large: the sweep's 30000000 variant scenes would take 600 GB of memory"),
-    (("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=2e10"), "the sweep has 20000000000 variants"),
-    (("run", "damped_swing", "--set", "strip.clamp_length_mm=1e300"), "are 2e+299 nodes, more than 2147483647"),
-    (("run", "damped_swing", "--set", "strip.spacing_mm=1e-6", "--set", "strip.free_length_mm=1e5"),
-     "are 1e+11 nodes, more than 2147483647"),
-    (("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--bootstrap", str(10**15)),
-     f"too large: --bootstrap {10**15}: the resamples would take"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (
+            ("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=30000000", "--max-variants", "100000000000"),
+            "too large: the sweep's 30000000 variant scenes would take 600 GB of memory",
+        ),
+        (("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=2e10"), "the sweep has 20000000000 variants"),
+        (("run", "damped_swing", "--set", "strip.clamp_length_mm=1e300"), "are 2e+299 nodes, more than 2147483647"),
+        (
+            ("run", "damped_swing", "--set", "strip.spacing_mm=1e-6", "--set", "strip.free_length_mm=1e5"),
+            "are 1e+11 nodes, more than 2147483647",
+        ),
+        (
+            ("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--bootstrap", str(10**15)),
+            f"too large: --bootstrap {10**15}: the resamples would take",
+        ),
+    ],
+)
 def test_sizes_are_checked_in_closed_form_before_anything_is_allocated(tmp_path, args, message):
     started = time.monotonic()
     done = cli(*args, "--out", "o", cwd=tmp_path)
@@ -421,17 +687,43 @@ def test_a_size_beyond_a_float_is_written_without_overflowing():
         check_memory(10**400, "x", "y")
 
 
-@pytest.mark.parametrize("args, message", [
-    # 3000 variants × 0.6 GB of probes and frames: ~2 TB, though one batch of one fits memory and disk
-    (("--set", "run.duration_s=20000", "--set", "output.probes_per_frame=1", "--set", "sweep.random.samples=3000",
-      "--frames", "--workers", "1", "--max-batch", "1"),
-     r"too large: the probes and frames of the sweep's 3000 remaining variants would write [0-9.]+ TB to .*s, "
-     r"whose file system has"),
-    # four strips of ~450 GB of results each
-    (("--set", "run.duration_s=20000", "--set", "output.probes_per_frame=1666", "--set", "sweep.random.samples=4",
-      "--workers", "2"),
-     r"too large: the recorded probes of 2 sweep batch\(es\) running side by side would take 896 GB of memory"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        # 3000 variants × 0.6 GB of probes and frames: ~2 TB, though one batch of one fits memory and disk
+        (
+            (
+                "--set",
+                "run.duration_s=20000",
+                "--set",
+                "output.probes_per_frame=1",
+                "--set",
+                "sweep.random.samples=3000",
+                "--frames",
+                "--workers",
+                "1",
+                "--max-batch",
+                "1",
+            ),
+            r"too large: the probes and frames of the sweep's 3000 remaining variants would write [0-9.]+ TB to .*s, "
+            r"whose file system has",
+        ),
+        # four strips of ~450 GB of results each
+        (
+            (
+                "--set",
+                "run.duration_s=20000",
+                "--set",
+                "output.probes_per_frame=1666",
+                "--set",
+                "sweep.random.samples=4",
+                "--workers",
+                "2",
+            ),
+            r"too large: the recorded probes of 2 sweep batch\(es\) running side by side would take 896 GB of memory",
+        ),
+    ],
+)
 def test_a_sweep_is_sized_as_a_whole_before_its_first_batch(tmp_path, args, message):
     done = cli("sweep", "damped_swing_sweep", *args, "--no-progress", "--out", "s", cwd=tmp_path)
     one_line_error(done, 2)
@@ -447,8 +739,10 @@ def test_probe_rows_out_of_time_order_are_refused_by_name(tmp_path):
     (tmp_path / "r" / "probes.csv").write_text("\n".join(lines) + "\n")
     done = cli("analyse", "r", cwd=tmp_path)
     one_line_error(done, 2)
-    assert "probes.csv, line 10: t = 0.01 s of variant 0 comes after t = 0.01333 s (line 9): the rows are out of " \
-           "time order" in done.stderr
+    assert (
+        "probes.csv, line 10: t = 0.01 s of variant 0 comes after t = 0.01333 s (line 9): the rows are out of "
+        "time order" in done.stderr
+    )
 
 
 def test_frame_times_out_of_order_are_refused(tmp_path):
@@ -457,16 +751,30 @@ def test_frame_times_out_of_order_are_refused(tmp_path):
     times = np.load(out / "frame_times.npy")
     times[[2, 3]] = times[[3, 2]]
     np.save(out / "frame_times.npy", times)
-    with pytest.raises(wc.DataFileError, match=r"frame_times.npy: frame 3 at t = 0.03333 s does not come after "
-                       r"frame 2 at 0.05 s"):
+    with pytest.raises(
+        wc.DataFileError,
+        match=r"frame_times.npy: frame 3 at t = 0.03333 s does not come after "
+        r"frame 2 at 0.05 s",
+    ):
         load_recording(out)
 
 
 def test_sweep_probes_out_of_time_order_are_refused(tmp_path):
     import pandas as pd
 
-    done = cli("sweep", "damped_swing_sweep", "--set", "sweep.random.samples=2", "--set", "run.duration_s=0.2",
-               "--frames", "--no-progress", "--out", "s", cwd=tmp_path)
+    done = cli(
+        "sweep",
+        "damped_swing_sweep",
+        "--set",
+        "sweep.random.samples=2",
+        "--set",
+        "run.duration_s=0.2",
+        "--frames",
+        "--no-progress",
+        "--out",
+        "s",
+        cwd=tmp_path,
+    )
     assert done.returncode == 0, done.stderr
     batch = sorted((tmp_path / "s" / "probes").glob("*.parquet"))[0]
     table = pd.read_parquet(batch)
@@ -476,18 +784,31 @@ def test_sweep_probes_out_of_time_order_are_refused(tmp_path):
         load_recording(tmp_path / "s")
 
 
-@pytest.mark.parametrize("header, rows, message", [
-    ("t_s,x [yd]", "0,1\n0.1,2\n", "column 2 is headed 'x [yd]': 'yd' is not a length unit"),
-    ("t_s,displacement_thou", "0,1\n0.1,2\n", "column 2 is headed 'displacement_thou': 'thou' is not a length unit"),
-    ("t (fortnight),x_mm", "0,1\n0.1,2\n", "column 1 is headed 't (fortnight)': 'fortnight' is not a time unit"),
-    ("t_s,theta_grads", "0,0\n0.1,2\n", "column 2 is headed 'theta_grads': 'grads' is not an angle unit"),
-    ("frame,t_s,s_parsec,x_mm,y_mm", "0,0,10,1,2\n1,0.1,10,1,2\n",
-     "column 3 is headed 's_parsec': 'parsec' is not a length unit"),
-])
+@pytest.mark.parametrize(
+    "header, rows, message",
+    [
+        ("t_s,x [yd]", "0,1\n0.1,2\n", "column 2 is headed 'x [yd]': 'yd' is not a length unit"),
+        (
+            "t_s,displacement_thou",
+            "0,1\n0.1,2\n",
+            "column 2 is headed 'displacement_thou': 'thou' is not a length unit",
+        ),
+        ("t (fortnight),x_mm", "0,1\n0.1,2\n", "column 1 is headed 't (fortnight)': 'fortnight' is not a time unit"),
+        ("t_s,theta_grads", "0,0\n0.1,2\n", "column 2 is headed 'theta_grads': 'grads' is not an angle unit"),
+        (
+            "frame,t_s,s_parsec,x_mm,y_mm",
+            "0,0,10,1,2\n1,0.1,10,1,2\n",
+            "column 3 is headed 's_parsec': 'parsec' is not a length unit",
+        ),
+    ],
+)
 def test_a_unit_the_header_states_is_refused_unless_known(tmp_path, header, rows, message):
     (tmp_path / "m.csv").write_text(f"{header}\n{rows}")
-    done = cli("analyse", "m.csv", cwd=tmp_path) if "theta" not in header else cli(
-        "clamp", "fit-angle", "m.csv", "--scene", "impulsive_rotation", "-o", "c.toml", cwd=tmp_path)
+    done = (
+        cli("analyse", "m.csv", cwd=tmp_path)
+        if "theta" not in header
+        else cli("clamp", "fit-angle", "m.csv", "--scene", "impulsive_rotation", "-o", "c.toml", cwd=tmp_path)
+    )
     one_line_error(done, 2)
     assert f"m.csv, line 1: {message}" in done.stderr and not (tmp_path / "c.toml").exists()
 
@@ -497,40 +818,63 @@ def short_result():
     return wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.05", "release.settle_time_s=0.1"]))
 
 
-@pytest.mark.parametrize("keywords, error, message", [
-    ({"initial_positions": np.zeros((24, 1, 2))}, wc.ArgumentError,
-     r"initial_positions: has shape \(24, 1, 2\); expected \(25, 1, 2\)"),
-    ({"initial_positions": np.full((25, 1, 2), np.inf)}, wc.ArgumentError,
-     r"initial_positions: \[0, 0, 0\] is inf; every value must be finite"),
-    ({"initial_positions": [["a"]]}, TypeError, r"initial_positions must be an array of numbers"),
-    ({"initial_velocities": np.zeros((25, 1, 2))}, wc.ArgumentError, "initial_velocities: given without "
-                                                                   "initial_positions"),
-])
+@pytest.mark.parametrize(
+    "keywords, error, message",
+    [
+        (
+            {"initial_positions": np.zeros((24, 1, 2))},
+            wc.ArgumentError,
+            r"initial_positions: has shape \(24, 1, 2\); expected \(25, 1, 2\)",
+        ),
+        (
+            {"initial_positions": np.full((25, 1, 2), np.inf)},
+            wc.ArgumentError,
+            r"initial_positions: \[0, 0, 0\] is inf; every value must be finite",
+        ),
+        ({"initial_positions": [["a"]]}, TypeError, r"initial_positions must be an array of numbers"),
+        (
+            {"initial_velocities": np.zeros((25, 1, 2))},
+            wc.ArgumentError,
+            "initial_velocities: given without initial_positions",
+        ),
+    ],
+)
 def test_simulate_names_a_wrong_start_instead_of_diverging(keywords, error, message):
     with pytest.raises(error, match=message):
         wc.simulate(wc.load_scene("damped_swing", ["run.duration_s=0.05"]), **keywords)
 
 
-@pytest.mark.parametrize("call, error, message", [
-    (lambda r: r.probe("tip_x", variant=-2), wc.ArgumentError, r"variant: -2 is not one of the 1 variants \(0 to 0\)"),
-    (lambda r: r.probe("tip_x", variant=1), wc.ArgumentError, "variant: 1 is not one of the 1 variants"),
-    (lambda r: r.probe("tip_x", variant=0.0), TypeError, "variant must be an integer index"),
-    (lambda r: r.probe("tip_z"), wc.ArgumentError, "name: 'tip_z' is not a probe; the probes are tip_x, tip_y"),
-])
+@pytest.mark.parametrize(
+    "call, error, message",
+    [
+        (
+            lambda r: r.probe("tip_x", variant=-2),
+            wc.ArgumentError,
+            r"variant: -2 is not one of the 1 variants \(0 to 0\)",
+        ),
+        (lambda r: r.probe("tip_x", variant=1), wc.ArgumentError, "variant: 1 is not one of the 1 variants"),
+        (lambda r: r.probe("tip_x", variant=0.0), TypeError, "variant must be an integer index"),
+        (lambda r: r.probe("tip_z"), wc.ArgumentError, "name: 'tip_z' is not a probe; the probes are tip_x, tip_y"),
+    ],
+)
 def test_a_result_refuses_an_index_or_name_it_does_not_have(short_result, call, error, message):
     with pytest.raises(error, match=message):
         call(short_result)
 
 
-@pytest.mark.parametrize("n_strips, n_variants, message", [
-    (1, 2, "meta.json: n_variants is 2, but the run directory holds one scene.toml"),
-    (2, 1, r"meta.json: n_variants is 1, but the run directory holds 2 variant scene\(s\) in variants/"),
-    (2, 3, r"meta.json: n_variants is 3, but the run directory holds 2 variant scene\(s\) in variants/"),
-])
+@pytest.mark.parametrize(
+    "n_strips, n_variants, message",
+    [
+        (1, 2, "meta.json: n_variants is 2, but the run directory holds one scene.toml"),
+        (2, 1, r"meta.json: n_variants is 1, but the run directory holds 2 variant scene\(s\) in variants/"),
+        (2, 3, r"meta.json: n_variants is 3, but the run directory holds 2 variant scene\(s\) in variants/"),
+    ],
+)
 def test_a_damaged_run_directory_names_the_file_that_is_wrong(tmp_path, n_strips, n_variants, message):
     out = tmp_path / "r"
-    wc.simulate([wc.load_scene("damped_swing", ["run.duration_s=0.05", "release.settle_time_s=0.1"])] * n_strips,
-                out=out)
+    wc.simulate(
+        [wc.load_scene("damped_swing", ["run.duration_s=0.05", "release.settle_time_s=0.1"])] * n_strips, out=out
+    )
     with pytest.raises(wc.ArgumentError, match="^variants: .*a range is START:STOP"):
         load_recording(out, variants="-1:")
     meta = json.loads((out / "meta.json").read_text())
@@ -550,28 +894,56 @@ def fb1_without_unit(tmp_path):
     return "fb1.csv"
 
 
-@pytest.mark.parametrize("case, warning", [
-    ("density 0.5", "--density-g-per-cm2: areal density 0.5 g/cm² is outside the plausible 0.001 to 0.2 g/cm²"),
-    ("density 1e-5", "--density-g-per-cm2: areal density 1e-05 g/cm² is outside the plausible 0.001 to 0.2 g/cm²"),
-    ("percent read as fraction", "fb1.csv, column 1 read as fraction: largest tensile strain 6.001 (fraction) is "
-                                 "outside the plausible 0.001 to 1 (fraction)"),
-])
+@pytest.mark.parametrize(
+    "case, warning",
+    [
+        ("density 0.5", "--density-g-per-cm2: areal density 0.5 g/cm² is outside the plausible 0.001 to 0.2 g/cm²"),
+        ("density 1e-5", "--density-g-per-cm2: areal density 1e-05 g/cm² is outside the plausible 0.001 to 0.2 g/cm²"),
+        (
+            "percent read as fraction",
+            "fb1.csv, column 1 read as fraction: largest tensile strain 6.001 (fraction) is "
+            "outside the plausible 0.001 to 1 (fraction)",
+        ),
+    ],
+)
 def test_an_implausible_kes_input_is_named_with_its_range(tmp_path, case, warning):
     density = case.split()[1] if case.startswith("density") else "0.02"
     extra = ("--strain-unit", "fraction") if "fraction" in case else ()
-    done = cli("material", "fit-kes", "--tensile", fb1_without_unit(tmp_path), "--bending", "kes_fb2_example",
-               "--density-g-per-cm2", density, *extra, "-o", "m.toml", "--accept", cwd=tmp_path)
+    done = cli(
+        "material",
+        "fit-kes",
+        "--tensile",
+        fb1_without_unit(tmp_path),
+        "--bending",
+        "kes_fb2_example",
+        "--density-g-per-cm2",
+        density,
+        *extra,
+        "-o",
+        "m.toml",
+        "--accept",
+        cwd=tmp_path,
+    )
     assert done.returncode == 0 and f"warpcloth material: warning: {warning}" in done.stderr, done.stderr
     assert "Traceback" not in done.stderr and done.stderr.count("warning:") == 1
 
 
-@pytest.mark.parametrize("text, warning", [
-    ("t,x\n" + "".join(f"{i * 10},{0.02 * np.sin(i / 3):.5f}\n" for i in range(400)),  # ms and metres
-     ["column 1 (headed 't', no unit): record length 3990 s is outside the plausible 0.01 to 3600 s",
-      "column 2 (headed 'x', no unit): largest displacement 0.02 mm is outside the plausible 0.1 to 2000 mm"]),
-    ("".join(f"{i / 100},{30 * np.sin(i / 9):.4f}\n" for i in range(300)),  # millimetres, no header: fine
-     []),
-])
+@pytest.mark.parametrize(
+    "text, warning",
+    [
+        (
+            "t,x\n" + "".join(f"{i * 10},{0.02 * np.sin(i / 3):.5f}\n" for i in range(400)),  # ms and metres
+            [
+                "column 1 (headed 't', no unit): record length 3990 s is outside the plausible 0.01 to 3600 s",
+                "column 2 (headed 'x', no unit): largest displacement 0.02 mm is outside the plausible 0.1 to 2000 mm",
+            ],
+        ),
+        (
+            "".join(f"{i / 100},{30 * np.sin(i / 9):.4f}\n" for i in range(300)),  # millimetres, no header: fine
+            [],
+        ),
+    ],
+)
 def test_a_trace_that_looks_like_another_unit_is_named(tmp_path, text, warning):
     (tmp_path / "trace.csv").write_text(text)
     done = cli("analyse", "trace.csv", cwd=tmp_path)
@@ -579,13 +951,20 @@ def test_a_trace_that_looks_like_another_unit_is_named(tmp_path, text, warning):
     assert done.stderr.count("warning:") == len(warning) and all(w in done.stderr for w in warning), done.stderr
 
 
-@pytest.mark.parametrize("overrides, message", [
-    (("output.laser_height_mm=-150",), "output.laser_height_mm: -150 mm is not on the hanging strip, which reaches "
-                                       "from 0 to -100 mm"),
-    (("output.laser_height_mm=5",), "output.laser_height_mm: 5 mm is not on the hanging strip"),
-    (("strip.free_length_mm=60", "release.hold_x_mm=30", "release.hold_y_mm=-40"),
-     "output.laser_height_mm: -80 mm is not on the hanging strip, which reaches from 0 to -60 mm"),
-])
+@pytest.mark.parametrize(
+    "overrides, message",
+    [
+        (
+            ("output.laser_height_mm=-150",),
+            "output.laser_height_mm: -150 mm is not on the hanging strip, which reaches from 0 to -100 mm",
+        ),
+        (("output.laser_height_mm=5",), "output.laser_height_mm: 5 mm is not on the hanging strip"),
+        (
+            ("strip.free_length_mm=60", "release.hold_x_mm=30", "release.hold_y_mm=-40"),
+            "output.laser_height_mm: -80 mm is not on the hanging strip, which reaches from 0 to -60 mm",
+        ),
+    ],
+)
 def test_a_laser_line_off_the_strip_is_refused_before_the_run(tmp_path, overrides, message):
     done = cli("run", "damped_swing", *(a for o in overrides for a in ("--set", o)), "--out", "r", cwd=tmp_path)
     one_line_error(done, 2)
@@ -593,11 +972,22 @@ def test_a_laser_line_off_the_strip_is_refused_before_the_run(tmp_path, override
 
 
 def test_a_density_out_of_range_in_a_scene_is_warned_about(tmp_path):
-    done = cli("run", "damped_swing", "--set", "material.density_g_per_cm2=3", "--set", "run.duration_s=0.05",
-               "--no-progress", "--out", "r", cwd=tmp_path)
+    done = cli(
+        "run",
+        "damped_swing",
+        "--set",
+        "material.density_g_per_cm2=3",
+        "--set",
+        "run.duration_s=0.05",
+        "--no-progress",
+        "--out",
+        "r",
+        cwd=tmp_path,
+    )
     assert done.returncode == 0 and done.stderr.count("warning:") == 1, done.stderr
-    assert "material.density_g_per_cm2: areal density 3 g/cm² is outside the plausible 0.001 to 0.2 g/cm²" \
-           in done.stderr
+    assert (
+        "material.density_g_per_cm2: areal density 3 g/cm² is outside the plausible 0.001 to 0.2 g/cm²" in done.stderr
+    )
 
 
 @pytest.mark.parametrize("scale", ["1e300", "-1e300"])
@@ -607,9 +997,24 @@ def test_a_kes_fit_that_overflows_writes_no_material_file(tmp_path, scale):
     rows = bundled_data("kes_fb1_example").read_text().splitlines()
     scaled = [f"{r.split(',')[0]},{float(r.split(',')[1]) * float(scale):.6g}" for r in rows[1:]]
     (tmp_path / "fb1.csv").write_text("\n".join([rows[0], *scaled]) + "\n")
-    done = cli("material", "fit-kes", "--tensile", "fb1.csv", "--bending", "kes_fb2_example", "--density-g-per-cm2",
-               "0.02", "-o", "m.toml", "--accept", cwd=tmp_path)
+    done = cli(
+        "material",
+        "fit-kes",
+        "--tensile",
+        "fb1.csv",
+        "--bending",
+        "kes_fb2_example",
+        "--density-g-per-cm2",
+        "0.02",
+        "-o",
+        "m.toml",
+        "--accept",
+        cwd=tmp_path,
+    )
     one_line_error(done, 2)
-    assert ("fb1.csv: the fit gave the tensile RMS = inf, not a finite number: no material file is written"
-            if scale == "1e300" else "fb1.csv: no quartic T(ε) rising on [0, 0.25] fits this loop") in done.stderr
+    assert (
+        "fb1.csv: the fit gave the tensile RMS = inf, not a finite number: no material file is written"
+        if scale == "1e300"
+        else "fb1.csv: no quartic T(ε) rising on [0, 0.25] fits this loop"
+    ) in done.stderr
     assert not (tmp_path / "m.toml").exists()

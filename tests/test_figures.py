@@ -45,24 +45,35 @@ def test_run_figures_are_written_and_show_the_swing(swing_run, tmp_path):
     series = read_laser_trace(measured)
     np.testing.assert_allclose(series.x, x[::5], atol=1e-3)
     paths = plot_run(recording, tmp_path / "fig", measured=measured, times=np.array([0.0, 0.25, 0.5]))
-    assert [p.name for p in paths] == ["amplitude.png", "clamp_angle.png", "shapes.png", "bending_loop.png",
-                                       "energy.png"]
+    assert [p.name for p in paths] == [
+        "amplitude.png",
+        "clamp_angle.png",
+        "shapes.png",
+        "bending_loop.png",
+        "energy.png",
+    ]
     for path in paths:
         assert_not_blank(path)
 
 
-@pytest.mark.parametrize("reader, text, message", [
-    (read_laser_trace, "t,x\n0.0,1.0\n", "m.csv: expected at least two rows of laser trace"),
-    (read_laser_trace, "0.0,1.0\n0.1,abc\n", "m.csv, line 2: 'abc' is not a number"),
-    (read_laser_trace, "0.0,1.0\n0.0,2.0\n", r"m.csv, line 2: times must increase; t = 0 after 0 \(line 1\)"),
-    (read_laser_trace, "0.0,1.0\n0.1,nan\n", "m.csv, line 2: x_mm is nan; every value must be finite"),
-    (read_laser_trace, "0.0\n0.1\n", "m.csv, line 1: expected 2 columns, got 1"),
-    (read_measurement, "0 0 0\n1 1 1\n", "m.csv, line 1: has 3 columns"),
-    (read_tracked_shapes, "1,0.1,0,0,0\n0,0.0,0,0,0\n",
-     r"m.csv, line 2: frame 0 at t = 0 s after frame 1 at t = 0.1 s \(line 1\): rows must be ordered by frame"),
-    (read_tracked_shapes, "0,0.0,-5,0,0\n1,0.1,0,0,0\n", "m.csv, line 1: arc length s must be ≥ 0"),
-    (read_encoder, "t,theta\n0.1,0\n0.05,1\n", "m.csv, line 3: times must increase"),
-])
+@pytest.mark.parametrize(
+    "reader, text, message",
+    [
+        (read_laser_trace, "t,x\n0.0,1.0\n", "m.csv: expected at least two rows of laser trace"),
+        (read_laser_trace, "0.0,1.0\n0.1,abc\n", "m.csv, line 2: 'abc' is not a number"),
+        (read_laser_trace, "0.0,1.0\n0.0,2.0\n", r"m.csv, line 2: times must increase; t = 0 after 0 \(line 1\)"),
+        (read_laser_trace, "0.0,1.0\n0.1,nan\n", "m.csv, line 2: x_mm is nan; every value must be finite"),
+        (read_laser_trace, "0.0\n0.1\n", "m.csv, line 1: expected 2 columns, got 1"),
+        (read_measurement, "0 0 0\n1 1 1\n", "m.csv, line 1: has 3 columns"),
+        (
+            read_tracked_shapes,
+            "1,0.1,0,0,0\n0,0.0,0,0,0\n",
+            r"m.csv, line 2: frame 0 at t = 0 s after frame 1 at t = 0.1 s \(line 1\): rows must be ordered by frame",
+        ),
+        (read_tracked_shapes, "0,0.0,-5,0,0\n1,0.1,0,0,0\n", "m.csv, line 1: arc length s must be ≥ 0"),
+        (read_encoder, "t,theta\n0.1,0\n0.05,1\n", "m.csv, line 3: times must increase"),
+    ],
+)
 def test_bad_measured_files_are_named(tmp_path, reader, text, message):
     path = tmp_path / "m.csv"
     path.write_text(text)
@@ -104,8 +115,10 @@ X_FORCE = np.array([-0.75, 2.5, 31.0, 62.25, 110.5, 240.0, 500.0])  # x in mm, o
 
 
 def numbers(delimiter, decimal=".", fmt="{:.4f}"):
-    return "".join(f"{fmt.format(a).replace('.', decimal)}{delimiter}{fmt.format(b).replace('.', decimal)}\n"
-                   for a, b in zip(T_PERCENT, X_FORCE, strict=True))
+    return "".join(
+        f"{fmt.format(a).replace('.', decimal)}{delimiter}{fmt.format(b).replace('.', decimal)}\n"
+        for a, b in zip(T_PERCENT, X_FORCE, strict=True)
+    )
 
 
 def read_both(path):
@@ -115,13 +128,16 @@ def read_both(path):
     return read_laser_trace(path), kes.read_tensile_csv(path)
 
 
-@pytest.mark.parametrize("name, text", [
-    ("semicolon.csv", "# exported with decimal commas\n\n" + numbers(";", ",")),
-    ("semicolon_trailing.csv", numbers(";", ",").replace("\n", ";\n")),  # a spreadsheet's trailing delimiter
-    ("tab.txt", numbers("\t")),
-    ("tab_comma.txt", numbers("\t", ",")),  # decimal commas: no number in the file has a point
-    ("spaces_comma.txt", numbers("   ", ",")),
-])
+@pytest.mark.parametrize(
+    "name, text",
+    [
+        ("semicolon.csv", "# exported with decimal commas\n\n" + numbers(";", ",")),
+        ("semicolon_trailing.csv", numbers(";", ",").replace("\n", ";\n")),  # a spreadsheet's trailing delimiter
+        ("tab.txt", numbers("\t")),
+        ("tab_comma.txt", numbers("\t", ",")),  # decimal commas: no number in the file has a point
+        ("spaces_comma.txt", numbers("   ", ",")),
+    ],
+)
 def test_every_reader_reads_a_delimiter_the_same(tmp_path, name, text):
     # Before one reader, the laser-trace reader split "0,5000;2,5000" at the commas too,
     # into t = 0, x = 5000 mm. Every form here reads exactly as the plain comma file.
@@ -134,8 +150,12 @@ def test_every_reader_reads_a_delimiter_the_same(tmp_path, name, text):
     np.testing.assert_array_equal(plain_trace.x, X_FORCE * 1e-3)
     np.testing.assert_array_equal(plain_loop.strain, T_PERCENT * 1e-2)
     np.testing.assert_array_equal(plain_loop.force, X_FORCE)
-    for a, b in ((trace.t, plain_trace.t), (trace.x, plain_trace.x), (loop.strain, plain_loop.strain),
-                 (loop.force, plain_loop.force)):
+    for a, b in (
+        (trace.t, plain_trace.t),
+        (trace.x, plain_trace.x),
+        (loop.strain, plain_loop.strain),
+        (loop.force, plain_loop.force),
+    ):
         np.testing.assert_array_equal(a, b, err_msg=name)
     assert list(loop.rows) == list(plain_loop.rows + (2 if name == "semicolon.csv" else 0))  # file lines
 
@@ -158,19 +178,26 @@ def test_tab_separated_names_with_spaces_are_read_by_every_reader(tmp_path):
     np.testing.assert_allclose(read_encoder(path)[1], [0, np.pi / 2])
 
 
-@pytest.mark.parametrize("torn, message", [
-    ("2,0;62,25\n3,0;110,5\n4,5", "line 7: expected 2 columns, got 1: '4,5'"),  # a torn last line
-    ("2,0;62,25\n3,0;1x0,5\n", "line 6: '1x0,5' is not a number"),
-    ("2,0;62,25\n;110,5\n", "line 6: column 1 is empty"),
-    ("2,0;62,25\n3,0;inf\n", "line 6: {x} is inf; every value must be finite"),
-])
+@pytest.mark.parametrize(
+    "torn, message",
+    [
+        ("2,0;62,25\n3,0;110,5\n4,5", "line 7: expected 2 columns, got 1: '4,5'"),  # a torn last line
+        ("2,0;62,25\n3,0;1x0,5\n", "line 6: '1x0,5' is not a number"),
+        ("2,0;62,25\n;110,5\n", "line 6: column 1 is empty"),
+        ("2,0;62,25\n3,0;inf\n", "line 6: {x} is inf; every value must be finite"),
+    ],
+)
 def test_a_torn_or_non_numeric_cell_is_named_with_its_line_by_every_reader(tmp_path, torn, message):
     from warpcloth.calibrate import kes
 
     path = tmp_path / "torn.csv"
     path.write_text("# a comment\n\nt;x\n0,0;-0,75\n" + torn)  # lines 1-3: comment, blank, header
-    second = {read_laser_trace: "x_mm", read_measurement: "column 2", kes.read_tensile_csv: "force",
-              read_encoder: "theta"}
+    second = {
+        read_laser_trace: "x_mm",
+        read_measurement: "column 2",
+        kes.read_tensile_csv: "force",
+        read_encoder: "theta",
+    }
     for read, x in second.items():
         with pytest.raises(wc.DataFileError, match=f"torn.csv, {re.escape(message.format(x=x))}"):
             read(path)
@@ -184,15 +211,26 @@ def test_an_ambiguous_decimal_comma_is_refused_naming_the_lines(tmp_path):
 
 
 def test_sweep_metric_plots(tmp_path):
-    sweep = wc.expand({"run": {"duration_s": 0.6}, "release": {"enabled": True, "settle_time_s": 0.1},
-                       "sweep": {"grid": {"damping.gamma_per_s": [0.1, 1.0, 3.0],
-                                          "material.hysteresis_d1_gf_cm_per_cm": [0.0, 0.04]}}})
+    sweep = wc.expand(
+        {
+            "run": {"duration_s": 0.6},
+            "release": {"enabled": True, "settle_time_s": 0.1},
+            "sweep": {
+                "grid": {"damping.gamma_per_s": [0.1, 1.0, 3.0], "material.hysteresis_d1_gf_cm_per_cm": [0.0, 0.04]}
+            },
+        }
+    )
     summary = wc.run_sweep(sweep, tmp_path / "sweep", workers=0, progress=False)
     assert np.isfinite(summary["first_amplitude_m"]).all()  # real swings, not rounding
     summary = read_sweep_summary(tmp_path / "sweep")
     line = plot_sweep(summary, tmp_path / "line.png", "first_amplitude_m", "damping.gamma_per_s")
-    heat = plot_sweep(summary, tmp_path / "heat.png", "first_amplitude_m", "damping.gamma_per_s",
-                      "material.hysteresis_d1_gf_cm_per_cm")
+    heat = plot_sweep(
+        summary,
+        tmp_path / "heat.png",
+        "first_amplitude_m",
+        "damping.gamma_per_s",
+        "material.hysteresis_d1_gf_cm_per_cm",
+    )
     assert_not_blank(line)
     assert_not_blank(heat)
     with pytest.raises(wc.ArgumentError, match="metric: .no_such_metric. is not a column of the sweep summary"):
@@ -214,8 +252,9 @@ def test_render_draws_the_strip_where_it_is(swing_run, tmp_path):
     tip = recording.frames[:, 0, -1, 0]
     far = int(np.argmin(tip))
     assert tip[0] > 0.04 and tip[far] < -0.02
-    paths = render_run(recording, tmp_path / "render", times=recording.frame_times[[0, far]], movie="motion.gif",
-                       stride=3)
+    paths = render_run(
+        recording, tmp_path / "render", times=recording.frame_times[[0, far]], movie="motion.gif", stride=3
+    )
     assert [p.suffix for p in paths] == [".png", ".png", ".gif"]
     start, start_count = ribbon_columns(pixels(paths[0]))
     end, end_count = ribbon_columns(pixels(paths[1]))
@@ -269,17 +308,26 @@ def test_a_sampled_sweep_is_plotted_as_points_not_a_zigzag():
     from warpcloth.viz.plots import sweep_figure
 
     rng = np.random.default_rng(0)
-    summary = pd.DataFrame({"variant": range(30), "damping.gamma_per_s": rng.random(30),
-                            "material.hysteresis_d1_gf_cm_per_cm": rng.random(30), "first_period_s": rng.random(30),
-                            "diverged": False})
+    summary = pd.DataFrame(
+        {
+            "variant": range(30),
+            "damping.gamma_per_s": rng.random(30),
+            "material.hysteresis_d1_gf_cm_per_cm": rng.random(30),
+            "first_period_s": rng.random(30),
+            "diverged": False,
+        }
+    )
     figure = sweep_figure(summary, "first_period_s", "damping.gamma_per_s")
     axes = figure.axes
     assert not any(len(line.get_xdata()) > 1 for line in axes[0].get_lines())  # nothing joined
     assert len(axes) == 2 and axes[1].get_ylabel() == "D1 (gf·cm/cm)"  # the colourbar, symbol and unit
     assert axes[0].get_xlabel() == "γ (s⁻¹)" and axes[0].get_ylabel() == "first period (s)"
     plt.close(figure)
-    one_d = sweep_figure(summary[["variant", "damping.gamma_per_s", "first_period_s", "diverged"]], "first_period_s",
-                         "damping.gamma_per_s")
+    one_d = sweep_figure(
+        summary[["variant", "damping.gamma_per_s", "first_period_s", "diverged"]],
+        "first_period_s",
+        "damping.gamma_per_s",
+    )
     assert len(one_d.axes[0].get_lines()[0].get_xdata()) == 30  # a 1-D sweep is still a curve
     plt.close(one_d)
 
@@ -306,13 +354,16 @@ def test_measured_files_go_onto_the_figure_of_their_kind(swing_run, tmp_path, fi
     recording = load_recording(swing_run)
     t, x = recording.probe("laser_x", 0)
     laser, encoder, shapes = tmp_path / "laser.csv", tmp_path / "encoder.csv", tmp_path / "markers.csv"
-    laser.write_text("t_s,x_mm\n" + "".join(f"{a:.5f},{b * 1e3:.4f}\n" for a, b in zip(t[::20], x[::20],
-                                                                                           strict=True)))
+    laser.write_text("t_s,x_mm\n" + "".join(f"{a:.5f},{b * 1e3:.4f}\n" for a, b in zip(t[::20], x[::20], strict=True)))
     encoder.write_text("t_s,theta_deg\n0,0\n0.1,0.5\n0.2,1.0\n")
     frames = recording.frames
     nc = recording.n_clamped
-    rows = [f"{f},{recording.frame_times[f]:.5f},{10 * k},{frames[f, 0, nc - 1 + 2 * k, 0] * 1e3:.4f},"
-            f"{frames[f, 0, nc - 1 + 2 * k, 1] * 1e3:.4f}\n" for f in (3, 9, 15) for k in range(1, 4)]
+    rows = [
+        f"{f},{recording.frame_times[f]:.5f},{10 * k},{frames[f, 0, nc - 1 + 2 * k, 0] * 1e3:.4f},"
+        f"{frames[f, 0, nc - 1 + 2 * k, 1] * 1e3:.4f}\n"
+        for f in (3, 9, 15)
+        for k in range(1, 4)
+    ]
     shapes.write_text("frame,t_s,s_mm,x_mm,y_mm\n" + "".join(rows))
 
     def labels(name):
@@ -385,15 +436,16 @@ def test_the_bending_loop_is_zoomed_to_the_path_and_marks_kes_b_and_2hb(swing_ru
     # the paper's law 2HB = 2 M0 − D1 (e^{−α(K0+1)} + e^{−α(K0−1)}), M0 = ½ D1 (1 + e^{−2αK0})
     # (docs/model.md §4.2, K in 1/cm), and B is D up to the branches' curvature there
     material = recording.scenes[0].material
-    d1, alpha, k0 = (material.hysteresis_d1_gf_cm_per_cm, material.hysteresis_alpha_cm,
-                     material.hysteresis_k0_per_cm)
+    d1, alpha, k0 = (material.hysteresis_d1_gf_cm_per_cm, material.hysteresis_alpha_cm, material.hysteresis_k0_per_cm)
     m0 = 0.5 * d1 * (1 + np.exp(-2 * alpha * k0))
-    assert kes.hb2_gf_cm_per_cm == pytest.approx(2 * m0 - d1 * (np.exp(-alpha * (k0 + 1)) + np.exp(-alpha * (k0 - 1))),
-                                                 rel=2e-3)
+    assert kes.hb2_gf_cm_per_cm == pytest.approx(
+        2 * m0 - d1 * (np.exp(-alpha * (k0 + 1)) + np.exp(-alpha * (k0 - 1))), rel=2e-3
+    )
     assert kes.b_gf_cm2_per_cm == pytest.approx(material.bending_rigidity_gf_cm2_per_cm, rel=0.01)
     k, m = kes_loop(recording)
-    assert kes == bending_summary(BendingLoop(k / units.CURVATURE_PER_CM, m / units.MOMENT_GF_CM_PER_CM,
-                                              np.arange(1, len(k) + 1), "x"))
+    assert kes == bending_summary(
+        BendingLoop(k / units.CURVATURE_PER_CM, m / units.MOMENT_GF_CM_PER_CM, np.arange(1, len(k) + 1), "x")
+    )
     _, curvature = recording.probe("loop_curvature", 0)
     path = curvature / units.CURVATURE_PER_CM
     lo, hi = zoom.get_xlim()
@@ -431,8 +483,10 @@ def test_formats_and_dpi(swing_run, tmp_path):
 
 def test_many_variants_are_coloured_by_a_parameter_not_listed_in_a_legend(tmp_path, figures):
     gammas = np.linspace(0.1, 1.2, 12)
-    scenes = [wc.load_scene("damped_swing", {"run.duration_s": 0.05, "release.settle_time_s": 0.05,
-                                             "damping.gamma_per_s": g}) for g in gammas]
+    scenes = [
+        wc.load_scene("damped_swing", {"run.duration_s": 0.05, "release.settle_time_s": 0.05, "damping.gamma_per_s": g})
+        for g in gammas
+    ]
     wc.simulate(scenes, out=tmp_path / "run")
     plot_run(load_recording(tmp_path / "run"), tmp_path / "f")
     for name in ("amplitude.png", "clamp_angle.png"):
@@ -440,8 +494,9 @@ def test_many_variants_are_coloured_by_a_parameter_not_listed_in_a_legend(tmp_pa
         assert ax.get_legend() is None and colourbar.get_ylabel() == "γ (s⁻¹)"
         lines = ax.get_lines()[:12]
         # the variant with the largest γ is drawn in viridis' last colour
-        assert np.allclose(lines[-1].get_color(), plt_viridis(1.0)) and np.allclose(lines[0].get_color(),
-                                                                                      plt_viridis(0.0))
+        assert np.allclose(lines[-1].get_color(), plt_viridis(1.0)) and np.allclose(
+            lines[0].get_color(), plt_viridis(0.0)
+        )
 
 
 def plt_viridis(x):
@@ -456,10 +511,16 @@ def test_a_metric_no_variant_has_is_refused_not_drawn_empty():
     from warpcloth.errors import ArgumentError
     from warpcloth.viz.plots import sweep_figure
 
-    summary = pd.DataFrame({"variant": range(4), "damping.gamma_per_s": [0.1, 0.2, 0.1, 0.2],
-                            "material.bending_rigidity_gf_cm2_per_cm": [0.1, 0.1, 0.2, 0.2],
-                            "first_period_s": np.nan, "mean_log_decrement": [0.1, np.nan, 0.3, 0.4],
-                            "diverged": False})
+    summary = pd.DataFrame(
+        {
+            "variant": range(4),
+            "damping.gamma_per_s": [0.1, 0.2, 0.1, 0.2],
+            "material.bending_rigidity_gf_cm2_per_cm": [0.1, 0.1, 0.2, 0.2],
+            "first_period_s": np.nan,
+            "mean_log_decrement": [0.1, np.nan, 0.3, 0.4],
+            "diverged": False,
+        }
+    )
     with pytest.raises(ArgumentError, match="metric: no variant has a value of 'first_period_s'"):
         sweep_figure(summary, "first_period_s", "damping.gamma_per_s", "material.bending_rigidity_gf_cm2_per_cm")
     figure = sweep_figure(summary, "mean_log_decrement", "damping.gamma_per_s")
@@ -472,9 +533,15 @@ def test_a_grid_over_the_bending_law_draws_a_line_per_law():
     from warpcloth.viz.plots import sweep_figure
 
     laws = ["tagawa2003", "dahl", "frictional_couple"]
-    summary = pd.DataFrame({"variant": range(9), "material.bending_law": np.repeat(laws, 3),
-                            "damping.gamma_per_s": np.tile([0.2, 0.5, 0.8], 3),
-                            "mean_log_decrement": np.arange(9) / 10, "diverged": False})
+    summary = pd.DataFrame(
+        {
+            "variant": range(9),
+            "material.bending_law": np.repeat(laws, 3),
+            "damping.gamma_per_s": np.tile([0.2, 0.5, 0.8], 3),
+            "mean_log_decrement": np.arange(9) / 10,
+            "diverged": False,
+        }
+    )
     ax = sweep_figure(summary, "mean_log_decrement", "damping.gamma_per_s").axes[0]
     lines = ax.get_lines()
     assert [line.get_label() for line in lines] == [f"bending law = {law}" for law in laws]
@@ -519,8 +586,15 @@ def test_a_text_column_is_refused_as_a_metric():
     from warpcloth.errors import ArgumentError
     from warpcloth.viz.plots import sweep_figure
 
-    summary = pd.DataFrame({"variant": range(3), "damping.gamma_per_s": [0.1, 0.2, 0.3],
-                            "diverged_phase": ["", "", ""], "first_period_s": [0.5, 0.5, 0.5], "diverged": False})
+    summary = pd.DataFrame(
+        {
+            "variant": range(3),
+            "damping.gamma_per_s": [0.1, 0.2, 0.3],
+            "diverged_phase": ["", "", ""],
+            "first_period_s": [0.5, 0.5, 0.5],
+            "diverged": False,
+        }
+    )
     with pytest.raises(ArgumentError, match="metric: 'diverged_phase' is not a number per variant"):
         sweep_figure(summary, "diverged_phase", "damping.gamma_per_s")
 
@@ -529,8 +603,12 @@ def test_many_variants_differing_by_a_choice_are_coloured_by_it(tmp_path, figure
     # 9 variants whose only difference is the bending law: colours follow the laws'
     # order (as renders and USD colour them), no legend, and no float conversion of a name
     laws = ["tagawa2003", "dahl", "frictional_couple"] * 3
-    scenes = [wc.load_scene("damped_swing", {"run.duration_s": 0.05, "release.settle_time_s": 0.05,
-                                             "material.bending_law": law}) for law in laws]
+    scenes = [
+        wc.load_scene(
+            "damped_swing", {"run.duration_s": 0.05, "release.settle_time_s": 0.05, "material.bending_law": law}
+        )
+        for law in laws
+    ]
     wc.simulate(scenes, out=tmp_path / "run")
     plot_run(load_recording(tmp_path / "run"), tmp_path / "f")
     ax, colourbar = figures["amplitude.png"].axes
@@ -558,8 +636,9 @@ def test_heat_map_ticks_sit_at_the_centres_of_the_grid_cells():
         np.testing.assert_allclose(axis.get_ticklocs(), 0.5 * (edges[:-1] + edges[1:]))  # the cells' centres
         assert [t.get_text() for t in axis.get_ticklabels()] == [f"{v:.4g}" for v in values]
     cells = ax.collections[0].get_array().reshape(len(d1s), len(gammas))
-    assert cells[1, 2] == summary.query(f"`damping.gamma_per_s` == 0.7 and `{D1_FIELD}` == 0.025")[
-        "first_period_s"].item()  # the cell labelled (0.7, 0.025) holds that variant
+    assert (
+        cells[1, 2] == summary.query(f"`damping.gamma_per_s` == 0.7 and `{D1_FIELD}` == 0.025")["first_period_s"].item()
+    )  # the cell labelled (0.7, 0.025) holds that variant
     plt.close("all")
     # a long grid labels every k-th cell, still at cell centres
     many = np.round(np.linspace(0.0, 2.9, 30), 3)
@@ -581,8 +660,12 @@ def test_a_driven_clamp_has_no_release_on_its_time_axes(swing_run, tmp_path, fig
     plot_run(load_recording(tmp_path / "rotation"), tmp_path / "f")
     rotation = {name: fig for name, fig in figures.items()}
     texts = [t for fig in rotation.values() for ax in fig.axes for t in (ax.get_xlabel(), ax.get_ylabel())]
-    texts += [ax.get_legend().get_title().get_text() for fig in rotation.values() for ax in fig.axes
-              if ax.get_legend() is not None]
+    texts += [
+        ax.get_legend().get_title().get_text()
+        for fig in rotation.values()
+        for ax in fig.axes
+        if ax.get_legend() is not None
+    ]
     assert not [t for t in texts if "release" in t]
     assert rotation["amplitude.png"].axes[0].get_xlabel() == "t (s)"
     assert rotation["shapes.png"].axes[0].get_legend().get_title().get_text() == "t"
@@ -601,9 +684,12 @@ def test_the_1_and_2_sigma_ellipses_have_their_own_legend_entries():
     from warpcloth.viz.plots import fit_search_figure
 
     names = ["damping.gamma_per_s", D1_FIELD]
-    fit = SimpleNamespace(parameters=dict(zip(names, [0.55, 0.025], strict=True)),
-                          sigma=dict(zip(names, [0.002, 0.0002], strict=True)), correlation=[[1.0, 0.4], [0.4, 1.0]],
-                          history=[{names[0]: 0.3, names[1]: 0.04}, {names[0]: 0.55, names[1]: 0.025}])
+    fit = SimpleNamespace(
+        parameters=dict(zip(names, [0.55, 0.025], strict=True)),
+        sigma=dict(zip(names, [0.002, 0.0002], strict=True)),
+        correlation=[[1.0, 0.4], [0.4, 1.0]],
+        history=[{names[0]: 0.3, names[1]: 0.04}, {names[0]: 0.55, names[1]: 0.025}],
+    )
     figure = fit_search_figure(fit, dict(zip(names, [0.551, 0.0251], strict=True)))
     ax = figure.axes[0]
     entries = dict(zip(*reversed(ax.get_legend_handles_labels()), strict=True))
@@ -626,18 +712,29 @@ def test_the_marker_overlay_axes_read_as_the_shape_figures(swing_run, tmp_path, 
     recording = load_recording(swing_run)
     nc = recording.n_clamped
     path = tmp_path / "markers.csv"
-    path.write_text("frame,t_s,s_mm,x_mm,y_mm\n" + "".join(
-        f"{f},{recording.frame_times[f]:.5f},{10 * k},{recording.frames[f, 0, nc - 1 + 2 * k, 0] * 1e3:.4f},"
-        f"{recording.frames[f, 0, nc - 1 + 2 * k, 1] * 1e3:.4f}\n" for f in (3, 9) for k in (1, 2)))
+    path.write_text(
+        "frame,t_s,s_mm,x_mm,y_mm\n"
+        + "".join(
+            f"{f},{recording.frame_times[f]:.5f},{10 * k},{recording.frames[f, 0, nc - 1 + 2 * k, 0] * 1e3:.4f},"
+            f"{recording.frames[f, 0, nc - 1 + 2 * k, 1] * 1e3:.4f}\n"
+            for f in (3, 9)
+            for k in (1, 2)
+        )
+    )
     result = SimpleNamespace(frames=recording.frames, frame_times=recording.frame_times)
-    fit = SimpleNamespace(shift_s=0.0, parameters={"damping.gamma_per_s": 0.3}, sigma={"damping.gamma_per_s": 0.01},
-                          rms=1e-4)
-    plot_fit_overlay(result, SimpleNamespace(scene=recording.scenes[0]), read_tracked_shapes(path), fit,
-                     tmp_path / "overlay.png")
+    fit = SimpleNamespace(
+        shift_s=0.0, parameters={"damping.gamma_per_s": 0.3}, sigma={"damping.gamma_per_s": 0.01}, rms=1e-4
+    )
+    plot_fit_overlay(
+        result, SimpleNamespace(scene=recording.scenes[0]), read_tracked_shapes(path), fit, tmp_path / "overlay.png"
+    )
     plot_run(recording, tmp_path / "f", measured=path)
     overlay, shapes = figures["overlay.png"].axes[0], figures["shapes.png"].axes[0]
-    assert (overlay.get_xlabel(), overlay.get_ylabel()) == (shapes.get_xlabel(), shapes.get_ylabel()) == (
-        "x from the clamp edge (mm)", "y from the clamp edge (mm)")
+    assert (
+        (overlay.get_xlabel(), overlay.get_ylabel())
+        == (shapes.get_xlabel(), shapes.get_ylabel())
+        == ("x from the clamp edge (mm)", "y from the clamp edge (mm)")
+    )
 
 
 def test_a_measured_trace_and_the_run_are_drawn_on_one_window(swing_run, tmp_path, figures):
@@ -649,8 +746,7 @@ def test_a_measured_trace_and_the_run_are_drawn_on_one_window(swing_run, tmp_pat
     t, x = recording.probe("laser_x", 0)
     half = t <= t[-1] / 2 + 1e-9
     laser = tmp_path / "laser.csv"
-    laser.write_text("t_s,x_mm\n" + "".join(f"{a:.6f},{b * 1e3:.4f}\n" for a, b in zip(t[half], x[half],
-                                                                                           strict=True)))
+    laser.write_text("t_s,x_mm\n" + "".join(f"{a:.6f},{b * 1e3:.4f}\n" for a, b in zip(t[half], x[half], strict=True)))
     end = float(np.round(t[half][-1], 6))
     plot_run(recording, tmp_path / "a", measured=laser)
     ax = figures["amplitude.png"].axes[0]

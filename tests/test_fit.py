@@ -84,16 +84,19 @@ def test_impulsive_rotation_centre_gamma_and_clock_are_recovered():
     assert fit.rms == pytest.approx(3e-4, rel=0.1)
 
 
-@pytest.mark.parametrize("names, bounds, message", [
-    ("stiffness", None, "neither a scene field nor one of"),
-    ("strip.spacing_mm", None, "cannot vary between the strips"),
-    ("material.name", None, "not a number"),
-    ("gamma", "gamma=1", "not name=LOW:HIGH"),
-    ("gamma", "gamma=2:1", "must be below"),
-    ("gamma", "D1=0:1", "'D1' is not among the --free"),
-    ("rotation_centre_dx_mm,release.hold_x_mm,clamp.table_t_s", None, "not a number"),
-    ("", None, "at least one parameter"),
-])
+@pytest.mark.parametrize(
+    "names, bounds, message",
+    [
+        ("stiffness", None, "neither a scene field nor one of"),
+        ("strip.spacing_mm", None, "cannot vary between the strips"),
+        ("material.name", None, "not a number"),
+        ("gamma", "gamma=1", "not name=LOW:HIGH"),
+        ("gamma", "gamma=2:1", "must be below"),
+        ("gamma", "D1=0:1", "'D1' is not among the --free"),
+        ("rotation_centre_dx_mm,release.hold_x_mm,clamp.table_t_s", None, "not a number"),
+        ("", None, "at least one parameter"),
+    ],
+)
 def test_bad_fit_requests_are_named(names, bounds, message):
     with pytest.raises(wc.ArgumentError, match=message):
         free_parameters(names, wc.load_scene("impulsive_rotation"), bounds)
@@ -101,8 +104,9 @@ def test_bad_fit_requests_are_named(names, bounds, message):
 
 def test_a_zero_parameter_needs_bounds():
     scene = wc.load_scene("damped_swing", ["material.hysteresis_d1_gf_cm_per_cm=0.0"])
-    with pytest.raises(wc.ArgumentError, match="bounds: D1 is 0 in the scene, so no default range; give "
-                       "--bounds D1=LOW:HIGH"):
+    with pytest.raises(
+        wc.ArgumentError, match="bounds: D1 is 0 in the scene, so no default range; give --bounds D1=LOW:HIGH"
+    ):
         free_parameters("D1", scene)
     (d1,) = free_parameters("D1", scene, "D1=0:0.1")
     assert (d1.lower, d1.upper, d1.field) == (0.0, 0.1, "material.hysteresis_d1_gf_cm_per_cm")
@@ -114,8 +118,17 @@ def test_cli_fits_the_bundled_examples(tmp_path):
     def cli(*args):
         return run_cli(*args, cwd=tmp_path)
 
-    done = cli("clamp", "fit-angle", "impulsive_rotation_encoder", "--scene", "impulsive_rotation",
-               "-o", "fitted.toml", "--plot", "clamp.png")
+    done = cli(
+        "clamp",
+        "fit-angle",
+        "impulsive_rotation_encoder",
+        "--scene",
+        "impulsive_rotation",
+        "-o",
+        "fitted.toml",
+        "--plot",
+        "clamp.png",
+    )
     assert done.returncode == 0, done.stderr
     assert "form: quartic, line, rest" in done.stdout and "status: converged" in done.stdout
     fitted = wc.load_scene(tmp_path / "fitted.toml")
@@ -125,14 +138,27 @@ def test_cli_fits_the_bundled_examples(tmp_path):
     assert np.abs(evaluate(*clamp_pieces(fitted.clamp), t) - truth).max() < np.radians(0.1)  # the noise
     assert second.theta_coefficients_si[1] == pytest.approx(16.0, rel=0.01)
     assert second.t_end_s == pytest.approx(0.12, abs=2e-3)
-    done = cli("fit", "impulsive_rotation", "--measured", "impulsive_rotation_shapes", "--free",
-               "gamma,rotation_centre_dy_mm", "--align-start", "0.01", "--out", "fit", "--no-progress",
-               "--bootstrap", "300")
+    done = cli(
+        "fit",
+        "impulsive_rotation",
+        "--measured",
+        "impulsive_rotation_shapes",
+        "--free",
+        "gamma,rotation_centre_dy_mm",
+        "--align-start",
+        "0.01",
+        "--out",
+        "fit",
+        "--no-progress",
+        "--bootstrap",
+        "300",
+    )
     assert done.returncode == 0, done.stderr
     result = json.loads((tmp_path / "fit" / "fit.json").read_text())
     assert result["status"] == "converged" and result["problems"] == []
-    dy, sigma, boot = (result["parameters"]["clamp.rotation_centre_dy_mm"][k] for k in ("value", "sigma",
-                                                                                     "sigma_bootstrap"))
+    dy, sigma, boot = (
+        result["parameters"]["clamp.rotation_centre_dy_mm"][k] for k in ("value", "sigma", "sigma_bootstrap")
+    )
     assert 0.6 < boot / sigma < 1.6  # white marker noise: the bootstrap agrees with Gauss–Newton
     assert result["inputs"]["measured"]["sha256"] and result["provenance"]["warp"] == wp.__version__
     assert abs(dy - 4.0) < 3 * sigma
@@ -154,8 +180,22 @@ def test_markers_beyond_the_free_end_are_refused():
 def test_a_fit_that_ends_on_a_bound_says_so_and_exits_non_zero(tmp_path):
     # Truth γ = 0.55 /s in the bundled trace; bounds that exclude it pin γ at 5: the search
     # ends there at many times the noise, and that must not read as a fitted value.
-    done = run_cli("fit", "damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--bounds",
-                   "gamma=5:6", "--max-iterations", "3", "--out", "fit", "--no-progress", cwd=tmp_path)
+    done = run_cli(
+        "fit",
+        "damped_swing",
+        "--measured",
+        "damped_swing_laser",
+        "--free",
+        "gamma",
+        "--bounds",
+        "gamma=5:6",
+        "--max-iterations",
+        "3",
+        "--out",
+        "fit",
+        "--no-progress",
+        cwd=tmp_path,
+    )
     assert done.returncode == 4, done.stderr
     assert "not a fit (at_bound): damping.gamma_per_s = 5 ended on a bound (5:6)" in done.stderr
     result = json.loads((tmp_path / "fit" / "fit.json").read_text())
@@ -173,8 +213,9 @@ def test_the_spacing_check_predicts_the_refit_at_half_the_spacing():
     keep = markers.t <= 0.25
     markers = TrackedShapes(*(getattr(markers, k)[keep] for k in ("frame", "t", "s", "x", "y")))
     base = raw("impulsive_rotation")
-    free = free_parameters("gamma,rotation_centre_dy_mm", wc.scene_from_dict(copy.deepcopy(base)),
-                           "rotation_centre_dy_mm=0:8")
+    free = free_parameters(
+        "gamma,rotation_centre_dy_mm", wc.scene_from_dict(copy.deepcopy(base)), "rotation_centre_dy_mm=0:8"
+    )
     fit = fit_motion(base, markers, free, align_start_s=0.01, progress=False, check_spacing=True)
     moves = fit.spacing_check["moves"]
     assert fit.spacing_check["spacing_mm"] == 1.25
@@ -188,8 +229,10 @@ def test_the_spacing_check_predicts_the_refit_at_half_the_spacing():
         assert moves[name] == pytest.approx(actual, rel=0.15, abs=0.2 * fit.sigma[name])
     dy = "clamp.rotation_centre_dy_mm"
     assert abs(moves[dy]) > fit.sigma[dy] and fit.status == "spacing_limited"
-    assert any(p.startswith("refining the strip to strip.spacing_mm = 1.25 moves clamp.rotation_centre_dy_mm")
-               for p in fit.problems)
+    assert any(
+        p.startswith("refining the strip to strip.spacing_mm = 1.25 moves clamp.rotation_centre_dy_mm")
+        for p in fit.problems
+    )
     assert fit.to_json()["spacing_check"] == fit.spacing_check
 
 
@@ -197,8 +240,20 @@ def test_a_spacing_check_that_could_not_run_is_not_a_pass():
     from warpcloth.calibrate.motion_fit import FitResult
 
     def judged(check):
-        fit = FitResult({"damping.gamma_per_s": 0.5}, {"damping.gamma_per_s": 0.01}, [[1.0]], 1e-4, 0.0, 100, 1, 1,
-                        0.0, converged=True, noise=1e-4, spacing_check=check)
+        fit = FitResult(
+            {"damping.gamma_per_s": 0.5},
+            {"damping.gamma_per_s": 0.01},
+            [[1.0]],
+            1e-4,
+            0.0,
+            100,
+            1,
+            1,
+            0.0,
+            converged=True,
+            noise=1e-4,
+            spacing_check=check,
+        )
         fit.judge(0)
         return fit
 

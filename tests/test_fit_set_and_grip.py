@@ -52,8 +52,10 @@ def fitted_back_with_set_and_grip(base, measured, truth, noise):
     """The fit of γ, K_rest and the grip factor, asserted converged with the truth within 3σ."""
     free = free_parameters("gamma,K_rest,grip_factor", wc.scene_from_dict(copy.deepcopy(base)))
     fit = fit_motion(base, measured, free, progress=False, noise=noise)
-    print(f"with set and grip: {fit.status}, RMS {fit.rms * 1e3:.3f} mm, "
-          + ", ".join(f"{k} {v:.5g} ± {fit.sigma[k]:.2g}" for k, v in fit.parameters.items()))
+    print(
+        f"with set and grip: {fit.status}, RMS {fit.rms * 1e3:.3f} mm, "
+        + ", ".join(f"{k} {v:.5g} ± {fit.sigma[k]:.2g}" for k, v in fit.parameters.items())
+    )
     assert fit.status == "converged", fit.problems
     for name, value in truth.items():
         assert abs(fit.parameters[name] - value) < 3 * fit.sigma[name]
@@ -72,10 +74,21 @@ def test_the_swing_alone_does_not_separate_the_set_from_d_a_horizontal_still_doe
     result = wc.simulate(wc.scene_from_dict(copy.deepcopy(swing)))
     trace = LaserTrace(result.t[::2], result.probe("laser_x", 0)[::2])
     ramp = 0.5
-    cantilever = raw("damped_swing", release__enabled=False, run__duration_s=2.0, damping__gamma_per_s=5.0,
-                     clamp__motion="piecewise", **truth)
-    cantilever["clamp"]["segments"] = [{"t_start_s": 0.0, "t_end_s": ramp, "theta_coefficients_si":
-                                        [0.0, 0.0, 1.5 * np.pi / ramp**2, -np.pi / ramp**3]}]
+    cantilever = raw(
+        "damped_swing",
+        release__enabled=False,
+        run__duration_s=2.0,
+        damping__gamma_per_s=5.0,
+        clamp__motion="piecewise",
+        **truth,
+    )
+    cantilever["clamp"]["segments"] = [
+        {
+            "t_start_s": 0.0,
+            "t_end_s": ramp,
+            "theta_coefficients_si": [0.0, 0.0, 1.5 * np.pi / ramp**2, -np.pi / ramp**3],
+        }
+    ]
     scene = wc.scene_from_dict(copy.deepcopy(cantilever))
     markers = tracked_markers(wc.simulate(scene), scene, 0.0, 0.0, np.random.default_rng(0))
     last = markers.t >= 1.9
@@ -95,15 +108,23 @@ def test_a_rotation_with_set_and_grip_is_fitted_back():
     # only γ (the set and grip left out) is not a fit (measured: at_bound, RMS 4.0 mm, 13×
     # the noise); with K_rest and the grip factor free they come back within 3σ (measured
     # γ 0.808 ± 0.051, K_rest 0.1016 ± 0.0017 1/cm, grip 2.994 ± 0.021, RMS 0.313 mm).
-    settle = dict(release__enabled=True, release__hold_free_end=False, release__move_time_s=0.1,
-                  release__settle_time_s=0.5, strip__spacing_mm=5.0, integrator__dt_s=1e-5, run__duration_s=0.3,
-                  clamp__grip_length_mm=10.0)
+    settle = dict(
+        release__enabled=True,
+        release__hold_free_end=False,
+        release__move_time_s=0.1,
+        release__settle_time_s=0.5,
+        strip__spacing_mm=5.0,
+        integrator__dt_s=1e-5,
+        run__duration_s=0.3,
+        clamp__grip_length_mm=10.0,
+    )
     base = raw("impulsive_rotation", **settle)
     truth = {"damping.gamma_per_s": 0.8, **SET_AND_GRIP}
     scene = with_fields(base, truth)
     measured = tracked_markers(wc.simulate(scene), scene, 0.0, 3e-4, np.random.default_rng(8))
-    without = fit_motion(base, measured, free_parameters("gamma", wc.scene_from_dict(copy.deepcopy(base))),
-                         progress=False, noise=3e-4)
+    without = fit_motion(
+        base, measured, free_parameters("gamma", wc.scene_from_dict(copy.deepcopy(base))), progress=False, noise=3e-4
+    )
     print(f"rotation without set and grip: {without.status}, RMS {without.rms * 1e3:.3f} mm")
     assert without.status != "converged"
     fitted_back_with_set_and_grip(base, measured, truth, 3e-4)

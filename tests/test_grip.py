@@ -32,8 +32,7 @@ def test_the_two_section_reference_has_its_limits():
     # root's 1e6 being finite). 500 RK4 steps: λ to ~1e-9, and fast.
     uniform = two_section_beam_mode(203.0, steps=500)[0]
     assert two_section_beam_mode(203.0, 0.2, 1.0, steps=500)[0] == pytest.approx(uniform, rel=1e-12)
-    assert two_section_beam_mode(0.0, 0.2, 1e6, steps=500)[0] == pytest.approx(1.875104068711961**2 / 0.8**2,
-                                                                              rel=2e-6)
+    assert two_section_beam_mode(0.0, 0.2, 1e6, steps=500)[0] == pytest.approx(1.875104068711961**2 / 0.8**2, rel=2e-6)
     # a stiffer root raises λ, more the longer it is
     lams = [two_section_beam_mode(203.0, a, 3.0, steps=500)[0] for a in (0.05, 0.1, 0.2)]
     assert uniform < lams[0] < lams[1] < lams[2]
@@ -63,11 +62,21 @@ def periods(spacing_mm, cases):
     scenes, starts, exact, plain = [], [], [], []
     for name in cases:
         g, rigidity, grip_mm, factor = CASES[name]
-        scene = wc.load_scene("damped_swing", overrides(
-            strip__spacing_mm=spacing_mm, material__hysteresis_d1_gf_cm_per_cm=0.0,
-            material__bending_rigidity_gf_cm2_per_cm=rigidity, damping__gamma_per_s=0.0, release__enabled=False,
-            run__duration_s=3.6 if g == 0.0 else 0.7, run__gravity_m_per_s2=g, integrator__dt_s=4e-6 * spacing_mm,
-            clamp__grip_length_mm=grip_mm, clamp__grip_bending_factor=factor))
+        scene = wc.load_scene(
+            "damped_swing",
+            overrides(
+                strip__spacing_mm=spacing_mm,
+                material__hysteresis_d1_gf_cm_per_cm=0.0,
+                material__bending_rigidity_gf_cm2_per_cm=rigidity,
+                damping__gamma_per_s=0.0,
+                release__enabled=False,
+                run__duration_s=3.6 if g == 0.0 else 0.7,
+                run__gravity_m_per_s2=g,
+                integrator__dt_s=4e-6 * spacing_mm,
+                clamp__grip_length_mm=grip_mm,
+                clamp__grip_bending_factor=factor,
+            ),
+        )
         material = to_si(scene.material)
         gamma = material.density * g * LENGTH_M**3 / material.bending_rigidity
         lam, shape, uniform = reference(gamma, grip_mm * 1e-3 / LENGTH_M, factor)
@@ -79,8 +88,10 @@ def periods(spacing_mm, cases):
     result = wc.simulate(scenes, initial_positions=np.stack(starts, axis=1))
     for j, name in enumerate(cases):
         out[name] = (smoothed_period(result.t, result.probe("tip_x", j)) / exact[j] - 1, plain[j])
-        print(f"{name}, h = {spacing_mm} mm: period error {out[name][0]:+.3%} (the grip shortens it by "
-              f"{-out[name][1]:.2%})")
+        print(
+            f"{name}, h = {spacing_mm} mm: period error {out[name][0]:+.3%} (the grip shortens it by "
+            f"{-out[name][1]:.2%})"
+        )
     return out
 
 

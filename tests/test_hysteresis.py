@@ -122,8 +122,9 @@ def cycle_work_error(m: MaterialSI, n: int) -> tuple[float, float, float]:
 def test_closed_cycle_work_equals_loop_area(alpha_k0):
     base = DEFAULT
     k0 = 250.0
-    m = MaterialSI(base.density, base.tensile, base.bending_rigidity,
-                   paper_loop(base.bending.hysteresis_d1, alpha_k0 / k0, k0))
+    m = MaterialSI(
+        base.density, base.tensile, base.bending_rigidity, paper_loop(base.bending.hysteresis_d1, alpha_k0 / k0, k0)
+    )
     error, area, bound = cycle_work_error(m, 5000)
     assert area > 0
     assert abs(error) <= bound
@@ -159,9 +160,16 @@ def test_loop_probe_records_the_chosen_hinge(hinge_mm, edge):
     for d1 in (0.0, 0.04):
         gaps = []
         for dt in (1e-5, 5e-6):
-            scene = wc.load_scene("damped_swing", overrides(
-                run__duration_s=0.6, output__loop_hinge_mm=hinge_mm, material__hysteresis_d1_gf_cm_per_cm=d1,
-                integrator__dt_s=dt, clamp__edge_hinge=edge))
+            scene = wc.load_scene(
+                "damped_swing",
+                overrides(
+                    run__duration_s=0.6,
+                    output__loop_hinge_mm=hinge_mm,
+                    material__hysteresis_d1_gf_cm_per_cm=d1,
+                    integrator__dt_s=dt,
+                    clamp__edge_hinge=edge,
+                ),
+            )
             result = wc.simulate(scene)
             curvature, moment = result.probe("loop_curvature", 0), result.probe("loop_moment", 0)
             node = scene.n_clamped - 1 + scene.loop_hinge

@@ -32,8 +32,10 @@ def swing_reference():
 def test_imex_converges_to_the_explicit_solution_at_first_order(swing_reference):
     # measured (1 s, h = 5 mm, through hold and release): 0.035 % at 5e-5 s (as explicit,
     # 0.036 %), 0.15 % at 2e-4, 0.77 % at 1e-3 s, where explicit Euler is unstable beyond 5e-5
-    errors = {dt: tip_error(run("damped_swing", "imex", dt, run__duration_s=1.0, **ELASTIC), swing_reference)
-              for dt in (5e-5, 2e-4, 8e-4)}
+    errors = {
+        dt: tip_error(run("damped_swing", "imex", dt, run__duration_s=1.0, **ELASTIC), swing_reference)
+        for dt in (5e-5, 2e-4, 8e-4)
+    }
     print({f"{dt:g}": f"{e:.3%}" for dt, e in errors.items()})
     order = np.log(errors[8e-4] / errors[2e-4]) / np.log(4)
     assert 0.8 < order < 1.2
@@ -63,8 +65,7 @@ def test_imex_removes_almost_no_energy_from_the_swing(swing_reference):
     assert abs(drift) < 5e-4
     explicit = run("damped_swing", "semi_implicit", 2e-6, run__duration_s=1.0, damping__gamma_per_s=0.0, **ELASTIC)
     late = explicit.t > 0.75
-    assert np.ptp(elastic.probe("tip_x", 0)[late]) == pytest.approx(np.ptp(explicit.probe("tip_x", 0)[late]),
-                                                                     rel=5e-3)
+    assert np.ptp(elastic.probe("tip_x", 0)[late]) == pytest.approx(np.ptp(explicit.probe("tip_x", 0)[late]), rel=5e-3)
 
 
 def test_imex_follows_the_driven_clamp():
@@ -84,10 +85,19 @@ def test_imex_reports_divergence_with_its_own_advice():
 
 
 def test_imex_batches_are_independent_bitwise():
-    scenes = [wc.load_scene("damped_swing", overrides(integrator__scheme="imex", integrator__dt_s=1e-4,
-                                                       run__duration_s=0.4, damping__gamma_per_s=g,
-                                                       material__hysteresis_d1_gf_cm_per_cm=d1))
-              for g, d1 in ((0.2, 0.0), (0.6, 0.04), (1.0, 0.08))]
+    scenes = [
+        wc.load_scene(
+            "damped_swing",
+            overrides(
+                integrator__scheme="imex",
+                integrator__dt_s=1e-4,
+                run__duration_s=0.4,
+                damping__gamma_per_s=g,
+                material__hysteresis_d1_gf_cm_per_cm=d1,
+            ),
+        )
+        for g, d1 in ((0.2, 0.0), (0.6, 0.04), (1.0, 0.08))
+    ]
     together = wc.simulate(scenes)
     for j, scene in enumerate(scenes):
         alone = wc.simulate(scene)
@@ -125,8 +135,7 @@ def test_energy_the_implicit_step_removes_is_not_taken_for_an_instability():
     # a long strip started unstretched (no hold to settle it) and a soft fabric on the
     # driven clamp: backward Euler damps their stretching transients, a budget *loss* of
     # about the strain energy; only energy an unstable step creates stops a strip
-    long = run("damped_swing", "imex", 4e-4, strip__free_length_mm=1000.0, release__enabled=False,
-               run__duration_s=0.6)
+    long = run("damped_swing", "imex", 4e-4, strip__free_length_mm=1000.0, release__enabled=False, run__duration_s=0.6)
     assert not long.diverged
     total = long.energy_total()[:, 0]
     assert total[-1] < total[0]  # it did lose energy: the stretching transient, damped

@@ -40,11 +40,18 @@ def write(path, text):
 # ------------------------------------------------------------------------------- fits
 
 
-@pytest.mark.parametrize("fields", [
-    {},  # the default: α K0 = 12.5, branches that saturate
-    {"bending_rigidity_gf_cm2_per_cm": 0.05, "hysteresis_d1_gf_cm_per_cm": 0.08, "hysteresis_alpha_cm": 0.6,
-     "hysteresis_k0_per_cm": 2.0},  # α K0 = 1.2: branches that never saturate
-])
+@pytest.mark.parametrize(
+    "fields",
+    [
+        {},  # the default: α K0 = 12.5, branches that saturate
+        {
+            "bending_rigidity_gf_cm2_per_cm": 0.05,
+            "hysteresis_d1_gf_cm_per_cm": 0.08,
+            "hysteresis_alpha_cm": 0.6,
+            "hysteresis_k0_per_cm": 2.0,
+        },  # α K0 = 1.2: branches that never saturate
+    ],
+)
 def test_bending_fit_recovers_a_loop_made_by_the_model(fields):
     # Measured: D, D1, α recovered to ≤ 3.2e-12 (default) and ≤ 1.2e-11 (soft) relative,
     # RMS ≤ 2e-13 of the moment range; bound 1e-9 on each.
@@ -68,8 +75,9 @@ def test_hysteretic_offset_is_linear_in_d1():
     assert h1.shape == (len(k), 4)
     for j, alpha in enumerate(alphas):
         for d, d1 in ((0.0, 0.04), (0.1, 0.5), (0.02, 3e-4)):
-            material = MaterialSection(bending_rigidity_gf_cm2_per_cm=d, hysteresis_d1_gf_cm_per_cm=d1,
-                                       hysteresis_alpha_cm=alpha)
+            material = MaterialSection(
+                bending_rigidity_gf_cm2_per_cm=d, hysteresis_d1_gf_cm_per_cm=d1, hysteresis_alpha_cm=alpha
+            )
             assert np.max(np.abs(kes_moment(material, k) - (d * k + d1 * h1[:, j]))) < 1e-12 * d1
     # one launch for many α gives what single launches give
     single = kes.hysteretic_offsets(k, [alphas[2]], 2.5)[:, 0]
@@ -213,31 +221,47 @@ def test_tensile_units_from_header_argument_or_data(tmp_path):
 def test_bending_reader_forms(tmp_path):
     k = kes_cycle(step=0.5)
     m = 0.1 * k
-    a = kes.read_bending_csv(write(tmp_path / "a.csv", "K (1/cm),M (gf·cm/cm)\n"
-                                   + "".join(f"{x},{y}\n" for x, y in zip(k, m, strict=True))))
+    a = kes.read_bending_csv(
+        write(tmp_path / "a.csv", "K (1/cm),M (gf·cm/cm)\n" + "".join(f"{x},{y}\n" for x, y in zip(k, m, strict=True)))
+    )
     b = kes.read_bending_csv(write(tmp_path / "b.txt", "".join(f"{x}  {y}\n" for x, y in zip(k, m, strict=True))))
     np.testing.assert_array_equal(a.curvature, b.curvature)
     np.testing.assert_array_equal(a.moment, m)
 
 
-@pytest.mark.parametrize("text, strain_unit, message", [
-    ("strain_percent,force\n" + "".join(f"{i},{i * 10}\n" for i in range(5)), None,
-     "the loading branch (first row to the maximum strain) has 5 point(s); fitting the quartic needs at least 6"),
-    ("strain_percent,force\n0,0\n1,10\n2,20\n1.5,30\n3,40\n4,50\n5,60\n6,70\n", None,
-     "line 5: strain 0.015 after 0.02 (line 4): the loading branch must be monotonic in strain"),
-    ("strain_percent,force\n0,0\n1,10\n2,20\n3,30\n4,40\n5,50\n3,20\n4,10\n0,0\n", None,
-     "line 9: strain 0.04 after 0.03 (line 8): the unloading branch must be monotonic in strain"),
-    ("strain_percent,force\n0,0\n1,10\n2,nan\n3,30\n", None, "line 4: force is nan; every value must be finite"),
-    ("strain_percent,force\n0,0\n1,ten\n", None, "line 3: 'ten' is not a number"),
-    ("strain_percent,force\n0,0,1\n", None, "line 2: expected 2 columns, got 3"),
-    ("strain_percent,force_N_per_m\n0,0\n", None, "header: column 2 is 'force_N_per_m'; expected force per width "
-     "in gf/cm"),
-    ("curvature_per_cm,moment\n0,0\n", None, "header: column 1 is 'curvature_per_cm'; expected strain_percent"),
-    ("extension_cm,force\n0,0\n", None, "header: column 1 is 'extension_cm'"),
-    ("extension,force\n0,0\n", None, "say its unit (extension_mm) or give strain_unit='mm'"),
-    ("strain_percent,force\n0,0\n", "fraction", "says percent, but the strain unit was given as fraction"),
-    ("Strain (%) Force (gf/cm)\n0 0\n", None, "the header 'Strain (%) Force (gf/cm)' has 4 column names"),
-])
+@pytest.mark.parametrize(
+    "text, strain_unit, message",
+    [
+        (
+            "strain_percent,force\n" + "".join(f"{i},{i * 10}\n" for i in range(5)),
+            None,
+            "the loading branch (first row to the maximum strain) has 5 point(s); fitting the quartic needs at least 6",
+        ),
+        (
+            "strain_percent,force\n0,0\n1,10\n2,20\n1.5,30\n3,40\n4,50\n5,60\n6,70\n",
+            None,
+            "line 5: strain 0.015 after 0.02 (line 4): the loading branch must be monotonic in strain",
+        ),
+        (
+            "strain_percent,force\n0,0\n1,10\n2,20\n3,30\n4,40\n5,50\n3,20\n4,10\n0,0\n",
+            None,
+            "line 9: strain 0.04 after 0.03 (line 8): the unloading branch must be monotonic in strain",
+        ),
+        ("strain_percent,force\n0,0\n1,10\n2,nan\n3,30\n", None, "line 4: force is nan; every value must be finite"),
+        ("strain_percent,force\n0,0\n1,ten\n", None, "line 3: 'ten' is not a number"),
+        ("strain_percent,force\n0,0,1\n", None, "line 2: expected 2 columns, got 3"),
+        (
+            "strain_percent,force_N_per_m\n0,0\n",
+            None,
+            "header: column 2 is 'force_N_per_m'; expected force per width in gf/cm",
+        ),
+        ("curvature_per_cm,moment\n0,0\n", None, "header: column 1 is 'curvature_per_cm'; expected strain_percent"),
+        ("extension_cm,force\n0,0\n", None, "header: column 1 is 'extension_cm'"),
+        ("extension,force\n0,0\n", None, "say its unit (extension_mm) or give strain_unit='mm'"),
+        ("strain_percent,force\n0,0\n", "fraction", "says percent, but the strain unit was given as fraction"),
+        ("Strain (%) Force (gf/cm)\n0 0\n", None, "the header 'Strain (%) Force (gf/cm)' has 4 column names"),
+    ],
+)
 def test_bad_tensile_data_is_named(tmp_path, text, strain_unit, message):
     path = write(tmp_path / "fb1.csv", text)
     with pytest.raises(DataFileError, match="fb1.csv") as err:
@@ -260,13 +284,23 @@ def bending_text(k, m=None):
     return "curvature_per_cm,moment_gf_cm_per_cm\n" + "".join(f"{x:.4f},{y:.5f}\n" for x, y in zip(k, m, strict=True))
 
 
-@pytest.mark.parametrize("k, message", [
-    (kes_cycle(step=1.25), "the loop has 9 point(s); fitting D, D1 and α along 0 → +K0 → −K0 → 0 needs at least 12"),
-    (kes_cycle()[:450], "the loop does not close: it starts at K = 0 1/cm (line 2) and ends at K = -1.02 1/cm "
-     "(line 451)"),
-    (np.concatenate([np.linspace(0, 2.5, 20), np.linspace(2.5, -0.5, 20), np.linspace(-0.5, 0, 5)]),
-     "the loop does not reach both signs of curvature: K runs from -0.5 to 2.5 1/cm"),
-])
+@pytest.mark.parametrize(
+    "k, message",
+    [
+        (
+            kes_cycle(step=1.25),
+            "the loop has 9 point(s); fitting D, D1 and α along 0 → +K0 → −K0 → 0 needs at least 12",
+        ),
+        (
+            kes_cycle()[:450],
+            "the loop does not close: it starts at K = 0 1/cm (line 2) and ends at K = -1.02 1/cm (line 451)",
+        ),
+        (
+            np.concatenate([np.linspace(0, 2.5, 20), np.linspace(2.5, -0.5, 20), np.linspace(-0.5, 0, 5)]),
+            "the loop does not reach both signs of curvature: K runs from -0.5 to 2.5 1/cm",
+        ),
+    ],
+)
 def test_bad_bending_loops_are_named(tmp_path, k, message):
     path = write(tmp_path / "fb2.csv", bending_text(k))
     with pytest.raises(DataFileError, match="fb2.csv") as err:
@@ -274,11 +308,14 @@ def test_bad_bending_loops_are_named(tmp_path, k, message):
     assert message in str(err.value)
 
 
-@pytest.mark.parametrize("header, message", [
-    ("curvature_1_per_m,moment", "header: column 1 is 'curvature_1_per_m'; expected curvature in 1/cm"),
-    ("curvature,moment_N", "header: column 2 is 'moment_N'; expected moment per width in gf·cm/cm"),
-    ("strain_percent,force_gf_per_cm", "expected curvature in 1/cm (e.g. curvature_per_cm; a KES-FB1 tensile file"),
-])
+@pytest.mark.parametrize(
+    "header, message",
+    [
+        ("curvature_1_per_m,moment", "header: column 1 is 'curvature_1_per_m'; expected curvature in 1/cm"),
+        ("curvature,moment_N", "header: column 2 is 'moment_N'; expected moment per width in gf·cm/cm"),
+        ("strain_percent,force_gf_per_cm", "expected curvature in 1/cm (e.g. curvature_per_cm; a KES-FB1 tensile file"),
+    ],
+)
 def test_bad_bending_header_is_named(tmp_path, header, message):
     path = write(tmp_path / "fb2.csv", header + "\n0,0\n1,0.1\n")
     with pytest.raises(DataFileError, match="fb2.csv") as err:
@@ -306,8 +343,11 @@ def fitted_material_file(path, density=2.03e-2):
 def test_material_file_round_trip_and_scene_by_relative_path(tmp_path, monkeypatch):
     fit, path = fitted_material_file(tmp_path / "mats" / "wool.toml")
     data = read_material_file(path)
-    assert data["material"] == {"name": "wool-fitted", "source": "fitted to the bundled examples",
-                                **{k: v for k, v in fit.material("wool-fitted", 2.03e-2).items() if k != "name"}}
+    assert data["material"] == {
+        "name": "wool-fitted",
+        "source": "fitted to the bundled examples",
+        **{k: v for k, v in fit.material("wool-fitted", 2.03e-2).items() if k != "name"},
+    }
     assert data["fit"]["tensile_rms_gf_per_cm"] == fit.tensile.rms_gf_per_cm
     assert data["fit"]["2hb_gf_cm_per_cm"] == fit.bending_kes.hb2_gf_cm_per_cm
     # a scene two directories away refers to it relative to itself, run from elsewhere
@@ -315,8 +355,11 @@ def test_material_file_round_trip_and_scene_by_relative_path(tmp_path, monkeypat
     scene_dir.mkdir(parents=True)
     text = (ROOT / "scenes" / "damped_swing.toml").read_text()
     start = text.index("[material]")
-    text = text[:start] + '[material]\nfrom_file = "../../mats/wool.toml"\nhysteresis_alpha_cm = 4.0\n' \
-        + text[text.index("[damping]"):]
+    text = (
+        text[:start]
+        + '[material]\nfrom_file = "../../mats/wool.toml"\nhysteresis_alpha_cm = 4.0\n'
+        + text[text.index("[damping]") :]
+    )
     write(scene_dir / "scene.toml", text)
     monkeypatch.chdir(tmp_path / "mats")
     scene = wc.load_scene(scene_dir / "scene.toml")
@@ -343,8 +386,7 @@ def test_scene_by_bundled_name_set_override_and_sweep():
     cotton = read_material_file("cotton-broadcloth")["material"]
     # --set material.from_file replaces the scene's own material values (damped_swing
     # writes them all out); other material overrides win wherever they stand
-    scene = wc.load_scene("damped_swing", ["material.hysteresis_alpha_cm=3.0",
-                                           "material.from_file=cotton-broadcloth"])
+    scene = wc.load_scene("damped_swing", ["material.hysteresis_alpha_cm=3.0", "material.from_file=cotton-broadcloth"])
     assert scene.material.density_g_per_cm2 == cotton["density_g_per_cm2"]
     assert scene.material.name == cotton["name"] and scene.material.hysteresis_alpha_cm == 3.0
     assert scene.damping.gamma_per_s == 0.3  # the rest of the scene stays
@@ -363,15 +405,23 @@ def test_scene_by_bundled_name_set_override_and_sweep():
 COTTON = read_material_file("cotton-broadcloth")["material"]
 
 
-@pytest.mark.parametrize("text, message", [
-    ('[material]\nname = "x"\nsource = "s"\n', "[material] lacks density_g_per_cm2, tensile_gf_per_cm"),
-    (tomli_w.dumps({"material": {**COTTON, "density_g_per_cm2": -1.0}}),
-     "material.density_g_per_cm2: must be > 0, got -1"),
-    (tomli_w.dumps({"material": {**COTTON, "source": " "}}), "material.source must say where the numbers come from"),
-    (tomli_w.dumps({"material": {**COTTON, "from_file": "wool90-nylon10"}}), "cannot refer to another"),
-    ("[material]\n[extra]\n", "unknown top-level entry 'extra'"),
-    ("[material\n", "is not valid TOML"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ('[material]\nname = "x"\nsource = "s"\n', "[material] lacks density_g_per_cm2, tensile_gf_per_cm"),
+        (
+            tomli_w.dumps({"material": {**COTTON, "density_g_per_cm2": -1.0}}),
+            "material.density_g_per_cm2: must be > 0, got -1",
+        ),
+        (
+            tomli_w.dumps({"material": {**COTTON, "source": " "}}),
+            "material.source must say where the numbers come from",
+        ),
+        (tomli_w.dumps({"material": {**COTTON, "from_file": "wool90-nylon10"}}), "cannot refer to another"),
+        ("[material]\n[extra]\n", "unknown top-level entry 'extra'"),
+        ("[material\n", "is not valid TOML"),
+    ],
+)
 def test_bad_material_file_is_named(tmp_path, text, message):
     path = write(tmp_path / "bad.toml", text)
     with pytest.raises(SceneError, match="material.from_file") as err:
@@ -393,8 +443,21 @@ def warpcloth_cli(*args, cwd):
 
 def test_cli_fit_kes_on_the_example_data(tmp_path):
     # the bundled examples by name (a path works as well: the other tests read FB1, FB2 by path)
-    done = warpcloth_cli("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example",
-                         "-o", "wool.toml", "--density-g-per-cm2", "2.03e-2", "--plot", "fit.png", cwd=tmp_path)
+    done = warpcloth_cli(
+        "material",
+        "fit-kes",
+        "--tensile",
+        "kes_fb1_example",
+        "--bending",
+        "kes_fb2_example",
+        "-o",
+        "wool.toml",
+        "--density-g-per-cm2",
+        "2.03e-2",
+        "--plot",
+        "fit.png",
+        cwd=tmp_path,
+    )
     assert done.returncode == 0, done.stderr
     out = done.stdout
     assert "D 0.100093 ± 8.2e-05 gf·cm²/cm, D1 0.0398362 ± 0.00022 gf·cm/cm, α 5.05015 ± 0.15 cm, K0 2.5 1/cm" in out
@@ -408,8 +471,9 @@ def test_cli_fit_kes_on_the_example_data(tmp_path):
 
 
 def test_cli_fit_kes_requires_the_density(tmp_path):
-    done = warpcloth_cli("material", "fit-kes", "--tensile", str(FB1), "--bending", str(FB2), "-o", "m.toml",
-                         cwd=tmp_path)
+    done = warpcloth_cli(
+        "material", "fit-kes", "--tensile", str(FB1), "--bending", str(FB2), "-o", "m.toml", cwd=tmp_path
+    )
     assert done.returncode == 2
     assert "--density-g-per-cm2: the mass per area is not part of KES-FB1/FB2 data" in done.stderr
     assert not (tmp_path / "m.toml").exists()
@@ -467,12 +531,26 @@ def test_a_loop_the_law_cannot_describe_is_not_reported_as_a_fit(tmp_path):
 
     k = np.concatenate([np.linspace(0, 2.5, 100), np.linspace(2.5, -2.5, 200), np.linspace(-2.5, 0, 100)])
     moment = 0.3 * np.sin(5 * k) + np.random.default_rng(0).normal(0, 0.001, len(k))
-    (tmp_path / "fb2.csv").write_text("curvature_per_cm,moment_gf_cm_per_cm\n" + "\n".join(
-        f"{a:.5f},{b:.6f}" for a, b in zip(k, moment, strict=True)))
+    (tmp_path / "fb2.csv").write_text(
+        "curvature_per_cm,moment_gf_cm_per_cm\n" + "\n".join(f"{a:.5f},{b:.6f}" for a, b in zip(k, moment, strict=True))
+    )
 
     def cli(*extra):
-        return run_cli("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "fb2.csv",
-                       "--density-g-per-cm2", "0.02", "-o", "m.toml", "--overwrite", *extra, cwd=tmp_path)
+        return run_cli(
+            "material",
+            "fit-kes",
+            "--tensile",
+            "kes_fb1_example",
+            "--bending",
+            "fb2.csv",
+            "--density-g-per-cm2",
+            "0.02",
+            "-o",
+            "m.toml",
+            "--overwrite",
+            *extra,
+            cwd=tmp_path,
+        )
 
     done = cli()
     assert done.returncode == 6 and "not a fit (poor_fit): the bending RMS" in done.stderr, done.stderr

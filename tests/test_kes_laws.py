@@ -27,12 +27,26 @@ GF_CM = 9.80665e-3  # gf·cm/cm → N
 NOISE = 0.002  # gf·cm/cm: the bundled FB2 example's (scenes/data/make_kes_examples.py)
 
 PAPER = MaterialSection()  # the default material: the bundled examples' truth
-DAHL_SOFT = MaterialSection(bending_law="dahl", bending_rigidity_gf_cm2_per_cm=0.1, dahl_moment_gf_cm_per_cm=0.02,
-                            dahl_curvature_per_cm=0.3, dahl_exponent=0.4)  # saturates within a finite bend
-DAHL_SLOW = MaterialSection(bending_law="dahl", bending_rigidity_gf_cm2_per_cm=0.1, dahl_moment_gf_cm_per_cm=0.02,
-                            dahl_curvature_per_cm=0.2, dahl_exponent=2.5)  # approaches saturation slowly
-FRICTION = MaterialSection(bending_law="frictional_couple", bending_rigidity_gf_cm2_per_cm=0.1,
-                           friction_moment_gf_cm_per_cm=0.02, friction_width_per_cm=0.1)
+DAHL_SOFT = MaterialSection(
+    bending_law="dahl",
+    bending_rigidity_gf_cm2_per_cm=0.1,
+    dahl_moment_gf_cm_per_cm=0.02,
+    dahl_curvature_per_cm=0.3,
+    dahl_exponent=0.4,
+)  # saturates within a finite bend
+DAHL_SLOW = MaterialSection(
+    bending_law="dahl",
+    bending_rigidity_gf_cm2_per_cm=0.1,
+    dahl_moment_gf_cm_per_cm=0.02,
+    dahl_curvature_per_cm=0.2,
+    dahl_exponent=2.5,
+)  # approaches saturation slowly
+FRICTION = MaterialSection(
+    bending_law="frictional_couple",
+    bending_rigidity_gf_cm2_per_cm=0.1,
+    friction_moment_gf_cm_per_cm=0.02,
+    friction_width_per_cm=0.1,
+)
 
 
 def law_loop(material: MaterialSection, seed=None, k0=2.5):
@@ -44,8 +58,10 @@ def law_loop(material: MaterialSection, seed=None, k0=2.5):
 
 
 def write_loop(path, loop):
-    path.write_text("curvature_per_cm,moment_gf_cm_per_cm\n" + "".join(
-        f"{a:.3f},{b:.6f}\n" for a, b in zip(loop.curvature, loop.moment, strict=True)))
+    path.write_text(
+        "curvature_per_cm,moment_gf_cm_per_cm\n"
+        + "".join(f"{a:.3f},{b:.6f}\n" for a, b in zip(loop.curvature, loop.moment, strict=True))
+    )
     return path
 
 
@@ -61,24 +77,42 @@ def cli(monkeypatch, tmp_path, capsys, *args):
 
 def test_every_kernel_law_has_a_fitter_and_its_free_parameters():
     assert tuple(kes.LAW_FITTERS) == tuple(BENDING_LAWS)
-    assert {law: f.free_parameters for law, f in kes.LAW_FITTERS.items()} == \
-        {"tagawa2003": 3, "dahl": 4, "frictional_couple": 3, "masing": 3}  # K0 is fixed by the data
+    assert {law: f.free_parameters for law, f in kes.LAW_FITTERS.items()} == {
+        "tagawa2003": 3,
+        "dahl": 4,
+        "frictional_couple": 3,
+        "masing": 3,
+    }  # K0 is fixed by the data
     for law, fitter in kes.LAW_FITTERS.items():  # a fit gives exactly the fields its law reads
         assert sorted(p.field for p in fitter.parameters) == sorted(
-            f for f in material_fields(law) if f not in ("name", "density_g_per_cm2", "tensile_gf_per_cm"))
+            f for f in material_fields(law) if f not in ("name", "density_g_per_cm2", "tensile_gf_per_cm")
+        )
 
 
-@pytest.mark.parametrize("material", [
-    PAPER,
-    MaterialSection(bending_rigidity_gf_cm2_per_cm=0.05, hysteresis_d1_gf_cm_per_cm=0.08, hysteresis_alpha_cm=0.6),
-    DAHL_SOFT,
-    DAHL_SLOW,
-    MaterialSection(bending_law="dahl", bending_rigidity_gf_cm2_per_cm=0.05, dahl_moment_gf_cm_per_cm=0.06,
-                    dahl_curvature_per_cm=1.2, dahl_exponent=2.5),  # never saturates within the cycle
-    FRICTION,
-    MaterialSection(bending_law="frictional_couple", bending_rigidity_gf_cm2_per_cm=0.03,
-                    friction_moment_gf_cm_per_cm=0.05, friction_width_per_cm=0.6),
-], ids=["paper", "paper-soft", "dahl-0.4", "dahl-2.5", "dahl-2.5-unsaturated", "friction", "friction-wide"])
+@pytest.mark.parametrize(
+    "material",
+    [
+        PAPER,
+        MaterialSection(bending_rigidity_gf_cm2_per_cm=0.05, hysteresis_d1_gf_cm_per_cm=0.08, hysteresis_alpha_cm=0.6),
+        DAHL_SOFT,
+        DAHL_SLOW,
+        MaterialSection(
+            bending_law="dahl",
+            bending_rigidity_gf_cm2_per_cm=0.05,
+            dahl_moment_gf_cm_per_cm=0.06,
+            dahl_curvature_per_cm=1.2,
+            dahl_exponent=2.5,
+        ),  # never saturates within the cycle
+        FRICTION,
+        MaterialSection(
+            bending_law="frictional_couple",
+            bending_rigidity_gf_cm2_per_cm=0.03,
+            friction_moment_gf_cm_per_cm=0.05,
+            friction_width_per_cm=0.6,
+        ),
+    ],
+    ids=["paper", "paper-soft", "dahl-0.4", "dahl-2.5", "dahl-2.5-unsaturated", "friction", "friction-wide"],
+)
 def test_fit_kes_recovers_each_law_from_a_loop_it_made(material, tmp_path):
     # Noise-free loops made by each law along the KES cycle. Measured: every parameter to
     # ≤ 3.7e-11 relative (dahl's n), RMS ≤ 1.8e-12 of the moment range; bound 1e-9.
@@ -106,8 +140,9 @@ def test_dahl_fitted_to_the_papers_loop_is_the_papers_law():
     # 2.1e-13 of its range); bound 1e-6.
     comparison = kes.compare_laws(law_loop(PAPER))
     dahl = comparison.fits["dahl"].parameters
-    m0 = bending_tagawa2003.loop_asymptote(PAPER.hysteresis_d1_gf_cm_per_cm, PAPER.hysteresis_alpha_cm,
-                                           PAPER.hysteresis_k0_per_cm)
+    m0 = bending_tagawa2003.loop_asymptote(
+        PAPER.hysteresis_d1_gf_cm_per_cm, PAPER.hysteresis_alpha_cm, PAPER.hysteresis_k0_per_cm
+    )
     assert dahl["dahl_exponent"] == pytest.approx(1.0, abs=1e-6)
     assert dahl["dahl_curvature_per_cm"] * PAPER.hysteresis_alpha_cm == pytest.approx(1.0, abs=1e-6)
     assert dahl["dahl_moment_gf_cm_per_cm"] == pytest.approx(m0, rel=1e-6)
@@ -203,8 +238,11 @@ def test_ties_and_caveats_are_said():
 
 
 def test_an_unknown_law_is_named():
-    with pytest.raises(ArgumentError, match=r"law: unknown bending law 'bao'; known: tagawa2003, dahl, "
-                                          r"frictional_couple, masing$"):
+    with pytest.raises(
+        ArgumentError,
+        match=r"law: unknown bending law 'bao'; known: tagawa2003, dahl, "
+        r"frictional_couple, masing$",
+    ):
         kes.fit_kes(kes.read_tensile_csv(FB1), kes.read_bending_csv(FB2), law="bao")
 
 
@@ -212,14 +250,31 @@ def test_an_unknown_law_is_named():
 
 
 def test_cli_fit_kes_law_all_on_the_bundled_example(monkeypatch, tmp_path, capsys):
-    status, out, err = cli(monkeypatch, tmp_path, capsys, "fit-kes", "--tensile", "kes_fb1_example", "--bending",
-                           "kes_fb2_example", "-o", "wool.toml", "--density-g-per-cm2", "2.03e-2", "--law", "all",
-                           "--plot", "laws.png")
+    status, out, err = cli(
+        monkeypatch,
+        tmp_path,
+        capsys,
+        "fit-kes",
+        "--tensile",
+        "kes_fb1_example",
+        "--bending",
+        "kes_fb2_example",
+        "-o",
+        "wool.toml",
+        "--density-g-per-cm2",
+        "2.03e-2",
+        "--law",
+        "all",
+        "--plot",
+        "laws.png",
+    )
     assert status == 0, err
-    table = out[out.index("law  "):]
-    for law, numbers in (("tagawa2003", "3     0.0021346   -6155.78   -6143.13     0.00     0.00"),
-                         ("dahl", "4     0.0021317   -6155.14   -6138.27     0.64     4.85"),
-                         ("frictional_couple", "3     0.0025158   -5991.15   -5978.50   164.62   164.62")):
+    table = out[out.index("law  ") :]
+    for law, numbers in (
+        ("tagawa2003", "3     0.0021346   -6155.78   -6143.13     0.00     0.00"),
+        ("dahl", "4     0.0021317   -6155.14   -6138.27     0.64     4.85"),
+        ("frictional_couple", "3     0.0025158   -5991.15   -5978.50   164.62   164.62"),
+    ):
         assert any(line.startswith(law) and numbers in line for line in table.splitlines()), (law, table)
     assert "0.09949      0.038249  (the data's own KES values)" in table
     assert "recommended by AIC: tagawa2003" in out
@@ -238,8 +293,22 @@ def test_cli_fit_kes_law_all_on_the_bundled_example(monkeypatch, tmp_path, capsy
 @pytest.mark.parametrize("material", [DAHL_SLOW, FRICTION], ids=["dahl", "frictional_couple"])
 def test_cli_fit_kes_law_all_writes_the_generating_law(material, monkeypatch, tmp_path, capsys):
     write_loop(tmp_path / "fb2.csv", law_loop(material, seed=0))
-    status, out, err = cli(monkeypatch, tmp_path, capsys, "fit-kes", "--tensile", str(FB1), "--bending", "fb2.csv",
-                           "-o", "m.toml", "--density-g-per-cm2", "0.02", "--law", "all")
+    status, out, err = cli(
+        monkeypatch,
+        tmp_path,
+        capsys,
+        "fit-kes",
+        "--tensile",
+        str(FB1),
+        "--bending",
+        "fb2.csv",
+        "-o",
+        "m.toml",
+        "--density-g-per-cm2",
+        "0.02",
+        "--law",
+        "all",
+    )
     law = material.bending_law
     assert status == 0, err
     assert f"recommended by AIC: {law}" in out
@@ -250,12 +319,29 @@ def test_cli_fit_kes_law_all_writes_the_generating_law(material, monkeypatch, tm
 
 
 def test_cli_fit_kes_one_other_law(monkeypatch, tmp_path, capsys):
-    status, out, err = cli(monkeypatch, tmp_path, capsys, "fit-kes", "--tensile", "kes_fb1_example", "--bending",
-                           "kes_fb2_example", "-o", "dahl.toml", "--density-g-per-cm2", "2.03e-2", "--law", "dahl",
-                           "--plot", "dahl.png")
+    status, out, err = cli(
+        monkeypatch,
+        tmp_path,
+        capsys,
+        "fit-kes",
+        "--tensile",
+        "kes_fb1_example",
+        "--bending",
+        "kes_fb2_example",
+        "-o",
+        "dahl.toml",
+        "--density-g-per-cm2",
+        "2.03e-2",
+        "--law",
+        "dahl",
+        "--plot",
+        "dahl.png",
+    )
     assert status == 0, err
-    assert ("law dahl: D 0.100114 ± 8.2e-05 gf·cm²/cm, M_s 0.019848 ± 0.00012 gf·cm/cm, K_s 0.197751 ± 0.0056 1/cm, "
-            "n 0.936558 ± 0.053") in out
+    assert (
+        "law dahl: D 0.100114 ± 8.2e-05 gf·cm²/cm, M_s 0.019848 ± 0.00012 gf·cm/cm, K_s 0.197751 ± 0.0056 1/cm, "
+        "n 0.936558 ± 0.053"
+    ) in out
     assert "AIC -6155.14, BIC -6138.27 (4 free parameters)" in out
     assert "law  " not in out  # one law: no comparison table
     material = read_material_file(tmp_path / "dahl.toml")["material"]
@@ -264,8 +350,18 @@ def test_cli_fit_kes_one_other_law(monkeypatch, tmp_path, capsys):
 
 
 def test_cli_compare_on_the_bundled_example(monkeypatch, tmp_path, capsys):
-    status, out, err = cli(monkeypatch, tmp_path, capsys, "compare", "--bending", "kes_fb2_example", "--plot",
-                           "cmp.png", "--csv", "cmp.csv")
+    status, out, err = cli(
+        monkeypatch,
+        tmp_path,
+        capsys,
+        "compare",
+        "--bending",
+        "kes_fb2_example",
+        "--plot",
+        "cmp.png",
+        "--csv",
+        "cmp.csv",
+    )
     assert status == 0, err
     assert "recommended by AIC: tagawa2003 (next: dahl, ΔAIC 0.64)" in out
     assert "says nothing about rate effects" in out
@@ -290,27 +386,61 @@ def test_cli_exits_with_the_status_of_a_loop_no_law_describes(monkeypatch, tmp_p
     status, out, err = cli(monkeypatch, tmp_path, capsys, "compare", "--bending", "sine.csv")
     assert status == 6 and "not a fit (poor_fit): the recommended" in err, err
     assert cli(monkeypatch, tmp_path, capsys, "compare", "--bending", "sine.csv", "--accept")[0] == 0
-    fit_kes = ["fit-kes", "--tensile", str(FB1), "--bending", "sine.csv", "-o", "m.toml", "--density-g-per-cm2",
-               "0.02", "--law", "all", "--overwrite"]
+    fit_kes = [
+        "fit-kes",
+        "--tensile",
+        str(FB1),
+        "--bending",
+        "sine.csv",
+        "-o",
+        "m.toml",
+        "--density-g-per-cm2",
+        "0.02",
+        "--law",
+        "all",
+        "--overwrite",
+    ]
     status, out, err = cli(monkeypatch, tmp_path, capsys, *fit_kes)
     assert status == 6 and "not a fit (poor_fit): the bending RMS" in err, err
     assert tomllib.loads((tmp_path / "m.toml").read_text())["fit"]["status"] == "poor_fit"
     assert cli(monkeypatch, tmp_path, capsys, *fit_kes, "--accept")[0] == 0
 
 
-@pytest.mark.parametrize("args, message", [
-    (["fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example", "-o", "m.toml",
-      "--density-g-per-cm2", "0.02", "--law", "bao"],
-     "error in option: --law: unknown bending law 'bao'; known: tagawa2003, dahl, frictional_couple, masing, or "
-     "all"),
-    (["compare", "--bending", "kes_fb2_example", "--csv", "table.txt"], "error in option: --csv: table.txt must be "
-     "a file ending in .csv"),
-    (["compare", "--bending", "kes_fb2_example", "--plot", "figure.jpg"], "error in option: --plot: figure.jpg must "
-     "be a file ending in .png"),
-    (["compare", "--bending", "kes_fb1_example"], "error in data file: kes_fb1_example, line 1: header"),
-    (["compare", "--bending", "nothere.csv"], "error in option: --bending: cannot read the KES-FB2 bending file "
-     "nothere.csv"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (
+            [
+                "fit-kes",
+                "--tensile",
+                "kes_fb1_example",
+                "--bending",
+                "kes_fb2_example",
+                "-o",
+                "m.toml",
+                "--density-g-per-cm2",
+                "0.02",
+                "--law",
+                "bao",
+            ],
+            "error in option: --law: unknown bending law 'bao'; known: tagawa2003, dahl, frictional_couple, masing, or "
+            "all",
+        ),
+        (
+            ["compare", "--bending", "kes_fb2_example", "--csv", "table.txt"],
+            "error in option: --csv: table.txt must be a file ending in .csv",
+        ),
+        (
+            ["compare", "--bending", "kes_fb2_example", "--plot", "figure.jpg"],
+            "error in option: --plot: figure.jpg must be a file ending in .png",
+        ),
+        (["compare", "--bending", "kes_fb1_example"], "error in data file: kes_fb1_example, line 1: header"),
+        (
+            ["compare", "--bending", "nothere.csv"],
+            "error in option: --bending: cannot read the KES-FB2 bending file nothere.csv",
+        ),
+    ],
+)
 def test_cli_wrong_inputs_are_one_line_naming_the_culprit(args, message, monkeypatch, tmp_path, capsys):
     status, out, err = cli(monkeypatch, tmp_path, capsys, *args)
     assert status == 2
@@ -325,8 +455,14 @@ def test_a_loop_without_hysteresis_is_not_identifiable_for_any_law():
     from warpcloth.calibrate.kes.readers import BendingLoop
 
     rng = np.random.default_rng(0)
-    k = np.concatenate([np.linspace(0, 2.5, 126), np.linspace(2.5, -2.5, 251)[1:], np.linspace(-2.5, 2.5, 251)[1:],
-                        np.linspace(2.5, 0, 126)[1:]])
+    k = np.concatenate(
+        [
+            np.linspace(0, 2.5, 126),
+            np.linspace(2.5, -2.5, 251)[1:],
+            np.linspace(-2.5, 2.5, 251)[1:],
+            np.linspace(2.5, 0, 126)[1:],
+        ]
+    )
     loop = BendingLoop(k, 0.1 * k + rng.normal(0, 0.002, len(k)), np.arange(1, len(k) + 1), "elastic")
     comparison = kes.compare_laws(loop)
     for law in comparison.fits:
@@ -336,10 +472,13 @@ def test_a_loop_without_hysteresis_is_not_identifiable_for_any_law():
     assert not any("same law" in line for line in comparison.caveats())
 
 
-@pytest.mark.parametrize("law, section", [
-    ("tagawa2003", {"hysteresis_d1_gf_cm_per_cm": 0.04, "hysteresis_alpha_cm": 5.0}),
-    ("frictional_couple", {"friction_moment_gf_cm_per_cm": 0.02, "friction_width_per_cm": 0.2}),
-])
+@pytest.mark.parametrize(
+    "law, section",
+    [
+        ("tagawa2003", {"hysteresis_d1_gf_cm_per_cm": 0.04, "hysteresis_alpha_cm": 5.0}),
+        ("frictional_couple", {"friction_moment_gf_cm_per_cm": 0.02, "friction_width_per_cm": 0.2}),
+    ],
+)
 def test_stated_uncertainties_match_the_scatter_over_noise_seeds(law, section):
     # σ from the linearised model (s² (JᵀJ)⁻¹) against the spread of 20 fits to loops
     # with fresh noise (σ = 0.002 gf·cm/cm); measured ratios 0.9–1.1 for tagawa2003. With
@@ -350,8 +489,12 @@ def test_stated_uncertainties_match_the_scatter_over_noise_seeds(law, section):
     k = kes_cycle()
     truth = kes_moment(MaterialSection(bending_law=law, **section), k)
     rng = np.random.default_rng(1)
-    fits = [kes.LAW_FITTERS[law].fit(BendingLoop(k, truth + rng.normal(0, 0.002, len(k)), np.arange(1, len(k) + 1),
-                                                 "noisy")) for _ in range(20)]
+    fits = [
+        kes.LAW_FITTERS[law].fit(
+            BendingLoop(k, truth + rng.normal(0, 0.002, len(k)), np.arange(1, len(k) + 1), "noisy")
+        )
+        for _ in range(20)
+    ]
     for name in fits[0].sigma:
         spread = np.std([f.parameters[name] for f in fits], ddof=1)
         stated = np.median([f.sigma[name] for f in fits])
@@ -378,8 +521,9 @@ def test_a_record_with_partial_cycles_says_whose_inner_loops_they_are(monkeypatc
     assert comparison.recommended == "masing"
     masing = comparison.fits["masing"]
     assert masing.parameters["hysteresis_d1_gf_cm_per_cm"] == pytest.approx(0.04, rel=0.02)
-    status, out, err = cli(monkeypatch, tmp_path, capsys, "compare", "--bending", "kes_fb2_inner_loops", "--csv",
-                           "inner.csv")
+    status, out, err = cli(
+        monkeypatch, tmp_path, capsys, "compare", "--bending", "kes_fb2_inner_loops", "--csv", "inner.csv"
+    )
     assert status == 0, err
     assert "the inner loops are masing's" in out
     with open(tmp_path / "inner.csv", newline="") as f:
@@ -391,8 +535,15 @@ def test_partial_cycles_of_the_papers_own_law_are_its_own():
     # the verdict is not a preference built in: partial cycles made by tagawa2003 itself
     # (noise-free, warpcloth's kernel) are tagawa2003's, and masing's are masing's
     knots = (0.0, 2.5, -2.5, 2.0, 1.6, 2.0, 1.6, -0.8, -0.4, -0.8, 0.0)
-    k = np.concatenate([*(np.linspace(a, b, round(abs(b - a) / 0.02), endpoint=False)
-                          for a, b in zip(knots[:-1], knots[1:], strict=True)), [0.0]])
+    k = np.concatenate(
+        [
+            *(
+                np.linspace(a, b, round(abs(b - a) / 0.02), endpoint=False)
+                for a, b in zip(knots[:-1], knots[1:], strict=True)
+            ),
+            [0.0],
+        ]
+    )
     noise = np.random.default_rng(5).normal(0.0, 2e-4, len(k))
     for law in ("tagawa2003", "masing"):
         material = to_si(MaterialSection(bending_law=law))

@@ -90,7 +90,7 @@ LAW = BendingLaw(
 
 # The fitter lives apart from the kernel file: the kernels are loaded before the rest of
 # warpcloth, the fitter only by the KES fit.
-TOY_FITTER = '''
+TOY_FITTER = """
 from warpcloth.calibrate.kes.bending_fit import LawFitter, Parameter, ShapeParameter
 
 FITTER = LawFitter(
@@ -98,9 +98,9 @@ FITTER = LawFitter(
     amplitude=Parameter("toy_moment_gf_cm_per_cm", "M_y", "gf·cm/cm"),
     shape=(ShapeParameter("toy_width_per_cm", "K_y", "1/cm", 1e-3, 2.0, 64, k0_power=1, scaled="K_y/K0"),),
 )
-'''
+"""
 
-CHECKS = '''
+CHECKS = """
 import json
 import numpy as np
 import warpcloth as wc
@@ -133,7 +133,7 @@ print(json.dumps({
     "fits": {law: [fit.parameters[k] for k in fit.parameters] + [fit.rms_gf_cm_per_cm]
              for law, fit in fits.items()},
 }))
-'''
+"""
 
 
 @pytest.fixture(scope="module")
@@ -173,14 +173,15 @@ def test_a_law_from_an_entry_point_is_a_law_everywhere(plugin):
 
 def test_the_command_line_knows_the_plugged_in_law(plugin, tmp_path):
     scene = tmp_path / "toy.toml"
-    scene.write_text('[material]\nbending_law = "toy_jenkins"\ntoy_moment_gf_cm_per_cm = 0.02\n'
-                     '[run]\nduration_s = 0.05\n')
+    scene.write_text(
+        '[material]\nbending_law = "toy_jenkins"\ntoy_moment_gf_cm_per_cm = 0.02\n[run]\nduration_s = 0.05\n'
+    )
     done = child(plugin, "-m", "warpcloth", "run", str(scene), "--out", str(tmp_path / "run"), cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     written = tomllib.loads((tmp_path / "run" / "scene.toml").read_text())["material"]
     assert written["bending_law"] == "toy_jenkins" and written["toy_width_per_cm"] == 0.2  # its default
     # its fields belong to it: under another law they are refused, in one line, before any kernel runs
-    scene.write_text('[material]\ntoy_moment_gf_cm_per_cm = 0.02\n')
+    scene.write_text("[material]\ntoy_moment_gf_cm_per_cm = 0.02\n")
     done = child(plugin, "-m", "warpcloth", "run", str(scene), "--out", str(tmp_path / "other"), cwd=tmp_path)
     assert done.returncode != 0
     assert "Traceback" not in done.stderr
@@ -200,15 +201,29 @@ def install(site: Path, module: str, law_source: str, fitter_source: str = TOY_F
     return {**os.environ, "PYTHONPATH": str(site)}
 
 
-@pytest.mark.parametrize(("law", "fitter", "command", "needle"), [
-    ("LAW = 42\n", TOY_FITTER, ["--help"],
-     "the bending law 'broken' registered under warpcloth.bending_laws as 'broken:LAW' is a int"),
-    (TOY_LAW.replace('"curvature", "Ky"', '"angle", "Ky"'), TOY_FITTER, ["--help"],
-     "the toy_jenkins law's parameter 'toy_width' has kind 'angle'; a kind is one of"),
-    (TOY_LAW, TOY_FITTER.replace('"toy_width_per_cm", "K_y"', '"toy_span_per_cm", "K_y"'),
-     ["material", "compare", "--bending", "kes_fb2_example"],
-     "the toy_jenkins bending law's KES fitter 'toy_jenkins_fit:FITTER' fits"),
-])
+@pytest.mark.parametrize(
+    ("law", "fitter", "command", "needle"),
+    [
+        (
+            "LAW = 42\n",
+            TOY_FITTER,
+            ["--help"],
+            "the bending law 'broken' registered under warpcloth.bending_laws as 'broken:LAW' is a int",
+        ),
+        (
+            TOY_LAW.replace('"curvature", "Ky"', '"angle", "Ky"'),
+            TOY_FITTER,
+            ["--help"],
+            "the toy_jenkins law's parameter 'toy_width' has kind 'angle'; a kind is one of",
+        ),
+        (
+            TOY_LAW,
+            TOY_FITTER.replace('"toy_width_per_cm", "K_y"', '"toy_span_per_cm", "K_y"'),
+            ["material", "compare", "--bending", "kes_fb2_example"],
+            "the toy_jenkins bending law's KES fitter 'toy_jenkins_fit:FITTER' fits",
+        ),
+    ],
+)
 def test_a_broken_plugin_is_one_line_naming_itself(tmp_path, law, fitter, command, needle):
     env = install(tmp_path, "broken" if law.startswith("LAW = 42") else "toy_jenkins", law, fitter)
     done = child(env, "-m", "warpcloth", *command, cwd=tmp_path)
@@ -226,5 +241,6 @@ def test_a_broken_plugin_names_itself(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(tmp_path)}
     done = child(env, "-c", "import warpcloth.scene")
     assert done.returncode != 0
-    assert ("the bending law 'broken' registered under warpcloth.bending_laws as 'broken_law:LAW' is a int"
-            in done.stderr)
+    assert (
+        "the bending law 'broken' registered under warpcloth.bending_laws as 'broken_law:LAW' is a int" in done.stderr
+    )

@@ -18,9 +18,19 @@ PACKAGES = {"warpcloth": ROOT / "warpcloth", "warpcloth.kernels": ROOT / "kernel
 # The layers, lowest first: kernels < sim < scene < io < viz < runs < track < calibrate < sweeps < cli
 # (errors, units and metrics, the one ruler, sit beside all of them). track sits above runs:
 # its synthetic camera films a simulation; nothing of the simulation imports it.
-ORDER = ("warpcloth.kernels", "warpcloth.sim", "warpcloth.scene", "warpcloth.io", "warpcloth.viz",
-         "warpcloth.runs", "warpcloth.track", "warpcloth.calibrate", "warpcloth.sweeps", "warpcloth.cli")
-FORBIDDEN = {layer: ORDER[i + 1:] for i, layer in enumerate(ORDER) if layer != "warpcloth.kernels"}
+ORDER = (
+    "warpcloth.kernels",
+    "warpcloth.sim",
+    "warpcloth.scene",
+    "warpcloth.io",
+    "warpcloth.viz",
+    "warpcloth.runs",
+    "warpcloth.track",
+    "warpcloth.calibrate",
+    "warpcloth.sweeps",
+    "warpcloth.cli",
+)
+FORBIDDEN = {layer: ORDER[i + 1 :] for i, layer in enumerate(ORDER) if layer != "warpcloth.kernels"}
 
 
 def modules() -> dict[str, Path]:
@@ -40,7 +50,8 @@ def modules() -> dict[str, Path]:
 def _type_checking_only(node: ast.If) -> bool:
     test = node.test
     return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
-        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
 
 
 def imports_of(name: str, path: Path, known: set[str]) -> set[str]:
@@ -83,8 +94,9 @@ def test_kernels_import_only_warp_and_the_standard_library(graph):
             continue
         for dep in deps:
             top = dep.split(".")[0]
-            assert dep.startswith("warpcloth.kernels") or top == "warp" or top in sys.stdlib_module_names, \
+            assert dep.startswith("warpcloth.kernels") or top == "warp" or top in sys.stdlib_module_names, (
                 f"{name} imports {dep}"
+            )
 
 
 @pytest.mark.parametrize("layer", sorted(FORBIDDEN))
@@ -107,7 +119,7 @@ def test_no_import_cycles(graph):
         stack.append(node)
         for dep in sorted(internal[node]):
             if state.get(dep) == 1:
-                cycle = stack[stack.index(dep):] + [dep]
+                cycle = stack[stack.index(dep) :] + [dep]
                 pytest.fail("import cycle: " + " → ".join(cycle))
             if dep not in state:
                 visit(dep)
@@ -151,8 +163,14 @@ def reachable(edges: dict[str, set[str]], start: str) -> set[str]:
 
 def test_the_graph_sees_the_layers(graph):
     # guards the test itself: it must find the packages and real edges between them
-    expected = {"warpcloth.sim.model", "warpcloth.kernels.strip", "warpcloth.scene.build", "warpcloth.cli.app",
-                "warpcloth.track.markers", "warpcloth.cli.track"}
+    expected = {
+        "warpcloth.sim.model",
+        "warpcloth.kernels.strip",
+        "warpcloth.scene.build",
+        "warpcloth.cli.app",
+        "warpcloth.track.markers",
+        "warpcloth.cli.track",
+    }
     assert expected <= set(graph)
     assert "warpcloth.track.calibration" in graph["warpcloth.track.markers"]
     assert "warpcloth.runs" in graph["warpcloth.track.render"]

@@ -33,8 +33,9 @@ def search(residuals, q0, lower, upper, iterations=200):
     for _ in range(iterations):
         points = lm.proposals(state, lower, upper)
         rows, pairs = lm.stencil(points[0])
-        state, stage = lm.step(state, points, [residuals(p) for p in points],
-                               partial(_stencil_jacobian, residuals, rows, pairs))
+        state, stage = lm.step(
+            state, points, [residuals(p) for p in points], partial(_stencil_jacobian, residuals, rows, pairs)
+        )
         stages.append(stage)
         if state.converged:
             break
@@ -100,9 +101,11 @@ def test_a_singular_jacobian_gives_nan_covariance_not_a_number_to_trust():
 
 def test_the_algorithm_needs_neither_warp_nor_the_rest_of_warpcloth():
     path = Path(lm.__file__)
-    code = ("import sys, importlib.util; sys.modules['warp'] = None; "
-            f"spec = importlib.util.spec_from_file_location('lm', {str(path)!r}); "
-            "m = sys.modules['lm'] = importlib.util.module_from_spec(spec); spec.loader.exec_module(m); "
-            "assert not [k for k, v in sys.modules.items() if v and k.startswith('warp')]")
+    code = (
+        "import sys, importlib.util; sys.modules['warp'] = None; "
+        f"spec = importlib.util.spec_from_file_location('lm', {str(path)!r}); "
+        "m = sys.modules['lm'] = importlib.util.module_from_spec(spec); spec.loader.exec_module(m); "
+        "assert not [k for k, v in sys.modules.items() if v and k.startswith('warp')]"
+    )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr

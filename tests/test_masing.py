@@ -16,7 +16,8 @@ import warpcloth as wc
 from warpcloth.sim import moment_along_path
 
 _spec = importlib.util.spec_from_file_location(
-    "make_kes_examples", Path(__file__).resolve().parents[1] / "scenes" / "data" / "make_kes_examples.py")
+    "make_kes_examples", Path(__file__).resolve().parents[1] / "scenes" / "data" / "make_kes_examples.py"
+)
 EXAMPLES = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(EXAMPLES)
 
@@ -71,13 +72,19 @@ def rippled(path_index, ripples, amplitude, samples_per_ripple=4):
     inserted at sample ``path_index`` (on the rising branch near K = 1 1/cm)."""
     path = kes_path()
     k = path[path_index]
-    one = np.concatenate([np.linspace(k, k - amplitude, samples_per_ripple + 1)[1:],
-                          np.linspace(k - amplitude, k, samples_per_ripple + 1)[1:]])
-    return np.concatenate([path[: path_index + 1], np.tile(one, ripples), path[path_index + 1:]]), path_index
+    one = np.concatenate(
+        [
+            np.linspace(k, k - amplitude, samples_per_ripple + 1)[1:],
+            np.linspace(k - amplitude, k, samples_per_ripple + 1)[1:],
+        ]
+    )
+    return np.concatenate([path[: path_index + 1], np.tile(one, ripples), path[path_index + 1 :]]), path_index
 
 
-@pytest.mark.parametrize("law, field, continuous", [
-    ("masing", None, True), ("frictional_couple", None, True), ("tagawa2003", None, False), ("dahl", None, False)])
+@pytest.mark.parametrize(
+    "law, field, continuous",
+    [("masing", None, True), ("frictional_couple", None, True), ("tagawa2003", None, False), ("dahl", None, False)],
+)
 def test_the_moment_is_continuous_in_the_curvature_path(law, field, continuous):
     # A KES cycle with N ripples of ε = 0.01 1/m added on the way: a law that is continuous
     # in the path (sup norm) moves H by O(ε), whatever N; tagawa2003 and dahl (Duhem
@@ -94,8 +101,8 @@ def test_the_moment_is_continuous_in_the_curvature_path(law, field, continuous):
         path, _ = rippled(at, n, eps)
         h = hysteretic(m, path)
         # compare after the ripples, where both paths are the same curvature again
-        after = h[at + 1 + 8 * n:]
-        changes.append(np.abs(after - reference[at + 1:]).max() / scale)
+        after = h[at + 1 + 8 * n :]
+        changes.append(np.abs(after - reference[at + 1 :]).max() / scale)
     print(f"{law}: H moved by {changes[0]:.2e}, {changes[1]:.2e} of its amplitude for 10, 1000 ripples")
     # O(ε) means at most the moment's slope times ε: αD1 ε ≈ 5e-4 D1 here
     if continuous:
@@ -116,7 +123,7 @@ def test_a_full_memory_drops_only_the_innermost_loop_and_counts_it():
     small = hysteretic(m, path, reversal_memory=2)
     past = path > 100.0 + 1e-9
     past[: np.argmax(path)] = False
-    past[: 1500] = False
+    past[:1500] = False
     assert np.abs(small[past] - full[past]).max() < 1e-15 * m.bending.hysteresis_d1
     assert np.abs(small - full).max() > 1e-4 * m.bending.hysteresis_d1  # the dropped loop did matter in between
     # continuous everywhere: no step larger than the steepest slope allows
@@ -127,8 +134,9 @@ def test_a_full_memory_drops_only_the_innermost_loop_and_counts_it():
 def test_a_run_reports_a_full_memory_and_the_default_is_enough(tmp_path, capsys):
     # the bundled swing opens at most 43 points in 3 s, 46 in 10 s (measured): 64 by
     # default. With room for 4 the run says so, in the result, meta.json and the CLI.
-    small = wc.run("damped_swing", overrides(run__duration_s=0.5, material__bending_law="masing",
-                                             integrator__reversal_memory=4))
+    small = wc.run(
+        "damped_swing", overrides(run__duration_s=0.5, material__bending_law="masing", integrator__reversal_memory=4)
+    )
     assert small.reversal_memory["capacity"] == 4
     assert small.reversal_memory["deepest"] == [4]
     assert small.reversal_memory["overflows"][0] > 0
@@ -140,9 +148,21 @@ def test_a_run_reports_a_full_memory_and_the_default_is_enough(tmp_path, capsys)
 
     from warpcloth.cli import main
 
-    code = main(["run", "damped_swing", "--no-progress", "--out", str(tmp_path / "r"), "--set",
-                 'material.bending_law="masing"', "--set", "integrator.reversal_memory=4", "--set",
-                 "run.duration_s=0.5"])
+    code = main(
+        [
+            "run",
+            "damped_swing",
+            "--no-progress",
+            "--out",
+            str(tmp_path / "r"),
+            "--set",
+            'material.bending_law="masing"',
+            "--set",
+            "integrator.reversal_memory=4",
+            "--set",
+            "run.duration_s=0.5",
+        ]
+    )
     assert code == 0
     err = capsys.readouterr().err
     assert "warning: the masing reversal memory (4 points per hinge) was full" in err
@@ -158,9 +178,19 @@ def test_a_reversal_memory_that_is_not_a_count_is_refused(value):
 
 def swing(h, duration, hold_x_mm=50.0, strips=1):
     """The bundled damped swing with masing at spacing h (mm), dt ∝ h (the scene's 1e-5 s at 5 mm)."""
-    scenes = [wc.load_scene("damped_swing", overrides(
-        material__bending_law="masing", strip__spacing_mm=h, integrator__dt_s=1e-5 * h / 5.0,
-        run__duration_s=duration, release__hold_x_mm=hold_x_mm + 1e-9 * k)) for k in range(strips)]
+    scenes = [
+        wc.load_scene(
+            "damped_swing",
+            overrides(
+                material__bending_law="masing",
+                strip__spacing_mm=h,
+                integrator__dt_s=1e-5 * h / 5.0,
+                run__duration_s=duration,
+                release__hold_x_mm=hold_x_mm + 1e-9 * k,
+            ),
+        )
+        for k in range(strips)
+    ]
     return wc.simulate(scenes, threads=1)
 
 
@@ -181,8 +211,9 @@ def test_the_hysteretic_swing_converges_in_h_and_is_not_chaotic():
         twin = pool.submit(swing, 1.25, 3.0, strips=2)
         runs = list(pool.map(lambda h: swing(h, 1.0), spacings[::-1]))[::-1]
         twin = twin.result()
-    decrement = np.array([swing_summary(r.t, r.probe("laser_x", 0), r.probe("tip_x", 0))["mean_log_decrement"]
-                          for r in runs])
+    decrement = np.array(
+        [swing_summary(r.t, r.probe("laser_x", 0), r.probe("tip_x", 0))["mean_log_decrement"] for r in runs]
+    )
     work = np.array([r.probe("hysteresis_work", 0)[-1] for r in runs])
     tip = [np.stack([r.probe("tip_x", 0), r.probe("tip_y", 0)], axis=-1) for r in runs]
     path = np.array([np.nanmax(np.linalg.norm(a - b, axis=-1)) for a, b in zip(tip[:-1], tip[1:], strict=True)])

@@ -80,8 +80,12 @@ def test_bundled_laser_period_is_its_truth_within_its_uncertainty():
     import warpcloth as wc
     from warpcloth.calibrate.analysis import analyse
 
-    truth = wc.simulate(wc.load_scene("damped_swing", {"damping.gamma_per_s": 0.55, "run.duration_s": 1.5,
-                                                       "material.hysteresis_d1_gf_cm_per_cm": 0.025}))
+    truth = wc.simulate(
+        wc.load_scene(
+            "damped_swing",
+            {"damping.gamma_per_s": 0.55, "run.duration_s": 1.5, "material.hysteresis_d1_gf_cm_per_cm": 0.025},
+        )
+    )
     expected = swing_summary(truth.t, truth.probe("laser_x", 0), truth.probe("tip_x", 0))["first_period_s"]
     (row,) = analyse("damped_swing_laser")
     assert row["first_period_u_s"] < 1e-3
@@ -132,8 +136,9 @@ def test_one_ruler_for_runs_sweeps_and_measured_traces(tmp_path):
         assert from_run[k] == pytest.approx(from_sweep[1][k], rel=1e-9), k
     probes = wc.load_recording(tmp_path / "r").probes
     trace = tmp_path / "lab.csv"
-    trace.write_text("t_s,x_mm\n" + "\n".join(f"{t!r},{x * 1e3!r}" for t, x in zip(probes["t"], probes["laser_x"],
-                                                                                   strict=True)))
+    trace.write_text(
+        "t_s,x_mm\n" + "\n".join(f"{t!r},{x * 1e3!r}" for t, x in zip(probes["t"], probes["laser_x"], strict=True))
+    )
     (from_trace,) = analyse(trace)
     for k in keys[:4]:
         assert from_trace[k] == pytest.approx(from_run[k], rel=1e-12), k
@@ -170,8 +175,9 @@ def test_analyse_measures_every_input_on_one_window(tmp_path):
     x = 50.0 / (1 + 2 * t) * np.cos(2 * np.pi * t / 0.52)
     for name, end in (("short.csv", 1.5), ("long.csv", 3.0)):
         keep = t <= end + 1e-9
-        (tmp_path / name).write_text("t_s,x_mm\n" + "\n".join(f"{a:.6f},{v:.6f}" for a, v in zip(t[keep], x[keep],
-                                                                                                strict=True)))
+        (tmp_path / name).write_text(
+            "t_s,x_mm\n" + "\n".join(f"{a:.6f},{v:.6f}" for a, v in zip(t[keep], x[keep], strict=True))
+        )
     short, long = str(tmp_path / "short.csv"), str(tmp_path / "long.csv")
     (alone,) = analyse(long)
     rows = analyse([short, long])
@@ -199,8 +205,10 @@ def test_analyse_gives_a_strip_that_diverged_before_t0_a_row_of_nans(tmp_path):
     from warpcloth.calibrate.analysis import analyse
 
     fields = ["run.duration_s=0.3", 'integrator.scheme="imex"', "integrator.dt_s=2e-4"]
-    scenes = [wc.load_scene("damped_swing", fields),
-              wc.load_scene("damped_swing", [*fields, "material.bending_rigidity_gf_cm2_per_cm=40"])]
+    scenes = [
+        wc.load_scene("damped_swing", fields),
+        wc.load_scene("damped_swing", [*fields, "material.bending_rigidity_gf_cm2_per_cm=40"]),
+    ]
     result = wc.simulate(scenes, out=tmp_path / "r", on_divergence="record")
     assert [d.strip for d in result.diverged] == [1] and result.diverged[0].phase != "record"
     good, gone = analyse(tmp_path / "r")

@@ -46,7 +46,7 @@ def split_comment(line):
         elif ch in "'\"":
             quote = ch
         elif ch == "#" and (i == 0 or line[i - 1].isspace()):
-            return line[:i].rstrip(), line[i + 1:].strip()
+            return line[:i].rstrip(), line[i + 1 :].strip()
     return line.rstrip(), ""
 
 
@@ -122,14 +122,17 @@ def test_split_comment_reads_quotes_as_bash_does():
 
 
 def test_readme_conventions_are_parsed():
-    steps = bash_steps("warpcloth run a --out 'r#1' \\\n"
-                       "    --set x=1   # exits 2\n"
-                       "# README test adds --set y=2\n"
-                       "warpcloth sweep s\n"
-                       "warpcloth run gpu   # on a GPU; not run by the README test\n")
+    steps = bash_steps(
+        "warpcloth run a --out 'r#1' \\\n"
+        "    --set x=1   # exits 2\n"
+        "# README test adds --set y=2\n"
+        "warpcloth sweep s\n"
+        "warpcloth run gpu   # on a GPU; not run by the README test\n"
+    )
     assert [(s.shown, s.exit_code) for s in steps] == [
         ("warpcloth run a --out 'r#1' --set x=1", 2),
-        (f"warpcloth sweep s --set y=2 {SWEEP_SHORTER}", 0)]
+        (f"warpcloth sweep s --set y=2 {SWEEP_SHORTER}", 0),
+    ]
 
 
 def test_readme_runs_as_written(tmp_path):
@@ -139,12 +142,14 @@ def test_readme_runs_as_written(tmp_path):
     shutil.copytree(ROOT / "scenes", tmp_path / "scenes", ignore=shutil.ignore_patterns("__pycache__"))
     env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
     for step in steps:
-        done = in_process(step, tmp_path) or subprocess.run(step.argv, cwd=tmp_path, env=env, capture_output=True,
-                                                            text=True, timeout=TIMEOUT_S)
+        done = in_process(step, tmp_path) or subprocess.run(
+            step.argv, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=TIMEOUT_S
+        )
         output = done.stdout + done.stderr
         assert done.returncode == step.exit_code and "Traceback (most recent call last)" not in output, (
             f"README command:\n{step.shown}\nexited {done.returncode} (the README says {step.exit_code}); "
-            f"output tail:\n{output[-TAIL_CHARS:]}")
+            f"output tail:\n{output[-TAIL_CHARS:]}"
+        )
         searches += [(step.shown, QUOTED.format(*m.groups())) for m in SEARCH.finditer(output)]
     # the numbers the guide quotes for its fits are the ones its fit commands print now
     assert len(searches) >= 2, "the guide's fit commands printed no launch and variant counts"

@@ -46,15 +46,17 @@ def test_the_reference_with_natural_curvature_has_its_limits():
     assert heavy_elastica(8.0, natural_curvature=0.0) == heavy_elastica(8.0)
     # a profile given as a function agrees with the same constant given as a number
     assert heavy_elastica(8.0, natural_curvature=lambda s: 0.5)["tip_drop"] == pytest.approx(
-        heavy_elastica(8.0, natural_curvature=0.5)["tip_drop"], rel=1e-12)
+        heavy_elastica(8.0, natural_curvature=0.5)["tip_drop"], rel=1e-12
+    )
 
 
 UNLOADED = {
     "constant +": (["strip.rest_curvature_per_cm=0.1"], lambda s: np.full_like(s, 10.0)),
     "constant −": (["strip.rest_curvature_per_cm=-0.25"], lambda s: np.full_like(s, -25.0)),
-    "table": (["strip.rest_curvature_table_s_mm=[0.0, 40.0, 100.0]",
-               "strip.rest_curvature_table_per_cm=[0.2, -0.1, 0.05]"],
-              lambda s: np.interp(s, [0.0, 0.04, 0.1], [20.0, -10.0, 5.0])),
+    "table": (
+        ["strip.rest_curvature_table_s_mm=[0.0, 40.0, 100.0]", "strip.rest_curvature_table_per_cm=[0.2, -0.1, 0.05]"],
+        lambda s: np.interp(s, [0.0, 0.04, 0.1], [20.0, -10.0, 5.0]),
+    ),
 }
 
 
@@ -62,8 +64,13 @@ UNLOADED = {
 def unloaded():
     # No gravity, linear bending, damping critical for the first cantilever mode: the
     # strip starts straight and curls into its natural shape.
-    base = overrides(run__gravity_m_per_s2=0.0, material__hysteresis_d1_gf_cm_per_cm=0.0, release__enabled=False,
-                     run__duration_s=10.0, damping__gamma_per_s=4.9)
+    base = overrides(
+        run__gravity_m_per_s2=0.0,
+        material__hysteresis_d1_gf_cm_per_cm=0.0,
+        release__enabled=False,
+        run__duration_s=10.0,
+        damping__gamma_per_s=4.9,
+    )
     scenes = [wc.load_scene("damped_swing", base + extra) for extra, _ in UNLOADED.values()]
     return scenes, wc.simulate(scenes)
 
@@ -88,7 +95,7 @@ def test_without_gravity_a_constant_set_rests_as_its_circular_arc(unloaded):
         assert edge == pytest.approx(k_rest, rel=1e-7)
         s = np.arange(len(nodes) - nc + 1) * scene.spacing
         exact = exact_hanging_shape(curvature, s)
-        error = np.abs(nodes[nc - 1:] - nodes[nc - 1] - exact).max() / LENGTH_M
+        error = np.abs(nodes[nc - 1 :] - nodes[nc - 1] - exact).max() / LENGTH_M
         deficit = (k_rest * scene.spacing) ** 2 / 24  # an arc's excess over its chord, relative
         print(f"K_rest = {k_rest:g} 1/m: shape error {error:.2e} L, the chord deficit {deficit:.2e}")
         assert error < deficit
@@ -103,7 +110,7 @@ def test_without_gravity_a_profile_rests_as_its_own_shape(unloaded):
     scene, nodes = scenes[j], result.frames[-1, j]
     nc = scene.n_clamped
     s = np.arange(len(nodes) - nc + 1) * scene.spacing
-    error = np.abs(nodes[nc - 1:] - nodes[nc - 1] - exact_hanging_shape(UNLOADED["table"][1], s)).max() / LENGTH_M
+    error = np.abs(nodes[nc - 1 :] - nodes[nc - 1] - exact_hanging_shape(UNLOADED["table"][1], s)).max() / LENGTH_M
     print(f"profile: shape error {error:.2e} L")
     assert error < 1e-3
 
@@ -111,8 +118,10 @@ def test_without_gravity_a_profile_rests_as_its_own_shape(unloaded):
 SET_CASES = {  # q = K_rest L for the reference, and the scene's fields
     "lifting": (1.0, ["strip.rest_curvature_per_cm=0.1"]),
     "curling down": (-1.0, ["strip.rest_curvature_per_cm=-0.1"]),
-    "profile": (lambda s: 2.0 * s, ["strip.rest_curvature_table_s_mm=[0.0, 100.0]",
-                                    "strip.rest_curvature_table_per_cm=[0.0, 0.2]"]),
+    "profile": (
+        lambda s: 2.0 * s,
+        ["strip.rest_curvature_table_s_mm=[0.0, 100.0]", "strip.rest_curvature_table_per_cm=[0.0, 0.2]"],
+    ),
 }
 
 
@@ -127,8 +136,11 @@ def settled_with_set():
         for j, name in enumerate(SET_CASES):
             nodes = result.frames[-1, j]
             edge, tip, last = nodes[scenes[j].n_clamped - 1], nodes[-1], nodes[-1] - nodes[-2]
-            shapes[(name, spacing)] = ((edge[1] - tip[1]) / LENGTH_M, (tip[0] - edge[0]) / LENGTH_M,
-                                       math.atan2(-last[1], last[0]))
+            shapes[(name, spacing)] = (
+                (edge[1] - tip[1]) / LENGTH_M,
+                (tip[0] - edge[0]) / LENGTH_M,
+                math.atan2(-last[1], last[0]),
+            )
     return shapes
 
 
@@ -148,8 +160,10 @@ def test_with_gravity_the_set_strip_is_the_heavy_elastica_with_natural_curvature
         drop, reach, angle = settled_with_set[(name, h)]
         chord_angle = exact["tip_angle"] + h * 1e-3 / (2 * LENGTH_M) * q_tip
         errors[h] = (drop / exact["tip_drop"] - 1, reach / exact["tip_reach"] - 1, angle / chord_angle - 1)
-    print(f"{name}: drop, reach, angle errors " + "; ".join(
-        f"h = {h} mm: " + ", ".join(f"{e:+.3%}" for e in v) for h, v in errors.items()))
+    print(
+        f"{name}: drop, reach, angle errors "
+        + "; ".join(f"h = {h} mm: " + ", ".join(f"{e:+.3%}" for e in v) for h, v in errors.items())
+    )
     assert all(abs(e) < 0.005 for e in errors[5.0])
     assert math.log2(abs(errors[5.0][0]) / abs(errors[2.5][0])) > 1.8
 
@@ -159,9 +173,16 @@ def test_every_law_started_on_its_rest_arc_stays_there(law):
     # Each law's hinges start fresh at K − K_rest = 0 and no force acts: the strip, placed
     # on the arc of its own natural curvature without gravity, does not move (a law that
     # bent from K, not K − K_rest, would spring straight at once).
-    scene = wc.load_scene("damped_swing", overrides(
-        run__gravity_m_per_s2=0.0, release__enabled=False, run__duration_s=0.2, material__bending_law=law,
-        strip__rest_curvature_per_cm=0.3))
+    scene = wc.load_scene(
+        "damped_swing",
+        overrides(
+            run__gravity_m_per_s2=0.0,
+            release__enabled=False,
+            run__duration_s=0.2,
+            material__bending_law=law,
+            strip__rest_curvature_per_cm=0.3,
+        ),
+    )
     nc, h, radius = scene.n_clamped, scene.spacing, 1 / 30.0
     start = wc.scene.rest_positions(scene)
     # equal chords h on the circle of radius R tangent to the clamp below its edge; the
@@ -185,8 +206,14 @@ def test_energy_budget_closes_with_a_set_and_a_grip(law):
     # the hold and release: kinetic + gravitational + tensile + work against bending and
     # damping stays constant (measured peak-to-peak 0.012 % of the peak kinetic energy,
     # as without them: tests/test_energy.py); the set changes the swing it closes on.
-    fields = dict(strip__rest_curvature_per_cm=0.15, clamp__grip_length_mm=12.0, clamp__grip_bending_factor=3.0,
-                  clamp__grip_hysteresis_factor=2.0, material__bending_law=law, run__duration_s=1.5)
+    fields = dict(
+        strip__rest_curvature_per_cm=0.15,
+        clamp__grip_length_mm=12.0,
+        clamp__grip_bending_factor=3.0,
+        clamp__grip_hysteresis_factor=2.0,
+        material__bending_law=law,
+        run__duration_s=1.5,
+    )
     result = wc.simulate(wc.load_scene("damped_swing", overrides(**fields)))
     plain = wc.simulate(wc.load_scene("damped_swing", overrides(material__bending_law=law, run__duration_s=1.5)))
     total = result.energy_total()[:, 0]
@@ -208,8 +235,12 @@ def test_a_free_settle_starts_a_set_strip_from_its_own_hanging_shape():
     # weight, so it is at rest at t = 0, curled (tip 6.9 mm aside for K_rest = 0.2 1/cm);
     # without a pre-roll the same strip starts straight and springs towards its set.
     fields = dict(strip__rest_curvature_per_cm=0.2, run__duration_s=0.1)
-    settled = wc.simulate(wc.load_scene("damped_swing", overrides(
-        release__hold_free_end=False, release__move_time_s=0.1, release__settle_time_s=1.0, **fields)))
+    settled = wc.simulate(
+        wc.load_scene(
+            "damped_swing",
+            overrides(release__hold_free_end=False, release__move_time_s=0.1, release__settle_time_s=1.0, **fields),
+        )
+    )
     straight = wc.simulate(wc.load_scene("damped_swing", overrides(release__enabled=False, **fields)))
     tip = settled.probe("tip_x", 0)
     print(f"settled: tip at {tip[0] * 1e3:.3f} mm, speed {settled.probe('tip_speed', 0)[0]:.2e} m/s")

@@ -42,8 +42,8 @@ def test_the_frictional_couple_on_the_shear_angle_is_its_closed_form():
     fs = fs / units.SHEAR_FORCE_GF_PER_CM
     rising = np.r_[True, np.diff(phi) > 0]
     slipped = np.abs(phi) > 2 * width + 1e-9  # past a full slip from the start and from every reversal there
-    slipped[np.argmax(phi):np.argmax(phi) + 2] = False
-    slipped[np.argmin(phi):np.argmin(phi) + 2] = False
+    slipped[np.argmax(phi) : np.argmax(phi) + 2] = False
+    slipped[np.argmin(phi) : np.argmin(phi) + 2] = False
     expected = g * phi + np.where(rising, force, -force)
     np.testing.assert_allclose(fs[slipped], expected[slipped], rtol=0, atol=1e-12)
     values = kes.shear_summary(kes.shear_loop(phi, fs))
@@ -57,16 +57,19 @@ def test_a_shear_law_is_its_bending_law_in_other_units(law):
     # the same numbers as a bending law (1/cm for degrees, gf·cm/cm for gf/cm) give the same
     # response: what lets the bending fitters fit shear loops unchanged
     section = MaterialSection(bending_law=law)
-    numbers = {name: getattr(section, field) for name, field in
-               zip(shear_fields(law), ["bending_rigidity_gf_cm2_per_cm",
-                                       *(p.scene_field for p in to_si(section).bending.description.parameters)],
-                   strict=True)}
+    numbers = {
+        name: getattr(section, field)
+        for name, field in zip(
+            shear_fields(law),
+            ["bending_rigidity_gf_cm2_per_cm", *(p.scene_field for p in to_si(section).bending.description.parameters)],
+            strict=True,
+        )
+    }
     shear = ShearMaterial(law, numbers.pop("rigidity_gf_per_cm_deg"), numbers)
     path = np.concatenate([np.linspace(0, 2.5, 50), np.linspace(2.5, -2.0, 90), np.linspace(-2.0, 1.0, 60)])
     fs, _ = shear_force_along_path([shear.si()], path * units.ANGLE_DEGREE)
     m, _ = moment_along_path(to_si(section), path * units.CURVATURE_PER_CM)
-    np.testing.assert_allclose(fs / units.SHEAR_FORCE_GF_PER_CM, m / units.MOMENT_GF_CM_PER_CM, rtol=1e-12,
-                               atol=1e-15)
+    np.testing.assert_allclose(fs / units.SHEAR_FORCE_GF_PER_CM, m / units.MOMENT_GF_CM_PER_CM, rtol=1e-12, atol=1e-15)
 
 
 def test_the_bundled_shear_loop_gives_back_its_iwan_model(masing_fit):
@@ -100,8 +103,11 @@ def test_a_loop_that_widens_away_from_zero_is_no_fit_for_any_law(noise):
     # data, so that the RMS alone could not tell (the missed KES values do)
     phi = kes.standard_cycle(8.0, 0.05)
     direction = np.sign(np.diff(phi, prepend=-1.0))
-    force = 0.6 * phi + (0.3 + 0.08 * np.abs(phi)) * np.tanh(5.0 * direction) \
+    force = (
+        0.6 * phi
+        + (0.3 + 0.08 * np.abs(phi)) * np.tanh(5.0 * direction)
         + np.random.default_rng(5).normal(0, noise, len(phi))
+    )
     loop = kes.shear_loop(phi, force, "widening")
     data = kes.shear_summary(loop)
     assert data.hg2_5_gf_per_cm > 1.5 * data.hg2_gf_per_cm
@@ -113,8 +119,20 @@ def test_a_loop_that_widens_away_from_zero_is_no_fit_for_any_law(noise):
 
 def test_fit_kes_writes_the_shear_table_a_strip_ignores(tmp_path):
     out = tmp_path / "wool.toml"
-    done = run_cli("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example", "--shear",
-                   "kes_fb1_shear_example", "--density-g-per-cm2", "0.0203", "-o", str(out))
+    done = run_cli(
+        "material",
+        "fit-kes",
+        "--tensile",
+        "kes_fb1_example",
+        "--bending",
+        "kes_fb2_example",
+        "--shear",
+        "kes_fb1_shear_example",
+        "--density-g-per-cm2",
+        "0.0203",
+        "-o",
+        str(out),
+    )
     assert done.returncode == 0, done.stderr
     assert "2HG5" in done.stdout and "law masing" in done.stdout
     data = tomllib.loads(out.read_text())
@@ -122,8 +140,17 @@ def test_fit_kes_writes_the_shear_table_a_strip_ignores(tmp_path):
     assert data["fit"]["shear_status"] == "converged" and data["fit"]["status"] == "converged"
     shear = parse_shear(data["shear"])
     assert shear.rigidity_gf_per_cm_deg == pytest.approx(0.6, rel=2e-3)
-    run = run_cli("run", "damped_swing", "--set", f"material.from_file={out}", "--set", "run.duration_s=0.02",
-                  "--out", str(tmp_path / "run"), "--no-progress")
+    run = run_cli(
+        "run",
+        "damped_swing",
+        "--set",
+        f"material.from_file={out}",
+        "--set",
+        "run.duration_s=0.02",
+        "--out",
+        str(tmp_path / "run"),
+        "--no-progress",
+    )
     assert run.returncode == 0, run.stderr
 
 
@@ -132,11 +159,25 @@ def test_the_material_file_status_is_the_least_trusted_fit(tmp_path):
     phi = kes.standard_cycle(8.0, 0.05)
     path = tmp_path / "elastic.csv"
     noise = np.random.default_rng(1).normal(0, 0.01, len(phi))
-    path.write_text("shear_angle_deg,shear_force_gf_per_cm\n" + "".join(
-        f"{p},{0.6 * p + e}\n" for p, e in zip(phi, noise, strict=True)))
+    path.write_text(
+        "shear_angle_deg,shear_force_gf_per_cm\n"
+        + "".join(f"{p},{0.6 * p + e}\n" for p, e in zip(phi, noise, strict=True))
+    )
     out = tmp_path / "el.toml"
-    done = run_cli("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example", "--shear",
-                   str(path), "--density-g-per-cm2", "0.0203", "-o", str(out))
+    done = run_cli(
+        "material",
+        "fit-kes",
+        "--tensile",
+        "kes_fb1_example",
+        "--bending",
+        "kes_fb2_example",
+        "--shear",
+        str(path),
+        "--density-g-per-cm2",
+        "0.0203",
+        "-o",
+        str(out),
+    )
     assert done.returncode == 7, done.stderr
     fit = tomllib.loads(out.read_text())["fit"]
     assert fit["status"] == "not_identifiable" and fit["shear_status"] == "not_identifiable"
@@ -144,8 +185,20 @@ def test_the_material_file_status_is_the_least_trusted_fit(tmp_path):
 
 
 def test_a_shear_law_without_a_shear_loop_is_refused(tmp_path):
-    done = run_cli("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example",
-                   "--shear-law", "dahl", "--density-g-per-cm2", "0.0203", "-o", str(tmp_path / "x.toml"))
+    done = run_cli(
+        "material",
+        "fit-kes",
+        "--tensile",
+        "kes_fb1_example",
+        "--bending",
+        "kes_fb2_example",
+        "--shear-law",
+        "dahl",
+        "--density-g-per-cm2",
+        "0.0203",
+        "-o",
+        str(tmp_path / "x.toml"),
+    )
     assert done.returncode == 2 and "--shear-law: dahl: there is no --shear loop" in done.stderr
     assert not (tmp_path / "x.toml").exists()
 
@@ -158,10 +211,13 @@ def test_compare_ranks_the_shear_laws():
     assert refused.returncode == 2 and "--plot" in refused.stderr and "Traceback" not in refused.stderr
 
 
-@pytest.mark.parametrize(("text", "needle"), [
-    ("shear_angle_rad,shear_force_gf_per_cm\n", "shear angle in degrees"),
-    ("shear_angle_deg,shear_force_N_per_m\n", "gf/cm"),
-])
+@pytest.mark.parametrize(
+    ("text", "needle"),
+    [
+        ("shear_angle_rad,shear_force_gf_per_cm\n", "shear angle in degrees"),
+        ("shear_angle_deg,shear_force_N_per_m\n", "gf/cm"),
+    ],
+)
 def test_a_shear_file_in_other_units_is_refused_by_its_header(tmp_path, text, needle):
     path = tmp_path / "loop.csv"
     phi = kes.standard_cycle(8.0, 0.5)
@@ -185,23 +241,38 @@ def test_an_angle_in_radians_without_a_header_is_refused(tmp_path):
     assert done.returncode == 2 and "is the column in degrees" in done.stderr
 
 
-@pytest.mark.parametrize(("change", "needle"), [
-    ({"hysteresis_alpha_per_deg": -1.0}, "shear.hysteresis_alpha_per_deg: must be > 0, got -1"),
-    ({"dahl_force_gf_per_cm": 0.3}, "shear.dahl_force_gf_per_cm: not a field of the masing shear law"),
-    ({"law": "viscous"}, "shear.law: must be one of"),
-    ({"rigidity_gf_per_cm_deg": "stiff"}, "shear.rigidity_gf_per_cm_deg: must be a finite number"),
-])
+@pytest.mark.parametrize(
+    ("change", "needle"),
+    [
+        ({"hysteresis_alpha_per_deg": -1.0}, "shear.hysteresis_alpha_per_deg: must be > 0, got -1"),
+        ({"dahl_force_gf_per_cm": 0.3}, "shear.dahl_force_gf_per_cm: not a field of the masing shear law"),
+        ({"law": "viscous"}, "shear.law: must be one of"),
+        ({"rigidity_gf_per_cm_deg": "stiff"}, "shear.rigidity_gf_per_cm_deg: must be a finite number"),
+    ],
+)
 def test_a_bad_shear_table_names_its_field(change, needle):
-    table = {"law": "masing", "rigidity_gf_per_cm_deg": 0.6, "hysteresis_d1_gf_per_cm": 0.8,
-             "hysteresis_alpha_per_deg": 0.6, "hysteresis_phi0_deg": 8.0, **change}
+    table = {
+        "law": "masing",
+        "rigidity_gf_per_cm_deg": 0.6,
+        "hysteresis_d1_gf_per_cm": 0.8,
+        "hysteresis_alpha_per_deg": 0.6,
+        "hysteresis_phi0_deg": 8.0,
+        **change,
+    }
     with pytest.raises(SceneError, match=needle):
         parse_shear(table)
 
 
 def test_a_shear_table_gives_every_field_of_its_law():
     with pytest.raises(SceneError, match="shear.hysteresis_phi0_deg: the masing shear law needs hysteresis_phi0_deg"):
-        parse_shear({"law": "masing", "rigidity_gf_per_cm_deg": 0.6, "hysteresis_d1_gf_per_cm": 0.8,
-                     "hysteresis_alpha_per_deg": 0.6})
+        parse_shear(
+            {
+                "law": "masing",
+                "rigidity_gf_per_cm_deg": 0.6,
+                "hysteresis_d1_gf_per_cm": 0.8,
+                "hysteresis_alpha_per_deg": 0.6,
+            }
+        )
 
 
 def test_the_worst_status_wins():

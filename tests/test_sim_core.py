@@ -17,20 +17,28 @@ from warpcloth.scene.clamp_motion import clamp_pieces
 def test_a_batch_built_in_si_runs_bit_for_bit_like_its_scene():
     # Two strips of the impulsive rotation built by hand (SI numbers, no scene file)
     # against the same two built from scenes: the builder is a real entry, not a shim.
-    scenes = [wc.load_scene("impulsive_rotation", overrides(run__duration_s=0.1, damping__gamma_per_s=g,
-                                                             clamp__rotation_centre_dy_mm=dy))
-              for g, dy in ((0.2, 2.8), (0.9, -1.0))]
+    scenes = [
+        wc.load_scene(
+            "impulsive_rotation",
+            overrides(run__duration_s=0.1, damping__gamma_per_s=g, clamp__rotation_centre_dy_mm=dy),
+        )
+        for g, dy in ((0.2, 2.8), (0.9, -1.0))
+    ]
     expected = wc.simulate(scenes)
     first = scenes[0]
     builder = sim.StripBuilder(rest_positions(first), n_clamped=first.n_clamped, spacing=2.5e-3)
     for scene in scenes:
         centre = 1e-3 * np.array([0.0, scene.clamp.rotation_centre_dy_mm])
-        builder.add_strip(to_si(scene.material), width=0.05, damping=scene.damping.gamma_per_s,
-                          clamp=sim.ClampMotion(*clamp_pieces(scene.clamp)), rotation_centre=centre)
+        builder.add_strip(
+            to_si(scene.material),
+            width=0.05,
+            damping=scene.damping.gamma_per_s,
+            clamp=sim.ClampMotion(*clamp_pieces(scene.clamp)),
+            rotation_centre=centre,
+        )
     model = builder.finalize(device="cpu")
     solver = sim.SemiImplicitEulerSolver(model, dt=5e-6)
-    recorder = sim.Recorder(interval=1 / 600, probes_per_frame=10, duration=0.1,
-                            laser_height=-0.08)
+    recorder = sim.Recorder(interval=1 / 600, probes_per_frame=10, duration=0.1, laser_height=-0.08)
     result = sim.simulate_batch(model, model.control(), solver, recorder)
     np.testing.assert_array_equal(result.probes, expected.probes)
     np.testing.assert_array_equal(result.frames, expected.frames)
@@ -49,7 +57,8 @@ def test_builder_refuses_what_the_kernel_cannot_simulate():
         sim.StripBuilder(chain(8), n_clamped=3, spacing=5e-3).finalize()
     with pytest.raises(ValueError, match="edge_hinge_length = 0 m must lie in"):
         sim.StripBuilder(chain(8), n_clamped=3, spacing=5e-3).add_strip(
-            to_si(wc.load_scene("damped_swing").material), width=0.05, edge_hinge_length=0.0)
+            to_si(wc.load_scene("damped_swing").material), width=0.05, edge_hinge_length=0.0
+        )
     with pytest.raises(TypeError, match="base of the Euler solvers"):
         builder = sim.StripBuilder(chain(8), n_clamped=3, spacing=5e-3)
         builder.add_strip(to_si(wc.load_scene("damped_swing").material), width=0.05)
@@ -70,9 +79,15 @@ def test_each_scheme_has_its_solver_and_they_differ_by_order_dt():
     assert set(sim.SOLVERS) == {"semi_implicit", "forward", "imex"} == set(integrators.build(wp.float64).schemes)
 
     def gap(dt):
-        runs = {scheme: wc.simulate(wc.load_scene("impulsive_rotation", overrides(
-            run__duration_s=0.002, integrator__scheme=scheme, integrator__dt_s=dt)))
-            for scheme in ("semi_implicit", "forward")}
+        runs = {
+            scheme: wc.simulate(
+                wc.load_scene(
+                    "impulsive_rotation",
+                    overrides(run__duration_s=0.002, integrator__scheme=scheme, integrator__dt_s=dt),
+                )
+            )
+            for scheme in ("semi_implicit", "forward")
+        }
         return np.nanmax(np.abs(runs["forward"].probe("tip_speed", 0) - runs["semi_implicit"].probe("tip_speed", 0)))
 
     # two first-order schemes: their difference halves with dt (and is not zero)
@@ -86,8 +101,13 @@ def tensile_kernel():
     vec4 = precision(wp.float64).vec4
 
     @wp.kernel
-    def evaluate(strain: wp.array(dtype=wp.float64), a: vec4, force: wp.array(dtype=wp.float64),
-                 energy: wp.array(dtype=wp.float64), stiffness: wp.array(dtype=wp.float64)):
+    def evaluate(
+        strain: wp.array(dtype=wp.float64),
+        a: vec4,
+        force: wp.array(dtype=wp.float64),
+        energy: wp.array(dtype=wp.float64),
+        stiffness: wp.array(dtype=wp.float64),
+    ):
         i = wp.tid()
         force[i] = law.force_per_width(strain[i], a)
         energy[i] = law.energy_per_width(strain[i], a)
@@ -141,9 +161,14 @@ def test_packed_parameters_follow_the_declared_layout():
     packed = m.bending_parameters()
     assert len(packed) == LAW_PARAMETER_SLOTS and packed[-1] == 0.0  # tagawa2003 is law 0 (kernels/laws.py)
     layout = dict(zip(bending_tagawa2003.PACKED, packed, strict=False))
-    assert layout == {"bending_rigidity": m.bending_rigidity, "hysteresis_d1": m.bending.hysteresis_d1,
-                      "hysteresis_alpha": m.bending.hysteresis_alpha, "hysteresis_k0": m.bending.hysteresis_k0,
-                      "hysteresis_m0": loop_asymptote_of(m)}
+    assert layout == {
+        "bending_rigidity": m.bending_rigidity,
+        "hysteresis_d1": m.bending.hysteresis_d1,
+        "hysteresis_alpha": m.bending.hysteresis_alpha,
+        "hysteresis_k0": m.bending.hysteresis_k0,
+        "hysteresis_m0": loop_asymptote_of(m),
+    }
     b = m.bending
-    assert loop_asymptote_of(m) == pytest.approx(0.5 * b.hysteresis_d1 * (1 + np.exp(-2 * b.hysteresis_alpha
-                                                                                   * b.hysteresis_k0)), rel=1e-15)
+    assert loop_asymptote_of(m) == pytest.approx(
+        0.5 * b.hysteresis_d1 * (1 + np.exp(-2 * b.hysteresis_alpha * b.hysteresis_k0)), rel=1e-15
+    )

@@ -10,9 +10,16 @@ import warpcloth as wc
 
 def hanging(scheme):
     # Default material, no damping, released straight: gravity sets off tensile waves.
-    return wc.load_scene("damped_swing", overrides(
-        release__enabled=False, damping__gamma_per_s=0.0, integrator__dt_s=1e-7,
-        integrator__scheme=scheme, run__duration_s=0.3))
+    return wc.load_scene(
+        "damped_swing",
+        overrides(
+            release__enabled=False,
+            damping__gamma_per_s=0.0,
+            integrator__dt_s=1e-7,
+            integrator__scheme=scheme,
+            run__duration_s=0.3,
+        ),
+    )
 
 
 def test_forward_euler_diverges_at_paper_dt_without_damping():
@@ -48,12 +55,14 @@ def past_the_check(scene, dt):
 
     batch = build_batch([scene])
     solver = SemiImplicitEulerSolver(batch.model, dt=dt, divergence_strain=scene.integrator.divergence_strain)
-    return simulate_batch(batch.model, batch.control, solver, batch.recorder, on_divergence="record",
-                          keep_frames=False, threads=1)
+    return simulate_batch(
+        batch.model, batch.control, solver, batch.recorder, on_divergence="record", keep_frames=False, threads=1
+    )
 
 
-@pytest.mark.parametrize("material, free_length_mm", [("wool90-nylon10", 100.0), ("polyester-taffeta", 100.0),
-                                                      ("wool90-nylon10", 10.0)])
+@pytest.mark.parametrize(
+    "material, free_length_mm", [("wool90-nylon10", 100.0), ("polyester-taffeta", 100.0), ("wool90-nylon10", 10.0)]
+)
 def test_the_refused_step_is_the_stretching_stability_limit(material, free_length_mm):
     # h·√(ρ_A/a1)/cos(π/4N) (5.0907e-5 s for the default material at h = 5 mm and N = 20 free
     # nodes, 1.3369e-5 s for polyester-taffeta; 5.50e-5 s at N = 2, where the cosine is
@@ -62,15 +71,21 @@ def test_the_refused_step_is_the_stretching_stability_limit(material, free_lengt
     from warpcloth.scene import to_si
     from warpcloth.sim.solvers import SemiImplicitEulerSolver
 
-    strip = dict(release__enabled=False, strip__free_length_mm=free_length_mm, material__from_file=material,
-                 output__laser_height_mm=-0.8 * free_length_mm)  # on the strip, however short
+    strip = dict(
+        release__enabled=False,
+        strip__free_length_mm=free_length_mm,
+        material__from_file=material,
+        output__laser_height_mm=-0.8 * free_length_mm,
+    )  # on the strip, however short
     scene = wc.load_scene("damped_swing", overrides(damping__gamma_per_s=0.0, run__duration_s=0.2, **strip))
-    limit = SemiImplicitEulerSolver.step_limit(to_si(scene.material), scene.spacing,
-                                               scene.n_nodes - scene.n_clamped)
+    limit = SemiImplicitEulerSolver.step_limit(to_si(scene.material), scene.spacing, scene.n_nodes - scene.n_clamped)
     assert not past_the_check(scene, 0.98 * limit).diverged
     assert past_the_check(scene, 1.02 * limit).diverged
-    with pytest.raises(wc.SceneError, match=r"integrator.dt_s: .* above the semi_implicit scheme's stability "
-                                            r"limit .*integrator.scheme = \"imex\"") as info:
+    with pytest.raises(
+        wc.SceneError,
+        match=r"integrator.dt_s: .* above the semi_implicit scheme's stability "
+        r"limit .*integrator.scheme = \"imex\"",
+    ) as info:
         wc.load_scene("damped_swing", overrides(integrator__dt_s=1.02 * limit, **strip))
     # the advice is rounded down: a step of what it says runs
     advised = float(re.search(r"a dt_s of at most (\S+) s", str(info.value)).group(1))
@@ -84,8 +99,13 @@ def test_a_recorded_run_past_the_limit_stays_readable(tmp_path):
     # the step check is for runs about to start: a stored scene is read back as it ran
 
     run = tmp_path / "run"
-    wc.simulate(wc.load_scene("damped_swing", overrides(integrator__scheme="imex", integrator__dt_s=1e-4,
-                                                        run__duration_s=0.05, release__enabled=False)), out=run)
+    wc.simulate(
+        wc.load_scene(
+            "damped_swing",
+            overrides(integrator__scheme="imex", integrator__dt_s=1e-4, run__duration_s=0.05, release__enabled=False),
+        ),
+        out=run,
+    )
     stored = run / "scene.toml"
     stored.write_text(re.sub(r'scheme = "imex"', 'scheme = "semi_implicit"', stored.read_text()))
     assert wc.load_recording(run).scenes[0].integrator.scheme == "semi_implicit"
@@ -102,5 +122,7 @@ def test_the_slack_above_the_limit_is_for_softening_laws_only():
     with pytest.raises(wc.SceneError, match="above the semi_implicit scheme's stability limit"):
         wc.load_scene("damped_swing", overrides(integrator__dt_s=1.0005 * limit))
     # a softening quartic (a2 < 0): strained, its limit can lie up to ~5e-4 above the unstrained one
-    wc.load_scene("damped_swing", overrides(integrator__dt_s=1.0005 * limit,
-                                            material__tensile_gf_per_cm=[2000.0, -1e4, 0.0, 2.93e7]))
+    wc.load_scene(
+        "damped_swing",
+        overrides(integrator__dt_s=1.0005 * limit, material__tensile_gf_per_cm=[2000.0, -1e4, 0.0, 2.93e7]),
+    )

@@ -36,9 +36,13 @@ def with_sweep(raw, **spec):
 
 
 def test_expansion_is_grid_times_zip_times_random_and_deterministic():
-    raw = with_sweep(base(), seed=7, grid={D1: [0.0, 0.04], "strip.width_mm": [30.0, 40.0, 50.0]},
-                     zip={GAMMA: [0.1, 0.2], "clamp.rotation_centre_dy_mm": [0.0, 1.0]},
-                     random={"method": "uniform", "samples": 4, "ranges": {ALPHA: [2.0, 8.0]}})
+    raw = with_sweep(
+        base(),
+        seed=7,
+        grid={D1: [0.0, 0.04], "strip.width_mm": [30.0, 40.0, 50.0]},
+        zip={GAMMA: [0.1, 0.2], "clamp.rotation_centre_dy_mm": [0.0, 1.0]},
+        random={"method": "uniform", "samples": 4, "ranges": {ALPHA: [2.0, 8.0]}},
+    )
     a, b = expand(raw), expand(raw)
     assert len(a.scenes) == 2 * 3 * 2 * 4
     assert a.assignments == b.assignments and a.fingerprint == b.fingerprint
@@ -51,8 +55,13 @@ def test_expansion_is_grid_times_zip_times_random_and_deterministic():
 
 def test_latin_hypercube_puts_one_sample_in_every_stratum():
     n = 50
-    sweep = expand(with_sweep(base(), seed=3, random={"method": "latin_hypercube", "samples": n,
-                                                      "ranges": {D1: [0.0, 0.1], GAMMA: [1.0, 3.0]}}))
+    sweep = expand(
+        with_sweep(
+            base(),
+            seed=3,
+            random={"method": "latin_hypercube", "samples": n, "ranges": {D1: [0.0, 0.1], GAMMA: [1.0, 3.0]}},
+        )
+    )
     d1 = np.array([a[D1] for a in sweep.assignments])
     gamma = np.array([a[GAMMA] for a in sweep.assignments])
     assert sorted(np.floor(d1 / 0.1 * n).astype(int)) == list(range(n))
@@ -90,8 +99,11 @@ def test_a_format_1_latin_hypercube_sweep_is_read_by_its_stored_variants_and_not
     np.testing.assert_array_equal(recording.parameters[D1], stored[D1])  # the variants that ran
     assert [s.material.hysteresis_d1_gf_cm_per_cm for s in recording.scenes] == stored[D1].tolist()
     renamed = with_sweep(raw, **(raw["sweep"] | {"seed": 12}))
-    with pytest.raises(wc.ArgumentError, match=r"^out: .*old was written by an older warpcloth \(sweep format 1\), "
-                       r"whose Latin hypercube drew other variants from the same seed; choose a new --out"):
+    with pytest.raises(
+        wc.ArgumentError,
+        match=r"^out: .*old was written by an older warpcloth \(sweep format 1\), "
+        r"whose Latin hypercube drew other variants from the same seed; choose a new --out",
+    ):
         run_sweep(expand(renamed), out, workers=0)
     info["format"] = 2  # a format-2 directory that no longer matches is refused, not relabelled
     manifest.write_text(json.dumps(info))
@@ -105,23 +117,29 @@ def test_batch_level_fields_make_separate_batches():
     assert batches == [[0, 2], [4], [1, 3]]
 
 
-@pytest.mark.parametrize("spec, field, text", [
-    ({}, "sweep", "no [sweep] section with a grid"),
-    ({"gird": {D1: [0.0]}}, "sweep", "no [sweep] section"),
-    ({"grid": {D1: [0.0]}, "gird": {}}, "sweep.gird", "unknown field"),
-    ({"grid": {"material.colour": [1.0]}}, 'sweep.grid."material.colour"', "is not a scene field"),
-    ({"grid": {D1: []}}, f'sweep.grid."{D1}"', "non-empty list"),
-    ({"grid": {D1: 0.04}}, f'sweep.grid."{D1}"', "non-empty list"),
-    ({"zip": {D1: [0.0, 0.1], GAMMA: [1.0]}}, "sweep.zip", "equal lengths"),
-    ({"grid": {D1: [0.0]}, "zip": {D1: [0.1]}}, f'sweep."{D1}"', "more than one block"),
-    ({"random": {"samples": 0, "ranges": {D1: [0, 1]}}}, "sweep.random.samples", "positive integer"),
-    ({"random": {"samples": 5, "ranges": {D1: [1.0, 0.5]}}}, f'sweep.random.ranges."{D1}"', "must be above"),
-    ({"random": {"samples": 5, "ranges": {D1: [0.0, "x"]}}}, f'sweep.random.ranges."{D1}"', "finite number"),
-    ({"random": {"samples": 5, "method": "sobol", "ranges": {D1: [0, 1]}}}, "sweep.random.method", "one of"),
-    ({"random": {"samples": 5, "ranges": {D1: [0, 1]}}, "seed": -1}, "sweep.seed", "non-negative"),
-    ({"grid": {D1: [0.04, -0.01]}}, "material.hysteresis_d1_gf_cm_per_cm",
-     f"in sweep variant 1 ({D1}=-0.01): must be ≥ 0"),
-])
+@pytest.mark.parametrize(
+    "spec, field, text",
+    [
+        ({}, "sweep", "no [sweep] section with a grid"),
+        ({"gird": {D1: [0.0]}}, "sweep", "no [sweep] section"),
+        ({"grid": {D1: [0.0]}, "gird": {}}, "sweep.gird", "unknown field"),
+        ({"grid": {"material.colour": [1.0]}}, 'sweep.grid."material.colour"', "is not a scene field"),
+        ({"grid": {D1: []}}, f'sweep.grid."{D1}"', "non-empty list"),
+        ({"grid": {D1: 0.04}}, f'sweep.grid."{D1}"', "non-empty list"),
+        ({"zip": {D1: [0.0, 0.1], GAMMA: [1.0]}}, "sweep.zip", "equal lengths"),
+        ({"grid": {D1: [0.0]}, "zip": {D1: [0.1]}}, f'sweep."{D1}"', "more than one block"),
+        ({"random": {"samples": 0, "ranges": {D1: [0, 1]}}}, "sweep.random.samples", "positive integer"),
+        ({"random": {"samples": 5, "ranges": {D1: [1.0, 0.5]}}}, f'sweep.random.ranges."{D1}"', "must be above"),
+        ({"random": {"samples": 5, "ranges": {D1: [0.0, "x"]}}}, f'sweep.random.ranges."{D1}"', "finite number"),
+        ({"random": {"samples": 5, "method": "sobol", "ranges": {D1: [0, 1]}}}, "sweep.random.method", "one of"),
+        ({"random": {"samples": 5, "ranges": {D1: [0, 1]}}, "seed": -1}, "sweep.seed", "non-negative"),
+        (
+            {"grid": {D1: [0.04, -0.01]}},
+            "material.hysteresis_d1_gf_cm_per_cm",
+            f"in sweep variant 1 ({D1}=-0.01): must be ≥ 0",
+        ),
+    ],
+)
 def test_bad_sweep_specs(spec, field, text):
     with pytest.raises(wc.SceneError) as info:
         expand(with_sweep(base(), **spec))
@@ -145,13 +163,17 @@ def test_sweep_results_equal_single_runs(tmp_path):
             np.testing.assert_array_equal(mine[name], single.probe(name, 0))
         assert summary.loc[i, "damping_work_J"] == single.probe("damping_work", 0)[-1]
     # stronger damping dissipates more and decays faster
-    assert (summary[summary[GAMMA] == 2.0]["damping_work_J"].values
-            > summary[summary[GAMMA] == 0.2]["damping_work_J"].values).all()
+    assert (
+        summary[summary[GAMMA] == 2.0]["damping_work_J"].values
+        > summary[summary[GAMMA] == 0.2]["damping_work_J"].values
+    ).all()
 
 
 def test_a_diverged_variant_is_recorded_and_the_sweep_goes_on(tmp_path):
-    raw = with_sweep(base(integrator__scheme="forward", integrator__dt_s=2e-5, release__enabled=False),
-                     zip={GAMMA: [0.0, 400.0], "material.tensile_gf_per_cm": [[2000.0, 0, 0, 2.93e7], [20.0, 0, 0, 0]]})
+    raw = with_sweep(
+        base(integrator__scheme="forward", integrator__dt_s=2e-5, release__enabled=False),
+        zip={GAMMA: [0.0, 400.0], "material.tensile_gf_per_cm": [[2000.0, 0, 0, 2.93e7], [20.0, 0, 0, 0]]},
+    )
     summary = run_sweep(expand(raw), tmp_path / "d", workers=0)
     assert summary["diverged"].tolist() == [True, False]
     assert summary.loc[0, "diverged_quantity"] == "tensile strain" and summary.loc[0, "diverged_time_s"] > 0
@@ -166,8 +188,7 @@ def test_a_changed_sweep_does_not_resume_into_an_old_directory(tmp_path):
 
 
 def cli_sweep(scene_file, out, *extra):
-    return [sys.executable, "-m", "warpcloth.cli", "sweep", str(scene_file), "--out", str(out), "--no-progress",
-            *extra]
+    return [sys.executable, "-m", "warpcloth.cli", "sweep", str(scene_file), "--out", str(out), "--no-progress", *extra]
 
 
 def read_results(out):
@@ -208,8 +229,7 @@ def test_threads_give_the_serial_results_bit_for_bit(tmp_path):
     run_sweep(sweep, tmp_path / "serial", max_batch=2, workers=0)
     for threads in (1, 2, 3):
         run_sweep(sweep, tmp_path / f"t{threads}", max_batch=2, workers=threads)
-        for mine, theirs in zip(read_results(tmp_path / f"t{threads}"), read_results(tmp_path / "serial"),
-                                strict=True):
+        for mine, theirs in zip(read_results(tmp_path / f"t{threads}"), read_results(tmp_path / "serial"), strict=True):
             pd.testing.assert_frame_equal(mine, theirs, check_exact=True)
 
 
@@ -225,21 +245,55 @@ def test_scheduler_and_workers_as_processes_survive_a_killed_worker(tmp_path):
     env = os.environ | {"DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
     bin_dir = os.path.dirname(sys.executable)
     scheduler_file = tmp_path / "scheduler.json"
-    procs = [subprocess.Popen([os.path.join(bin_dir, "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
-                               "--no-dashboard", "--scheduler-file", str(scheduler_file)],
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)]
+    procs = [
+        subprocess.Popen(
+            [
+                os.path.join(bin_dir, "dask"),
+                "scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                str(scheduler_file),
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            env=env,
+        )
+    ]
     try:
         deadline = time.time() + 60
         while not scheduler_file.exists() and time.time() < deadline:
             time.sleep(0.1)
         address = json.loads(scheduler_file.read_text())["address"]
         for _ in range(2):
-            procs.append(subprocess.Popen([os.path.join(bin_dir, "dask"), "worker", address, "--nthreads", "1",
-                                           "--nworkers", "1", "--no-nanny", "--no-dashboard"],
-                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
+            procs.append(
+                subprocess.Popen(
+                    [
+                        os.path.join(bin_dir, "dask"),
+                        "worker",
+                        address,
+                        "--nthreads",
+                        "1",
+                        "--nworkers",
+                        "1",
+                        "--no-nanny",
+                        "--no-dashboard",
+                    ],
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL,
+                    env=env,
+                )
+            )
         out = tmp_path / "dask"
-        driver = subprocess.Popen(cli_sweep(scene_file, out, "--max-batch", "1", "--scheduler", address),
-                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        driver = subprocess.Popen(
+            cli_sweep(scene_file, out, "--max-batch", "1", "--scheduler", address),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         while time.time() < deadline + 120 and not list((out / "summary").glob("batch-*.parquet")):
             time.sleep(0.05)
         procs[1].kill()  # a worker dies mid-sweep
@@ -263,8 +317,13 @@ def test_a_variant_that_diverges_during_the_hold_does_not_stop_the_sweep(tmp_pat
     # A tensile curve so soft that gravity stretches the strip past divergence_strain while
     # it is held: no sample after t = 0 exists for it, and the sweep still completes.
     tensile = [[2000.0, 0.0, 0.0, 2.93e7], [0.5, 0.0, 0.0, 0.0]]
-    sweep = wc.expand({"run": {"duration_s": 0.05}, "release": {"enabled": True, "settle_time_s": 0.05},
-                       "sweep": {"zip": {"material.tensile_gf_per_cm": tensile}}})
+    sweep = wc.expand(
+        {
+            "run": {"duration_s": 0.05},
+            "release": {"enabled": True, "settle_time_s": 0.05},
+            "sweep": {"zip": {"material.tensile_gf_per_cm": tensile}},
+        }
+    )
     summary = wc.run_sweep(sweep, tmp_path / "s", workers=0)
     healthy, soft = summary.iloc[0], summary.iloc[1]
     assert not healthy["diverged"] and healthy["hysteresis_work_J"] > 0

@@ -39,9 +39,21 @@ def tracked(tmp_path_factory):
     where = tmp_path_factory.mktemp("track")
     cal = run_cli(*CALIBRATE, "-o", str(where / "plane.json"))
     assert cal.returncode == 0, cal.stderr
-    done = run_cli("track", str(DATA / "rotation.avi"), "--plane", str(where / "plane.json"), "--background",
-                   str(DATA / "background.png"), *MARKERS, "-o", str(where / "shapes.csv"), "--overlay",
-                   str(where / "overlay.png"), "--overlay-video", str(where / "overlay.avi"))
+    done = run_cli(
+        "track",
+        str(DATA / "rotation.avi"),
+        "--plane",
+        str(where / "plane.json"),
+        "--background",
+        str(DATA / "background.png"),
+        *MARKERS,
+        "-o",
+        str(where / "shapes.csv"),
+        "--overlay",
+        str(where / "overlay.png"),
+        "--overlay-video",
+        str(where / "overlay.avi"),
+    )
     assert done.returncode == 0, done.stderr
     return where
 
@@ -71,9 +83,19 @@ def test_track_recovers_the_simulated_markers(tracked):
 
 
 def test_fit_of_the_tracked_shapes_recovers_the_rotation_centre(tracked):
-    done = run_cli("fit", "impulsive_rotation", "--measured", str(tracked / "shapes.csv"), "--free",
-                   "gamma,rotation_centre_dy_mm", "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out",
-                   str(tracked / "fit"))
+    done = run_cli(
+        "fit",
+        "impulsive_rotation",
+        "--measured",
+        str(tracked / "shapes.csv"),
+        "--free",
+        "gamma,rotation_centre_dy_mm",
+        "--bounds",
+        "rotation_centre_dy_mm=0:8",
+        "--no-progress",
+        "--out",
+        str(tracked / "fit"),
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     fit = json.loads((tracked / "fit" / "fit.json").read_text())
     dy = fit["parameters"]["clamp.rotation_centre_dy_mm"]["value"]
@@ -82,9 +104,21 @@ def test_fit_of_the_tracked_shapes_recovers_the_rotation_centre(tracked):
 
 @pytest.fixture(scope="module")
 def centreline(tracked):
-    done = run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tracked / "plane.json"), "--background",
-                   str(DATA / "background.png"), "--centreline-s", "5:95:10", "--free-length-mm", "100",
-                   "--no-progress", "-o", str(tracked / "centreline.csv"))
+    done = run_cli(
+        "track",
+        str(DATA / "rotation.avi"),
+        "--plane",
+        str(tracked / "plane.json"),
+        "--background",
+        str(DATA / "background.png"),
+        "--centreline-s",
+        "5:95:10",
+        "--free-length-mm",
+        "100",
+        "--no-progress",
+        "-o",
+        str(tracked / "centreline.csv"),
+    )
     assert done.returncode == 0, done.stderr
     return tracked / "centreline.csv"
 
@@ -95,9 +129,19 @@ def test_the_centreline_without_markers_recovers_the_simulated_strip(centreline)
     error_mm = np.column_stack([shapes.x - truth.x, shapes.y - truth.y]) * 1e3
     assert np.all(np.abs(error_mm.mean(axis=0)) <= 0.02), error_mm.mean(axis=0)
     assert np.all(np.sqrt(np.mean(error_mm**2, axis=0)) <= 0.1)
-    done = run_cli("fit", "impulsive_rotation", "--measured", str(centreline), "--free",
-                   "gamma,rotation_centre_dy_mm", "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out",
-                   str(centreline.parent / "fit-centreline"))
+    done = run_cli(
+        "fit",
+        "impulsive_rotation",
+        "--measured",
+        str(centreline),
+        "--free",
+        "gamma,rotation_centre_dy_mm",
+        "--bounds",
+        "rotation_centre_dy_mm=0:8",
+        "--no-progress",
+        "--out",
+        str(centreline.parent / "fit-centreline"),
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     fit = json.loads((centreline.parent / "fit-centreline" / "fit.json").read_text())
     assert abs(fit["parameters"]["clamp.rotation_centre_dy_mm"]["value"] - TRUTH_DY_MM) <= 0.05
@@ -164,8 +208,18 @@ def first_frames(tracked):
 
 def track_with(video, where, *options):
     """``warpcloth track VIDEO`` with where's plane.json and the bundled background, into where/out.csv."""
-    return run_cli("track", str(video), "--plane", str(where / "plane.json"), "--background",
-                   str(DATA / "background.png"), "--no-progress", "-o", str(where / "out.csv"), *options)
+    return run_cli(
+        "track",
+        str(video),
+        "--plane",
+        str(where / "plane.json"),
+        "--background",
+        str(DATA / "background.png"),
+        "--no-progress",
+        "-o",
+        str(where / "out.csv"),
+        *options,
+    )
 
 
 def track_cli(video, where, *more):
@@ -186,7 +240,7 @@ def test_a_lost_marker_is_an_error(tracked, first_frames, tmp_path, s_mm):
     truth = read_tracked_shapes(DATA / "truth.csv")
     at = (truth.frame == 2) & np.isclose(truth.s, s_mm * 1e-3)
     u, v = read_plane(tracked / "plane.json").to_pixels(np.array([[truth.x[at][0], truth.y[at][0]]]) * 1e3)[0]
-    rows, cols = np.mgrid[0: frames.shape[1], 0: frames.shape[2]]
+    rows, cols = np.mgrid[0 : frames.shape[1], 0 : frames.shape[2]]
     hidden = np.hypot(cols - u, rows - v) < 12  # the marker covered in frame 2
     frames[2][hidden] = background[hidden]
     one_line_error(track_cli(short_clip(frames, tracked, tmp_path), tmp_path), "frame 2", f"marker s = {s_mm} mm lost")
@@ -196,7 +250,7 @@ def test_a_lost_marker_is_an_error(tracked, first_frames, tmp_path, s_mm):
 def test_a_damaged_frame_is_an_error(tracked, first_frames, tmp_path):
     data = bytearray(short_clip(first_frames, tracked, tmp_path).read_bytes())
     middle = int(len(data) * 0.6)
-    data[middle: middle + 200] = bytes(200)
+    data[middle : middle + 200] = bytes(200)
     (tmp_path / "damaged.avi").write_bytes(bytes(data))
     one_line_error(track_cli(tmp_path / "damaged.avi", tmp_path), "damaged.avi", "damaged")
     assert not (tmp_path / "out.csv").exists()
@@ -209,18 +263,44 @@ def test_unreadable_and_missing_inputs_are_errors(tracked, tmp_path):
     one_line_error(track_cli(tmp_path / "missing.avi", tmp_path), "VIDEO", "does not exist")
     (tmp_path / "plane.json").write_text('{"format": "something else"}')
     one_line_error(track_cli(DATA / "rotation.avi", tmp_path), "plane.json", "not a plane file")
-    one_line_error(run_cli(*CALIBRATE[:3], str(tmp_path / "none.png"), *CALIBRATE[3:], "-o", str(tmp_path / "p.json")),
-                   "IMAGE", "does not exist")
-    one_line_error(run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tmp_path / "none.json"), *MARKERS,
-                           "-o", str(tmp_path / "out.csv")), "--plane", "does not exist")
+    one_line_error(
+        run_cli(*CALIBRATE[:3], str(tmp_path / "none.png"), *CALIBRATE[3:], "-o", str(tmp_path / "p.json")),
+        "IMAGE",
+        "does not exist",
+    )
+    one_line_error(
+        run_cli(
+            "track",
+            str(DATA / "rotation.avi"),
+            "--plane",
+            str(tmp_path / "none.json"),
+            *MARKERS,
+            "-o",
+            str(tmp_path / "out.csv"),
+        ),
+        "--plane",
+        "does not exist",
+    )
     plane = json.loads((tracked / "plane.json").read_text())
     (tmp_path / "plane.json").write_text(json.dumps(plane | {"image_size_px": [640, 480]}))
     one_line_error(track_cli(DATA / "rotation.avi", tmp_path), "--plane", "640 × 480 px", "768 × 720 px")
     (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
     cv2.imwrite(str(tmp_path / "small.png"), np.zeros((10, 10), np.uint8))
-    one_line_error(run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tmp_path / "plane.json"), "--background",
-                           str(tmp_path / "small.png"), *MARKERS, "-o", str(tmp_path / "out.csv")),
-                   "--background", "10 × 10 px")
+    one_line_error(
+        run_cli(
+            "track",
+            str(DATA / "rotation.avi"),
+            "--plane",
+            str(tmp_path / "plane.json"),
+            "--background",
+            str(tmp_path / "small.png"),
+            *MARKERS,
+            "-o",
+            str(tmp_path / "out.csv"),
+        ),
+        "--background",
+        "10 × 10 px",
+    )
     assert not (tmp_path / "out.csv").exists() and not (tmp_path / "p.json").exists()
 
 
@@ -229,14 +309,28 @@ def test_a_calibration_that_does_not_fit_is_an_error(tmp_path):
     # others' 0.06 to 0.22 (the clean set: 0.05 to 0.07)
     board = cv2.imread(BOARDS[3], cv2.IMREAD_GRAYSCALE)
     zoom = cv2.getRotationMatrix2D((board.shape[1] / 2, board.shape[0] / 2), 0, 1.2)
-    cv2.imwrite(str(tmp_path / "zoomed.png"), cv2.warpAffine(board, zoom, board.shape[::-1],
-                                                             borderMode=cv2.BORDER_REPLICATE))
-    done = run_cli(*CALIBRATE[:2], *BOARDS[:3], str(tmp_path / "zoomed.png"), *BOARDS[4:], *CALIBRATE[8:], "-o",
-                   str(tmp_path / "p.json"), "--max-rms-px", "0.2")
-    one_line_error(done, "zoomed.png", "reprojection error 0.299 px", "exceeds --max-rms-px 0.2",
-                   "do not fit one camera")
-    one_line_error(run_cli(*CALIBRATE[:2], *BOARDS, "--board", "9x7", *CALIBRATE[10:], "-o", str(tmp_path / "p.json")),
-                   "board_0.png", "no chessboard of 9 × 7 inner corners")
+    cv2.imwrite(
+        str(tmp_path / "zoomed.png"), cv2.warpAffine(board, zoom, board.shape[::-1], borderMode=cv2.BORDER_REPLICATE)
+    )
+    done = run_cli(
+        *CALIBRATE[:2],
+        *BOARDS[:3],
+        str(tmp_path / "zoomed.png"),
+        *BOARDS[4:],
+        *CALIBRATE[8:],
+        "-o",
+        str(tmp_path / "p.json"),
+        "--max-rms-px",
+        "0.2",
+    )
+    one_line_error(
+        done, "zoomed.png", "reprojection error 0.299 px", "exceeds --max-rms-px 0.2", "do not fit one camera"
+    )
+    one_line_error(
+        run_cli(*CALIBRATE[:2], *BOARDS, "--board", "9x7", *CALIBRATE[10:], "-o", str(tmp_path / "p.json")),
+        "board_0.png",
+        "no chessboard of 9 × 7 inner corners",
+    )
     assert not (tmp_path / "p.json").exists()
 
 
@@ -252,8 +346,15 @@ def test_a_background_model_that_holds_the_strip_is_an_error(tracked, tmp_path):
     # without --background the model is the frames' median; in the bundled clip the clamp
     # rests in its final pose for half the frames and the strip's root near it
     (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
-    done = run_cli("track", str(DATA / "rotation.avi"), "--plane", str(tmp_path / "plane.json"), *MARKERS, "-o",
-                   str(tmp_path / "out.csv"))
+    done = run_cli(
+        "track",
+        str(DATA / "rotation.avi"),
+        "--plane",
+        str(tmp_path / "plane.json"),
+        *MARKERS,
+        "-o",
+        str(tmp_path / "out.csv"),
+    )
     one_line_error(done, "lost", "give --background")
     assert not (tmp_path / "out.csv").exists()
 
@@ -299,6 +400,7 @@ def not_tracked(monkeypatch):
 
     def refuse(*args, **kwargs):
         raise AssertionError("the video was tracked before the options were checked")
+
     monkeypatch.setattr(markers, "track_markers", refuse)
 
 
@@ -306,19 +408,39 @@ def test_outputs_that_would_replace_each_other_are_refused(tracked, tmp_path, no
     # `-o same.png --overlay same.png` wrote the figure over the shapes file, exit 0
     (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
     video = DATA / "rotation.avi"
-    same = run_cli("track", video, "--plane", tmp_path / "plane.json", *MARKERS, "-o", tmp_path / "same.png",
-                   "--overlay", tmp_path / "same.png")
+    same = run_cli(
+        "track",
+        video,
+        "--plane",
+        tmp_path / "plane.json",
+        *MARKERS,
+        "-o",
+        tmp_path / "same.png",
+        "--overlay",
+        tmp_path / "same.png",
+    )
     one_line_error(same, "--overlay", "same.png is also -o's file")
-    movie = run_cli("track", video, "--plane", tmp_path / "plane.json", *MARKERS, "-o", tmp_path / "s.csv",
-                    "--overlay-video", tmp_path / "s.csv")
+    movie = run_cli(
+        "track",
+        video,
+        "--plane",
+        tmp_path / "plane.json",
+        *MARKERS,
+        "-o",
+        tmp_path / "s.csv",
+        "--overlay-video",
+        tmp_path / "s.csv",
+    )
     one_line_error(movie, "--overlay-video", "s.csv is also -o's file")
     done = run_cli("track", video, "--plane", tmp_path / "plane.json", *MARKERS, "-o", tmp_path / "shapes.txt")
     one_line_error(done, "-o", "shapes.txt must end in .csv")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plane.json"]
 
 
-@pytest.mark.parametrize(("edge", "words"), [("1,2,1,2", ("0 px apart", "at least 10 px")),
-                                             ("1e9,2,3,2", ("outside the 768 × 720 px plane view",))])
+@pytest.mark.parametrize(
+    ("edge", "words"),
+    [("1,2,1,2", ("0 px apart", "at least 10 px")), ("1e9,2,3,2", ("outside the 768 × 720 px plane view",))],
+)
 def test_a_clamp_edge_of_one_point_or_outside_the_image_is_an_error(tmp_path, edge, words):
     # two equal pixels wrote a plane file of NaN (exit 0); a pixel outside the image was taken
     done = run_cli(*CALIBRATE[:12], "--clamp-edge-px", edge, "-o", str(tmp_path / "p.json"))
@@ -341,9 +463,12 @@ def test_a_range_of_arc_lengths_ends_at_its_last(tracked, tmp_path, not_tracked)
     assert marker_arcs("5:95:10").tolist() == [5.0 + 10 * i for i in range(10)]
     assert marker_arcs("0.05:0.95:0.1")[-1] == 0.95  # within rounding: 0.9 / 0.1 is 8.999...
     (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
-    for text, words in (("5:95:7", ("'5:95:7'", "STEP 7 does not divide LAST − FIRST = 90 mm")),
-                        ("5:95:20", ("'5:95:20'", "does not divide")),
-                        ("95:5:10", ("FIRST < LAST", "'95:5:10'")), ("5:95:0", ("STEP > 0", "'5:95:0'"))):
+    for text, words in (
+        ("5:95:7", ("'5:95:7'", "STEP 7 does not divide LAST − FIRST = 90 mm")),
+        ("5:95:20", ("'5:95:20'", "does not divide")),
+        ("95:5:10", ("FIRST < LAST", "'95:5:10'")),
+        ("5:95:0", ("STEP > 0", "'5:95:0'")),
+    ):
         done = track_with(DATA / "rotation.avi", tmp_path, "--marker-s", text, "--marker-diameter-mm", "2.4")
         one_line_error(done, "--marker-s", *words)
     assert not (tmp_path / "out.csv").exists()
@@ -369,8 +494,9 @@ def test_the_overlay_video_is_encoded_frame_by_frame_at_the_videos_own_times(tmp
     n, shape = len(times), (240, 320)
     frames = ((i, float(t), np.full(shape, 40 + i, np.uint8)) for i, t in enumerate(times))
     px = np.tile([[50.0, 60.0], [120.0, 80.0]], (n, 1, 1))
-    tracked = Tracked(np.arange(n), np.array(times, dtype=float), np.array([5.0, 15.0]), px, px, px[..., 0],
-                      px[..., 0], np.ones(n))
+    tracked = Tracked(
+        np.arange(n), np.array(times, dtype=float), np.array([5.0, 15.0]), px, px, px[..., 0], px[..., 0], np.ones(n)
+    )
     tracemalloc.start()
     try:
         write_overlay_video(tmp_path / "o.avi", frames, tracked, times)

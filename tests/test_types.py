@@ -26,6 +26,11 @@ results they draw) and the USD export."""
 
 def test_the_public_api_type_checks():
     cache = Path(tempfile.gettempdir()) / "warpcloth-mypy-cache"
-    done = subprocess.run([sys.executable, "-m", "mypy", "--cache-dir", str(cache), *MODULES], cwd=ROOT,
-                          capture_output=True, text=True, timeout=300)
+    done = subprocess.run(
+        [sys.executable, "-m", "mypy", "--cache-dir", str(cache), *MODULES],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stdout + done.stderr

@@ -130,27 +130,37 @@ def test_value_clips_give_the_same_samples_and_move_with_the_file(rotation_run, 
     stage = Usd.Stage.Open(str(tmp_path / "moved" / "clipped.usdc"))
     assert stage.GetTimeCodesPerSecond() == 60.0 and stage.GetEndTimeCode() == n_frames - 1
     for f in range(n_frames):
-        np.testing.assert_allclose(curve_points(stage, "/World/Strips/variant_0000", f)[:, :2],
-                                   recording.frames[f, 0], atol=1e-7)
+        np.testing.assert_allclose(
+            curve_points(stage, "/World/Strips/variant_0000", f)[:, :2], recording.frames[f, 0], atol=1e-7
+        )
 
 
 def test_sweep_variants_are_selected_by_range_and_by_parameter(tmp_path):
-    sweep = wc.expand({"run": {"duration_s": 0.1}, "release": {"settle_time_s": 0.05},
-                       "sweep": {"grid": {"damping.gamma_per_s": [0.1, 0.2, 0.4, 0.8]}}})
+    sweep = wc.expand(
+        {
+            "run": {"duration_s": 0.1},
+            "release": {"settle_time_s": 0.05},
+            "sweep": {"grid": {"damping.gamma_per_s": [0.1, 0.2, 0.4, 0.8]}},
+        }
+    )
     wc.run_sweep(sweep, tmp_path / "sweep", workers=0, frames=True, progress=False)
     picked = load_recording(tmp_path / "sweep", variants="1:4", where="damping.gamma_per_s<0.5")
     assert list(picked.variants) == [1, 2]
     single = wc.simulate(sweep.scenes[2])
     np.testing.assert_array_equal(picked.frames[:, 1], single.frames[:, 0])
     stage = Usd.Stage.Open(str(export_usd(picked, tmp_path / "sweep.usda")))
-    assert [p.GetName() for p in stage.GetPrimAtPath("/World/Strips").GetChildren()] == ["variant_0001",
-                                                                                         "variant_0002"]
+    assert [p.GetName() for p in stage.GetPrimAtPath("/World/Strips").GetChildren()] == ["variant_0001", "variant_0002"]
     with pytest.raises(wc.ArgumentError, match="^where: "):
         load_recording(tmp_path / "sweep", where="damping.gamma_per_s>9")
     with pytest.raises(wc.ArgumentError, match="^variants: "):
         load_recording(tmp_path / "sweep", variants="7")
-    no_frames = wc.expand({"run": {"duration_s": 0.05}, "release": {"settle_time_s": 0.05},
-                           "sweep": {"grid": {"damping.gamma_per_s": [0.1]}}})
+    no_frames = wc.expand(
+        {
+            "run": {"duration_s": 0.05},
+            "release": {"settle_time_s": 0.05},
+            "sweep": {"grid": {"damping.gamma_per_s": [0.1]}},
+        }
+    )
     wc.run_sweep(no_frames, tmp_path / "bare", workers=0, progress=False)
     with pytest.raises(wc.DataFileError, match="--frames"):
         load_recording(tmp_path / "bare")
@@ -175,11 +185,14 @@ def test_a_failed_export_leaves_the_previous_file_whole(rotation_run, tmp_path, 
 def test_a_killed_export_leaves_a_complete_stage_or_none(swing_batch, tmp_path):
     # A real SIGKILL of an exporting process at several moments: the stage is either
     # absent or opens with every frame (it is only renamed into place when complete).
-    script = ("import sys; from warpcloth import load_recording, export_usd;"
-              "r = load_recording(sys.argv[1]); print('ready', flush=True);"
-              "[export_usd(r, sys.argv[2] + f'/k{i}.usda', ribbon=True) for i in range(1000)]")
-    proc = subprocess.Popen([sys.executable, "-c", script, str(swing_batch), str(tmp_path)], stdout=subprocess.PIPE,
-                            text=True)
+    script = (
+        "import sys; from warpcloth import load_recording, export_usd;"
+        "r = load_recording(sys.argv[1]); print('ready', flush=True);"
+        "[export_usd(r, sys.argv[2] + f'/k{i}.usda', ribbon=True) for i in range(1000)]"
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script, str(swing_batch), str(tmp_path)], stdout=subprocess.PIPE, text=True
+    )
     assert proc.stdout.readline().strip() == "ready"
     time.sleep(1.5)
     os.kill(proc.pid, signal.SIGKILL)
@@ -201,12 +214,21 @@ def test_a_diverged_strip_is_hidden_and_an_interrupted_run_is_cut(tmp_path):
     # its last shape for drawing and is hidden from its divergence on; the clamp stays
     # finite.
     def hanging(**fields):
-        return wc.load_scene("damped_swing", overrides(
-            release__enabled=False, integrator__dt_s=2e-5, integrator__scheme="forward", run__duration_s=0.3,
-            **fields))
+        return wc.load_scene(
+            "damped_swing",
+            overrides(
+                release__enabled=False,
+                integrator__dt_s=2e-5,
+                integrator__scheme="forward",
+                run__duration_s=0.3,
+                **fields,
+            ),
+        )
 
-    scenes = [hanging(damping__gamma_per_s=0.0),
-              hanging(damping__gamma_per_s=400.0, material__tensile_gf_per_cm=[20.0, 0.0, 0.0, 0.0])]
+    scenes = [
+        hanging(damping__gamma_per_s=0.0),
+        hanging(damping__gamma_per_s=400.0, material__tensile_gf_per_cm=[20.0, 0.0, 0.0, 0.0]),
+    ]
     wc.simulate(scenes, out=tmp_path / "run", on_divergence="record")
     recording = load_recording(tmp_path / "run")
     alive = recording.alive
@@ -235,8 +257,14 @@ def test_a_sweep_whose_material_file_changed_is_refused(tmp_path):
     material = tmp_path / "fabric.toml"
     bundled = importlib.resources.files("warpcloth.scenes") / "materials" / "wool90-nylon10.toml"
     material.write_text(bundled.read_text())
-    sweep = wc.expand({"run": {"duration_s": 0.05}, "release": {"settle_time_s": 0.05},
-                       "material": {"from_file": str(material)}, "sweep": {"grid": {"damping.gamma_per_s": [0.1]}}})
+    sweep = wc.expand(
+        {
+            "run": {"duration_s": 0.05},
+            "release": {"settle_time_s": 0.05},
+            "material": {"from_file": str(material)},
+            "sweep": {"grid": {"damping.gamma_per_s": [0.1]}},
+        }
+    )
     wc.run_sweep(sweep, tmp_path / "sweep", workers=0, frames=True, progress=False)
     assert load_recording(tmp_path / "sweep").scenes[0].material.density_g_per_cm2 == 0.0203
     material.write_text(material.read_text().replace("density_g_per_cm2 = 2.03e-2", "density_g_per_cm2 = 4e-2"))

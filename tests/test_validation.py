@@ -14,69 +14,116 @@ def load(**fields):
     return wc.load_scene("damped_swing", overrides(**fields))
 
 
-@pytest.mark.parametrize("fields, field, text", [
-    (dict(strip__spacing_mm=-5.0), "strip.spacing_mm", "must be > 0, got -5"),
-    (dict(strip__spacing_mm=3.0), "strip.spacing_mm", "does not divide strip.free_length_mm"),
-    (dict(strip__spacing_mm=60.0), "strip.spacing_mm", "does not divide"),
-    (dict(strip__free_length_mm=0.0), "strip.free_length_mm", "must be > 0"),
-    (dict(material__tensile_gf_per_cm=[2000.0, -3e4, 0.0, 0.0]), "material.tensile_gf_per_cm",
-     "not increasing at ε = 0.25"),
-    # interior minimum of dT/dε (where T'' = 0), found exactly
-    (dict(material__tensile_gf_per_cm=[2000.0, 0.0, -2e5, 5e5]), "material.tensile_gf_per_cm",
-     "not increasing at ε = 0.2 (dT/dε = -6000 gf/cm)"),
-    (dict(material__tensile_gf_per_cm=[0.0, 0.0, 0.0, 1e7]), "material.tensile_gf_per_cm",
-     "at ε = 0 (dT/dε = 0 gf/cm)"),
-    (dict(material__tensile_gf_per_cm=[2000.0, 0.0]), "material.tensile_gf_per_cm", "needs the 4"),
-    (dict(material__bending_rigidity_gf_cm2_per_cm=-0.1), "material.bending_rigidity_gf_cm2_per_cm",
-     "must be ≥ 0, got -0.1"),
-    (dict(material__hysteresis_d1_gf_cm_per_cm=-0.01), "material.hysteresis_d1_gf_cm_per_cm", "must be ≥ 0"),
-    (dict(material__hysteresis_alpha_cm=0.0), "material.hysteresis_alpha_cm", "must be > 0, got 0"),
-    (dict(material__hysteresis_k0_per_cm=-2.0), "material.hysteresis_k0_per_cm", "must be > 0"),
-    (dict(material__density_g_per_cm2=0.0), "material.density_g_per_cm2", "must be > 0"),
-    (dict(damping__gamma_per_s=-1.0), "damping.gamma_per_s", "must be ≥ 0"),
-    (dict(integrator__dt_s=0.0), "integrator.dt_s", "must be > 0"),
-    (dict(integrator__dt_s=0.01), "integrator.dt_s", "longer than the probe interval"),
-    (dict(integrator__scheme="rk4"), "integrator.scheme", "must be one of semi_implicit, forward"),
-    (dict(integrator__precision="float16"), "integrator.precision", "must be one of"),
-    (dict(output__probes_per_frame=0), "output.probes_per_frame", "must be ≥ 1"),
-    (dict(output__probes_per_frame=2.5), "output.probes_per_frame", "expected an integer"),
-    (dict(release__hold_x_mm=150.0), "release.hold_x_mm", "the free end reaches between"),
-    (dict(run__duration_s=1e9), "run.duration_s", "steps, more than"),
-    (dict(strip__width_mm="wide"), "strip.width_mm",
-     "expected a number, got 'wide'"),
-    (dict(release__enabled=1), "release.enabled", "expected true or false"),
-    (dict(clamp__motion="wobble"), "clamp.motion", "must be one of fixed, piecewise, table"),
-    (dict(clamp__motion="piecewise"), "clamp.segments", "needs at least one segment"),
-    (dict(clamp__motion="table", clamp__table_t_s=[0.0, 0.1], clamp__table_theta_rad=[0.0]),
-     "clamp.table_theta_rad", "needs as many samples"),
-    (dict(clamp__motion="table", clamp__table_t_s=[0.0, 0.1, 0.1], clamp__table_theta_rad=[0.0, 1.0, 2.0]),
-     "clamp.table_t_s[2]", "must be after"),
-    (dict(strip__rest_curvature_per_cm=0.1, strip__rest_curvature_table_s_mm=[0.0, 100.0],
-          strip__rest_curvature_table_per_cm=[0.1, 0.1]), "strip.rest_curvature_per_cm",
-     "= 0.1 1/cm and a table strip.rest_curvature_table_per_cm are both given"),
-    (dict(strip__rest_curvature_table_s_mm=[0.0, 100.0], strip__rest_curvature_table_per_cm=[0.1]),
-     "strip.rest_curvature_table_per_cm", "needs as many values as strip.rest_curvature_table_s_mm, at least 2 "
-     "(got 2 arc lengths and 1 curvatures)"),
-    (dict(strip__rest_curvature_table_s_mm=[5.0, 100.0], strip__rest_curvature_table_per_cm=[0.1, 0.2]),
-     "strip.rest_curvature_table_s_mm[0]", "5 mm must be 0"),
-    (dict(strip__rest_curvature_table_s_mm=[0.0, 50.0, 50.0, 100.0],
-          strip__rest_curvature_table_per_cm=[0.1, 0.2, 0.2, 0.1]), "strip.rest_curvature_table_s_mm[2]",
-     "50 mm must be after 50 mm"),
-    (dict(strip__rest_curvature_table_s_mm=[0.0, 80.0], strip__rest_curvature_table_per_cm=[0.1, 0.2]),
-     "strip.rest_curvature_table_s_mm[1]", "80 mm ends above the free end; the profile must reach "
-     "strip.free_length_mm = 100 mm"),
-    (dict(strip__rest_curvature_per_cm=-2.5), "strip.rest_curvature_per_cm",
-     "-2.5 1/cm curls the strip by more than one radian per segment (1/h = 2 1/cm"),
-    (dict(strip__rest_curvature_table_s_mm=[0.0, 100.0], strip__rest_curvature_table_per_cm=[0.1, 3.0]),
-     "strip.rest_curvature_table_per_cm[1]", "3 1/cm curls the strip"),
-    (dict(strip__rest_curvature_per_cm="curly"), "strip.rest_curvature_per_cm", "expected a number"),
-    (dict(release__hold_free_end=False, release__hold_x_mm=30.0), "release.hold_x_mm",
-     "= 30 mm but release.hold_free_end = false leaves the free end free"),
-    (dict(clamp__grip_length_mm=120.0), "clamp.grip_length_mm", "120 mm is longer than the free strip"),
-    (dict(clamp__grip_length_mm=-1.0), "clamp.grip_length_mm", "must be ≥ 0"),
-    (dict(clamp__grip_bending_factor=0.0), "clamp.grip_bending_factor", "must be > 0, got 0"),
-    (dict(clamp__grip_hysteresis_factor=-1.0), "clamp.grip_hysteresis_factor", "must be ≥ 0"),
-])
+@pytest.mark.parametrize(
+    "fields, field, text",
+    [
+        (dict(strip__spacing_mm=-5.0), "strip.spacing_mm", "must be > 0, got -5"),
+        (dict(strip__spacing_mm=3.0), "strip.spacing_mm", "does not divide strip.free_length_mm"),
+        (dict(strip__spacing_mm=60.0), "strip.spacing_mm", "does not divide"),
+        (dict(strip__free_length_mm=0.0), "strip.free_length_mm", "must be > 0"),
+        (
+            dict(material__tensile_gf_per_cm=[2000.0, -3e4, 0.0, 0.0]),
+            "material.tensile_gf_per_cm",
+            "not increasing at ε = 0.25",
+        ),
+        # interior minimum of dT/dε (where T'' = 0), found exactly
+        (
+            dict(material__tensile_gf_per_cm=[2000.0, 0.0, -2e5, 5e5]),
+            "material.tensile_gf_per_cm",
+            "not increasing at ε = 0.2 (dT/dε = -6000 gf/cm)",
+        ),
+        (
+            dict(material__tensile_gf_per_cm=[0.0, 0.0, 0.0, 1e7]),
+            "material.tensile_gf_per_cm",
+            "at ε = 0 (dT/dε = 0 gf/cm)",
+        ),
+        (dict(material__tensile_gf_per_cm=[2000.0, 0.0]), "material.tensile_gf_per_cm", "needs the 4"),
+        (
+            dict(material__bending_rigidity_gf_cm2_per_cm=-0.1),
+            "material.bending_rigidity_gf_cm2_per_cm",
+            "must be ≥ 0, got -0.1",
+        ),
+        (dict(material__hysteresis_d1_gf_cm_per_cm=-0.01), "material.hysteresis_d1_gf_cm_per_cm", "must be ≥ 0"),
+        (dict(material__hysteresis_alpha_cm=0.0), "material.hysteresis_alpha_cm", "must be > 0, got 0"),
+        (dict(material__hysteresis_k0_per_cm=-2.0), "material.hysteresis_k0_per_cm", "must be > 0"),
+        (dict(material__density_g_per_cm2=0.0), "material.density_g_per_cm2", "must be > 0"),
+        (dict(damping__gamma_per_s=-1.0), "damping.gamma_per_s", "must be ≥ 0"),
+        (dict(integrator__dt_s=0.0), "integrator.dt_s", "must be > 0"),
+        (dict(integrator__dt_s=0.01), "integrator.dt_s", "longer than the probe interval"),
+        (dict(integrator__scheme="rk4"), "integrator.scheme", "must be one of semi_implicit, forward"),
+        (dict(integrator__precision="float16"), "integrator.precision", "must be one of"),
+        (dict(output__probes_per_frame=0), "output.probes_per_frame", "must be ≥ 1"),
+        (dict(output__probes_per_frame=2.5), "output.probes_per_frame", "expected an integer"),
+        (dict(release__hold_x_mm=150.0), "release.hold_x_mm", "the free end reaches between"),
+        (dict(run__duration_s=1e9), "run.duration_s", "steps, more than"),
+        (dict(strip__width_mm="wide"), "strip.width_mm", "expected a number, got 'wide'"),
+        (dict(release__enabled=1), "release.enabled", "expected true or false"),
+        (dict(clamp__motion="wobble"), "clamp.motion", "must be one of fixed, piecewise, table"),
+        (dict(clamp__motion="piecewise"), "clamp.segments", "needs at least one segment"),
+        (
+            dict(clamp__motion="table", clamp__table_t_s=[0.0, 0.1], clamp__table_theta_rad=[0.0]),
+            "clamp.table_theta_rad",
+            "needs as many samples",
+        ),
+        (
+            dict(clamp__motion="table", clamp__table_t_s=[0.0, 0.1, 0.1], clamp__table_theta_rad=[0.0, 1.0, 2.0]),
+            "clamp.table_t_s[2]",
+            "must be after",
+        ),
+        (
+            dict(
+                strip__rest_curvature_per_cm=0.1,
+                strip__rest_curvature_table_s_mm=[0.0, 100.0],
+                strip__rest_curvature_table_per_cm=[0.1, 0.1],
+            ),
+            "strip.rest_curvature_per_cm",
+            "= 0.1 1/cm and a table strip.rest_curvature_table_per_cm are both given",
+        ),
+        (
+            dict(strip__rest_curvature_table_s_mm=[0.0, 100.0], strip__rest_curvature_table_per_cm=[0.1]),
+            "strip.rest_curvature_table_per_cm",
+            "needs as many values as strip.rest_curvature_table_s_mm, at least 2 (got 2 arc lengths and 1 curvatures)",
+        ),
+        (
+            dict(strip__rest_curvature_table_s_mm=[5.0, 100.0], strip__rest_curvature_table_per_cm=[0.1, 0.2]),
+            "strip.rest_curvature_table_s_mm[0]",
+            "5 mm must be 0",
+        ),
+        (
+            dict(
+                strip__rest_curvature_table_s_mm=[0.0, 50.0, 50.0, 100.0],
+                strip__rest_curvature_table_per_cm=[0.1, 0.2, 0.2, 0.1],
+            ),
+            "strip.rest_curvature_table_s_mm[2]",
+            "50 mm must be after 50 mm",
+        ),
+        (
+            dict(strip__rest_curvature_table_s_mm=[0.0, 80.0], strip__rest_curvature_table_per_cm=[0.1, 0.2]),
+            "strip.rest_curvature_table_s_mm[1]",
+            "80 mm ends above the free end; the profile must reach strip.free_length_mm = 100 mm",
+        ),
+        (
+            dict(strip__rest_curvature_per_cm=-2.5),
+            "strip.rest_curvature_per_cm",
+            "-2.5 1/cm curls the strip by more than one radian per segment (1/h = 2 1/cm",
+        ),
+        (
+            dict(strip__rest_curvature_table_s_mm=[0.0, 100.0], strip__rest_curvature_table_per_cm=[0.1, 3.0]),
+            "strip.rest_curvature_table_per_cm[1]",
+            "3 1/cm curls the strip",
+        ),
+        (dict(strip__rest_curvature_per_cm="curly"), "strip.rest_curvature_per_cm", "expected a number"),
+        (
+            dict(release__hold_free_end=False, release__hold_x_mm=30.0),
+            "release.hold_x_mm",
+            "= 30 mm but release.hold_free_end = false leaves the free end free",
+        ),
+        (dict(clamp__grip_length_mm=120.0), "clamp.grip_length_mm", "120 mm is longer than the free strip"),
+        (dict(clamp__grip_length_mm=-1.0), "clamp.grip_length_mm", "must be ≥ 0"),
+        (dict(clamp__grip_bending_factor=0.0), "clamp.grip_bending_factor", "must be > 0, got 0"),
+        (dict(clamp__grip_hysteresis_factor=-1.0), "clamp.grip_hysteresis_factor", "must be ≥ 0"),
+    ],
+)
 def test_field_errors_name_field_and_value(fields, field, text):
     with pytest.raises(wc.SceneError) as info:
         load(**fields)
@@ -119,7 +166,7 @@ def test_a_path_is_a_path_never_the_bundled_scene_of_its_stem(tmp_path, monkeypa
         wc.load_scene(reference)
     with pytest.raises(wc.DataFileError, match="no such scene file"):
         wc.load_sweep(reference)
-    (tmp_path / "damped_swing.toml").write_text('[damping]\ngamma_per_s = 0.7\n')
+    (tmp_path / "damped_swing.toml").write_text("[damping]\ngamma_per_s = 0.7\n")
     assert wc.load_scene(tmp_path / "damped_swing.toml").damping.gamma_per_s == 0.7  # the file, not the bundle
     assert wc.load_scene("damped_swing").damping.gamma_per_s == 0.3  # a bare name is the bundled scene
 
@@ -147,10 +194,13 @@ def test_empty_file_gives_the_documented_defaults(tmp_path):
     assert "illustrative" in scene.material.name
 
 
-@pytest.mark.parametrize("content, message", [
-    (b"\x00\x01\x02\xff\xfe binary", "is not UTF-8 text"),
-    ("[damping]\ngamma_per_s = 0.5  # réglé\n".encode("latin-1"), r"is not UTF-8 text \(byte 0xe9"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (b"\x00\x01\x02\xff\xfe binary", "is not UTF-8 text"),
+        ("[damping]\ngamma_per_s = 0.5  # réglé\n".encode("latin-1"), r"is not UTF-8 text \(byte 0xe9"),
+    ],
+)
 def test_a_scene_file_that_is_not_utf8_text_is_named(tmp_path, content, message):
     path = tmp_path / "scene.toml"
     path.write_bytes(content)
@@ -178,8 +228,11 @@ def test_scene_errors_say_where_the_value_was_set(tmp_path):
     scene = tmp_path / "swing.toml"
     scene.write_text(text.replace("dt_s = 1e-5 ", "dt_s = 0.01 "))
     line = 1 + next(i for i, row in enumerate(text.splitlines()) if row.startswith("dt_s"))
-    with pytest.raises(wc.SceneError, match=rf"^integrator.dt_s: 0.01 s is longer than the probe interval .* "
-                                            rf"\({re.escape(str(scene))}, line {line}\)$"):
+    with pytest.raises(
+        wc.SceneError,
+        match=rf"^integrator.dt_s: 0.01 s is longer than the probe interval .* "
+        rf"\({re.escape(str(scene))}, line {line}\)$",
+    ):
         wc.load_scene(scene)
     with pytest.raises(wc.SceneError, match=r"\(set by the override integrator.dt_s=1e-4\)$"):
         wc.load_scene("damped_swing", ["integrator.dt_s=1e-4"])
@@ -205,18 +258,26 @@ def test_scene_errors_say_where_the_value_was_set(tmp_path):
     # material file that replaced the material, a cross-field check's other field
     with pytest.raises(wc.SceneError, match=r"got -2 \(set by the override damping.gamma_per_s=-2.0\)$"):
         wc.load_scene("damped_swing", ["damping.gamma_per_s=-1.0", "damping.gamma_per_s=-2.0"])
-    segments = 'clamp.segments=[{t_start_s = 0.0, t_end_s = 0.1, theta_coefficients_si = [0.0, 1.0]}, ' \
-               '{t_start_s = 0.2, t_end_s = 0.3, theta_coefficients_si = [0.1]}]'
+    segments = (
+        "clamp.segments=[{t_start_s = 0.0, t_end_s = 0.1, theta_coefficients_si = [0.0, 1.0]}, "
+        "{t_start_s = 0.2, t_end_s = 0.3, theta_coefficients_si = [0.1]}]"
+    )
     with pytest.raises(wc.SceneError, match=r"clamp.segments\[1\].t_start_s: .*\(set by the override clamp.segments="):
         wc.load_scene("impulsive_rotation", [segments])
     wool_text = (importlib.resources.files("warpcloth.scenes") / "materials" / "wool90-nylon10.toml").read_text()
     soft = tmp_path / "soft.toml"  # a2 so negative that T' < 0 within the strain range: the scene check refuses
     soft.write_text(wool_text.replace("[2000.0, 0.0, 0.0, 2.93e7]", "[2000.0, -1e6, 0.0, 0.0]"))
-    with pytest.raises(wc.SceneError, match=rf"^material.tensile_gf_per_cm: .*\(set by the override "
-                                            rf"material.from_file=\"{re.escape(str(soft))}\"\)$"):
+    with pytest.raises(
+        wc.SceneError,
+        match=rf"^material.tensile_gf_per_cm: .*\(set by the override "
+        rf"material.from_file=\"{re.escape(str(soft))}\"\)$",
+    ):
         wc.load_scene("damped_swing", [f'material.from_file="{soft}"'])
-    with pytest.raises(wc.SceneError, match=r"^release.hold_x_mm: .*\(bundled scene damped_swing, line 24; and the "
-                                            r"override release.hold_y_mm=-500\)$"):
+    with pytest.raises(
+        wc.SceneError,
+        match=r"^release.hold_x_mm: .*\(bundled scene damped_swing, line 24; and the "
+        r"override release.hold_y_mm=-500\)$",
+    ):
         wc.load_scene("damped_swing", ["release.hold_y_mm=-500"])
     # a sweep variant's value comes from its sweep line even when the base field is overridden too
     with pytest.raises(wc.SceneError, match=rf"in sweep variant 1 .*, line {swept}\)$"):
@@ -242,8 +303,9 @@ def test_override_keys_index_lists_and_quote_dotted_names():
     # list items by [i] as by .i; a quoted key keeps its dots (a swept field's range)
     rotation = wc.load_scene("impulsive_rotation", ["clamp.segments[1].t_end_s=0.13"])
     assert rotation.clamp.segments[1].t_end_s == 0.13
-    sweep = wc.load_sweep("damped_swing_sweep", ["sweep.random.samples=5",
-                                                 'sweep.random.ranges."damping.gamma_per_s"=[0.1, 0.2]'])
+    sweep = wc.load_sweep(
+        "damped_swing_sweep", ["sweep.random.samples=5", 'sweep.random.ranges."damping.gamma_per_s"=[0.1, 0.2]']
+    )
     assert all(0.1 <= s.damping.gamma_per_s <= 0.2 for s in sweep.scenes)
     # an item of a list the scene does not have; a list item that is a number
     with pytest.raises(wc.SceneError, match=r"clamp.table_t_s: has no list item '0': it is not set here"):
@@ -251,8 +313,15 @@ def test_override_keys_index_lists_and_quote_dotted_names():
     with pytest.raises(wc.SceneError, match=r"^material.tensile_gf_per_cm.1: is a value, not a section"):
         wc.load_scene("damped_swing", ["material.tensile_gf_per_cm.1.0.0=3"])
     # a typo is an error naming it as written, never another field
-    for typo in ("damping:gamma_per_s", "damping..gamma_per_s", "damping.gamma_per_s,", ".damping.gamma_per_s",
-                 "damping.gamma_per_s.", "dämping.gamma_per_s", "damping.gamma per_s"):
+    for typo in (
+        "damping:gamma_per_s",
+        "damping..gamma_per_s",
+        "damping.gamma_per_s,",
+        ".damping.gamma_per_s",
+        "damping.gamma_per_s.",
+        "dämping.gamma_per_s",
+        "damping.gamma per_s",
+    ):
         with pytest.raises(wc.SceneError, match=rf"^{re.escape(typo)}: is not a field name"):
             wc.load_scene("damped_swing", [f"{typo}=1"])
     with pytest.raises(wc.SceneError, match=r"^sweep.random..samples: is not a field name"):
@@ -266,10 +335,14 @@ def test_override_keys_index_lists_and_quote_dotted_names():
     assert scene.material.tensile_gf_per_cm[0] == 5000.0
     # a sweep variant's value from an override of its sweep entry; a base scene's step for every variant
     with pytest.raises(wc.SceneError, match=r"in sweep variant 0 .*\(set by the override sweep.random.ranges."):
-        wc.load_sweep("damped_swing_sweep", ["sweep.random.samples=5",
-                                             'sweep.random.ranges."damping.gamma_per_s"=[-2.0, -1.0]'])
-    with pytest.raises(wc.SceneError, match=r"^integrator.dt_s: .*\(the base scene: every variant\) \(set by the "
-                                            r"override integrator.dt_s=1e-4\)$"):
+        wc.load_sweep(
+            "damped_swing_sweep", ["sweep.random.samples=5", 'sweep.random.ranges."damping.gamma_per_s"=[-2.0, -1.0]']
+        )
+    with pytest.raises(
+        wc.SceneError,
+        match=r"^integrator.dt_s: .*\(the base scene: every variant\) \(set by the "
+        r"override integrator.dt_s=1e-4\)$",
+    ):
         wc.load_sweep("damped_swing_sweep", ["sweep.random.samples=5", "integrator.dt_s=1e-4"])
     # a dict with a key that is not a string: an error, not a traceback
     with pytest.raises(wc.SceneError, match=r"^1: unknown field"):

@@ -33,10 +33,21 @@ from .errors import (
 
 _SUBMODULES = ("calibrate", "io", "scene", "sim", "viz")
 _LAZY = {
-    "load_recording": "io.load", "Recording": "io.recording", "first_period": "metrics", "run": "runs",
-    "simulate": "runs", "Scene": "scene", "Sweep": "scene", "bundled_scenes": "scene", "expand": "scene",
-    "load_scene": "scene", "load_sweep": "scene", "scene_from_dict": "scene", "RunResult": "sim",
-    "run_sweep": "sweeps", "export_usd": "viz.usd",
+    "load_recording": "io.load",
+    "Recording": "io.recording",
+    "first_period": "metrics",
+    "run": "runs",
+    "simulate": "runs",
+    "Scene": "scene",
+    "Sweep": "scene",
+    "bundled_scenes": "scene",
+    "expand": "scene",
+    "load_scene": "scene",
+    "load_sweep": "scene",
+    "scene_from_dict": "scene",
+    "RunResult": "sim",
+    "run_sweep": "sweeps",
+    "export_usd": "viz.usd",
 }
 """Public name → the module (below warpcloth) that defines it."""
 

@@ -113,8 +113,14 @@ class TurningPoints(NamedTuple):
     """Standard uncertainty of each time from the noise (0 at an unrefined sample, NaN with no noise given)."""
 
 
-def turning_points(t: np.ndarray, x: np.ndarray, starts_at_rest: bool = False, prominence: float = 0.01,
-                   resolution: float = RESOLUTION_M, noise: float | None = None) -> TurningPoints:
+def turning_points(
+    t: np.ndarray,
+    x: np.ndarray,
+    starts_at_rest: bool = False,
+    prominence: float = 0.01,
+    resolution: float = RESOLUTION_M,
+    noise: float | None = None,
+) -> TurningPoints:
     """Alternating turning points of an oscillation, least-squares refined (module docstring).
 
     A turning point counts once the signal has moved back from it by more than
@@ -156,8 +162,13 @@ def turning_points(t: np.ndarray, x: np.ndarray, starts_at_rest: bool = False, p
                 found.append(low)
             rising, high = True, k
     coarse_t, coarse_x = t[found], x[found]
-    refined = np.array([_refine(t, x, j, *_local_swing(coarse_t, coarse_x, k), noise) if 0 < j < len(x) - 1
-                        else (t[j], x[j], 0.0) for k, j in enumerate(found)], dtype=float).reshape(-1, 3)
+    refined = np.array(
+        [
+            _refine(t, x, j, *_local_swing(coarse_t, coarse_x, k), noise) if 0 < j < len(x) - 1 else (t[j], x[j], 0.0)
+            for k, j in enumerate(found)
+        ],
+        dtype=float,
+    ).reshape(-1, 3)
     return TurningPoints(*refined.T)
 
 
@@ -175,8 +186,9 @@ def _local_swing(times: np.ndarray, values: np.ndarray, k: int) -> tuple[float, 
     return half_period, float(np.log(before / after) / half_period) if before > 0 and after > 0 else 0.0
 
 
-def _refine(t: np.ndarray, x: np.ndarray, j: int, half_period: float, decay: float,
-            noise: float | None) -> tuple[float, float, float]:
+def _refine(
+    t: np.ndarray, x: np.ndarray, j: int, half_period: float, decay: float, noise: float | None
+) -> tuple[float, float, float]:
     """Time, value and time uncertainty of the turning point near sample ``j``: the vertex
     of x ≈ c + b s + a g(s) fitted by least squares over |s| ≤ w (module docstring), first
     about sample ``j``, then about that vertex."""
@@ -204,15 +216,25 @@ def _refine(t: np.ndarray, x: np.ndarray, j: int, half_period: float, decay: flo
     return centre, value, float(noise * np.sqrt(gradient @ np.linalg.solve(design.T @ design, gradient)))
 
 
-def extrema(t: np.ndarray, x: np.ndarray, starts_at_rest: bool = False, prominence: float = 0.01,
-            resolution: float = RESOLUTION_M) -> tuple[np.ndarray, np.ndarray]:
+def extrema(
+    t: np.ndarray,
+    x: np.ndarray,
+    starts_at_rest: bool = False,
+    prominence: float = 0.01,
+    resolution: float = RESOLUTION_M,
+) -> tuple[np.ndarray, np.ndarray]:
     """Times and values of :func:`turning_points`."""
     points = turning_points(t, x, starts_at_rest, prominence, resolution)
     return points.times, points.values
 
 
-def swing_summary(t: np.ndarray, laser: np.ndarray, tip: np.ndarray | None = None,
-                  starts_at_rest: bool = True, noise: float | None = None) -> dict:
+def swing_summary(
+    t: np.ndarray,
+    laser: np.ndarray,
+    tip: np.ndarray | None = None,
+    starts_at_rest: bool = True,
+    noise: float | None = None,
+) -> dict:
     """:func:`swing_metrics` of the laser-line displacement, or of ``tip`` when the strip
     misses the laser line in more than a tenth of the samples; ``"signal"`` says which."""
     laser = np.asarray(laser, dtype=float)
@@ -221,8 +243,7 @@ def swing_summary(t: np.ndarray, laser: np.ndarray, tip: np.ndarray | None = Non
     return {"signal": "laser_x" if use_laser else "tip_x"} | metrics
 
 
-def swing_metrics(t: np.ndarray, signal: np.ndarray, starts_at_rest: bool = True,
-                  noise: float | None = None) -> dict:
+def swing_metrics(t: np.ndarray, signal: np.ndarray, starts_at_rest: bool = True, noise: float | None = None) -> dict:
     """Summary of a decaying swing: first period, half-cycle amplitudes, log decrements.
 
     ``half_cycle_amplitude[i]`` is half the swing between turning points i and i+1;
@@ -236,8 +257,11 @@ def swing_metrics(t: np.ndarray, signal: np.ndarray, starts_at_rest: bool = True
     amplitude = np.abs(np.diff(values)) / 2
     decrement = np.log(amplitude[:-1] / amplitude[1:]) if len(amplitude) > 1 else np.zeros(0)
     period = float(times[2] - times[0]) if len(times) >= 3 else float("nan")
-    uncertainty = {} if noise is None else \
-        {"first_period_u_s": float(np.hypot(time_u[0], time_u[2])) if len(times) >= 3 else float("nan")}
+    uncertainty = (
+        {}
+        if noise is None
+        else {"first_period_u_s": float(np.hypot(time_u[0], time_u[2])) if len(times) >= 3 else float("nan")}
+    )
     return {
         "first_period_s": period,
         **uncertainty,
@@ -249,8 +273,9 @@ def swing_metrics(t: np.ndarray, signal: np.ndarray, starts_at_rest: bool = True
     }
 
 
-def comparison_window(spans: dict[str, tuple[float, float]], t_from: float | None = None,
-                      t_to: float | None = None) -> tuple[float, float]:
+def comparison_window(
+    spans: dict[str, tuple[float, float]], t_from: float | None = None, t_to: float | None = None
+) -> tuple[float, float]:
     """The window (s) on which records of these ``spans`` (name → first, last sample time)
     are compared: ``--from``/``--to`` where given, else the overlap of every record. A
     window that reaches outside any record, or is empty, is an :class:`ArgumentError`
@@ -259,20 +284,32 @@ def comparison_window(spans: dict[str, tuple[float, float]], t_from: float | Non
     end_name = min(spans, key=lambda name: spans[name][1])
     start, end = spans[start_name][0], spans[end_name][1]
     if t_from is not None and t_from < start - TIME_TOLERANCE_S:
-        raise ArgumentError("t_from", f"{t_from:g} s is before the start of {start_name} ({start:g} s): the window "
-                            "must lie inside every record compared")
+        raise ArgumentError(
+            "t_from",
+            f"{t_from:g} s is before the start of {start_name} ({start:g} s): the window "
+            "must lie inside every record compared",
+        )
     if t_to is not None and t_to > end + TIME_TOLERANCE_S:
-        raise ArgumentError("t_to", f"{t_to:g} s is after the end of {end_name} ({end:g} s): the window must lie "
-                            "inside every record compared")
+        raise ArgumentError(
+            "t_to",
+            f"{t_to:g} s is after the end of {end_name} ({end:g} s): the window must lie inside every record compared",
+        )
     lower = start if t_from is None else t_from
     upper = end if t_to is None else t_to
     if not lower < upper:
         if t_from is not None:
-            raise ArgumentError("t_from", f"{t_from:g} s is not before the window's end {upper:g} s "
-                              + ("(--to)" if t_to is not None else f"(the end of {end_name})"))
+            raise ArgumentError(
+                "t_from",
+                f"{t_from:g} s is not before the window's end {upper:g} s "
+                + ("(--to)" if t_to is not None else f"(the end of {end_name})"),
+            )
         if t_to is not None:
-            raise ArgumentError("t_to", f"{t_to:g} s is not after the window's start {lower:g} s (the start of "
-                              f"{start_name})")
-        raise ArgumentError("spans", f"the records do not overlap in time: {end_name} ends at {end:g} s, before "
-                          f"{start_name} starts at {start:g} s")
+            raise ArgumentError(
+                "t_to", f"{t_to:g} s is not after the window's start {lower:g} s (the start of {start_name})"
+            )
+        raise ArgumentError(
+            "spans",
+            f"the records do not overlap in time: {end_name} ends at {end:g} s, before "
+            f"{start_name} starts at {start:g} s",
+        )
     return float(lower), float(upper)

@@ -49,13 +49,19 @@ def simulate(
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
     wrong = next((s for s in scenes if not isinstance(s, Scene)), None)
     if wrong is not None or not scenes:
-        raise TypeError(f"simulate takes Scene objects (wc.load_scene(name_or_path) makes one), got {wrong!r}"
-                        if scenes else "simulate needs at least one scene")
+        raise TypeError(
+            f"simulate takes Scene objects (wc.load_scene(name_or_path) makes one), got {wrong!r}"
+            if scenes
+            else "simulate needs at least one scene"
+        )
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
     scenes = shared_auto_step(scenes)
     if initial_velocities is not None and initial_positions is None:
-        raise ArgumentError("initial_velocities", "given without initial_positions; give the start's positions too "
-                          "(e.g. the rest shape, warpcloth.scene.rest_positions)")
+        raise ArgumentError(
+            "initial_velocities",
+            "given without initial_positions; give the start's positions too "
+            "(e.g. the rest shape, warpcloth.scene.rest_positions)",
+        )
     for argument, value in (("initial_positions", initial_positions), ("initial_velocities", initial_velocities)):
         if value is not None:
             checked_nodes(argument, value, scenes[0].n_nodes, len(scenes))
@@ -71,10 +77,21 @@ def simulate(
         frame_times = batch.recorder.schedule(batch.control, batch.solver).frame_times
         sink = RunWriter(out, scenes, batch.model.n_nodes, frame_times, overwrite=overwrite)
     parameters = {name: column.to_numpy() for name, column in per_strip_parameters(scenes).items()}
-    return simulate_batch(batch.model, batch.control, batch.solver, batch.recorder, state, sink=sink,
-                          progress=progress, on_divergence=on_divergence, keep_frames=keep_frames, labels=scenes,
-                          parameters=parameters, attrs={"coordinates": f"{COORDINATES}; t = 0 at the release"},
-                          threads=threads)
+    return simulate_batch(
+        batch.model,
+        batch.control,
+        batch.solver,
+        batch.recorder,
+        state,
+        sink=sink,
+        progress=progress,
+        on_divergence=on_divergence,
+        keep_frames=keep_frames,
+        labels=scenes,
+        parameters=parameters,
+        attrs={"coordinates": f"{COORDINATES}; t = 0 at the release"},
+        threads=threads,
+    )
 
 
 def run(scene: str | Path | Scene, overrides: Overrides = (), **kwargs: Any) -> RunResult:

@@ -32,23 +32,38 @@ from warpcloth.sim.resources import check_disk, check_memory
 WORKER_MEMORY_BYTES = 1 << 30  # per-batch result memory a worker may hold
 MAX_WORKERS_PER_CORE = 4
 BATCHES_PER_WORKER = 8  # enough batches for balance, progress and resume granularity
-SUMMARY_SCALARS = ("first_period_s", "first_amplitude_m", "mean_log_decrement", "n_half_cycles",
-                   "peak_tip_speed_m_per_s", "hysteresis_work_J", "damping_work_J", "diverged",
-                   "diverged_time_s", "diverged_phase", "diverged_quantity")
+SUMMARY_SCALARS = (
+    "first_period_s",
+    "first_amplitude_m",
+    "mean_log_decrement",
+    "n_half_cycles",
+    "peak_tip_speed_m_per_s",
+    "hysteresis_work_J",
+    "damping_work_J",
+    "diverged",
+    "diverged_time_s",
+    "diverged_phase",
+    "diverged_quantity",
+)
 
 
 def _recorded(scene: Scene) -> tuple[int, int]:
     # probe samples and shape frames of one strip's record, as Python integers
-    return (int(scene.run.duration_s / scene.output_interval) + 1,
-            int(scene.run.duration_s * scene.output.frame_rate_hz) + 1)
+    return (
+        int(scene.run.duration_s / scene.output_interval) + 1,
+        int(scene.run.duration_s * scene.output.frame_rate_hz) + 1,
+    )
 
 
 def strip_memory_bytes(scene: Scene, frames: bool) -> int:
     """Memory one strip's recorded results take while its batch runs (probes and frames
     twice: as recorded and as written)."""
     n_samples, n_frames = _recorded(scene)
-    return 8 * len(PROBE_FIELDS) * n_samples * 2 + 16 * 8 * scene.n_nodes + (
-        16 * scene.n_nodes * n_frames * 2 if frames else 0)
+    return (
+        8 * len(PROBE_FIELDS) * n_samples * 2
+        + 16 * 8 * scene.n_nodes
+        + (16 * scene.n_nodes * n_frames * 2 if frames else 0)
+    )
 
 
 def strip_disk_bytes(scene: Scene, frames: bool) -> int:
@@ -66,23 +81,31 @@ def default_max_batch(scene: Scene, n_variants: int, workers: int, frames: bool)
     return max(1, min(memory_cap, balance))
 
 
-def check_sweep_fits(sweep: Sweep, batches: list[list[int]], pending: list[int], workers: int | None,
-                     frames: bool, out: Path) -> None:
+def check_sweep_fits(
+    sweep: Sweep, batches: list[list[int]], pending: list[int], workers: int | None, frames: bool, out: Path
+) -> None:
     """Refuse, before its first batch, a sweep whose batches running side by side would
     not fit in memory (``workers`` at once; None: on a Dask cluster, whose memory is its
     own) or whose remaining results would not fit the free disk of ``out``."""
     what = "probes and frames" if frames else "probes"
     if workers is not None:
-        sizes = sorted((sum(strip_memory_bytes(sweep.scenes[v], frames) for v in batches[b]) for b in pending),
-                       reverse=True)[: max(1, workers)]
-        check_memory(sum(sizes), f"the recorded {what} of {len(sizes)} sweep batch(es) running side by side",
-                     "run fewer at once (--workers) or smaller ones (--max-batch), or record less "
-                     "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)")
+        sizes = sorted(
+            (sum(strip_memory_bytes(sweep.scenes[v], frames) for v in batches[b]) for b in pending), reverse=True
+        )[: max(1, workers)]
+        check_memory(
+            sum(sizes),
+            f"the recorded {what} of {len(sizes)} sweep batch(es) running side by side",
+            "run fewer at once (--workers) or smaller ones (--max-batch), or record less "
+            "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)",
+        )
     variants = [v for b in pending for v in batches[b]]
-    check_disk(out, sum(strip_disk_bytes(sweep.scenes[v], frames) for v in variants),
-               f"the {what} of the sweep's {len(variants)} remaining variants",
-               "free space, choose another --out, or record less (output.probes_per_frame, output.frame_rate_hz, "
-               "run.duration_s" + (", or leave out --frames)" if frames else ")"))
+    check_disk(
+        out,
+        sum(strip_disk_bytes(sweep.scenes[v], frames) for v in variants),
+        f"the {what} of the sweep's {len(variants)} remaining variants",
+        "free space, choose another --out, or record less (output.probes_per_frame, output.frame_rate_hz, "
+        "run.duration_s" + (", or leave out --frames)" if frames else ")"),
+    )
 
 
 def _last(series: np.ndarray) -> float:
@@ -94,8 +117,15 @@ def _peak(series: np.ndarray) -> float:
     return float(np.max(series)) if len(series) else float("nan")
 
 
-def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[dict],
-              assignments: list[dict], device: str | None, frames: bool) -> dict:
+def run_batch(
+    out_dir: str,
+    batch: int,
+    variants: list[int],
+    scene_dicts: list[dict],
+    assignments: list[dict],
+    device: str | None,
+    frames: bool,
+) -> dict:
     """Simulate one batch and write its files (runs in a Dask worker or in-process)."""
     init_warp_quietly()  # a worker process starts Warp afresh: no banner or notices in the results
     scenes = [scene_from_dict(d) for d in scene_dicts]
@@ -114,8 +144,12 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
         columns["t"].append(result.t[ok])
         for q, name in enumerate(PROBE_FIELDS):
             columns[name].append(values[ok, q])
-        metrics = swing_summary(result.t[ok], result.probe("laser_x", local)[ok], result.probe("tip_x", local)[ok],
-                                starts_at_rest=scenes[local].release.enabled)
+        metrics = swing_summary(
+            result.t[ok],
+            result.probe("laser_x", local)[ok],
+            result.probe("tip_x", local)[ok],
+            starts_at_rest=scenes[local].release.enabled,
+        )
         metrics.pop("signal")
         report = diverged.get(local)
         row: dict[str, object] = {"variant": variant, "batch": batch}
@@ -133,8 +167,9 @@ def run_batch(out_dir: str, batch: int, variants: list[int], scene_dicts: list[d
         if result.reversal_memory:  # reversals a full masing memory could not store (no hysteresis in their loops)
             row["reversal_overflows"] = int(np.asarray(result.reversal_memory["overflows"])[local])
         rows.append(row)
-    SweepDirectory(out_dir).write_batch(batch, {k: np.concatenate(v) for k, v in columns.items()}, rows,
-                                        result.frames if frames else None)
+    SweepDirectory(out_dir).write_batch(
+        batch, {k: np.concatenate(v) for k, v in columns.items()}, rows, result.frames if frames else None
+    )
     return {"batch": batch, "n_variants": len(variants), "strip_steps": result.strip_steps, "wall_s": wall}
 
 
@@ -174,11 +209,13 @@ def run_sweep(
         raise ArgumentError("workers", f"must be ≥ 0 (0 runs the batches in this process), got {workers}")
     cores = os.cpu_count() or 1
     if workers is not None and workers > MAX_WORKERS_PER_CORE * cores:
-        raise ArgumentError("workers", f"{workers} threads on {cores} cores would only wait on each other "
-                          f"(at most {MAX_WORKERS_PER_CORE * cores}); a cluster is reached with --scheduler")
+        raise ArgumentError(
+            "workers",
+            f"{workers} threads on {cores} cores would only wait on each other "
+            f"(at most {MAX_WORKERS_PER_CORE * cores}); a cluster is reached with --scheduler",
+        )
     if scheduler is not None and not re.match(r"^(\w+://)?[\w.\-\[\]:]+:\d+$", scheduler):
-        raise ArgumentError("scheduler", f"{scheduler!r} is not a scheduler address (host:port or "
-                          "tcp://host:port)")
+        raise ArgumentError("scheduler", f"{scheduler!r} is not a scheduler address (host:port or tcp://host:port)")
     if max_batch is not None and max_batch < 1:
         raise ArgumentError("max_batch", f"must be ≥ 1, got {max_batch}")
     out = Path(out)
@@ -203,8 +240,9 @@ def run_sweep(
     pending = [b for b in range(len(batches)) if not directory.is_done(b)]
     check_sweep_fits(sweep, batches, pending, at_once, frames, out)  # a resumed one: what remains
     done = len(sweep.scenes) - sum(len(batches[b]) for b in pending)
-    bar = tqdm(total=len(sweep.scenes), initial=done, unit="variant", desc="sweep", disable=not progress,
-               dynamic_ncols=True)
+    bar = tqdm(
+        total=len(sweep.scenes), initial=done, unit="variant", desc="sweep", disable=not progress, dynamic_ncols=True
+    )
     started = time.perf_counter()
     strip_steps = 0
 
@@ -216,8 +254,15 @@ def run_sweep(
 
     def task(b: int) -> tuple:
         ids = batches[b]
-        return (str(out), b, ids, [sweep.scenes[i].to_dict() for i in ids], [sweep.assignments[i] for i in ids],
-                device, frames)
+        return (
+            str(out),
+            b,
+            ids,
+            [sweep.scenes[i].to_dict() for i in ids],
+            [sweep.assignments[i] for i in ids],
+            device,
+            frames,
+        )
 
     try:
         if pending:
@@ -243,14 +288,17 @@ def run_sweep(
     return directory.finish(len(batches))
 
 
-def _run_on_dask(pending: list[int], task: Callable[[int], tuple], finished: Callable[[dict], None],
-                 scheduler: str, fingerprint: str) -> None:
+def _run_on_dask(
+    pending: list[int], task: Callable[[int], tuple], finished: Callable[[dict], None], scheduler: str, fingerprint: str
+) -> None:
     from dask.distributed import Client, as_completed
 
     client = Client(scheduler)
     try:
-        futures = [client.submit(run_batch, *task(b), key=f"warpcloth-{fingerprint[:12]}-batch-{b:04d}",
-                                 pure=False, retries=2) for b in pending]
+        futures = [
+            client.submit(run_batch, *task(b), key=f"warpcloth-{fingerprint[:12]}-batch-{b:04d}", pure=False, retries=2)
+            for b in pending
+        ]
         for future in as_completed(futures):
             finished(future.result())
     finally:

@@ -77,8 +77,12 @@ and each one's factor to SI (s, m, rad)."""
 
 PLAUSIBLE = {
     "areal density": (1e-3, 0.2, "g/cm²", "10–2000 g/m², gauze to heavy canvas"),
-    "largest tensile strain": (1e-3, 1.0, "(fraction)", "0.1–100 %: a KES-FB1 loop to 500 gf/cm stretches a fabric "
-                               "by a few to some tens of percent"),
+    "largest tensile strain": (
+        1e-3,
+        1.0,
+        "(fraction)",
+        "0.1–100 %: a KES-FB1 loop to 500 gf/cm stretches a fabric by a few to some tens of percent",
+    ),
     "record length": (0.01, 3600.0, "s", "a swing is measured for seconds to minutes"),
     "largest displacement": (0.1, 2000.0, "mm", "a hanging strip swings by millimetres to some hundreds of them"),
     "largest clamp angle": (1e-3, 20.0, "rad", "a clamp turns by a fraction of a turn to a few turns"),
@@ -98,5 +102,9 @@ def check_plausible(quantity: str, value: float, where: str, hint: str = "") -> 
 
     low, high, unit, why = PLAUSIBLE[quantity]
     if not low <= abs(value) <= high:
-        warnings.warn(f"{where}: {quantity} {value:.4g} {unit} is outside the plausible {low:g} to {high:g} {unit} "
-                      f"({why}); used as given{' (' + hint + ')' if hint else ''}", PlausibilityWarning, stacklevel=3)
+        warnings.warn(
+            f"{where}: {quantity} {value:.4g} {unit} is outside the plausible {low:g} to {high:g} {unit} "
+            f"({why}); used as given{' (' + hint + ')' if hint else ''}",
+            PlausibilityWarning,
+            stacklevel=3,
+        )

@@ -68,8 +68,16 @@ def field_rows(section_type: type, prefix: str) -> list[tuple[str, ...]]:
     hints = typing.get_type_hints(section_type)
     for f in dataclasses.fields(section_type):
         meta, tp = f.metadata, hints[f.name]
-        rows.append((f"{prefix}.{f.name}", _type_name(tp), _toml(_default(f)), _allowed(meta),
-                     "yes" if meta.get("per_strip") else "", meta.get("doc", "")))
+        rows.append(
+            (
+                f"{prefix}.{f.name}",
+                _type_name(tp),
+                _toml(_default(f)),
+                _allowed(meta),
+                "yes" if meta.get("per_strip") else "",
+                meta.get("doc", ""),
+            )
+        )
         item = typing.get_args(tp)[0] if typing.get_origin(tp) is list else None
         if item is not None and dataclasses.is_dataclass(item):
             rows += field_rows(item, f"{prefix}.{f.name}[]")
@@ -85,8 +93,13 @@ def _entry(text: str, literal: bool = False) -> nodes.entry:
     return entry
 
 
-def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...] = HEADERS,
-           widths: tuple[int, ...] = WIDTHS, literal: tuple[int, ...] = (0, 2)) -> nodes.table:
+def _table(
+    title: str,
+    rows: list[tuple[str, ...]],
+    headers: tuple[str, ...] = HEADERS,
+    widths: tuple[int, ...] = WIDTHS,
+    literal: tuple[int, ...] = (0, 2),
+) -> nodes.table:
     table = nodes.table(classes=["generated-reference"])
     table += nodes.title(title, title)
     group = nodes.tgroup(cols=len(headers))
@@ -154,8 +167,11 @@ class ProbeColumns(SphinxDirective):
         from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 
         for name in sorted(set(PROBE_FIELDS) ^ set(PROBE_MEANINGS)):
-            where = "has no description in docs/_ext/scene_reference.py" if name in PROBE_FIELDS else \
-                "is described in docs/_ext/scene_reference.py but is not a probe"
+            where = (
+                "has no description in docs/_ext/scene_reference.py"
+                if name in PROBE_FIELDS
+                else "is described in docs/_ext/scene_reference.py but is not a probe"
+            )
             logger.warning(f"probe column {name!r} {where}", location=self.get_location())
         rows = [(name, PROBE_UNITS[name], PROBE_MEANINGS.get(name, "")) for name in PROBE_FIELDS]
         return [_table("probe columns", rows, ("column", "unit (SI)", "meaning"), (16, 22, 50), (0,))]

@@ -84,8 +84,13 @@ def bending_example() -> np.ndarray:
     """Rows (curvature in 1/cm, moment per width in gf·cm/cm) of the cycle 0 → +2.5 → −2.5 → 0."""
     k0 = DEFAULT_MATERIAL["hysteresis_k0_per_cm"]
     n = round(k0 / CURVATURE_STEP_PER_CM)
-    k = np.concatenate([np.linspace(0.0, k0, n, endpoint=False), np.linspace(k0, -k0, 2 * n, endpoint=False),
-                        np.linspace(-k0, 0.0, n + 1)])
+    k = np.concatenate(
+        [
+            np.linspace(0.0, k0, n, endpoint=False),
+            np.linspace(k0, -k0, 2 * n, endpoint=False),
+            np.linspace(-k0, 0.0, n + 1),
+        ]
+    )
     moment, _ = moment_along_path(to_si(MaterialSection()), k * units.CURVATURE_PER_CM)
     moment = moment / units.MOMENT_GF_CM_PER_CM
     moment += np.random.default_rng(2027).normal(0.0, BENDING_NOISE_GF_CM_PER_CM, len(moment))
@@ -113,11 +118,14 @@ def iwan_moment(curvature_per_cm: np.ndarray, d1: float, alpha_cm: float, elemen
 
 def inner_loops_example() -> np.ndarray:
     """Rows (curvature in 1/cm, moment per width in gf·cm/cm) of the cycle with partial cycles."""
-    legs = [np.linspace(a, b, max(round(abs(b - a) / CURVATURE_STEP_PER_CM), 1), endpoint=False)
-            for a, b in zip(INNER_KNOTS_PER_CM[:-1], INNER_KNOTS_PER_CM[1:], strict=True)]
+    legs = [
+        np.linspace(a, b, max(round(abs(b - a) / CURVATURE_STEP_PER_CM), 1), endpoint=False)
+        for a, b in zip(INNER_KNOTS_PER_CM[:-1], INNER_KNOTS_PER_CM[1:], strict=True)
+    ]
     k = np.concatenate([*legs, [INNER_KNOTS_PER_CM[-1]]])
     moment = DEFAULT_MATERIAL["bending_rigidity_gf_cm2_per_cm"] * k + iwan_moment(
-        k, DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"], DEFAULT_MATERIAL["hysteresis_alpha_cm"])
+        k, DEFAULT_MATERIAL["hysteresis_d1_gf_cm_per_cm"], DEFAULT_MATERIAL["hysteresis_alpha_cm"]
+    )
     moment += np.random.default_rng(2028).normal(0.0, BENDING_NOISE_GF_CM_PER_CM, len(moment))
     return np.column_stack([k, moment])
 
@@ -125,25 +133,54 @@ def inner_loops_example() -> np.ndarray:
 def shear_example() -> np.ndarray:
     """Rows (shear angle in degrees, shear force per width in gf/cm) of the cycle 0 → +8 → −8 → 0°."""
     n = round(SHEAR_PHI0_DEG / SHEAR_STEP_DEG)
-    phi = np.concatenate([np.linspace(0.0, SHEAR_PHI0_DEG, n, endpoint=False),
-                          np.linspace(SHEAR_PHI0_DEG, -SHEAR_PHI0_DEG, 2 * n, endpoint=False),
-                          np.linspace(-SHEAR_PHI0_DEG, 0.0, n + 1)])
+    phi = np.concatenate(
+        [
+            np.linspace(0.0, SHEAR_PHI0_DEG, n, endpoint=False),
+            np.linspace(SHEAR_PHI0_DEG, -SHEAR_PHI0_DEG, 2 * n, endpoint=False),
+            np.linspace(-SHEAR_PHI0_DEG, 0.0, n + 1),
+        ]
+    )
     force = SHEAR_TRUTH["rigidity_gf_per_cm_deg"] * phi + iwan_moment(
-        phi, SHEAR_TRUTH["hysteresis_d1_gf_per_cm"], SHEAR_TRUTH["hysteresis_alpha_per_deg"])
+        phi, SHEAR_TRUTH["hysteresis_d1_gf_per_cm"], SHEAR_TRUTH["hysteresis_alpha_per_deg"]
+    )
     force += np.random.default_rng(2029).normal(0.0, SHEAR_NOISE_GF_PER_CM, len(force))
     return np.column_stack([phi, force])
 
 
 def main() -> None:
     """Write the example files next to this script."""
-    np.savetxt(HERE / "kes_fb1_example.csv", tensile_example(), fmt=("%.4f", "%.3f"), delimiter=",",
-               header="strain_percent,force_gf_per_cm", comments="")
-    np.savetxt(HERE / "kes_fb2_example.csv", bending_example(), fmt=("%.3f", "%.5f"), delimiter=",",
-               header="curvature_per_cm,moment_gf_cm_per_cm", comments="")
-    np.savetxt(HERE / "kes_fb2_inner_loops.csv", inner_loops_example(), fmt=("%.3f", "%.5f"), delimiter=",",
-               header="curvature_per_cm,moment_gf_cm_per_cm", comments="")
-    np.savetxt(HERE / "kes_fb1_shear_example.csv", shear_example(), fmt=("%.2f", "%.4f"), delimiter=",",
-               header="shear_angle_deg,shear_force_gf_per_cm", comments="")
+    np.savetxt(
+        HERE / "kes_fb1_example.csv",
+        tensile_example(),
+        fmt=("%.4f", "%.3f"),
+        delimiter=",",
+        header="strain_percent,force_gf_per_cm",
+        comments="",
+    )
+    np.savetxt(
+        HERE / "kes_fb2_example.csv",
+        bending_example(),
+        fmt=("%.3f", "%.5f"),
+        delimiter=",",
+        header="curvature_per_cm,moment_gf_cm_per_cm",
+        comments="",
+    )
+    np.savetxt(
+        HERE / "kes_fb2_inner_loops.csv",
+        inner_loops_example(),
+        fmt=("%.3f", "%.5f"),
+        delimiter=",",
+        header="curvature_per_cm,moment_gf_cm_per_cm",
+        comments="",
+    )
+    np.savetxt(
+        HERE / "kes_fb1_shear_example.csv",
+        shear_example(),
+        fmt=("%.2f", "%.4f"),
+        delimiter=",",
+        header="shear_angle_deg,shear_force_gf_per_cm",
+        comments="",
+    )
 
 
 if __name__ == "__main__":

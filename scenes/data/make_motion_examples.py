@@ -66,8 +66,10 @@ def tracked_shapes(rng: np.random.Generator) -> str:
         for s_mm in range(0, 101, 10):
             x, y = result.frames[f, 0, nc - 1 + round(s_mm / h)] * 1e3 + rng.normal(0, 0.3, 2)
             rows.append(f"{f},{t - 0.004:.6f},{s_mm},{x:.4f},{y:.4f}")
-    return (f"# synthetic: {ROTATION_TRUTH}, noise 0.3 mm, camera clock 4 ms late "
-            "(scenes/data/make_motion_examples.py)\nframe,t_s,s_mm,x_mm,y_mm\n" + "\n".join(rows) + "\n")
+    return (
+        f"# synthetic: {ROTATION_TRUTH}, noise 0.3 mm, camera clock 4 ms late "
+        "(scenes/data/make_motion_examples.py)\nframe,t_s,s_mm,x_mm,y_mm\n" + "\n".join(rows) + "\n"
+    )
 
 
 def encoder(rng: np.random.Generator) -> str:
@@ -78,8 +80,10 @@ def encoder(rng: np.random.Generator) -> str:
     theta = np.where(tau < 0.05, 3.2e4 * tau**4, 0.2 + 16.0 * (np.minimum(tau, 0.12) - 0.05))
     degrees = 0.25 + np.degrees(theta) + rng.normal(0, 0.1, len(t))
     rows = "\n".join(f"{ti:.4f},{di:.4f}" for ti, di in zip(t, degrees, strict=True))
-    return ("# synthetic: at rest (reading 0.25 deg) until t = 0, then 3.2e4 t^4 to 0.05 s, 16 rad/s to 0.12 s, "
-            f"stopped; noise 0.1 deg (scenes/data/make_motion_examples.py)\nt_s,theta_deg\n{rows}\n")
+    return (
+        "# synthetic: at rest (reading 0.25 deg) until t = 0, then 3.2e4 t^4 to 0.05 s, 16 rad/s to 0.12 s, "
+        f"stopped; noise 0.1 deg (scenes/data/make_motion_examples.py)\nt_s,theta_deg\n{rows}\n"
+    )
 
 
 def main() -> None:

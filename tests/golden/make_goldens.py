@@ -61,20 +61,32 @@ import numpy as np
 import warpcloth as wc
 
 HERE = Path(__file__).parent
-PAPER = "clamp.edge_hinge=\"paper\""  # the model the pre-split code had (the default is now second order)
-TABLE = ["clamp.motion=\"table\"", "clamp.table_t_s=[0.0, 0.02, 0.05, 0.08, 0.1]",
-         "clamp.table_theta_rad=[0.0, 0.05, 0.3, 0.6, 0.7]", "clamp.interpolation=\"cubic\""]
+PAPER = 'clamp.edge_hinge="paper"'  # the model the pre-split code had (the default is now second order)
+TABLE = [
+    'clamp.motion="table"',
+    "clamp.table_t_s=[0.0, 0.02, 0.05, 0.08, 0.1]",
+    "clamp.table_theta_rad=[0.0, 0.05, 0.3, 0.6, 0.7]",
+    'clamp.interpolation="cubic"',
+]
 CASES = {
     "damped_swing": ("damped_swing", []),
     "impulsive_rotation": ("impulsive_rotation", []),
-    "forward_euler": ("impulsive_rotation", ["integrator.scheme=\"forward\"", "integrator.dt_s=2e-7",
-                                             "run.duration_s=0.03"]),
-    "float32": ("damped_swing", ["integrator.precision=\"float32\"", "release.settle_time_s=0.2",
-                                 "run.duration_s=0.5"]),
+    "forward_euler": (
+        "impulsive_rotation",
+        ['integrator.scheme="forward"', "integrator.dt_s=2e-7", "run.duration_s=0.03"],
+    ),
+    "float32": ("damped_swing", ['integrator.precision="float32"', "release.settle_time_s=0.2", "run.duration_s=0.5"]),
     "cubic_table": ("impulsive_rotation", [*TABLE, "run.duration_s=0.2", "clamp.rotation_centre_dx_mm=1.5"]),
-    "quartic_and_wrapping_hold": ("damped_swing", ["material.tensile_gf_per_cm=[2000.0, 3.0e4, 1.0e5, 2.93e7]",
-                                                   "release.hold_x_mm=-50.0", "release.hold_y_mm=10.0",
-                                                   "release.settle_time_s=0.2", "run.duration_s=0.5"]),
+    "quartic_and_wrapping_hold": (
+        "damped_swing",
+        [
+            "material.tensile_gf_per_cm=[2000.0, 3.0e4, 1.0e5, 2.93e7]",
+            "release.hold_x_mm=-50.0",
+            "release.hold_y_mm=10.0",
+            "release.settle_time_s=0.2",
+            "run.duration_s=0.5",
+        ],
+    ),
 }
 SWEEP_OVERRIDES = ["sweep.random.samples=6", "run.duration_s=0.4", PAPER]
 

@@ -58,16 +58,34 @@ def swing_records(source: str | Path, starts_at_rest: bool = True) -> list[Swing
     if (path / "sweep.json").is_file():  # its probe store: a sweep need not have kept shape frames
         scenes = stored_sweep(path, read_json(path / "sweep.json")).scenes
         probes = read_parquet(path / "probes").sort_values(["variant", "t"], kind="stable")
-        return [SwingRecord(str(path), int(variant), rows["t"].to_numpy(), rows["laser_x"].to_numpy(),
-                            rows["tip_x"].to_numpy(), scenes[int(variant)].release.enabled, False)
-                for variant, rows in probes.groupby("variant")]
+        return [
+            SwingRecord(
+                str(path),
+                int(variant),
+                rows["t"].to_numpy(),
+                rows["laser_x"].to_numpy(),
+                rows["tip_x"].to_numpy(),
+                scenes[int(variant)].release.enabled,
+                False,
+            )
+            for variant, rows in probes.groupby("variant")
+        ]
     if (path / "meta.json").is_file():
         recording = load_recording(path)
         records = []
         for j, variant in enumerate(recording.variants):
             probes = recording.probes[recording.probes["variant"] == variant]
-            records.append(SwingRecord(str(path), int(variant), probes["t"].to_numpy(), probes["laser_x"].to_numpy(),
-                                       probes["tip_x"].to_numpy(), recording.scenes[j].release.enabled, False))
+            records.append(
+                SwingRecord(
+                    str(path),
+                    int(variant),
+                    probes["t"].to_numpy(),
+                    probes["laser_x"].to_numpy(),
+                    probes["tip_x"].to_numpy(),
+                    recording.scenes[j].release.enabled,
+                    False,
+                )
+            )
         return records
     measured = read_measurement(bundled_data(source), argument="source")
     if not isinstance(measured, LaserTrace):
@@ -87,27 +105,40 @@ def swing_row(record: SwingRecord, window: tuple[float, float] | None = None) ->
         metrics = swing_summary(t, laser, None, at_rest, noise=difference_noise([laser])) | {"signal": "measured x"}
     else:
         metrics = swing_summary(t, laser, record.tip[inside], at_rest)
-    return {"source": record.source, "variant": record.variant, "from_s": lower, "to_s": upper,
-            "signal": metrics["signal"], "first_period_s": metrics["first_period_s"],
-            "first_period_u_s": metrics.get("first_period_u_s", float("nan")),
-            "first_amplitude_mm": metrics["first_amplitude_m"] * 1e3,
-            "mean_log_decrement": metrics["mean_log_decrement"], "n_half_cycles": metrics["n_half_cycles"],
-            "log_decrement": json.dumps(np.asarray(metrics["log_decrement"]).tolist())}
+    return {
+        "source": record.source,
+        "variant": record.variant,
+        "from_s": lower,
+        "to_s": upper,
+        "signal": metrics["signal"],
+        "first_period_s": metrics["first_period_s"],
+        "first_period_u_s": metrics.get("first_period_u_s", float("nan")),
+        "first_amplitude_mm": metrics["first_amplitude_m"] * 1e3,
+        "mean_log_decrement": metrics["mean_log_decrement"],
+        "n_half_cycles": metrics["n_half_cycles"],
+        "log_decrement": json.dumps(np.asarray(metrics["log_decrement"]).tolist()),
+    }
 
 
-def analyse(sources: str | Path | list[str | Path], starts_at_rest: bool = True, t_from: float | None = None,
-            t_to: float | None = None) -> list[dict]:
+def analyse(
+    sources: str | Path | list[str | Path],
+    starts_at_rest: bool = True,
+    t_from: float | None = None,
+    t_to: float | None = None,
+) -> list[dict]:
     """One row of swing metrics per measured trace and per variant of a run or sweep,
     every one on the same window (:func:`comparison_window`: the overlap of all the
     records unless ``t_from``/``t_to`` choose it); each row holds ``from_s`` and ``to_s``."""
     sources = sources if isinstance(sources, list) else [sources]
     records = [record for source in sources for record in swing_records(source, starts_at_rest)]
     # a record without samples (diverged before t = 0) gets its row of NaNs, not a say in the window
-    spans = {f"{r.source}" + ("" if r.variant is None else f" variant {r.variant}"): r.span for r in records
-             if len(r.t)}
+    spans = {
+        f"{r.source}" + ("" if r.variant is None else f" variant {r.variant}"): r.span for r in records if len(r.t)
+    }
     if not spans:
-        raise DataFileError(", ".join(str(s) for s in sources), "holds no samples after t = 0 (every strip "
-                            "diverged before it)")
+        raise DataFileError(
+            ", ".join(str(s) for s in sources), "holds no samples after t = 0 (every strip diverged before it)"
+        )
     window = comparison_window(spans, t_from, t_to)
     return [swing_row(record, window) for record in records]
 

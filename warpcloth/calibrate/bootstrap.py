@@ -35,8 +35,9 @@ def correlation_length(residual: np.ndarray) -> int:
     return int(below[0]) if len(below) else n
 
 
-def block_bootstrap_sigma(jacobian: np.ndarray, residual: np.ndarray, replicates: int,
-                          rng: np.random.Generator, block: int | None = None) -> tuple[np.ndarray, int]:
+def block_bootstrap_sigma(
+    jacobian: np.ndarray, residual: np.ndarray, replicates: int, rng: np.random.Generator, block: int | None = None
+) -> tuple[np.ndarray, int]:
     """σ of the least-squares parameters (columns of ``jacobian``, ∂r/∂p) from ``replicates``
     moving-block resamples of ``residual``; returns (σ, block length)."""
     n, _ = jacobian.shape

@@ -90,8 +90,13 @@ class ClampMotionFit:
 
     def theta(self, t: np.ndarray) -> np.ndarray:
         """The fitted θ(t)."""
-        return self.rest_rad + _shape(np.atleast_1d(np.asarray(t, dtype=float)), self.onset_s, self.breaks_s,
-                                      self.stop_s, np.array([*self.quartic_si, *self.speeds_rad_per_s[1:]]))
+        return self.rest_rad + _shape(
+            np.atleast_1d(np.asarray(t, dtype=float)),
+            self.onset_s,
+            self.breaks_s,
+            self.stop_s,
+            np.array([*self.quartic_si, *self.speeds_rad_per_s[1:]]),
+        )
 
     def segments(self, until_s: float | None = None) -> list[dict]:
         """The motion as scene ``clamp.segments`` (θ = Σ c_k (t − t_start)^k), measured
@@ -99,11 +104,17 @@ class ClampMotionFit:
         shape, so an encoder offset must not become a jump at t = 0. A motion that does
         not stop in the record continues its last line to ``until_s`` (then holds)."""
         ends = [*self.breaks_s[1:], self.stop_s if self.stop_s is not None else max(until_s or 0.0, self.record_end_s)]
-        pieces = [{"t_start_s": self.onset_s, "t_end_s": self.breaks_s[0],
-                   "theta_coefficients_si": [0.0, *self.quartic_si]}]
+        pieces = [
+            {"t_start_s": self.onset_s, "t_end_s": self.breaks_s[0], "theta_coefficients_si": [0.0, *self.quartic_si]}
+        ]
         for start, end, speed in zip(self.breaks_s, ends, self.speeds_rad_per_s, strict=True):
-            pieces.append({"t_start_s": start, "t_end_s": end,
-                           "theta_coefficients_si": [float(self.theta(start)[0] - self.rest_rad), speed]})
+            pieces.append(
+                {
+                    "t_start_s": start,
+                    "t_end_s": end,
+                    "theta_coefficients_si": [float(self.theta(start)[0] - self.rest_rad), speed],
+                }
+            )
         return pieces
 
     @property
@@ -122,8 +133,9 @@ class ClampMotionFit:
         return (self.onset_s, *self.breaks_s, *(() if self.stop_s is None else (self.stop_s,)))
 
 
-def _shape(t: np.ndarray, t0: float, breaks: tuple[float, ...], stop: float | None,
-           coefficients: np.ndarray) -> np.ndarray:
+def _shape(
+    t: np.ndarray, t0: float, breaks: tuple[float, ...], stop: float | None, coefficients: np.ndarray
+) -> np.ndarray:
     point = np.array([[t0, *breaks, *(() if stop is None else (stop,))]])
     return _columns(t, point, len(breaks), stop is not None)[0] @ coefficients
 
@@ -132,7 +144,7 @@ def _columns(t: np.ndarray, points: np.ndarray, lines: int, stops: bool) -> np.n
     # θ − θ0 = A @ (a1, a2, a3, a4, ω2, ...) for breakpoint sets ``points`` [candidate,
     # onset, breaks..., stop?]: every piece continues the one before it.
     t = t[None, :]
-    t0, breaks = points[:, :1], [points[:, 1 + i:2 + i] for i in range(lines)]
+    t0, breaks = points[:, :1], [points[:, 1 + i : 2 + i] for i in range(lines)]
     te = np.minimum(t, points[:, -1:]) if stops else t
     t1 = breaks[0]
     tau = np.clip(np.minimum(te, t1) - t0, 0, None)
@@ -145,16 +157,18 @@ def _columns(t: np.ndarray, points: np.ndarray, lines: int, stops: bool) -> np.n
     return np.stack(cols, axis=-1)
 
 
-def _solve(t: np.ndarray, theta: np.ndarray, points: np.ndarray, lines: int, stops: bool,
-           rest_first: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _solve(
+    t: np.ndarray, theta: np.ndarray, points: np.ndarray, lines: int, stops: bool, rest_first: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Cost, coefficients and θ0 of many breakpoint sets ``points`` [candidate, k]
     (times scaled to the record, so the columns are O(1)); infinite cost for a set that
     leaves a piece too few samples. θ0 is the mean of the samples before the onset for a
     record that starts at rest, a fitted constant for one moving from its first sample."""
     edges = np.searchsorted(t, points)
     counts = np.diff(np.column_stack([np.zeros(len(points), int), edges, np.full(len(points), len(t))]), axis=1)
-    usable = (counts[:, 0] >= MIN_REST if rest_first else counts[:, 0] == 0) & np.all(counts[:, 1:] >= MIN_PER_PIECE,
-                                                                                      axis=1)
+    usable = (counts[:, 0] >= MIN_REST if rest_first else counts[:, 0] == 0) & np.all(
+        counts[:, 1:] >= MIN_PER_PIECE, axis=1
+    )
     costs = np.full(len(points), np.inf)
     coefficients = np.zeros((len(points), 3 + lines))
     prefix = np.concatenate([[0.0], np.cumsum(theta)])
@@ -206,8 +220,9 @@ def _guided(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool, rest_firs
     return np.array(out).reshape(-1, 1 + lines + (1 if stops else 0))
 
 
-def _search(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool,
-            rest_first: bool) -> tuple[float, np.ndarray, np.ndarray, float]:
+def _search(
+    t: np.ndarray, theta: np.ndarray, lines: int, stops: bool, rest_first: bool
+) -> tuple[float, np.ndarray, np.ndarray, float]:
     """Cost, breakpoints, coefficients and θ0 of the best breakpoint set: a grid over the
     record, then coordinate scans around the best few (distinct) starts. A record moving
     from its first sample has its onset there (an onset before the record reads the same
@@ -240,8 +255,9 @@ def _search(t: np.ndarray, theta: np.ndarray, lines: int, stops: bool,
             for i in range(first, k):
                 trial = np.repeat(point[None], 25, axis=0)
                 trial[:, i] = np.linspace(point[i] - span, point[i] + span, 25)
-                trial = trial[np.all(np.diff(trial, axis=1) > 0, axis=1) & (trial[:, first] > t[0])
-                              & (trial[:, -1] < t[-1])]
+                trial = trial[
+                    np.all(np.diff(trial, axis=1) > 0, axis=1) & (trial[:, first] > t[0]) & (trial[:, -1] < t[-1])
+                ]
                 c, _, _ = _solve(t, theta, trial, lines, stops, rest_first)
                 j = int(np.argmin(c))
                 if c[j] < cost:
@@ -261,8 +277,9 @@ def fit_clamp_motion(t: np.ndarray, theta: np.ndarray, forms: tuple[str, ...] = 
     theta = np.asarray(theta, dtype=float)
     needed = MIN_REST + 3 * MIN_PER_PIECE
     if len(t) < needed:
-        raise ArgumentError("t", f"{len(t)} samples are too few for rest, a quartic, a line and a stop; "
-                          f"give at least {needed}")
+        raise ArgumentError(
+            "t", f"{len(t)} samples are too few for rest, a quartic, a line and a stop; give at least {needed}"
+        )
     if np.ptp(theta) <= 0:
         raise ArgumentError("theta", "the angle never changes: there is no clamp motion to fit")
     n = len(t)
@@ -271,8 +288,10 @@ def fit_clamp_motion(t: np.ndarray, theta: np.ndarray, forms: tuple[str, ...] = 
     found = {}
     unknown = [form for form in forms if form not in FORMS]
     if unknown or not forms:
-        raise ArgumentError("forms", f"{unknown[0] if unknown else 'none'!r} is not a clamp-motion form; the forms are "
-                          + ", ".join(FORMS))
+        raise ArgumentError(
+            "forms",
+            f"{unknown[0] if unknown else 'none'!r} is not a clamp-motion form; the forms are " + ", ".join(FORMS),
+        )
     for form in forms:
         lines, stops, rest_first = FORMS[form]
         cost, point, x, rest = _search(unit_t, theta, lines, stops, rest_first)
@@ -287,11 +306,12 @@ def fit_clamp_motion(t: np.ndarray, theta: np.ndarray, forms: tuple[str, ...] = 
         bic = n * math.log(max(cost, 1e-300) / n) + k * math.log(n)
         found[form] = (bic, cost, point, x, rest, lines, stops)
     if not found:
-        raise ArgumentError("theta", "no form fits: every candidate leaves a piece with fewer than "
-                          f"{MIN_PER_PIECE} samples")
+        raise ArgumentError(
+            "theta", f"no form fits: every candidate leaves a piece with fewer than {MIN_PER_PIECE} samples"
+        )
     form = min(found, key=lambda f: found[f][0])
     bic, cost, point, x, rest, lines, stops = found[form]
-    t0, breaks = float(point[0]), tuple(float(b) for b in point[1:1 + lines])
+    t0, breaks = float(point[0]), tuple(float(b) for b in point[1 : 1 + lines])
     stop = float(point[1 + lines]) if stops else None
     speeds = (float(sum(k * x[k - 1] * (breaks[0] - t0) ** (k - 1) for k in range(1, 5))), *map(float, x[4:]))
     # The 4th differences of the whole record, not the smaller of that and the scatter at
@@ -304,11 +324,28 @@ def fit_clamp_motion(t: np.ndarray, theta: np.ndarray, forms: tuple[str, ...] = 
     problems = []
     ratio = poor_fit_ratio(rms, noise)
     if ratio is not None:
-        problems.append(f"the RMS {rms:.3g} rad is {ratio:.1f}× the encoder's noise {noise:.2g} rad "
-                        f"({source}): no form of rest, quartic, lines and stop describes this encoder")
-    return ClampMotionFit(form, t0, breaks, stop, rest, tuple(float(v) for v in x[:4]), speeds, rms, noise, source,
-                          n, bic, "poor_fit" if problems else "converged", problems,
-                          {f: math.sqrt(v[1] / n) for f, v in found.items()}, float(t[-1]))
+        problems.append(
+            f"the RMS {rms:.3g} rad is {ratio:.1f}× the encoder's noise {noise:.2g} rad "
+            f"({source}): no form of rest, quartic, lines and stop describes this encoder"
+        )
+    return ClampMotionFit(
+        form,
+        t0,
+        breaks,
+        stop,
+        rest,
+        tuple(float(v) for v in x[:4]),
+        speeds,
+        rms,
+        noise,
+        source,
+        n,
+        bic,
+        "poor_fit" if problems else "converged",
+        problems,
+        {f: math.sqrt(v[1] / n) for f, v in found.items()},
+        float(t[-1]),
+    )
 
 
 def scene_with_clamp_motion(raw_scene: dict, fit: ClampMotionFit, until_s: float | None = None) -> dict:

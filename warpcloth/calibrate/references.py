@@ -46,8 +46,9 @@ def hanging_beam_mode(gamma: float, mode: int = 0, n_basis: int = 24) -> tuple[f
     return float(np.sqrt(values[mode])), shape
 
 
-def heavy_elastica(kappa: float, steps: int = 4000,
-                   natural_curvature: float | Callable[[float], float] = 0.0) -> dict[str, float]:
+def heavy_elastica(
+    kappa: float, steps: int = 4000, natural_curvature: float | Callable[[float], float] = 0.0
+) -> dict[str, float]:
     """Static shape of an inextensible cantilever clamped horizontally under its own weight.
 
     θ(s), the tangent's angle below the horizontal at s = arc length / L, solves
@@ -96,8 +97,9 @@ def hanging_beam_eigenvalue(gamma: float, steps: int = 2000, lambda_max: float =
     return two_section_beam_mode(gamma, steps=steps, lambda_max=lambda_max)[0]
 
 
-def two_section_beam_mode(gamma: float, root_length: float = 0.0, root_factor: float = 1.0, steps: int = 2000,
-                          lambda_max: float = 60.0) -> tuple[float, Callable]:
+def two_section_beam_mode(
+    gamma: float, root_length: float = 0.0, root_factor: float = 1.0, steps: int = 2000, lambda_max: float = 60.0
+) -> tuple[float, Callable]:
     """λ and mode shape W(ξ) (W(1) = 1) of the first mode of the clamped hanging beam whose
     root section ξ < ``root_length`` is ``root_factor`` times as rigid as the rest:
     (d W″)″ − γ((1−ξ)W′)′ = λ²W with d = ``root_factor`` there and 1 beyond, by shooting.
@@ -113,8 +115,12 @@ def two_section_beam_mode(gamma: float, root_length: float = 0.0, root_factor: f
     if not 0.0 <= root_length < 1.0 or not root_factor > 0:
         raise ValueError(f"root_length {root_length:g} must lie in [0, 1) and root_factor {root_factor:g} be > 0")
     inner = round(steps * root_length)
-    grid_xi = np.concatenate([np.linspace(0.0, root_length, inner + 1)[:-1] if inner else np.zeros(0),
-                              np.linspace(root_length if inner else 0.0, 1.0, steps - inner + 1)])
+    grid_xi = np.concatenate(
+        [
+            np.linspace(0.0, root_length, inner + 1)[:-1] if inner else np.zeros(0),
+            np.linspace(root_length if inner else 0.0, 1.0, steps - inner + 1),
+        ]
+    )
 
     def integrate(lam: np.ndarray, keep: bool = False) -> np.ndarray:
         lam = np.atleast_1d(np.asarray(lam, dtype=float))

@@ -7,23 +7,53 @@ from pathlib import Path
 
 from .options import add_overwrite, finite, new_result
 
-COLUMNS = ("source", "variant", "from_s", "to_s", "signal", "first_period_s", "first_period_u_s", "first_amplitude_mm",
-           "mean_log_decrement", "n_half_cycles", "log_decrement")
+COLUMNS = (
+    "source",
+    "variant",
+    "from_s",
+    "to_s",
+    "signal",
+    "first_period_s",
+    "first_period_u_s",
+    "first_amplitude_mm",
+    "mean_log_decrement",
+    "n_half_cycles",
+    "log_decrement",
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``analyse``."""
-    p = sub.add_parser("analyse", help="first period (± its standard uncertainty for measured traces), amplitudes "
-                       "and decrements of measured traces, runs and sweeps, measured one way (the sweep summary's)")
-    p.add_argument("inputs", nargs="+", metavar="INPUT",
-                   help="a measured laser trace 't_s, x_mm' (or a bundled one by name), a run directory or a "
-                        "sweep directory")
-    p.add_argument("--in-motion", action="store_true",
-                   help="measured traces do not start at rest at their t = 0 (default: they start at the release)")
-    p.add_argument("--from", dest="t_from", type=finite, metavar="S",
-                   help="compare from this time, s (default: the latest start among the inputs)")
-    p.add_argument("--to", dest="t_to", type=finite, metavar="S",
-                   help="compare up to this time, s (default: the earliest end among the inputs: their overlap)")
+    p = sub.add_parser(
+        "analyse",
+        help="first period (± its standard uncertainty for measured traces), amplitudes "
+        "and decrements of measured traces, runs and sweeps, measured one way (the sweep summary's)",
+    )
+    p.add_argument(
+        "inputs",
+        nargs="+",
+        metavar="INPUT",
+        help="a measured laser trace 't_s, x_mm' (or a bundled one by name), a run directory or a sweep directory",
+    )
+    p.add_argument(
+        "--in-motion",
+        action="store_true",
+        help="measured traces do not start at rest at their t = 0 (default: they start at the release)",
+    )
+    p.add_argument(
+        "--from",
+        dest="t_from",
+        type=finite,
+        metavar="S",
+        help="compare from this time, s (default: the latest start among the inputs)",
+    )
+    p.add_argument(
+        "--to",
+        dest="t_to",
+        type=finite,
+        metavar="S",
+        help="compare up to this time, s (default: the earliest end among the inputs: their overlap)",
+    )
     p.add_argument("--csv", help="also write the table as CSV")
     add_overwrite(p, "--csv file")
     p.set_defaults(handler=analyse_command)

@@ -36,8 +36,12 @@ from .interrupt import EXIT_INTERRUPTED, EXIT_UNUSABLE_INPUT, interrupted_at_sta
 COMMAND_GROUPS = (run, sweep, view, fit, material, analyse, scene, track)
 """Each registers its subcommands with a ``handler`` (see :func:`main`)."""
 
-WHAT = ((SceneError, "error in scene"), (DataFileError, "error in data file"), (OptionError, "error in option"),
-        (ResourceError, "too large"))
+WHAT = (
+    (SceneError, "error in scene"),
+    (DataFileError, "error in data file"),
+    (OptionError, "error in option"),
+    (ResourceError, "too large"),
+)
 EXIT_DIVERGED = 3
 STREAMING = ("run", "sweep")
 """Commands whose results stream to disk (the rest write each file whole, atomically)."""
@@ -57,8 +61,10 @@ def _version() -> str:
 def parser() -> argparse.ArgumentParser:
     """The argument parser of every command."""
     top = argparse.ArgumentParser(
-        prog="warpcloth", description="Batched Warp simulation of hanging fabric strips: "
-        "run | sweep | export-usd | plot | render | fit | clamp | material | analyse | scene | track (--help on each).")
+        prog="warpcloth",
+        description="Batched Warp simulation of hanging fabric strips: "
+        "run | sweep | export-usd | plot | render | fit | clamp | material | analyse | scene | track (--help on each).",
+    )
     top.add_argument("--version", action="version", version=f"warpcloth {_version()}")
     top.add_argument("--verbose", action="store_true", help="let Warp print its banner, module loads and CUDA notices")
     sub = top.add_subparsers(dest="command", required=True)
@@ -71,6 +77,7 @@ def show_warnings_as_lines(command: str) -> None:
     """Print each :class:`~warpcloth.errors.PlausibilityWarning` as one line
     ``warpcloth COMMAND: warning: ...`` (no source line), each text once; NumPy's
     RuntimeWarnings are not shown."""
+
     def show(message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
         if issubclass(category, PlausibilityWarning):
             if str(message) not in seen:
@@ -126,16 +133,25 @@ def _run_handler(args: argparse.Namespace) -> int:
         if args.command in STREAMING:
             out = getattr(args, "out", None)
             where = f" in {out}" if out else ""
-            print(f"warpcloth {args.command}: interrupted; what was written so far is kept{where} and marked "
-                  "incomplete", file=sys.stderr)
+            print(
+                f"warpcloth {args.command}: interrupted; what was written so far is kept{where} and marked incomplete",
+                file=sys.stderr,
+            )
         else:
-            print(f"warpcloth {args.command}: interrupted; its files are written whole or not at all, so nothing "
-                  "was replaced or left half-written", file=sys.stderr)
+            print(
+                f"warpcloth {args.command}: interrupted; its files are written whole or not at all, so nothing "
+                "was replaced or left half-written",
+                file=sys.stderr,
+            )
         return EXIT_INTERRUPTED
     except OSError as exc:
         # a file that cannot be read or written (missing directory, no permission, full disk)
         where = f": {exc.filename}" if exc.filename else ""
-        advice = ("; free space (or raise the file-size limit) and rerun: what was committed before is kept, "
-                  "an unfinished run is marked incomplete" if exc.errno in FULL else "")
+        advice = (
+            "; free space (or raise the file-size limit) and rerun: what was committed before is kept, "
+            "an unfinished run is marked incomplete"
+            if exc.errno in FULL
+            else ""
+        )
         print(f"warpcloth {args.command}: I/O error: {exc.strerror or exc}{where}{advice}", file=sys.stderr)
         return EXIT_IO

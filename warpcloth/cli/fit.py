@@ -27,33 +27,70 @@ def register(sub: argparse._SubParsersAction) -> None:
     fit_p = sub.add_parser("fit", help="fit free scene parameters to a measured motion (batched runs)")
     fit_p.add_argument("scene", help="scene file or bundled scene whose experiment was measured")
     fit_p.set_defaults(handler=fit_command)
-    fit_p.add_argument("--measured", required=True,
-                       help="CSV: laser trace 't_s, x_mm' or tracked shapes 'frame, t_s, s_mm, x_mm, y_mm'")
-    fit_p.add_argument("--free", required=True, help="parameters to fit, e.g. gamma,rotation_centre_dy_mm,D1 "
-                       "(aliases: gamma D D1 alpha K0 density rotation_centre_dx_mm rotation_centre_dy_mm "
-                       "hold_x_mm hold_y_mm; or any per-strip field by dotted name)")
-    fit_p.add_argument("--bounds", help="name=LOW:HIGH,... (default: a rotation centre or hold position ± 10 mm "
-                       "around the scene's value; gamma 0 to max(4× the scene's, 2 /s); a hysteresis amplitude D1, Ms "
-                       "or Mf 0 to 4×; any other ¼× to 4×; a parameter that is 0 in the scene needs its bounds)")
-    fit_p.add_argument("--align-start", type=non_negative, default=0.0, metavar="SECONDS",
-                       help="also fit a clock offset between measurement and simulation, within ± this (default: 0, "
-                            "the clocks agree)")
-    fit_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                       help="override a field of the scene first")
+    fit_p.add_argument(
+        "--measured",
+        required=True,
+        help="CSV: laser trace 't_s, x_mm' or tracked shapes 'frame, t_s, s_mm, x_mm, y_mm'",
+    )
+    fit_p.add_argument(
+        "--free",
+        required=True,
+        help="parameters to fit, e.g. gamma,rotation_centre_dy_mm,D1 "
+        "(aliases: gamma D D1 alpha K0 density rotation_centre_dx_mm rotation_centre_dy_mm "
+        "hold_x_mm hold_y_mm; or any per-strip field by dotted name)",
+    )
+    fit_p.add_argument(
+        "--bounds",
+        help="name=LOW:HIGH,... (default: a rotation centre or hold position ± 10 mm "
+        "around the scene's value; gamma 0 to max(4× the scene's, 2 /s); a hysteresis amplitude D1, Ms "
+        "or Mf 0 to 4×; any other ¼× to 4×; a parameter that is 0 in the scene needs its bounds)",
+    )
+    fit_p.add_argument(
+        "--align-start",
+        type=non_negative,
+        default=0.0,
+        metavar="SECONDS",
+        help="also fit a clock offset between measurement and simulation, within ± this (default: 0, the clocks agree)",
+    )
+    fit_p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a field of the scene first",
+    )
     fit_p.add_argument("--out", type=path_text, help="fit directory (default: runs/fit-<scene name>)")
-    fit_p.add_argument("--space-filling", type=at_least(0), default=None,
-                       help="variants in the first, space-filling batch (default: max(16, 8 × the free parameters))")
-    fit_p.add_argument("--max-iterations", type=at_least(0), default=25,
-                       help="local refinement launches at most (default: 25)")
+    fit_p.add_argument(
+        "--space-filling",
+        type=at_least(0),
+        default=None,
+        help="variants in the first, space-filling batch (default: max(16, 8 × the free parameters))",
+    )
+    fit_p.add_argument(
+        "--max-iterations", type=at_least(0), default=25, help="local refinement launches at most (default: 25)"
+    )
     fit_p.add_argument("--seed", type=at_least(0), default=0, help="seed of the space-filling sample (default: 0)")
-    fit_p.add_argument("--bootstrap", type=at_least(0), default=0, metavar="N",
-                       help="also a moving-block bootstrap σ from N resamples, for time-correlated errors (default: 0, "
-                            "none)")
-    fit_p.add_argument("--noise", type=positive, default=None, metavar="MM",
-                       help="measurement noise σ in mm the RMS is judged against (default: estimated from the data)")
-    fit_p.add_argument("--check-spacing", action="store_true",
-                       help="also run the best fit at half the strip spacing and say how far each parameter would "
-                            "move; a move beyond its σ is status spacing_limited (exit 9)")
+    fit_p.add_argument(
+        "--bootstrap",
+        type=at_least(0),
+        default=0,
+        metavar="N",
+        help="also a moving-block bootstrap σ from N resamples, for time-correlated errors (default: 0, none)",
+    )
+    fit_p.add_argument(
+        "--noise",
+        type=positive,
+        default=None,
+        metavar="MM",
+        help="measurement noise σ in mm the RMS is judged against (default: estimated from the data)",
+    )
+    fit_p.add_argument(
+        "--check-spacing",
+        action="store_true",
+        help="also run the best fit at half the strip spacing and say how far each parameter would "
+        "move; a move beyond its σ is status spacing_limited (exit 9)",
+    )
     fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda (default: Warp's preferred device)")
     fit_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_overwrite(fit_p, "fit directory --out")
@@ -64,11 +101,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     angle_p.add_argument("encoder", metavar="ENCODER", help="CSV 't_s, theta' (rad, or the header's unit: theta_deg)")
     angle_p.add_argument("--scene", required=True, help="scene to write the fitted motion into")
     angle_p.add_argument("-o", "--output", type=path_text, required=True, help="the new scene file (TOML)")
-    angle_p.add_argument("--angle-unit", choices=("rad", "deg"), default=None,
-                         help="override the header's unit (default: the header's, else rad)")
+    angle_p.add_argument(
+        "--angle-unit",
+        choices=("rad", "deg"),
+        default=None,
+        help="override the header's unit (default: the header's, else rad)",
+    )
     angle_p.add_argument("--plot", help="also write a PNG of the encoder data and the fit")
-    angle_p.add_argument("--accept", action="store_true",
-                         help=f"exit 0 even when the fit is poor (RMS above {POOR_FIT_FACTOR:g}× the encoder's noise)")
+    angle_p.add_argument(
+        "--accept",
+        action="store_true",
+        help=f"exit 0 even when the fit is poor (RMS above {POOR_FIT_FACTOR:g}× the encoder's noise)",
+    )
     add_overwrite(angle_p, "scene file -o")
 
 
@@ -86,38 +130,69 @@ def fit_command(args: argparse.Namespace) -> int:
     measurement = read_measurement(args.measured, argument="--measured")
     free = free_parameters(args.free, scene, args.bounds)
     out = new_result(args.out or Path("runs") / f"fit-{Path(args.scene).stem}", args.overwrite, "--out")
-    fit = fit_motion(base, measurement, free, align_start_s=args.align_start, space_filling=args.space_filling,
-                     max_iterations=args.max_iterations, seed=args.seed, device=args.device,
-                     progress=not args.no_progress, noise=None if args.noise is None else args.noise * 1e-3,
-                     bootstrap=args.bootstrap, check_spacing=args.check_spacing)
-    inputs = {"scene": str(args.scene), "overrides": args.overrides, "measured": file_checksum(
-        bundled_data(args.measured)), "free": [p.field for p in free], "align_start_s": args.align_start,
-        "space_filling": args.space_filling, "max_iterations": args.max_iterations, "seed": args.seed,
-        "bootstrap": args.bootstrap, "check_spacing": args.check_spacing}
+    fit = fit_motion(
+        base,
+        measurement,
+        free,
+        align_start_s=args.align_start,
+        space_filling=args.space_filling,
+        max_iterations=args.max_iterations,
+        seed=args.seed,
+        device=args.device,
+        progress=not args.no_progress,
+        noise=None if args.noise is None else args.noise * 1e-3,
+        bootstrap=args.bootstrap,
+        check_spacing=args.check_spacing,
+    )
+    inputs = {
+        "scene": str(args.scene),
+        "overrides": args.overrides,
+        "measured": file_checksum(bundled_data(args.measured)),
+        "free": [p.field for p in free],
+        "align_start_s": args.align_start,
+        "space_filling": args.space_filling,
+        "max_iterations": args.max_iterations,
+        "seed": args.seed,
+        "bootstrap": args.bootstrap,
+        "check_spacing": args.check_spacing,
+    }
     write_fit(fit, base, measurement, out, args.device, inputs)
-    print(f"RMS {fit.rms * 1e3:.4g} mm over {fit.n_residuals} residuals (noise {fit.noise * 1e3:.3g} mm, "
-          f"{fit.noise_source}); {fit.launches} launches, {fit.variants} variants, {fit.wall_time_s:.1f} s")
+    print(
+        f"RMS {fit.rms * 1e3:.4g} mm over {fit.n_residuals} residuals (noise {fit.noise * 1e3:.3g} mm, "
+        f"{fit.noise_source}); {fit.launches} launches, {fit.variants} variants, {fit.wall_time_s:.1f} s"
+    )
     for name, value in fit.parameters.items():
-        boot = (f" (block bootstrap ± {fit.sigma_bootstrap[name]:.2g}, blocks of {fit.bootstrap_block})"
-                if fit.sigma_bootstrap else "")
+        boot = (
+            f" (block bootstrap ± {fit.sigma_bootstrap[name]:.2g}, blocks of {fit.bootstrap_block})"
+            if fit.sigma_bootstrap
+            else ""
+        )
         print(f"  {name} = {value:.6g} ± {fit.sigma[name]:.2g}{boot}{'  (on a bound)' if name in fit.at_bound else ''}")
     for other in fit.other_minima:
         where = ", ".join(f"{k} = {v:.5g}" for k, v in other.items() if not k.endswith("rms_mm"))
-        print(f"note: the space-filling stage also found a separate basin at {where} (RMS {other['rms_mm']:.4g} mm "
-              f"there, a ridge of {other['ridge_rms_mm']:.4g} mm between); the result above refined the lowest")
+        print(
+            f"note: the space-filling stage also found a separate basin at {where} (RMS {other['rms_mm']:.4g} mm "
+            f"there, a ridge of {other['ridge_rms_mm']:.4g} mm between); the result above refined the lowest"
+        )
     if fit.mesh_note:
         print(f"note: {fit.mesh_note}")
     if fit.spacing_check:
         check = fit.spacing_check
-        moves = ", ".join(f"{name} {delta:+.3g} ({abs(delta) / fit.sigma[name]:.1f}σ)"
-                          for name, delta in check["moves"].items())
-        print(f"spacing check: at strip.spacing_mm = {check['spacing_mm']:g} "
-              + (f"the fit would move {moves}" if moves else f"it could not run: {check.get('note', '')}"))
+        moves = ", ".join(
+            f"{name} {delta:+.3g} ({abs(delta) / fit.sigma[name]:.1f}σ)" for name, delta in check["moves"].items()
+        )
+        print(
+            f"spacing check: at strip.spacing_mm = {check['spacing_mm']:g} "
+            + (f"the fit would move {moves}" if moves else f"it could not run: {check.get('note', '')}")
+        )
     print(f"status: {fit.status}")
     print(f"wrote {out}/ (best.toml reruns the best fit: warpcloth run {out / 'best.toml'})")
     if fit.status != "converged":
-        print(f"warpcloth fit: not a fit ({fit.status}): " + "; ".join(fit.problems) + " — the values and σ above "
-              "are not estimates to report (fit.json has status and problems)", file=sys.stderr)
+        print(
+            f"warpcloth fit: not a fit ({fit.status}): " + "; ".join(fit.problems) + " — the values and σ above "
+            "are not estimates to report (fit.json has status and problems)",
+            file=sys.stderr,
+        )
     return EXIT_FIT_STATUS[fit.status]
 
 
@@ -146,31 +221,52 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
     write_text_atomically(out, tomli_w.dumps(written))
     a = ", ".join(f"{c:.5g}" for c in fit.quartic_si)
     lines = "; ".join(f"{w:.5g} rad/s from {b:.4f} s" for w, b in zip(fit.speeds_rad_per_s, fit.breaks_s, strict=True))
-    end = (f"stopped at {fit.stop_s:.4f} s" if fit.stop_s is not None else
-           f"still moving at the end of the record ({t[-1]:.4f} s): the scene continues the last line to "
-           f"{scene.run.duration_s:g} s (run.duration_s)")
-    print(f"form: {fit.form} (lowest BIC; RMS of each form: "
-          + ", ".join(f"{f} {r:.3g} rad" for f, r in fit.candidates.items()) + ")")
-    start = (f"moving from the first sample ({fit.onset_s:.4f} s) at θ0 = {fit.rest_rad:.4g} rad (fitted: the record "
-             "has no rest before the motion; the scene's θ is measured from it)" if fit.moving_at_start else
-             f"encoder at rest {fit.rest_rad:.4g} rad (the mean before the onset; the scene's θ is measured from it); "
-             f"onset {fit.onset_s:.4f} s")
+    end = (
+        f"stopped at {fit.stop_s:.4f} s"
+        if fit.stop_s is not None
+        else f"still moving at the end of the record ({t[-1]:.4f} s): the scene continues the last line to "
+        f"{scene.run.duration_s:g} s (run.duration_s)"
+    )
+    print(
+        f"form: {fit.form} (lowest BIC; RMS of each form: "
+        + ", ".join(f"{f} {r:.3g} rad" for f, r in fit.candidates.items())
+        + ")"
+    )
+    start = (
+        f"moving from the first sample ({fit.onset_s:.4f} s) at θ0 = {fit.rest_rad:.4g} rad (fitted: the record "
+        "has no rest before the motion; the scene's θ is measured from it)"
+        if fit.moving_at_start
+        else f"encoder at rest {fit.rest_rad:.4g} rad (the mean before the onset; the scene's θ is measured from it); "
+        f"onset {fit.onset_s:.4f} s"
+    )
     print(f"{start}; quartic a1…a4 = ({a}) rad/s^k; then {lines}; {end}")
     turned = float(fit.theta(0.0)[0] - fit.rest_rad)
     if fit.moving_at_start and fit.onset_s < 0 and abs(turned) > 3 * fit.noise_rad:
-        print(f"note: the record is in motion from {fit.onset_s:g} s, so at the scene's t = 0 the clamp has already "
-              f"turned {turned:.4g} rad while the strip starts from its hanging rest shape; put the record's t = 0 at "
-              "the start of the motion", file=sys.stderr)
-    print(f"RMS {fit.rms_rad:.3g} rad over {fit.n_samples} samples, noise {fit.noise_rad:.2g} rad ({fit.noise_source})"
-          f"; status: {fit.status}")
+        print(
+            f"note: the record is in motion from {fit.onset_s:g} s, so at the scene's t = 0 the clamp has already "
+            f"turned {turned:.4g} rad while the strip starts from its hanging rest shape; put the record's t = 0 at "
+            "the start of the motion",
+            file=sys.stderr,
+        )
+    print(
+        f"RMS {fit.rms_rad:.3g} rad over {fit.n_samples} samples, noise {fit.noise_rad:.2g} rad ({fit.noise_source})"
+        f"; status: {fit.status}"
+    )
     print(f"wrote {out}")
     if args.plot:
         from warpcloth.viz.plots import plot_clamp_fit
 
         print(f"wrote {plot_clamp_fit(t, theta, fit, plot)}")
     if fit.status != "converged":
-        print(f"warpcloth clamp fit-angle: not a fit ({fit.status}): " + "; ".join(fit.problems)
-              + (" (accepted with --accept)" if args.accept else "; a scene driven by it is wrong for the whole "
-                 "record (--accept to use it anyway)"), file=sys.stderr)
+        print(
+            f"warpcloth clamp fit-angle: not a fit ({fit.status}): "
+            + "; ".join(fit.problems)
+            + (
+                " (accepted with --accept)"
+                if args.accept
+                else "; a scene driven by it is wrong for the whole record (--accept to use it anyway)"
+            ),
+            file=sys.stderr,
+        )
         return 0 if args.accept else EXIT_FIT_STATUS[fit.status]
     return 0

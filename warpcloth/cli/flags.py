@@ -61,16 +61,18 @@ FLAGS = {
 }
 """Library argument → the option (or positional argument) that supplies it."""
 
-LIBRARY_ONLY = frozenset({
-    "fit",  # fit_search_figure(fit): the command line draws no search figure
-    "forms",  # clamp-motion forms: the command tries every one
-    "initial_positions",  # simulate()'s start state: no option sets it
-    "initial_velocities",
-    "j",  # Recording.probe(name, j): the command line selects variants by --variants
-    "name",  # RunResult.probe(name)
-    "path",  # a measured-data reader called directly
-    "variant",  # RunResult.probe(..., variant=)
-})
+LIBRARY_ONLY = frozenset(
+    {
+        "fit",  # fit_search_figure(fit): the command line draws no search figure
+        "forms",  # clamp-motion forms: the command tries every one
+        "initial_positions",  # simulate()'s start state: no option sets it
+        "initial_velocities",
+        "j",  # Recording.probe(name, j): the command line selects variants by --variants
+        "name",  # RunResult.probe(name)
+        "path",  # a measured-data reader called directly
+        "variant",  # RunResult.probe(..., variant=)
+    }
+)
 """Arguments the command line never passes: an error about one is the library caller's."""
 
 

@@ -28,46 +28,87 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add ``material fit-kes``, ``material compare`` and ``material list``."""
     material_p = sub.add_parser("material", help="material files: fit one to KES-FB data, list the bundled ones")
     material_sub = material_p.add_subparsers(dest="material_command", required=True)
-    kes_p = material_sub.add_parser("fit-kes", help="fit a material file to a KES-FB1 tensile and a KES-FB2 "
-                                    "bending loop (CSV, KES units)")
-    kes_p.add_argument("--tensile", required=True, metavar="FB1.csv",
-                       help="KES-FB1 loop: strain (%% or fraction) or extension (mm), force per width (gf/cm)")
+    kes_p = material_sub.add_parser(
+        "fit-kes", help="fit a material file to a KES-FB1 tensile and a KES-FB2 bending loop (CSV, KES units)"
+    )
+    kes_p.add_argument(
+        "--tensile",
+        required=True,
+        metavar="FB1.csv",
+        help="KES-FB1 loop: strain (%% or fraction) or extension (mm), force per width (gf/cm)",
+    )
     kes_p.add_argument("--bending", required=True, metavar="FB2.csv", help=BENDING_HELP)
-    kes_p.add_argument("--law", default=DEFAULT_BENDING_LAW, metavar="NAME|all",
-                       help="the bending law to fit: "
-                       + ", ".join(f"{law.name} ({law.summary})" for law in BENDING_LAWS.values())
-                       + "; or all: fit every one, print their comparison and write the material of the one with "
-                       f"the lowest AIC (default: {DEFAULT_BENDING_LAW})")
-    kes_p.add_argument("--shear", metavar="FB1S.csv", help=f"also fit the fabric's in-plane shear: {SHEAR_HELP}; "
-                       "the material file gains a [shear] table (for the woven sheet being built, docs/model.md §17; "
-                       "strips ignore it)")
-    kes_p.add_argument("--shear-law", default=None, choices=tuple(BENDING_LAWS),
-                       help=f"the law to fit to --shear (default: {DEFAULT_SHEAR_LAW})")
+    kes_p.add_argument(
+        "--law",
+        default=DEFAULT_BENDING_LAW,
+        metavar="NAME|all",
+        help="the bending law to fit: "
+        + ", ".join(f"{law.name} ({law.summary})" for law in BENDING_LAWS.values())
+        + "; or all: fit every one, print their comparison and write the material of the one with "
+        f"the lowest AIC (default: {DEFAULT_BENDING_LAW})",
+    )
+    kes_p.add_argument(
+        "--shear",
+        metavar="FB1S.csv",
+        help=f"also fit the fabric's in-plane shear: {SHEAR_HELP}; "
+        "the material file gains a [shear] table (for the woven sheet being built, docs/model.md §17; "
+        "strips ignore it)",
+    )
+    kes_p.add_argument(
+        "--shear-law",
+        default=None,
+        choices=tuple(BENDING_LAWS),
+        help=f"the law to fit to --shear (default: {DEFAULT_SHEAR_LAW})",
+    )
     kes_p.add_argument("-o", "--output", type=path_text, required=True, help="the material file to write (.toml)")
-    kes_p.add_argument("--density-g-per-cm2", type=positive, default=None,
-                       help="mass per area ρ_A (required: KES-FB1/FB2 data do not contain it)")
+    kes_p.add_argument(
+        "--density-g-per-cm2",
+        type=positive,
+        default=None,
+        help="mass per area ρ_A (required: KES-FB1/FB2 data do not contain it)",
+    )
     kes_p.add_argument("--name", help="material name (default: the output file's stem)")
-    kes_p.add_argument("--strain-unit", choices=("percent", "fraction", "mm"), default=None,
-                       help="unit of the tensile file's first column when its header does not say "
-                       "(default: percent if its maximum exceeds 1, else fraction)")
-    kes_p.add_argument("--gauge-length-mm", type=positive, default=None,
-                       help="gauge length for extension in mm (default: 50, the KES-FB1 standard)")
-    kes_p.add_argument("--divergence-strain", type=positive, default=None,
-                       help="T(ε) must increase up to this strain (default: the scenes' default, 0.25)")
-    kes_p.add_argument("--plot", help="also write a PNG of the data against the fit (tagawa2003: tensile and "
-                       "bending; another law or all: the bending laws' comparison figure)")
+    kes_p.add_argument(
+        "--strain-unit",
+        choices=("percent", "fraction", "mm"),
+        default=None,
+        help="unit of the tensile file's first column when its header does not say "
+        "(default: percent if its maximum exceeds 1, else fraction)",
+    )
+    kes_p.add_argument(
+        "--gauge-length-mm",
+        type=positive,
+        default=None,
+        help="gauge length for extension in mm (default: 50, the KES-FB1 standard)",
+    )
+    kes_p.add_argument(
+        "--divergence-strain",
+        type=positive,
+        default=None,
+        help="T(ε) must increase up to this strain (default: the scenes' default, 0.25)",
+    )
+    kes_p.add_argument(
+        "--plot",
+        help="also write a PNG of the data against the fit (tagawa2003: tensile and "
+        "bending; another law or all: the bending laws' comparison figure)",
+    )
     kes_p.add_argument("--accept", action="store_true", help="exit 0 even when the fit is not trusted")
     add_overwrite(kes_p, "material file")
-    compare_p = material_sub.add_parser("compare", help="fit every law to a KES-FB2 bending or a KES-FB1 shear loop "
-                                        "and compare them by information criterion (writes no material)")
+    compare_p = material_sub.add_parser(
+        "compare",
+        help="fit every law to a KES-FB2 bending or a KES-FB1 shear loop "
+        "and compare them by information criterion (writes no material)",
+    )
     loop_p = compare_p.add_mutually_exclusive_group(required=True)
     loop_p.add_argument("--bending", metavar="FB2.csv", help=BENDING_HELP)
     loop_p.add_argument("--shear", metavar="FB1S.csv", help=f"{SHEAR_HELP} (--plot and --csv: bending only)")
-    compare_p.add_argument("--plot", metavar="FIG.png", help="write a PNG of each law's fit over the loop and its "
-                           "residuals")
+    compare_p.add_argument(
+        "--plot", metavar="FIG.png", help="write a PNG of each law's fit over the loop and its residuals"
+    )
     compare_p.add_argument("--csv", type=path_text, metavar="TABLE.csv", help="write the comparison table as CSV")
-    compare_p.add_argument("--accept", action="store_true", help="exit 0 even when the recommended law's fit is not "
-                           "trusted")
+    compare_p.add_argument(
+        "--accept", action="store_true", help="exit 0 even when the recommended law's fit is not trusted"
+    )
     add_overwrite(compare_p, "figure or table")
     material_sub.add_parser("list", help="list the bundled materials and where their numbers come from")
     material_p.set_defaults(handler=material_command)
@@ -89,8 +130,10 @@ def material_command(args: argparse.Namespace) -> int:
 def _print_comparison(comparison: LawComparison, source: str) -> None:
     # the table and the recommendation with its caveats
     n = len(comparison.loop.curvature)
-    print(f"bending laws fitted to {source} ({n} points); AIC = n ln(SSE/n) + 2k, BIC = n ln(SSE/n) + k ln n "
-          f"(n = {n} points, k free parameters); B and 2HB of each law along 0 → +K0 → −K0 → 0:")
+    print(
+        f"bending laws fitted to {source} ({n} points); AIC = n ln(SSE/n) + 2k, BIC = n ln(SSE/n) + k ln n "
+        f"(n = {n} points, k free parameters); B and 2HB of each law along 0 → +K0 → −K0 → 0:"
+    )
     print(comparison.table())
     for line in comparison.caveats():
         print(f"  {line}")
@@ -105,22 +148,33 @@ def _finish(command: str, status: str, problems: list[str], accept: bool, what: 
     print(f"status: {status}")
     if status == "converged":
         return 0
-    print(f"warpcloth material {command}: not a fit ({status}): " + "; ".join(problems)
-          + (" (accepted with --accept)" if accept else f" ({what}; --accept to exit 0 anyway)"), file=sys.stderr)
+    print(
+        f"warpcloth material {command}: not a fit ({status}): "
+        + "; ".join(problems)
+        + (" (accepted with --accept)" if accept else f" ({what}; --accept to exit 0 anyway)"),
+        file=sys.stderr,
+    )
     return 0 if accept else EXIT_FIT_STATUS[status]
 
 
 def _print_shear(fit: ShearFit, source: str) -> None:
     n = len(fit.loop.angle)
     print(f"shear ({source}, {n} points), law {fit.shear.law}: {fit.describe()}")
-    print(f"  RMS {fit.rms_gf_per_cm:.4g} gf/cm, AIC {fit.law_fit.aic():.2f}, BIC {fit.law_fit.bic():.2f} "
-          f"({fit.law_fit.free_parameters} free parameters)")
+    print(
+        f"  RMS {fit.rms_gf_per_cm:.4g} gf/cm, AIC {fit.law_fit.aic():.2f}, BIC {fit.law_fit.bic():.2f} "
+        f"({fit.law_fit.free_parameters} free parameters)"
+    )
     if fit.law_fit.note:
         print(f"  note: {fit.law_fit.note}")
     units = {"G": "gf/(cm·°)", "2HG": "gf/cm", "2HG5": "gf/cm"}
-    print("  KES: " + ", ".join(f"{name} {_kes_value(data, units[name])} (the law's "
-                                f"{_kes_value(law, units[name])}{_difference(data, law)})"
-                                for name, data, law in fit.kes_comparison()) + " along 0 → +φ0 → −φ0 → 0")
+    print(
+        "  KES: "
+        + ", ".join(
+            f"{name} {_kes_value(data, units[name])} (the law's {_kes_value(law, units[name])}{_difference(data, law)})"
+            for name, data, law in fit.kes_comparison()
+        )
+        + " along 0 → +φ0 → −φ0 → 0"
+    )
 
 
 def _number(value: float | None) -> str:
@@ -135,8 +189,10 @@ def _compare_shear(args: argparse.Namespace) -> int:
     from warpcloth.calibrate import kes
 
     if args.plot or args.csv:
-        raise OptionError("--plot" if args.plot else "--csv", "the comparison figure and table are of bending "
-                          "loops; with --shear the comparison is printed")
+        raise OptionError(
+            "--plot" if args.plot else "--csv",
+            "the comparison figure and table are of bending loops; with --shear the comparison is printed",
+        )
     loop = kes.read_shear_csv(args.shear, argument="--shear")
     fits = {law: kes.fit_shear(loop, law) for law in BENDING_LAWS}
     best = min(f.law_fit.aic() for f in fits.values())
@@ -145,14 +201,24 @@ def _compare_shear(args: argparse.Namespace) -> int:
     for law in ranking:
         fit = fits[law]
         status, _ = fit.verdict()
-        print(f"  {law}: ΔAIC {fit.law_fit.aic() - best:.1f}, " + ", ".join(
-            f"{name} {_number(law_value)}{_difference(data, law_value)}"
-            for name, data, law_value in fit.kes_comparison()) + f" — {status}")
+        print(
+            f"  {law}: ΔAIC {fit.law_fit.aic() - best:.1f}, "
+            + ", ".join(
+                f"{name} {_number(law_value)}{_difference(data, law_value)}"
+                for name, data, law_value in fit.kes_comparison()
+            )
+            + f" — {status}"
+        )
     print(f"recommended: {ranking[0]} (the lowest AIC)")
     _print_shear(fits[ranking[0]], args.shear)
     status, problems = fits[ranking[0]].verdict()
-    return _finish("compare", status, [f"the recommended {ranking[0]} fit: {p}" for p in problems], args.accept,
-                   "the table shows it")
+    return _finish(
+        "compare",
+        status,
+        [f"the recommended {ranking[0]} fit: {p}" for p in problems],
+        args.accept,
+        "the table shows it",
+    )
 
 
 def _compare(args: argparse.Namespace) -> int:
@@ -179,8 +245,13 @@ def _compare(args: argparse.Namespace) -> int:
         write_text_atomically(table, text.getvalue())
         print(f"wrote {table}")
     status, problems = comparison.status(comparison.recommended)
-    return _finish("compare", status, [f"the recommended {comparison.recommended} fit: {p}" for p in problems],
-                   args.accept, "the table shows it")
+    return _finish(
+        "compare",
+        status,
+        [f"the recommended {comparison.recommended} fit: {p}" for p in problems],
+        args.accept,
+        "the table shows it",
+    )
 
 
 def _fit_kes(args: argparse.Namespace) -> int:
@@ -188,8 +259,11 @@ def _fit_kes(args: argparse.Namespace) -> int:
 
     laws = kes.selected_laws(args.law)
     if args.density_g_per_cm2 is None:
-        raise OptionError("--density-g-per-cm2", "the mass per area is not part of KES-FB1/FB2 data; weigh a "
-                         "sample and give it in g/cm² (e.g. 2.03e-2 for the illustrative wool/nylon)")
+        raise OptionError(
+            "--density-g-per-cm2",
+            "the mass per area is not part of KES-FB1/FB2 data; weigh a "
+            "sample and give it in g/cm² (e.g. 2.03e-2 for the illustrative wool/nylon)",
+        )
     out = new_result(args.output, args.overwrite, "--output")
     plot = figure_path(args.plot, args.overwrite) if args.plot else None
     if out.suffix != ".toml":
@@ -207,8 +281,10 @@ def _fit_kes(args: argparse.Namespace) -> int:
     law = comparison.recommended
     fit = kes.fit_kes(tensile, comparison.loop, max_strain, bending_fit=comparison.fits[law])
     chosen = f"; bending law {law}, the lowest AIC of {', '.join(laws)}" if len(laws) > 1 else ""
-    source = (f"fitted by warpcloth material fit-kes to {args.tensile} (KES-FB1) and {args.bending} (KES-FB2)"
-              f"{chosen}; density {args.density_g_per_cm2:g} g/cm² given on the command line")
+    source = (
+        f"fitted by warpcloth material fit-kes to {args.tensile} (KES-FB1) and {args.bending} (KES-FB2)"
+        f"{chosen}; density {args.density_g_per_cm2:g} g/cm² given on the command line"
+    )
     if shear is not None:
         source += f"; shear ({shear_law}) fitted to {args.shear} (KES-FB1 shear)"
     data = kes.material_file_data(fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain, shear)
@@ -217,30 +293,42 @@ def _fit_kes(args: argparse.Namespace) -> int:
     print(f"tensile file's first column read as {fit.tensile_loop.strain_unit}")
     t, tk, b, bk = fit.tensile, fit.tensile_kes, fit.bending, fit.bending_kes
     rt = f", RT {tk.rt_percent:.1f} %" if tk.rt_percent is not None else " (no unloading branch: no RT)"
-    print(f"tensile ({args.tensile}, {data['fit']['tensile_loading_points']} loading points): T(ε) = a1 ε + a2 ε² "
-          f"+ a3 ε³ + a4 ε⁴, a = ({', '.join(f'{a:.6g}' for a in t.coefficients)}) gf/cm")
+    print(
+        f"tensile ({args.tensile}, {data['fit']['tensile_loading_points']} loading points): T(ε) = a1 ε + a2 ε² "
+        f"+ a3 ε³ + a4 ε⁴, a = ({', '.join(f'{a:.6g}' for a in t.coefficients)}) gf/cm"
+    )
     print(f"  RMS {t.rms_gf_per_cm:.4g} gf/cm ({t.rms_relative:.3%} of the force range)")
     if t.note:
         print(f"  note: {t.note}")
-    print(f"  KES: EMT {tk.emt_percent:.4g} %, WT {tk.wt_gf_cm_per_cm2:.4g} gf·cm/cm², LT {tk.lt:.4g}{rt} "
-          f"(Fm {tk.fm_gf_per_cm:.4g} gf/cm)")
+    print(
+        f"  KES: EMT {tk.emt_percent:.4g} %, WT {tk.wt_gf_cm_per_cm2:.4g} gf·cm/cm², LT {tk.lt:.4g}{rt} "
+        f"(Fm {tk.fm_gf_per_cm:.4g} gf/cm)"
+    )
     if len(laws) > 1:
         _print_comparison(comparison, args.bending)
-    print(f"bending ({args.bending}, {len(fit.bending_loop.curvature)} points), law {law}: "
-          f"{kes.LAW_FITTERS[law].describe(b)}")
-    print(f"  RMS {b.rms_gf_cm_per_cm:.4g} gf·cm/cm ({b.rms_relative:.3%} of the moment range), AIC {b.aic():.2f}, "
-          f"BIC {b.bic():.2f} ({b.free_parameters} free parameters)")
+    print(
+        f"bending ({args.bending}, {len(fit.bending_loop.curvature)} points), law {law}: "
+        f"{kes.LAW_FITTERS[law].describe(b)}"
+    )
+    print(
+        f"  RMS {b.rms_gf_cm_per_cm:.4g} gf·cm/cm ({b.rms_relative:.3%} of the moment range), AIC {b.aic():.2f}, "
+        f"BIC {b.bic():.2f} ({b.free_parameters} free parameters)"
+    )
     if b.note:
         print(f"  note: {b.note}")
     model = comparison.reproduced[law]
-    print(f"  KES: B {_kes_value(bk.b_gf_cm2_per_cm, 'gf·cm²/cm')}, 2HB {_kes_value(bk.hb2_gf_cm_per_cm, 'gf·cm/cm')} "
-          f"(the data's; the fitted law along 0 → +K0 → −K0 → 0: B {_kes_value(model.b_gf_cm2_per_cm, 'gf·cm²/cm')}, "
-          f"2HB {_kes_value(model.hb2_gf_cm_per_cm, 'gf·cm/cm')})")
+    print(
+        f"  KES: B {_kes_value(bk.b_gf_cm2_per_cm, 'gf·cm²/cm')}, 2HB {_kes_value(bk.hb2_gf_cm_per_cm, 'gf·cm/cm')} "
+        f"(the data's; the fitted law along 0 → +K0 → −K0 → 0: B {_kes_value(model.b_gf_cm2_per_cm, 'gf·cm²/cm')}, "
+        f"2HB {_kes_value(model.hb2_gf_cm_per_cm, 'gf·cm/cm')})"
+    )
     if shear is not None:
         _print_shear(shear, args.shear)
     which = f" with the {law} bending law, the one AIC recommends" if len(laws) > 1 else ""
-    print(f"wrote {kes.write_material_file(out, data)}{which} (a scene uses it with from_file = \"{out}\" in its "
-          f"[material], or --set material.from_file={out})")
+    print(
+        f'wrote {kes.write_material_file(out, data)}{which} (a scene uses it with from_file = "{out}" in its '
+        f"[material], or --set material.from_file={out})"
+    )
     if plot is not None:
         from warpcloth.viz.plots import plot_bending_law_comparison, plot_kes_fit
 

@@ -10,8 +10,14 @@ from pathlib import Path
 
 from warpcloth.errors import ArgumentError, OptionError
 
-EXIT_FIT_STATUS = {"converged": 0, "at_bound": 4, "poor_fit": 6, "not_identifiable": 7, "failed": 8,
-                   "spacing_limited": 9}
+EXIT_FIT_STATUS = {
+    "converged": 0,
+    "at_bound": 4,
+    "poor_fit": 6,
+    "not_identifiable": 7,
+    "failed": 8,
+    "spacing_limited": 9,
+}
 """Exit status of a fit by its verdict: only ``converged`` is 0; every other result is
 written (to look at) but must not be read as a fit."""
 
@@ -63,6 +69,7 @@ def non_negative(value: str) -> float:
 
 def at_least(minimum: int) -> Callable[[str], int]:
     """An integer option type that refuses values below ``minimum``."""
+
     def parse(value: str) -> int:
         try:
             number = int(value)
@@ -71,6 +78,7 @@ def at_least(minimum: int) -> Callable[[str], int]:
         if number < minimum:
             raise argparse.ArgumentTypeError(f"{value} must be at least {minimum}")
         return number
+
     parse.__name__ = f"integer >= {minimum}"
     return parse
 

@@ -20,13 +20,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     run_p = sub.add_parser("run", help="simulate a scene and write a run directory")
     run_p.add_argument("scene", help=f"scene file, or a bundled scene: {', '.join(bundled_scenes())}")
     run_p.add_argument("--out", type=path_text, help="run directory (default: runs/<scene name>)")
-    run_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                       help="override a scene field by dotted name, e.g. integrator.dt_s=1e-7")
+    run_p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene field by dotted name, e.g. integrator.dt_s=1e-7",
+    )
     run_p.add_argument("--device", type=device, default=None, help="cpu or cuda (default: Warp's preferred device)")
     run_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     run_p.add_argument("--usd", metavar="FILE", help="also export the run as a USD stage (.usd, .usda or .usdc)")
-    run_p.add_argument("--overwrite", action="store_true",
-                       help="replace what --out holds, once the new run is complete (default: refuse)")
+    run_p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace what --out holds, once the new run is complete (default: refuse)",
+    )
     run_p.set_defaults(handler=run_scene)
 
 
@@ -47,21 +56,29 @@ def run_scene(args: argparse.Namespace) -> int:
         raise DivergenceError(f"{exc}\nRecorded up to the divergence: {out}", exc.diverged, exc.result) from None
     tip = result.probe("tip_x", 0)
     print(f"wrote {out}/ (probes.csv, frames.npy, frame_times.npy, scene.toml, meta.json)")
-    print(f"{result.strip_steps:.3g} strip-steps in {result.wall_time_s:.2f} s "
-          f"({result.strip_steps / result.wall_time_s:.3g} strip-steps/s)")
-    print(f"final free end ({tip[-1] * 1e3:.2f}, {result.probe('tip_y', 0)[-1] * 1e3:.2f}) mm, "
-          f"clamp angle {result.probe('clamp_angle', 0)[-1]:.4f} rad")
+    print(
+        f"{result.strip_steps:.3g} strip-steps in {result.wall_time_s:.2f} s "
+        f"({result.strip_steps / result.wall_time_s:.3g} strip-steps/s)"
+    )
+    print(
+        f"final free end ({tip[-1] * 1e3:.2f}, {result.probe('tip_y', 0)[-1] * 1e3:.2f}) mm, "
+        f"clamp angle {result.probe('clamp_angle', 0)[-1]:.4f} rad"
+    )
     summary = swing_summary(result.t, result.probe("laser_x", 0), tip, starts_at_rest=True)
     if scene.release.enabled and summary["n_half_cycles"] >= 2:  # a released swing
-        print(f"first period {summary['first_period_s']:.4f} s, first amplitude "
-              f"{summary['first_amplitude_m'] * 1e3:.2f} mm, mean log decrement {summary['mean_log_decrement']:.4f} "
-              f"per half-cycle over {summary['n_half_cycles'] - 1} ratios of {summary['n_half_cycles']} "
-              f"half-cycles ({summary['signal']}, turning points; the sweep "
-              "summary and `warpcloth analyse` measure the same way)")
+        print(
+            f"first period {summary['first_period_s']:.4f} s, first amplitude "
+            f"{summary['first_amplitude_m'] * 1e3:.2f} mm, mean log decrement {summary['mean_log_decrement']:.4f} "
+            f"per half-cycle over {summary['n_half_cycles'] - 1} ratios of {summary['n_half_cycles']} "
+            f"half-cycles ({summary['signal']}, turning points; the sweep "
+            "summary and `warpcloth analyse` measure the same way)"
+        )
     elif scene.release.enabled:
-        print(f"no first period: the record ({scene.run.duration_s:g} s after the release) holds "
-              f"{summary['n_half_cycles']} half-cycle(s) of the {summary['signal']} signal; a period needs two "
-              "(run longer: run.duration_s)")
+        print(
+            f"no first period: the record ({scene.run.duration_s:g} s after the release) holds "
+            f"{summary['n_half_cycles']} half-cycle(s) of the {summary['signal']} signal; a period needs two "
+            "(run longer: run.duration_s)"
+        )
     warning = result.memory_warning()
     if warning:
         print(f"warpcloth run: warning: {warning}", file=sys.stderr)

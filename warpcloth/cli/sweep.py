@@ -14,21 +14,42 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p = sub.add_parser("sweep", help="run (or resume) the [sweep] of a scene into a sweep directory")
     sweep_p.add_argument("scene", help="scene file with a [sweep] section, or a bundled one")
     sweep_p.add_argument("--out", type=path_text, help="sweep directory (default: runs/<scene name>); rerun to resume")
-    sweep_p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                         help="override a field of the base scene")
-    sweep_p.add_argument("--max-batch", type=at_least(1), default=None,
-                         help="strips per batch (default: from the memory per strip and the worker count)")
-    sweep_p.add_argument("--workers", type=at_least(0), default=None,
-                         help="threads running batches side by side in this process (default: one per core; 0 = one "
-                              "batch after another)")
-    sweep_p.add_argument("--scheduler", default=None,
-                         help="address of a running Dask scheduler to use instead (default: none, threads in this "
-                              "process)")
-    sweep_p.add_argument("--device", type=device, default=None,
-                         help="cpu or cuda, on every worker (default: Warp's preferred device)")
+    sweep_p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a field of the base scene",
+    )
+    sweep_p.add_argument(
+        "--max-batch",
+        type=at_least(1),
+        default=None,
+        help="strips per batch (default: from the memory per strip and the worker count)",
+    )
+    sweep_p.add_argument(
+        "--workers",
+        type=at_least(0),
+        default=None,
+        help="threads running batches side by side in this process (default: one per core; 0 = one "
+        "batch after another)",
+    )
+    sweep_p.add_argument(
+        "--scheduler",
+        default=None,
+        help="address of a running Dask scheduler to use instead (default: none, threads in this process)",
+    )
+    sweep_p.add_argument(
+        "--device", type=device, default=None, help="cpu or cuda, on every worker (default: Warp's preferred device)"
+    )
     sweep_p.add_argument("--frames", action="store_true", help="also store shape frames (large)")
-    sweep_p.add_argument("--max-variants", type=at_least(1), default=None,
-                         help="refuse a sweep of more variants than this (default: 100000)")
+    sweep_p.add_argument(
+        "--max-variants",
+        type=at_least(1),
+        default=None,
+        help="refuse a sweep of more variants than this (default: 100000)",
+    )
     sweep_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     sweep_p.set_defaults(handler=run_sweep_command)
 
@@ -40,8 +61,9 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     from warpcloth.sweeps import run_sweep
 
     out = Path(args.out or Path("runs") / Path(args.scene).stem)
-    sweep = load_sweep(args.scene, args.overrides, max_variants=args.max_variants or MAX_VARIANTS,
-                       progress=not args.no_progress)
+    sweep = load_sweep(
+        args.scene, args.overrides, max_variants=args.max_variants or MAX_VARIANTS, progress=not args.no_progress
+    )
     groups: dict[tuple[str, float], list] = {}  # one step per scheme and probe interval
     for s in sweep.scenes:
         if s.integrator.dt_chosen_by == "auto":
@@ -50,21 +72,45 @@ def run_sweep_command(args: argparse.Namespace) -> int:
         from warpcloth.scene.step import choose_step, requesting_auto
 
         for (scheme, _), chosen in groups.items():
-            print(choose_step(requesting_auto(chosen)).describe()
-                  .replace("auto:", f"auto, for the {len(chosen)} {scheme} variants:" if len(groups) > 1
-                           else f"auto, for all {len(chosen)} variants:", 1))
+            print(
+                choose_step(requesting_auto(chosen))
+                .describe()
+                .replace(
+                    "auto:",
+                    f"auto, for the {len(chosen)} {scheme} variants:"
+                    if len(groups) > 1
+                    else f"auto, for all {len(chosen)} variants:",
+                    1,
+                )
+            )
     # claimed as --out here, so a sweep another process is writing is refused naming the option
     claim_result(out, "--out")
-    summary = run_sweep(sweep, out, max_batch=args.max_batch, workers=args.workers, scheduler=args.scheduler,
-                        device=args.device, frames=args.frames, progress=not args.no_progress)
+    summary = run_sweep(
+        sweep,
+        out,
+        max_batch=args.max_batch,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        device=args.device,
+        frames=args.frames,
+        progress=not args.no_progress,
+    )
     n_div = int(summary["diverged"].sum())
-    evenness = "" if sweep.discrepancy is None else \
-        f"; its random sample's centred L2 discrepancy is {sweep.discrepancy:.3g} (lower is more even)"
-    print(f"wrote {out}/ ({len(summary)} variants: summary.csv, summary.parquet, probes/, variants.csv); "
-          f"{n_div} diverged{evenness}")
+    evenness = (
+        ""
+        if sweep.discrepancy is None
+        else f"; its random sample's centred L2 discrepancy is {sweep.discrepancy:.3g} (lower is more even)"
+    )
+    print(
+        f"wrote {out}/ ({len(summary)} variants: summary.csv, summary.parquet, probes/, variants.csv); "
+        f"{n_div} diverged{evenness}"
+    )
     if "reversal_overflows" in summary and summary["reversal_overflows"].fillna(0).any():
         full = summary.loc[summary["reversal_overflows"].fillna(0) > 0, "variant"].tolist()
-        print(f"warpcloth sweep: warning: the masing reversal memory was full in {len(full)} variant(s) "
-              f"({', '.join(map(str, full[:8]))}{' …' if len(full) > 8 else ''}; summary column reversal_overflows): "
-              "their inner loops were traced without hysteresis; raise integrator.reversal_memory", file=sys.stderr)
+        print(
+            f"warpcloth sweep: warning: the masing reversal memory was full in {len(full)} variant(s) "
+            f"({', '.join(map(str, full[:8]))}{' …' if len(full) > 8 else ''}; summary column reversal_overflows): "
+            "their inner loops were traced without hysteresis; raise integrator.reversal_memory",
+            file=sys.stderr,
+        )
     return 0

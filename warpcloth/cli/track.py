@@ -30,54 +30,96 @@ def route(argv: Sequence[str]) -> list[str]:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``track calibrate`` and ``track VIDEO``."""
-    track_p = sub.add_parser("track", help="markers in lab video → tracked shapes (frame, t, s, x, y) for fit",
-                             description="warpcloth track calibrate IMAGE... -o plane.json; then warpcloth track VIDEO "
-                             "--plane plane.json -o shapes.csv (short for: warpcloth track video VIDEO ...)")
+    track_p = sub.add_parser(
+        "track",
+        help="markers in lab video → tracked shapes (frame, t, s, x, y) for fit",
+        description="warpcloth track calibrate IMAGE... -o plane.json; then warpcloth track VIDEO "
+        "--plane plane.json -o shapes.csv (short for: warpcloth track video VIDEO ...)",
+    )
     track_sub = track_p.add_subparsers(dest="track_command", required=True)
     cal = track_sub.add_parser("calibrate", help="camera, lens and the strip's plane from chessboard images")
     cal.set_defaults(handler=calibrate_command)
-    cal.add_argument("images", nargs="+", metavar="IMAGE",
-                     help="board images, the first held in the strip's plane (the plane view), the others in other "
-                          "poses (for the lens distortion)")
+    cal.add_argument(
+        "images",
+        nargs="+",
+        metavar="IMAGE",
+        help="board images, the first held in the strip's plane (the plane view), the others in other "
+        "poses (for the lens distortion)",
+    )
     cal.add_argument("-o", "--output", type=path_text, required=True, help="the plane file to write (.json)")
-    cal.add_argument("--board", required=True, metavar="COLUMNSxROWS",
-                     help="the chessboard's inner corners, e.g. 11x10 for a board of 12 × 11 squares")
+    cal.add_argument(
+        "--board",
+        required=True,
+        metavar="COLUMNSxROWS",
+        help="the chessboard's inner corners, e.g. 11x10 for a board of 12 × 11 squares",
+    )
     cal.add_argument("--square-mm", type=positive, required=True, help="the side of a square, mm")
-    cal.add_argument("--origin-corner", metavar="I,J",
-                     help="the inner corner (column, row, from 0, top left in the plane view) at the clamp's lowest "
-                          "point, the board's rows level")
-    cal.add_argument("--clamp-edge-px", metavar="U1,V1,U2,V2",
-                     help="instead: two pixels of the plane view, the clamp's lowest point and a point along its lower "
-                          "edge towards +x")
-    cal.add_argument("--max-rms-px", type=positive, default=0.3,
-                     help="refuse a calibration whose reprojection RMS in any image exceeds this (default: 0.3 px; "
-                          "a clean calibration has a fraction of that, the bundled example 0.07)")
+    cal.add_argument(
+        "--origin-corner",
+        metavar="I,J",
+        help="the inner corner (column, row, from 0, top left in the plane view) at the clamp's lowest "
+        "point, the board's rows level",
+    )
+    cal.add_argument(
+        "--clamp-edge-px",
+        metavar="U1,V1,U2,V2",
+        help="instead: two pixels of the plane view, the clamp's lowest point and a point along its lower "
+        "edge towards +x",
+    )
+    cal.add_argument(
+        "--max-rms-px",
+        type=positive,
+        default=0.3,
+        help="refuse a calibration whose reprojection RMS in any image exceeds this (default: 0.3 px; "
+        "a clean calibration has a fraction of that, the bundled example 0.07)",
+    )
     add_overwrite(cal, "plane file -o")
-    vid = track_sub.add_parser("video", help="track the markers (or the centreline) of a video (warpcloth track "
-                               "VIDEO ... for short)")
+    vid = track_sub.add_parser(
+        "video", help="track the markers (or the centreline) of a video (warpcloth track VIDEO ... for short)"
+    )
     vid.set_defaults(handler=video_command)
-    vid.add_argument("video", metavar="VIDEO", help="the video (any container and codec FFmpeg reads; its timestamps "
-                     "are each frame's time)")
+    vid.add_argument(
+        "video",
+        metavar="VIDEO",
+        help="the video (any container and codec FFmpeg reads; its timestamps are each frame's time)",
+    )
     vid.add_argument("--plane", required=True, help="plane.json from warpcloth track calibrate")
-    vid.add_argument("--marker-s", metavar="S,S,...|FIRST:LAST:STEP",
-                     help="the markers' arc lengths from the clamp's lowest point, mm, in order along the strip")
+    vid.add_argument(
+        "--marker-s",
+        metavar="S,S,...|FIRST:LAST:STEP",
+        help="the markers' arc lengths from the clamp's lowest point, mm, in order along the strip",
+    )
     vid.add_argument("--marker-diameter-mm", type=positive, help="the markers' diameter, mm (with --marker-s)")
-    vid.add_argument("--centreline-s", metavar="S,S,...|FIRST:LAST:STEP",
-                     help="instead of markers: the strip's centreline at these arc lengths from the clamp's lowest "
-                          "point, mm, measured from the free end (needs --free-length-mm)")
+    vid.add_argument(
+        "--centreline-s",
+        metavar="S,S,...|FIRST:LAST:STEP",
+        help="instead of markers: the strip's centreline at these arc lengths from the clamp's lowest "
+        "point, mm, measured from the free end (needs --free-length-mm)",
+    )
     vid.add_argument("--free-length-mm", type=positive, help="the strip's free length, mm (with --centreline-s)")
     vid.add_argument("-o", "--output", type=path_text, required=True, help="the tracked shapes to write (.csv)")
-    vid.add_argument("--background", metavar="IMAGE",
-                     help="a frame of the scene without the strip (default: the per-pixel median of the video's "
-                          "frames, a fixed-camera background model)")
-    vid.add_argument("--threshold-dn", type=positive, default=None,
-                     help="darkening below the background that counts as marker, grey levels (default: 10× the "
-                          "sensor noise estimated in each frame)")
+    vid.add_argument(
+        "--background",
+        metavar="IMAGE",
+        help="a frame of the scene without the strip (default: the per-pixel median of the video's "
+        "frames, a fixed-camera background model)",
+    )
+    vid.add_argument(
+        "--threshold-dn",
+        type=positive,
+        default=None,
+        help="darkening below the background that counts as marker, grey levels (default: 10× the "
+        "sensor noise estimated in each frame)",
+    )
     vid.add_argument("--overlay", metavar="PNG", help="also write a figure of what was tracked")
-    vid.add_argument("--overlay-video", metavar="AVI",
-                     help="also write every frame with its tracked points circled (grey FFV1 in AVI)")
-    vid.add_argument("--overlay-frame", type=at_least(0), default=None,
-                     help="the frame the overlay shows (default: the middle one)")
+    vid.add_argument(
+        "--overlay-video",
+        metavar="AVI",
+        help="also write every frame with its tracked points circled (grey FFV1 in AVI)",
+    )
+    vid.add_argument(
+        "--overlay-frame", type=at_least(0), default=None, help="the frame the overlay shows (default: the middle one)"
+    )
     vid.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_overwrite(vid, "output file -o (and --overlay, --overlay-video)")
 
@@ -97,19 +139,24 @@ def marker_arcs(text: str, option: str = "--marker-s") -> np.ndarray:
     included, STEP dividing LAST − FIRST), increasing, ≥ 0, at least two."""
     try:
         values = [float(v) for v in text.split(":" if ":" in text else ",")]
-        if ":" in text and (len(values) != 3 or not np.all(np.isfinite(values)) or not values[0] < values[1]
-                            or not values[2] > 0):
+        if ":" in text and (
+            len(values) != 3 or not np.all(np.isfinite(values)) or not values[0] < values[1] or not values[2] > 0
+        ):
             raise ValueError
     except ValueError:
-        raise OptionError(option, f"expected S,S,... or FIRST:LAST:STEP (mm, FIRST < LAST, STEP > 0), got "
-                          f"{text!r}") from None
+        raise OptionError(
+            option, f"expected S,S,... or FIRST:LAST:STEP (mm, FIRST < LAST, STEP > 0), got {text!r}"
+        ) from None
     if ":" in text:
         first, last, step = values
         steps = (last - first) / step
         # a STEP that does not reach LAST exactly would move the last point silently
         if not abs(steps - round(steps)) <= 1e-9 * max(steps, 1.0):
-            raise OptionError(option, f"{text!r}: STEP {step:g} does not divide LAST − FIRST = {last - first:g} mm "
-                              "(LAST is the last arc length)")
+            raise OptionError(
+                option,
+                f"{text!r}: STEP {step:g} does not divide LAST − FIRST = {last - first:g} mm "
+                "(LAST is the last arc length)",
+            )
         values = np.linspace(first, last, round(steps) + 1)
     arcs = np.array(values)
     if len(arcs) < 2 or not np.all(np.isfinite(arcs)) or arcs[0] < 0 or np.any(np.diff(arcs) <= 0):
@@ -120,19 +167,22 @@ def marker_arcs(text: str, option: str = "--marker-s") -> np.ndarray:
 def _what_to_track(args: argparse.Namespace) -> np.ndarray:
     # markers (--marker-s with their diameter) or the centreline (--centreline-s with the free length)
     if bool(args.marker_s) == bool(args.centreline_s):
-        raise OptionError("--marker-s", "give --marker-s (markers) or --centreline-s (the centreline without markers), "
-                          "one of them")
+        raise OptionError(
+            "--marker-s", "give --marker-s (markers) or --centreline-s (the centreline without markers), one of them"
+        )
     if args.marker_s:
         if args.marker_diameter_mm is None:
             raise OptionError("--marker-diameter-mm", "is needed with --marker-s (the markers' diameter, mm)")
         return marker_arcs(args.marker_s)
     if args.free_length_mm is None:
-        raise OptionError("--free-length-mm", "is needed with --centreline-s (arc lengths are measured from the free "
-                          "end)")
+        raise OptionError(
+            "--free-length-mm", "is needed with --centreline-s (arc lengths are measured from the free end)"
+        )
     arcs = marker_arcs(args.centreline_s, "--centreline-s")
     if arcs[-1] > args.free_length_mm:
-        raise OptionError("--centreline-s", f"{arcs[-1]:g} mm lies beyond the free end (--free-length-mm "
-                          f"{args.free_length_mm:g})")
+        raise OptionError(
+            "--centreline-s", f"{arcs[-1]:g} mm lies beyond the free end (--free-length-mm {args.free_length_mm:g})"
+        )
     return arcs
 
 
@@ -151,22 +201,33 @@ def calibrate_command(args: argparse.Namespace) -> int:
     out = new_result(args.output, args.overwrite, "-o")
     if out.suffix.lower() != ".json":
         raise OptionError("-o", f"{out} must end in .json")
-    _, record = calibrate_plane(args.images, inner, args.square_mm, origin_corner=corner,
-                                clamp_edge_px=args.clamp_edge_px, max_rms_px=args.max_rms_px)
+    _, record = calibrate_plane(
+        args.images,
+        inner,
+        args.square_mm,
+        origin_corner=corner,
+        clamp_edge_px=args.clamp_edge_px,
+        max_rms_px=args.max_rms_px,
+    )
     record["provenance"] = provenance(device="cpu")
     write_text_atomically(out, json.dumps(record, indent=1) + "\n")
     view = record["plane_view"]
-    print(f"{len(args.images)} board images: reprojection RMS {record['reprojection_rms_px']:.3g} px (worst image "
-          f"{max(v['rms_px'] for v in record['views']):.3g} px); plane view {view['rms_px']:.3g} px = "
-          f"{view['rms_mm']:.3g} mm, {view['mm_per_px'][0]:.3g} to {view['mm_per_px'][1]:.3g} mm/px")
+    print(
+        f"{len(args.images)} board images: reprojection RMS {record['reprojection_rms_px']:.3g} px (worst image "
+        f"{max(v['rms_px'] for v in record['views']):.3g} px); plane view {view['rms_px']:.3g} px = "
+        f"{view['rms_mm']:.3g} mm, {view['mm_per_px'][0]:.3g} to {view['mm_per_px'][1]:.3g} mm/px"
+    )
     print(f"wrote {out}")
     return 0
 
 
 def _outputs(args: argparse.Namespace) -> tuple[Path, Path | None, Path | None]:
     # the shapes file, the overlay figure and the overlay video: distinct, each of its kind, each new
-    named = {option: Path(text) for option, text in (("-o", args.output), ("--overlay", args.overlay),
-                                                      ("--overlay-video", args.overlay_video)) if text}
+    named = {
+        option: Path(text)
+        for option, text in (("-o", args.output), ("--overlay", args.overlay), ("--overlay-video", args.overlay_video))
+        if text
+    }
     seen: dict[Path, str] = {}
     for option, path in named.items():
         where = path.resolve()
@@ -202,26 +263,51 @@ def video_command(args: argparse.Namespace) -> int:
     background = read_image(args.background, "--background") if args.background else None
     frames = FrameStream(args.video, "VIDEO")  # decoded as it is tracked: a long recording is never held whole
     if args.overlay_frame is not None and args.overlay_frame >= frames.total:
-        raise OptionError("--overlay-frame", f"{args.overlay_frame} is not a frame of {args.video}, which has "
-                          f"{frames.total} in its container (0 to {frames.total - 1})")
+        raise OptionError(
+            "--overlay-frame",
+            f"{args.overlay_frame} is not a frame of {args.video}, which has "
+            f"{frames.total} in its container (0 to {frames.total - 1})",
+        )
     size = (frames.width, frames.height)
     if tuple(size) != tuple(mapping.image_size):
-        raise OptionError("--plane", f"{args.plane} was calibrated for {mapping.image_size[0]} × "
-                          f"{mapping.image_size[1]} px images, the video's frames are {size[0]} × {size[1]} px")
+        raise OptionError(
+            "--plane",
+            f"{args.plane} was calibrated for {mapping.image_size[0]} × "
+            f"{mapping.image_size[1]} px images, the video's frames are {size[0]} × {size[1]} px",
+        )
     if background is None:
         background = median_background(frames)
         source = "the median of the frames"
     elif background.shape != (size[1], size[0]):
-        raise OptionError("--background", f"{args.background} is {background.shape[1]} × {background.shape[0]} px, "
-                          f"the video's frames are {size[0]} × {size[1]} px")
+        raise OptionError(
+            "--background",
+            f"{args.background} is {background.shape[1]} × {background.shape[0]} px, "
+            f"the video's frames are {size[0]} × {size[1]} px",
+        )
     else:
         source = str(args.background)
     if args.marker_s:
-        tracked = track_markers(frames, background, mapping, arcs, args.marker_diameter_mm, args.video,
-                                threshold_dn=args.threshold_dn, progress=not args.no_progress)
+        tracked = track_markers(
+            frames,
+            background,
+            mapping,
+            arcs,
+            args.marker_diameter_mm,
+            args.video,
+            threshold_dn=args.threshold_dn,
+            progress=not args.no_progress,
+        )
     else:
-        tracked = track_centreline(frames, background, mapping, arcs, args.free_length_mm, args.video,
-                                   threshold_dn=args.threshold_dn, progress=not args.no_progress)
+        tracked = track_centreline(
+            frames,
+            background,
+            mapping,
+            arcs,
+            args.free_length_mm,
+            args.video,
+            threshold_dn=args.threshold_dn,
+            progress=not args.no_progress,
+        )
     dropped, duplicated = frames.dropped, frames.duplicated
     times = [frames.times[i] for i in tracked.frame]  # exact, before the overlay's pass decodes them again
     off = avi_timing(times)[2] if movie is not None else 0.0  # AVI refuses > 1000 frames/s: before writing
@@ -229,16 +315,19 @@ def video_command(args: argparse.Namespace) -> int:
         print(f"warpcloth track: warning: {args.video}: {note}", file=sys.stderr)
     kept = len(tracked.t)
     if args.overlay_frame is not None and args.overlay_frame >= kept:
-        raise OptionError("--overlay-frame", f"{args.overlay_frame} is not one of the {kept} frames kept (0 to "
-                          f"{kept - 1})")
+        raise OptionError(
+            "--overlay-frame", f"{args.overlay_frame} is not one of the {kept} frames kept (0 to {kept - 1})"
+        )
     video = file_checksum(args.video)
-    header = [f"# warpcloth track {args.video} (sha256 {video['sha256']}), plane {args.plane}, background {source}",
-              f"# {len(arcs)} {what}, {kept} frames; sensor noise {np.median(tracked.noise_dn):.3g} grey "
-              "levels; u_px, u_mm: standard uncertainty of each coordinate from the sensor noise alone (the "
-              "calibration's is in the plane file)",
-              *(f"# dropped: {note}" for note in dropped),
-              *(f"# duplicated: {note}" for note in duplicated),
-              "frame,t_s,s_mm,x_mm,y_mm,u_px,u_mm"]
+    header = [
+        f"# warpcloth track {args.video} (sha256 {video['sha256']}), plane {args.plane}, background {source}",
+        f"# {len(arcs)} {what}, {kept} frames; sensor noise {np.median(tracked.noise_dn):.3g} grey "
+        "levels; u_px, u_mm: standard uncertainty of each coordinate from the sensor noise alone (the "
+        "calibration's is in the plane file)",
+        *(f"# dropped: {note}" for note in dropped),
+        *(f"# duplicated: {note}" for note in duplicated),
+        "frame,t_s,s_mm,x_mm,y_mm,u_px,u_mm",
+    ]
     write_text_atomically(out, "\n".join(header + tracked.csv_rows()) + "\n")
     if overlay is not None:
         shown = args.overlay_frame if args.overlay_frame is not None else kept // 2
@@ -247,12 +336,16 @@ def video_command(args: argparse.Namespace) -> int:
     if movie is not None:
         write_overlay_video(movie, frames, tracked, times)
         if off:
-            print(f"warpcloth track: warning: {movie}: AVI holds no time base finer than 1/1000 s; frame times are "
-                  f"rounded, by up to {off:.3g} s", file=sys.stderr)
-    print(f"tracked {len(arcs)} {what} in {kept} frames (t = {tracked.t[0]:.6g} to {tracked.t[-1]:.6g} s): "
-          f"median uncertainty {np.median(tracked.u_mm):.2g} mm ({np.median(tracked.u_px):.2g} px), sensor noise "
-          f"{np.median(tracked.noise_dn):.3g} grey levels; {len(dropped)} gaps of dropped frames, "
-          f"{len(duplicated)} duplicated frames left out")
+            print(
+                f"warpcloth track: warning: {movie}: AVI holds no time base finer than 1/1000 s; frame times are "
+                f"rounded, by up to {off:.3g} s",
+                file=sys.stderr,
+            )
+    print(
+        f"tracked {len(arcs)} {what} in {kept} frames (t = {tracked.t[0]:.6g} to {tracked.t[-1]:.6g} s): "
+        f"median uncertainty {np.median(tracked.u_mm):.2g} mm ({np.median(tracked.u_px):.2g} px), sensor noise "
+        f"{np.median(tracked.noise_dn):.3g} grey levels; {len(dropped)} gaps of dropped frames, "
+        f"{len(duplicated)} duplicated frames left out"
+    )
     print(f"wrote {', '.join(str(p) for p in (out, overlay, movie) if p is not None)}")
     return 0
-

@@ -14,6 +14,7 @@ from .options import add_overwrite, at_least, finite, new_result, path_text, pos
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``export-usd``, ``plot`` and ``render``."""
+
     def selection(p: argparse.ArgumentParser) -> None:
         p.add_argument("run_dir", metavar="RUN_DIR", help="a run directory, or a sweep directory run with --frames")
         p.add_argument("--variants", help="which variants: 3, 1,4,9 or 0:50 (default: all)")
@@ -21,29 +22,49 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     usd_p = sub.add_parser("export-usd", help="write a run (or sweep variants) as an animated USD stage")
     selection(usd_p)
-    usd_p.add_argument("-o", "--output", type=path_text, required=True,
-                       help="stage file: .usd or .usdc (binary), .usda (text)")
+    usd_p.add_argument(
+        "-o", "--output", type=path_text, required=True, help="stage file: .usd or .usdc (binary), .usda (text)"
+    )
     usd_p.add_argument("--ribbon", action="store_true", help="also write each strip as a mesh of its real width")
     usd_p.set_defaults(handler=export_usd_command)
     add_overwrite(usd_p, "stage -o")
-    usd_p.add_argument("--frames-per-clip", type=at_least(1), default=None,
-                       help="split frames into value-clip layers of this many frames (default: only when large)")
+    usd_p.add_argument(
+        "--frames-per-clip",
+        type=at_least(1),
+        default=None,
+        help="split frames into value-clip layers of this many frames (default: only when large)",
+    )
     plot_p = sub.add_parser("plot", help="figures of a run, or a sweep metric against parameters")
     selection(plot_p)
     plot_p.set_defaults(handler=plot_command)
     plot_p.add_argument("--out", type=path_text, help="figure directory (default: RUN_DIR/figures)")
     add_overwrite(plot_p, "figure directory --out")
-    plot_p.add_argument("--measured", help="a measured CSV, drawn on the figure of its kind: a laser trace (t, x) on "
-                        "amplitude, a clamp encoder (t, theta: column 2 headed theta/angle) on clamp_angle, tracked "
-                        "markers (frame, t, s, x, y) on shapes")
-    plot_p.add_argument("--from", dest="t_from", type=finite, metavar="S", help="draw the time series (and a "
-                        "--measured trace or encoder) from this time, s (default: the start of their overlap)")
-    plot_p.add_argument("--to", dest="t_to", type=finite, metavar="S", help="…up to this time, s (default: the end "
-                        "of their overlap)")
+    plot_p.add_argument(
+        "--measured",
+        help="a measured CSV, drawn on the figure of its kind: a laser trace (t, x) on "
+        "amplitude, a clamp encoder (t, theta: column 2 headed theta/angle) on clamp_angle, tracked "
+        "markers (frame, t, s, x, y) on shapes",
+    )
+    plot_p.add_argument(
+        "--from",
+        dest="t_from",
+        type=finite,
+        metavar="S",
+        help="draw the time series (and a "
+        "--measured trace or encoder) from this time, s (default: the start of their overlap)",
+    )
+    plot_p.add_argument(
+        "--to", dest="t_to", type=finite, metavar="S", help="…up to this time, s (default: the end of their overlap)"
+    )
     plot_p.add_argument("--format", choices=FORMATS, default="png", help="figure file format (default: png)")
     plot_p.add_argument("--dpi", type=positive, default=DPI, help=f"resolution of raster output (default: {DPI})")
-    plot_p.add_argument("--times", type=finite, nargs="+", help="shape-overlay times, s from t = 0 (the release, "
-                        "or the start of the clamp motion) (default: nine over the first half swing)")
+    plot_p.add_argument(
+        "--times",
+        type=finite,
+        nargs="+",
+        help="shape-overlay times, s from t = 0 (the release, "
+        "or the start of the clamp motion) (default: nine over the first half swing)",
+    )
     plot_p.add_argument("--metric", help="sweep: summary column to plot (e.g. first_period_s)")
     plot_p.add_argument("--x", help="sweep: parameter on the x axis (a swept field, e.g. damping.gamma_per_s)")
     plot_p.add_argument("--y", help="sweep: second parameter (heat map)")
@@ -52,12 +73,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     render_p.set_defaults(handler=render_command)
     render_p.add_argument("--out", type=path_text, help="image directory (default: RUN_DIR/render)")
     add_overwrite(render_p, "image directory --out")
-    render_p.add_argument("--times", type=finite, nargs="+", help="times of the PNG frames, s from t = 0 (the "
-                          "release, or the start of the clamp motion) (default: six spread over the run)")
-    render_p.add_argument("--movie", default="motion.gif", help="animation file name, .gif or .mp4; 'none' for none "
-                          "(default: motion.gif)")
-    render_p.add_argument("--stride", type=at_least(1), default=1, help="animate every n-th frame, at real speed "
-                          "(default: 1)")
+    render_p.add_argument(
+        "--times",
+        type=finite,
+        nargs="+",
+        help="times of the PNG frames, s from t = 0 (the "
+        "release, or the start of the clamp motion) (default: six spread over the run)",
+    )
+    render_p.add_argument(
+        "--movie", default="motion.gif", help="animation file name, .gif or .mp4; 'none' for none (default: motion.gif)"
+    )
+    render_p.add_argument(
+        "--stride", type=at_least(1), default=1, help="animate every n-th frame, at real speed (default: 1)"
+    )
 
 
 def export_usd_command(args: argparse.Namespace) -> int:
@@ -66,8 +94,12 @@ def export_usd_command(args: argparse.Namespace) -> int:
     from warpcloth.viz.usd import export_usd
 
     recording = load_recording(args.run_dir, args.variants, args.where)
-    out = export_usd(recording, new_result(args.output, args.overwrite, "-o"), ribbon=args.ribbon,
-                     frames_per_clip=args.frames_per_clip)
+    out = export_usd(
+        recording,
+        new_result(args.output, args.overwrite, "-o"),
+        ribbon=args.ribbon,
+        frames_per_clip=args.frames_per_clip,
+    )
     print(f"wrote {out} ({len(recording.variants)} variants, {len(recording.frame_times)} frames)")
     return 0
 
@@ -88,12 +120,23 @@ def plot_command(args: argparse.Namespace) -> int:
         print(f"wrote {path}")
         total = json.loads((Path(args.run_dir) / "sweep.json").read_text())["n_variants"]
         if len(summary) < total:
-            print(f"note: the sweep has not finished: the figure shows the {len(summary)} of its {total} variants "
-                  "done so far (run the sweep again to complete it)")
+            print(
+                f"note: the sweep has not finished: the figure shows the {len(summary)} of its {total} variants "
+                "done so far (run the sweep again to complete it)"
+            )
         return 0
     recording = load_recording(args.run_dir, args.variants, args.where)
-    for path in plot_run(recording, out, measured=args.measured, times=args.times, kes=material_kes_values(recording),
-                         fmt=args.format, dpi=args.dpi, t_from=args.t_from, t_to=args.t_to):
+    for path in plot_run(
+        recording,
+        out,
+        measured=args.measured,
+        times=args.times,
+        kes=material_kes_values(recording),
+        fmt=args.format,
+        dpi=args.dpi,
+        t_from=args.t_from,
+        t_to=args.t_to,
+    ):
         print(f"wrote {path}")
     return 0
 
@@ -107,8 +150,14 @@ def material_kes_values(recording: object, variant: int = 0) -> object:
     from warpcloth.viz.plots import kes_loop
 
     k, m = kes_loop(recording, variant)
-    return bending_summary(BendingLoop(k / units.CURVATURE_PER_CM, m / units.MOMENT_GF_CM_PER_CM,
-                                       np.arange(1, len(k) + 1), "the material's KES-FB2 loop"))
+    return bending_summary(
+        BendingLoop(
+            k / units.CURVATURE_PER_CM,
+            m / units.MOMENT_GF_CM_PER_CM,
+            np.arange(1, len(k) + 1),
+            "the material's KES-FB2 loop",
+        )
+    )
 
 
 def render_command(args: argparse.Namespace) -> int:

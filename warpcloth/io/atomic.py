@@ -55,6 +55,7 @@ def write_npy_atomically(path: str | Path, array: object) -> Path:
     def save(tmp: Path) -> None:
         with open(tmp, "wb") as fh:  # a handle, so numpy never appends ".npy" to the name
             np.save(fh, array)
+
     return write_atomically(path, save)
 
 

@@ -114,8 +114,15 @@ def _content(lines: list[str]) -> list[tuple[int, str]]:
     return out
 
 
-def read_csv(path: str | Path, columns: int | None = None, *, what: str = "data",
-             names: Sequence[str] | None = None, extra_columns: bool = False, argument: str | None = None) -> Table:
+def read_csv(
+    path: str | Path,
+    columns: int | None = None,
+    *,
+    what: str = "data",
+    names: Sequence[str] | None = None,
+    extra_columns: bool = False,
+    argument: str | None = None,
+) -> Table:
     """Read a table of numbers from a CSV-like file (or a bundled example by name).
 
     ``columns``: how many columns every row has (None: as many as the first data row);
@@ -157,14 +164,23 @@ def read_csv(path: str | Path, columns: int | None = None, *, what: str = "data"
         for j, cell in enumerate(cells[:columns]):
             value = _number(cell.replace(",", ".") if decimal_comma else cell)
             if value is None:
-                raise DataFileError(path, f"column {j + 1} is empty" if not cell else f"{cell!r} is not a number",
-                                    number)
+                raise DataFileError(
+                    path, f"column {j + 1} is empty" if not cell else f"{cell!r} is not a number", number
+                )
             if not math.isfinite(value):
                 name = names[j] if names and j < len(names) else f"column {j + 1}"
                 raise DataFileError(path, f"{name} is {value}; every value must be finite", number)
             values[i, j] = value
-    return Table(path, values, np.array([number for number, _, _ in rows], dtype=int), header, header_line,
-                 header_text, delimiter, decimal_comma)
+    return Table(
+        path,
+        values,
+        np.array([number for number, _, _ in rows], dtype=int),
+        header,
+        header_line,
+        header_text,
+        delimiter,
+        decimal_comma,
+    )
 
 
 def _decimal_comma(path: Path, rows: list[tuple[int, str, list[str]]], delimiter: str) -> bool:
@@ -179,7 +195,11 @@ def _decimal_comma(path: Path, rows: list[tuple[int, str, list[str]]], delimiter
     point = next((number for number, _, cells in rows if any("." in c for c in cells)), None)
     if point is not None:
         between = "tabs" if delimiter == "\t" else "whitespace"
-        raise DataFileError(path, f"a decimal comma, but line {point} has a decimal point: with {between} "
-                            "between the columns a file "
-                            "uses one or the other (or separate the columns with ';' and use decimal commas)", comma)
+        raise DataFileError(
+            path,
+            f"a decimal comma, but line {point} has a decimal point: with {between} "
+            "between the columns a file "
+            "uses one or the other (or separate the columns with ';' and use decimal commas)",
+            comma,
+        )
     return True

@@ -41,8 +41,18 @@ from warpcloth.units import check_plausible
 
 from .csv import Table, bundled_data, read_csv, read_text
 
-__all__ = ["ClampAngleTrace", "LaserTrace", "TrackedShapes", "bundled_data", "read_encoder", "read_laser_trace",
-           "read_measurement", "read_table", "read_text", "read_tracked_shapes"]
+__all__ = [
+    "ClampAngleTrace",
+    "LaserTrace",
+    "TrackedShapes",
+    "bundled_data",
+    "read_encoder",
+    "read_laser_trace",
+    "read_measurement",
+    "read_table",
+    "read_text",
+    "read_tracked_shapes",
+]
 
 _LASER = ("t_s", "x_mm")
 _SHAPES = ("frame", "t_s", "s_mm", "x_mm", "y_mm")
@@ -52,8 +62,9 @@ UNCERTAINTY_COLUMNS = ("u_px", "u_mm")
 standard uncertainty (px, mm). Read and ignored: a fit judges its RMS by the noise."""
 
 
-def read_table(path: str | Path, n_columns: int | None, what: str, argument: str,
-               names: tuple[str, ...] | None = None) -> Table:
+def read_table(
+    path: str | Path, n_columns: int | None, what: str, argument: str, names: tuple[str, ...] | None = None
+) -> Table:
     """At least two rows of ``n_columns`` numbers (None: as many as the first data row
     has; more are ignored) from a measured-data file or a bundled example by name."""
     table = read_csv(path, n_columns, what=what, names=names, extra_columns=True, argument=argument)
@@ -63,14 +74,40 @@ def read_table(path: str | Path, n_columns: int | None, what: str, argument: str
     return table
 
 
-_QUANTITY = {"t_s": ("time", "s"), "x_mm": ("length", "mm"), "y_mm": ("length", "mm"), "s_mm": ("length", "mm"),
-             "theta": ("angle", "rad"), "frame": (None, None)}
+_QUANTITY = {
+    "t_s": ("time", "s"),
+    "x_mm": ("length", "mm"),
+    "y_mm": ("length", "mm"),
+    "s_mm": ("length", "mm"),
+    "theta": ("angle", "rad"),
+    "frame": (None, None),
+}
 _BRACKETED = re.compile(r"\s*[\[(]\s*([^\[\]()]*?)\s*[\])]\s*$")
 _SUFFIX = re.compile(r"_([A-Za-zµ%]+)\s*$")
 
 
-NAME_WORDS = {"t", "time", "x", "y", "s", "theta", "angle", "phi", "frame", "tip", "laser", "marker", "encoder",
-              "clamp", "pos", "position", "disp", "displacement", "arc", "raw"}
+NAME_WORDS = {
+    "t",
+    "time",
+    "x",
+    "y",
+    "s",
+    "theta",
+    "angle",
+    "phi",
+    "frame",
+    "tip",
+    "laser",
+    "marker",
+    "encoder",
+    "clamp",
+    "pos",
+    "position",
+    "disp",
+    "displacement",
+    "arc",
+    "raw",
+}
 """Words that may end a column's name after an underscore without being a unit
 (``laser_x``, ``tip_x``, ``x_tip``); any other ending after an underscore is read as a
 unit, and refused unless it is one of the column's quantity."""
@@ -104,10 +141,13 @@ def header_unit(table: Table, column: int, role: str) -> float:
     if unit is None:
         return known[default]
     if unit not in known and unit.lower() not in known:
-        raise DataFileError(table.path, f"column {column + 1} is headed {name!r}: {unit!r} is not "
-                            f"{'an' if quantity == 'angle' else 'a'} {quantity} unit (known: {', '.join(known)}); "
-                            f"write e.g. {role.split('_')[0]}_{default}, or a name without a unit for {default}",
-                            table.header_line)
+        raise DataFileError(
+            table.path,
+            f"column {column + 1} is headed {name!r}: {unit!r} is not "
+            f"{'an' if quantity == 'angle' else 'a'} {quantity} unit (known: {', '.join(known)}); "
+            f"write e.g. {role.split('_')[0]}_{default}, or a name without a unit for {default}",
+            table.header_line,
+        )
     return known.get(unit, known.get(unit.lower()))
 
 
@@ -133,8 +173,11 @@ def _increasing(table: Table, t: np.ndarray) -> None:
     step = np.diff(t)
     if np.any(step <= 0):
         i = int(np.argmax(step <= 0))
-        raise DataFileError(table.path, f"times must increase; t = {t[i + 1]:g} after {t[i]:g} (line "
-                            f"{table.lines[i]})", int(table.lines[i + 1]))
+        raise DataFileError(
+            table.path,
+            f"times must increase; t = {t[i + 1]:g} after {t[i]:g} (line {table.lines[i]})",
+            int(table.lines[i + 1]),
+        )
 
 
 @dataclass(frozen=True)
@@ -165,8 +208,13 @@ def read_laser_trace(path: str | Path, argument: str = "path") -> LaserTrace:
 def _laser_trace(table: Table) -> LaserTrace:
     data = _scaled(table, _LASER)
     _increasing(table, data[:, 0])
-    _plausible(table, 1, "largest displacement", float(np.max(np.abs(data[:, 1]))) / units.LENGTH_MM,
-               "metres? head the column x_m")
+    _plausible(
+        table,
+        1,
+        "largest displacement",
+        float(np.max(np.abs(data[:, 1]))) / units.LENGTH_MM,
+        "metres? head the column x_m",
+    )
     return LaserTrace(data[:, 0], data[:, 1])
 
 
@@ -183,13 +231,20 @@ def _tracked_shapes(table: Table) -> TrackedShapes:
     disordered = (np.diff(frame) < 0) | ((np.diff(frame) > 0) & (np.diff(t) <= 0))
     if np.any(disordered):
         i = int(np.argmax(disordered))
-        raise DataFileError(table.path, f"frame {frame[i + 1]:g} at t = {t[i + 1]:g} s after frame {frame[i]:g} at "
-                            f"t = {t[i]:g} s (line {lines[i]}): rows must be ordered by frame, and later frames "
-                            "must have later times", int(lines[i + 1]))
+        raise DataFileError(
+            table.path,
+            f"frame {frame[i + 1]:g} at t = {t[i + 1]:g} s after frame {frame[i]:g} at "
+            f"t = {t[i]:g} s (line {lines[i]}): rows must be ordered by frame, and later frames "
+            "must have later times",
+            int(lines[i + 1]),
+        )
     if np.any(data[:, 2] < 0):
         i = int(np.argmax(data[:, 2] < 0))
-        raise DataFileError(table.path, f"arc length s must be ≥ 0 (from the clamp's lowest point), got "
-                            f"{table.values[i, 2]:g}", int(lines[i]))
+        raise DataFileError(
+            table.path,
+            f"arc length s must be ≥ 0 (from the clamp's lowest point), got {table.values[i, 2]:g}",
+            int(lines[i]),
+        )
     return TrackedShapes(frame.astype(int), t, data[:, 2], data[:, 3], data[:, 4])
 
 
@@ -213,8 +268,9 @@ def is_angle_column(table: Table, column: int) -> bool:
     return bool(_ANGLE_NAME.match(name)) or stated_unit(name) in units.MEASURED_UNITS["angle"]
 
 
-def read_encoder(path: str | Path, angle_unit: str | None = None,
-                 argument: str = "path") -> tuple[np.ndarray, np.ndarray]:
+def read_encoder(
+    path: str | Path, angle_unit: str | None = None, argument: str = "path"
+) -> tuple[np.ndarray, np.ndarray]:
     """Read a clamp encoder series ``t (s), theta``; returns (t, θ in rad). The angle
     unit comes from ``angle_unit`` ("rad" or "deg"), else from the header, else rad."""
     if angle_unit not in (None, "rad", "deg"):
@@ -227,19 +283,28 @@ def _clamp_angle(table: Table, angle_unit: str | None = None) -> ClampAngleTrace
     data = _scaled(table, _ENCODER)
     _increasing(table, data[:, 0])
     if angle_unit is None:
-        _plausible(table, 1, "largest clamp angle", float(np.max(np.abs(data[:, 1]))),
-                   "degrees? head the column theta_deg, or give --angle-unit deg")
+        _plausible(
+            table,
+            1,
+            "largest clamp angle",
+            float(np.max(np.abs(data[:, 1]))),
+            "degrees? head the column theta_deg, or give --angle-unit deg",
+        )
     else:
         said = (stated_unit(table.header[1]) or "").lower() if table.header and len(table.header) > 1 else ""
         if said in units.MEASURED_UNITS["angle"] and said != angle_unit:
-            raise ArgumentError("angle_unit", f"{angle_unit} contradicts the header of {table.path}, whose column 2 "
-                              f"is {table.header[1]!r}; drop --angle-unit or fix the header")
+            raise ArgumentError(
+                "angle_unit",
+                f"{angle_unit} contradicts the header of {table.path}, whose column 2 "
+                f"is {table.header[1]!r}; drop --angle-unit or fix the header",
+            )
         data[:, 1] = table.values[:, 1] * units.MEASURED_UNITS["angle"][angle_unit]
     return ClampAngleTrace(data[:, 0], data[:, 1])
 
 
-def read_measurement(path: str | Path, argument: str = "path",
-                     encoder: bool = False) -> LaserTrace | TrackedShapes | ClampAngleTrace:
+def read_measurement(
+    path: str | Path, argument: str = "path", encoder: bool = False
+) -> LaserTrace | TrackedShapes | ClampAngleTrace:
     """A laser trace (2 columns), tracked shapes (5 columns), told apart by the column
     count, or, with ``encoder``, a clamp encoder (2 columns, the second headed as an angle:
     :func:`is_angle_column`). An encoder where none is expected is refused: read as a
@@ -249,13 +314,19 @@ def read_measurement(path: str | Path, argument: str = "path",
     if n == 2 and is_angle_column(table, 1):
         if encoder:
             return _clamp_angle(table)
-        raise DataFileError(table.path, f"is a clamp encoder (column 2 is headed {table.header[1]!r}), not a "
-                            "motion of the strip; fit the clamp's motion with `warpcloth clamp fit-angle`",
-                            table.header_line)
+        raise DataFileError(
+            table.path,
+            f"is a clamp encoder (column 2 is headed {table.header[1]!r}), not a "
+            "motion of the strip; fit the clamp's motion with `warpcloth clamp fit-angle`",
+            table.header_line,
+        )
     if n == 2:
         return _laser_trace(table)
     if n == 5 or (n == 7 and table.header is not None and tuple(table.header[5:7]) == UNCERTAINTY_COLUMNS):
         return _tracked_shapes(table)
-    raise DataFileError(table.path, f"has {n} columns: a laser trace has 2 (t_s, x_mm), tracked shapes 5 "
-                        "(frame, t_s, s_mm, x_mm, y_mm), or 7 as warpcloth track writes them (… u_px, u_mm)",
-                        int(table.lines[0]))
+    raise DataFileError(
+        table.path,
+        f"has {n} columns: a laser trace has 2 (t_s, x_mm), tracked shapes 5 "
+        "(frame, t_s, s_mm, x_mm, y_mm), or 7 as warpcloth track writes them (… u_px, u_mm)",
+        int(table.lines[0]),
+    )

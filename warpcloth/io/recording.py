@@ -63,8 +63,10 @@ class Recording:
         times = np.atleast_1d(np.asarray(times, dtype=float))
         late = times[(times < self.frame_times[0] - 1e-9) | (times > self.frame_times[-1] + 1e-9)]
         if len(late):
-            raise ArgumentError("times", f"{late[0]:g} s is outside the recording "
-                             f"({self.frame_times[0]:g} to {self.frame_times[-1]:g} s)")
+            raise ArgumentError(
+                "times",
+                f"{late[0]:g} s is outside the recording ({self.frame_times[0]:g} to {self.frame_times[-1]:g} s)",
+            )
         return np.abs(self.frame_times[None, :] - times[:, None]).argmin(axis=1)
 
     @property
@@ -85,8 +87,9 @@ class Recording:
     def probe(self, name: str, j: int) -> tuple[np.ndarray, np.ndarray]:
         """Times and values of one probe of the j-th selected variant (0 … n − 1)."""
         name = checked_probe(name)
-        rows = self.probes[self.probes["variant"] == self.variants[checked_index("j", j, len(self.variants),
-                                                                                 "selected variants")]]
+        rows = self.probes[
+            self.probes["variant"] == self.variants[checked_index("j", j, len(self.variants), "selected variants")]
+        ]
         return rows["t"].to_numpy(), rows[name].to_numpy()
 
     def to_dataframe(self) -> pd.DataFrame:
@@ -107,10 +110,19 @@ class Recording:
         table = table.reindex(columns=pd.MultiIndex.from_product([PROBE_FIELDS, self.variants]))
         probes = table.to_numpy().reshape(len(table), len(PROBE_FIELDS), len(self.variants))
         parameters = self.parameters.set_index("variant").loc[self.variants]
-        return probes_dataset(table.index.to_numpy(), probes, self.frame_times, self.frames, self.variants,
-                              {name: parameters[name].to_numpy() for name in parameters.columns},
-                              {"source": str(self.source), "complete": int(self.complete),
-                               "coordinates": f"{COORDINATES}; t = 0 at the release"})
+        return probes_dataset(
+            table.index.to_numpy(),
+            probes,
+            self.frame_times,
+            self.frames,
+            self.variants,
+            {name: parameters[name].to_numpy() for name in parameters.columns},
+            {
+                "source": str(self.source),
+                "complete": int(self.complete),
+                "coordinates": f"{COORDINATES}; t = 0 at the release",
+            },
+        )
 
     def clamp_pose(self, j: int) -> tuple[np.ndarray, np.ndarray]:
         """Per frame, the clamp's rotation angle (rad) and translation (m) that carry its
@@ -139,8 +151,9 @@ def parse_variants(text: str | int | Sequence[int] | None, n_variants: int) -> n
     elif isinstance(text, int) and not isinstance(text, bool):
         text = str(text)
     elif not isinstance(text, str):
-        raise TypeError(f"variants must be a selection such as '3', '1,4,9' or '0:50' (or an int or a list of "
-                        f"ints), got {text!r}")
+        raise TypeError(
+            f"variants must be a selection such as '3', '1,4,9' or '0:50' (or an int or a list of ints), got {text!r}"
+        )
     text = text.strip()
     try:
         parts = [int(p) if p else None for p in text.split(":")] if ":" in text else None
@@ -149,8 +162,10 @@ def parse_variants(text: str | int | Sequence[int] | None, n_variants: int) -> n
         raise ArgumentError("variants", f"{text!r} is not a variant number, list (1,4,9) or range (0:50)") from None
     if parts is not None:
         if len(parts) > 3 or any(p is not None and p < 0 for p in parts) or parts[2:3] == [0]:
-            raise ArgumentError("variants", f"{text!r}: a range is START:STOP[:STEP] of numbers ≥ 0 (a step > 0); "
-                              "it never counts from the end")
+            raise ArgumentError(
+                "variants",
+                f"{text!r}: a range is START:STOP[:STEP] of numbers ≥ 0 (a step > 0); it never counts from the end",
+            )
         chosen = np.arange(n_variants)[slice(*parts)]
     if len(chosen) == 0:
         raise ArgumentError("variants", f"{text!r} selects no variant of {n_variants}")
@@ -175,13 +190,18 @@ def filter_variants(parameters: pd.DataFrame, where: str) -> np.ndarray:
             raise ArgumentError("where", f"{clause.strip()!r} is not 'field OP value' (e.g. damping.gamma_per_s<0.5)")
         name, op, value = match.groups()
         if name not in parameters:
-            raise ArgumentError("where", f"{name!r} is not a parameter of these variants; "
-                             f"known: {', '.join(c for c in parameters.columns if c != 'variant')}")
+            raise ArgumentError(
+                "where",
+                f"{name!r} is not a parameter of these variants; "
+                f"known: {', '.join(c for c in parameters.columns if c != 'variant')}",
+            )
         column = parameters[name]
         if not pd.api.types.is_numeric_dtype(column):  # a choice, e.g. material.bending_law==dahl
             if op not in ("==", "!="):
-                raise ArgumentError("where", f"{name} is a choice ({', '.join(sorted(set(column)))}): compare it "
-                                  f"with == or !=, not {op}")
+                raise ArgumentError(
+                    "where",
+                    f"{name} is a choice ({', '.join(sorted(set(column)))}): compare it with == or !=, not {op}",
+                )
             same = (column == value.strip("\"'")).to_numpy()
             keep &= same if op == "==" else ~same
             continue
@@ -189,8 +209,14 @@ def filter_variants(parameters: pd.DataFrame, where: str) -> np.ndarray:
             number = float(value)
         except ValueError:
             raise ArgumentError("where", f"{value!r} in {clause.strip()!r} is not a number") from None
-        keep &= {"<": column < number, "<=": column <= number, ">": column > number, ">=": column >= number,
-                 "==": column == number, "!=": column != number}[op].to_numpy()
+        keep &= {
+            "<": column < number,
+            "<=": column <= number,
+            ">": column > number,
+            ">=": column >= number,
+            "==": column == number,
+            "!=": column != number,
+        }[op].to_numpy()
     chosen = parameters["variant"].to_numpy()[keep]
     if len(chosen) == 0:
         raise ArgumentError("where", f"{where!r} matches no variant")
@@ -236,6 +262,10 @@ def check_time_order(path: Path, t: np.ndarray, variant: np.ndarray, line_offset
     if len(back):
         row, before = int(order[back[0] + 1]), int(order[back[0]])
         where = f"row {before + 1}" if line_offset is None else f"line {before + line_offset}"
-        raise DataFileError(path, f"t = {t[row]:.10g} s of variant {variant[row]} comes after t = {t[before]:.10g} s "
-                            f"({where}): the rows are out of time order, so the file was changed after it was "
-                            "written", None if line_offset is None else row + line_offset)
+        raise DataFileError(
+            path,
+            f"t = {t[row]:.10g} s of variant {variant[row]} comes after t = {t[before]:.10g} s "
+            f"({where}): the rows are out of time order, so the file was changed after it was "
+            "written",
+            None if line_offset is None else row + line_offset,
+        )

@@ -78,11 +78,17 @@ def check_output_directory(out_dir: str | Path, overwrite: bool = False) -> None
     if out.is_dir() and any(out.iterdir()):
         what = "a run" if (out / "meta.json").is_file() else "a sweep" if (out / "sweep.json").is_file() else "files"
         if not overwrite:
-            raise ArgumentError("out", f"{out} already holds {what}; choose another --out, or pass --overwrite "
-                              "(the old one is replaced only once the new run is complete)")
+            raise ArgumentError(
+                "out",
+                f"{out} already holds {what}; choose another --out, or pass --overwrite "
+                "(the old one is replaced only once the new run is complete)",
+            )
         if what != "a run":
-            raise ArgumentError("out", f"{out} holds {what} that are not a warpcloth run; --overwrite replaces only "
-                              "a run directory, never other files: choose another --out")
+            raise ArgumentError(
+                "out",
+                f"{out} holds {what} that are not a warpcloth run; --overwrite replaces only "
+                "a run directory, never other files: choose another --out",
+            )
 
 
 class RunWriter:
@@ -94,35 +100,48 @@ class RunWriter:
     so a kill or a failure leaves the old result as it was.
     """
 
-    def __init__(self, out_dir: str | Path, scenes: list[Scene], n_nodes: int, frame_times: np.ndarray,
-                 overwrite: bool = False) -> None:
+    def __init__(
+        self, out_dir: str | Path, scenes: list[Scene], n_nodes: int, frame_times: np.ndarray, overwrite: bool = False
+    ) -> None:
         check_output_directory(out_dir, overwrite)
         self.target = Path(out_dir).absolute()
         writer = live_writer(self.target / WRITING)
         if writer is not None:
-            raise ArgumentError("out", f"{out_dir} is being written by another warpcloth process (pid {writer}); "
-                              "wait for it, or choose another --out")
+            raise ArgumentError(
+                "out",
+                f"{out_dir} is being written by another warpcloth process (pid {writer}); "
+                "wait for it, or choose another --out",
+            )
         replacing = self.target.is_dir() and any(self.target.iterdir())
         self.dir = self.target.with_name(f".{self.target.name}.new-{os.getpid()}") if replacing else self.target
         if replacing and self.dir.exists():
             shutil.rmtree(self.dir)  # a staging directory this process left before
         n_samples = (len(frame_times) - 1) * scenes[0].output.probes_per_frame + 1
         row_bytes = 16 + 24 * len(PROBE_FIELDS)  # "%.17g" fields of at most 24 characters
-        check_disk(self.target, 16 * len(frame_times) * len(scenes) * n_nodes + n_samples * len(scenes) * row_bytes,
-                   "the run's frames.npy and probes.csv", "free space, choose another --out, or record less "
-                   "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)")
+        check_disk(
+            self.target,
+            16 * len(frame_times) * len(scenes) * n_nodes + n_samples * len(scenes) * row_bytes,
+            "the run's frames.npy and probes.csv",
+            "free space, choose another --out, or record less "
+            "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)",
+        )
         self.dir.mkdir(parents=True, exist_ok=True)
         # One writer per directory: a second process that passed the emptiness check at
         # the same moment finds the marker and stops instead of interleaving its rows.
         writer = hold(self.dir / WRITING)
         if writer is not None:
-            raise ArgumentError("out", f"{self.target} is being written by another warpcloth process (pid {writer}); "
-                              "choose another --out")
+            raise ArgumentError(
+                "out",
+                f"{self.target} is being written by another warpcloth process (pid {writer}); choose another --out",
+            )
         if any(p.name != WRITING for p in self.dir.iterdir()):
             # another writer finished here between the emptiness check and the marker
             release(self.dir / WRITING)
-            raise ArgumentError("out", f"{self.target} already holds a run (written meanwhile by another process); "
-                              "choose another --out, or pass --overwrite")
+            raise ArgumentError(
+                "out",
+                f"{self.target} already holds a run (written meanwhile by another process); "
+                "choose another --out, or pass --overwrite",
+            )
         if len(scenes) == 1:
             write_scene(self.dir / "scene.toml", scenes[0])
         else:
@@ -138,9 +157,13 @@ class RunWriter:
             "probe_columns": list(PROBE_COLUMNS),
             "probe_units": {"t": "s", "variant": "index", **PROBE_UNITS},
             "coordinates": COORDINATES,
-            "frames": {"file": "frames.npy", "shape": [len(frame_times), len(scenes), n_nodes, 2],
-                       "axes": ["frame", "variant", "node", "xy"], "unit": "m",
-                       "times_file": "frame_times.npy"},
+            "frames": {
+                "file": "frames.npy",
+                "shape": [len(frame_times), len(scenes), n_nodes, 2],
+                "axes": ["frame", "variant", "node", "xy"],
+                "unit": "m",
+                "times_file": "frame_times.npy",
+            },
             "diverged": [],
         }
         self.meta["committed"] = {"probe_rows": 0, "probe_bytes": 0, "frames": 0}
@@ -148,8 +171,9 @@ class RunWriter:
         write_npy_atomically(self.dir / "frame_times.npy", frame_times)
         self.frame_shape = (len(frame_times), len(scenes), n_nodes, 2)
         self.frames = open(self.dir / "frames.npy", "wb")  # noqa: SIM115 - closed in close()
-        np.lib.format.write_array_header_1_0(self.frames, {"descr": "<f8", "fortran_order": False,
-                                                           "shape": self.frame_shape})
+        np.lib.format.write_array_header_1_0(
+            self.frames, {"descr": "<f8", "fortran_order": False, "shape": self.frame_shape}
+        )
         self.frame_offset = self.frames.tell()
         self.frame_bytes = int(np.prod(self.frame_shape[1:])) * 8
         with naming(self.dir / "frames.npy"):
@@ -235,30 +259,42 @@ def read_probes(path: Path, meta: dict) -> pd.DataFrame:
     with open(file, "rb") as fh:
         data = fh.read()
     if meta["complete"] and len(data) != committed["probe_bytes"]:
-        raise DataFileError(file, f"holds {len(data)} bytes but meta.json records {committed['probe_bytes']} for "
-                            "the complete run: the file was truncated or changed")
+        raise DataFileError(
+            file,
+            f"holds {len(data)} bytes but meta.json records {committed['probe_bytes']} for "
+            "the complete run: the file was truncated or changed",
+        )
     if len(data) < committed["probe_bytes"]:
-        raise DataFileError(file, f"is shorter ({len(data)} bytes) than its committed part "
-                            f"({committed['probe_bytes']} bytes): the file was truncated")
+        raise DataFileError(
+            file,
+            f"is shorter ({len(data)} bytes) than its committed part "
+            f"({committed['probe_bytes']} bytes): the file was truncated",
+        )
     text = data[: committed["probe_bytes"]].decode("utf-8", errors="replace")
     try:
         numbers = pd.read_csv(io.StringIO(text))
     except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
         raise DataFileError(file, f"is not a probe table: {exc}") from None
     if list(numbers.columns) != list(PROBE_COLUMNS):
-        raise DataFileError(file, f"has columns {', '.join(map(str, numbers.columns))}; a run writes "
-                            f"{', '.join(PROBE_COLUMNS)}")
+        raise DataFileError(
+            file, f"has columns {', '.join(map(str, numbers.columns))}; a run writes {', '.join(PROBE_COLUMNS)}"
+        )
     damaged = [c for c in numbers.columns if not pd.api.types.is_numeric_dtype(numbers[c])]
     if damaged:
         # only a changed file gets here: find its first cell that is not a number
         column = PROBE_COLUMNS.index(damaged[0])
-        row = int(np.flatnonzero(pd.to_numeric(numbers[damaged[0]], errors="coerce").isna()
-                                 & numbers[damaged[0]].notna())[0])
-        raise DataFileError(file, f"{damaged[0]} is {numbers.iat[row, column]!r}, not a number: the file was "
-                            "changed after the run", row + 2)
+        row = int(
+            np.flatnonzero(pd.to_numeric(numbers[damaged[0]], errors="coerce").isna() & numbers[damaged[0]].notna())[0]
+        )
+        raise DataFileError(
+            file,
+            f"{damaged[0]} is {numbers.iat[row, column]!r}, not a number: the file was changed after the run",
+            row + 2,
+        )
     if meta["complete"] and len(numbers) != committed["probe_rows"]:
-        raise DataFileError(file, f"holds {len(numbers)} rows but meta.json records {committed['probe_rows']} for "
-                            "the complete run")
+        raise DataFileError(
+            file, f"holds {len(numbers)} rows but meta.json records {committed['probe_rows']} for the complete run"
+        )
     numbers["variant"] = numbers["variant"].astype(int)
     check_time_order(file, numbers["t"].to_numpy(), numbers["variant"].to_numpy(), line_offset=2)
     return numbers
@@ -268,20 +304,30 @@ def _check_meta(path: Path, meta: dict) -> None:
     # meta.json says what the other files must be; a run whose files disagree is damaged
     file = path / "meta.json"
     if "committed" not in meta:
-        raise DataFileError(file, "has no record of the committed rows and frames (written by an older "
-                            "warpcloth); rerun the scene to read it")
+        raise DataFileError(
+            file,
+            "has no record of the committed rows and frames (written by an older "
+            "warpcloth); rerun the scene to read it",
+        )
     if meta.get("coordinates") != COORDINATES:
-        raise DataFileError(file, "does not say its positions are from the clamp edge (an older warpcloth measured "
-                            "them from the clamp's top); rerun the scene to read it")
+        raise DataFileError(
+            file,
+            "does not say its positions are from the clamp edge (an older warpcloth measured "
+            "them from the clamp's top); rerun the scene to read it",
+        )
     committed = meta["committed"]
     checks = [
         (isinstance(meta.get("complete"), bool), "complete must be true or false"),
         (isinstance(meta.get("n_variants"), int) and meta["n_variants"] >= 1, "n_variants must be a count ≥ 1"),
         (isinstance(meta.get("n_nodes"), int) and meta["n_nodes"] >= 3, "n_nodes must be a count ≥ 3"),
         (meta.get("probe_columns") == list(PROBE_COLUMNS), "probe_columns differ from what a run writes"),
-        (isinstance(committed, dict) and all(isinstance(committed.get(k), int) and committed[k] >= 0
-                                             for k in ("probe_rows", "probe_bytes", "frames")),
-         "committed must give probe_rows, probe_bytes and frames as counts ≥ 0"),
+        (
+            isinstance(committed, dict)
+            and all(
+                isinstance(committed.get(k), int) and committed[k] >= 0 for k in ("probe_rows", "probe_bytes", "frames")
+            ),
+            "committed must give probe_rows, probe_bytes and frames as counts ≥ 0",
+        ),
     ]
     for ok, why in checks:
         if not ok:
@@ -295,10 +341,18 @@ def _check_scene_files(path: Path, n_variants: int) -> None:
         return
     if n_variants > 1 and stored == [f"{i:04d}.toml" for i in range(n_variants)]:
         return
-    held = (f"{len(stored)} variant scene(s) in variants/" if stored else
-            "one scene.toml" if (path / "scene.toml").is_file() else "no scene file")
-    raise DataFileError(path / "meta.json", f"n_variants is {n_variants}, but the run directory holds {held}: "
-                        "meta.json or the directory was changed after the run")
+    held = (
+        f"{len(stored)} variant scene(s) in variants/"
+        if stored
+        else "one scene.toml"
+        if (path / "scene.toml").is_file()
+        else "no scene file"
+    )
+    raise DataFileError(
+        path / "meta.json",
+        f"n_variants is {n_variants}, but the run directory holds {held}: "
+        "meta.json or the directory was changed after the run",
+    )
 
 
 def read_run(path: Path, variants: str | None = None, where: str | None = None) -> Recording:
@@ -309,8 +363,9 @@ def read_run(path: Path, variants: str | None = None, where: str | None = None) 
     if meta["n_variants"] == 1:
         scenes = [scene_from_dict(read_scene_file(path / "scene.toml"))]
     else:
-        scenes = [scene_from_dict(read_scene_file(path / "variants" / f"{i:04d}.toml"))
-                  for i in range(meta["n_variants"])]
+        scenes = [
+            scene_from_dict(read_scene_file(path / "variants" / f"{i:04d}.toml")) for i in range(meta["n_variants"])
+        ]
     parameters = per_strip_parameters(scenes)
     parameters.insert(0, "variant", np.arange(len(scenes)))
     chosen = select_variants(parameters, variants, where)
@@ -322,19 +377,34 @@ def read_run(path: Path, variants: str | None = None, where: str | None = None) 
         stored = np.load(path / "frames.npy", mmap_mode="r")
         recorded = len(np.load(path / "frame_times.npy"))
     except (ValueError, OSError, EOFError) as exc:
-        raise DataFileError(path / "frames.npy", f"cannot be read as the run's frames ({exc}): the run directory "
-                            "is damaged") from None
+        raise DataFileError(
+            path / "frames.npy", f"cannot be read as the run's frames ({exc}): the run directory is damaged"
+        ) from None
     expected = (recorded, meta["n_variants"], meta["n_nodes"], 2)
     if stored.shape != expected or reached > expected[0]:
-        raise DataFileError(path / "frames.npy", f"holds frames of shape {stored.shape}, but the run recorded "
-                            f"{expected} ({reached} committed): the run directory is damaged")
+        raise DataFileError(
+            path / "frames.npy",
+            f"holds frames of shape {stored.shape}, but the run recorded "
+            f"{expected} ({reached} committed): the run directory is damaged",
+        )
     frames = np.asarray(stored[:reached, chosen])
     times = np.load(path / "frame_times.npy")[:reached]
     if np.any(~(np.diff(times) > 0)):
         first = int(np.argmax(~(np.diff(times) > 0)))
-        raise DataFileError(path / "frame_times.npy", f"frame {first + 1} at t = {times[first + 1]:.10g} s does not "
-                            f"come after frame {first} at {times[first]:.10g} s: the frame times are out of order, "
-                            "so the run directory is damaged")
+        raise DataFileError(
+            path / "frame_times.npy",
+            f"frame {first + 1} at t = {times[first + 1]:.10g} s does not "
+            f"come after frame {first} at {times[first]:.10g} s: the frame times are out of order, "
+            "so the run directory is damaged",
+        )
     probes = read_probes(path, meta)
-    return Recording(path, chosen, [scenes[i] for i in chosen], times, frames, probes[probes["variant"].isin(chosen)],
-                     parameters.iloc[chosen].reset_index(drop=True), bool(meta["complete"]))
+    return Recording(
+        path,
+        chosen,
+        [scenes[i] for i in chosen],
+        times,
+        frames,
+        probes[probes["variant"].isin(chosen)],
+        parameters.iloc[chosen].reset_index(drop=True),
+        bool(meta["complete"]),
+    )

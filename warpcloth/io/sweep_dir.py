@@ -58,8 +58,10 @@ def read_parquet(path: Path, **options: object) -> pd.DataFrame:
     try:
         return pd.read_parquet(path, **options)
     except (OSError, pa.ArrowException, ValueError) as exc:
-        raise DataFileError(path, f"cannot be read ({exc}); it is damaged: run the sweep again into its "
-                            "directory to recompute that batch") from None
+        raise DataFileError(
+            path,
+            f"cannot be read ({exc}); it is damaged: run the sweep again into its directory to recompute that batch",
+        ) from None
 
 
 def _readable(path: Path, frames: bool = False) -> bool:
@@ -92,8 +94,12 @@ class SweepDirectory:
         damaged batch counts as not done, so a resumed sweep recomputes it)."""
         summary, probes = self.summary_path(batch), self.path / "probes" / f"batch-{batch:04d}.parquet"
         frames = self.path / "frames" / f"batch-{batch:04d}.npy"
-        return (summary.exists() and _readable(summary) and _readable(probes)
-                and (not frames.exists() or _readable(frames, frames=True)))
+        return (
+            summary.exists()
+            and _readable(summary)
+            and _readable(probes)
+            and (not frames.exists() or _readable(frames, frames=True))
+        )
 
     def prepare(self, sweep: Sweep, plan: Callable[[], list[list[int]]]) -> list[list[int]]:
         """The batch layout: the stored one when this directory holds the same sweep
@@ -103,27 +109,44 @@ class SweepDirectory:
             stored = read_json(manifest)
             check_coordinates(manifest, stored)
             if stored["fingerprint"] != sweep.fingerprint:
-                why = ("was written by an older warpcloth (sweep format 1), whose Latin hypercube drew other "
-                       "variants from the same seed" if _older_sample(stored) else
-                       "holds a different sweep (its scenes or sweep spec changed)")
+                why = (
+                    "was written by an older warpcloth (sweep format 1), whose Latin hypercube drew other "
+                    "variants from the same seed"
+                    if _older_sample(stored)
+                    else "holds a different sweep (its scenes or sweep spec changed)"
+                )
                 raise ArgumentError("out", f"{self.path} {why}; choose a new --out directory to start this one")
             return stored["batches"]
         batches = plan()
         for sub in ("summary", "probes", "frames"):
             (self.path / sub).mkdir(parents=True, exist_ok=True)
         batch_of = {v: b for b, ids in enumerate(batches) for v in ids}
-        table = pd.DataFrame([{"variant": i, "batch": batch_of[i]} | {k: _cell(v) for k, v in a.items()}
-                              for i, a in enumerate(sweep.assignments)])
+        table = pd.DataFrame(
+            [
+                {"variant": i, "batch": batch_of[i]} | {k: _cell(v) for k, v in a.items()}
+                for i, a in enumerate(sweep.assignments)
+            ]
+        )
         write_atomically(self.path / "variants.csv", lambda p: table.to_csv(p, index=False))
-        info = {"fingerprint": sweep.fingerprint, "n_variants": len(sweep.scenes), "keys": sweep.keys,
-                "batches": batches, "sweep": sweep.spec, "base_scene": sweep.base, "complete": False,
-                "coordinates": COORDINATES, "format": FORMAT, "discrepancy": sweep.discrepancy,
-                "provenance": provenance()}
+        info = {
+            "fingerprint": sweep.fingerprint,
+            "n_variants": len(sweep.scenes),
+            "keys": sweep.keys,
+            "batches": batches,
+            "sweep": sweep.spec,
+            "base_scene": sweep.base,
+            "complete": False,
+            "coordinates": COORDINATES,
+            "format": FORMAT,
+            "discrepancy": sweep.discrepancy,
+            "provenance": provenance(),
+        }
         write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
         return batches
 
-    def write_batch(self, batch: int, probes: dict[str, np.ndarray], summary_rows: list[dict],
-                    frames: np.ndarray | None) -> None:
+    def write_batch(
+        self, batch: int, probes: dict[str, np.ndarray], summary_rows: list[dict], frames: np.ndarray | None
+    ) -> None:
         """Store one batch: probe columns, optional frames, then (last) its summary rows."""
         table = pa.table(probes)
         write_atomically(self.path / "probes" / f"batch-{batch:04d}.parquet", lambda p: pq.write_table(table, p))
@@ -149,8 +172,11 @@ class SweepDirectory:
 def check_coordinates(manifest: Path, info: dict) -> None:
     """Refuse a sweep whose positions are not from the clamp edge (an older warpcloth's)."""
     if info.get("coordinates") != COORDINATES:
-        raise DataFileError(manifest, "does not say its positions are from the clamp edge (an older warpcloth "
-                            "measured them from the clamp's top); run the sweep again into a new --out directory")
+        raise DataFileError(
+            manifest,
+            "does not say its positions are from the clamp edge (an older warpcloth "
+            "measured them from the clamp's top); run the sweep again into a new --out directory",
+        )
 
 
 def _older_sample(info: dict) -> bool:
@@ -170,13 +196,19 @@ def stored_sweep(path: Path, info: dict) -> Sweep:
         table = pd.read_csv(path / "variants.csv").sort_values("variant")
         values = table[sampled].to_numpy(dtype=float)
     except (OSError, KeyError, ValueError, pd.errors.ParserError) as exc:
-        raise DataFileError(path / "variants.csv", f"cannot be read ({exc}); a sweep of format 1 is labelled by "
-                            "the variants it stores there") from None
+        raise DataFileError(
+            path / "variants.csv",
+            f"cannot be read ({exc}); a sweep of format 1 is labelled by the variants it stores there",
+        ) from None
     if len(values) != len(sweep.assignments):
-        raise DataFileError(path / "variants.csv", f"lists {len(values)} variants, sweep.json "
-                            f"{len(sweep.assignments)}; a sweep of format 1 is labelled by the variants it stores")
-    assignments = [a | dict(zip(sampled, map(float, row), strict=True))
-                   for a, row in zip(sweep.assignments, values, strict=True)]
+        raise DataFileError(
+            path / "variants.csv",
+            f"lists {len(values)} variants, sweep.json "
+            f"{len(sweep.assignments)}; a sweep of format 1 is labelled by the variants it stores",
+        )
+    assignments = [
+        a | dict(zip(sampled, map(float, row), strict=True)) for a, row in zip(sweep.assignments, values, strict=True)
+    ]
     return Sweep(sweep.base, sweep.spec, sweep.keys, assignments, variant_scenes(sweep.base, assignments))
 
 
@@ -186,8 +218,11 @@ def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording
     check_coordinates(path / "sweep.json", info)
     sweep = stored_sweep(path, info)
     if sweep.fingerprint != info["fingerprint"]:
-        raise DataFileError(path, "its variants no longer resolve to the scenes that were simulated "
-                            "(a material file it uses has changed?); the stored results cannot be labelled")
+        raise DataFileError(
+            path,
+            "its variants no longer resolve to the scenes that were simulated "
+            "(a material file it uses has changed?); the stored results cannot be labelled",
+        )
     parameters = per_strip_parameters(sweep.scenes)
     parameters.insert(0, "variant", np.arange(len(sweep.scenes)))
     chosen = select_variants(parameters, variants, where)
@@ -195,23 +230,38 @@ def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording
     needed = sorted({where_is[v][0] for v in chosen})
     missing = [b for b in needed if not (path / "frames" / f"batch-{b:04d}.npy").is_file()]
     if missing:
-        raise DataFileError(path, f"has no shape frames for batch {missing[0]}: that batch ran without --frames "
-                            "(or has not finished); a resumed sweep keeps finished batches, so run it with "
-                            "--frames into a new --out directory")
+        raise DataFileError(
+            path,
+            f"has no shape frames for batch {missing[0]}: that batch ran without --frames "
+            "(or has not finished); a resumed sweep keeps finished batches, so run it with "
+            "--frames into a new --out directory",
+        )
     try:
         stores = {b: np.load(path / "frames" / f"batch-{b:04d}.npy", mmap_mode="r") for b in needed}
     except (OSError, ValueError, EOFError) as exc:
-        raise DataFileError(path / "frames", f"a batch's frames cannot be read ({exc}); run the sweep again into "
-                            "its directory to recompute it") from None
+        raise DataFileError(
+            path / "frames",
+            f"a batch's frames cannot be read ({exc}); run the sweep again into its directory to recompute it",
+        ) from None
     n_frames = min(len(s) for s in stores.values())
     frames = np.stack([stores[where_is[v][0]][:n_frames, where_is[v][1]] for v in chosen], axis=1)
-    tables = {b: read_parquet(path / "probes" / f"batch-{b:04d}.parquet",
-                              filters=[("variant", "in", [int(v) for v in chosen])]) for b in needed}
+    tables = {
+        b: read_parquet(
+            path / "probes" / f"batch-{b:04d}.parquet", filters=[("variant", "in", [int(v) for v in chosen])]
+        )
+        for b in needed
+    }
     for b, table in tables.items():
-        check_time_order(path / "probes" / f"batch-{b:04d}.parquet", table["t"].to_numpy(),
-                         table["variant"].to_numpy())
+        check_time_order(path / "probes" / f"batch-{b:04d}.parquet", table["t"].to_numpy(), table["variant"].to_numpy())
     probes = pd.concat(tables.values())
     probes = probes[["t", "variant", *PROBE_FIELDS]]
     frame_times = np.arange(n_frames) / sweep.scenes[0].output.frame_rate_hz
-    return Recording(path, chosen, [sweep.scenes[i] for i in chosen], frame_times, frames, probes,
-                     parameters.iloc[chosen].reset_index(drop=True))
+    return Recording(
+        path,
+        chosen,
+        [sweep.scenes[i] for i in chosen],
+        frame_times,
+        frames,
+        probes,
+        parameters.iloc[chosen].reset_index(drop=True),
+    )

@@ -107,8 +107,11 @@ def claim_result(result: str | Path, argument: str) -> None:
         marker.parent.mkdir(parents=True, exist_ok=True)
     writer = hold(marker)
     if writer is not None:
-        raise ArgumentError(argument, f"{result} is being written by another warpcloth process (pid {writer}); "
-                            f"wait for it, or choose another {argument}")
+        raise ArgumentError(
+            argument,
+            f"{result} is being written by another warpcloth process (pid {writer}); "
+            f"wait for it, or choose another {argument}",
+        )
     _CLAIMED.add(marker)
     atexit.register(release, marker)
 

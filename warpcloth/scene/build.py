@@ -50,16 +50,20 @@ def check_batch(scenes: Sequence[Scene]) -> None:
         try:
             check_step(scene)
         except SceneError as exc:
-            raise SceneError(exc.field, f"variant {i}: {exc.message}" if len(scenes) > 1 else exc.message,
-                             exc.related, i) from None
+            raise SceneError(
+                exc.field, f"variant {i}: {exc.message}" if len(scenes) > 1 else exc.message, exc.related, i
+            ) from None
     first = scenes[0].to_dict()
     for i, scene in enumerate(scenes[1:], start=1):
         other = scene.to_dict()
         for name in batch_fields():
             section, key = name.split(".")
             if first[section][key] != other[section][key]:
-                raise SceneError(name, f"differs between variant 0 ({first[section][key]!r}) and variant {i} "
-                                 f"({other[section][key]!r}); it cannot vary within one batch")
+                raise SceneError(
+                    name,
+                    f"differs between variant 0 ({first[section][key]!r}) and variant {i} "
+                    f"({other[section][key]!r}); it cannot vary within one batch",
+                )
 
 
 def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
@@ -71,13 +75,21 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
     # numbers of 8 B per node and strip), before any exists
     remembers = any(bending_law(scene.material.bending_law).uses_reversal_memory for scene in scenes)
     history = 16 * (first.integrator.reversal_memory + 1) * first.n_nodes if remembers else 0
-    check_memory((216 * first.n_nodes + history) * len(scenes),
-                 f"the state of {len(scenes)} strip(s) of {first.n_nodes} nodes",
-                 "use a coarser strip.spacing_mm, fewer strips per batch"
-                 + (" or a smaller integrator.reversal_memory" if remembers else ""))
-    builder = StripBuilder(rest_positions(first), first.n_clamped, first.spacing, first.run.gravity_m_per_s2,
-                           release_time=first.preroll, move_time=first.release.move_time_s,
-                           reversal_memory=first.integrator.reversal_memory)
+    check_memory(
+        (216 * first.n_nodes + history) * len(scenes),
+        f"the state of {len(scenes)} strip(s) of {first.n_nodes} nodes",
+        "use a coarser strip.spacing_mm, fewer strips per batch"
+        + (" or a smaller integrator.reversal_memory" if remembers else ""),
+    )
+    builder = StripBuilder(
+        rest_positions(first),
+        first.n_clamped,
+        first.spacing,
+        first.run.gravity_m_per_s2,
+        release_time=first.preroll,
+        move_time=first.release.move_time_s,
+        reversal_memory=first.integrator.reversal_memory,
+    )
     for scene in scenes:
         start, end, coefficients = clamp_pieces(scene.clamp)
         builder.add_strip(
@@ -85,15 +97,17 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
             width=scene.strip.width_mm * units.LENGTH_MM,
             damping=scene.damping.gamma_per_s,
             clamp=ClampMotion(start, end, coefficients),
-            rotation_centre=units.LENGTH_MM * np.array([scene.clamp.rotation_centre_dx_mm,
-                                                        scene.clamp.rotation_centre_dy_mm]),
+            rotation_centre=units.LENGTH_MM
+            * np.array([scene.clamp.rotation_centre_dx_mm, scene.clamp.rotation_centre_dy_mm]),
             hold_target=units.LENGTH_MM * np.array([scene.release.hold_x_mm, scene.release.hold_y_mm]),
             settle_damping=scene.release.settle_damping_per_s,
             hold_free_end=scene.release.hold_free_end,
             edge_hinge_length=scene.edge_hinge_length,
-            fabric_set=FabricSet(scene.strip.rest_curvature_per_cm * units.CURVATURE_PER_CM,
-                                 tuple(s * units.LENGTH_MM for s in scene.strip.rest_curvature_table_s_mm),
-                                 tuple(k * units.CURVATURE_PER_CM for k in scene.strip.rest_curvature_table_per_cm)),
+            fabric_set=FabricSet(
+                scene.strip.rest_curvature_per_cm * units.CURVATURE_PER_CM,
+                tuple(s * units.LENGTH_MM for s in scene.strip.rest_curvature_table_s_mm),
+                tuple(k * units.CURVATURE_PER_CM for k in scene.strip.rest_curvature_table_per_cm),
+            ),
             grip=grip_of(scene),
         )
     return builder

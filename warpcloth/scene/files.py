@@ -60,15 +60,26 @@ def scene_source(name_or_path: str | Path) -> tuple[str, str]:
     path = Path(name_or_path)
     if is_path(name_or_path):
         if not path.is_file():
-            why = ("is a directory" if path.is_dir() else "ends in .toml" if path.suffix == ".toml"
-                   else "has a directory part")
-            raise DataFileError(str(name_or_path), f"no such scene file (a path, because it {why}; a bundled "
-                                f"scene is named without either: {', '.join(bundled_scenes())})")
+            why = (
+                "is a directory"
+                if path.is_dir()
+                else "ends in .toml"
+                if path.suffix == ".toml"
+                else "has a directory part"
+            )
+            raise DataFileError(
+                str(name_or_path),
+                f"no such scene file (a path, because it {why}; a bundled "
+                f"scene is named without either: {', '.join(bundled_scenes())})",
+            )
         return read_toml_text(path), str(path)
     resource = importlib.resources.files("warpcloth.scenes") / f"{path.name}.toml"
     if not resource.is_file():
-        raise ArgumentError("name_or_path", f"no bundled scene {str(name_or_path)!r} (bundled: "
-                         f"{', '.join(bundled_scenes())}; a scene file is a path ending in .toml)")
+        raise ArgumentError(
+            "name_or_path",
+            f"no bundled scene {str(name_or_path)!r} (bundled: "
+            f"{', '.join(bundled_scenes())}; a scene file is a path ending in .toml)",
+        )
     return resource.read_text(), f"bundled scene {path.name}"
 
 

@@ -11,5 +11,8 @@ from .schema import Scene
 
 def grip_of(scene: Scene) -> Grip:
     """The clamp's grip zone of ``scene`` in SI (docs/model.md §5.4)."""
-    return Grip(scene.clamp.grip_length_mm * units.LENGTH_MM, scene.clamp.grip_bending_factor,
-                scene.clamp.grip_hysteresis_factor)
+    return Grip(
+        scene.clamp.grip_length_mm * units.LENGTH_MM,
+        scene.clamp.grip_bending_factor,
+        scene.clamp.grip_hysteresis_factor,
+    )

@@ -35,8 +35,11 @@ def key_path(dotted: str) -> tuple[str, ...]:
     outside the grammar (an empty part, a stray character) is a SceneError naming it."""
     text = str(dotted)
     if not _NAME.fullmatch(text):
-        raise SceneError(text.strip() or repr(text), "is not a field name: dotted parts of letters, digits, _ and "
-                         "-, list items as .N or [N] (e.g. damping.gamma_per_s, clamp.segments.1.t_end_s)")
+        raise SceneError(
+            text.strip() or repr(text),
+            "is not a field name: dotted parts of letters, digits, _ and "
+            "-, list items as .N or [N] (e.g. damping.gamma_per_s, clamp.segments.1.t_end_s)",
+        )
     return tuple(quoted[1:-1] if quoted else index or bare for quoted, index, bare in _TOKEN.findall(text))
 
 
@@ -107,9 +110,8 @@ def field_line(text: str, field: str, swept: bool = False) -> int | None:
             if path[0] == "sweep" and key_path_or_none(path[-1]) == target:
                 return number
             continue
-        if path[:len(target)] == target:
+        if path[: len(target)] == target:
             return number  # the field itself, or a table of it written with dotted keys
-        if len(path) > best_length and target[:len(path)] == path:
+        if len(path) > best_length and target[: len(path)] == path:
             best, best_length = number, len(path)  # the value sits inside this key's array or inline table
     return best
-

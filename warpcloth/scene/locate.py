@@ -53,15 +53,22 @@ def where_set(error: SceneError, text: str | None, source: str, overrides: Overr
     if error.variant is not None:
         for name in (error.field, *error.related):
             field = key_path_or_none(name)
-            swept = last(lambda path, _key, field=field: len(path) > 2 and path[0] == "sweep" and
-                         key_path_or_none(path[-1]) == field)
+            swept = last(
+                lambda path, _key, field=field: (
+                    len(path) > 2 and path[0] == "sweep" and key_path_or_none(path[-1]) == field
+                )
+            )
             if swept:
                 return f"set by the override {swept}"
             line = field_line(text, name, swept=True) if text is not None else None
             if line:
                 return f"{source}, line {line}"
-    related = last(lambda path, key: any(overlaps(path, f) for f in others) or (
-        is_material_file_key(key) and any(f[:1] == ("material",) for f in others)))
+    related = last(
+        lambda path, key: (
+            any(overlaps(path, f) for f in others)
+            or (is_material_file_key(key) and any(f[:1] == ("material",) for f in others))
+        )
+    )
     mine = last(lambda path, key: overlaps(path, own) or (is_material_file_key(key) and own[:1] == ("material",)))
     if mine:
         return f"set by the override {mine}"

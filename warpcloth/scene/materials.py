@@ -23,6 +23,7 @@ from .shear import SHEAR_TABLE, ShearMaterial, parse_shear
 
 MATERIAL_FILE_KEY = "material.from_file"
 
+
 def si_value(parameter: LawParameter, value: float) -> float:
     """A law parameter's scene value (KES units) in SI, by the unit its description names."""
     factor = units.BENDING_UNITS[parameter.kind][0]
@@ -36,8 +37,9 @@ def to_si(section: MaterialSection) -> MaterialSI:
         density=section.density_g_per_cm2 * units.AREAL_DENSITY_G_PER_CM2,
         tensile=tuple(a * units.TENSILE_GF_PER_CM for a in section.tensile_gf_per_cm),
         bending_rigidity=si_value(BENDING_RIGIDITY, getattr(section, BENDING_RIGIDITY.scene_field)),
-        bending=LawParameters.of(law.name, {p.name: si_value(p, getattr(section, p.scene_field))
-                                                for p in law.parameters}),
+        bending=LawParameters.of(
+            law.name, {p.name: si_value(p, getattr(section, p.scene_field)) for p in law.parameters}
+        ),
     )
 
 
@@ -55,8 +57,10 @@ def law_fields(law: str) -> list[str]:
 
 def law_aliases() -> dict[str, str]:
     """Every law parameter's short name (``Ms``), D's included, and its dotted scene field."""
-    return {p.alias: f"material.{p.scene_field}"
-            for p in (BENDING_RIGIDITY, *(parameter for parameter, _ in LAW_PARAMETERS.values()))}
+    return {
+        p.alias: f"material.{p.scene_field}"
+        for p in (BENDING_RIGIDITY, *(parameter for parameter, _ in LAW_PARAMETERS.values()))
+    }
 
 
 def hysteresis_amplitudes() -> tuple[str, ...]:
@@ -83,21 +87,32 @@ def validate_material(section: MaterialSection, max_strain: float, prefix: str) 
         laws = f.metadata.get("laws", ())
         if laws and section.bending_law not in laws and getattr(section, f.name) != f.default:
             law = " or ".join(laws)
-            origin = (f" (set by the scene or by its material file {section.from_file!r}: a material file "
-                      "gives the fields of its own law)") if section.from_file else ""
-            raise SceneError(f"{prefix}.{f.name}", f"= {getattr(section, f.name)!r} is a parameter of the "
-                             f"{law} bending law, but {prefix}.bending_law is {section.bending_law!r} (whose "
-                             f"parameters are {', '.join(law_fields(section.bending_law))}){origin}; set "
-                             f"{prefix}.bending_law = \"{laws[0]}\", use a material of that law, or leave the field "
-                             "out")
+            origin = (
+                (
+                    f" (set by the scene or by its material file {section.from_file!r}: a material file "
+                    "gives the fields of its own law)"
+                )
+                if section.from_file
+                else ""
+            )
+            raise SceneError(
+                f"{prefix}.{f.name}",
+                f"= {getattr(section, f.name)!r} is a parameter of the "
+                f"{law} bending law, but {prefix}.bending_law is {section.bending_law!r} (whose "
+                f"parameters are {', '.join(law_fields(section.bending_law))}){origin}; set "
+                f'{prefix}.bending_law = "{laws[0]}", use a material of that law, or leave the field '
+                "out",
+            )
     a = section.tensile_gf_per_cm
     if len(a) != 4:
         raise SceneError(f"{prefix}.tensile_gf_per_cm", f"needs the 4 coefficients a1..a4, got {len(a)}")
     slope, strain = tensile_slope_minimum(a, max_strain)
     if not slope > 0:
-        raise SceneError(f"{prefix}.tensile_gf_per_cm",
-                         f"T(ε) with a = {a} is not increasing at ε = {strain:.4g} (dT/dε = {slope:.4g} "
-                         f"gf/cm); it must increase on [0, integrator.divergence_strain = {max_strain:g}]")
+        raise SceneError(
+            f"{prefix}.tensile_gf_per_cm",
+            f"T(ε) with a = {a} is not increasing at ε = {strain:.4g} (dT/dε = {slope:.4g} "
+            f"gf/cm); it must increase on [0, integrator.divergence_strain = {max_strain:g}]",
+        )
 
 
 def bundled_materials() -> list[str]:
@@ -109,9 +124,12 @@ def bundled_materials() -> list[str]:
 def material_fields(law: str | None = None) -> list[str]:
     """The [material] fields a material file gives (every one but ``from_file``); for
     ``law``, only those that law reads (the common ones and its own parameters)."""
-    return [f.name for f in dataclasses.fields(MaterialSection)
-            if f.name not in ("from_file", "bending_law") and (law is None or not f.metadata.get("laws")
-                                                                or law in f.metadata["laws"])]
+    return [
+        f.name
+        for f in dataclasses.fields(MaterialSection)
+        if f.name not in ("from_file", "bending_law")
+        and (law is None or not f.metadata.get("laws") or law in f.metadata["laws"])
+    ]
 
 
 def read_material_file(ref: str | Path) -> dict:
@@ -129,38 +147,52 @@ def read_material_file(ref: str | Path) -> dict:
         try:
             text = read_toml_text(path)
         except OSError as exc:
-            raise SceneError(MATERIAL_FILE_KEY, f"cannot read material file {ref!r}: {exc.strerror} (a path is "
-                             f"relative to the scene file; a bundled material is named without .toml: "
-                             f"{', '.join(bundled_materials())})") from None
+            raise SceneError(
+                MATERIAL_FILE_KEY,
+                f"cannot read material file {ref!r}: {exc.strerror} (a path is "
+                f"relative to the scene file; a bundled material is named without .toml: "
+                f"{', '.join(bundled_materials())})",
+            ) from None
     else:
         resource = importlib.resources.files("warpcloth.scenes") / "materials" / f"{ref}.toml"
         if not ref or not resource.is_file():
-            raise SceneError(MATERIAL_FILE_KEY, f"no bundled material {ref!r} (bundled: "
-                             f"{', '.join(bundled_materials())}; a material file is a path ending in .toml)")
+            raise SceneError(
+                MATERIAL_FILE_KEY,
+                f"no bundled material {ref!r} (bundled: "
+                f"{', '.join(bundled_materials())}; a material file is a path ending in .toml)",
+            )
         text = resource.read_text()
         where = f"bundled material {ref}"
     data = parse_toml(text, where, MATERIAL_FILE_KEY)
     extra = sorted(set(data) - {"material", "fit", SHEAR_TABLE})
     if extra:
-        raise SceneError(MATERIAL_FILE_KEY, f"{where}: unknown top-level entry {extra[0]!r}; a material file "
-                         "has a [material] and optionally a [shear] and a [fit] table")
+        raise SceneError(
+            MATERIAL_FILE_KEY,
+            f"{where}: unknown top-level entry {extra[0]!r}; a material file "
+            "has a [material] and optionally a [shear] and a [fit] table",
+        )
     material = data.get("material")
     if not isinstance(material, dict) or not isinstance(data.get("fit", {}), dict):
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: needs a [material] table (and [fit], if any, a table)")
     # a file without bending_law predates the other laws: the paper's
     law = material.get("bending_law", DEFAULT_BENDING_LAW)
     if not isinstance(law, str) or law not in BENDING_LAWS:
-        raise SceneError(MATERIAL_FILE_KEY, f"{where}: material.bending_law must be one of "
-                         f"{', '.join(BENDING_LAWS)}; got {law!r}")
+        raise SceneError(
+            MATERIAL_FILE_KEY, f"{where}: material.bending_law must be one of {', '.join(BENDING_LAWS)}; got {law!r}"
+        )
     missing = [k for k in [*material_fields(law), "source"] if k not in material]
     if missing:
-        raise SceneError(MATERIAL_FILE_KEY, f"{where}: [material] lacks {', '.join(missing)}; a material file "
-                         f"gives every field its bending law ({law}) reads, so that nothing silently comes from "
-                         "the default material")
+        raise SceneError(
+            MATERIAL_FILE_KEY,
+            f"{where}: [material] lacks {', '.join(missing)}; a material file "
+            f"gives every field its bending law ({law}) reads, so that nothing silently comes from "
+            "the default material",
+        )
     source = material["source"]
     if not isinstance(source, str) or not source.strip():
-        raise SceneError(MATERIAL_FILE_KEY, f"{where}: material.source must say where the numbers come from, "
-                         f"got {source!r}")
+        raise SceneError(
+            MATERIAL_FILE_KEY, f"{where}: material.source must say where the numbers come from, got {source!r}"
+        )
     if "from_file" in material:
         raise SceneError(MATERIAL_FILE_KEY, f"{where}: a material file cannot refer to another (from_file)")
     try:
@@ -193,8 +225,11 @@ def with_material_file(data: dict) -> dict:
     if not missing:
         return data
     if not ref.strip():
-        raise SceneError(MATERIAL_FILE_KEY, f"{ref!r} names no material file, and the scene leaves "
-                         f"{', '.join(missing)} to it; give a bundled material name or a path ending in .toml")
+        raise SceneError(
+            MATERIAL_FILE_KEY,
+            f"{ref!r} names no material file, and the scene leaves "
+            f"{', '.join(missing)} to it; give a bundled material name or a path ending in .toml",
+        )
     values = read_material_file(ref)["material"]
     values = {"bending_law": DEFAULT_BENDING_LAW, **values}
     return {**data, "material": {**{k: values[k] for k in [*missing, "bending_law"] if k in values}, **material}}

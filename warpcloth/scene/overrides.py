@@ -30,17 +30,24 @@ def set_field(data: dict, key: str, value: Any) -> None:
     parts = list(key_path(key))
     for i, part in enumerate(parts):
         if "." in part and tuple(parts[:i]) not in SWEPT_NAME_TABLES:
-            raise SceneError(key.strip(), f"{part!r} in quotes is a swept field's name, which only "
-                             f"{', '.join('.'.join(t) for t in SWEPT_NAME_TABLES)} take; elsewhere write it unquoted")
+            raise SceneError(
+                key.strip(),
+                f"{part!r} in quotes is a swept field's name, which only "
+                f"{', '.join('.'.join(t) for t in SWEPT_NAME_TABLES)} take; elsewhere write it unquoted",
+            )
     if tuple(parts) == MATERIAL_FILE:
         if not isinstance(value, str) or not value.strip():
-            raise SceneError(MATERIAL_FILE_KEY, f"{value!r} names no material file; give a bundled material name "
-                             f"({', '.join(bundled_materials())}) or a path ending in .toml")
+            raise SceneError(
+                MATERIAL_FILE_KEY,
+                f"{value!r} names no material file; give a bundled material name "
+                f"({', '.join(bundled_materials())}) or a path ending in .toml",
+            )
         if value.endswith(".toml") and not Path(value).is_absolute():
             value = str(Path(value).resolve())  # relative to where the command runs, recorded absolute
         if isinstance(data.get("material"), dict):
-            data["material"] = {k: v for k, v in data["material"].items()
-                                if k not in [*material_fields(), "bending_law"]}
+            data["material"] = {
+                k: v for k, v in data["material"].items() if k not in [*material_fields(), "bending_law"]
+            }
     elif parts[0] == "material" and len(parts) > 2:
         # A list item of a material that comes from a file: the file's list first.
         data.update(with_material_file(data))
@@ -60,8 +67,10 @@ def set_field(data: dict, key: str, value: Any) -> None:
             node[part] = value
         else:
             if part not in node and parts[i + 1].isdigit():
-                raise SceneError(".".join(parts[: i + 1]), f"has no list item {parts[i + 1]!r}: it is not set here "
-                                 "(set the whole list, e.g. key=[...])")
+                raise SceneError(
+                    ".".join(parts[: i + 1]),
+                    f"has no list item {parts[i + 1]!r}: it is not set here (set the whole list, e.g. key=[...])",
+                )
             node = node.setdefault(part, {})
             if not isinstance(node, (dict, list)):
                 raise SceneError(".".join(parts[: i + 1]), "is a value, not a section")

@@ -90,8 +90,11 @@ def read_toml_text(path: Path) -> str:
     try:
         return path.read_bytes().decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise DataFileError(path, f"is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start}); "
-                            "a scene or material file is TOML, which is UTF-8") from None
+        raise DataFileError(
+            path,
+            f"is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start}); "
+            "a scene or material file is TOML, which is UTF-8",
+        ) from None
 
 
 def parse_toml(text: str, where: str, field: str) -> dict:

@@ -90,8 +90,10 @@ def parse_shear(table: object, where: str = "") -> ShearMaterial:
     expected = shear_fields(law)
     unknown = sorted(set(table) - {"law", *expected})
     if unknown:
-        raise SceneError(f"{SHEAR_TABLE}.{unknown[0]}", f"{where}not a field of the {law} shear law (its fields: "
-                         f"{', '.join(expected)})")
+        raise SceneError(
+            f"{SHEAR_TABLE}.{unknown[0]}",
+            f"{where}not a field of the {law} shear law (its fields: {', '.join(expected)})",
+        )
     missing = [name for name in expected if name not in table]
     if missing:
         raise SceneError(f"{SHEAR_TABLE}.{missing[0]}", f"{where}the {law} shear law needs {', '.join(missing)}")

@@ -61,12 +61,16 @@ class StepChoice:
 
     def describe(self) -> str:
         """One line for the run's output."""
-        held = (f"{self.margin:g} × the {self.bound.mode} {'limit' if self.bound.exact else 'estimate'} "
-                f"{self.bound.seconds:.3e} s")
+        held = (
+            f"{self.margin:g} × the {self.bound.mode} {'limit' if self.bound.exact else 'estimate'} "
+            f"{self.bound.seconds:.3e} s"
+        )
         if self.accurate_s is not None:
             held += f" and the {self.accurate_s:g} s up to which {self.scheme} is measured within 0.2 %"
-        return (f"integrator.dt_s = auto: {self.dt_s:.4e} s = 1/{round(self.interval_s / self.dt_s)} of the probe "
-                f"interval, within {held} (docs/model.md §9.6)")
+        return (
+            f"integrator.dt_s = auto: {self.dt_s:.4e} s = 1/{round(self.interval_s / self.dt_s)} of the probe "
+            f"interval, within {held} (docs/model.md §9.6)"
+        )
 
 
 def _requests(scene: Scene) -> bool:
@@ -83,26 +87,40 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
     for scene, material, (_, loop) in zip(scenes, materials, response, strict=True):
         law = bending_law(material.bending_law)
         if scheme == "imex" and loop > 0 and not law.mesh_independent:
-            raise SceneError("integrator.dt_s", f"auto has no accurate imex step for the {law.name} law of "
-                             f"material {scene.material.name!r}: without return-point memory its loop keeps a "
-                             "0.1–2 % floor against the converged solution that no dt removes (docs/model.md "
-                             "§9.5); use bending_law = \"masing\", or scheme = \"semi_implicit\" with dt_s = "
-                             "\"auto\"", related=("integrator.scheme", "material.bending_law"))
+            raise SceneError(
+                "integrator.dt_s",
+                f"auto has no accurate imex step for the {law.name} law of "
+                f"material {scene.material.name!r}: without return-point memory its loop keeps a "
+                "0.1–2 % floor against the converged solution that no dt removes (docs/model.md "
+                '§9.5); use bending_law = "masing", or scheme = "semi_implicit" with dt_s = '
+                '"auto"',
+                related=("integrator.scheme", "material.bending_law"),
+            )
     bounds = []
     for scene, material in zip(scenes, materials, strict=True):
         bound = _stability_bound(scene, material)
         if bound is None:
-            raise SceneError("integrator.dt_s", f"auto needs a scheme with a known stability limit; {scheme} has "
-                             "none (forward Euler amplifies every undamped oscillation, docs/model.md §9): use "
-                             "semi_implicit or imex", related=("integrator.scheme",))
+            raise SceneError(
+                "integrator.dt_s",
+                f"auto needs a scheme with a known stability limit; {scheme} has "
+                "none (forward Euler amplifies every undamped oscillation, docs/model.md §9): use "
+                "semi_implicit or imex",
+                related=("integrator.scheme",),
+            )
         bounds.append(bound)
     bound = min(bounds, key=lambda b: b.seconds * STABILITY_MARGIN[b.exact])
     margin = STABILITY_MARGIN[bound.exact]
     accurate = ACCURATE_STEP_S.get(scheme)
     longest = min(bound.seconds * margin, accurate or math.inf, interval)
     dt = interval / math.ceil(interval / longest * (1 - 1e-12))
-    return StepChoice(dt, bound, margin, accurate if accurate is not None and accurate < bound.seconds * margin
-                      else None, interval, scheme)
+    return StepChoice(
+        dt,
+        bound,
+        margin,
+        accurate if accurate is not None and accurate < bound.seconds * margin else None,
+        interval,
+        scheme,
+    )
 
 
 def with_chosen_step(scenes: Sequence[Scene]) -> list[Scene]:
@@ -144,17 +162,25 @@ def check_chosen_step(scene: Scene) -> None:
         return
     now = choose_step(requesting_auto([scene])).dt_s
     if scene.integrator.dt_s > now * (1 + 1e-9):
-        raise SceneError("integrator.dt_s", f"{scene.integrator.dt_s:.4e} s was chosen by dt_s = \"auto\" for "
-                         f"another scene (integrator.dt_chosen_by = \"auto\"); for this one auto chooses "
-                         f"{now:.4e} s: set integrator.dt_s = \"auto\" to choose again, or give the step with "
-                         "integrator.dt_chosen_by = \"scene\"",
-                         related=("integrator.dt_chosen_by", "strip.spacing_mm", "integrator.scheme"))
+        raise SceneError(
+            "integrator.dt_s",
+            f'{scene.integrator.dt_s:.4e} s was chosen by dt_s = "auto" for '
+            f'another scene (integrator.dt_chosen_by = "auto"); for this one auto chooses '
+            f'{now:.4e} s: set integrator.dt_s = "auto" to choose again, or give the step with '
+            'integrator.dt_chosen_by = "scene"',
+            related=("integrator.dt_chosen_by", "strip.spacing_mm", "integrator.scheme"),
+        )
 
 
 def _stability_bound(scene: Scene, material: MaterialSI) -> StepBound | None:
-    return SOLVERS[scene.integrator.scheme].stable_step(material, scene.spacing, scene.n_nodes - scene.n_clamped,
-                                                        scene.edge_hinge_length, scene.run.gravity_m_per_s2,
-                                                        grip_of(scene))
+    return SOLVERS[scene.integrator.scheme].stable_step(
+        material,
+        scene.spacing,
+        scene.n_nodes - scene.n_clamped,
+        scene.edge_hinge_length,
+        scene.run.gravity_m_per_s2,
+        grip_of(scene),
+    )
 
 
 def stable_step_of(scene: Scene) -> float | None:
@@ -175,8 +201,10 @@ def describe_step(scene: Scene) -> str:
     choice = choose_step(requesting_auto([scene]))
     if math.isclose(choice.dt_s, scene.integrator.dt_s, rel_tol=1e-12):
         return choice.describe()
-    return (f"integrator.dt_s = auto: {scene.integrator.dt_s:.4e} s, the longest step that suits every scene "
-            f"sharing it (this one alone: {choice.describe().split(': ', 1)[1]})")
+    return (
+        f"integrator.dt_s = auto: {scene.integrator.dt_s:.4e} s, the longest step that suits every scene "
+        f"sharing it (this one alone: {choice.describe().split(': ', 1)[1]})"
+    )
 
 
 STEP_LIMIT_SLACK = 1e-3
@@ -197,10 +225,13 @@ def check_step(scene: Scene) -> None:
     """
     st = scene.strip
     if not -st.free_length_mm < scene.output.laser_height_mm < 0:
-        raise SceneError("output.laser_height_mm", f"{scene.output.laser_height_mm:g} mm is not on the hanging "
-                         f"strip, which reaches from 0 to -{st.free_length_mm:g} mm (strip.free_length_mm): the "
-                         f"laser line would never cross it; put it between -{st.free_length_mm:g} and 0 mm",
-                         related=("strip.free_length_mm",))
+        raise SceneError(
+            "output.laser_height_mm",
+            f"{scene.output.laser_height_mm:g} mm is not on the hanging "
+            f"strip, which reaches from 0 to -{st.free_length_mm:g} mm (strip.free_length_mm): the "
+            f"laser line would never cross it; put it between -{st.free_length_mm:g} and 0 mm",
+            related=("strip.free_length_mm",),
+        )
     check_plausible("areal density", scene.material.density_g_per_cm2, "material.density_g_per_cm2")
     check_chosen_step(scene)
     dt, scheme = scene.integrator.dt_s, scene.integrator.scheme
@@ -211,11 +242,20 @@ def check_step(scene: Scene) -> None:
     m, st = scene.material, scene.strip
     unit = 10.0 ** (math.floor(math.log10(limit)) - 3)
     below = math.floor(limit / unit) * unit  # 4 digits, rounded down: the advice itself runs
-    raise SceneError("integrator.dt_s", f"{dt:g} s is above the {scheme} scheme's stability limit {below:.3e} s "
-                     f"for this strip: the stretching mode, h·√(ρ_A/a1)/cos(π/4N) with strip.spacing_mm = "
-                     f"{st.spacing_mm:g} (N = {scene.n_nodes - scene.n_clamped} free nodes), "
-                     f"material.density_g_per_cm2 = {m.density_g_per_cm2:g}, material.tensile_gf_per_cm[0] = "
-                     f"{m.tensile_gf_per_cm[0]:g}; use a dt_s of at most {below:.3e} s or integrator.scheme = "
-                     "\"imex\" (stretching implicit)",
-                     related=("strip.spacing_mm", "strip.free_length_mm", "material.density_g_per_cm2",
-                              "material.tensile_gf_per_cm", "material.from_file", "integrator.scheme"))
+    raise SceneError(
+        "integrator.dt_s",
+        f"{dt:g} s is above the {scheme} scheme's stability limit {below:.3e} s "
+        f"for this strip: the stretching mode, h·√(ρ_A/a1)/cos(π/4N) with strip.spacing_mm = "
+        f"{st.spacing_mm:g} (N = {scene.n_nodes - scene.n_clamped} free nodes), "
+        f"material.density_g_per_cm2 = {m.density_g_per_cm2:g}, material.tensile_gf_per_cm[0] = "
+        f"{m.tensile_gf_per_cm[0]:g}; use a dt_s of at most {below:.3e} s or integrator.scheme = "
+        '"imex" (stretching implicit)',
+        related=(
+            "strip.spacing_mm",
+            "strip.free_length_mm",
+            "material.density_g_per_cm2",
+            "material.tensile_gf_per_cm",
+            "material.from_file",
+            "integrator.scheme",
+        ),
+    )

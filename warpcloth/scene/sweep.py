@@ -150,8 +150,11 @@ class RandomBlock:
         generator = np.random.default_rng(self.seed)
         d = len(self.bounds)
         # latin_hypercube: one sample per stratum in every dimension, strata paired at random
-        unit = (generator.random((self.samples, d)) if self.method == "uniform"
-                else latin_hypercube(self.samples, d, generator))
+        unit = (
+            generator.random((self.samples, d))
+            if self.method == "uniform"
+            else latin_hypercube(self.samples, d, generator)
+        )
         low = np.array([b[0] for b in self.bounds])
         high = np.array([b[1] for b in self.bounds])
         return low + unit * (high - low), unit
@@ -163,8 +166,9 @@ def _random_block(spec: dict) -> RandomBlock:
         return RandomBlock([], [], 1, "uniform", 0)
     unknown = set(block) - RANDOM_KEYS
     if unknown:
-        raise SceneError(f"sweep.random.{sorted(unknown)[0]}",
-                         f"unknown field; known: {', '.join(sorted(RANDOM_KEYS))}")
+        raise SceneError(
+            f"sweep.random.{sorted(unknown)[0]}", f"unknown field; known: {', '.join(sorted(RANDOM_KEYS))}"
+        )
     method = block.get("method", "latin_hypercube")
     if method not in METHODS:
         raise SceneError("sweep.random.method", f"must be one of {', '.join(METHODS)}; got {method!r}")
@@ -231,11 +235,13 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     # Python integers, counted before anything is drawn or expanded
     n_variants = math.prod(len(v) for v in grid.values()) * max(lengths or {1}) * random.samples
     if n_variants > max_variants:
-        raise ArgumentError("max_variants", f"the sweep has {n_variants} variants, more than {max_variants}; each "
-                          "is a validated scene in memory (~1 ms and a few kB apiece): split it into several "
-                          "sweeps, or raise --max-variants (Python: max_variants=)")
-    check_memory(n_variants * VARIANT_BYTES, f"the sweep's {n_variants} variant scenes",
-                 "split it into several sweeps")
+        raise ArgumentError(
+            "max_variants",
+            f"the sweep has {n_variants} variants, more than {max_variants}; each "
+            "is a validated scene in memory (~1 ms and a few kB apiece): split it into several "
+            "sweeps, or raise --max-variants (Python: max_variants=)",
+        )
+    check_memory(n_variants * VARIANT_BYTES, f"the sweep's {n_variants} variant scenes", "split it into several sweeps")
     grid_rows = list(itertools.product(*grid.values())) if grid else [()]
     zip_rows = list(zip(*zipped.values(), strict=True)) if zipped else [()]
     random_values, unit = random.sample()
@@ -250,8 +256,14 @@ def variant_scenes(base: dict, assignments: list[dict[str, Any]], progress: bool
     fields set (``progress`` shows a bar); a refused one is a SceneError naming it."""
     scenes = []
     # leave=False: a refused variant's message then starts on a clean line
-    with tqdm(total=len(assignments), desc="expanding sweep", unit=" variants", disable=not progress,
-              dynamic_ncols=True, leave=False) as bar:
+    with tqdm(
+        total=len(assignments),
+        desc="expanding sweep",
+        unit=" variants",
+        disable=not progress,
+        dynamic_ncols=True,
+        leave=False,
+    ) as bar:
         for i, assignment in enumerate(assignments):
             data = copy.deepcopy(base)
             try:
@@ -266,8 +278,12 @@ def variant_scenes(base: dict, assignments: list[dict[str, Any]], progress: bool
     return with_chosen_step(scenes)
 
 
-def load_sweep(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] = (),
-               max_variants: int = MAX_VARIANTS, progress: bool = False) -> Sweep:
+def load_sweep(
+    name_or_path: str | Path,
+    overrides: list[str] | tuple[str, ...] = (),
+    max_variants: int = MAX_VARIANTS,
+    progress: bool = False,
+) -> Sweep:
     """Read a scene with a ``[sweep]`` section (path or bundled name) and expand it.
 
     ``overrides`` (``key=value``) change the base scene, e.g. ``run.duration_s=1``, or

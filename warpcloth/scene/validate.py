@@ -26,57 +26,84 @@ def validate_scene(scene: Scene) -> None:
     # in floats, before any count is rounded to an integer (a length of 1e308 mm is inf nodes)
     nodes = st.clamp_length_mm / st.spacing_mm + st.free_length_mm / st.spacing_mm
     if not nodes <= MAX_NODES:
-        raise SceneError("strip.free_length_mm", f"{st.free_length_mm:g} mm below and strip.clamp_length_mm = "
-                         f"{st.clamp_length_mm:g} mm in the clamp at strip.spacing_mm = {st.spacing_mm:g} mm are "
-                         f"{nodes:.3g} nodes, more than {MAX_NODES}", related=("strip.clamp_length_mm",
-                                                                               "strip.spacing_mm"))
+        raise SceneError(
+            "strip.free_length_mm",
+            f"{st.free_length_mm:g} mm below and strip.clamp_length_mm = "
+            f"{st.clamp_length_mm:g} mm in the clamp at strip.spacing_mm = {st.spacing_mm:g} mm are "
+            f"{nodes:.3g} nodes, more than {MAX_NODES}",
+            related=("strip.clamp_length_mm", "strip.spacing_mm"),
+        )
     for name in ("free_length_mm", "clamp_length_mm"):
         if not _multiple(getattr(st, name), st.spacing_mm):
-            raise SceneError("strip.spacing_mm", f"{st.spacing_mm:g} mm does not divide strip.{name} = "
-                             f"{getattr(st, name):g} mm into whole segments", related=(f"strip.{name}",))
+            raise SceneError(
+                "strip.spacing_mm",
+                f"{st.spacing_mm:g} mm does not divide strip.{name} = {getattr(st, name):g} mm into whole segments",
+                related=(f"strip.{name}",),
+            )
     if scene.n_nodes - scene.n_clamped < 2:
-        raise SceneError("strip.spacing_mm", f"{st.spacing_mm:g} mm leaves fewer than 2 free nodes",
-                         related=("strip.free_length_mm",))
+        raise SceneError(
+            "strip.spacing_mm",
+            f"{st.spacing_mm:g} mm leaves fewer than 2 free nodes",
+            related=("strip.free_length_mm",),
+        )
     validate_material(scene.material, scene.integrator.divergence_strain, "material")
     _validate_clamp(scene.clamp)
     _validate_rest_curvature(scene)
     _validate_grip(scene)
     if not scene.release.hold_free_end:
         if not scene.release.enabled:
-            raise SceneError("release.hold_free_end", "= false but release.enabled = false: there is no pre-roll "
-                             "for the free end to settle in, so it would be ignored; remove it or enable the release",
-                             related=("release.enabled",))
+            raise SceneError(
+                "release.hold_free_end",
+                "= false but release.enabled = false: there is no pre-roll "
+                "for the free end to settle in, so it would be ignored; remove it or enable the release",
+                related=("release.enabled",),
+            )
         defaults = ReleaseSection()
         for name in ("hold_x_mm", "hold_y_mm"):
             if getattr(scene.release, name) != getattr(defaults, name):
-                raise SceneError(f"release.{name}", f"= {getattr(scene.release, name):g} mm but "
-                                 "release.hold_free_end = false leaves the free end free, so no held position is "
-                                 "used; remove it or hold the free end", related=("release.hold_free_end",))
+                raise SceneError(
+                    f"release.{name}",
+                    f"= {getattr(scene.release, name):g} mm but "
+                    "release.hold_free_end = false leaves the free end free, so no held position is "
+                    "used; remove it or hold the free end",
+                    related=("release.hold_free_end",),
+                )
     if scene.release.enabled and scene.release.hold_free_end:
         r = math.hypot(scene.release.hold_x_mm, scene.release.hold_y_mm)
         if not st.spacing_mm <= r <= st.free_length_mm:
-            raise SceneError("release.hold_x_mm", f"held position ({scene.release.hold_x_mm:g}, "
-                             f"{scene.release.hold_y_mm:g}) mm is {r:g} mm from the clamp's lowest point; "
-                             f"the free end reaches between {st.spacing_mm:g} and {st.free_length_mm:g} mm",
-                             related=("release.hold_y_mm", "strip.free_length_mm", "strip.spacing_mm"))
+            raise SceneError(
+                "release.hold_x_mm",
+                f"held position ({scene.release.hold_x_mm:g}, "
+                f"{scene.release.hold_y_mm:g}) mm is {r:g} mm from the clamp's lowest point; "
+                f"the free end reaches between {st.spacing_mm:g} and {st.free_length_mm:g} mm",
+                related=("release.hold_y_mm", "strip.free_length_mm", "strip.spacing_mm"),
+            )
     n_hinges = scene.n_nodes - scene.n_clamped
     if not _multiple(scene.output.loop_hinge_mm, st.spacing_mm) or scene.loop_hinge >= n_hinges:
-        raise SceneError("output.loop_hinge_mm", f"{scene.output.loop_hinge_mm:g} mm is not a hinge: hinges lie "
-                         f"every strip.spacing_mm = {st.spacing_mm:g} mm from 0 to "
-                         f"{st.free_length_mm - st.spacing_mm:g} mm below the clamp",
-                         related=("strip.spacing_mm", "strip.free_length_mm"))
+        raise SceneError(
+            "output.loop_hinge_mm",
+            f"{scene.output.loop_hinge_mm:g} mm is not a hinge: hinges lie "
+            f"every strip.spacing_mm = {st.spacing_mm:g} mm from 0 to "
+            f"{st.free_length_mm - st.spacing_mm:g} mm below the clamp",
+            related=("strip.spacing_mm", "strip.free_length_mm"),
+        )
     dt = scene.integrator.dt_s
     if isinstance(dt, str):  # "auto", chosen after these checks (warpcloth.scene.step)
         return
     if dt > scene.output_interval:
-        raise SceneError("integrator.dt_s", f"{dt:g} s is longer than the probe interval "
-                         f"{scene.output_interval:g} s (1 / (output.frame_rate_hz × output.probes_per_frame))",
-                         related=("output.frame_rate_hz", "output.probes_per_frame"))
+        raise SceneError(
+            "integrator.dt_s",
+            f"{dt:g} s is longer than the probe interval "
+            f"{scene.output_interval:g} s (1 / (output.frame_rate_hz × output.probes_per_frame))",
+            related=("output.frame_rate_hz", "output.probes_per_frame"),
+        )
     steps = (scene.preroll + scene.run.duration_s) / dt
     if steps > MAX_STEPS:
-        raise SceneError("run.duration_s", f"{scene.preroll + scene.run.duration_s:g} s at dt {dt:g} s is "
-                         f"{steps:.3g} steps, more than {MAX_STEPS}",
-                         related=("integrator.dt_s", "release.settle_time_s", "release.move_time_s"))
+        raise SceneError(
+            "run.duration_s",
+            f"{scene.preroll + scene.run.duration_s:g} s at dt {dt:g} s is {steps:.3g} steps, more than {MAX_STEPS}",
+            related=("integrator.dt_s", "release.settle_time_s", "release.move_time_s"),
+        )
 
 
 def _validate_rest_curvature(scene: Scene) -> None:
@@ -84,41 +111,60 @@ def _validate_rest_curvature(scene: Scene) -> None:
     s, k = st.rest_curvature_table_s_mm, st.rest_curvature_table_per_cm
     if s or k:
         if st.rest_curvature_per_cm != 0.0:
-            raise SceneError("strip.rest_curvature_per_cm", f"= {st.rest_curvature_per_cm:g} 1/cm and a table "
-                             "strip.rest_curvature_table_per_cm are both given; give the constant or the table",
-                             related=("strip.rest_curvature_table_per_cm",))
+            raise SceneError(
+                "strip.rest_curvature_per_cm",
+                f"= {st.rest_curvature_per_cm:g} 1/cm and a table "
+                "strip.rest_curvature_table_per_cm are both given; give the constant or the table",
+                related=("strip.rest_curvature_table_per_cm",),
+            )
         if len(s) < 2 or len(s) != len(k):
-            raise SceneError("strip.rest_curvature_table_per_cm", f"needs as many values as "
-                             f"strip.rest_curvature_table_s_mm, at least 2 (got {len(s)} arc lengths and {len(k)} "
-                             "curvatures)", related=("strip.rest_curvature_table_s_mm",))
+            raise SceneError(
+                "strip.rest_curvature_table_per_cm",
+                f"needs as many values as "
+                f"strip.rest_curvature_table_s_mm, at least 2 (got {len(s)} arc lengths and {len(k)} "
+                "curvatures)",
+                related=("strip.rest_curvature_table_s_mm",),
+            )
         if s[0] != 0.0:
-            raise SceneError("strip.rest_curvature_table_s_mm[0]", f"{s[0]:g} mm must be 0 (the clamp's lowest "
-                             "point): the profile covers the whole free strip")
+            raise SceneError(
+                "strip.rest_curvature_table_s_mm[0]",
+                f"{s[0]:g} mm must be 0 (the clamp's lowest point): the profile covers the whole free strip",
+            )
         for i in range(1, len(s)):
             if not s[i] > s[i - 1]:
-                raise SceneError(f"strip.rest_curvature_table_s_mm[{i}]", f"{s[i]:g} mm must be after "
-                                 f"{s[i - 1]:g} mm")
+                raise SceneError(f"strip.rest_curvature_table_s_mm[{i}]", f"{s[i]:g} mm must be after {s[i - 1]:g} mm")
         if s[-1] < st.free_length_mm:
-            raise SceneError(f"strip.rest_curvature_table_s_mm[{len(s) - 1}]", f"{s[-1]:g} mm ends above the free "
-                             f"end; the profile must reach strip.free_length_mm = {st.free_length_mm:g} mm",
-                             related=("strip.free_length_mm",))
+            raise SceneError(
+                f"strip.rest_curvature_table_s_mm[{len(s) - 1}]",
+                f"{s[-1]:g} mm ends above the free "
+                f"end; the profile must reach strip.free_length_mm = {st.free_length_mm:g} mm",
+                related=("strip.free_length_mm",),
+            )
     # a hinge turns by about K h between its segments; beyond 1/h the chain folds (§5.4)
     limit = 10.0 / st.spacing_mm  # 1/h in 1/cm
     for name, values in (("rest_curvature_per_cm", [st.rest_curvature_per_cm]), ("rest_curvature_table_per_cm", k)):
         for i, value in enumerate(values):
             if abs(value) > limit:
                 where = f"strip.{name}" + (f"[{i}]" if name.endswith("table_per_cm") else "")
-                raise SceneError(where, f"{value:g} 1/cm curls the strip by more than one radian per segment "
-                                 f"(1/h = {limit:g} 1/cm at strip.spacing_mm = {st.spacing_mm:g}); a fabric's set "
-                                 "is far gentler, or refine the spacing", related=("strip.spacing_mm",))
+                raise SceneError(
+                    where,
+                    f"{value:g} 1/cm curls the strip by more than one radian per segment "
+                    f"(1/h = {limit:g} 1/cm at strip.spacing_mm = {st.spacing_mm:g}); a fabric's set "
+                    "is far gentler, or refine the spacing",
+                    related=("strip.spacing_mm",),
+                )
 
 
 def _validate_grip(scene: Scene) -> None:
     # a zone of length 0 has no effect whatever its factors: the limit a fit of ℓ_g crosses
     clamp, st = scene.clamp, scene.strip
     if clamp.grip_length_mm > st.free_length_mm:
-        raise SceneError("clamp.grip_length_mm", f"{clamp.grip_length_mm:g} mm is longer than the free strip "
-                         f"(strip.free_length_mm = {st.free_length_mm:g} mm)", related=("strip.free_length_mm",))
+        raise SceneError(
+            "clamp.grip_length_mm",
+            f"{clamp.grip_length_mm:g} mm is longer than the free strip "
+            f"(strip.free_length_mm = {st.free_length_mm:g} mm)",
+            related=("strip.free_length_mm",),
+        )
 
 
 def _validate_clamp(clamp: ClampSection) -> None:
@@ -127,8 +173,10 @@ def _validate_clamp(clamp: ClampSection) -> None:
     if clamp.motion == "fixed":
         for name, needs in (("segments", "piecewise"), ("table_t_s", "table"), ("table_theta_rad", "table")):
             if getattr(clamp, name):
-                raise SceneError(f"clamp.{name}", f"is given but clamp.motion = 'fixed' ignores it; set "
-                                 f"motion = \"{needs}\" or remove it")
+                raise SceneError(
+                    f"clamp.{name}",
+                    f"is given but clamp.motion = 'fixed' ignores it; set motion = \"{needs}\" or remove it",
+                )
     if clamp.motion == "piecewise":
         if not clamp.segments:
             raise SceneError("clamp.segments", "motion = 'piecewise' needs at least one segment")
@@ -137,25 +185,33 @@ def _validate_clamp(clamp: ClampSection) -> None:
             if not seg.t_end_s > seg.t_start_s:
                 raise SceneError(f"{where}.t_end_s", f"{seg.t_end_s:g} must be after t_start_s {seg.t_start_s:g}")
             if not 1 <= len(seg.theta_coefficients_si) <= 5:
-                raise SceneError(f"{where}.theta_coefficients_si",
-                                 f"needs 1 to 5 coefficients (up to a quartic), got {len(seg.theta_coefficients_si)}")
+                raise SceneError(
+                    f"{where}.theta_coefficients_si",
+                    f"needs 1 to 5 coefficients (up to a quartic), got {len(seg.theta_coefficients_si)}",
+                )
             if i:
                 prev = clamp.segments[i - 1]
                 if abs(seg.t_start_s - prev.t_end_s) > 1e-12:
-                    raise SceneError(f"{where}.t_start_s", f"{seg.t_start_s:g} s must equal the previous "
-                                     f"segment's t_end_s {prev.t_end_s:g} s")
+                    raise SceneError(
+                        f"{where}.t_start_s",
+                        f"{seg.t_start_s:g} s must equal the previous segment's t_end_s {prev.t_end_s:g} s",
+                    )
                 tau = prev.t_end_s - prev.t_start_s
                 end = sum(c * tau**k for k, c in enumerate(prev.theta_coefficients_si))
                 jump = seg.theta_coefficients_si[0] - end
                 if abs(jump) > 1e-9 * max(1.0, abs(end)):
-                    raise SceneError(f"{where}.theta_coefficients_si",
-                                     f"θ jumps by {jump:.3g} rad at t = {seg.t_start_s:g} s; the clamp "
-                                     "cannot teleport (make c_0 equal the previous segment's end value)")
+                    raise SceneError(
+                        f"{where}.theta_coefficients_si",
+                        f"θ jumps by {jump:.3g} rad at t = {seg.t_start_s:g} s; the clamp "
+                        "cannot teleport (make c_0 equal the previous segment's end value)",
+                    )
     elif clamp.motion == "table":
         t, th = clamp.table_t_s, clamp.table_theta_rad
         if len(t) < 2 or len(t) != len(th):
-            raise SceneError("clamp.table_theta_rad", f"needs as many samples as clamp.table_t_s, at least 2 "
-                             f"(got {len(t)} times and {len(th)} angles)")
+            raise SceneError(
+                "clamp.table_theta_rad",
+                f"needs as many samples as clamp.table_t_s, at least 2 (got {len(t)} times and {len(th)} angles)",
+            )
         for i in range(1, len(t)):
             if not t[i] > t[i - 1]:
                 raise SceneError(f"clamp.table_t_s[{i}]", f"{t[i]:g} s must be after {t[i - 1]:g} s")

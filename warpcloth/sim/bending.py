@@ -20,9 +20,13 @@ from .model import machine_device
 from .state import allocate_reversal_memory
 
 
-def moment_along_path(materials: MaterialSI | Sequence[MaterialSI], curvature: np.ndarray,
-                      device: str | None = "cpu", with_tangent: bool = False,
-                      reversal_memory: int | None = None) -> tuple[np.ndarray, ...]:
+def moment_along_path(
+    materials: MaterialSI | Sequence[MaterialSI],
+    curvature: np.ndarray,
+    device: str | None = "cpu",
+    with_tangent: bool = False,
+    reversal_memory: int | None = None,
+) -> tuple[np.ndarray, ...]:
     """Moment per width M (N·m/m) along curvature paths (1/m), one column per material.
 
     ``curvature`` is ``[sample]`` (one path for every material) or ``[sample, path]``; M is
@@ -35,23 +39,30 @@ def moment_along_path(materials: MaterialSI | Sequence[MaterialSI], curvature: n
     the path has reversals, so none is ever dropped).
     """
     materials = [materials] if isinstance(materials, MaterialSI) else list(materials)
-    return law_along_path([m.bending_parameters() for m in materials], curvature, device, with_tangent,
-                          reversal_memory)
+    return law_along_path([m.bending_parameters() for m in materials], curvature, device, with_tangent, reversal_memory)
 
 
-def shear_force_along_path(shear: Sequence[tuple[float, LawParameters]], angle: np.ndarray,
-                           device: str | None = "cpu", with_tangent: bool = False) -> tuple[np.ndarray, ...]:
+def shear_force_along_path(
+    shear: Sequence[tuple[float, LawParameters]],
+    angle: np.ndarray,
+    device: str | None = "cpu",
+    with_tangent: bool = False,
+) -> tuple[np.ndarray, ...]:
     """Shear force per width Fs = G φ + h(φ) (N/m) along shear-angle paths (rad), one column
     per ``(G, law)`` (G in N/(m·rad), :meth:`warpcloth.scene.ShearMaterial.si`): the same
     law functions as :func:`moment_along_path`, the angle for the curvature. Shapes and
     the returned work (N·rad/m) as there."""
-    packed = [packed_parameters(law.law, {BENDING_RIGIDITY.name: rigidity, **law.as_dict()})
-              for rigidity, law in shear]
+    packed = [packed_parameters(law.law, {BENDING_RIGIDITY.name: rigidity, **law.as_dict()}) for rigidity, law in shear]
     return law_along_path(packed, angle, device, with_tangent)
 
 
-def law_along_path(packed: Sequence[tuple[float, ...]], path: np.ndarray, device: str | None = "cpu",
-                   with_tangent: bool = False, reversal_memory: int | None = None) -> tuple[np.ndarray, ...]:
+def law_along_path(
+    packed: Sequence[tuple[float, ...]],
+    path: np.ndarray,
+    device: str | None = "cpu",
+    with_tangent: bool = False,
+    reversal_memory: int | None = None,
+) -> tuple[np.ndarray, ...]:
     """The laws' response D x + h(x) along paths ``x``, one column per packed parameter
     vector (kernels/laws.py): :func:`moment_along_path` and :func:`shear_force_along_path`
     in one kernel launch."""
@@ -74,9 +85,19 @@ def law_along_path(packed: Sequence[tuple[float, ...]], path: np.ndarray, device
     moment = wp.zeros(k.shape, dtype=wp.float64, device=device)
     slope = wp.zeros(k.shape, dtype=wp.float64, device=device)
     work = wp.zeros(k.shape[1], dtype=wp.float64, device=device)
-    wp.launch(law.moment_along_path, dim=k.shape[1], device=device,
-              inputs=[wp.array(np.ascontiguousarray(k), dtype=wp.float64, device=device), parameters, history, moment,
-                      slope, work])
+    wp.launch(
+        law.moment_along_path,
+        dim=k.shape[1],
+        device=device,
+        inputs=[
+            wp.array(np.ascontiguousarray(k), dtype=wp.float64, device=device),
+            parameters,
+            history,
+            moment,
+            slope,
+            work,
+        ],
+    )
     m, dm = moment.numpy(), slope.numpy()
     if single:
         m, dm = m[:, 0], dm[:, 0]

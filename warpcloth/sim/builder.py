@@ -47,8 +47,10 @@ class FabricSet:
     def __post_init__(self) -> None:
         s = np.asarray(self.table_s, dtype=float)
         if len(s) != len(self.table_curvature) or len(s) == 1 or np.any(np.diff(s) <= 0):
-            raise ValueError(f"a rest-curvature table needs at least 2 strictly increasing arc lengths, one curvature "
-                             f"each; got {len(s)} arc lengths and {len(self.table_curvature)} curvatures")
+            raise ValueError(
+                f"a rest-curvature table needs at least 2 strictly increasing arc lengths, one curvature "
+                f"each; got {len(s)} arc lengths and {len(self.table_curvature)} curvatures"
+            )
 
     def hinge_values(self, intervals: np.ndarray) -> np.ndarray:
         """K_rest of each hinge: the profile's mean over the arc ``intervals`` ``[hinge, (start,
@@ -89,8 +91,10 @@ class Grip:
 
     def __post_init__(self) -> None:
         if not (self.length >= 0 and self.bending_factor > 0 and self.hysteresis_factor >= 0):
-            raise ValueError(f"a grip needs length ≥ 0, bending_factor > 0 and hysteresis_factor ≥ 0; got "
-                             f"{self.length:g}, {self.bending_factor:g}, {self.hysteresis_factor:g}")
+            raise ValueError(
+                f"a grip needs length ≥ 0, bending_factor > 0 and hysteresis_factor ≥ 0; got "
+                f"{self.length:g}, {self.bending_factor:g}, {self.hysteresis_factor:g}"
+            )
 
     def hinge_factors(self, intervals: np.ndarray) -> np.ndarray:
         """``[hinge, (bending, hysteresis)]`` factors of hinges bending the arc ``intervals``:
@@ -135,9 +139,16 @@ class StripBuilder:
     reported (:attr:`warpcloth.sim.RunResult.reversal_memory`).
     """
 
-    def __init__(self, rest_positions: np.ndarray, n_clamped: int, spacing: float, gravity: float = 9.80665,
-                 release_time: float = 0.0, move_time: float = 0.0,
-                 reversal_memory: int = bending_masing.DEFAULT_CAPACITY) -> None:
+    def __init__(
+        self,
+        rest_positions: np.ndarray,
+        n_clamped: int,
+        spacing: float,
+        gravity: float = 9.80665,
+        release_time: float = 0.0,
+        move_time: float = 0.0,
+        reversal_memory: int = bending_masing.DEFAULT_CAPACITY,
+    ) -> None:
         self.rest_positions = np.asarray(rest_positions, dtype=np.float64)
         if self.rest_positions.ndim != 2 or self.rest_positions.shape[1] != 2:
             raise ValueError(f"rest_positions must be [node, xy], got shape {self.rest_positions.shape}")
@@ -147,8 +158,9 @@ class StripBuilder:
         worst = int(np.argmax(np.abs(lengths - spacing)))
         if not abs(lengths[worst] - spacing) <= 1e-9 * spacing:
             # every segment shares one rest length in the kernel: the chain must be uniform
-            raise ValueError(f"segment {worst} of rest_positions is {lengths[worst]:.6g} m long, not the spacing "
-                             f"{spacing:.6g} m")
+            raise ValueError(
+                f"segment {worst} of rest_positions is {lengths[worst]:.6g} m long, not the spacing {spacing:.6g} m"
+            )
         self.n_clamped = n_clamped
         self.spacing = spacing
         self.gravity = gravity
@@ -164,11 +176,21 @@ class StripBuilder:
         """The clamp's lowest node, where the free strip begins."""
         return self.rest_positions[self.n_clamped - 1]
 
-    def add_strip(self, material: MaterialSI, *, width: float, damping: float = 0.0,
-                  clamp: ClampMotion | None = None, rotation_centre: Sequence[float] | None = None,
-                  hold_target: Sequence[float] | None = None, settle_damping: float = 0.0,
-                  edge_hinge_length: float | None = None, fabric_set: FabricSet | None = None,
-                  grip: Grip | None = None, hold_free_end: bool = True) -> int:
+    def add_strip(
+        self,
+        material: MaterialSI,
+        *,
+        width: float,
+        damping: float = 0.0,
+        clamp: ClampMotion | None = None,
+        rotation_centre: Sequence[float] | None = None,
+        hold_target: Sequence[float] | None = None,
+        settle_damping: float = 0.0,
+        edge_hinge_length: float | None = None,
+        fabric_set: FabricSet | None = None,
+        grip: Grip | None = None,
+        hold_free_end: bool = True,
+    ) -> int:
         """Add one strip (SI: m, 1/s, absolute positions); returns its index in the batch.
 
         ``rotation_centre`` defaults to the clamp edge and ``hold_target`` to the free
@@ -183,12 +205,23 @@ class StripBuilder:
         edge = 0.5 * self.spacing if edge_hinge_length is None else edge_hinge_length
         if not 0 < edge <= self.spacing:
             raise ValueError(f"edge_hinge_length = {edge:g} m must lie in (0, spacing = {self.spacing:g} m]")
-        self.strips.append(StripSpec(
-            material=material, width=width, damping=damping, clamp=clamp or ClampMotion(),
-            rotation_centre=np.asarray(self.clamp_edge if rotation_centre is None else rotation_centre, dtype=float),
-            hold_target=np.asarray(self.rest_positions[-1] if hold_target is None else hold_target, dtype=float),
-            settle_damping=settle_damping, edge_hinge_length=edge, fabric_set=fabric_set or FabricSet(),
-            grip=grip or Grip(), hold_free_end=bool(hold_free_end)))
+        self.strips.append(
+            StripSpec(
+                material=material,
+                width=width,
+                damping=damping,
+                clamp=clamp or ClampMotion(),
+                rotation_centre=np.asarray(
+                    self.clamp_edge if rotation_centre is None else rotation_centre, dtype=float
+                ),
+                hold_target=np.asarray(self.rest_positions[-1] if hold_target is None else hold_target, dtype=float),
+                settle_damping=settle_damping,
+                edge_hinge_length=edge,
+                fabric_set=fabric_set or FabricSet(),
+                grip=grip or Grip(),
+                hold_free_end=bool(hold_free_end),
+            )
+        )
         return len(self.strips) - 1
 
     def hinge_intervals(self) -> np.ndarray:

@@ -20,32 +20,49 @@ def _xarray() -> object:
     return xr
 
 
-def probes_dataset(t: np.ndarray, probes: np.ndarray, frame_times: np.ndarray, frames: np.ndarray | None,
-                   variants: np.ndarray, parameters: Mapping[str, np.ndarray], attrs: Mapping[str, object]) -> object:
+def probes_dataset(
+    t: np.ndarray,
+    probes: np.ndarray,
+    frame_times: np.ndarray,
+    frames: np.ndarray | None,
+    variants: np.ndarray,
+    parameters: Mapping[str, np.ndarray],
+    attrs: Mapping[str, object],
+) -> object:
     """An ``xarray.Dataset``: each probe of ``probes[sample, field, variant]`` a variable
     over (t, variant), ``frames[frame, variant, node, xy]`` (if any) over (frame_time,
     variant, node, xy), ``parameters`` (one value per variant, by dotted scene name) as
     coordinates along ``variant``, units in each variable's ``attrs``."""
     xr = _xarray()
-    dataset = xr.Dataset({name: (("t", "variant"), probes[:, k, :], {"units": PROBE_UNITS[name]})
-                          for k, name in enumerate(PROBE_FIELDS)},
-                         coords={"t": ("t", t, {"units": "s"}), "variant": np.asarray(variants)})
+    dataset = xr.Dataset(
+        {
+            name: (("t", "variant"), probes[:, k, :], {"units": PROBE_UNITS[name]})
+            for k, name in enumerate(PROBE_FIELDS)
+        },
+        coords={"t": ("t", t, {"units": "s"}), "variant": np.asarray(variants)},
+    )
     if frames is not None:
-        dataset["frames"] = xr.DataArray(frames, dims=("frame_time", "variant", "node", "xy"),
-                                         coords={"frame_time": ("frame_time", frame_times, {"units": "s"}),
-                                                 "xy": ["x", "y"]}, attrs={"units": "m"})
+        dataset["frames"] = xr.DataArray(
+            frames,
+            dims=("frame_time", "variant", "node", "xy"),
+            coords={"frame_time": ("frame_time", frame_times, {"units": "s"}), "xy": ["x", "y"]},
+            attrs={"units": "m"},
+        )
     dataset = dataset.assign_coords({name: ("variant", np.asarray(values)) for name, values in parameters.items()})
     dataset.attrs.update(attrs)
     return dataset
 
 
-def probes_frame(t: np.ndarray, probes: np.ndarray, variants: np.ndarray,
-                 parameters: Mapping[str, np.ndarray]) -> pd.DataFrame:
+def probes_frame(
+    t: np.ndarray, probes: np.ndarray, variants: np.ndarray, parameters: Mapping[str, np.ndarray]
+) -> pd.DataFrame:
     """``probes[sample, field, variant]`` in long form (t, variant, one column per probe,
     SI; samples a strip never reached left out) joined with each variant's parameters."""
     n_samples, _, n_variants = probes.shape
-    table = pd.DataFrame({"t": np.repeat(t, n_variants), "variant": np.tile(np.asarray(variants), n_samples)}
-                         | {name: probes[:, k, :].reshape(-1) for k, name in enumerate(PROBE_FIELDS)})
+    table = pd.DataFrame(
+        {"t": np.repeat(t, n_variants), "variant": np.tile(np.asarray(variants), n_samples)}
+        | {name: probes[:, k, :].reshape(-1) for k, name in enumerate(PROBE_FIELDS)}
+    )
     table = table[np.isfinite(probes).any(axis=1).reshape(-1)].reset_index(drop=True)
     labels = pd.DataFrame({"variant": np.asarray(variants)} | {k: np.asarray(v) for k, v in parameters.items()})
     return table.merge(labels, on="variant", how="left")

@@ -26,8 +26,10 @@ class LawParameters:
         values = dict(values or {})
         unknown = sorted(set(values) - {p.name for p in description.parameters})
         if unknown:
-            raise KeyError(f"the {law} law has no parameter {unknown[0]!r}; it has "
-                           f"{', '.join(p.name for p in description.parameters) or 'none'}")
+            raise KeyError(
+                f"the {law} law has no parameter {unknown[0]!r}; it has "
+                f"{', '.join(p.name for p in description.parameters) or 'none'}"
+            )
         missing = [p.name for p in description.parameters if p.name not in values]
         if missing:
             raise KeyError(f"the {law} law needs {', '.join(missing)}")
@@ -62,8 +64,9 @@ class LawParameters:
         return dict(self.values)
 
 
-ELASTIC = LawParameters.of(DEFAULT_BENDING_LAW, {"hysteresis_d1": 0.0, "hysteresis_alpha": 0.05,
-                                                     "hysteresis_k0": 250.0})
+ELASTIC = LawParameters.of(
+    DEFAULT_BENDING_LAW, {"hysteresis_d1": 0.0, "hysteresis_alpha": 0.05, "hysteresis_k0": 250.0}
+)
 """The default law without hysteresis (D1 = 0): M = D K."""
 
 

@@ -23,8 +23,6 @@ if TYPE_CHECKING:
 PRECISIONS = {"float64": wp.float64, "float32": wp.float32}
 
 
-
-
 _INIT_LOCK = threading.Lock()
 _INITIALISED: list[bool] = []
 
@@ -66,8 +64,8 @@ def machine_device(device: str | None) -> wp.context.Device:
         return wp.get_device(device)
     except (RuntimeError, ValueError) as exc:
         known = ", ".join(d.alias for d in wp.get_devices())
-        raise ArgumentError("device", f"{device!r} is not a device of this machine ({exc}); it has: {known}") \
-            from None
+        raise ArgumentError("device", f"{device!r} is not a device of this machine ({exc}); it has: {known}") from None
+
 
 class Model:
     """Static description of B strips sharing node count, spacing and gravity.

@@ -38,8 +38,10 @@ class Recorder:
 
     def sample_range(self, control: Control) -> tuple[int, int]:
         """First and last output sample k (k < 0 during the hold), without building arrays."""
-        return (-math.floor(control.release_time / self.interval + 1e-9),
-                math.floor(self.duration / self.interval + 1e-9))
+        return (
+            -math.floor(control.release_time / self.interval + 1e-9),
+            math.floor(self.duration / self.interval + 1e-9),
+        )
 
     def schedule(self, control: Control, solver: Solver) -> Schedule:
         """The output samples of a run: hold samples (k < 0) are run, not kept."""

@@ -31,8 +31,9 @@ def size_text(n: float) -> str:
     """A byte count for a message: three digits and a decimal unit (any Python integer,
     however far beyond a float's range, is written without overflowing)."""
     n = Decimal(n)
-    unit, scale = next(((u, s) for u, s in (("TB", 12), ("GB", 9), ("MB", 6), ("kB", 3)) if n >= Decimal(10) ** s),
-                       ("B", 0))
+    unit, scale = next(
+        ((u, s) for u, s in (("TB", 12), ("GB", 9), ("MB", 6), ("kB", 3)) if n >= Decimal(10) ** s), ("B", 0)
+    )
     value = n.scaleb(-scale)
     return f"{float(value):.3g} {unit}" if value < Decimal("1e300") else f"{value:.3g} {unit}"
 
@@ -41,8 +42,10 @@ def check_memory(needed: int, what: str, knobs: str, available: int | None = Non
     """Refuse ``needed`` bytes of ``what`` when over :data:`MEMORY_FRACTION` of the memory available."""
     available = available_memory() if available is None else available
     if needed > MEMORY_FRACTION * available:
-        raise ResourceError(f"{what} would take {size_text(needed)} of memory, more than "
-                            f"{MEMORY_FRACTION:.0%} of the {size_text(available)} available; {knobs}")
+        raise ResourceError(
+            f"{what} would take {size_text(needed)} of memory, more than "
+            f"{MEMORY_FRACTION:.0%} of the {size_text(available)} available; {knobs}"
+        )
 
 
 def check_disk(target: str | Path, needed: int, what: str, knobs: str) -> None:
@@ -52,5 +55,6 @@ def check_disk(target: str | Path, needed: int, what: str, knobs: str) -> None:
     existing = next(p for p in (target, *target.absolute().parents) if p.exists())
     free = shutil.disk_usage(existing).free
     if needed > free:
-        raise ResourceError(f"{what} would write {size_text(needed)} to {target}, whose file system has "
-                            f"{size_text(free)} free; {knobs}")
+        raise ResourceError(
+            f"{what} would write {size_text(needed)} to {target}, whose file system has {size_text(free)} free; {knobs}"
+        )

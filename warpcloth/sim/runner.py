@@ -59,8 +59,10 @@ class BudgetWatch:
         out = {}
         for strip in np.flatnonzero(bad.any(axis=0)):
             n = int(np.argmax(bad[:, strip]))
-            out[int(strip)] = (n, float((total[n, strip] - self.reference[strip])
-                                        / max(peak[n, strip], self.floor[strip])))
+            out[int(strip)] = (
+                n,
+                float((total[n, strip] - self.reference[strip]) / max(peak[n, strip], self.floor[strip])),
+            )
         return out
 
 
@@ -128,8 +130,15 @@ class RunResult:
         """An ``xarray.Dataset`` of the probes over (t, variant), the frames over
         (frame_time, variant, node, xy) and :attr:`parameters` as coordinates along
         ``variant``, units in ``attrs`` (needs ``pip install 'warpcloth[xarray]'``)."""
-        return probes_dataset(self.t, self.probes, self.frame_times, self.frames, np.arange(self.probes.shape[2]),
-                              self.parameters, self.attrs)
+        return probes_dataset(
+            self.t,
+            self.probes,
+            self.frame_times,
+            self.frames,
+            np.arange(self.probes.shape[2]),
+            self.parameters,
+            self.attrs,
+        )
 
     def to_dataframe(self) -> pd.DataFrame:
         """The probes in long form (t, variant, one column per probe, SI) joined with
@@ -146,8 +155,15 @@ class RunResult:
         """Budget that should stay constant: kinetic + gravitational + tensile + work done
         against bending and damping − work done by the drives, ``[sample, variant]``."""
         p = self.probe
-        return (p("kinetic") + p("gravitational") + p("tensile") + p("bending_elastic_work")
-                + p("hysteresis_work") + p("damping_work") - p("drive_work"))
+        return (
+            p("kinetic")
+            + p("gravitational")
+            + p("tensile")
+            + p("bending_elastic_work")
+            + p("hysteresis_work")
+            + p("damping_work")
+            - p("drive_work")
+        )
 
 
 def reversal_memory_warning(report: dict[str, object]) -> str | None:
@@ -158,9 +174,11 @@ def reversal_memory_warning(report: dict[str, object]) -> str | None:
         return None
     strips = np.flatnonzero(overflows)
     named = ", ".join(f"{s} ({overflows[s]})" for s in strips[:8]) + (" …" if len(strips) > 8 else "")
-    return (f"the masing reversal memory ({report['capacity']} points per hinge) was full: {int(overflows.sum())} "
-            f"reversal(s) not stored in strip(s) {named}; their inner loops were traced without hysteresis, so the "
-            "hysteresis work is underestimated by their area; raise integrator.reversal_memory")
+    return (
+        f"the masing reversal memory ({report['capacity']} points per hinge) was full: {int(overflows.sum())} "
+        f"reversal(s) not stored in strip(s) {named}; their inner loops were traced without hysteresis, so the "
+        "hysteresis work is underestimated by their area; raise integrator.reversal_memory"
+    )
 
 
 def checked_probe(name: object) -> str:
@@ -177,10 +195,12 @@ def check_recording_fits(model: Model, control: Control, recorder: Recorder, kee
     k_min, k_max = recorder.sample_range(control)
     n_frames = k_max // recorder.probes_per_frame + 1
     # the schedule's own arrays (steps, times: 8 B per sample each) and the recorded results
-    check_memory(16 * (k_max - k_min + 1) + 8 * (k_max + 1) * nq * b + (16 * n_frames * b * n if keep_frames else 0),
-                 f"the recorded probes{' and frames' if keep_frames else ''} of {b} strip(s)",
-                 "record less (output.probes_per_frame, output.frame_rate_hz, run.duration_s), run fewer "
-                 "strips at once (sweep --max-batch), or keep frames only on disk (keep_frames=False)")
+    check_memory(
+        16 * (k_max - k_min + 1) + 8 * (k_max + 1) * nq * b + (16 * n_frames * b * n if keep_frames else 0),
+        f"the recorded probes{' and frames' if keep_frames else ''} of {b} strip(s)",
+        "record less (output.probes_per_frame, output.frame_rate_hz, run.duration_s), run fewer "
+        "strips at once (sweep --max-batch), or keep frames only on disk (keep_frames=False)",
+    )
 
 
 class DivergenceMonitor:
@@ -201,8 +221,9 @@ class DivergenceMonitor:
         if len(steps):
             _stop_unbalanced(state, self.budget, values, steps, known)
         status = state.struct.status.numpy()
-        new = [self.solver.divergence_report(state, self.control, int(s)) for s in np.nonzero(status)[0]
-               if s not in known]
+        new = [
+            self.solver.divergence_report(state, self.control, int(s)) for s in np.nonzero(status)[0] if s not in known
+        ]
         self.diverged.extend(new)
         return new
 
@@ -240,8 +261,13 @@ class RecordBuffers:
     def chunk(self, i: int, j: int) -> OutputChunk:
         """What the launch for the schedule's outputs ``i`` … ``j − 1`` records, and where."""
         k0 = self.schedule.k_min + i
-        return OutputChunk(self.schedule.steps[i:j], k0, -(-max(k0, 0) // self.schedule.probes_per_frame),
-                           self.probe_buffer, self.frame_buffer)
+        return OutputChunk(
+            self.schedule.steps[i:j],
+            k0,
+            -(-max(k0, 0) // self.schedule.probes_per_frame),
+            self.probe_buffer,
+            self.frame_buffer,
+        )
 
     def kept(self, i: int, j: int) -> tuple[np.ndarray, np.ndarray]:
         """The kept samples (t ≥ 0) of outputs ``i`` … ``j − 1``: their indices k, and their
@@ -261,8 +287,11 @@ class RecordBuffers:
         values = np.where(valid[:, None, :], values, np.nan)
         self.probes[k] = values
         frame_index = k[k % ppf == 0] // ppf
-        frames = np.transpose(self.frame_buffer[: len(frame_index)].numpy(), (0, 2, 1, 3)) if len(frame_index) \
+        frames = (
+            np.transpose(self.frame_buffer[: len(frame_index)].numpy(), (0, 2, 1, 3))
+            if len(frame_index)
             else np.zeros((0, self.probes.shape[2], self.frame_buffer.shape[1], 2))
+        )
         frames = np.where(valid[k % ppf == 0][:, :, None, None], frames, np.nan)
         if self.frames is not None and len(frame_index):
             self.frames[frame_index] = frames
@@ -302,8 +331,15 @@ class ChunkPlan:
 
 def _progress_bar(schedule: Schedule, show: bool) -> tqdm:
     span = float(schedule.times(schedule.k_min + len(schedule.steps) - 1) - schedule.times(schedule.k_min))
-    return tqdm(total=span, unit="s", unit_scale=False, desc="simulated", disable=not show, dynamic_ncols=True,
-                bar_format="{l_bar}{bar}| {n:.3f}/{total:.3f} s sim [{elapsed}<{remaining}, {rate_fmt}{postfix}]")
+    return tqdm(
+        total=span,
+        unit="s",
+        unit_scale=False,
+        desc="simulated",
+        disable=not show,
+        dynamic_ncols=True,
+        bar_format="{l_bar}{bar}| {n:.3f}/{total:.3f} s sim [{elapsed}<{remaining}, {rate_fmt}{postfix}]",
+    )
 
 
 def simulate_batch(
@@ -365,9 +401,19 @@ def simulate_batch(
     strip_steps = model.n_strips * int(schedule.steps[plan.done - 1])  # up to where the run stopped
     memory = state.reversal_report()
     diverged = monitor.diverged
-    result = RunResult(list(labels or []), schedule.times(schedule.kept), record.probes,
-                       schedule.times(schedule.frame_samples), record.frames, diverged, wall_time, strip_steps,
-                       dict(parameters or {}), dict(attrs or {}), memory)
+    result = RunResult(
+        list(labels or []),
+        schedule.times(schedule.kept),
+        record.probes,
+        schedule.times(schedule.frame_samples),
+        record.frames,
+        diverged,
+        wall_time,
+        strip_steps,
+        dict(parameters or {}),
+        dict(attrs or {}),
+        memory,
+    )
     if sink is not None:
         extra = {"wall_time_s": wall_time, "strip_steps": strip_steps, "device": str(model.device)}
         sink.close(diverged, extra | ({"reversal_memory": memory} if memory else {}))
@@ -376,13 +422,13 @@ def simulate_batch(
     return result
 
 
-def _stop_unbalanced(state: State, budget: BudgetWatch, values: np.ndarray, steps: np.ndarray,
-                     known: set[int]) -> None:
+def _stop_unbalanced(state: State, budget: BudgetWatch, values: np.ndarray, steps: np.ndarray, known: set[int]) -> None:
     # A strip whose budget fails stops at that sample, unless the kernel stopped it
     # earlier; the first of the two events is the one reported, however the run is cut
     # into launches (the samples from it on are dropped like others').
-    fields = {name: getattr(state.struct, name).numpy() for name in ("status", "status_step", "status_index",
-                                                                     "status_value")}
+    fields = {
+        name: getattr(state.struct, name).numpy() for name in ("status", "status_step", "status_index", "status_value")
+    }
     # a kernel stop keeps the sample of its step for strain and fold (1, 2), not for a
     # non-finite energy (3); only kept samples are checked
     stopped = fields["status"] != 0

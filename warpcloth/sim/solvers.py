@@ -55,8 +55,10 @@ QUANTITY = {
     STATUS_STRAIN: "tensile strain",
     STATUS_FOLDED: "hinge chord |e1+e2|/h (the strip folded onto itself)",
     STATUS_NONFINITE_ENERGY: "total energy (not finite)",
-    STATUS_BUDGET: ("energy budget residual (in units of the peak kinetic energy, at least 1e-3 of the strip's "
-                    "weight times its free length or of D W / L)"),
+    STATUS_BUDGET: (
+        "energy budget residual (in units of the peak kinetic energy, at least 1e-3 of the strip's "
+        "weight times its free length or of D W / L)"
+    ),
 }
 
 
@@ -79,8 +81,7 @@ class Solver(Protocol):
     def release_step(self, control: Control) -> int:
         """Step index of t = 0 under ``control``."""
 
-    def advance(self, state: State, control: Control, recorder: Recorder, chunk: OutputChunk,
-                threads: int = 1) -> None:
+    def advance(self, state: State, control: Control, recorder: Recorder, chunk: OutputChunk, threads: int = 1) -> None:
         """Advance every healthy strip to each output step of ``chunk``, recording its probes
         and frames there, on up to ``threads`` CPU threads."""
 
@@ -104,8 +105,10 @@ class FusedStripSolver:
 
     def __init__(self, model: Model, dt: float, divergence_strain: float = 0.25) -> None:
         if not self.scheme:
-            raise TypeError("FusedStripSolver is the base of the Euler solvers; use one of "
-                            f"{', '.join(c.__name__ for c in SOLVERS.values())}")
+            raise TypeError(
+                "FusedStripSolver is the base of the Euler solvers; use one of "
+                f"{', '.join(c.__name__ for c in SOLVERS.values())}"
+            )
         self.model = model
         self.dt = dt
         self.divergence_strain = divergence_strain
@@ -119,8 +122,15 @@ class FusedStripSolver:
         return None
 
     @classmethod
-    def stable_step(cls, material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
-                    gravity: float, grip: Grip | None = None) -> StepBound | None:
+    def stable_step(
+        cls,
+        material: MaterialSI,
+        spacing: float,
+        free_nodes: int,
+        edge_hinge_length: float,
+        gravity: float,
+        grip: Grip | None = None,
+    ) -> StepBound | None:
         """The longest step this scheme runs stably on the chain :meth:`step_limit`
         describes (the clamp-edge hinge bending ``edge_hinge_length``, under ``gravity``,
         with the clamp's ``grip``),
@@ -144,8 +154,7 @@ class FusedStripSolver:
         s.move_steps = max(1, self.step_of(control.move_time))
         return s
 
-    def advance(self, state: State, control: Control, recorder: Recorder, chunk: OutputChunk,
-                threads: int = 1) -> None:
+    def advance(self, state: State, control: Control, recorder: Recorder, chunk: OutputChunk, threads: int = 1) -> None:
         """Advance every healthy strip to each output step of ``chunk``, recording there
         (:class:`~warpcloth.sim.recorder.OutputChunk`): one launch, or on a CPU one launch
         per thread over contiguous ranges of strips (Warp runs a CPU launch on one thread and
@@ -155,9 +164,18 @@ class FusedStripSolver:
         """
         model = self.model
         steps = wp.array(np.asarray(chunk.output_steps, dtype=np.int32), dtype=int, device=model.device)
-        inputs = [model.struct, control.struct, self._stepping(control), state.struct,
-                  recorder.settings(self.kernels.ProbeSettings, model.scalar), steps, int(chunk.first_output),
-                  int(chunk.first_frame), chunk.probes, chunk.frames]
+        inputs = [
+            model.struct,
+            control.struct,
+            self._stepping(control),
+            state.struct,
+            recorder.settings(self.kernels.ProbeSettings, model.scalar),
+            steps,
+            int(chunk.first_output),
+            int(chunk.first_frame),
+            chunk.probes,
+            chunk.frames,
+        ]
         # at least STRIPS_PER_THREAD strips per thread: a small batch gains nothing from
         # splitting and, measured in the test suite, can lose (2-strip to 8-strip batches
         # ran 20 % slower on 2 threads there)
@@ -165,8 +183,12 @@ class FusedStripSolver:
         bounds = np.linspace(0, model.n_strips, parts + 1).round().astype(int)
 
         def launch(part: int) -> None:
-            wp.launch(self.kernels.advance, dim=int(bounds[part + 1] - bounds[part]), device=model.device,
-                      inputs=[*inputs, int(bounds[part])])
+            wp.launch(
+                self.kernels.advance,
+                dim=int(bounds[part + 1] - bounds[part]),
+                device=model.device,
+                inputs=[*inputs, int(bounds[part])],
+            )
 
         if parts == 1:
             launch(0)
@@ -181,11 +203,20 @@ class FusedStripSolver:
             return None
         step = int(state.struct.status_step.numpy()[strip])
         time_s = (step - self.release_step(control)) * self.dt
-        return Divergence(strip=strip, code=code, step=step, time_s=time_s, phase=phase_at(time_s, control),
-                          quantity=QUANTITY[code], where=int(state.struct.status_index.numpy()[strip]),
-                          value=float(state.struct.status_value.numpy()[strip]),
-                          limit=BUDGET_TOLERANCE if code == STATUS_BUDGET else self.divergence_strain,
-                          scheme=self.scheme, precision=self.model.precision, dt_s=self.dt)
+        return Divergence(
+            strip=strip,
+            code=code,
+            step=step,
+            time_s=time_s,
+            phase=phase_at(time_s, control),
+            quantity=QUANTITY[code],
+            where=int(state.struct.status_index.numpy()[strip]),
+            value=float(state.struct.status_value.numpy()[strip]),
+            limit=BUDGET_TOLERANCE if code == STATUS_BUDGET else self.divergence_strain,
+            scheme=self.scheme,
+            precision=self.model.precision,
+            dt_s=self.dt,
+        )
 
 
 class SemiImplicitEulerSolver(FusedStripSolver):
@@ -208,8 +239,15 @@ class SemiImplicitEulerSolver(FusedStripSolver):
         return spacing * float(np.sqrt(material.density / a1)) / float(np.cos(np.pi / (4 * free_nodes)))
 
     @classmethod
-    def stable_step(cls, material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
-                    gravity: float, grip: Grip | None = None) -> StepBound | None:
+    def stable_step(
+        cls,
+        material: MaterialSI,
+        spacing: float,
+        free_nodes: int,
+        edge_hinge_length: float,
+        gravity: float,
+        grip: Grip | None = None,
+    ) -> StepBound | None:
         """The smaller of the exact stretching limit and the transverse (bending) estimate."""
         stretching = cls.step_limit(material, spacing, free_nodes)
         bending = transverse_step_limit(material, spacing, free_nodes, edge_hinge_length, gravity, grip)
@@ -223,8 +261,10 @@ class ForwardEulerSolver(FusedStripSolver):
 
     scheme = "forward"
     label = "paper eqs. 5–6"
-    advice = (" or integrator.scheme = semi_implicit with a dt below its stretching limit (forward Euler"
-              " amplifies every undamped oscillation, docs/model.md §9)")
+    advice = (
+        " or integrator.scheme = semi_implicit with a dt below its stretching limit (forward Euler"
+        " amplifies every undamped oscillation, docs/model.md §9)"
+    )
 
 
 class ImexSolver(FusedStripSolver):
@@ -237,11 +277,21 @@ class ImexSolver(FusedStripSolver):
     advice = " (with imex, explicit bending limits dt: ∝ h², docs/model.md §9.5)"
 
     @classmethod
-    def stable_step(cls, material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
-                    gravity: float, grip: Grip | None = None) -> StepBound | None:
+    def stable_step(
+        cls,
+        material: MaterialSI,
+        spacing: float,
+        free_nodes: int,
+        edge_hinge_length: float,
+        gravity: float,
+        grip: Grip | None = None,
+    ) -> StepBound | None:
         """The transverse (bending) estimate: stretching is implicit."""
-        return StepBound(transverse_step_limit(material, spacing, free_nodes, edge_hinge_length, gravity, grip),
-                         "bending", exact=False)
+        return StepBound(
+            transverse_step_limit(material, spacing, free_nodes, edge_hinge_length, gravity, grip),
+            "bending",
+            exact=False,
+        )
 
 
 SOLVERS: dict[str, type[FusedStripSolver]] = {
@@ -294,16 +344,28 @@ class Divergence:
 
     def describe(self) -> str:
         """One sentence a user can act on."""
-        where = f" at segment {self.where}" if self.code == STATUS_STRAIN else (
-            f" at hinge node {self.where}" if self.code == STATUS_FOLDED else "")
-        limit = {STATUS_STRAIN: f", beyond integrator.divergence_strain = {self.limit:g}",
-                 STATUS_BUDGET: f", above {self.limit:g}: the step is unstable"}.get(self.code, "")
+        where = (
+            f" at segment {self.where}"
+            if self.code == STATUS_STRAIN
+            else (f" at hinge node {self.where}" if self.code == STATUS_FOLDED else "")
+        )
+        limit = {
+            STATUS_STRAIN: f", beyond integrator.divergence_strain = {self.limit:g}",
+            STATUS_BUDGET: f", above {self.limit:g}: the step is unstable",
+        }.get(self.code, "")
         advice = f"try a smaller integrator.dt_s (now {self.dt_s:g} s, e.g. {self.dt_s / 4:g})"
         advice += SOLVERS[self.scheme].advice
         if self.code == STATUS_BUDGET and self.precision == "float32":
-            advice = ("float32 rounding feeds energy into the stretching modes over a long run (a smaller dt makes "
-                      "it worse): use integrator.precision = \"float64\", or " + advice)
-        during = {"move": "while its free end was carried to the hold", "hold": "during the hold",
-                  "record": "after t = 0"}[self.phase]
-        return (f"strip {self.strip} diverged {during}, at t = {self.time_s:.6g} s (step {self.step}): "
-                f"{self.quantity} = {self.value:.4g}{where}{limit}; {advice}")
+            advice = (
+                "float32 rounding feeds energy into the stretching modes over a long run (a smaller dt makes "
+                'it worse): use integrator.precision = "float64", or ' + advice
+            )
+        during = {
+            "move": "while its free end was carried to the hold",
+            "hold": "during the hold",
+            "record": "after t = 0",
+        }[self.phase]
+        return (
+            f"strip {self.strip} diverged {during}, at t = {self.time_s:.6g} s (step {self.step}): "
+            f"{self.quantity} = {self.value:.4g}{where}{limit}; {advice}"
+        )

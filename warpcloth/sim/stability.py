@@ -69,8 +69,14 @@ def is_hysteretic(material: MaterialSI) -> bool:
     return cycle_response([material])[0][1] > 0.0
 
 
-def transverse_step_limit(material: MaterialSI, spacing: float, free_nodes: int, edge_hinge_length: float,
-                          gravity: float, grip: Grip | None = None) -> float:
+def transverse_step_limit(
+    material: MaterialSI,
+    spacing: float,
+    free_nodes: int,
+    edge_hinge_length: float,
+    gravity: float,
+    grip: Grip | None = None,
+) -> float:
     """2/ω_max (s) of the straight hanging chain's transverse modes: ``free_nodes`` nodes
     below the clamp edge at ``spacing`` (m), masses ρ_A·h (the free end half), hinge
     stiffness tangent·(h/edge_hinge_length)/h at the clamp-edge hinge and tangent/h below

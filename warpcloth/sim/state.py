@@ -15,8 +15,9 @@ if TYPE_CHECKING:
     from .model import Model
 
 
-def allocate_reversal_memory(struct_type: type, capacity: int, n_hinges: int, n_strips: int, vec2: object,
-                    device: object) -> object:
+def allocate_reversal_memory(
+    struct_type: type, capacity: int, n_hinges: int, n_strips: int, vec2: object, device: object
+) -> object:
     """A law history struct with ``capacity`` reversal points per hinge above the origin
     (capacity 0: no strip stores any, so the points array is a placeholder)."""
     history = struct_type()
@@ -35,15 +36,20 @@ def checked_nodes(argument: str, value: object, n_nodes: int, n_strips: int) -> 
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
-        raise TypeError(f"{argument} must be an array of numbers [node, strip, xy] of shape {expected}, got "
-                        f"{type(value).__name__}") from None
+        raise TypeError(
+            f"{argument} must be an array of numbers [node, strip, xy] of shape {expected}, got {type(value).__name__}"
+        ) from None
     if array.shape != expected:
-        raise ArgumentError(argument, f"has shape {array.shape}; expected {expected} ([node, strip, xy]: "
-                          f"{n_nodes} nodes, {n_strips} strip(s), x and y)")
+        raise ArgumentError(
+            argument,
+            f"has shape {array.shape}; expected {expected} ([node, strip, xy]: "
+            f"{n_nodes} nodes, {n_strips} strip(s), x and y)",
+        )
     if not np.isfinite(array).all():
         node, strip, axis = np.argwhere(~np.isfinite(array))[0]
-        raise ArgumentError(argument, f"[{node}, {strip}, {axis}] is {array[node, strip, axis]}; every value must be "
-                          "finite")
+        raise ArgumentError(
+            argument, f"[{node}, {strip}, {axis}] is {array[node, strip, axis]}; every value must be finite"
+        )
     return array
 
 
@@ -77,8 +83,9 @@ class State:
         s.correction = nodes()
         s.elimination = nodes()
         s.hinge = wp.zeros((n_hinges, b), dtype=model.structs.law.Memory, device=model.device)
-        s.history = allocate_reversal_memory(model.structs.law.History, model.reversal_memory, n_hinges, b, t.vec2,
-                                    model.device)
+        s.history = allocate_reversal_memory(
+            model.structs.law.History, model.reversal_memory, n_hinges, b, t.vec2, model.device
+        )
         s.work = per_strip(t.vec4)
         s.step = per_strip(int)
         s.status = per_strip(int)

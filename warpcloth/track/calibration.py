@@ -61,8 +61,15 @@ class PlaneMapping:
         import cv2
 
         pts = np.asarray(pixels, dtype=np.float64).reshape(-1, 1, 2)
-        ideal = cv2.undistortPoints(pts, self.camera_matrix, self.distortion, None, np.eye(3), np.eye(3),
-                                    (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)).reshape(-1, 2)
+        ideal = cv2.undistortPoints(
+            pts,
+            self.camera_matrix,
+            self.distortion,
+            None,
+            np.eye(3),
+            np.eye(3),
+            (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14),
+        ).reshape(-1, 2)
         h = self.normalized_to_plane
         w = ideal @ h[2, :2] + h[2, 2]
         return np.column_stack([ideal @ h[0, :2] + h[0, 2], ideal @ h[1, :2] + h[1, 2]]) / w[:, None]
@@ -86,9 +93,12 @@ class PlaneMapping:
 
     def as_json(self) -> dict:
         """The mapping's part of plane.json."""
-        return {"image_size_px": list(self.image_size), "camera_matrix": self.camera_matrix.tolist(),
-                "distortion_k1_k2_p1_p2_k3": self.distortion.tolist(),
-                "normalized_to_plane_mm": self.normalized_to_plane.tolist()}
+        return {
+            "image_size_px": list(self.image_size),
+            "camera_matrix": self.camera_matrix.tolist(),
+            "distortion_k1_k2_p1_p2_k3": self.distortion.tolist(),
+            "normalized_to_plane_mm": self.normalized_to_plane.tolist(),
+        }
 
 
 def _corners(image: np.ndarray, path: Path, inner: tuple[int, int]) -> np.ndarray:
@@ -97,8 +107,11 @@ def _corners(image: np.ndarray, path: Path, inner: tuple[int, int]) -> np.ndarra
     flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
     found, corners = cv2.findChessboardCorners(image, inner, flags=flags)
     if not found:
-        raise DataFileError(path, f"no chessboard of {inner[0]} × {inner[1]} inner corners found (--board counts "
-                            "inner corners, columns × rows); the whole board must be in view and in focus")
+        raise DataFileError(
+            path,
+            f"no chessboard of {inner[0]} × {inner[1]} inner corners found (--board counts "
+            "inner corners, columns × rows); the whole board must be in view and in focus",
+        )
     criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 100, 1e-6)
     return cv2.cornerSubPix(image, corners, (5, 5), (-1, -1), criteria).reshape(-1, 2).astype(np.float64)
 
@@ -123,15 +136,24 @@ def _pixel_pair(text: str, size: tuple[int, int]) -> np.ndarray:
     except ValueError:
         values = []
     if len(values) != 4 or not np.all(np.isfinite(values)):
-        raise ArgumentError("clamp_edge_px", f"expected U1,V1,U2,V2 (pixels: the clamp's lowest point, then a point "
-                          f"along its lower edge towards +x), got {text!r}")
+        raise ArgumentError(
+            "clamp_edge_px",
+            f"expected U1,V1,U2,V2 (pixels: the clamp's lowest point, then a point "
+            f"along its lower edge towards +x), got {text!r}",
+        )
     ends = np.array(values).reshape(2, 2)
     if np.any(ends < 0) or np.any(ends > np.array(size) - 1):
-        raise ArgumentError("clamp_edge_px", f"{text}: a pixel outside the {size[0]} × {size[1]} px plane view (u 0 "
-                          f"to {size[0] - 1}, v 0 to {size[1] - 1})")
+        raise ArgumentError(
+            "clamp_edge_px",
+            f"{text}: a pixel outside the {size[0]} × {size[1]} px plane view (u 0 "
+            f"to {size[0] - 1}, v 0 to {size[1] - 1})",
+        )
     if np.linalg.norm(ends[1] - ends[0]) < MIN_EDGE_PX:
-        raise ArgumentError("clamp_edge_px", f"{text}: the two pixels are {np.linalg.norm(ends[1] - ends[0]):.3g} px "
-                          f"apart; at least {MIN_EDGE_PX} px are needed to give the edge's direction")
+        raise ArgumentError(
+            "clamp_edge_px",
+            f"{text}: the two pixels are {np.linalg.norm(ends[1] - ends[0]):.3g} px "
+            f"apart; at least {MIN_EDGE_PX} px are needed to give the edge's direction",
+        )
     return ends
 
 
@@ -144,39 +166,61 @@ def _all_finite(value: object) -> bool:
     return not isinstance(value, float) or bool(np.isfinite(value))
 
 
-def calibrate_plane(paths: list[str | Path], inner: tuple[int, int], square_mm: float, *,
-                    origin_corner: tuple[int, int] | None = None, clamp_edge_px: str | None = None,
-                    max_rms_px: float = 0.3) -> tuple[PlaneMapping, dict]:
+def calibrate_plane(
+    paths: list[str | Path],
+    inner: tuple[int, int],
+    square_mm: float,
+    *,
+    origin_corner: tuple[int, int] | None = None,
+    clamp_edge_px: str | None = None,
+    max_rms_px: float = 0.3,
+) -> tuple[PlaneMapping, dict]:
     """The mapping and the full plane.json record from board images, the first the plane
     view. A calibration whose reprojection RMS exceeds ``max_rms_px`` in any image is a
     DataFileError naming the worst image: the images do not fit one camera."""
     import cv2
 
     if len(paths) < MIN_IMAGES:
-        raise ArgumentError("paths", f"{len(paths)} board image(s) given; at least {MIN_IMAGES} are needed (the plane "
-                          "view first, then views in other poses for the lens distortion)")
+        raise ArgumentError(
+            "paths",
+            f"{len(paths)} board image(s) given; at least {MIN_IMAGES} are needed (the plane "
+            "view first, then views in other poses for the lens distortion)",
+        )
     if (origin_corner is None) == (clamp_edge_px is None):
-        raise ArgumentError("origin_corner", "give exactly one of --origin-corner I,J and --clamp-edge-px "
-                          "U1,V1,U2,V2 to place the clamp's lowest point")
+        raise ArgumentError(
+            "origin_corner",
+            "give exactly one of --origin-corner I,J and --clamp-edge-px U1,V1,U2,V2 to place the clamp's lowest point",
+        )
     if origin_corner is not None and not (0 <= origin_corner[0] < inner[0] and 0 <= origin_corner[1] < inner[1]):
-        raise ArgumentError("origin_corner", f"{origin_corner[0]},{origin_corner[1]} is not an inner corner of the "
-                          f"{inner[0]} × {inner[1]} board (0 to {inner[0] - 1}, 0 to {inner[1] - 1})")
+        raise ArgumentError(
+            "origin_corner",
+            f"{origin_corner[0]},{origin_corner[1]} is not an inner corner of the "
+            f"{inner[0]} × {inner[1]} board (0 to {inner[0] - 1}, 0 to {inner[1] - 1})",
+        )
     paths = [Path(p) for p in paths]
     images = [read_image(p, "paths") for p in paths]
     size = images[0].shape[::-1]
     for path, image in zip(paths, images, strict=True):
         if image.shape[::-1] != size:
-            raise DataFileError(path, f"is {image.shape[1]} × {image.shape[0]} px, the plane view {paths[0]} is "
-                                f"{size[0]} × {size[1]}: every image must come from the same camera setting")
+            raise DataFileError(
+                path,
+                f"is {image.shape[1]} × {image.shape[0]} px, the plane view {paths[0]} is "
+                f"{size[0]} × {size[1]}: every image must come from the same camera setting",
+            )
     edge = None if clamp_edge_px is None else _pixel_pair(clamp_edge_px, size)
     corners = [_corners(image, path, inner) for path, image in zip(paths, images, strict=True)]
     corners[0] = _level(corners[0], inner)
     board = np.zeros((inner[0] * inner[1], 3), np.float32)
-    board[:, :2] = np.mgrid[0: inner[0], 0: inner[1]].T.reshape(-1, 2) * square_mm
+    board[:, :2] = np.mgrid[0 : inner[0], 0 : inner[1]].T.reshape(-1, 2) * square_mm
     rms, matrix, distortion, rvecs, tvecs = cv2.calibrateCamera(
-        [board] * len(images), [c.astype(np.float32).reshape(-1, 1, 2) for c in corners], size, None, None,
+        [board] * len(images),
+        [c.astype(np.float32).reshape(-1, 1, 2) for c in corners],
+        size,
+        None,
+        None,
         flags=cv2.CALIB_FIX_K3,
-        criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12))
+        criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12),
+    )
     view_rms = []
     for c, rvec, tvec in zip(corners, rvecs, tvecs, strict=True):
         projected, _ = cv2.projectPoints(board, rvec, tvec, matrix, distortion)
@@ -184,9 +228,12 @@ def calibrate_plane(paths: list[str | Path], inner: tuple[int, int], square_mm: 
     worst = int(np.argmax(view_rms))
     if view_rms[worst] > max_rms_px:
         listed = ", ".join(f"{p.name} {r:.3g}" for p, r in zip(paths, view_rms, strict=True))
-        raise DataFileError(paths[worst], f"reprojection error {view_rms[worst]:.3g} px exceeds --max-rms-px "
-                            f"{max_rms_px:g} (per image, px: {listed}): the images do not fit one camera and lens "
-                            "(a changed zoom or focus, a resized image, or a board that is not flat)")
+        raise DataFileError(
+            paths[worst],
+            f"reprojection error {view_rms[worst]:.3g} px exceeds --max-rms-px "
+            f"{max_rms_px:g} (per image, px: {listed}): the images do not fit one camera and lens "
+            "(a changed zoom or focus, a resized image, or a board that is not flat)",
+        )
     r = cv2.Rodrigues(rvecs[0])[0]
     to_board = np.linalg.inv(np.column_stack([r[:, 0], r[:, 1], tvecs[0].ravel()]))
     distortion = distortion.ravel()[:5].astype(np.float64)
@@ -205,18 +252,29 @@ def calibrate_plane(paths: list[str | Path], inner: tuple[int, int], square_mm: 
     expected = board[:, :2] @ np.vstack([x_axis, y_axis]).T - [x_axis @ origin, y_axis @ origin]
     plane_error = mapping.to_plane(corners[0]) - expected
     scale = mapping.mm_per_px(corners[0])
-    record = {"format": FORMAT, **mapping.as_json(),
-              "board": {"kind": "chessboard", "inner_corners": list(inner), "square_mm": square_mm},
-              "origin": placed,
-              "reprojection_rms_px": float(rms),
-              "plane_view": {"image": str(paths[0]), "rms_px": view_rms[0],
-                             "rms_mm": float(np.sqrt(np.mean(np.sum(plane_error**2, axis=1)))),
-                             "mm_per_px": [float(scale.min()), float(scale.max())]},
-              "views": [{"image": str(p), "sha256": hashlib.sha256(p.read_bytes()).hexdigest(), "rms_px": v}
-                        for p, v in zip(paths, view_rms, strict=True)]}
+    record = {
+        "format": FORMAT,
+        **mapping.as_json(),
+        "board": {"kind": "chessboard", "inner_corners": list(inner), "square_mm": square_mm},
+        "origin": placed,
+        "reprojection_rms_px": float(rms),
+        "plane_view": {
+            "image": str(paths[0]),
+            "rms_px": view_rms[0],
+            "rms_mm": float(np.sqrt(np.mean(np.sum(plane_error**2, axis=1)))),
+            "mm_per_px": [float(scale.min()), float(scale.max())],
+        },
+        "views": [
+            {"image": str(p), "sha256": hashlib.sha256(p.read_bytes()).hexdigest(), "rms_px": v}
+            for p, v in zip(paths, view_rms, strict=True)
+        ],
+    }
     if not _all_finite(record):
-        raise DataFileError(paths[0], "the calibration gives numbers that are not finite (a degenerate plane view or "
-                            "clamp edge); no plane file is written")
+        raise DataFileError(
+            paths[0],
+            "the calibration gives numbers that are not finite (a degenerate plane view or "
+            "clamp edge); no plane file is written",
+        )
     return mapping, record
 
 
@@ -229,18 +287,30 @@ def read_plane(path: str | Path, argument: str = "path") -> PlaneMapping:
         raise ArgumentError(argument, f"{path} does not exist" if not path.exists() else f"{path} is not a file")
     data = read_json(path)
     if data.get("format") != FORMAT:
-        raise DataFileError(path, f"is not a plane file of warpcloth track calibrate (format {data.get('format')!r}, "
-                            f"expected {FORMAT!r})")
+        raise DataFileError(
+            path,
+            f"is not a plane file of warpcloth track calibrate (format {data.get('format')!r}, expected {FORMAT!r})",
+        )
     try:
-        mapping = PlaneMapping(np.array(data["camera_matrix"], dtype=float),
-                               np.array(data["distortion_k1_k2_p1_p2_k3"], dtype=float),
-                               np.array(data["normalized_to_plane_mm"], dtype=float),
-                               tuple(int(v) for v in data["image_size_px"]))
+        mapping = PlaneMapping(
+            np.array(data["camera_matrix"], dtype=float),
+            np.array(data["distortion_k1_k2_p1_p2_k3"], dtype=float),
+            np.array(data["normalized_to_plane_mm"], dtype=float),
+            tuple(int(v) for v in data["image_size_px"]),
+        )
     except (KeyError, TypeError, ValueError) as exc:
         raise DataFileError(path, f"is damaged ({type(exc).__name__}: {exc})") from None
     shapes = (mapping.camera_matrix.shape, mapping.distortion.shape, mapping.normalized_to_plane.shape)
-    if shapes != ((3, 3), (5,), (3, 3)) or len(mapping.image_size) != 2 or not all(
-            np.all(np.isfinite(a)) for a in (mapping.camera_matrix, mapping.distortion, mapping.normalized_to_plane)):
-        raise DataFileError(path, "is damaged (camera_matrix 3 × 3, distortion 5 numbers, normalized_to_plane_mm "
-                            "3 × 3, all finite, are expected)")
+    if (
+        shapes != ((3, 3), (5,), (3, 3))
+        or len(mapping.image_size) != 2
+        or not all(
+            np.all(np.isfinite(a)) for a in (mapping.camera_matrix, mapping.distortion, mapping.normalized_to_plane)
+        )
+    ):
+        raise DataFileError(
+            path,
+            "is damaged (camera_matrix 3 × 3, distortion 5 numbers, normalized_to_plane_mm "
+            "3 × 3, all finite, are expected)",
+        )
     return mapping

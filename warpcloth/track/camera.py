@@ -37,8 +37,10 @@ class Camera:
         k1, k2, p1, p2, k3 = self.distortion
         r2 = x * x + y * y
         radial = 1 + k1 * r2 + k2 * r2**2 + k3 * r2**3
-        return (x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
-                y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y)
+        return (
+            x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
+            y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y,
+        )
 
     def project(self, points: np.ndarray) -> np.ndarray:
         """Camera-frame points ``[..., 3]`` (mm) → pixels ``[..., 2]``."""
@@ -91,8 +93,10 @@ class PlanePose:
         homography = np.column_stack([self.rotation[:, 0], self.rotation[:, 1], self.translation])
         inverse = np.linalg.inv(homography)
         w = inverse[2, 0] * x + inverse[2, 1] * y + inverse[2, 2]
-        return ((inverse[0, 0] * x + inverse[0, 1] * y + inverse[0, 2]) / w,
-                (inverse[1, 0] * x + inverse[1, 1] * y + inverse[1, 2]) / w)
+        return (
+            (inverse[0, 0] * x + inverse[0, 1] * y + inverse[0, 2]) / w,
+            (inverse[1, 0] * x + inverse[1, 1] * y + inverse[1, 2]) / w,
+        )
 
     def shifted(self, origin_xy: tuple[float, float]) -> PlanePose:
         """The same plane with its coordinates measured from ``origin_xy``."""

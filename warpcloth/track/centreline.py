@@ -50,9 +50,12 @@ def _region_path(mask: np.ndarray, seed: tuple[float, float], where: str, path: 
         raise DataFileError(path, f"{where}: nothing differs from the background by the threshold: no strip")
     nearest = int(np.argmin(np.hypot(xs - seed[0], ys - seed[1])))
     if np.hypot(xs[nearest] - seed[0], ys[nearest] - seed[1]) > SEED_REACH_PX:
-        raise DataFileError(path, f"{where}: nothing differs from the background within {SEED_REACH_PX} px of the "
-                            "clamp's lowest point at rest: the strip or the clamp is not where the plane file puts "
-                            "them")
+        raise DataFileError(
+            path,
+            f"{where}: nothing differs from the background within {SEED_REACH_PX} px of the "
+            "clamp's lowest point at rest: the strip or the clamp is not where the plane file puts "
+            "them",
+        )
     seed_pixel = (ys[nearest], xs[nearest])
     ys, xs = np.nonzero(labels == labels[seed_pixel])
     index = -np.ones(mask.shape, np.int64)
@@ -67,8 +70,9 @@ def _region_path(mask: np.ndarray, seed: tuple[float, float], where: str, path: 
         rows.append(np.arange(len(xs))[ok])
         cols.append(target[ok])
         weights.append(np.full(ok.sum(), np.hypot(dx, dy)))
-    graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
-                       shape=(len(xs), len(xs))).tocsr()
+    graph = coo_matrix(
+        (np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(len(xs), len(xs))
+    ).tocsr()
     start = int(index[seed_pixel])
     distance, predecessors = dijkstra(graph, directed=False, indices=start, return_predecessors=True)
     node = int(np.argmax(np.where(np.isfinite(distance), distance, -1)))
@@ -93,16 +97,17 @@ def _sample(image: np.ndarray, points: np.ndarray) -> np.ndarray:
     maps = np.zeros((-(-n // width) * width, 2), np.float32)
     maps[:n] = points
     maps = maps.reshape(-1, width, 2)
-    return cv2.remap(image, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR,
-                     borderMode=cv2.BORDER_REPLICATE).ravel()[:n]
+    return cv2.remap(image, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()[:n]
 
 
-def _refine(difference: np.ndarray, path: np.ndarray, half_width: float, noise: float,
-            threshold: float) -> tuple[np.ndarray, np.ndarray]:
+def _refine(
+    difference: np.ndarray, path: np.ndarray, half_width: float, noise: float, threshold: float
+) -> tuple[np.ndarray, np.ndarray]:
     # each point moved to the centre of the profile across the strip; its σ from the noise
     kernel = np.ones(SMOOTH) / SMOOTH
-    smooth = np.column_stack([np.convolve(np.pad(path[:, k], SMOOTH // 2, mode="edge"), kernel, "valid")
-                              for k in range(2)])
+    smooth = np.column_stack(
+        [np.convolve(np.pad(path[:, k], SMOOTH // 2, mode="edge"), kernel, "valid") for k in range(2)]
+    )
     tangent = np.gradient(smooth, axis=0)
     tangent /= np.linalg.norm(tangent, axis=1)[:, None]
     normal = np.column_stack([-tangent[:, 1], tangent[:, 0]])
@@ -133,9 +138,17 @@ def _free_end(difference: np.ndarray, centre: np.ndarray, half_width: float) -> 
     return centre[0] + cross * direction
 
 
-def _one_frame(image: np.ndarray, bg: np.ndarray, mapping: PlaneMapping, seed: np.ndarray, s_mm: np.ndarray,
-               free_length_mm: float, threshold_dn: float | None, where: str,
-               path: Path) -> tuple[np.ndarray, np.ndarray, float]:
+def _one_frame(
+    image: np.ndarray,
+    bg: np.ndarray,
+    mapping: PlaneMapping,
+    seed: np.ndarray,
+    s_mm: np.ndarray,
+    free_length_mm: float,
+    threshold_dn: float | None,
+    where: str,
+    path: Path,
+) -> tuple[np.ndarray, np.ndarray, float]:
     # the centreline points (px), their σ (px) and the frame's noise
     import cv2
 
@@ -147,8 +160,7 @@ def _one_frame(image: np.ndarray, bg: np.ndarray, mapping: PlaneMapping, seed: n
     # the half-width: the distance to the region's edge at the middle of the strip, the
     # largest within 9 px of the path (a shortest path runs along an edge)
     inside = cv2.dilate(cv2.distanceTransform(mask.astype(np.uint8), cv2.DIST_L2, 5), np.ones((9, 9), np.uint8))
-    half_width = max(float(np.median(inside[route[:, 1].astype(int), route[:, 0].astype(int)][: len(route) // 2])),
-                     1.0)
+    half_width = max(float(np.median(inside[route[:, 1].astype(int), route[:, 0].astype(int)][: len(route) // 2])), 1.0)
     centre = _resample(route, STEP_PX)
     for _ in range(2):  # the second pass profiles across the first pass's centreline
         centre, sigma = _refine(difference, centre, half_width, noise, threshold)
@@ -160,24 +172,35 @@ def _one_frame(image: np.ndarray, bg: np.ndarray, mapping: PlaneMapping, seed: n
     # over 1 px steps that would lengthen the arc by ~1 %, so the line is averaged over
     # 11 px and its arc summed over 5 px chords (a curvature radius of 20 mm: −0.01 %)
     kernel = np.ones(LINE_SMOOTH) / LINE_SMOOTH
-    centre = np.column_stack([np.convolve(np.pad(centre[:, k], LINE_SMOOTH // 2, mode="edge"), kernel, "valid")
-                              for k in range(2)])[::ARC_STRIDE]
+    centre = np.column_stack(
+        [np.convolve(np.pad(centre[:, k], LINE_SMOOTH // 2, mode="edge"), kernel, "valid") for k in range(2)]
+    )[::ARC_STRIDE]
     sigma = sigma[::ARC_STRIDE] / np.sqrt(LINE_SMOOTH)
     line_px = np.vstack([tip, centre])
     line_mm = mapping.to_plane(line_px)
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(line_mm, axis=0), axis=1))])
     wanted = free_length_mm - np.asarray(s_mm)
     if wanted.max() > arc[-1]:
-        raise DataFileError(path, f"{where}: the centreline found is {arc[-1]:.3g} mm long from the free end, "
-                            f"shorter than the {wanted.max():g} mm to s = {np.min(s_mm):g} mm (--centreline-s, "
-                            "--free-length-mm)")
+        raise DataFileError(
+            path,
+            f"{where}: the centreline found is {arc[-1]:.3g} mm long from the free end, "
+            f"shorter than the {wanted.max():g} mm to s = {np.min(s_mm):g} mm (--centreline-s, "
+            "--free-length-mm)",
+        )
     points = np.column_stack([np.interp(wanted, arc, line_px[:, 0]), np.interp(wanted, arc, line_px[:, 1])])
     return points, np.interp(wanted, arc, np.concatenate([[sigma[0]], sigma])), noise
 
 
-def track_centreline(frames: Frames | FrameStream, background: np.ndarray, mapping: PlaneMapping, s_mm: np.ndarray,
-                     free_length_mm: float, path: str | Path, threshold_dn: float | None = None,
-                     progress: bool = False) -> Tracked:
+def track_centreline(
+    frames: Frames | FrameStream,
+    background: np.ndarray,
+    mapping: PlaneMapping,
+    s_mm: np.ndarray,
+    free_length_mm: float,
+    path: str | Path,
+    threshold_dn: float | None = None,
+    progress: bool = False,
+) -> Tracked:
     """The centreline at arc lengths ``s_mm`` from the clamp's lowest point in every frame
     (see the module docstring); ``frames`` gives ``(index, t, image)`` per frame."""
     from tqdm import tqdm
@@ -186,10 +209,12 @@ def track_centreline(frames: Frames | FrameStream, background: np.ndarray, mappi
     seed = mapping.to_pixels(np.zeros((1, 2)))[0]
     bg = background.astype(np.float32)
     index, t, px, u, noise = [], [], [], [], []
-    for i, time, image in tqdm(frames, total=frames.total, desc="tracking the centreline", unit=" frames",
-                               disable=not progress):
-        points, sigma, frame_noise = _one_frame(image, bg, mapping, seed, s_mm, free_length_mm, threshold_dn,
-                                                f"frame {i} (t = {time:.6g} s)", path)
+    for i, time, image in tqdm(
+        frames, total=frames.total, desc="tracking the centreline", unit=" frames", disable=not progress
+    ):
+        points, sigma, frame_noise = _one_frame(
+            image, bg, mapping, seed, s_mm, free_length_mm, threshold_dn, f"frame {i} (t = {time:.6g} s)", path
+        )
         index.append(i)
         t.append(time)
         px.append(points)

@@ -60,8 +60,9 @@ class Tracked:
         for f, frame in enumerate(self.frame):
             for m, s in enumerate(self.s_mm):
                 x, y = self.mm[f, m]
-                rows.append(f"{frame},{self.t[f]:.9f},{s:g},{x:.5f},{y:.5f},{self.u_px[f, m]:.4f},"
-                            f"{self.u_mm[f, m]:.5f}")
+                rows.append(
+                    f"{frame},{self.t[f]:.9f},{s:g},{x:.5f},{y:.5f},{self.u_px[f, m]:.4f},{self.u_mm[f, m]:.5f}"
+                )
         return rows
 
 
@@ -78,8 +79,9 @@ def noise_sigma(darkening: np.ndarray) -> float:
     return sigma
 
 
-def _blobs(darkening: np.ndarray, threshold: float, areas: tuple[float, float],
-           noise: float) -> tuple[np.ndarray, np.ndarray]:
+def _blobs(
+    darkening: np.ndarray, threshold: float, areas: tuple[float, float], noise: float
+) -> tuple[np.ndarray, np.ndarray]:
     import cv2
 
     mask = (darkening > threshold).astype(np.uint8)
@@ -103,17 +105,20 @@ def _blobs(darkening: np.ndarray, threshold: float, areas: tuple[float, float],
     return np.array(centres).reshape(-1, 2), np.array(sigmas).reshape(-1, 2)
 
 
-def _chain(plane: np.ndarray, start: np.ndarray, reach: float, s_mm: np.ndarray, where: str,
-           path: Path) -> np.ndarray:
+def _chain(plane: np.ndarray, start: np.ndarray, reach: float, s_mm: np.ndarray, where: str, path: Path) -> np.ndarray:
     # indices into `plane` of the markers in their order along the strip
     if not len(plane):
-        raise DataFileError(path, f"{where}: no marker found (none darker than the background by the threshold, "
-                            "with a marker's area)")
+        raise DataFileError(
+            path, f"{where}: no marker found (none darker than the background by the threshold, with a marker's area)"
+        )
     first = int(np.argmin(np.linalg.norm(plane - start, axis=1)))
     if np.linalg.norm(plane[first] - start) > reach:
-        raise DataFileError(path, f"{where}: marker s = {s_mm[0]:g} mm lost: no dark blob within {reach:.3g} mm of "
-                            f"where it was (x = {start[0]:.2f}, y = {start[1]:.2f} mm); the nearest is "
-                            f"{np.linalg.norm(plane[first] - start):.3g} mm away")
+        raise DataFileError(
+            path,
+            f"{where}: marker s = {s_mm[0]:g} mm lost: no dark blob within {reach:.3g} mm of "
+            f"where it was (x = {start[0]:.2f}, y = {start[1]:.2f} mm); the nearest is "
+            f"{np.linalg.norm(plane[first] - start):.3g} mm away",
+        )
     order = [first]
     left = set(range(len(plane))) - set(order)
     for i in range(1, len(s_mm)):
@@ -128,19 +133,33 @@ def _chain(plane: np.ndarray, start: np.ndarray, reach: float, s_mm: np.ndarray,
             seen = f"the nearest other dark blob is {chord:.3g} mm from it"
         else:
             seen = "no other dark blob is left"
-        extra = (", or the background holds the strip or the clamp where this frame has none (a median of frames in "
-                 "which they rest: give --background)" if len(plane) > len(s_mm) else "")
-        raise DataFileError(path, f"{where}: marker s = {s_mm[i]:g} mm lost: it should be within "
-                            f"{STRETCH * arc + SLACK_MM:.3g} mm of the marker at s = {s_mm[i - 1]:g} mm "
-                            f"(at x = {plane[order[-1], 0]:.2f}, y = {plane[order[-1], 1]:.2f} mm), but {seen} "
-                            f"({len(plane)} marker-sized blobs in this frame for {len(s_mm)} markers): it is hidden "
-                            f"or merged with another, or --marker-s or the plane's scale (--plane) is wrong{extra}")
+        extra = (
+            ", or the background holds the strip or the clamp where this frame has none (a median of frames in "
+            "which they rest: give --background)"
+            if len(plane) > len(s_mm)
+            else ""
+        )
+        raise DataFileError(
+            path,
+            f"{where}: marker s = {s_mm[i]:g} mm lost: it should be within "
+            f"{STRETCH * arc + SLACK_MM:.3g} mm of the marker at s = {s_mm[i - 1]:g} mm "
+            f"(at x = {plane[order[-1], 0]:.2f}, y = {plane[order[-1], 1]:.2f} mm), but {seen} "
+            f"({len(plane)} marker-sized blobs in this frame for {len(s_mm)} markers): it is hidden "
+            f"or merged with another, or --marker-s or the plane's scale (--plane) is wrong{extra}",
+        )
     return np.array(order)
 
 
-def track_markers(frames: Frames | FrameStream, background: np.ndarray, mapping: PlaneMapping, s_mm: np.ndarray,
-                  diameter_mm: float, path: str | Path, threshold_dn: float | None = None,
-                  progress: bool = False) -> Tracked:
+def track_markers(
+    frames: Frames | FrameStream,
+    background: np.ndarray,
+    mapping: PlaneMapping,
+    s_mm: np.ndarray,
+    diameter_mm: float,
+    path: str | Path,
+    threshold_dn: float | None = None,
+    progress: bool = False,
+) -> Tracked:
     """Every marker in every frame (see the module docstring); ``frames`` gives
     ``(index, t, image)`` per frame, in memory or streamed."""
     from tqdm import tqdm
@@ -173,4 +192,3 @@ def track_markers(frames: Frames | FrameStream, background: np.ndarray, mapping:
     u_px = np.sqrt(0.5 * np.sum(sig**2, axis=2))
     u_mm = u_px * mapping.mm_per_px(px.reshape(-1, 2)).reshape(n, m)
     return Tracked(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u_px, u_mm, np.array(noise))
-

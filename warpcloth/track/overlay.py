@@ -31,17 +31,25 @@ def overlay_figure(image: np.ndarray, tracked: Tracked, frame: int) -> object:
     left.imshow(image, cmap="gray", vmin=0, vmax=255)
     for m in range(len(tracked.s_mm)):
         left.plot(tracked.px[:, m, 0], tracked.px[:, m, 1], "-", color="tab:orange", lw=0.7, alpha=0.8)
-    left.scatter(tracked.px[frame, :, 0], tracked.px[frame, :, 1], s=60, facecolors="none", edgecolors="tab:red",
-                 linewidths=1.0)
+    left.scatter(
+        tracked.px[frame, :, 0], tracked.px[frame, :, 1], s=60, facecolors="none", edgecolors="tab:red", linewidths=1.0
+    )
     for m, s in enumerate(tracked.s_mm):
-        left.annotate(f"{s:g}", tracked.px[frame, m], xytext=(6, -6), textcoords="offset points", color="tab:red",
-                      fontsize=7)
+        left.annotate(
+            f"{s:g}", tracked.px[frame, m], xytext=(6, -6), textcoords="offset points", color="tab:red", fontsize=7
+        )
     left.set_title(f"frame {tracked.frame[frame]} at t = {tracked.t[frame]:.4f} s: markers (s in mm) and their paths")
     left.set_axis_off()
     for f in range(len(tracked.t)):
         shown = f == frame
-        right.plot(tracked.mm[f, :, 0], tracked.mm[f, :, 1], "o-" if shown else "-", ms=3,
-                   color="black" if shown else plt.cm.viridis(f / max(len(tracked.t) - 1, 1)), lw=1.4 if shown else 0.8)
+        right.plot(
+            tracked.mm[f, :, 0],
+            tracked.mm[f, :, 1],
+            "o-" if shown else "-",
+            ms=3,
+            color="black" if shown else plt.cm.viridis(f / max(len(tracked.t) - 1, 1)),
+            lw=1.4 if shown else 0.8,
+        )
     right.plot([0], [0], "s", color="tab:red", label="clamp's lowest point at rest")
     right.set_aspect("equal")
     right.set_xlabel("x (mm)")
@@ -80,13 +88,17 @@ def avi_timing(times: Sequence[Fraction]) -> tuple[Fraction, list[int], float]:
     time_base = max(exact, FINEST_AVI_S)
     pts = [round(t / time_base) for t in times]
     if any(b <= a for a, b in zip(pts, pts[1:], strict=False)):
-        raise ArgumentError("overlay_video", f"frames less than {float(FINEST_AVI_S):g} s apart: an AVI written by "
-                            "FFmpeg holds at most 1000 frames/s (leave --overlay-video out, or use --overlay)")
+        raise ArgumentError(
+            "overlay_video",
+            f"frames less than {float(FINEST_AVI_S):g} s apart: an AVI written by "
+            "FFmpeg holds at most 1000 frames/s (leave --overlay-video out, or use --overlay)",
+        )
     return time_base, pts, max(abs(float(t - p * time_base)) for t, p in zip(times, pts, strict=True))
 
 
-def write_overlay_video(path: str | Path, frames: Frames | FrameStream, tracked: Tracked,
-                        times: Sequence[Fraction]) -> None:
+def write_overlay_video(
+    path: str | Path, frames: Frames | FrameStream, tracked: Tracked, times: Sequence[Fraction]
+) -> None:
     """The frames ``tracked`` was tracked from (``(index, t, image)`` each, in the same
     order, at the exact ``times`` s) with their points circled and labelled, as grey FFV1 in
     AVI, encoded one at a time and written atomically, each frame at its own time as far as
@@ -105,10 +117,26 @@ def write_overlay_video(path: str | Path, frames: Frames | FrameStream, tracked:
             for m, s in enumerate(tracked.s_mm):
                 centre = tuple(int(round(v * 16)) for v in tracked.px[f, m])
                 cv2.circle(image, centre, 8 * 16, 255, 1, cv2.LINE_AA, 4)
-                cv2.putText(image, f"{s:g}", (int(tracked.px[f, m, 0]) + 10, int(tracked.px[f, m, 1]) + 4),
-                            cv2.FONT_HERSHEY_SIMPLEX, 0.35, 255, 1, cv2.LINE_AA)
-            cv2.putText(image, f"frame {tracked.frame[f]}  t = {tracked.t[f]:.4f} s", (10, 20),
-                        cv2.FONT_HERSHEY_SIMPLEX, 0.5, 255, 1, cv2.LINE_AA)
+                cv2.putText(
+                    image,
+                    f"{s:g}",
+                    (int(tracked.px[f, m, 0]) + 10, int(tracked.px[f, m, 1]) + 4),
+                    cv2.FONT_HERSHEY_SIMPLEX,
+                    0.35,
+                    255,
+                    1,
+                    cv2.LINE_AA,
+                )
+            cv2.putText(
+                image,
+                f"frame {tracked.frame[f]}  t = {tracked.t[f]:.4f} s",
+                (10, 20),
+                cv2.FONT_HERSHEY_SIMPLEX,
+                0.5,
+                255,
+                1,
+                cv2.LINE_AA,
+            )
             yield image
 
     write_atomically(path, lambda tmp: write_video(tmp, drawn(), pts, time_base))

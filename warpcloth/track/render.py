@@ -50,8 +50,9 @@ EXAMPLE = {
 }
 """What the bundled example is made of."""
 
-CAMERA = Camera(fx=2300.0, fy=2300.0, cx=383.2, cy=357.6, distortion=(-0.25, 0.12, 6e-4, -4e-4, 0.0),
-                width=768, height=720)
+CAMERA = Camera(
+    fx=2300.0, fy=2300.0, cx=383.2, cy=357.6, distortion=(-0.25, 0.12, 6e-4, -4e-4, 0.0), width=768, height=720
+)
 STRIP_PLANE = PlanePose(rotation(-12.0, 20.0, 1.5), np.zeros(3))
 SUPERSAMPLE = 3
 TEXEL_MM = 0.05
@@ -88,8 +89,9 @@ def _ray_grid(camera: Camera) -> tuple[np.ndarray, np.ndarray]:
     return x, y
 
 
-def _texture_map(camera_rays: tuple[np.ndarray, np.ndarray], pose: PlanePose,
-                 box: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+def _texture_map(
+    camera_rays: tuple[np.ndarray, np.ndarray], pose: PlanePose, box: tuple[float, float, float, float]
+) -> tuple[np.ndarray, np.ndarray]:
     # for cv2.remap: the texel (column, row) every ray reads, texel centres at integers
     px, py = pose.from_rays(*camera_rays)
     return (((px - box[0]) / TEXEL_MM - 0.5).astype(np.float32), ((py - box[1]) / TEXEL_MM - 0.5).astype(np.float32))
@@ -105,7 +107,7 @@ def _integrate(texture: np.ndarray, maps: tuple[np.ndarray, np.ndarray], border:
 
 def _lighting(camera: Camera) -> np.ndarray:
     # a left-to-right gradient and a vignette: 0.62 to 1.08 across the image
-    v, u = np.mgrid[0: camera.height, 0: camera.width].astype(float)
+    v, u = np.mgrid[0 : camera.height, 0 : camera.width].astype(float)
     r2 = ((u - camera.cx) ** 2 + (v - camera.cy) ** 2) / (0.5 * camera.width) ** 2
     return 0.8 + 0.28 * (u / camera.width) - 0.12 * r2 - 0.06 * (v / camera.height)
 
@@ -177,15 +179,15 @@ def _draw_strip(wall: np.ndarray, nodes_mm: np.ndarray, n_clamped: int, markers_
     pts = np.rint(_texel(corners[:, 0], -corners[:, 1]) * scale).astype(np.int32)
     cv2.fillPoly(cover, [pts], 255, cv2.LINE_AA, shift)
     texture += (ALBEDO["clamp"] - texture) * (cover / 255.0)
-    _draw_band(texture, nodes_mm[n_clamped - 1:], 0.5 * EXAMPLE["strip_thickness_mm"])
+    _draw_band(texture, nodes_mm[n_clamped - 1 :], 0.5 * EXAMPLE["strip_thickness_mm"])
     radius = 0.5 * EXAMPLE["marker_diameter_mm"] / TEXEL_MM
     for centre in _texel(markers_mm[:, 0], -markers_mm[:, 1]):
         c0, r0 = np.floor(centre - radius - 2).astype(int)
         c1, r1 = np.ceil(centre + radius + 2).astype(int)
-        rows, cols = np.mgrid[r0: r1 + 1, c0: c1 + 1]
+        rows, cols = np.mgrid[r0 : r1 + 1, c0 : c1 + 1]
         # exact area coverage of a disc edge, to first order: a one-texel linear ramp
         coverage = np.clip(radius - np.hypot(cols - centre[0], rows - centre[1]) + 0.5, 0, 1)
-        patch = texture[r0: r1 + 1, c0: c1 + 1]
+        patch = texture[r0 : r1 + 1, c0 : c1 + 1]
         patch += (ALBEDO["marker"] - patch) * coverage.astype(np.float32)
     return texture
 
@@ -197,7 +199,7 @@ def _board_texture() -> tuple[np.ndarray, tuple[float, float, float, float]]:
     edge = sq + BOARD_MARGIN_MM
     box = (-edge, -edge, (nx - 2) * sq + edge, (ny - 2) * sq + edge)
     shape = (round((box[3] - box[1]) / TEXEL_MM), round((box[2] - box[0]) / TEXEL_MM))
-    rows, cols = np.mgrid[0: shape[0], 0: shape[1]]
+    rows, cols = np.mgrid[0 : shape[0], 0 : shape[1]]
     x, y = box[0] + (cols + 0.5) * TEXEL_MM, box[1] + (rows + 0.5) * TEXEL_MM
     i, j = np.floor((x + sq) / sq), np.floor((y + sq) / sq)
     inside = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
@@ -226,8 +228,11 @@ def _truth_run() -> tuple[object, object]:
     from warpcloth.scene import read_scene_file, scene_from_dict, set_field
 
     data = read_scene_file("impulsive_rotation")
-    fields = EXAMPLE["truth"] | {"run.duration_s": EXAMPLE["duration_s"] + 0.01, "output.frame_rate_hz": 6000.0,
-                                 "output.probes_per_frame": 1}
+    fields = EXAMPLE["truth"] | {
+        "run.duration_s": EXAMPLE["duration_s"] + 0.01,
+        "output.frame_rate_hz": 6000.0,
+        "output.probes_per_frame": 1,
+    }
     for key, value in fields.items():
         set_field(data, key, value)
     scene = scene_from_dict(copy.deepcopy(data))
@@ -276,7 +281,7 @@ def make_example(out: str | Path, progress: bool = True) -> dict:
     rate = EXAMPLE["frame_rate_hz"]
     n_frames = round(EXAMPLE["duration_s"] * rate) + 1
     s_mm = np.array(EXAMPLE["marker_s_mm"])
-    offsets = ((np.arange(EXAMPLE["instants_per_exposure"]) + 0.5) / EXAMPLE["instants_per_exposure"] - 0.5)
+    offsets = (np.arange(EXAMPLE["instants_per_exposure"]) + 0.5) / EXAMPLE["instants_per_exposure"] - 0.5
     images, rows = [], []
     for k in tqdm(range(n_frames), desc="rendering frames", unit=" frames", disable=not progress):
         t = k / rate
@@ -284,8 +289,9 @@ def make_example(out: str | Path, progress: bool = True) -> dict:
         for offset in offsets:
             instant = max(t + offset * EXAMPLE["exposure_s"], 0.0)  # at rest before t = 0
             nodes = _at(result, instant)
-            radiance += _integrate(_draw_strip(wall, nodes, scene.n_clamped, _markers(nodes, scene, s_mm)), wall_maps,
-                                   ALBEDO["wall"])
+            radiance += _integrate(
+                _draw_strip(wall, nodes, scene.n_clamped, _markers(nodes, scene, s_mm)), wall_maps, ALBEDO["wall"]
+            )
         images.append(_expose(radiance / len(offsets), lighting, rng))
         truth = _markers(_at(result, t), scene, s_mm)
         rows += [f"{k},{t:.9f},{s:g},{x:.6f},{y:.6f}" for s, (x, y) in zip(s_mm, truth, strict=True)]
@@ -295,17 +301,27 @@ def make_example(out: str | Path, progress: bool = True) -> dict:
     back = read_frames(out / "rotation.avi")
     if not (np.array_equal(back.images, np.stack(images)) and np.array_equal(back.t, np.arange(n_frames) / rate)):
         raise RuntimeError("the video does not read back as written (lossless, exact timestamps)")
-    write_text_atomically(out / "truth.csv", "# the simulated markers at each frame's time (python -m "
-                          f"warpcloth.track.render; truth {EXAMPLE['truth']})\nframe,t_s,s_mm,x_mm,y_mm\n"
-                          + "\n".join(rows) + "\n")
-    described = {"example": EXAMPLE, "camera": {"matrix": CAMERA.matrix.tolist(), "distortion": CAMERA.distortion,
-                                                "image_size_px": [CAMERA.width, CAMERA.height]},
-                 "strip_plane": {"rotation": strip_plane.rotation.tolist(),
-                                 "translation_mm": strip_plane.translation.tolist()},
-                 "files": {"video": "rotation.avi (FFV1 in AVI, lossless, 8-bit grey)", "background": "background.png",
-                           "plane_view": "board_0.png",
-                           "boards": [f"board_{i}.png" for i in range(len(BOARD_VIEWS) + 1)],
-                           "truth": "truth.csv"}}
+    write_text_atomically(
+        out / "truth.csv",
+        "# the simulated markers at each frame's time (python -m "
+        f"warpcloth.track.render; truth {EXAMPLE['truth']})\nframe,t_s,s_mm,x_mm,y_mm\n" + "\n".join(rows) + "\n",
+    )
+    described = {
+        "example": EXAMPLE,
+        "camera": {
+            "matrix": CAMERA.matrix.tolist(),
+            "distortion": CAMERA.distortion,
+            "image_size_px": [CAMERA.width, CAMERA.height],
+        },
+        "strip_plane": {"rotation": strip_plane.rotation.tolist(), "translation_mm": strip_plane.translation.tolist()},
+        "files": {
+            "video": "rotation.avi (FFV1 in AVI, lossless, 8-bit grey)",
+            "background": "background.png",
+            "plane_view": "board_0.png",
+            "boards": [f"board_{i}.png" for i in range(len(BOARD_VIEWS) + 1)],
+            "truth": "truth.csv",
+        },
+    }
     write_text_atomically(out / "truth.json", json.dumps(described, indent=1) + "\n")
     return described
 
@@ -314,5 +330,8 @@ if __name__ == "__main__":
     import importlib.resources
 
     # by default the bundled example itself (scenes/data/track/ of a checkout or an editable install)
-    make_example(sys.argv[1] if len(sys.argv) > 1 else Path(str(importlib.resources.files("warpcloth.scenes")))
-                 / "data" / "track")
+    make_example(
+        sys.argv[1]
+        if len(sys.argv) > 1
+        else Path(str(importlib.resources.files("warpcloth.scenes"))) / "data" / "track"
+    )

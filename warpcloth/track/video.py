@@ -59,8 +59,9 @@ class FrameStream:
 
         self.path = Path(path)
         if not self.path.is_file():
-            raise ArgumentError(argument, f"{self.path} does not exist" if not self.path.exists() else
-                              f"{self.path} is not a file")
+            raise ArgumentError(
+                argument, f"{self.path} does not exist" if not self.path.exists() else f"{self.path} is not a file"
+            )
         try:
             with av.open(str(self.path)) as container:
                 if not container.streams.video:
@@ -92,24 +93,36 @@ class FrameStream:
                         break
                     except av.error.FFmpegError as exc:
                         after = float(self.times[-1]) if self.times else 0.0
-                        raise DataFileError(self.path, f"frame {i} (after t = {after:g} s) cannot be decoded "
-                                            f"({exc}); the file is damaged") from None
+                        raise DataFileError(
+                            self.path,
+                            f"frame {i} (after t = {after:g} s) cannot be decoded ({exc}); the file is damaged",
+                        ) from None
                     if frame.pts is None or frame.time_base is None:
-                        raise DataFileError(self.path, f"frame {i} has no timestamp; the container must give each "
-                                            "frame's time (re-mux it, e.g. to .avi or .mkv)")
+                        raise DataFileError(
+                            self.path,
+                            f"frame {i} has no timestamp; the container must give each "
+                            "frame's time (re-mux it, e.g. to .avi or .mkv)",
+                        )
                     t = Fraction(frame.pts) * frame.time_base
                     if logged:
                         said = "; ".join(" ".join(entry[2].split()) for entry in logged)
-                        raise DataFileError(self.path, f"frame {i} (t = {float(t):g} s) or the one before it is "
-                                            f"damaged: the decoder says {said!r}")
+                        raise DataFileError(
+                            self.path,
+                            f"frame {i} (t = {float(t):g} s) or the one before it is "
+                            f"damaged: the decoder says {said!r}",
+                        )
                     if self.times and t <= self.times[-1]:
-                        raise DataFileError(self.path, f"frame {i} has time {float(t):.6g} s, not after frame "
-                                            f"{i - 1}'s {float(self.times[-1]):.6g} s: the timestamps do not increase")
+                        raise DataFileError(
+                            self.path,
+                            f"frame {i} has time {float(t):.6g} s, not after frame "
+                            f"{i - 1}'s {float(self.times[-1]):.6g} s: the timestamps do not increase",
+                        )
                     self.times.append(t)
                     image = frame.to_ndarray(format="gray")
                     if previous is not None and np.array_equal(image, previous[1]):
-                        self.duplicated.append(f"frame {i} (t = {float(t):.6g} s) repeats frame {previous[0]} "
-                                               "exactly; left out")
+                        self.duplicated.append(
+                            f"frame {i} (t = {float(t):.6g} s) repeats frame {previous[0]} exactly; left out"
+                        )
                         continue
                     previous = (i, image)
                     yield i, float(t), image
@@ -129,9 +142,12 @@ class FrameStream:
         """Gaps of more than 1.5 nominal intervals in the last iteration, one note each."""
         steps = [b - a for a, b in zip(self.times, self.times[1:], strict=False)]
         nominal = sorted(steps)[len(steps) // 2]
-        return [f"{round(step / nominal) - 1} frame(s) missing between frame {i} (t = {float(self.times[i]):.6g} s) "
-                f"and frame {i + 1} (t = {float(self.times[i + 1]):.6g} s), nominal interval {float(nominal):.6g} s"
-                for i, step in enumerate(steps) if step > DROP_FACTOR * nominal]
+        return [
+            f"{round(step / nominal) - 1} frame(s) missing between frame {i} (t = {float(self.times[i]):.6g} s) "
+            f"and frame {i + 1} (t = {float(self.times[i + 1]):.6g} s), nominal interval {float(nominal):.6g} s"
+            for i, step in enumerate(steps)
+            if step > DROP_FACTOR * nominal
+        ]
 
 
 def read_frames(path: str | Path, argument: str = "path") -> Frames:
@@ -139,8 +155,9 @@ def read_frames(path: str | Path, argument: str = "path") -> Frames:
     streams a :class:`FrameStream`)."""
     stream = FrameStream(path, argument)
     index, t, images = zip(*stream, strict=True)
-    return Frames(np.stack(images), np.array(t), np.array(index), stream.nominal_interval_s, stream.dropped,
-                  stream.duplicated)
+    return Frames(
+        np.stack(images), np.array(t), np.array(index), stream.nominal_interval_s, stream.dropped, stream.duplicated
+    )
 
 
 def median_background(frames: Iterable[tuple[int, float, np.ndarray]], most: int = 64) -> np.ndarray:

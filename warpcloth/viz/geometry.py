@@ -30,8 +30,9 @@ def colour_values(recording: Recording) -> np.ndarray:
         return recording.variants.astype(float)
     column = recording.parameters[recording.varying[0]]
     # a choice (e.g. the bending law) colours by its values' order of appearance
-    return column.to_numpy(dtype=float) if pd.api.types.is_numeric_dtype(column) else \
-        pd.factorize(column)[0].astype(float)
+    return (
+        column.to_numpy(dtype=float) if pd.api.types.is_numeric_dtype(column) else pd.factorize(column)[0].astype(float)
+    )
 
 
 def points3(xy: np.ndarray) -> np.ndarray:

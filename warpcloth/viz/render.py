@@ -77,8 +77,9 @@ class StripRenderer:
         centre = (lo + hi) / 2
         span = max(hi - lo) * 1.2 + 0.01
         azimuth, elevation = np.radians(CAMERA_AZIMUTH_DEG), np.radians(CAMERA_ELEVATION_DEG)
-        direction = np.array([np.sin(azimuth) * np.cos(elevation), np.sin(elevation),
-                              np.cos(azimuth) * np.cos(elevation)])
+        direction = np.array(
+            [np.sin(azimuth) * np.cos(elevation), np.sin(elevation), np.cos(azimuth) * np.cos(elevation)]
+        )
         self.plotter.camera.focal_point = (centre[0], centre[1], 0.0)
         self.plotter.camera.position = tuple(np.array([centre[0], centre[1], 0.0]) + direction)
         self.plotter.camera.up = (0.0, 1.0, 0.0)
@@ -113,8 +114,10 @@ class StripRenderer:
             try:
                 import imageio_ffmpeg  # noqa: F401
             except ImportError:
-                raise ArgumentError("movie", "MP4 needs the imageio-ffmpeg package (pip install imageio-ffmpeg); "
-                                 "a .gif needs nothing more") from None
+                raise ArgumentError(
+                    "movie",
+                    "MP4 needs the imageio-ffmpeg package (pip install imageio-ffmpeg); a .gif needs nothing more",
+                ) from None
         elif path.suffix != ".gif":
             raise ArgumentError("movie", f"{path} must end in .gif or .mp4")
 
@@ -127,6 +130,7 @@ class StripRenderer:
                 self.show_frame(int(f))
                 self.plotter.write_frame()
             self.plotter.mwriter.close()
+
         return write_atomically(path, write)
 
     def close(self) -> None:
@@ -150,8 +154,14 @@ def gif_stride(frame_rate: float, stride: int = 1) -> int:
     return max(1, stride)
 
 
-def render_run(recording: Recording, out_dir: str | Path, *, times: np.ndarray | None = None,
-               movie: str | None = "motion.gif", stride: int = 1) -> list[Path]:
+def render_run(
+    recording: Recording,
+    out_dir: str | Path,
+    *,
+    times: np.ndarray | None = None,
+    movie: str | None = "motion.gif",
+    stride: int = 1,
+) -> list[Path]:
     """PNGs of the frames at ``times`` (default: six spread over the run) and, unless
     ``movie`` is None, an animation of every ``stride``-th frame at real speed."""
     if stride > len(recording.frame_times):

@@ -106,8 +106,9 @@ def _author(stage: Usd.Stage, recording: Recording, frames: range, ribbon: bool)
                 curve.GetExtentAttr().Set(_extent(points[f, j], pad), f)
             _hide_after_divergence(curve, alive[:, j], frames)
             if ribbon:
-                _hide_after_divergence(_author_ribbon(stage, recording, j, name, frames, colours[j]), alive[:, j],
-                                       frames)
+                _hide_after_divergence(
+                    _author_ribbon(stage, recording, j, name, frames, colours[j]), alive[:, j], frames
+                )
     for j, variant in enumerate(recording.variants):
         _author_clamp(stage, recording, j, f"/World/Clamps/variant_{variant:04d}", frames)
 
@@ -121,26 +122,31 @@ def _hide_after_divergence(prim: UsdGeom.Imageable, alive: np.ndarray, frames: r
         attr.Set(UsdGeom.Tokens.inherited if alive[f] else UsdGeom.Tokens.invisible, f)
 
 
-def _write_primvars(prim: UsdGeom.Gprim, recording: Recording, rows: slice, interpolation: str,
-                    colours: np.ndarray) -> None:
+def _write_primvars(
+    prim: UsdGeom.Gprim, recording: Recording, rows: slice, interpolation: str, colours: np.ndarray
+) -> None:
     api = UsdGeom.PrimvarsAPI(prim)
     table = recording.parameters.iloc[rows]
     api.CreatePrimvar("warpcloth:variant", Sdf.ValueTypeNames.IntArray, interpolation).Set(
-        Vt.IntArray([int(v) for v in table["variant"]]))
+        Vt.IntArray([int(v) for v in table["variant"]])
+    )
     for name in table.columns:
         if name == "variant":
             continue
         if pd.api.types.is_numeric_dtype(table[name]):
             api.CreatePrimvar(_primvar_name(name), Sdf.ValueTypeNames.DoubleArray, interpolation).Set(
-                Vt.DoubleArray([float(v) for v in table[name]]))
+                Vt.DoubleArray([float(v) for v in table[name]])
+            )
         else:  # a choice, e.g. the bending law
             api.CreatePrimvar(_primvar_name(name), Sdf.ValueTypeNames.StringArray, interpolation).Set(
-                Vt.StringArray([str(v) for v in table[name]]))
+                Vt.StringArray([str(v) for v in table[name]])
+            )
     prim.CreateDisplayColorPrimvar(interpolation).Set(Vt.Vec3fArray([Gf.Vec3f(*map(float, c)) for c in colours]))
 
 
-def _author_ribbon(stage: Usd.Stage, recording: Recording, j: int, name: str, frames: range,
-                   colour: np.ndarray) -> UsdGeom.Mesh:
+def _author_ribbon(
+    stage: Usd.Stage, recording: Recording, j: int, name: str, frames: range, colour: np.ndarray
+) -> UsdGeom.Mesh:
     width = recording.scenes[j].strip.width_mm * 1e-3
     mesh = UsdGeom.Mesh.Define(stage, f"/World/Ribbons/{name}")
     counts, indices = ribbon_quads(recording.frames.shape[2])
@@ -182,8 +188,9 @@ def _set_stage_metadata(stage: Usd.Stage, n_frames: int, fps: float) -> None:
     stage.SetStartTimeCode(0)
     stage.SetEndTimeCode(max(n_frames - 1, 0))
     # where the stage came from, as strings (USD layer metadata holds plain values)
-    stage.GetRootLayer().customLayerData = {"warpcloth_provenance": {
-        k: json.dumps(v) if not isinstance(v, str) else v for k, v in provenance().items()}}
+    stage.GetRootLayer().customLayerData = {
+        "warpcloth_provenance": {k: json.dumps(v) if not isinstance(v, str) else v for k, v in provenance().items()}
+    }
 
 
 @contextlib.contextmanager
@@ -194,14 +201,18 @@ def usd_write_errors(out: Path) -> Iterator[None]:
         yield
     except Tf.ErrorException as exc:
         text = str(exc)
-        code = next((c for c, words in ((errno.EFBIG, "File too large"), (errno.ENOSPC, "No space left"))
-                     if words in text), errno.EIO)
-        raise OSError(code, os.strerror(code) if code != errno.EIO else "USD could not write the stage",
-                      str(out)) from None
+        code = next(
+            (c for c, words in ((errno.EFBIG, "File too large"), (errno.ENOSPC, "No space left")) if words in text),
+            errno.EIO,
+        )
+        raise OSError(
+            code, os.strerror(code) if code != errno.EIO else "USD could not write the stage", str(out)
+        ) from None
 
 
-def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = False,
-               frames_per_clip: int | None = None) -> Path:
+def export_usd(
+    recording: Recording, out_file: str | Path, *, ribbon: bool = False, frames_per_clip: int | None = None
+) -> Path:
     """Write ``recording`` as a USD stage at ``out_file`` (.usd, .usda or .usdc).
 
     ``frames_per_clip`` splits the time samples into value-clip layers of that many
@@ -210,8 +221,11 @@ def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = Fal
     """
     out = check_stage_path(out_file)
     if ribbon and len(recording.variants) > PRIM_PER_STRIP_LIMIT:
-        raise ArgumentError("ribbon", f"ribbons are written per variant; select at most {PRIM_PER_STRIP_LIMIT} "
-                         f"of the {len(recording.variants)} variants (--variants, --where)")
+        raise ArgumentError(
+            "ribbon",
+            f"ribbons are written per variant; select at most {PRIM_PER_STRIP_LIMIT} "
+            f"of the {len(recording.variants)} variants (--variants, --where)",
+        )
     n_frames, n_variants, n_nodes = recording.frames.shape[:3]
     if frames_per_clip is None and n_frames * n_variants * n_nodes > CLIP_POINTS:
         frames_per_clip = max(1, CLIP_POINTS // (n_variants * n_nodes))
@@ -245,8 +259,9 @@ def export_usd(recording: Recording, out_file: str | Path, *, ribbon: bool = Fal
     return out
 
 
-def _write_clips(clips: Path, recording: Recording, frames_per_clip: int, ribbon: bool, n_frames: int,
-                 fps: float) -> Path:
+def _write_clips(
+    clips: Path, recording: Recording, frames_per_clip: int, ribbon: bool, n_frames: int, fps: float
+) -> Path:
     clips.mkdir()
     files = []
     for k, first in enumerate(range(0, n_frames, frames_per_clip)):

@@ -25,8 +25,10 @@ EXPONENT_GRID = (0.1, 5.0, 24)
 DAHL = LawFitter(
     law="dahl",
     amplitude=Parameter("dahl_moment_gf_cm_per_cm", "M_s", "gf·cm/cm"),
-    shape=(ShapeParameter("dahl_curvature_per_cm", "K_s", "1/cm", *SCALE_K0_GRID, k0_power=1, scaled="K_s/K0"),
-           ShapeParameter("dahl_exponent", "n", "", *EXPONENT_GRID, k0_power=0, scaled="n")),
+    shape=(
+        ShapeParameter("dahl_curvature_per_cm", "K_s", "1/cm", *SCALE_K0_GRID, k0_power=1, scaled="K_s/K0"),
+        ShapeParameter("dahl_exponent", "n", "", *EXPONENT_GRID, k0_power=0, scaled="n"),
+    ),
 )
 """Dahl's law: amplitude M_s, shape (K_s, n)."""
 

@@ -116,8 +116,10 @@ def poor_fit(what: str, rms: float, unit: str, samples: np.ndarray) -> str | Non
     noise = difference_noise([samples])
     ratio = poor_fit_ratio(rms, noise)
     if ratio is not None:
-        return (f"the {what} RMS {rms:.4g} {unit} is {ratio:.1f}× the noise of the data ({noise:.3g} {unit}, "
-                "from its 4th differences): the model does not describe this loop")
+        return (
+            f"the {what} RMS {rms:.4g} {unit} is {ratio:.1f}× the noise of the data ({noise:.3g} {unit}, "
+            "from its 4th differences): the model does not describe this loop"
+        )
     return None
 
 
@@ -143,8 +145,9 @@ def elastic_aic(loop: BendingLoop) -> float:
     return len(k) * math.log(max(sse / len(k), 1e-300)) + 2
 
 
-def bending_problems(fit: BendingFit, loop: BendingLoop, what: str = "bending", unit: str = "gf·cm/cm",
-                     line: str = "M = D K") -> list[tuple[str, str]]:
+def bending_problems(
+    fit: BendingFit, loop: BendingLoop, what: str = "bending", unit: str = "gf·cm/cm", line: str = "M = D K"
+) -> list[tuple[str, str]]:
     """(status, why) of each reason a bending fit is not trusted, in :data:`STATUS_ORDER`:
     ``failed`` (a value not finite), ``poor_fit`` (the law does not describe the loop),
     ``not_identifiable`` (the elastic line fits the loop as well: no hysteresis for the
@@ -156,10 +159,15 @@ def bending_problems(fit: BendingFit, loop: BendingLoop, what: str = "bending", 
         found.append(("failed", f"a fitted {fit.law} value is not finite"))
     gain = elastic_aic(loop) - fit.aic()
     if gain < AIC_TIE:
-        found.append(("not_identifiable", f"the loop shows no hysteresis the {fit.law} law can tell: the elastic line "
-                      f"{line} fits it as well (AIC better by {gain:.1f} < {AIC_TIE:g} for "
-                      f"{fit.free_parameters - 1} more parameters), so its hysteresis parameters are not determined "
-                      "by these data"))
+        found.append(
+            (
+                "not_identifiable",
+                f"the loop shows no hysteresis the {fit.law} law can tell: the elastic line "
+                f"{line} fits it as well (AIC better by {gain:.1f} < {AIC_TIE:g} for "
+                f"{fit.free_parameters - 1} more parameters), so its hysteresis parameters are not determined "
+                "by these data",
+            )
+        )
     if "edge of its search range" in fit.note:
         found.append(("at_bound", fit.note))
     why = poor_fit(what, fit.rms_gf_cm_per_cm, unit, loop.moment)
@@ -198,6 +206,7 @@ class LawFitter:
     def describe(self, fit: BendingFit, digits: int = 6) -> str:
         """The fit's parameters as text with their units and standard uncertainties, e.g.
         ``D 0.1 ± 0.0003 gf·cm²/cm, …`` (no ± for K0, which the data fix)."""
+
         def one(p: Parameter) -> str:
             sigma = fit.sigma.get(p.field)
             spread = f" ± {sigma:.2g}" if sigma is not None and math.isfinite(sigma) else ""
@@ -205,16 +214,18 @@ class LawFitter:
 
         return ", ".join(one(p) for p in self.parameters)
 
-    def uncertainties(self, loop: BendingLoop, d: float, a: float, shape: np.ndarray, sse: float,
-                      device: str | None = "cpu") -> dict[str, float]:
+    def uncertainties(
+        self, loop: BendingLoop, d: float, a: float, shape: np.ndarray, sse: float, device: str | None = "cpu"
+    ) -> dict[str, float]:
         """Standard uncertainties of D, A and the shape parameters at the optimum, from the
         linearised model: cov = s² (JᵀJ)⁻¹, s² = SSE / (n − k), J = ∂M/∂(D, A, θ) with the
         θ columns by central differences (one launch); NaN where the amplitude is 0 (the
         shape parameters then have no effect) or the Jacobian is singular."""
         k, k0 = loop.curvature, loop.k0
         step = 1e-4
-        probes = np.concatenate([shape[None, :] * np.exp(step * np.eye(len(shape))),
-                                 shape[None, :] * np.exp(-step * np.eye(len(shape)))])
+        probes = np.concatenate(
+            [shape[None, :] * np.exp(step * np.eye(len(shape))), shape[None, :] * np.exp(-step * np.eye(len(shape)))]
+        )
         offsets = self.unit_offsets(k, np.vstack([shape[None, :], probes]), k0, device)
         columns = [k, offsets[:, 0]]
         n_shape = len(shape)
@@ -230,23 +241,34 @@ class LawFitter:
             covariance = sse / dof * np.linalg.inv(jacobian.T @ jacobian)
         except np.linalg.LinAlgError:
             return {name: math.nan for name in names}
-        return {name: float(math.sqrt(v)) if v >= 0 else math.nan for name, v in zip(names, np.diag(covariance),
-                                                                                     strict=True)}
+        return {
+            name: float(math.sqrt(v)) if v >= 0 else math.nan
+            for name, v in zip(names, np.diag(covariance), strict=True)
+        }
 
     def _fixed(self, k0: float) -> dict[str, float]:
         return {self.k0.field: k0} if self.k0 else {}
 
-    def unit_offsets(self, curvature_per_cm: np.ndarray, shapes: np.ndarray, k0_per_cm: float,
-                     device: str | None = "cpu") -> np.ndarray:
+    def unit_offsets(
+        self, curvature_per_cm: np.ndarray, shapes: np.ndarray, k0_per_cm: float, device: str | None = "cpu"
+    ) -> np.ndarray:
         """Hysteretic moment g(θ; path) per gf·cm/cm of the amplitude along a curvature
         path (1/cm), one column per row of ``shapes`` (``[point, shape parameter]``, KES
         units), all in one kernel launch with D = 0; the hinge starts fresh at the path's
         first sample. Returns ``[sample, point]``."""
         fixed = self._fixed(k0_per_cm)
-        materials = [to_si(MaterialSection(bending_law=self.law, bending_rigidity_gf_cm2_per_cm=0.0,
-                                           **{self.amplitude.field: 1.0}, **fixed,
-                                           **{p.field: float(v) for p, v in zip(self.shape, row, strict=True)}))
-                     for row in np.atleast_2d(shapes)]
+        materials = [
+            to_si(
+                MaterialSection(
+                    bending_law=self.law,
+                    bending_rigidity_gf_cm2_per_cm=0.0,
+                    **{self.amplitude.field: 1.0},
+                    **fixed,
+                    **{p.field: float(v) for p, v in zip(self.shape, row, strict=True)},
+                )
+            )
+            for row in np.atleast_2d(shapes)
+        ]
         k = np.asarray(curvature_per_cm, dtype=np.float64) * units.CURVATURE_PER_CM
         moment, _ = moment_along_path(materials, k[:, None], device=device)
         return moment / units.MOMENT_GF_CM_PER_CM
@@ -268,31 +290,61 @@ class LawFitter:
         # Nelder–Mead on ln θ inside the grid's box from the best grid point, the first
         # simplex one grid step along each ln θ, inwards from an edge (SciPy clips a
         # vertex onto the box, which would flatten a simplex started outwards).
-        steps = np.array([(lg[1] - lg[0]) * (-1 if i == len(lg) - 1 else 1) for lg, i in zip(logs, index,
-                                                                                             strict=True)])
+        steps = np.array([(lg[1] - lg[0]) * (-1 if i == len(lg) - 1 else 1) for lg, i in zip(logs, index, strict=True)])
         start = np.log(points[best])
-        search = minimize(objective, start, method="Nelder-Mead", bounds=[(lg[0], lg[-1]) for lg in logs],
-                          options={"initial_simplex": np.vstack([start, start + np.diag(steps)]),
-                                   "xatol": SIMPLEX_SIZE, "fatol": np.inf, "maxiter": SIMPLEX_ITERATIONS})
+        search = minimize(
+            objective,
+            start,
+            method="Nelder-Mead",
+            bounds=[(lg[0], lg[-1]) for lg in logs],
+            options={
+                "initial_simplex": np.vstack([start, start + np.diag(steps)]),
+                "xatol": SIMPLEX_SIZE,
+                "fatol": np.inf,
+                "maxiter": SIMPLEX_ITERATIONS,
+            },
+        )
         x, refined = search.x, float(search.fun)
         shape = np.exp(x)
         if sse[best] < refined:  # a flat objective (no hysteresis): keep the grid's point
             shape = points[best]
-        edges = [(p, v) for p, i, v, lg in zip(self.shape, index, shape, logs, strict=True)
-                 if i in (0, p.count - 1) or min(abs(math.log(v) - lg[0]), abs(math.log(v) - lg[-1])) < SIMPLEX_SIZE]
+        edges = [
+            (p, v)
+            for p, i, v, lg in zip(self.shape, index, shape, logs, strict=True)
+            if i in (0, p.count - 1) or min(abs(math.log(v) - lg[0]), abs(math.log(v) - lg[-1])) < SIMPLEX_SIZE
+        ]
         note = ""
         if edges:
-            note = "; ".join(f"{p.symbol} at the edge of its search range ({p.scaled} = {v / k0**p.k0_power:g})"
-                             for p, v in edges) + "; the loop may not have the model's shape"
+            note = (
+                "; ".join(
+                    f"{p.symbol} at the edge of its search range ({p.scaled} = {v / k0**p.k0_power:g})"
+                    for p, v in edges
+                )
+                + "; the loop may not have the model's shape"
+            )
         offset = self.unit_offsets(k, shape[None, :], k0, device)[:, 0]
         d_fit, a_fit, total = _linear_part(k, m, offset)
         if a_fit == 0.0:
             symbols = [p.symbol for p in self.shape]
-            note = (f"the loop shows no hysteresis ({self.amplitude.symbol} = 0): {', '.join(symbols)} "
-                    f"{'has' if len(symbols) == 1 else 'have'} no effect")
+            note = (
+                f"the loop shows no hysteresis ({self.amplitude.symbol} = 0): {', '.join(symbols)} "
+                f"{'has' if len(symbols) == 1 else 'have'} no effect"
+            )
         rms = math.sqrt(total / len(k))
-        parameters = {RIGIDITY.field: d_fit, self.amplitude.field: a_fit,
-                      **{p.field: float(v) for p, v in zip(self.shape, shape, strict=True)}, **self._fixed(k0)}
+        parameters = {
+            RIGIDITY.field: d_fit,
+            self.amplitude.field: a_fit,
+            **{p.field: float(v) for p, v in zip(self.shape, shape, strict=True)},
+            **self._fixed(k0),
+        }
         sigma = self.uncertainties(loop, d_fit, a_fit, shape, total, device)
-        return self.result(self.law, parameters, rms, rms / (float(np.ptp(m)) or 1.0), d_fit * k + a_fit * offset,
-                           self.free_parameters, note, sigma)
+        return self.result(
+            self.law,
+            parameters,
+            rms,
+            rms / (float(np.ptp(m)) or 1.0),
+            d_fit * k + a_fit * offset,
+            self.free_parameters,
+            note,
+            sigma,
+        )

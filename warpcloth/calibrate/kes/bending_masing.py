@@ -16,8 +16,9 @@ from .bending_fit import LawFitter
 from .bending_tagawa2003 import TAGAWA2003, Tagawa2003Fit
 from .readers import BendingLoop
 
-MASING = LawFitter(law="masing", amplitude=TAGAWA2003.amplitude, shape=TAGAWA2003.shape, k0=TAGAWA2003.k0,
-                   result=Tagawa2003Fit)
+MASING = LawFitter(
+    law="masing", amplitude=TAGAWA2003.amplitude, shape=TAGAWA2003.shape, k0=TAGAWA2003.k0, result=Tagawa2003Fit
+)
 """The masing law: the paper's parameters and search, the law's own hinge logic."""
 
 

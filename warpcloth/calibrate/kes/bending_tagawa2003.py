@@ -54,8 +54,9 @@ TAGAWA2003 = LawFitter(
 """The paper's law: amplitude D1, shape α (α K0 on the grid), K0 from the data."""
 
 
-def hysteretic_offsets(curvature_per_cm: np.ndarray, alphas_cm: Sequence[float] | np.ndarray, k0_per_cm: float,
-                       device: str | None = "cpu") -> np.ndarray:
+def hysteretic_offsets(
+    curvature_per_cm: np.ndarray, alphas_cm: Sequence[float] | np.ndarray, k0_per_cm: float, device: str | None = "cpu"
+) -> np.ndarray:
     """Offset h(α; path) per gf·cm/cm of D1 along a curvature path, one column per α.
 
     All α run in one kernel launch (warpcloth.sim.moment_along_path, the strip

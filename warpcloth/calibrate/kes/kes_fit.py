@@ -84,8 +84,14 @@ class KesFit:
         return {k: (float(v) if isinstance(v, np.floating) else v) for k, v in table.items() if v is not None}
 
 
-def fit_kes(tensile: TensileLoop, bending: BendingLoop, max_strain: float = DIVERGENCE_STRAIN,
-            device: str | None = "cpu", law: str = DEFAULT_LAW, bending_fit: BendingFit | None = None) -> KesFit:
+def fit_kes(
+    tensile: TensileLoop,
+    bending: BendingLoop,
+    max_strain: float = DIVERGENCE_STRAIN,
+    device: str | None = "cpu",
+    law: str = DEFAULT_LAW,
+    bending_fit: BendingFit | None = None,
+) -> KesFit:
     """Fit the tensile quartic and the bending law ``law`` (a name in ``LAW_FITTERS``:
     tagawa2003, dahl, frictional_couple), and compute the KES values of both loops.
 
@@ -94,5 +100,11 @@ def fit_kes(tensile: TensileLoop, bending: BendingLoop, max_strain: float = DIVE
     """
     if bending_fit is None:
         bending_fit = law_fitter(law).fit(bending, device)
-    return KesFit(tensile, bending, fit_tensile(tensile, max_strain), bending_fit, tensile_summary(tensile),
-                  bending_summary(bending))
+    return KesFit(
+        tensile,
+        bending,
+        fit_tensile(tensile, max_strain),
+        bending_fit,
+        tensile_summary(tensile),
+        bending_summary(bending),
+    )

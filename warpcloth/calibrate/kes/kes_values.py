@@ -143,8 +143,7 @@ def bending_summary(loop: BendingLoop) -> BendingSummary:
 def shear_summary(loop: ShearLoop) -> ShearSummary:
     """G, 2HG and 2HG5 of a shear loop (None where the loop does not reach the angles used)."""
     legs = _legs(loop.as_law_loop())
-    return ShearSummary(_mean_slope(legs, G_RANGE_DEG), *(_mean_width(legs, at, HG_WINDOW_DEG)
-                                                           for at in HG_ANGLES_DEG))
+    return ShearSummary(_mean_slope(legs, G_RANGE_DEG), *(_mean_width(legs, at, HG_WINDOW_DEG) for at in HG_ANGLES_DEG))
 
 
 KES_CYCLE_STEP_PER_CM = 0.02
@@ -159,6 +158,10 @@ KES-FB1 shear example's)."""
 def standard_cycle(k0_per_cm: float, step_per_cm: float = KES_CYCLE_STEP_PER_CM) -> np.ndarray:
     """The KES-FB2 curvature cycle 0 → +K0 → −K0 → 0 (1/cm), in steps of about ``step_per_cm``."""
     n = max(round(k0_per_cm / step_per_cm), 2)
-    return np.concatenate([np.linspace(0.0, k0_per_cm, n, endpoint=False),
-                           np.linspace(k0_per_cm, -k0_per_cm, 2 * n, endpoint=False),
-                           np.linspace(-k0_per_cm, 0.0, n + 1)])
+    return np.concatenate(
+        [
+            np.linspace(0.0, k0_per_cm, n, endpoint=False),
+            np.linspace(k0_per_cm, -k0_per_cm, 2 * n, endpoint=False),
+            np.linspace(-k0_per_cm, 0.0, n + 1),
+        ]
+    )

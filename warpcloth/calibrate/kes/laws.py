@@ -39,16 +39,19 @@ def _fitter_of(law: BendingLaw) -> LawFitter:
     try:
         fitter = getattr(importlib.import_module(module), attribute)
     except (ImportError, AttributeError) as exc:  # noqa: B014 - a broken fitter module, or no such name
-        raise LawRegistryError(f"the {law.name} bending law names its KES fitter {law.fitter!r}, which cannot be "
-                          f"loaded: {exc}") from exc
+        raise LawRegistryError(
+            f"the {law.name} bending law names its KES fitter {law.fitter!r}, which cannot be loaded: {exc}"
+        ) from exc
     if not isinstance(fitter, LawFitter) or fitter.law != law.name:
         raise LawRegistryError(f"the {law.name} bending law's KES fitter {law.fitter!r} is not a LawFitter of that law")
     fields = {p.field for p in fitter.parameters}
     expected = {BENDING_RIGIDITY.scene_field, *(p.scene_field for p in law.parameters)}
     if fields != expected:
-        raise LawRegistryError(f"the {law.name} bending law's KES fitter {law.fitter!r} fits "
-                               f"{', '.join(sorted(fields))}; the law's [material] fields are "
-                               f"{', '.join(sorted(expected))}")
+        raise LawRegistryError(
+            f"the {law.name} bending law's KES fitter {law.fitter!r} fits "
+            f"{', '.join(sorted(fields))}; the law's [material] fields are "
+            f"{', '.join(sorted(expected))}"
+        )
     return fitter
 
 
@@ -81,19 +84,24 @@ def selected_laws(law: str) -> list[str]:
     if law == ALL_LAWS:
         return list(LAW_FITTERS)
     if law not in LAW_FITTERS:
-        raise ArgumentError("law", f"unknown bending law {law!r}; known: {', '.join(LAW_FITTERS)}, or "
-                          f"{ALL_LAWS} (fit every one and compare them)")
+        raise ArgumentError(
+            "law",
+            f"unknown bending law {law!r}; known: {', '.join(LAW_FITTERS)}, or "
+            f"{ALL_LAWS} (fit every one and compare them)",
+        )
     return [law]
 
 
-def reproduced_kes_values(fits: list[BendingFit], k0_per_cm: float,
-                          device: str | None = "cpu") -> list[BendingSummary]:
+def reproduced_kes_values(fits: list[BendingFit], k0_per_cm: float, device: str | None = "cpu") -> list[BendingSummary]:
     """B and 2HB of each fitted law along the standard cycle 0 → +K0 → −K0 → 0 (one launch)."""
     k = standard_cycle(k0_per_cm)
-    moment, _ = moment_along_path([to_si(f.material_section()) for f in fits], (k * units.CURVATURE_PER_CM)[:, None],
-                                  device=device)
-    return [bending_summary(bending_loop(k, moment[:, j] / units.MOMENT_GF_CM_PER_CM, "the fitted law"))
-            for j in range(len(fits))]
+    moment, _ = moment_along_path(
+        [to_si(f.material_section()) for f in fits], (k * units.CURVATURE_PER_CM)[:, None], device=device
+    )
+    return [
+        bending_summary(bending_loop(k, moment[:, j] / units.MOMENT_GF_CM_PER_CM, "the fitted law"))
+        for j in range(len(fits))
+    ]
 
 
 def _number(value: float | None, spec: str) -> str:
@@ -159,23 +167,29 @@ class LawComparison:
         cannot say (it has none)."""
         start = self.loop.inner_start
         if start is None:
-            return ("this loop has no partial cycles, and a major loop does not determine how a law treats inner "
-                    "loops (tagawa2003 and masing share it exactly, a dahl of n = 1 too): which law's inner loops "
-                    "are the fabric's needs a KES-FB2 record with partial cycles (e.g. kes_fb2_inner_loops)")
+            return (
+                "this loop has no partial cycles, and a major loop does not determine how a law treats inner "
+                "loops (tagawa2003 and masing share it exactly, a dahl of n = 1 too): which law's inner loops "
+                "are the fabric's needs a KES-FB2 record with partial cycles (e.g. kes_fb2_inner_loops)"
+            )
         delta = self.inner_delta()
         noise = difference_noise([self.loop.moment])
         best = min(delta, key=delta.get)
         ties = [law for law, d in delta.items() if d < AIC_TIE]
         listed = ", ".join(f"{law} {d:+.1f}" for law, d in sorted(delta.items(), key=lambda item: item[1]))
-        head = (f"partial cycles from {self.loop.row_label} {self.loop.rows[start]} on "
-                f"({len(self.loop.moment) - start} points), n ln(SSE/SSE_best) there: {listed}")
+        head = (
+            f"partial cycles from {self.loop.row_label} {self.loop.rows[start]} on "
+            f"({len(self.loop.moment) - start} points), n ln(SSE/SSE_best) there: {listed}"
+        )
         ratio = self.inner_rms(best) / noise
         if poor_fit_ratio(self.inner_rms(best), noise) is not None:
             return f"{head}; no law describes them (the best, {best}, at {ratio:.1f}× the noise {noise:.3g} gf·cm/cm)"
         if len(ties) == len(delta):
             return f"{head}; they do not tell the laws' inner loops apart (every law within {AIC_TIE:g})"
-        return (f"{head}; the inner loops are {' and '.join(ties)}'s (RMS {ratio:.2f}× the noise there), the other "
-                f"law(s) worse by ≥ {AIC_TIE:g}")
+        return (
+            f"{head}; the inner loops are {' and '.join(ties)}'s (RMS {ratio:.2f}× the noise there), the other "
+            f"law(s) worse by ≥ {AIC_TIE:g}"
+        )
 
     def same_as_tagawa2003(self) -> str | None:
         """Why the dahl fit is the paper's law (n within 0.05 of 1, or not significantly
@@ -189,31 +203,42 @@ class LawComparison:
         if abs(n - 1) < SAME_EXPONENT:
             return f"dahl's n = {n:.3g} is within {SAME_EXPONENT:g} of 1"
         if ratio < LIKELIHOOD_RATIO_95:
-            return (f"dahl's n = {n:.3g} is within its uncertainty of 1 (the likelihood ratio of dahl over tagawa2003, "
-                    f"n ln(SSE_tagawa2003 / SSE_dahl) = {ratio:.2f}, is below {LIKELIHOOD_RATIO_95}, the 95 % point "
-                    "of χ² with 1 degree of freedom)")
+            return (
+                f"dahl's n = {n:.3g} is within its uncertainty of 1 (the likelihood ratio of dahl over tagawa2003, "
+                f"n ln(SSE_tagawa2003 / SSE_dahl) = {ratio:.2f}, is below {LIKELIHOOD_RATIO_95}, the 95 % point "
+                "of χ² with 1 degree of freedom)"
+            )
         return None
 
     def caveats(self) -> list[str]:
         """The recommendation and what it does not say."""
         ranking, delta = self.ranking(), self.delta_aic()
         best = ranking[0]
-        lines = [f"recommended by AIC: {best}" + (f" (next: {ranking[1]}, ΔAIC {delta[ranking[1]]:.2f})"
-                                                   if len(ranking) > 1 else " (the only law fitted)")]
+        lines = [
+            f"recommended by AIC: {best}"
+            + (f" (next: {ranking[1]}, ΔAIC {delta[ranking[1]]:.2f})" if len(ranking) > 1 else " (the only law fitted)")
+        ]
         ties = [law for law in ranking[1:] if delta[law] < AIC_TIE]
         if ties:
-            lines.append(f"{', '.join(ties)} {'is' if len(ties) == 1 else 'are'} within ΔAIC < {AIC_TIE:g} of {best}: "
-                         "not a preference; the loop does not tell these laws apart")
+            lines.append(
+                f"{', '.join(ties)} {'is' if len(ties) == 1 else 'are'} within ΔAIC < {AIC_TIE:g} of {best}: "
+                "not a preference; the loop does not tell these laws apart"
+            )
         same = self.same_as_tagawa2003()
         if same:
-            lines.append(f"{same}: dahl with n = 1 is tagawa2003 (M_s = M0, K_s = 1/α), so on this loop the two are "
-                         "the same law")
+            lines.append(
+                f"{same}: dahl with n = 1 is tagawa2003 (M_s = M0, K_s = 1/α), so on this loop the two are the same law"
+            )
         lines.append(self.inner_loop_verdict())
         if all(self.status(law)[0] == "not_identifiable" for law in self.fits):
-            lines.append("no law's hysteresis is determined by this loop: the elastic line M = D K fits it as well, "
-                         "so the ranking says nothing; measure a loop with a visible width (2HB above the noise)")
-        lines.append("a quasi-static KES-FB2 loop says nothing about rate effects: check the choice against a "
-                     "measured swing (warpcloth fit)")
+            lines.append(
+                "no law's hysteresis is determined by this loop: the elastic line M = D K fits it as well, "
+                "so the ranking says nothing; measure a loop with a visible width (2HB above the noise)"
+            )
+        lines.append(
+            "a quasi-static KES-FB2 loop says nothing about rate effects: check the choice against a "
+            "measured swing (warpcloth fit)"
+        )
         return lines
 
     def rows(self) -> list[dict]:
@@ -222,47 +247,80 @@ class LawComparison:
         delta_aic, delta_bic = self.delta_aic(), self.delta_bic()
         rows = []
         for law, fit in self.fits.items():
-            rows.append({"law": law, "recommended": law == self.recommended, "status": self.status(law)[0],
-                         "free_parameters": fit.free_parameters, "points": fit.points,
-                         "rms_gf_cm_per_cm": fit.rms_gf_cm_per_cm, "rms_relative": fit.rms_relative,
-                         "aic": fit.aic(), "bic": fit.bic(), "delta_aic": delta_aic[law], "delta_bic": delta_bic[law],
-                         "inner_rms_gf_cm_per_cm": self.inner_rms(law),
-                         "inner_delta": self.inner_delta().get(law),
-                         "b_gf_cm2_per_cm": self.reproduced[law].b_gf_cm2_per_cm,
-                         "2hb_gf_cm_per_cm": self.reproduced[law].hb2_gf_cm_per_cm,
-                         **{name: fit.parameters.get(name) for name in fields}})
-        rows.append({"law": "measured", "b_gf_cm2_per_cm": self.measured.b_gf_cm2_per_cm,
-                     "2hb_gf_cm_per_cm": self.measured.hb2_gf_cm_per_cm})
+            rows.append(
+                {
+                    "law": law,
+                    "recommended": law == self.recommended,
+                    "status": self.status(law)[0],
+                    "free_parameters": fit.free_parameters,
+                    "points": fit.points,
+                    "rms_gf_cm_per_cm": fit.rms_gf_cm_per_cm,
+                    "rms_relative": fit.rms_relative,
+                    "aic": fit.aic(),
+                    "bic": fit.bic(),
+                    "delta_aic": delta_aic[law],
+                    "delta_bic": delta_bic[law],
+                    "inner_rms_gf_cm_per_cm": self.inner_rms(law),
+                    "inner_delta": self.inner_delta().get(law),
+                    "b_gf_cm2_per_cm": self.reproduced[law].b_gf_cm2_per_cm,
+                    "2hb_gf_cm_per_cm": self.reproduced[law].hb2_gf_cm_per_cm,
+                    **{name: fit.parameters.get(name) for name in fields},
+                }
+            )
+        rows.append(
+            {
+                "law": "measured",
+                "b_gf_cm2_per_cm": self.measured.b_gf_cm2_per_cm,
+                "2hb_gf_cm_per_cm": self.measured.hb2_gf_cm_per_cm,
+            }
+        )
         return rows
 
     def table(self) -> str:
         """The comparison as printed text: one line per law, then the measured KES values."""
         delta_aic, delta_bic = self.delta_aic(), self.delta_bic()
         width = max(len(law) for law in [*self.fits, "measured"])
-        head = (f"{'law':<{width}}  k  {'RMS gf·cm/cm':>12}  {'AIC':>9}  {'BIC':>9}  {'ΔAIC':>7}  {'ΔBIC':>7}  "
-                f"{'B gf·cm²/cm':>11}  {'2HB gf·cm/cm':>12}  {'status':<9}  parameters")
+        head = (
+            f"{'law':<{width}}  k  {'RMS gf·cm/cm':>12}  {'AIC':>9}  {'BIC':>9}  {'ΔAIC':>7}  {'ΔBIC':>7}  "
+            f"{'B gf·cm²/cm':>11}  {'2HB gf·cm/cm':>12}  {'status':<9}  parameters"
+        )
         lines = [head]
         for law, fit in self.fits.items():
             kes = self.reproduced[law]
-            lines.append(f"{law:<{width}}  {fit.free_parameters}  {fit.rms_gf_cm_per_cm:>12.5g}  {fit.aic():>9.2f}  "
-                         f"{fit.bic():>9.2f}  {delta_aic[law]:>7.2f}  {delta_bic[law]:>7.2f}  "
-                         f"{_number(kes.b_gf_cm2_per_cm, '>11.5g')}  {_number(kes.hb2_gf_cm_per_cm, '>12.5g')}  "
-                         f"{self.status(law)[0]:<9}  {LAW_FITTERS[law].describe(fit)}")
-        lines.append(f"{'measured':<{width}}  {'':>1}  {'':>12}  {'':>9}  {'':>9}  {'':>7}  {'':>7}  "
-                     f"{_number(self.measured.b_gf_cm2_per_cm, '>11.5g')}  "
-                     f"{_number(self.measured.hb2_gf_cm_per_cm, '>12.5g')}  (the data's own KES values)")
+            lines.append(
+                f"{law:<{width}}  {fit.free_parameters}  {fit.rms_gf_cm_per_cm:>12.5g}  {fit.aic():>9.2f}  "
+                f"{fit.bic():>9.2f}  {delta_aic[law]:>7.2f}  {delta_bic[law]:>7.2f}  "
+                f"{_number(kes.b_gf_cm2_per_cm, '>11.5g')}  {_number(kes.hb2_gf_cm_per_cm, '>12.5g')}  "
+                f"{self.status(law)[0]:<9}  {LAW_FITTERS[law].describe(fit)}"
+            )
+        lines.append(
+            f"{'measured':<{width}}  {'':>1}  {'':>12}  {'':>9}  {'':>9}  {'':>7}  {'':>7}  "
+            f"{_number(self.measured.b_gf_cm2_per_cm, '>11.5g')}  "
+            f"{_number(self.measured.hb2_gf_cm_per_cm, '>12.5g')}  (the data's own KES values)"
+        )
         return "\n".join(lines)
 
     def fit_table(self) -> dict:
         """What a material file's [fit] table records of the comparison."""
         delta = self.delta_aic()
-        return {"bending_law_chosen_by": f"lowest AIC among {', '.join(self.fits)}",
-                "bending_comparison": {law: {"aic": f.aic(), "bic": f.bic(), "delta_aic": delta[law],
-                                             "rms_gf_cm_per_cm": f.rms_gf_cm_per_cm, "status": self.status(law)[0]}
-                                       | ({"inner_rms_gf_cm_per_cm": self.inner_rms(law),
-                                           "inner_delta": self.inner_delta()[law]}
-                                          if self.loop.inner_start is not None else {})
-                                       for law, f in self.fits.items()}}
+        return {
+            "bending_law_chosen_by": f"lowest AIC among {', '.join(self.fits)}",
+            "bending_comparison": {
+                law: {
+                    "aic": f.aic(),
+                    "bic": f.bic(),
+                    "delta_aic": delta[law],
+                    "rms_gf_cm_per_cm": f.rms_gf_cm_per_cm,
+                    "status": self.status(law)[0],
+                }
+                | (
+                    {"inner_rms_gf_cm_per_cm": self.inner_rms(law), "inner_delta": self.inner_delta()[law]}
+                    if self.loop.inner_start is not None
+                    else {}
+                )
+                for law, f in self.fits.items()
+            },
+        }
 
 
 def compare_laws(loop: BendingLoop, laws: list[str] | None = None, device: str | None = "cpu") -> LawComparison:
@@ -271,4 +329,3 @@ def compare_laws(loop: BendingLoop, laws: list[str] | None = None, device: str |
     fits = {law: law_fitter(law).fit(loop, device) for law in laws}
     reproduced = reproduced_kes_values(list(fits.values()), loop.k0, device)
     return LawComparison(loop, fits, dict(zip(fits, reproduced, strict=True)), bending_summary(loop))
-

@@ -20,35 +20,53 @@ from .shear_fit import ShearFit
 from .tensile_fit import DIVERGENCE_STRAIN
 
 
-def material_file_data(fit: KesFit, name: str, density_g_per_cm2: float, source: str,
-                       max_strain: float = DIVERGENCE_STRAIN, shear: ShearFit | None = None) -> dict:
+def material_file_data(
+    fit: KesFit,
+    name: str,
+    density_g_per_cm2: float,
+    source: str,
+    max_strain: float = DIVERGENCE_STRAIN,
+    shear: ShearFit | None = None,
+) -> dict:
     """The TOML data of a material file for a fit, checked usable up to ``max_strain``;
     with ``shear``, its ``[shear]`` table too (docs/model.md §17.1)."""
     if not (math.isfinite(density_g_per_cm2) and density_g_per_cm2 > 0):
-        raise ArgumentError("density_g_per_cm2", f"must be a positive mass per area in g/cm², got "
-                          f"{density_g_per_cm2!r}")
+        raise ArgumentError(
+            "density_g_per_cm2", f"must be a positive mass per area in g/cm², got {density_g_per_cm2!r}"
+        )
     check_plausible("areal density", density_g_per_cm2, "--density-g-per-cm2")
     material = fit.material(name, density_g_per_cm2)
     # a fit whose numbers overflowed is not written: a scene would load it as a material
     values = {f"material.{k}": v for k, v in material.items()} | {
-        "the tensile RMS": fit.tensile.rms_gf_per_cm, "the bending RMS": fit.bending.rms_gf_cm_per_cm}
+        "the tensile RMS": fit.tensile.rms_gf_per_cm,
+        "the bending RMS": fit.bending.rms_gf_cm_per_cm,
+    }
     for field, value in values.items():
         numbers = value if isinstance(value, list) else [value]
         if any(isinstance(v, float) and not math.isfinite(v) for v in numbers):
             source = fit.tensile_loop.source if "tensile" in field else fit.bending_loop.source
-            raise DataFileError(source, f"the fit gave {field} = {value!r}, not a finite number: no material file "
-                                "is written (are the numbers in the units the header says?)")
+            raise DataFileError(
+                source,
+                f"the fit gave {field} = {value!r}, not a finite number: no material file "
+                "is written (are the numbers in the units the header says?)",
+            )
     validate_material(MaterialSection(**material), max_strain, "material")
     law = material["bending_law"]
-    ordered = {"name": name, "source": source, "bending_law": law,
-               **{k: material[k] for k in material_fields(law) if k != "name"}}
+    ordered = {
+        "name": name,
+        "source": source,
+        "bending_law": law,
+        **{k: material[k] for k in material_fields(law) if k != "name"},
+    }
     data = {"material": ordered, "fit": fit.summary_table()}
     if shear is not None:
         table = shear.shear.table()
         bad = [k for k, v in table.items() if isinstance(v, float) and not math.isfinite(v)]
         if bad:
-            raise DataFileError(shear.loop.source, f"the shear fit gave {bad[0]} = {table[bad[0]]!r}, not a finite "
-                                "number: no material file is written")
+            raise DataFileError(
+                shear.loop.source,
+                f"the shear fit gave {bad[0]} = {table[bad[0]]!r}, not a finite number: no material file is written",
+            )
         parse_shear(table, "the shear fit")
         data["shear"] = table
         data["fit"] |= shear.summary_table()

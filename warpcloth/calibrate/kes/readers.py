@@ -163,13 +163,17 @@ def _read_columns(path: str | Path, what: str, names: tuple[str, str], argument:
     table = read_csv(path, 2, what=what, names=names, argument=argument)
     if table.header is not None and len(table.header) != 2:
         spaces = " (with whitespace separation a name cannot contain spaces)" if table.delimiter == WHITESPACE else ""
-        raise DataFileError(table.path, f"the header {table.header_text!r} has {len(table.header)} column names, "
-                            f"expected 2{spaces}", table.header_line)
+        raise DataFileError(
+            table.path,
+            f"the header {table.header_text!r} has {len(table.header)} column names, expected 2{spaces}",
+            table.header_line,
+        )
     return table
 
 
-def _check_name(path: str | Path, line: int | None, column: int, name: str, words: set[str],
-                units_ok: list[set[str]], expected: str) -> set[str]:
+def _check_name(
+    path: str | Path, line: int | None, column: int, name: str, words: set[str], units_ok: list[set[str]], expected: str
+) -> set[str]:
     # The column's name must be one of ``words`` and any unit it states one of ``units_ok``;
     # returns the unit tokens (what is left of the name).
     tokens = _tokens(name)
@@ -179,8 +183,13 @@ def _check_name(path: str | Path, line: int | None, column: int, name: str, word
     return unit
 
 
-def read_tensile_csv(path: str | Path, strain_unit: str | None = None,
-                     gauge_length_mm: float = KES_FB1_GAUGE_MM, *, argument: str | None = None) -> TensileLoop:
+def read_tensile_csv(
+    path: str | Path,
+    strain_unit: str | None = None,
+    gauge_length_mm: float = KES_FB1_GAUGE_MM,
+    *,
+    argument: str | None = None,
+) -> TensileLoop:
     """Read a KES-FB1 loop: columns strain (%, fraction) or extension (mm), force per width (gf/cm).
 
     ``path`` may also name a bundled example (``kes_fb1_example``); ``argument`` is the
@@ -197,21 +206,41 @@ def read_tensile_csv(path: str | Path, strain_unit: str | None = None,
     header, values, rows, line = table.header, table.values, table.lines, table.header_line
     unit = strain_unit
     if header is not None:
-        first = _check_name(path, line, 1, header[0], _TENSILE_NAMES[0],
-                            [{"percent"}, {"pct"}, {"fraction"}, {"frac"}, {"mm"}],
-                            "strain_percent, strain_fraction, strain or extension_mm")
-        _check_name(path, line, 2, header[1], _TENSILE_NAMES[1], [{"gf", "cm"}], "force per width in gf/cm "
-                    "(e.g. force_gf_per_cm; a KES-FB2 bending file has curvature and moment)")
-        said = {"percent": "percent", "pct": "percent", "fraction": "fraction", "frac": "fraction",
-                "mm": "mm"}.get(next(iter(first), ""))
+        first = _check_name(
+            path,
+            line,
+            1,
+            header[0],
+            _TENSILE_NAMES[0],
+            [{"percent"}, {"pct"}, {"fraction"}, {"frac"}, {"mm"}],
+            "strain_percent, strain_fraction, strain or extension_mm",
+        )
+        _check_name(
+            path,
+            line,
+            2,
+            header[1],
+            _TENSILE_NAMES[1],
+            [{"gf", "cm"}],
+            "force per width in gf/cm (e.g. force_gf_per_cm; a KES-FB2 bending file has curvature and moment)",
+        )
+        said = {"percent": "percent", "pct": "percent", "fraction": "fraction", "frac": "fraction", "mm": "mm"}.get(
+            next(iter(first), "")
+        )
         if said is None and set(_tokens(header[0])) & {"extension", "elongation"}:
             said = strain_unit
             if said != "mm":
-                raise DataFileError(str(path), f"header: column 1 is {header[0]!r}: say its unit (extension_mm) or "
-                                    "give strain_unit='mm'", line)
+                raise DataFileError(
+                    str(path),
+                    f"header: column 1 is {header[0]!r}: say its unit (extension_mm) or give strain_unit='mm'",
+                    line,
+                )
         if said and strain_unit and said != strain_unit:
-            raise DataFileError(str(path), f"header: column 1 {header[0]!r} says {said}, but the strain unit was "
-                                f"given as {strain_unit}", line)
+            raise DataFileError(
+                str(path),
+                f"header: column 1 {header[0]!r} says {said}, but the strain unit was given as {strain_unit}",
+                line,
+            )
         unit = said or strain_unit
     how = "from the header" if header is not None and unit != strain_unit else "as given"
     if unit is None:
@@ -219,10 +248,17 @@ def read_tensile_csv(path: str | Path, strain_unit: str | None = None,
         how = "guessed: the column's maximum is " + ("above" if unit == "percent" else "at most") + " 1"
     scale = {"percent": PERCENT, "fraction": 1.0, "mm": 1.0 / gauge_length_mm}[unit]
     loop = tensile_loop(values[:, 0] * scale, values[:, 1], source=str(path), rows=rows)
-    other = {"fraction": "percent (--strain-unit percent)", "percent": "a fraction (--strain-unit fraction)",
-             "mm": "another gauge length (--gauge-length-mm)"}[unit]
-    check_plausible("largest tensile strain", float(np.max(np.abs(loop.strain))), f"{path}, column 1 read as {unit}",
-                    f"is the column in {other}?")
+    other = {
+        "fraction": "percent (--strain-unit percent)",
+        "percent": "a fraction (--strain-unit fraction)",
+        "mm": "another gauge length (--gauge-length-mm)",
+    }[unit]
+    check_plausible(
+        "largest tensile strain",
+        float(np.max(np.abs(loop.strain))),
+        f"{path}, column 1 read as {unit}",
+        f"is the column in {other}?",
+    )
     described = f"extension in mm over a {gauge_length_mm:g} mm gauge" if unit == "mm" else f"strain in {unit}"
     return dataclasses.replace(loop, strain_unit=f"{described} ({how})")
 
@@ -236,10 +272,24 @@ def read_bending_csv(path: str | Path, *, argument: str | None = None) -> Bendin
     table = _read_columns(path, "KES-FB2 bending", ("curvature", "moment"), argument)
     header, values, line = table.header, table.values, table.header_line
     if header is not None:
-        _check_name(path, line, 1, header[0], _BENDING_NAMES[0], [{"cm"}, {"1", "cm"}],
-                    "curvature in 1/cm (e.g. curvature_per_cm; a KES-FB1 tensile file has strain and force)")
-        _check_name(path, line, 2, header[1], _BENDING_NAMES[1], [{"gf", "cm"}],
-                    "moment per width in gf·cm/cm (e.g. moment_gf_cm_per_cm)")
+        _check_name(
+            path,
+            line,
+            1,
+            header[0],
+            _BENDING_NAMES[0],
+            [{"cm"}, {"1", "cm"}],
+            "curvature in 1/cm (e.g. curvature_per_cm; a KES-FB1 tensile file has strain and force)",
+        )
+        _check_name(
+            path,
+            line,
+            2,
+            header[1],
+            _BENDING_NAMES[1],
+            [{"gf", "cm"}],
+            "moment per width in gf·cm/cm (e.g. moment_gf_cm_per_cm)",
+        )
     return bending_loop(values[:, 0], values[:, 1], source=str(path), rows=table.lines)
 
 
@@ -253,10 +303,24 @@ def read_shear_csv(path: str | Path, *, argument: str | None = None) -> ShearLoo
     table = _read_columns(path, "KES-FB1 shear", ("angle", "force"), argument)
     header, values, line = table.header, table.values, table.header_line
     if header is not None:
-        _check_name(path, line, 1, header[0], _SHEAR_NAMES[0], [{"deg"}, {"degree"}, {"degrees"}],
-                    "the shear angle in degrees (e.g. shear_angle_deg; KES-FB1 shear is recorded in degrees)")
-        _check_name(path, line, 2, header[1], _SHEAR_NAMES[1], [{"gf", "cm"}],
-                    "shear force per width in gf/cm (e.g. shear_force_gf_per_cm)")
+        _check_name(
+            path,
+            line,
+            1,
+            header[0],
+            _SHEAR_NAMES[0],
+            [{"deg"}, {"degree"}, {"degrees"}],
+            "the shear angle in degrees (e.g. shear_angle_deg; KES-FB1 shear is recorded in degrees)",
+        )
+        _check_name(
+            path,
+            line,
+            2,
+            header[1],
+            _SHEAR_NAMES[1],
+            [{"gf", "cm"}],
+            "shear force per width in gf/cm (e.g. shear_force_gf_per_cm)",
+        )
     return shear_loop(values[:, 0], values[:, 1], source=str(path), rows=table.lines)
 
 
@@ -270,16 +334,18 @@ def _error(source: str, label: str, row: object, message: str) -> DataFileError:
     return DataFileError(source, f"{label} {row}: {message}")
 
 
-def _check_finite(values: np.ndarray, rows: np.ndarray, source: str, names: tuple[str, str],
-                  label: str = "line") -> None:
+def _check_finite(
+    values: np.ndarray, rows: np.ndarray, source: str, names: tuple[str, str], label: str = "line"
+) -> None:
     bad = np.nonzero(~np.isfinite(values))
     if len(bad[0]):
         i, j = int(bad[0][0]), int(bad[1][0])
         raise _error(source, label, rows[i], f"{names[j]} is {values[i, j]}; every value must be finite")
 
 
-def _paired(x: np.ndarray, y: np.ndarray, rows: np.ndarray | None, source: str,
-            names: tuple[str, str]) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
+def _paired(
+    x: np.ndarray, y: np.ndarray, rows: np.ndarray | None, source: str, names: tuple[str, str]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
     # Two equally long finite columns, and where each row came from (file line or sample).
     x = np.asarray(x, dtype=np.float64).ravel()
     y = np.asarray(y, dtype=np.float64).ravel()
@@ -291,8 +357,9 @@ def _paired(x: np.ndarray, y: np.ndarray, rows: np.ndarray | None, source: str,
     return x, y, rows, label
 
 
-def tensile_loop(strain: np.ndarray, force: np.ndarray, source: str = "tensile data",
-                 rows: np.ndarray | None = None) -> TensileLoop:
+def tensile_loop(
+    strain: np.ndarray, force: np.ndarray, source: str = "tensile data", rows: np.ndarray | None = None
+) -> TensileLoop:
     """A validated tensile loop from arrays: strain as a fraction, force per width in gf/cm.
 
     Loading runs from the first point to the maximum strain and must not go back in strain;
@@ -303,8 +370,11 @@ def tensile_loop(strain: np.ndarray, force: np.ndarray, source: str = "tensile d
     loop = TensileLoop(strain, force, rows, source, label)
     n_loading = loop.turn + 1 if len(strain) else 0
     if n_loading < MIN_LOADING_POINTS:
-        raise DataFileError(source, f"the loading branch (first row to the maximum strain) has {n_loading} "
-                            f"point(s); fitting the quartic needs at least {MIN_LOADING_POINTS}")
+        raise DataFileError(
+            source,
+            f"the loading branch (first row to the maximum strain) has {n_loading} "
+            f"point(s); fitting the quartic needs at least {MIN_LOADING_POINTS}",
+        )
     if not strain[loop.turn] > 0:
         raise DataFileError(source, f"the strain never exceeds 0 (maximum {strain[loop.turn]:g})")
     for part, sign, what in ((loop.loading, 1, "loading"), (loop.unloading, -1, "unloading")):
@@ -312,9 +382,14 @@ def tensile_loop(strain: np.ndarray, force: np.ndarray, source: str = "tensile d
         step = sign * np.diff(strain[part])
         if np.any(step < 0):
             i = int(index[np.nonzero(step < 0)[0][0]])
-            raise _error(source, label, rows[i + 1], f"strain {strain[i + 1]:.6g} after {strain[i]:.6g} ({label} "
-                         f"{rows[i]}): the {what} branch must be monotonic in strain (loading runs to the maximum "
-                         f"strain, {strain[loop.turn]:.6g} at {label} {rows[loop.turn]})")
+            raise _error(
+                source,
+                label,
+                rows[i + 1],
+                f"strain {strain[i + 1]:.6g} after {strain[i]:.6g} ({label} "
+                f"{rows[i]}): the {what} branch must be monotonic in strain (loading runs to the maximum "
+                f"strain, {strain[loop.turn]:.6g} at {label} {rows[loop.turn]})",
+            )
     return loop
 
 
@@ -330,25 +405,35 @@ class _CycleWords:
 def _check_cycle(x: np.ndarray, rows: np.ndarray, label: str, source: str, words: _CycleWords) -> float:
     # One cycle from rest to both signs of x and back; returns the largest |x|.
     if len(x) < MIN_BENDING_POINTS:
-        raise DataFileError(source, f"the loop has {len(x)} point(s); {words.needs} needs at least "
-                            f"{MIN_BENDING_POINTS}")
+        raise DataFileError(
+            source, f"the loop has {len(x)} point(s); {words.needs} needs at least {MIN_BENDING_POINTS}"
+        )
     x0 = float(np.max(np.abs(x)))
     if not x0 > 0:
         raise DataFileError(source, f"the {words.x} is 0 throughout")
     low, high = float(x.min()), float(x.max())
     s, u = words.symbol, words.unit
     if high < LOOP_REACH * x0 or low > -LOOP_REACH * x0:
-        raise DataFileError(source, f"the loop does not reach both signs of {words.x}: {s} runs from {low:.4g} to "
-                            f"{high:.4g}{u}; a loop goes to +{s}0 and −{s}0 (each side at least {LOOP_REACH:.0%} of "
-                            f"the largest |{s}|)")
+        raise DataFileError(
+            source,
+            f"the loop does not reach both signs of {words.x}: {s} runs from {low:.4g} to "
+            f"{high:.4g}{u}; a loop goes to +{s}0 and −{s}0 (each side at least {LOOP_REACH:.0%} of "
+            f"the largest |{s}|)",
+        )
     if abs(x[0]) > LOOP_CLOSURE * x0:
-        raise DataFileError(source, f"the loop starts at {s} = {x[0]:.4g}{u} ({label} {rows[0]}), not from rest: the "
-                            "model starts fresh at the first row, as the instrument's cycle does from 0; give the "
-                            "cycle from its start")
+        raise DataFileError(
+            source,
+            f"the loop starts at {s} = {x[0]:.4g}{u} ({label} {rows[0]}), not from rest: the "
+            "model starts fresh at the first row, as the instrument's cycle does from 0; give the "
+            "cycle from its start",
+        )
     if abs(x[-1] - x[0]) > LOOP_CLOSURE * x0:
-        raise DataFileError(source, f"the loop does not close: it starts at {s} = {x[0]:.4g}{u} ({label} {rows[0]}) "
-                            f"and ends at {s} = {x[-1]:.4g}{u} ({label} {rows[-1]}); a loop returns to its start "
-                            f"(within {LOOP_CLOSURE:.0%} of the largest |{s}|, {x0:.4g}{u})")
+        raise DataFileError(
+            source,
+            f"the loop does not close: it starts at {s} = {x[0]:.4g}{u} ({label} {rows[0]}) "
+            f"and ends at {s} = {x[-1]:.4g}{u} ({label} {rows[-1]}); a loop returns to its start "
+            f"(within {LOOP_CLOSURE:.0%} of the largest |{s}|, {x0:.4g}{u})",
+        )
     return x0
 
 
@@ -360,8 +445,9 @@ SHEAR_ANGLE_RANGE_DEG = (1.0, 45.0)
 loop below 1° is most likely in radians, one beyond 45° not a fabric's shear test."""
 
 
-def bending_loop(curvature: np.ndarray, moment: np.ndarray, source: str = "bending data",
-                 rows: np.ndarray | None = None) -> BendingLoop:
+def bending_loop(
+    curvature: np.ndarray, moment: np.ndarray, source: str = "bending data", rows: np.ndarray | None = None
+) -> BendingLoop:
     """A validated bending loop from arrays: curvature in 1/cm, moment per width in gf·cm/cm.
 
     One cycle from rest: it must reach both signs of curvature (each at least half the
@@ -373,8 +459,9 @@ def bending_loop(curvature: np.ndarray, moment: np.ndarray, source: str = "bendi
     return BendingLoop(curvature, moment, rows, source, label)
 
 
-def shear_loop(angle: np.ndarray, force: np.ndarray, source: str = "shear data",
-               rows: np.ndarray | None = None) -> ShearLoop:
+def shear_loop(
+    angle: np.ndarray, force: np.ndarray, source: str = "shear data", rows: np.ndarray | None = None
+) -> ShearLoop:
     """A validated shear loop from arrays: angle in degrees, force per width in gf/cm; one
     cycle from rest to both signs of φ and back, as :func:`bending_loop` requires of a
     bending loop, its largest ``|φ|`` within :data:`SHEAR_ANGLE_RANGE_DEG`."""
@@ -382,7 +469,10 @@ def shear_loop(angle: np.ndarray, force: np.ndarray, source: str = "shear data",
     phi0 = _check_cycle(angle, rows, label, source, _SHEAR_WORDS)
     low, high = SHEAR_ANGLE_RANGE_DEG
     if not low <= phi0 <= high:
-        raise DataFileError(source, f"the largest shear angle is {phi0:.4g}°, outside {low:g}–{high:g}°: is the "
-                            "column in degrees? (KES-FB1 shears to ±8°; an angle in radians reads as a loop below "
-                            "1°: convert it, or head the column shear_angle_deg with the angle in degrees)")
+        raise DataFileError(
+            source,
+            f"the largest shear angle is {phi0:.4g}°, outside {low:g}–{high:g}°: is the "
+            "column in degrees? (KES-FB1 shears to ±8°; an angle in radians reads as a loop below "
+            "1°: convert it, or head the column shear_angle_deg with the angle in degrees)",
+        )
     return ShearLoop(angle, force, rows, source, label)

@@ -70,17 +70,24 @@ class ShearFit:
                 continue
             allowed = KES_TOLERANCE * abs(data) + (2 * noise if name != "G" else 0.0)
             if abs(law - data) > allowed:
-                found.append(("poor_fit", f"the fitted {self.shear.law} law's {name} {law:.4g} misses the data's "
-                              f"{data:.4g} by {100 * (law - data) / data:+.1f} % (allowed {allowed:.3g}): the law does "
-                              "not make this loop's shape"))
+                found.append(
+                    (
+                        "poor_fit",
+                        f"the fitted {self.shear.law} law's {name} {law:.4g} misses the data's "
+                        f"{data:.4g} by {100 * (law - data) / data:+.1f} % (allowed {allowed:.3g}): the law does "
+                        "not make this loop's shape",
+                    )
+                )
         found.sort(key=lambda problem: STATUS_ORDER.index(problem[0]))
         return (found[0][0] if found else "converged"), [message for _, message in found]
 
     def describe(self, digits: int = 6) -> str:
         """The fitted parameters with their units and standard uncertainties."""
         law = bending_law(self.shear.law)
-        units_of = {RIGIDITY_FIELD: "gf/(cm·°)",
-                    **{shear_field(p): units.SHEAR_UNITS[p.kind][2] for p in law.parameters}}
+        units_of = {
+            RIGIDITY_FIELD: "gf/(cm·°)",
+            **{shear_field(p): units.SHEAR_UNITS[p.kind][2] for p in law.parameters},
+        }
         values = {RIGIDITY_FIELD: self.shear.rigidity_gf_per_cm_deg, **self.shear.parameters}
 
         def one(name: str) -> str:
@@ -93,14 +100,21 @@ class ShearFit:
     def kes_comparison(self) -> list[tuple[str, float | None, float | None]]:
         """(value, the data's, the fitted law's) for G, 2HG and 2HG5."""
         m, r = self.measured, self.reproduced
-        return [("G", m.g_gf_per_cm_deg, r.g_gf_per_cm_deg), ("2HG", m.hg2_gf_per_cm, r.hg2_gf_per_cm),
-                ("2HG5", m.hg2_5_gf_per_cm, r.hg2_5_gf_per_cm)]
+        return [
+            ("G", m.g_gf_per_cm_deg, r.g_gf_per_cm_deg),
+            ("2HG", m.hg2_gf_per_cm, r.hg2_gf_per_cm),
+            ("2HG5", m.hg2_5_gf_per_cm, r.hg2_5_gf_per_cm),
+        ]
 
     def summary_table(self) -> dict:
         """The shear part of a material file's [fit] table (omitting what is undefined)."""
         status, problems = self.verdict()
-        table = {"shear_status": status, "shear_file": self.loop.source, "shear_points": len(self.loop.angle),
-                 "shear_rms_gf_per_cm": self.rms_gf_per_cm}
+        table = {
+            "shear_status": status,
+            "shear_file": self.loop.source,
+            "shear_points": len(self.loop.angle),
+            "shear_rms_gf_per_cm": self.rms_gf_per_cm,
+        }
         if problems:
             table["shear_problems"] = problems
         for name, data, law in self.kes_comparison():
@@ -122,10 +136,11 @@ def reproduced_shear_values(shear: ShearMaterial, phi0_deg: float, device: str |
 def fit_shear(loop: ShearLoop, law: str = DEFAULT_LAW, device: str | None = "cpu") -> ShearFit:
     """Fit G and the shear law ``law`` to the loop (see the module docstring)."""
     fit = law_fitter(law).fit(loop.as_law_loop(), device)
-    names = {BENDING_RIGIDITY.scene_field: RIGIDITY_FIELD,
-             **{p.scene_field: shear_field(p) for p in bending_law(law).parameters}}
+    names = {
+        BENDING_RIGIDITY.scene_field: RIGIDITY_FIELD,
+        **{p.scene_field: shear_field(p) for p in bending_law(law).parameters},
+    }
     values = {names[k]: float(v) for k, v in fit.parameters.items()}
     shear = ShearMaterial(law, values.pop(RIGIDITY_FIELD), values)
     sigma = {names[k]: v for k, v in fit.sigma.items()}
     return ShearFit(loop, fit, shear, sigma, shear_summary(loop), reproduced_shear_values(shear, loop.phi0, device))
-

@@ -63,9 +63,11 @@ def fit_tensile(loop: TensileLoop, max_strain: float = DIVERGENCE_STRAIN) -> Ten
     if not slope > 0:
         inside = "inside the data" if where <= scale else "beyond the data"
         free_rms = float(np.sqrt(np.mean((design @ (coefficients / unscale) - t) ** 2)))
-        note = (f"the unconstrained quartic (RMS {free_rms:.3g} gf/cm) decreases at ε = {where:.4g} ({inside}, "
-                f"which end at {scale:.4g}; dT/dε = {slope:.4g} gf/cm); refitted with dT/dε ≥ {SLOPE_FLOOR:g} "
-                f"Fm/εm on [0, {upper:g}] (a smaller divergence strain constrains less)")
+        note = (
+            f"the unconstrained quartic (RMS {free_rms:.3g} gf/cm) decreases at ε = {where:.4g} ({inside}, "
+            f"which end at {scale:.4g}; dT/dε = {slope:.4g} gf/cm); refitted with dT/dε ≥ {SLOPE_FLOOR:g} "
+            f"Fm/εm on [0, {upper:g}] (a smaller divergence strain constrains less)"
+        )
         grid = np.linspace(0.0, upper, 257) / scale
         # dT/dε = Σ k b_k (ε/s)^(k−1) / s for the scaled coefficients b_k
         gradient = powers * grid[:, None] ** (powers - 1) / scale
@@ -73,9 +75,11 @@ def fit_tensile(loop: TensileLoop, max_strain: float = DIVERGENCE_STRAIN) -> Ten
         try:
             coefficients = least_squares_above(design, t, gradient, np.full(len(grid), floor)) * unscale
         except ValueError:  # numerically infeasible: forces far outside a fabric's (overflowing squares)
-            raise DataFileError(loop.source, f"no quartic T(ε) rising on [0, {upper:g}] fits this loop (largest "
-                                f"|force| {float(np.max(np.abs(loop.force))):.3g} gf/cm): are the forces in gf/cm?") \
-                from None
+            raise DataFileError(
+                loop.source,
+                f"no quartic T(ε) rising on [0, {upper:g}] fits this loop (largest "
+                f"|force| {float(np.max(np.abs(loop.force))):.3g} gf/cm): are the forces in gf/cm?",
+            ) from None
         constrained = True
         slope, where = tensile_slope_minimum(list(coefficients), upper)
         if not slope > 0:  # pragma: no cover - the grid constraint holds between its points

@@ -44,7 +44,6 @@ the spacing check) and :mod:`.report` (:class:`FitResult`, :func:`write_fit`). E
 public name is importable from here.
 """
 
-
 from .lm import MAX_LAMBDA, STENCIL_STEP
 from .objective import MAX_STEP_CORNERS_FREE, SHIFT, Objective
 from .parameters import ALIASES, HYSTERESIS_AMPLITUDES, REST_CURVATURE_SPAN, FreeParameter, free_parameters

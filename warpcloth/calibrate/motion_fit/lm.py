@@ -53,8 +53,9 @@ def start(q: np.ndarray, cost: float, residual: np.ndarray) -> State:
     return State(q, cost, residual, None, INITIAL_LAMBDA)
 
 
-def lm_step(q: np.ndarray, jac: np.ndarray, residual: np.ndarray, lam: float, lower: np.ndarray,
-            upper: np.ndarray) -> np.ndarray:
+def lm_step(
+    q: np.ndarray, jac: np.ndarray, residual: np.ndarray, lam: float, lower: np.ndarray, upper: np.ndarray
+) -> np.ndarray:
     """The damped Gauss–Newton step (JᵀJ + λ diag JᵀJ) Δ = −Jᵀr from ``q``, clipped into
     the box [``lower``, ``upper``]."""
     normal = jac.T @ jac
@@ -86,8 +87,9 @@ def stencil(point: np.ndarray) -> tuple[list[np.ndarray], list[tuple[int, int, f
     return rows, pairs
 
 
-def step(state: State, points: Sequence[np.ndarray], residuals: Sequence[np.ndarray],
-         jacobian: Callable[[], np.ndarray]) -> tuple[State, str]:
+def step(
+    state: State, points: Sequence[np.ndarray], residuals: Sequence[np.ndarray], jacobian: Callable[[], np.ndarray]
+) -> tuple[State, str]:
     """The state after a batch evaluated :func:`proposals` ``points`` (their ``residuals``;
     ``jacobian()`` gives the Jacobian at ``points[0]``), and what happened: ``"step"`` (the
     full step is taken, with its Jacobian; λ falls), ``"cautious step"`` (a fallback is
@@ -95,8 +97,14 @@ def step(state: State, points: Sequence[np.ndarray], residuals: Sequence[np.ndar
     costs = [float(np.mean(r**2)) for r in residuals]
     if state.jac is None or costs[0] < state.cost:
         improvement = state.cost - costs[0] if state.jac is not None else math.inf
-        return State(points[0], costs[0], residuals[0], jacobian(), max(state.lam / 3, MIN_LAMBDA),
-                     0 <= improvement <= CONVERGED_IMPROVEMENT * costs[0]), "step"
+        return State(
+            points[0],
+            costs[0],
+            residuals[0],
+            jacobian(),
+            max(state.lam / 3, MIN_LAMBDA),
+            0 <= improvement <= CONVERGED_IMPROVEMENT * costs[0],
+        ), "step"
     if min(costs[1:]) < state.cost:
         k = 1 + int(np.argmin(costs[1:]))
         return replace(state, q=points[k], cost=costs[k], residual=residuals[k], lam=state.lam * 10), "cautious step"

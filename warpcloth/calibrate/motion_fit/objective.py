@@ -33,8 +33,14 @@ class Objective:
     the start time is aligned, the clock offset δ (s): simulated time = measured + δ.
     """
 
-    def __init__(self, base: dict, measurement: LaserTrace | TrackedShapes, free: list[FreeParameter],
-                 align_start_s: float = 0.0, device: str | None = None) -> None:
+    def __init__(
+        self,
+        base: dict,
+        measurement: LaserTrace | TrackedShapes,
+        free: list[FreeParameter],
+        align_start_s: float = 0.0,
+        device: str | None = None,
+    ) -> None:
         self.measurement = measurement
         self.free = free
         self.align = float(align_start_s)
@@ -47,8 +53,11 @@ class Objective:
             raise ArgumentError("align_start_s", f"{self.align:g} s is longer than the measured record ({span:g} s)")
         t_end = float(measurement.t[-1]) + self.align
         if measurement.t[0] + self.align < 0:
-            raise ArgumentError("measurement", f"measured times start at {measurement.t[0]:g} s, before the scene's "
-                              "t = 0 (release or clamp start) even with the allowed --align-start; shift them")
+            raise ArgumentError(
+                "measurement",
+                f"measured times start at {measurement.t[0]:g} s, before the scene's "
+                "t = 0 (release or clamp start) even with the allowed --align-start; shift them",
+            )
         set_field(self.base, "run.duration_s", t_end + scene.output_interval)
         if isinstance(measurement, TrackedShapes):
             # Shapes are compared at the probe rate, so the time alignment interpolates
@@ -61,9 +70,12 @@ class Objective:
             free_length = self.scene.strip.free_length_mm * 1e-3
             beyond = measurement.s > free_length * (1 + 1e-9)
             if beyond.any():
-                raise ArgumentError("measurement", f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond "
-                                  f"the free end ({free_length * 1e3:g} mm below the clamp's lowest point); s is the "
-                                  "arc length from the clamp's lowest point, not from the clamp's top")
+                raise ArgumentError(
+                    "measurement",
+                    f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond "
+                    f"the free end ({free_length * 1e3:g} mm below the clamp's lowest point); s is the "
+                    "arc length from the clamp's lowest point, not from the clamp's top",
+                )
         self.shift_step = 0.5 * self.scene.output_interval
         self.launches = 0
         self.variants = 0
@@ -74,11 +86,16 @@ class Objective:
         if self.base.get("integrator", {}).get("dt_s") != AUTO:
             return
         if len(self.free) > MAX_STEP_CORNERS_FREE:
-            raise ArgumentError("free", f"integrator.dt_s = auto checks every corner of the box, 2^{len(self.free)} "
-                              f"scenes for {len(self.free)} free parameters (at most {MAX_STEP_CORNERS_FREE}); "
-                              "give integrator.dt_s a number")
-        corners = [scene_from_dict(self.scene_data(np.array(c, dtype=float)), choose_step=False)
-                   for c in itertools.product((0.0, 1.0), repeat=len(self.free))]
+            raise ArgumentError(
+                "free",
+                f"integrator.dt_s = auto checks every corner of the box, 2^{len(self.free)} "
+                f"scenes for {len(self.free)} free parameters (at most {MAX_STEP_CORNERS_FREE}); "
+                "give integrator.dt_s a number",
+            )
+        corners = [
+            scene_from_dict(self.scene_data(np.array(c, dtype=float)), choose_step=False)
+            for c in itertools.product((0.0, 1.0), repeat=len(self.free))
+        ]
         set_field(self.base, "integrator.dt_s", choose_step(corners).dt_s)
         set_field(self.base, "integrator.dt_chosen_by", AUTO)
 
@@ -123,8 +140,9 @@ class Objective:
         scenes = [scene_from_dict(self.scene_data(u)) for u in points]
         self.launches += 1
         self.variants += len(points)
-        return simulate(scenes, device=self.device, on_divergence="record",
-                        keep_frames=isinstance(self.measurement, TrackedShapes))
+        return simulate(
+            scenes, device=self.device, on_divergence="record", keep_frames=isinstance(self.measurement, TrackedShapes)
+        )
 
     def residuals(self, result: RunResult, j: int, shift: float, penalise: bool = True) -> np.ndarray:
         """Simulated minus measured, SI, for variant j of a result at clock offset δ.
@@ -166,13 +184,17 @@ class Objective:
         costs = [np.mean(self.residuals(result, j, d) ** 2) for d in shifts]
         return float(shifts[int(np.argmin(costs))])
 
-    def jacobian(self, result: RunResult, stencil: list[tuple[int, int, float]], centre: int,
-                 shift: float) -> np.ndarray:
+    def jacobian(
+        self, result: RunResult, stencil: list[tuple[int, int, float]], centre: int, shift: float
+    ) -> np.ndarray:
         """Columns ∂r/∂u_i from stencil pairs (plus, minus, Δu), and ∂r/∂δ by re-sampling."""
-        columns = [(self.residuals(result, plus, shift) - self.residuals(result, minus, shift)) / du
-                   for plus, minus, du in stencil]
+        columns = [
+            (self.residuals(result, plus, shift) - self.residuals(result, minus, shift)) / du
+            for plus, minus, du in stencil
+        ]
         if self.align:
             h = self.shift_step
-            columns.append((self.residuals(result, centre, shift + h) - self.residuals(result, centre, shift - h))
-                           / (2 * h))
+            columns.append(
+                (self.residuals(result, centre, shift + h) - self.residuals(result, centre, shift - h)) / (2 * h)
+            )
         return np.column_stack(columns)

@@ -101,20 +101,29 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
 def _fittable_field(name: str, base: Scene, fixed: set[str]) -> str:
     # The dotted scene field ``name`` stands for, if it is a per-strip number of this law.
     dotted = ALIASES.get(name, name)
-    if dotted.count(".") != 1 or not hasattr(base, dotted.split(".")[0]) or not hasattr(
-            getattr(base, dotted.split(".")[0]), dotted.split(".")[1]):
+    if (
+        dotted.count(".") != 1
+        or not hasattr(base, dotted.split(".")[0])
+        or not hasattr(getattr(base, dotted.split(".")[0]), dotted.split(".")[1])
+    ):
         raise ArgumentError("names", f"{name!r} is neither a scene field nor one of {', '.join(ALIASES)}")
     value = _field_value(base, dotted)
     if dotted in fixed or isinstance(value, (bool, str, list)):
-        raise ArgumentError("names", f"{name} ({dotted}) cannot vary between the strips of one batch or is not "
-                            "a number; only per-strip numeric fields can be fitted")
+        raise ArgumentError(
+            "names",
+            f"{name} ({dotted}) cannot vary between the strips of one batch or is not "
+            "a number; only per-strip numeric fields can be fitted",
+        )
     laws = field_laws(dotted)
     if laws and base.material.bending_law not in laws:
-        raise ArgumentError("names", f"{name} ({dotted}) is a parameter of the {' or '.join(laws)} bending law, "
-                            "but the scene's "
-                            f"material uses {base.material.bending_law} (whose parameters are "
-                            f"{', '.join(law_fields(base.material.bending_law))}); set material.bending_law to "
-                            "fit it")
+        raise ArgumentError(
+            "names",
+            f"{name} ({dotted}) is a parameter of the {' or '.join(laws)} bending law, "
+            "but the scene's "
+            f"material uses {base.material.bending_law} (whose parameters are "
+            f"{', '.join(law_fields(base.material.bending_law))}); set material.bending_law to "
+            "fit it",
+        )
     return dotted
 
 
@@ -132,8 +141,9 @@ def _default_range(name: str, dotted: str, value: float, base: Scene) -> tuple[f
         return 0.0, 4 * value
     if value > 0:
         return value / 4, value * 4
-    raise ArgumentError("bounds", f"{name} is {value:g} in the scene, so no default range; give "
-                        f"--bounds {name}=LOW:HIGH")
+    raise ArgumentError(
+        "bounds", f"{name} is {value:g} in the scene, so no default range; give --bounds {name}=LOW:HIGH"
+    )
 
 
 def _check_box_is_valid(name: str, dotted: str, bounds: tuple[float, float], base: Scene) -> None:

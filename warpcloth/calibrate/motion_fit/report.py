@@ -59,10 +59,16 @@ class FitResult:
             "rms_mm": self.rms * 1e3,
             "noise_mm": self.noise * 1e3,
             "noise_source": self.noise_source,
-            "parameters": {name: {"value": value, "sigma": self.sigma[name], "at_bound": name in self.at_bound,
-                                  "bounds": list(self.bounds.get(name, ()))}
-                           | ({"sigma_bootstrap": self.sigma_bootstrap[name]} if self.sigma_bootstrap else {})
-                           for name, value in self.parameters.items()},
+            "parameters": {
+                name: {
+                    "value": value,
+                    "sigma": self.sigma[name],
+                    "at_bound": name in self.at_bound,
+                    "bounds": list(self.bounds.get(name, ())),
+                }
+                | ({"sigma_bootstrap": self.sigma_bootstrap[name]} if self.sigma_bootstrap else {})
+                for name, value in self.parameters.items()
+            },
             "bootstrap_block": self.bootstrap_block,
             "other_minima": self.other_minima,
             "correlation": {"names": list(self.parameters), "matrix": self.correlation},
@@ -80,19 +86,43 @@ class FitResult:
         self.status, self.problems = judge(self, missing)
 
 
-def summarise(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarray, residual: np.ndarray,
-              history: list[dict], converged: bool, wall: float) -> FitResult:
+def summarise(
+    objective: Objective,
+    u: np.ndarray,
+    shift: float,
+    jac: np.ndarray,
+    residual: np.ndarray,
+    history: list[dict],
+    converged: bool,
+    wall: float,
+) -> FitResult:
     """The fit at point ``u`` (clock offset ``shift``) with its Jacobian and residuals
     there: the values, their Gauss–Newton σ and correlation, the RMS, how the search went."""
     sigma, correlation = lm.sigma_and_correlation(lm.covariance(jac / objective.ranges, residual))
     values = objective.values(u) | ({SHIFT: shift} if objective.align else {})
-    return FitResult(values, dict(zip(objective.names, sigma.tolist(), strict=True)), correlation.tolist(),
-                     float(np.sqrt(np.mean(residual**2))), shift, len(residual), objective.launches,
-                     objective.variants, wall, history, converged)
+    return FitResult(
+        values,
+        dict(zip(objective.names, sigma.tolist(), strict=True)),
+        correlation.tolist(),
+        float(np.sqrt(np.mean(residual**2))),
+        shift,
+        len(residual),
+        objective.launches,
+        objective.variants,
+        wall,
+        history,
+        converged,
+    )
 
 
-def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | TrackedShapes, out: str | Path,
-              device: str | None = None, inputs: dict | None = None) -> list[Path]:
+def write_fit(
+    fit: FitResult,
+    objective_base: dict,
+    measurement: LaserTrace | TrackedShapes,
+    out: str | Path,
+    device: str | None = None,
+    inputs: dict | None = None,
+) -> list[Path]:
     """Write the fit: ``best.toml`` (reruns the best fit with the scene's own duration and
     output), ``fit.json`` (with ``inputs``, e.g. the measured file and its checksum, the
     seed, and the provenance), ``history.csv``, ``residuals.csv`` and ``overlay.png``.
@@ -121,17 +151,34 @@ def write_fit(fit: FitResult, objective_base: dict, measurement: LaserTrace | Tr
     result = objective.run(np.zeros((1, 0)))
     residual = objective.residuals(result, 0, fit.shift_s, penalise=False)
     if isinstance(measurement, LaserTrace):
-        table = pd.DataFrame({"t_s": measurement.t, "measured_x_mm": measurement.x * 1e3,
-                              "simulated_x_mm": (measurement.x + residual) * 1e3, "residual_mm": residual * 1e3})
+        table = pd.DataFrame(
+            {
+                "t_s": measurement.t,
+                "measured_x_mm": measurement.x * 1e3,
+                "simulated_x_mm": (measurement.x + residual) * 1e3,
+                "residual_mm": residual * 1e3,
+            }
+        )
     else:
         r = residual.reshape(-1, 2)
-        table = pd.DataFrame({"frame": measurement.frame, "t_s": measurement.t, "s_mm": measurement.s * 1e3,
-                              "residual_x_mm": r[:, 0] * 1e3, "residual_y_mm": r[:, 1] * 1e3})
-    return write_files_atomically(out, {
-        "best.toml": lambda p: p.write_text(tomli_w.dumps(scene.to_dict())),
-        "fit.json": lambda p: p.write_text(json.dumps(fit.to_json() | {"inputs": inputs or {},
-                                                                        "provenance": provenance(device)}, indent=1)),
-        "history.csv": lambda p: pd.DataFrame(fit.history).to_csv(p, index=False),
-        "residuals.csv": lambda p: table.to_csv(p, index=False),
-        "overlay.png": lambda p: plot_fit_overlay(result, objective, measurement, fit, p),
-    })
+        table = pd.DataFrame(
+            {
+                "frame": measurement.frame,
+                "t_s": measurement.t,
+                "s_mm": measurement.s * 1e3,
+                "residual_x_mm": r[:, 0] * 1e3,
+                "residual_y_mm": r[:, 1] * 1e3,
+            }
+        )
+    return write_files_atomically(
+        out,
+        {
+            "best.toml": lambda p: p.write_text(tomli_w.dumps(scene.to_dict())),
+            "fit.json": lambda p: p.write_text(
+                json.dumps(fit.to_json() | {"inputs": inputs or {}, "provenance": provenance(device)}, indent=1)
+            ),
+            "history.csv": lambda p: pd.DataFrame(fit.history).to_csv(p, index=False),
+            "residuals.csv": lambda p: table.to_csv(p, index=False),
+            "overlay.png": lambda p: plot_fit_overlay(result, objective, measurement, fit, p),
+        },
+    )

@@ -26,10 +26,21 @@ from .verdict import ended_at_bound, judged_noise, mesh_note, spacing_shift
 MAX_SPACE_FILLING = 10_000
 
 
-def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[FreeParameter], *,
-               align_start_s: float = 0.0, space_filling: int | None = None, max_iterations: int = 25,
-               seed: int = 0, device: str | None = None, progress: bool = True,
-               noise: float | None = None, bootstrap: int = 0, check_spacing: bool = False) -> FitResult:
+def fit_motion(
+    base: dict,
+    measurement: LaserTrace | TrackedShapes,
+    free: list[FreeParameter],
+    *,
+    align_start_s: float = 0.0,
+    space_filling: int | None = None,
+    max_iterations: int = 25,
+    seed: int = 0,
+    device: str | None = None,
+    progress: bool = True,
+    noise: float | None = None,
+    bootstrap: int = 0,
+    check_spacing: bool = False,
+) -> FitResult:
     """Fit ``free`` parameters of raw scene ``base`` to ``measurement`` (see the module doc).
 
     ``noise`` is the measurement's σ (m) the RMS is judged against; by default it is
@@ -43,17 +54,23 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
     rng = np.random.default_rng(seed)
     n0 = space_filling or max(16, 8 * len(free))
     if n0 > MAX_SPACE_FILLING:
-        raise ArgumentError("space_filling", f"{n0} variants in one launch is more than {MAX_SPACE_FILLING}; a "
-                            "Latin hypercube of a few dozen per parameter finds the basin")
+        raise ArgumentError(
+            "space_filling",
+            f"{n0} variants in one launch is more than {MAX_SPACE_FILLING}; a "
+            "Latin hypercube of a few dozen per parameter finds the basin",
+        )
     # the resamples' indices and residuals (8 B each, at most two residuals per measured row),
     # sized before hours of fitting, not after
-    check_memory(16 * bootstrap * 2 * len(measurement.t), f"--bootstrap {bootstrap}: the resamples",
-                 "ask for fewer (a few thousand give σ to about 1 %)")
+    check_memory(
+        16 * bootstrap * 2 * len(measurement.t),
+        f"--bootstrap {bootstrap}: the resamples",
+        "ask for fewer (a few thousand give σ to about 1 %)",
+    )
     history = _History(objective, max_iterations + 1, progress)
     state, other_minima = _space_filling(objective, n0, rng, history)
     state, result = _levenberg_marquardt(objective, state, max_iterations, history)
     history.close()
-    u, shift = state.q[:len(free)], objective.shift_of(state.q)
+    u, shift = state.q[: len(free)], objective.shift_of(state.q)
     jac, residual = state.jac, state.residual
     # the Jacobian must be taken at the reported point (the last launch's, after a full step)
     if history.rows[-1]["stage"] != "step" or jac is None or result is None:
@@ -63,8 +80,9 @@ def fit_motion(base: dict, measurement: LaserTrace | TrackedShapes, free: list[F
         sigma, fit.bootstrap_block = block_bootstrap_sigma(jac / objective.ranges, residual, bootstrap, rng)
         fit.sigma_bootstrap = dict(zip(fit.parameters, sigma.tolist(), strict=True))
     fit.at_bound = ended_at_bound(free, u)
-    fit.bounds = {p.field: (p.lower, p.upper) for p in free} | ({SHIFT: (-objective.align, objective.align)}
-                                                                  if objective.align else {})
+    fit.bounds = {p.field: (p.lower, p.upper) for p in free} | (
+        {SHIFT: (-objective.align, objective.align)} if objective.align else {}
+    )
     fit.noise, fit.noise_source = judged_noise(measurement, noise)
     fit.other_minima = other_minima
     if check_spacing:
@@ -84,8 +102,9 @@ class _History:
         self.bar = tqdm(total=total, desc="fit", unit="launch", disable=not progress)
 
     def __call__(self, stage: str, u: np.ndarray, shift: float, rms: float) -> None:
-        self.rows.append({"launch": self.objective.launches, "stage": stage, "rms": rms, "shift_s": shift}
-                         | self.objective.values(u))
+        self.rows.append(
+            {"launch": self.objective.launches, "stage": stage, "rms": rms, "shift_s": shift} | self.objective.values(u)
+        )
         self.bar.set_postfix(rms=f"{rms:.4g}")
         self.bar.update(1)
 
@@ -93,8 +112,9 @@ class _History:
         self.bar.close()
 
 
-def _space_filling(objective: Objective, n0: int, rng: np.random.Generator,
-                   record: _History) -> tuple[lm.State, list[dict]]:
+def _space_filling(
+    objective: Objective, n0: int, rng: np.random.Generator, record: _History
+) -> tuple[lm.State, list[dict]]:
     # 1. One launch of a Latin hypercube (the scene's own values join the sample); its
     # best point starts the local search, its other basins are reported.
     d = len(objective.free)
@@ -110,8 +130,9 @@ def _space_filling(objective: Objective, n0: int, rng: np.random.Generator,
     return lm.start(q, cost, objective.residuals(result, best, shift)), other_minima
 
 
-def _levenberg_marquardt(objective: Objective, state: lm.State, max_iterations: int,
-                         record: _History) -> tuple[lm.State, RunResult | None]:
+def _levenberg_marquardt(
+    objective: Objective, state: lm.State, max_iterations: int, record: _History
+) -> tuple[lm.State, RunResult | None]:
     # 2. Speculative Levenberg–Marquardt (.lm): each launch holds the proposed step, its
     # stencil and the cautious steps. Returns the last launch's result too (None without
     # one), whose row 0 is the last full step.
@@ -123,8 +144,9 @@ def _levenberg_marquardt(objective: Objective, state: lm.State, max_iterations: 
         stencil_rows, pairs = lm.stencil(proposals[0][:d])
         result = objective.run(np.vstack([proposals[0][:d], *stencil_rows, *[p[:d] for p in proposals[1:]]]))
         rows = [0, *range(1 + 2 * d, 2 * d + len(proposals))]
-        residuals = [objective.residuals(result, row, objective.shift_of(p)) for row, p in zip(rows, proposals,
-                                                                                               strict=True)]
+        residuals = [
+            objective.residuals(result, row, objective.shift_of(p)) for row, p in zip(rows, proposals, strict=True)
+        ]
         jacobian = partial(objective.jacobian, result, pairs, 0, objective.shift_of(proposals[0]))
         state, stage = lm.step(state, proposals, residuals, jacobian)
         record(stage, state.q[:d], objective.shift_of(state.q), math.sqrt(state.cost))
@@ -167,6 +189,8 @@ def _other_minima(objective: Objective, points: np.ndarray, costs: np.ndarray, b
         shift = objective.best_shift(result, k)
         ridge = float(np.mean(objective.residuals(result, k, shift) ** 2))
         if ridge > max(costs[best], costs[j]):
-            out.append({"rms_mm": math.sqrt(costs[j]) * 1e3, "ridge_rms_mm": math.sqrt(ridge) * 1e3}
-                       | objective.values(points[j]))
+            out.append(
+                {"rms_mm": math.sqrt(costs[j]) * 1e3, "ridge_rms_mm": math.sqrt(ridge) * 1e3}
+                | objective.values(points[j])
+            )
     return out

@@ -56,39 +56,64 @@ def judge(fit: FitResult, missing: int) -> tuple[str, list[str]]:
     corr = np.asarray(fit.correlation, dtype=float)
     found: list[tuple[str, str]] = []
     if missing or not math.isfinite(fit.rms):
-        found.append(("failed", f"the best run has no value for {missing} of the {fit.n_residuals} measured "
-                                "points (the strip misses the laser line or diverged)" if missing
-                      else f"the RMS is {fit.rms}"))
+        found.append(
+            (
+                "failed",
+                f"the best run has no value for {missing} of the {fit.n_residuals} measured "
+                "points (the strip misses the laser line or diverged)"
+                if missing
+                else f"the RMS is {fit.rms}",
+            )
+        )
     for name in fit.at_bound:
         low, high = fit.bounds[name]
-        found.append(("at_bound", f"{name} = {fit.parameters[name]:.6g} ended on a bound ({low:g}:{high:g}); "
-                                  "the optimum lies outside, so it is not an estimate: widen --bounds or fix "
-                                  "the model"))
+        found.append(
+            (
+                "at_bound",
+                f"{name} = {fit.parameters[name]:.6g} ended on a bound ({low:g}:{high:g}); "
+                "the optimum lies outside, so it is not an estimate: widen --bounds or fix "
+                "the model",
+            )
+        )
     if not all(math.isfinite(v) for v in fit.sigma.values()):
         found.append(("not_identifiable", "the Jacobian is singular: some parameter does not change the fit"))
     for i in range(len(names)):
         for j in range(i):
             if abs(corr[i, j]) > NOT_IDENTIFIABLE_CORRELATION:
-                found.append(("not_identifiable", f"{names[i]} and {names[j]} are correlated {corr[i, j]:+.3f}: "
-                                                  "the data do not separate them; fix one, or measure what "
-                                                  "distinguishes them"))
+                found.append(
+                    (
+                        "not_identifiable",
+                        f"{names[i]} and {names[j]} are correlated {corr[i, j]:+.3f}: "
+                        "the data do not separate them; fix one, or measure what "
+                        "distinguishes them",
+                    )
+                )
     ratio = poor_fit_ratio(fit.rms, fit.noise)
     if ratio is not None:
-        found.append(("poor_fit", f"the RMS {fit.rms * 1e3:.4g} mm is {ratio:.1f}× the "
-                                  f"measurement noise {fit.noise * 1e3:.3g} mm ({fit.noise_source}): the "
-                                  "model with these free parameters does not explain the data"))
+        found.append(
+            (
+                "poor_fit",
+                f"the RMS {fit.rms * 1e3:.4g} mm is {ratio:.1f}× the "
+                f"measurement noise {fit.noise * 1e3:.3g} mm ({fit.noise_source}): the "
+                "model with these free parameters does not explain the data",
+            )
+        )
     if fit.spacing_check.get("note"):
         found.append(("failed", f"--check-spacing could not check the spacing: {fit.spacing_check['note']}"))
     moved = fit.spacing_check.get("moves", {})
     for name, delta in moved.items():
         if abs(delta) > fit.sigma.get(name, math.inf):
-            found.append(("spacing_limited", f"refining the strip to strip.spacing_mm = "
-                                             f"{fit.spacing_check['spacing_mm']:g} moves {name} by {delta:+.4g} "
-                                             f"({abs(delta) / fit.sigma[name]:.1f}σ): the mesh, not the data, "
-                                             "limits it; fit at a finer strip.spacing_mm"))
+            found.append(
+                (
+                    "spacing_limited",
+                    f"refining the strip to strip.spacing_mm = "
+                    f"{fit.spacing_check['spacing_mm']:g} moves {name} by {delta:+.4g} "
+                    f"({abs(delta) / fit.sigma[name]:.1f}σ): the mesh, not the data, "
+                    "limits it; fit at a finer strip.spacing_mm",
+                )
+            )
     if not fit.converged:
-        found.append(("failed", "the search stopped at its iteration limit before converging "
-                                "(raise --max-iterations)"))
+        found.append(("failed", "the search stopped at its iteration limit before converging (raise --max-iterations)"))
     return found[0][0] if found else "converged", [message for _, message in found]
 
 
@@ -103,8 +128,7 @@ def measurement_noise(measurement: LaserTrace | TrackedShapes) -> float:
     return difference_noise([measurement.x[order][p] for p in pieces] + [measurement.y[order][p] for p in pieces])
 
 
-def spacing_shift(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarray,
-                  residual: np.ndarray) -> dict:
+def spacing_shift(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarray, residual: np.ndarray) -> dict:
     """How far the fit at point ``u`` would move at half the strip's spacing: the best point
     run once more at h/2 (dt halved, or chosen again where ``dt_s = "auto"`` chose it) and
     the Gauss–Newton step its residuals ask for, −J⁺(r_{h/2} − r_h) with the fit's own
@@ -130,8 +154,11 @@ def spacing_shift(objective: Objective, u: np.ndarray, shift: float, jac: np.nda
     refined = Objective(fine, objective.measurement, [], objective.align, objective.device)
     fine_residual = refined.residuals(refined.run(np.zeros((1, 0))), 0, shift, penalise=False)
     if not np.all(np.isfinite(fine_residual)):
-        return {"spacing_mm": scene.strip.spacing_mm / 2, "moves": {},
-                "note": "the run at half the spacing misses measured points (the laser line, or it diverged)"}
+        return {
+            "spacing_mm": scene.strip.spacing_mm / 2,
+            "moves": {},
+            "note": "the run at half the spacing misses measured points (the laser line, or it diverged)",
+        }
     step = -np.linalg.lstsq(jac, fine_residual - residual, rcond=None)[0] * objective.ranges
     return {"spacing_mm": scene.strip.spacing_mm / 2, "moves": dict(zip(objective.names, step.tolist(), strict=True))}
 
@@ -143,9 +170,11 @@ def mesh_note(base: dict) -> str:
     law = scene.material.bending_law
     if bending_law(law).mesh_independent:
         return ""
-    return (f"the {law} law's hysteresis depends on the mesh (no return-point memory, docs/model.md §15.6): these "
-            f"values hold at strip.spacing_mm = {scene.strip.spacing_mm:g} only, and refining h moves them (its "
-            "decrement grows without converging); the masing law takes the same parameters and converges in h")
+    return (
+        f"the {law} law's hysteresis depends on the mesh (no return-point memory, docs/model.md §15.6): these "
+        f"values hold at strip.spacing_mm = {scene.strip.spacing_mm:g} only, and refining h moves them (its "
+        "decrement grows without converging); the masing law takes the same parameters and converges in h"
+    )
 
 
 @dataclass
@@ -171,8 +200,14 @@ class Identifiability:
         return "\n".join(lines)
 
 
-def weighted_jacobian(base: dict, measurement: LaserTrace | TrackedShapes, noise: float, names: str | list[str],
-                      bounds: str | None = None, device: str | None = None) -> tuple[list[str], np.ndarray]:
+def weighted_jacobian(
+    base: dict,
+    measurement: LaserTrace | TrackedShapes,
+    noise: float,
+    names: str | list[str],
+    bounds: str | None = None,
+    device: str | None = None,
+) -> tuple[list[str], np.ndarray]:
     """The fields of the ``--free`` parameters ``names`` and ∂r/∂(field value) / σ_m of the
     experiment (raw scene ``base``, its ``measurement``, noise σ_m in m) at the scene's own
     values: one batched launch of the central-difference stencil, as the fit takes it."""
@@ -194,6 +229,10 @@ def identifiability(blocks: list[tuple[list[str], np.ndarray]]) -> Identifiabili
     if any(f != fields for f, _ in blocks):
         raise ValueError("every experiment must have the same free parameters, in the same order")
     sigma, correlation = lm.sigma_and_correlation(lm.covariance(np.vstack([j for _, j in blocks])))
-    pairs = [(fields[i], fields[j], float(correlation[i, j])) for i in range(len(fields)) for j in range(i)
-             if not abs(correlation[i, j]) <= NOT_IDENTIFIABLE_CORRELATION]
+    pairs = [
+        (fields[i], fields[j], float(correlation[i, j]))
+        for i in range(len(fields))
+        for j in range(i)
+        if not abs(correlation[i, j]) <= NOT_IDENTIFIABLE_CORRELATION
+    ]
     return Identifiability(fields, dict(zip(fields, sigma.tolist(), strict=True)), correlation, pairs)

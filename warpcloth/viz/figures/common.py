@@ -24,8 +24,25 @@ from warpcloth.kernels.laws import LAW_PARAMETERS  # noqa: E402
 from warpcloth.viz import DPI, FORMATS  # noqa: E402
 from warpcloth.viz.geometry import colour_values  # noqa: E402
 
-__all__ = ["DPI", "FIELD_LABELS", "FORMATS", "LEGEND_VARIANTS", "MM", "X_LABEL", "Y_LABEL", "colours_and_labels", "plt",
-           "field_label", "field_unit", "inside", "legend", "save", "time_label", "variant_label", "window_note"]
+__all__ = [
+    "DPI",
+    "FIELD_LABELS",
+    "FORMATS",
+    "LEGEND_VARIANTS",
+    "MM",
+    "X_LABEL",
+    "Y_LABEL",
+    "colours_and_labels",
+    "plt",
+    "field_label",
+    "field_unit",
+    "inside",
+    "legend",
+    "save",
+    "time_label",
+    "variant_label",
+    "window_note",
+]
 
 MM = 1 / units.LENGTH_MM
 
@@ -46,8 +63,10 @@ def variant_label(recording: Recording, j: int) -> str:
     """Variant ``j``'s name in a legend: its number and the first two parameters that vary."""
     varying = recording.varying[:2]
     values = [recording.parameters[c].iloc[j] for c in varying]
-    parts = [f"{c.split('.')[-1]}={v:.3g}" if isinstance(v, float) else f"{c.split('.')[-1]}={v}"
-             for c, v in zip(varying, values, strict=True)]
+    parts = [
+        f"{c.split('.')[-1]}={v:.3g}" if isinstance(v, float) else f"{c.split('.')[-1]}={v}"
+        for c, v in zip(varying, values, strict=True)
+    ]
     return f"variant {recording.variants[j]}" + (f" ({', '.join(parts)})" if parts else "")
 
 
@@ -78,8 +97,10 @@ def legend(ax: plt.Axes, **style: object) -> None:
 FIELD_LABELS = {
     "damping.gamma_per_s": ("γ", "s⁻¹"),
     # every bending law's parameters, D's included, as their descriptions label them
-    **{f"material.{p.scene_field}": (p.label, units.BENDING_UNITS[p.kind][1])
-       for p in (BENDING_RIGIDITY, *(parameter for parameter, _ in LAW_PARAMETERS.values()))},
+    **{
+        f"material.{p.scene_field}": (p.label, units.BENDING_UNITS[p.kind][1])
+        for p in (BENDING_RIGIDITY, *(parameter for parameter, _ in LAW_PARAMETERS.values()))
+    },
     "material.density_g_per_cm2": ("ρ_A", "g/cm²"),
     "material.bending_law": ("bending law", ""),
     "clamp.rotation_centre_dx_mm": ("rotation centre dx", "mm"),

@@ -68,13 +68,16 @@ class ClampFit(Protocol):
     def theta(self, t: np.ndarray) -> np.ndarray: ...
 
 
-def plot_fit_overlay(result: RunResult, objective: FitResiduals, measurement: LaserTrace | TrackedShapes,
-                     fit: MotionFit, path: Path) -> Path:
+def plot_fit_overlay(
+    result: RunResult, objective: FitResiduals, measurement: LaserTrace | TrackedShapes, fit: MotionFit, path: Path
+) -> Path:
     """Measured against the best fit: the laser trace and its residual, or tracked
     markers over the simulated strip at six of the measured frames (on the measured clock)."""
     shift = fit.shift_s
-    title = ", ".join(f"{field_label(k, units=False)} = {v:.4g} ± {fit.sigma[k]:.2g} {field_unit(k)}".rstrip()
-                      for k, v in fit.parameters.items())
+    title = ", ".join(
+        f"{field_label(k, units=False)} = {v:.4g} ± {fit.sigma[k]:.2g} {field_unit(k)}".rstrip()
+        for k, v in fit.parameters.items()
+    )
     if isinstance(measurement, LaserTrace):
         fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, height_ratios=[3, 1])
         top.plot(measurement.t, measurement.x * MM, "k.", ms=2.5, label="measured")
@@ -87,8 +90,10 @@ def plot_fit_overlay(result: RunResult, objective: FitResiduals, measurement: La
         bottom.plot(measurement.t, residual * MM, "C0.", ms=2)
         bottom.axhline(0, color="0.6", lw=0.6)
         bottom.set(xlabel="measured time (s)", ylabel="residual (mm)")
-        top.set_title(f"RMS {fit.rms * MM:.3g} mm on t = {window[0]:g} … {window[1]:g} s (the measured record); "
-                      f"{title}", fontsize=8)
+        top.set_title(
+            f"RMS {fit.rms * MM:.3g} mm on t = {window[0]:g} … {window[1]:g} s (the measured record); {title}",
+            fontsize=8,
+        )
         return common.save(fig, path)
     if result.frames is None:
         raise ValueError("tracked markers are drawn over the run's frames: run it with keep_frames=True")
@@ -106,8 +111,11 @@ def plot_fit_overlay(result: RunResult, objective: FitResiduals, measurement: La
         ax.plot(measurement.x[rows] * MM, measurement.y[rows] * MM, "o", color=colour, ms=3.5, mfc="none")
     ax.set_aspect("equal")
     ax.set(xlabel=X_LABEL, ylabel=Y_LABEL)
-    ax.set_title(f"markers (o) vs best fit (lines); RMS {fit.rms * MM:.3g} mm on t = {measurement.t.min():g} … "
-                 f"{measurement.t.max():g} s (the measured record)\n{title}", fontsize=8)
+    ax.set_title(
+        f"markers (o) vs best fit (lines); RMS {fit.rms * MM:.3g} mm on t = {measurement.t.min():g} … "
+        f"{measurement.t.max():g} s (the measured record)\n{title}",
+        fontsize=8,
+    )
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title="measured t", title_fontsize=7)
     return common.save(fig, path)
 
@@ -154,8 +162,11 @@ def plot_clamp_fit(t: np.ndarray, theta: np.ndarray, fit: ClampFit, path: Path) 
     top.plot(t, np.degrees(fit.theta(t)), "C3", lw=1.2, label=fit.form)
     for when in fit.breakpoints_s:
         top.axvline(when, color="0.7", lw=0.6, ls="--")
-    top.set(ylabel="θ (deg)", title=f"clamp motion fit, RMS {np.degrees(fit.rms_rad):.3g}° "
-            f"(noise {np.degrees(fit.noise_rad):.2g}°): {fit.status}")
+    top.set(
+        ylabel="θ (deg)",
+        title=f"clamp motion fit, RMS {np.degrees(fit.rms_rad):.3g}° "
+        f"(noise {np.degrees(fit.noise_rad):.2g}°): {fit.status}",
+    )
     top.legend(fontsize=7)
     bottom.plot(t, np.degrees(theta - fit.theta(t)), "C0.", ms=2)
     bottom.axhline(0, color="0.6", lw=0.6)

@@ -152,8 +152,9 @@ def kes_loop(recording: Recording, variant: int = 0, samples: int = 400) -> tupl
     # others on the standard cycle
     closure = material.bending.description.loop_closure
     k0 = material.bending[closure] if closure else KES_K0_PER_CM * units.CURVATURE_PER_CM
-    path = np.concatenate([np.linspace(0, k0, samples), np.linspace(k0, -k0, 2 * samples)[1:],
-                           np.linspace(-k0, k0, 2 * samples)[1:]])
+    path = np.concatenate(
+        [np.linspace(0, k0, samples), np.linspace(k0, -k0, 2 * samples)[1:], np.linspace(-k0, k0, 2 * samples)[1:]]
+    )
     moment, _ = moment_along_path(material, path)
     return path, moment
 
@@ -178,8 +179,9 @@ def _mark_kes_values(ax: plt.Axes, k: np.ndarray, m: np.ndarray, kes: KesValues)
         span = np.array([lo, hi])
         ax.plot(span, centre + b * (span - k1), color="C0", lw=2, label=f"B = {b:.4g} gf·cm²/cm (slope, 0.5–1.5)")
     if hb2 is not None:
-        ax.annotate("", xy=(k1, max(at_k1)), xytext=(k1, min(at_k1)),
-                    arrowprops={"arrowstyle": "<->", "color": "C1", "lw": 1.5})
+        ax.annotate(
+            "", xy=(k1, max(at_k1)), xytext=(k1, min(at_k1)), arrowprops={"arrowstyle": "<->", "color": "C1", "lw": 1.5}
+        )
         ax.plot([], [], color="C1", lw=1.5, label=f"2HB = {hb2:.4g} gf·cm/cm (width at K = 1)")
 
 
@@ -188,8 +190,9 @@ def _sorted(k: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return k[order], m[order]
 
 
-def plot_bending_loop(recording: Recording, path: Path, variant: int = 0, kes: KesValues | None = None, *,
-                      dpi: float = DPI) -> Path:
+def plot_bending_loop(
+    recording: Recording, path: Path, variant: int = 0, kes: KesValues | None = None, *, dpi: float = DPI
+) -> Path:
     """The material's KES-FB2 loop ±K0 as the instrument charts it, B and 2HB marked when
     ``kes`` (:class:`KesValues`, e.g. a :class:`warpcloth.calibrate.kes.BendingSummary`) is given (left), and the probed
     hinge's moment–curvature path over the run, zoomed to the path (right; Figs. 3b, 8b);
@@ -216,8 +219,9 @@ def plot_bending_loop(recording: Recording, path: Path, variant: int = 0, kes: K
         pad_k, pad_m = 0.08 * (k_hi - k_lo) or 0.01, 0.08 * (m_hi - m_lo) or 0.001
         zoom.set(xlim=(k_lo - pad_k, k_hi + pad_k), ylim=(m_lo - pad_m, m_hi + pad_m))
     hinge = recording.scenes[variant].output.loop_hinge_mm
-    zoom.set_title(f"Hinge {hinge:g} mm below the clamp edge, {variant_label(recording, variant)} (zoomed to its path)",
-                   fontsize=9)
+    zoom.set_title(
+        f"Hinge {hinge:g} mm below the clamp edge, {variant_label(recording, variant)} (zoomed to its path)", fontsize=9
+    )
     zoom.legend(fontsize=7)
     return common.save(fig, path, dpi)
 
@@ -235,14 +239,22 @@ def plot_kes_fit(fit: KesFitResult, path: str | Path) -> Path:
     e = np.linspace(0.0, float(tl.strain.max()), 200)
     left.plot(e / units.STRAIN_PERCENT, tf(e), "-", color="C0", label="quartic fit (loading)")
     rt = f", RT {tk.rt_percent:.1f} %" if tk.rt_percent is not None else ""
-    left.set_title(f"KES-FB1: EMT {tk.emt_percent:.2f} %, LT {tk.lt:.3f}, WT {tk.wt_gf_cm_per_cm2:.3g} "
-                   f"gf·cm/cm²{rt}", fontsize=9)
+    left.set_title(
+        f"KES-FB1: EMT {tk.emt_percent:.2f} %, LT {tk.lt:.3f}, WT {tk.wt_gf_cm_per_cm2:.3g} gf·cm/cm²{rt}", fontsize=9
+    )
     left.set_xlabel("strain (%)")
     left.set_ylabel("force per width T (gf/cm)")
     a = ", ".join(f"{c:.4g}" for c in tf.coefficients)
-    left.text(0.03, 0.97, f"a = ({a}) gf/cm\nRMS {tf.rms_gf_per_cm:.3g} gf/cm ({tf.rms_relative:.2%} of range)"
-              + ("\nconstrained to increase" if tf.constrained else ""),
-              transform=left.transAxes, va="top", fontsize=8, bbox={"fc": "white", "alpha": 0.8})
+    left.text(
+        0.03,
+        0.97,
+        f"a = ({a}) gf/cm\nRMS {tf.rms_gf_per_cm:.3g} gf/cm ({tf.rms_relative:.2%} of range)"
+        + ("\nconstrained to increase" if tf.constrained else ""),
+        transform=left.transAxes,
+        va="top",
+        fontsize=8,
+        bbox={"fc": "white", "alpha": 0.8},
+    )
     left.legend(loc="lower right", fontsize=8)
     bl, bk, bf = fit.bending_loop, fit.bending_kes, fit.bending
     right.plot(bl.curvature, bl.moment, ".", ms=3, color="0.4", label="data")
@@ -252,10 +264,17 @@ def plot_kes_fit(fit: KesFitResult, path: str | Path) -> Path:
     right.set_title(f"KES-FB2: B {b} gf·cm²/cm, 2HB {hb} gf·cm/cm", fontsize=9)
     right.set_xlabel("curvature K (1/cm)")
     right.set_ylabel("moment per width M (gf·cm/cm)")
-    right.text(0.03, 0.97, f"D {bf.rigidity_gf_cm2_per_cm:.4g} gf·cm²/cm, D1 {bf.d1_gf_cm_per_cm:.4g} gf·cm/cm\n"
-               f"α {bf.alpha_cm:.4g} cm, K0 {bf.k0_per_cm:.4g} 1/cm\n"
-               f"RMS {bf.rms_gf_cm_per_cm:.3g} gf·cm/cm ({bf.rms_relative:.2%} of range)",
-               transform=right.transAxes, va="top", fontsize=8, bbox={"fc": "white", "alpha": 0.8})
+    right.text(
+        0.03,
+        0.97,
+        f"D {bf.rigidity_gf_cm2_per_cm:.4g} gf·cm²/cm, D1 {bf.d1_gf_cm_per_cm:.4g} gf·cm/cm\n"
+        f"α {bf.alpha_cm:.4g} cm, K0 {bf.k0_per_cm:.4g} 1/cm\n"
+        f"RMS {bf.rms_gf_cm_per_cm:.3g} gf·cm/cm ({bf.rms_relative:.2%} of range)",
+        transform=right.transAxes,
+        va="top",
+        fontsize=8,
+        bbox={"fc": "white", "alpha": 0.8},
+    )
     right.legend(loc="lower right", fontsize=8)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_atomically(path, figure.savefig)
@@ -274,8 +293,9 @@ def bending_law_comparison_figure(comparison: LawComparisonResult) -> plt.Figure
     cycle (bottom: each point thin, a running mean thick, so a law's systematic misfit
     stands out of the noise); the title gives the recommendation and the data's B and 2HB."""
     loop, delta, measured = comparison.loop, comparison.delta_aic(), comparison.measured
-    fig, axes = plt.subplot_mosaic([["loop", "shape"], ["residual", "residual"]], figsize=(11.0, 7.6),
-                                   height_ratios=(1.6, 1.0))
+    fig, axes = plt.subplot_mosaic(
+        [["loop", "shape"], ["residual", "residual"]], figsize=(11.0, 7.6), height_ratios=(1.6, 1.0)
+    )
     slope = measured.b_gf_cm2_per_cm if measured.b_gf_cm2_per_cm is not None else 0.0
     k, index = loop.curvature, np.arange(len(loop.curvature))
     window = np.ones(min(RESIDUAL_MEAN_POINTS, len(index)))
@@ -283,33 +303,55 @@ def bending_law_comparison_figure(comparison: LawComparisonResult) -> plt.Figure
     for name, centre in (("loop", 0.0), ("shape", slope)):
         axes[name].plot(k, loop.moment - centre * k, ".", ms=2.5, color="0.6", label="KES-FB2 data", zorder=1)
     for j, (law, fit) in enumerate(comparison.fits.items()):
-        axes["loop"].plot(k, fit.moment, color=f"C{j}", lw=1.2, zorder=2,
-                          label=f"{law} (k = {fit.free_parameters}): RMS {fit.rms_gf_cm_per_cm:.3g} gf·cm/cm, "
-                          f"ΔAIC {delta[law]:.1f}")
+        axes["loop"].plot(
+            k,
+            fit.moment,
+            color=f"C{j}",
+            lw=1.2,
+            zorder=2,
+            label=f"{law} (k = {fit.free_parameters}): RMS {fit.rms_gf_cm_per_cm:.3g} gf·cm/cm, ΔAIC {delta[law]:.1f}",
+        )
         axes["shape"].plot(k, fit.moment - slope * k, color=f"C{j}", lw=1.2, zorder=2, label=law)
         residual = fit.moment - loop.moment
         axes["residual"].plot(index, residual, color=f"C{j}", lw=0.5, alpha=0.2)
-        axes["residual"].plot(index, np.convolve(residual, window, mode="same") / counts, color=f"C{j}", lw=1.5,
-                              label=law)
+        axes["residual"].plot(
+            index, np.convolve(residual, window, mode="same") / counts, color=f"C{j}", lw=1.5, label=law
+        )
     for leg in loop.legs()[1:]:
         axes["residual"].axvline(leg.start, color="0.7", lw=0.6, ls=":")
     for ax in axes.values():
         ax.axhline(0.0, color="0.8", lw=0.5)
-    kes = ", ".join(f"{name} {value:.4g} {unit}" for name, value, unit in
-                    (("B", measured.b_gf_cm2_per_cm, "gf·cm²/cm"), ("2HB", measured.hb2_gf_cm_per_cm, "gf·cm/cm"))
-                    if value is not None)
-    axes["loop"].set(xlabel="curvature K (1/cm)", ylabel="moment per width M (gf·cm/cm)",
-                     title=f"{Path(loop.source).name}: "
-                     + (f"AIC recommends {comparison.recommended}" if len(comparison.fits) > 1
-                        else f"{comparison.recommended} fitted (one law: no comparison)")
-                     + (f"\ndata: {kes}" if kes else ""))
+    kes = ", ".join(
+        f"{name} {value:.4g} {unit}"
+        for name, value, unit in (
+            ("B", measured.b_gf_cm2_per_cm, "gf·cm²/cm"),
+            ("2HB", measured.hb2_gf_cm_per_cm, "gf·cm/cm"),
+        )
+        if value is not None
+    )
+    axes["loop"].set(
+        xlabel="curvature K (1/cm)",
+        ylabel="moment per width M (gf·cm/cm)",
+        title=f"{Path(loop.source).name}: "
+        + (
+            f"AIC recommends {comparison.recommended}"
+            if len(comparison.fits) > 1
+            else f"{comparison.recommended} fitted (one law: no comparison)"
+        )
+        + (f"\ndata: {kes}" if kes else ""),
+    )
     axes["loop"].legend(fontsize=7, loc="lower right")
-    axes["shape"].set(xlabel="curvature K (1/cm)", ylabel=f"M − {slope:.4g} K (gf·cm/cm)",
-                      title="the loops without the data's centre line B K")
+    axes["shape"].set(
+        xlabel="curvature K (1/cm)",
+        ylabel=f"M − {slope:.4g} K (gf·cm/cm)",
+        title="the loops without the data's centre line B K",
+    )
     axes["shape"].legend(fontsize=7, loc="center", bbox_to_anchor=(0.27, 0.5))
-    axes["residual"].set(xlabel="point along the cycle (dotted: the turns at +K0 and −K0)",
-                         ylabel="model − data (gf·cm/cm)",
-                         title=f"residuals (thin: each point; thick: running mean over {len(window)} points)")
+    axes["residual"].set(
+        xlabel="point along the cycle (dotted: the turns at +K0 and −K0)",
+        ylabel="model − data (gf·cm/cm)",
+        title=f"residuals (thin: each point; thick: running mean over {len(window)} points)",
+    )
     axes["residual"].legend(fontsize=7, ncols=len(comparison.fits))
     for ax in axes.values():
         ax.title.set_fontsize(9)
@@ -317,8 +359,7 @@ def bending_law_comparison_figure(comparison: LawComparisonResult) -> plt.Figure
     return fig
 
 
-def plot_bending_law_comparison(comparison: LawComparisonResult, path: str | Path, *,
-                                dpi: float = DPI) -> Path:
+def plot_bending_law_comparison(comparison: LawComparisonResult, path: str | Path, *, dpi: float = DPI) -> Path:
     """:func:`bending_law_comparison_figure` written to ``path`` (its suffix chooses the format)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -20,8 +20,9 @@ def read_sweep_summary(sweep_dir: str | Path) -> pd.DataFrame:
 
     sweep_dir = Path(sweep_dir)
     if not (sweep_dir / "sweep.json").is_file():
-        raise DataFileError(sweep_dir, "is not a sweep directory (no sweep.json); --metric and --x plot a sweep's "
-                            "summary")
+        raise DataFileError(
+            sweep_dir, "is not a sweep directory (no sweep.json); --metric and --x plot a sweep's summary"
+        )
     merged = sweep_dir / "summary.parquet"
     if merged.is_file():
         return read_parquet(merged)
@@ -31,8 +32,9 @@ def read_sweep_summary(sweep_dir: str | Path) -> pd.DataFrame:
     return pd.concat([read_parquet(p) for p in parts]).sort_values("variant")
 
 
-def plot_sweep(summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: str | None = None, *,
-               dpi: float = DPI) -> Path:
+def plot_sweep(
+    summary: pd.DataFrame, path: str | Path, metric: str, x: str, y: str | None = None, *, dpi: float = DPI
+) -> Path:
     """:func:`sweep_figure` written to ``path`` (its suffix chooses the format)."""
     return common.save(sweep_figure(summary, metric, x, y), Path(path), dpi)
 
@@ -51,8 +53,9 @@ def sweep_figure(summary: pd.DataFrame, metric: str, x: str, y: str | None = Non
         _heat_map(fig, ax, data, metric, x, y)
     diverged = len(summary) - len(data) - missing
     notes = [f"{diverged} diverged"] * bool(diverged) + [f"{missing} without a value"] * bool(missing)
-    ax.set_title(f"{field_label(metric, units=False)} over {len(data)} variants" + (f" ({', '.join(notes)})"
-                                                                                   if notes else ""))
+    ax.set_title(
+        f"{field_label(metric, units=False)} over {len(data)} variants" + (f" ({', '.join(notes)})" if notes else "")
+    )
     return fig
 
 
@@ -61,22 +64,34 @@ def _plotted(summary: pd.DataFrame, metric: str, x: str, y: str | None) -> tuple
     # value; an ArgumentError names a column the figure cannot plot.
     for argument, name in (("metric", metric), ("x", x), ("y", y)):
         if name is not None and name not in summary:
-            raise ArgumentError(argument, f"{name!r} is not a column of the sweep summary; "
-                             f"known: {', '.join(c for c in summary.columns if c not in ('variant', 'batch'))}")
+            raise ArgumentError(
+                argument,
+                f"{name!r} is not a column of the sweep summary; "
+                f"known: {', '.join(c for c in summary.columns if c not in ('variant', 'batch'))}",
+            )
     if y is not None and y == x:
         raise ArgumentError("y", f"{y!r} is already on the x axis; a heat map needs two different parameters")
     if summary[metric].map(lambda v: isinstance(v, (list, np.ndarray))).any():
-        raise ArgumentError("metric", f"{metric!r} holds a list per variant (one value per half-cycle); plot one "
-                          "number per variant, e.g. mean_log_decrement or first_amplitude_m")
+        raise ArgumentError(
+            "metric",
+            f"{metric!r} holds a list per variant (one value per half-cycle); plot one "
+            "number per variant, e.g. mean_log_decrement or first_amplitude_m",
+        )
     if not pd.api.types.is_numeric_dtype(summary[metric]) or pd.api.types.is_bool_dtype(summary[metric]):
-        raise ArgumentError("metric", f"{metric!r} is not a number per variant (it holds "
-                          f"{summary[metric].dtype}); plot a numeric column, e.g. first_period_s or mean_log_decrement")
+        raise ArgumentError(
+            "metric",
+            f"{metric!r} is not a number per variant (it holds "
+            f"{summary[metric].dtype}); plot a numeric column, e.g. first_period_s or mean_log_decrement",
+        )
     data = summary[~summary["diverged"]] if "diverged" in summary else summary
     valued = data[np.isfinite(data[metric].to_numpy(dtype=float))]
     if valued.empty:
-        raise ArgumentError("metric", f"no variant has a value of "
-                          f"{metric!r} (every one is NaN: for a period or decrement, the record may be shorter "
-                          "than the swing needs, or the strip does not swing); plot another metric or run longer")
+        raise ArgumentError(
+            "metric",
+            f"no variant has a value of "
+            f"{metric!r} (every one is NaN: for a period or decrement, the record may be shorter "
+            "than the swing needs, or the strip does not swing); plot another metric or run longer",
+        )
     return valued, len(data) - len(valued)
 
 
@@ -123,15 +138,15 @@ def _heat_map(fig: plt.Figure, ax: plt.Axes, data: pd.DataFrame, metric: str, x:
     scale = {"cmap": "viridis", "vmin": lo, "vmax": hi if hi > lo else None}
     if table.size == len(data) and not table.isna().any().any():
         # one equal cell per grid value, at 0, 1, 2, ..., labelled at its centre
-        mesh = ax.pcolormesh(np.arange(table.shape[1]), np.arange(table.shape[0]), table.to_numpy(),
-                             shading="nearest", **scale)
+        mesh = ax.pcolormesh(
+            np.arange(table.shape[1]), np.arange(table.shape[0]), table.to_numpy(), shading="nearest", **scale
+        )
         _cell_ticks(ax.xaxis, table.columns)
         _cell_ticks(ax.yaxis, table.index)
     else:
         mesh = ax.scatter(data[x], data[y], c=data[metric], s=14, **scale)
     fig.colorbar(mesh, ax=ax, label=field_label(metric), extend="both")
     ax.set(xlabel=field_label(x), ylabel=field_label(y))
-
 
 
 HEAT_MAP_TICKS = 12
@@ -145,5 +160,4 @@ def _cell_ticks(axis: matplotlib.axis.Axis, values: pd.Index) -> None:
     # edges lie halfway to the neighbours), and the locator's round numbers fell anywhere.
     step = -(-len(values) // HEAT_MAP_TICKS)
     shown = range(0, len(values), step)
-    axis.set_ticks(list(shown), [f"{values[i]:.4g}" if isinstance(values[i], float) else str(values[i])
-                                 for i in shown])
+    axis.set_ticks(list(shown), [f"{values[i]:.4g}" if isinstance(values[i], float) else str(values[i]) for i in shown])

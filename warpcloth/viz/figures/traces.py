@@ -31,8 +31,14 @@ from .common import (
 from .kes import KesValues, plot_bending_loop
 
 
-def plot_amplitude(recording: Recording, path: Path, measured: LaserTrace | None = None, *,
-                   dpi: float = DPI, window: tuple[float, float] | None = None) -> Path:
+def plot_amplitude(
+    recording: Recording,
+    path: Path,
+    measured: LaserTrace | None = None,
+    *,
+    dpi: float = DPI,
+    window: tuple[float, float] | None = None,
+) -> Path:
     """Laser-line displacement (and free-end x) against time, as in the paper's Fig. 10;
     with ``window`` (s) only that span of the run and of ``measured`` (same footing)."""
     fig, ax = plt.subplots(figsize=(8, 4))
@@ -48,14 +54,23 @@ def plot_amplitude(recording: Recording, path: Path, measured: LaserTrace | None
         keep = inside(measured.t, window)
         ax.plot(measured.t[keep], measured.x[keep] * MM, "k.", ms=2.5, label="measured")
     ax.axhline(0, color="0.6", lw=0.6)
-    ax.set(xlabel=time_label(recording), ylabel="x (mm)",
-           title=f"Displacement at the laser line (y = {laser_mm:g} mm from the clamp edge){window_note(window)}")
+    ax.set(
+        xlabel=time_label(recording),
+        ylabel="x (mm)",
+        title=f"Displacement at the laser line (y = {laser_mm:g} mm from the clamp edge){window_note(window)}",
+    )
     legend(ax, fontsize=7, loc="upper right")
     return common.save(fig, path, dpi)
 
 
-def plot_clamp_angle(recording: Recording, path: Path, measured: ClampAngleTrace | None = None, *,
-                     dpi: float = DPI, window: tuple[float, float] | None = None) -> Path:
+def plot_clamp_angle(
+    recording: Recording,
+    path: Path,
+    measured: ClampAngleTrace | None = None,
+    *,
+    dpi: float = DPI,
+    window: tuple[float, float] | None = None,
+) -> Path:
     """Clamp rotation angle against time, as in the paper's Fig. 12, over an encoder's;
     with ``window`` (s) only that span of both."""
     fig, ax = plt.subplots(figsize=(6, 4))
@@ -86,8 +101,15 @@ def default_shape_times(recording: Recording, count: int = 9, variant: int = 0) 
     return np.linspace(times[0], times[1], count)
 
 
-def plot_shapes(recording: Recording, path: Path, times: np.ndarray, variant: int = 0,
-                measured: TrackedShapes | None = None, *, dpi: float = DPI) -> Path:
+def plot_shapes(
+    recording: Recording,
+    path: Path,
+    times: np.ndarray,
+    variant: int = 0,
+    measured: TrackedShapes | None = None,
+    *,
+    dpi: float = DPI,
+) -> Path:
     """Stroboscopic overlay of the strip's shape at ``times`` (Figs. 9, 11), the laser line
     dashed; with ``measured`` markers, the shapes at the measured frames (up to eight)
     with the markers over them."""
@@ -109,17 +131,31 @@ def plot_shapes(recording: Recording, path: Path, times: np.ndarray, variant: in
     laser_mm = recording.scenes[variant].output.laser_height_mm
     ax.axhline(laser_mm, color="C3", lw=0.8, ls="--", label=f"laser line, y = {laser_mm:g} mm")
     ax.set_aspect("equal")
-    ax.set(xlabel=X_LABEL, ylabel=Y_LABEL,
-           title=f"Strip shapes{' and measured markers (o)' if measured is not None else ''}, "
-                 f"{variant_label(recording, variant)}")
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title=time_label(recording, unit=False),
-              title_fontsize=7)
+    ax.set(
+        xlabel=X_LABEL,
+        ylabel=Y_LABEL,
+        title=f"Strip shapes{' and measured markers (o)' if measured is not None else ''}, "
+        f"{variant_label(recording, variant)}",
+    )
+    ax.legend(
+        fontsize=7,
+        loc="upper left",
+        bbox_to_anchor=(1.02, 1),
+        title=time_label(recording, unit=False),
+        title_fontsize=7,
+    )
     return common.save(fig, path, dpi)
 
 
-ENERGY_TERMS = (("kinetic", "kinetic"), ("gravitational", "gravitational (rel. to t=0)"), ("tensile", "tensile"),
-                ("bending_elastic_work", "bending, elastic"), ("hysteresis_work", "dissipated by hysteresis"),
-                ("damping_work", "dissipated by damping"), ("drive_work", "done by the clamp (−)"))
+ENERGY_TERMS = (
+    ("kinetic", "kinetic"),
+    ("gravitational", "gravitational (rel. to t=0)"),
+    ("tensile", "tensile"),
+    ("bending_elastic_work", "bending, elastic"),
+    ("hysteresis_work", "dissipated by hysteresis"),
+    ("damping_work", "dissipated by damping"),
+    ("drive_work", "done by the clamp (−)"),
+)
 
 
 def plot_energy(recording: Recording, path: Path, variant: int = 0, *, dpi: float = DPI) -> Path:
@@ -147,10 +183,19 @@ def plot_energy(recording: Recording, path: Path, variant: int = 0, *, dpi: floa
     return common.save(fig, path, dpi)
 
 
-def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path | None = None,
-             times: np.ndarray | None = None, variant: int = 0, kes: KesValues | None = None,
-             fmt: str = "png", dpi: float = DPI, t_from: float | None = None,
-             t_to: float | None = None) -> list[Path]:
+def plot_run(
+    recording: Recording,
+    out_dir: str | Path,
+    *,
+    measured: str | Path | None = None,
+    times: np.ndarray | None = None,
+    variant: int = 0,
+    kes: KesValues | None = None,
+    fmt: str = "png",
+    dpi: float = DPI,
+    t_from: float | None = None,
+    t_to: float | None = None,
+) -> list[Path]:
     """Write every run figure into ``out_dir`` as ``fmt`` (png, pdf or svg); returns the
     paths. A ``measured`` file goes onto the figure of its kind: a laser trace onto the
     amplitude, a clamp encoder onto the clamp angle, tracked markers onto the shapes
@@ -176,13 +221,24 @@ def plot_run(recording: Recording, out_dir: str | Path, *, measured: str | Path 
     out.mkdir(parents=True, exist_ok=True)
     shapes = data if isinstance(data, TrackedShapes) else None
     return [
-        plot_amplitude(recording, out / f"amplitude.{fmt}", data if isinstance(data, LaserTrace) else None, dpi=dpi,
-                       window=window),
-        plot_clamp_angle(recording, out / f"clamp_angle.{fmt}", data if isinstance(data, ClampAngleTrace) else None,
-                         dpi=dpi, window=window),
-        plot_shapes(recording, out / f"shapes.{fmt}",
-                    default_shape_times(recording, variant=variant) if times is None else times, variant, shapes,
-                    dpi=dpi),
+        plot_amplitude(
+            recording, out / f"amplitude.{fmt}", data if isinstance(data, LaserTrace) else None, dpi=dpi, window=window
+        ),
+        plot_clamp_angle(
+            recording,
+            out / f"clamp_angle.{fmt}",
+            data if isinstance(data, ClampAngleTrace) else None,
+            dpi=dpi,
+            window=window,
+        ),
+        plot_shapes(
+            recording,
+            out / f"shapes.{fmt}",
+            default_shape_times(recording, variant=variant) if times is None else times,
+            variant,
+            shapes,
+            dpi=dpi,
+        ),
         plot_bending_loop(recording, out / f"bending_loop.{fmt}", variant, kes, dpi=dpi),
         plot_energy(recording, out / f"energy.{fmt}", variant, dpi=dpi),
     ]
