@@ -15,55 +15,20 @@ import warp as wp
 from tqdm import tqdm
 
 from warpcloth.errors import ArgumentError, DivergenceError, checked_index
-from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX, STATUS_BUDGET, STATUS_NONFINITE_ENERGY
+from warpcloth.kernels import PROBE_FIELDS, PROBE_INDEX
 
 from .control import Control
+from .divergence import Divergence, DivergenceMonitor
 from .labelled import probes_dataset, probes_frame
 from .model import Model
 from .recorder import OutputChunk, Recorder, Schedule
 from .resources import check_memory
-from .solvers import BUDGET_TOLERANCE, Divergence, Solver
+from .solvers import Solver
 from .state import State
 
 TARGET_LAUNCH_SECONDS = 0.5  # long enough to amortise launch cost, short enough for progress
 BUFFER_BYTES = 64 * 2**20  # cap on the per-chunk probe and frame buffers
 DIVERGENCE_POLICIES = ("raise", "record")
-BUDGET_TERMS = ("kinetic", "gravitational", "tensile", "bending_elastic_work", "hysteresis_work", "damping_work")
-
-
-class BudgetWatch:
-    """Each strip's energy budget at the release and its peak kinetic energy so far, to
-    stop a strip whose budget no longer closes (:data:`BUDGET_TOLERANCE`)."""
-
-    def __init__(self, model: Model) -> None:
-        self.reference = np.full(model.n_strips, np.nan)
-        self.peak_kinetic = np.zeros(model.n_strips)
-        free = model.n_nodes - model.n_clamped
-        weight = model.node_mass * (free - 0.5) * model.gravity * free * model.spacing
-        # without gravity (a set strip curling at rest) the scale is bending's: D W over the
-        # free length, the work of bending it through one radian
-        bending = model.bending[:, 0] * model.width / (free * model.spacing)
-        self.floor = 1e-3 * np.maximum(weight, bending)
-
-    def first_violation(self, values: np.ndarray, usable: np.ndarray) -> dict[int, tuple[int, float]]:
-        """``strip → (sample index, residual / scale)`` of the first failing sample of
-        each strip in the chunk ``values[sample, field, strip]`` (samples from the release
-        on), looking only where ``usable[sample, strip]``."""
-        total = sum(values[:, PROBE_INDEX[name], :] for name in BUDGET_TERMS) - values[:, PROBE_INDEX["drive_work"], :]
-        kinetic = np.where(usable, values[:, PROBE_INDEX["kinetic"], :], 0.0)
-        self.reference = np.where(np.isnan(self.reference), total[0], self.reference)
-        peak = np.maximum(self.peak_kinetic, np.fmax.accumulate(np.nan_to_num(kinetic, nan=0.0), axis=0))
-        self.peak_kinetic = peak[-1]
-        with np.errstate(invalid="ignore"):
-            bad = usable & (total - self.reference > BUDGET_TOLERANCE * np.maximum(peak, self.floor))
-        out = {}
-        for strip in np.flatnonzero(bad.any(axis=0)):
-            n = int(np.argmax(bad[:, strip]))
-            out[int(strip)] = (
-                n,
-                float((total[n, strip] - self.reference[strip]) / max(peak[n, strip], self.floor[strip])),
-            )
-        return out
 
 
 def available_cores() -> int:
@@ -201,44 +166,6 @@ def check_recording_fits(model: Model, control: Control, recorder: Recorder, kee
         "record less (output.probes_per_frame, output.frame_rate_hz, run.duration_s), run fewer "
         "strips at once (sweep --max-batch), or keep frames only on disk (keep_frames=False)",
     )
-
-
-class DivergenceMonitor:
-    """Which strips have stopped, and why: the kernel's health codes read after each
-    launch, the energy budget checked on the chunk's probes (:class:`BudgetWatch`), and
-    which of the chunk's samples each stopped strip still owns."""
-
-    def __init__(self, model: Model, solver: Solver, control: Control) -> None:
-        self.solver, self.control = solver, control
-        self.budget = BudgetWatch(model)
-        self.diverged: list[Divergence] = []
-        self.n_strips = model.n_strips
-
-    def check(self, state: State, values: np.ndarray, steps: np.ndarray) -> list[Divergence]:
-        """The strips that stopped in the chunk just run (``values[sample, field, strip]`` at
-        ``steps``, the samples from the release on), each reported once."""
-        known = {d.strip for d in self.diverged}
-        if len(steps):
-            _stop_unbalanced(state, self.budget, values, steps, known)
-        status = state.struct.status.numpy()
-        new = [
-            self.solver.divergence_report(state, self.control, int(s)) for s in np.nonzero(status)[0] if s not in known
-        ]
-        self.diverged.extend(new)
-        return new
-
-    def valid(self, steps: np.ndarray) -> np.ndarray:
-        """``[sample, strip]``: whether each sample at ``steps`` precedes its strip's stop (the
-        sample of a strain or a fold is kept, one whose energy failed is not)."""
-        valid = np.ones((len(steps), self.n_strips), dtype=bool)
-        for d in self.diverged:
-            valid[:, d.strip] &= steps < d.step if d.sample_lost else steps <= d.step
-        return valid
-
-    @property
-    def all_stopped(self) -> bool:
-        """Whether no strip is left running."""
-        return len(self.diverged) == self.n_strips
 
 
 class RecordBuffers:
@@ -420,27 +347,3 @@ def simulate_batch(
     if diverged and on_divergence == "raise":
         raise DivergenceError("; ".join(d.describe() for d in diverged), diverged, result)
     return result
-
-
-def _stop_unbalanced(state: State, budget: BudgetWatch, values: np.ndarray, steps: np.ndarray, known: set[int]) -> None:
-    # A strip whose budget fails stops at that sample, unless the kernel stopped it
-    # earlier; the first of the two events is the one reported, however the run is cut
-    # into launches (the samples from it on are dropped like others').
-    fields = {
-        name: getattr(state.struct, name).numpy() for name in ("status", "status_step", "status_index", "status_value")
-    }
-    # a kernel stop keeps the sample of its step for strain and fold (1, 2), not for a
-    # non-finite energy (3); only kept samples are checked
-    stopped = fields["status"] != 0
-    through = np.where(fields["status"] == STATUS_NONFINITE_ENERGY, fields["status_step"] - 1, fields["status_step"])
-    usable = ~stopped[None, :] | (steps[:, None] <= through[None, :])
-    failed = {s: v for s, v in budget.first_violation(values, usable).items() if s not in known}
-    if not failed:
-        return
-    for strip, (sample, residual) in failed.items():
-        fields["status"][strip] = STATUS_BUDGET
-        fields["status_step"][strip] = int(steps[sample])
-        fields["status_index"][strip] = -1
-        fields["status_value"][strip] = residual
-    for name, value in fields.items():
-        getattr(state.struct, name).assign(value)

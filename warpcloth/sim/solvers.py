@@ -8,7 +8,6 @@ solver class here registered in :data:`SOLVERS`.
 
 from __future__ import annotations
 
-import dataclasses
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Protocol
@@ -18,48 +17,21 @@ import warp as wp
 
 from warpcloth.kernels import (
     STATUS_BUDGET,
-    STATUS_FOLDED,
-    STATUS_NONFINITE_ENERGY,
     STATUS_OK,
-    STATUS_STRAIN,
     build_strip,
 )
 
 from .builder import Grip
 from .control import Control
+from .divergence import BUDGET_TOLERANCE, QUANTITY, Divergence, phase_at
 from .material import MaterialSI
 from .model import Model
 from .recorder import OutputChunk, Recorder
 from .stability import transverse_step_limit
 from .state import State
 
-BUDGET_TOLERANCE = 0.1
-"""A strip whose energy budget (docs/model.md §10) has *gained* more than this fraction of
-its energy scale since the release has diverged, even if no strain or fold check fired:
-an unstable step (imex beyond its bending limit, forward Euler) creates energy, and can
-grow a zig-zag or an oscillation long before a segment overstretches. Energy the step
-removes is not counted: imex's backward Euler damps the stretching modes by design
-(docs/model.md §9.5), which a soft or long strip started unstretched shows as a budget
-loss of about its initial strain energy. The scale is the peak kinetic energy up to that
-sample, and at least 1e-3 of the strip's weight times its free length, or of D W / L
-(the work of bending it through a radian) where that is larger, as without gravity (just
-after a release, or for a strip at rest, the kinetic energy is near 0, and rounding is
-not). A healthy run's budget
-stays within 1e-2 of its peak kinetic energy (imex at its largest stable dt), usually
-1e-4. The check reads the recorded samples, so where it fires does not depend on how the
-run is cut into launches."""
 STRIPS_PER_THREAD = 8
 """A CPU launch is split among threads only into ranges of at least this many strips."""
-
-QUANTITY = {
-    STATUS_STRAIN: "tensile strain",
-    STATUS_FOLDED: "hinge chord |e1+e2|/h (the strip folded onto itself)",
-    STATUS_NONFINITE_ENERGY: "total energy (not finite)",
-    STATUS_BUDGET: (
-        "energy budget residual (in units of the peak kinetic energy, at least 1e-3 of the strip's "
-        "weight times its free length or of D W / L)"
-    ),
-}
 
 
 @dataclass(frozen=True)
@@ -214,6 +186,7 @@ class FusedStripSolver:
             value=float(state.struct.status_value.numpy()[strip]),
             limit=BUDGET_TOLERANCE if code == STATUS_BUDGET else self.divergence_strain,
             scheme=self.scheme,
+            advice=self.advice,
             precision=self.model.precision,
             dt_s=self.dt,
         )
@@ -300,72 +273,3 @@ SOLVERS: dict[str, type[FusedStripSolver]] = {
     ImexSolver.scheme: ImexSolver,
 }
 """Solver class of each ``integrator.scheme``."""
-
-
-PHASES = ("move", "hold", "record")
-"""Phases of a run: the free end carried to its hold target, held there while the strip
-settles, then the record from t = 0 (the release, or the start of a run without one)."""
-
-
-def phase_at(time_s: float, control: Control) -> str:
-    """The phase (:data:`PHASES`) a time after the release (negative before it) falls in."""
-    if time_s >= 0:
-        return "record"
-    return "move" if time_s + control.release_time < control.move_time else "hold"
-
-
-@dataclass(frozen=True)
-class Divergence:
-    """Where and how one strip of a batch diverged: what the runner stops it for, the run
-    directory records (:meth:`as_dict`) and the user reads (:meth:`describe`)."""
-
-    strip: int  # index in the batch
-    code: int  # the health code the kernel set (kernels/status.py)
-    step: int  # the step it was set at
-    time_s: float  # that step's time after t = 0 (negative before the release)
-    phase: str  # PHASES
-    quantity: str  # what left its range, in words
-    where: int  # the segment of a strain, the hinge node of a fold
-    value: float  # the quantity's value
-    limit: float  # the range it left
-    scheme: str  # the solver's integrator.scheme
-    precision: str
-    dt_s: float
-
-    def as_dict(self) -> dict:
-        """The report as the run directory's meta.json writes it."""
-        return dataclasses.asdict(self)
-
-    @property
-    def sample_lost(self) -> bool:
-        """Whether the probe sample at :attr:`step` is already unusable (an energy that is
-        not finite or off budget), so only the samples before it are kept."""
-        return self.code in (STATUS_NONFINITE_ENERGY, STATUS_BUDGET)
-
-    def describe(self) -> str:
-        """One sentence a user can act on."""
-        where = (
-            f" at segment {self.where}"
-            if self.code == STATUS_STRAIN
-            else (f" at hinge node {self.where}" if self.code == STATUS_FOLDED else "")
-        )
-        limit = {
-            STATUS_STRAIN: f", beyond integrator.divergence_strain = {self.limit:g}",
-            STATUS_BUDGET: f", above {self.limit:g}: the step is unstable",
-        }.get(self.code, "")
-        advice = f"try a smaller integrator.dt_s (now {self.dt_s:g} s, e.g. {self.dt_s / 4:g})"
-        advice += SOLVERS[self.scheme].advice
-        if self.code == STATUS_BUDGET and self.precision == "float32":
-            advice = (
-                "float32 rounding feeds energy into the stretching modes over a long run (a smaller dt makes "
-                'it worse): use integrator.precision = "float64", or ' + advice
-            )
-        during = {
-            "move": "while its free end was carried to the hold",
-            "hold": "during the hold",
-            "record": "after t = 0",
-        }[self.phase]
-        return (
-            f"strip {self.strip} diverged {during}, at t = {self.time_s:.6g} s (step {self.step}): "
-            f"{self.quantity} = {self.value:.4g}{where}{limit}; {advice}"
-        )
