@@ -263,34 +263,34 @@ def read_tensile_csv(
     return dataclasses.replace(loop, strain_unit=f"{described} ({how})")
 
 
+def _read_loop(
+    path: str | Path, what: str, names: tuple[str, str], columns: tuple[tuple, tuple], argument: str | None
+) -> Table:
+    # A two-column loop file whose header, if any, names each column as ``columns`` say:
+    # (the words a name may be, the unit token sets it may state, what is expected).
+    table = _read_columns(path, what, names, argument)
+    if table.header is not None:
+        for column, (name, (words, units_ok, expected)) in enumerate(zip(table.header, columns, strict=True), 1):
+            _check_name(path, table.header_line, column, name, words, units_ok, expected)
+    return table
+
+
 def read_bending_csv(path: str | Path, *, argument: str | None = None) -> BendingLoop:
     """Read a KES-FB2 loop: columns curvature (1/cm) and moment per width (gf·cm/cm).
 
     ``path`` may also name a bundled example (``kes_fb2_example``); ``argument`` is the
     caller's name for the path, if it wants one blamed.
     """
-    table = _read_columns(path, "KES-FB2 bending", ("curvature", "moment"), argument)
-    header, values, line = table.header, table.values, table.header_line
-    if header is not None:
-        _check_name(
-            path,
-            line,
-            1,
-            header[0],
+    columns = (
+        (
             _BENDING_NAMES[0],
             [{"cm"}, {"1", "cm"}],
             "curvature in 1/cm (e.g. curvature_per_cm; a KES-FB1 tensile file has strain and force)",
-        )
-        _check_name(
-            path,
-            line,
-            2,
-            header[1],
-            _BENDING_NAMES[1],
-            [{"gf", "cm"}],
-            "moment per width in gf·cm/cm (e.g. moment_gf_cm_per_cm)",
-        )
-    return bending_loop(values[:, 0], values[:, 1], source=str(path), rows=table.lines)
+        ),
+        (_BENDING_NAMES[1], [{"gf", "cm"}], "moment per width in gf·cm/cm (e.g. moment_gf_cm_per_cm)"),
+    )
+    table = _read_loop(path, "KES-FB2 bending", ("curvature", "moment"), columns, argument)
+    return bending_loop(table.values[:, 0], table.values[:, 1], source=str(path), rows=table.lines)
 
 
 def read_shear_csv(path: str | Path, *, argument: str | None = None) -> ShearLoop:
@@ -300,28 +300,16 @@ def read_shear_csv(path: str | Path, *, argument: str | None = None) -> ShearLoo
     the caller's name for the path, if it wants one blamed. A header that gives the angle
     in radians is refused rather than read as degrees.
     """
-    table = _read_columns(path, "KES-FB1 shear", ("angle", "force"), argument)
-    header, values, line = table.header, table.values, table.header_line
-    if header is not None:
-        _check_name(
-            path,
-            line,
-            1,
-            header[0],
+    columns = (
+        (
             _SHEAR_NAMES[0],
             [{"deg"}, {"degree"}, {"degrees"}],
             "the shear angle in degrees (e.g. shear_angle_deg; KES-FB1 shear is recorded in degrees)",
-        )
-        _check_name(
-            path,
-            line,
-            2,
-            header[1],
-            _SHEAR_NAMES[1],
-            [{"gf", "cm"}],
-            "shear force per width in gf/cm (e.g. shear_force_gf_per_cm)",
-        )
-    return shear_loop(values[:, 0], values[:, 1], source=str(path), rows=table.lines)
+        ),
+        (_SHEAR_NAMES[1], [{"gf", "cm"}], "shear force per width in gf/cm (e.g. shear_force_gf_per_cm)"),
+    )
+    table = _read_loop(path, "KES-FB1 shear", ("angle", "force"), columns, argument)
+    return shear_loop(table.values[:, 0], table.values[:, 1], source=str(path), rows=table.lines)
 
 
 # ---------------------------------------------------------------------------------- validation
