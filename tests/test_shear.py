@@ -279,3 +279,16 @@ def test_the_worst_status_wins():
     assert kes.worst_status("converged", "at_bound") == "at_bound"
     assert kes.worst_status("poor_fit", "at_bound", "converged") == "poor_fit"
     assert kes.worst_status("converged", "converged") == "converged"
+
+
+def test_every_kind_has_its_bending_and_its_shear_unit():
+    # a law parameter's kind is all its description says of its units: both tables must know
+    # every kind, and name constants that exist
+    from warpcloth.kernels.law import KINDS
+
+    assert set(units.BENDING_UNITS) == set(units.SHEAR_UNITS) == {*KINDS, "rigidity"}
+    for constant, *_ in units.BENDING_UNITS.values():
+        assert constant == "" or isinstance(getattr(units, constant), float)
+    for _, constant, _ in units.SHEAR_UNITS.values():
+        assert constant == "" or isinstance(getattr(units, constant), float)
+    assert units.from_kes(2.0, "ANGLE_DEGREE") == 2.0 * units.ANGLE_DEGREE and units.from_kes(2.0, "") == 2.0

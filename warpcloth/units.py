@@ -55,6 +55,14 @@ BENDING_UNITS = {
 """A law parameter's bending unit by its kind (:data:`warpcloth.kernels.law.KINDS`, and D's
 ``rigidity``): the constant above that converts its scene field to SI, its unit as printed."""
 
+
+def from_kes(value: float, constant: str) -> float:
+    """``value`` in KES units converted to SI by the constant of this module named
+    ``constant`` (empty: a pure number): what :data:`BENDING_UNITS` and
+    :data:`SHEAR_UNITS` name, applied in this one place."""
+    return value * globals()[constant] if constant else value
+
+
 SHEAR_UNITS = {
     "rigidity": ("gf_per_cm_deg", "SHEAR_RIGIDITY_GF_PER_CM_DEG", "gf/(cm·°)"),
     "moment": ("gf_per_cm", "SHEAR_FORCE_GF_PER_CM", "gf/cm"),

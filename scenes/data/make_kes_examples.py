@@ -49,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from warpcloth import units
-from warpcloth.calibrate.kes import PERCENT
+from warpcloth.calibrate.kes import PERCENT, standard_cycle
 from warpcloth.scene import DEFAULT_MATERIAL, MaterialSection, to_si
 from warpcloth.sim import moment_along_path
 
@@ -82,15 +82,7 @@ def tensile_example() -> np.ndarray:
 
 def bending_example() -> np.ndarray:
     """Rows (curvature in 1/cm, moment per width in gf·cm/cm) of the cycle 0 → +2.5 → −2.5 → 0."""
-    k0 = DEFAULT_MATERIAL["hysteresis_k0_per_cm"]
-    n = round(k0 / CURVATURE_STEP_PER_CM)
-    k = np.concatenate(
-        [
-            np.linspace(0.0, k0, n, endpoint=False),
-            np.linspace(k0, -k0, 2 * n, endpoint=False),
-            np.linspace(-k0, 0.0, n + 1),
-        ]
-    )
+    k = standard_cycle(DEFAULT_MATERIAL["hysteresis_k0_per_cm"], CURVATURE_STEP_PER_CM)
     moment, _ = moment_along_path(to_si(MaterialSection()), k * units.CURVATURE_PER_CM)
     moment = moment / units.MOMENT_GF_CM_PER_CM
     moment += np.random.default_rng(2027).normal(0.0, BENDING_NOISE_GF_CM_PER_CM, len(moment))
@@ -132,14 +124,7 @@ def inner_loops_example() -> np.ndarray:
 
 def shear_example() -> np.ndarray:
     """Rows (shear angle in degrees, shear force per width in gf/cm) of the cycle 0 → +8 → −8 → 0°."""
-    n = round(SHEAR_PHI0_DEG / SHEAR_STEP_DEG)
-    phi = np.concatenate(
-        [
-            np.linspace(0.0, SHEAR_PHI0_DEG, n, endpoint=False),
-            np.linspace(SHEAR_PHI0_DEG, -SHEAR_PHI0_DEG, 2 * n, endpoint=False),
-            np.linspace(-SHEAR_PHI0_DEG, 0.0, n + 1),
-        ]
-    )
+    phi = standard_cycle(SHEAR_PHI0_DEG, SHEAR_STEP_DEG)
     force = SHEAR_TRUTH["rigidity_gf_per_cm_deg"] * phi + iwan_moment(
         phi, SHEAR_TRUTH["hysteresis_d1_gf_per_cm"], SHEAR_TRUTH["hysteresis_alpha_per_deg"]
     )
@@ -147,40 +132,19 @@ def shear_example() -> np.ndarray:
     return np.column_stack([phi, force])
 
 
+EXAMPLES = {
+    "kes_fb1_example.csv": (tensile_example, ("%.4f", "%.3f"), "strain_percent,force_gf_per_cm"),
+    "kes_fb2_example.csv": (bending_example, ("%.3f", "%.5f"), "curvature_per_cm,moment_gf_cm_per_cm"),
+    "kes_fb2_inner_loops.csv": (inner_loops_example, ("%.3f", "%.5f"), "curvature_per_cm,moment_gf_cm_per_cm"),
+    "kes_fb1_shear_example.csv": (shear_example, ("%.2f", "%.4f"), "shear_angle_deg,shear_force_gf_per_cm"),
+}
+"""Each file: the function that makes its rows, the columns' formats, its header."""
+
+
 def main() -> None:
     """Write the example files next to this script."""
-    np.savetxt(
-        HERE / "kes_fb1_example.csv",
-        tensile_example(),
-        fmt=("%.4f", "%.3f"),
-        delimiter=",",
-        header="strain_percent,force_gf_per_cm",
-        comments="",
-    )
-    np.savetxt(
-        HERE / "kes_fb2_example.csv",
-        bending_example(),
-        fmt=("%.3f", "%.5f"),
-        delimiter=",",
-        header="curvature_per_cm,moment_gf_cm_per_cm",
-        comments="",
-    )
-    np.savetxt(
-        HERE / "kes_fb2_inner_loops.csv",
-        inner_loops_example(),
-        fmt=("%.3f", "%.5f"),
-        delimiter=",",
-        header="curvature_per_cm,moment_gf_cm_per_cm",
-        comments="",
-    )
-    np.savetxt(
-        HERE / "kes_fb1_shear_example.csv",
-        shear_example(),
-        fmt=("%.2f", "%.4f"),
-        delimiter=",",
-        header="shear_angle_deg,shear_force_gf_per_cm",
-        comments="",
-    )
+    for name, (rows, fmt, header) in EXAMPLES.items():
+        np.savetxt(HERE / name, rows(), fmt=fmt, delimiter=",", header=header, comments="")
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ from .schema import (
     batch_fields,
     choice_fields,
 )
-from .shear import RIGIDITY_FIELD, ShearMaterial, parse_shear, shear_field, shear_fields
+from .shear import RIGIDITY_FIELD, ShearMaterial, parse_shear, shear_field, shear_fields, shear_parameters, shear_unit
 from .step import check_step
 from .sweep import Sweep, expand, load_sweep
 
@@ -67,6 +67,8 @@ __all__ = [
     "parse_shear",
     "shear_field",
     "shear_fields",
+    "shear_parameters",
+    "shear_unit",
     "read_material_file",
     "read_scene_file",
     "rest_positions",

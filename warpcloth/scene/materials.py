@@ -26,8 +26,7 @@ MATERIAL_FILE_KEY = "material.from_file"
 
 def si_value(parameter: LawParameter, value: float) -> float:
     """A law parameter's scene value (KES units) in SI, by the unit its description names."""
-    factor = units.BENDING_UNITS[parameter.kind][0]
-    return value * getattr(units, factor) if factor else value
+    return units.from_kes(value, units.BENDING_UNITS[parameter.kind][0])
 
 
 def to_si(section: MaterialSection) -> MaterialSI:

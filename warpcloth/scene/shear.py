@@ -26,29 +26,38 @@ from dataclasses import dataclass
 from warpcloth import units
 from warpcloth.errors import SceneError
 from warpcloth.kernels import BENDING_LAWS, bending_law
-from warpcloth.kernels.law import LawParameter
+from warpcloth.kernels.law import BENDING_RIGIDITY, LawParameter
 from warpcloth.sim import LawParameters
 
 SHEAR_TABLE = "shear"
-RIGIDITY_FIELD = "rigidity_gf_per_cm_deg"
-"""G, the slope of the shear loop's centre line, gf/(cm·degree)."""
 
 
 def shear_field(parameter: LawParameter) -> str:
     """The ``[shear]`` field of a law parameter: its name in shear's words and units
-    (``hysteresis_k0`` → ``hysteresis_phi0_deg``, ``dahl_moment`` → ``dahl_force_gf_per_cm``)."""
-    stem = parameter.name.replace("moment", "force").replace("curvature", "angle").replace("k0", "phi0")
+    (``bending_rigidity`` → ``rigidity_gf_per_cm_deg``, G; ``hysteresis_k0`` →
+    ``hysteresis_phi0_deg``; ``dahl_moment`` → ``dahl_force_gf_per_cm``)."""
+    stem = parameter.name.replace("bending_", "").replace("moment", "force").replace("curvature", "angle")
+    stem = stem.replace("k0", "phi0")
     suffix = units.SHEAR_UNITS[parameter.kind][0]
     return f"{stem}_{suffix}" if suffix else stem
 
 
+RIGIDITY_FIELD = shear_field(BENDING_RIGIDITY)
+"""G, the slope of the shear loop's centre line, gf/(cm·degree)."""
+
+
+def shear_parameters(law: str) -> tuple[LawParameter, ...]:
+    """What a shear law of ``law`` reads: the slope (G for D), then the law's own."""
+    return (BENDING_RIGIDITY, *bending_law(law).parameters)
+
+
 def shear_fields(law: str) -> list[str]:
     """The ``[shear]`` fields a material of shear law ``law`` gives, G first."""
-    return [RIGIDITY_FIELD, *(shear_field(p) for p in bending_law(law).parameters)]
+    return [shear_field(p) for p in shear_parameters(law)]
 
 
-def shear_label(parameter: LawParameter) -> str:
-    """A law parameter's unit as a shear parameter prints it."""
+def shear_unit(parameter: LawParameter) -> str:
+    """A law parameter's unit as a shear parameter prints it (``gf/cm``, ``°``)."""
     return units.SHEAR_UNITS[parameter.kind][2]
 
 
@@ -63,13 +72,12 @@ class ShearMaterial:
     def si(self) -> tuple[float, LawParameters]:
         """G in N/(m·rad) and the law's parameters in SI (force N/m, angle rad): the one
         KES → SI conversion of shear."""
-        law = bending_law(self.law)
-        values = {}
-        for p in law.parameters:
-            factor = units.SHEAR_UNITS[p.kind][1]
-            value = self.parameters[shear_field(p)]
-            values[p.name] = value * getattr(units, factor) if factor else value
-        return self.rigidity_gf_per_cm_deg * units.SHEAR_RIGIDITY_GF_PER_CM_DEG, LawParameters.of(self.law, values)
+        given = {RIGIDITY_FIELD: self.rigidity_gf_per_cm_deg, **self.parameters}
+        si = {
+            p.name: units.from_kes(given[shear_field(p)], units.SHEAR_UNITS[p.kind][1])
+            for p in shear_parameters(self.law)
+        }
+        return si.pop(BENDING_RIGIDITY.name), LawParameters.of(self.law, si)
 
     def table(self) -> dict:
         """The ``[shear]`` table of a material file."""

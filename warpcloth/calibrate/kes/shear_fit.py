@@ -28,9 +28,7 @@ import math
 from dataclasses import dataclass
 
 from warpcloth import units
-from warpcloth.kernels import bending_law
-from warpcloth.kernels.law import BENDING_RIGIDITY
-from warpcloth.scene import RIGIDITY_FIELD, ShearMaterial, shear_field
+from warpcloth.scene import RIGIDITY_FIELD, ShearMaterial, shear_field, shear_parameters, shear_unit
 from warpcloth.sim import shear_force_along_path
 
 from ..noise import difference_noise
@@ -83,11 +81,7 @@ class ShearFit:
 
     def describe(self, digits: int = 6) -> str:
         """The fitted parameters with their units and standard uncertainties."""
-        law = bending_law(self.shear.law)
-        units_of = {
-            RIGIDITY_FIELD: "gf/(cm·°)",
-            **{shear_field(p): units.SHEAR_UNITS[p.kind][2] for p in law.parameters},
-        }
+        units_of = {shear_field(p): shear_unit(p) for p in shear_parameters(self.shear.law)}
         values = {RIGIDITY_FIELD: self.shear.rigidity_gf_per_cm_deg, **self.shear.parameters}
 
         def one(name: str) -> str:
@@ -136,10 +130,7 @@ def reproduced_shear_values(shear: ShearMaterial, phi0_deg: float, device: str |
 def fit_shear(loop: ShearLoop, law: str = DEFAULT_LAW, device: str | None = "cpu") -> ShearFit:
     """Fit G and the shear law ``law`` to the loop (see the module docstring)."""
     fit = law_fitter(law).fit(loop.as_law_loop(), device)
-    names = {
-        BENDING_RIGIDITY.scene_field: RIGIDITY_FIELD,
-        **{p.scene_field: shear_field(p) for p in bending_law(law).parameters},
-    }
+    names = {p.scene_field: shear_field(p) for p in shear_parameters(law)}
     values = {names[k]: float(v) for k, v in fit.parameters.items()}
     shear = ShearMaterial(law, values.pop(RIGIDITY_FIELD), values)
     sigma = {names[k]: v for k, v in fit.sigma.items()}
