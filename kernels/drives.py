@@ -47,29 +47,44 @@ def build(scalar: Any) -> SimpleNamespace:
         hold_free_end: wp.array(dtype=int)  # 1: the free end is carried and held; 0: it settles freely
 
     @wp.func
-    def clamp_angle(control: StripControl, s: int, t: scalar):
-        # θ and dθ/dt of the piecewise polynomial; held constant outside its span.
-        n = control.n_segments[s]
+    def piecewise_polynomial(
+        segment_start: wp.array2d(dtype=scalar),
+        segment_end: wp.array2d(dtype=scalar),
+        segment_coefficients: wp.array2d(dtype=vec5),
+        n: int,
+        s: int,
+        t: scalar,
+    ):
+        # Value and rate of body s's piecewise polynomial ([segment, body] arrays) at t;
+        # held constant outside its span. Shared by the strip's clamp angle and the
+        # sheet's clamp rotation and translation.
         if n == 0:
             return zero, zero
         lo = int(0)  # noqa: UP018 - Warp needs int() to make a loop-mutable variable
         hi = n - 1
         while lo < hi:
             mid = (lo + hi + 1) // 2
-            if control.segment_start[mid, s] <= t:
+            if segment_start[mid, s] <= t:
                 lo = mid
             else:
                 hi = mid - 1
-        start = control.segment_start[lo, s]
-        end = control.segment_end[lo, s]
+        start = segment_start[lo, s]
+        end = segment_end[lo, s]
         tau = wp.clamp(t, start, end) - start
         moving = t >= start and t <= end
-        c = control.segment_coefficients[lo, s]
-        theta = c[0] + tau * (c[1] + tau * (c[2] + tau * (c[3] + tau * c[4])))
+        c = segment_coefficients[lo, s]
+        value = c[0] + tau * (c[1] + tau * (c[2] + tau * (c[3] + tau * c[4])))
         rate = zero
         if moving:
             rate = c[1] + tau * (scalar(2.0) * c[2] + tau * (scalar(3.0) * c[3] + tau * scalar(4.0) * c[4]))
-        return theta, rate
+        return value, rate
+
+    @wp.func
+    def clamp_angle(control: StripControl, s: int, t: scalar):
+        # θ and dθ/dt of the piecewise polynomial; held constant outside its span.
+        return piecewise_polynomial(
+            control.segment_start, control.segment_end, control.segment_coefficients, control.n_segments[s], s, t
+        )
 
     @wp.func
     def held_free_end(
@@ -102,4 +117,9 @@ def build(scalar: Any) -> SimpleNamespace:
         velocity = dp * ((r1 - r0) * radial + r * turn * perp(radial))
         return position, velocity
 
-    return SimpleNamespace(StripControl=StripControl, clamp_angle=clamp_angle, held_free_end=held_free_end)
+    return SimpleNamespace(
+        StripControl=StripControl,
+        piecewise_polynomial=piecewise_polynomial,
+        clamp_angle=clamp_angle,
+        held_free_end=held_free_end,
+    )

@@ -38,19 +38,29 @@ class Recorder:
 
     def sample_range(self, control: Control) -> tuple[int, int]:
         """First and last output sample k (k < 0 during the hold), without building arrays."""
-        return (
-            -math.floor(control.release_time / self.interval + 1e-9),
-            math.floor(self.duration / self.interval + 1e-9),
-        )
+        return sample_bounds(self, control.release_time)
 
     def schedule(self, control: Control, solver: Solver) -> Schedule:
         """The output samples of a run: hold samples (k < 0) are run, not kept."""
-        interval, dt = self.interval, solver.dt
-        release_step = solver.release_step(control)
-        k_min, k_max = self.sample_range(control)
-        k = np.arange(k_min, k_max + 1)
-        steps = np.maximum(0, release_step + np.rint(k * interval / dt).astype(np.int64))
-        return Schedule(k_min, steps, self.probes_per_frame, release_step, dt)
+        return output_schedule(self, control.release_time, solver.dt, solver.release_step(control))
+
+
+def sample_bounds(recorder: Any, release_time: float) -> tuple[int, int]:
+    """First and last output sample k of a recorder's schedule (k < 0 during the hold)."""
+    return (
+        -math.floor(release_time / recorder.interval + 1e-9),
+        math.floor(recorder.duration / recorder.interval + 1e-9),
+    )
+
+
+def output_schedule(recorder: Any, release_time: float, dt: float, release_step: int) -> Schedule:
+    """The output samples every ``recorder.interval`` s from −``release_time`` (the hold,
+    run but not kept) to ``recorder.duration``, each ending on the step nearest its time,
+    a frame every ``recorder.probes_per_frame``: a strip's or a sheet's recorder alike."""
+    k_min, k_max = sample_bounds(recorder, release_time)
+    k = np.arange(k_min, k_max + 1)
+    steps = np.maximum(0, release_step + np.rint(k * recorder.interval / dt).astype(np.int64))
+    return Schedule(k_min, steps, recorder.probes_per_frame, release_step, dt)
 
 
 @dataclass

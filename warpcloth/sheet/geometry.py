@@ -1,0 +1,266 @@
+"""Where a batch's sheets lie and how their nodes connect (docs/model.md §17.2).
+
+A sheet is cut from a lattice of mass points, node (i, j) the i-th along the warp and the
+j-th along the weft, at rest at ``origin + i h_warp d_warp + j h_weft d_weft``. The cut is
+the set of lattice cells it keeps; from it follow the nodes (every corner of a kept
+cell), the segments (every side of a kept cell), the hinges (every node where a warp or
+weft line goes on through two segments) and what each carries: a node the area of a
+quarter of each kept cell around it, a segment the width of half of each kept cell beside
+it, a hinge a quarter of each kept cell around it. A one-cell-wide sheet is the strip:
+two lines of half its width, each node half its row's mass.
+
+Coordinates are the strip's (warpcloth/scene/geometry.py): x out of the sheet's rest plane,
+y up, z across it, the origin at the middle of the clamp edge.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from warpcloth.kernels.sheet_structs import WARP, WEFT
+
+EDGE_HINGES = ("second_order", "paper")
+"""How a hinge at the clamp edge bends: over h/2 (second order in h, the strip's default)
+or over h (the paper's model), docs/model.md §5.3."""
+
+
+@dataclass(frozen=True)
+class SheetGeometry:
+    """The shared grid of a batch of sheets: nodes, their rest positions, and the element
+    lists the kernels loop over (indices into the nodes)."""
+
+    lattice: np.ndarray  # [node, (i, j)]
+    rest_positions: np.ndarray  # [node, xyz], m
+    clamped: np.ndarray  # [node], bool
+    node_area: np.ndarray  # [node], m²
+    spacing: tuple[float, float]  # (h_warp, h_weft), m
+    edge_nodes: np.ndarray  # [segment, 2]
+    edge_family: np.ndarray  # [segment]: WARP or WEFT
+    edge_width: np.ndarray  # [segment], m
+    hinge_nodes: np.ndarray  # [hinge, 3]
+    hinge_axis_nodes: np.ndarray  # [hinge, 2]
+    hinge_family: np.ndarray  # [hinge]
+    hinge_width: np.ndarray  # [hinge], m
+    hinge_curvature_scale: np.ndarray  # [hinge]
+    cell_nodes: np.ndarray  # [cell, 4]: (i, j), (i+1, j), (i, j+1), (i+1, j+1)
+    cell_area: np.ndarray  # [cell], m²
+
+    @property
+    def n_nodes(self) -> int:
+        """How many nodes a sheet has."""
+        return len(self.rest_positions)
+
+    def node(self, i: int, j: int) -> int:
+        """The index of lattice node (i, j); KeyError if the cut does not keep it."""
+        hits = np.flatnonzero((self.lattice[:, 0] == i) & (self.lattice[:, 1] == j))
+        if not len(hits):
+            raise KeyError(f"the sheet has no node at lattice (i, j) = ({i}, {j})")
+        return int(hits[0])
+
+    def cell(self, i: int, j: int) -> int:
+        """The index of the cell whose first corner is lattice node (i, j)."""
+        first = self.node(i, j)
+        hits = np.flatnonzero(self.cell_nodes[:, 0] == first)
+        if not len(hits):
+            raise KeyError(f"the sheet has no free cell at lattice (i, j) = ({i}, {j})")
+        return int(hits[0])
+
+    def hinge(self, family: int, i: int, j: int) -> int:
+        """The index of the ``family`` (WARP or WEFT) hinge at lattice node (i, j)."""
+        centre = self.node(i, j)
+        hits = np.flatnonzero((self.hinge_nodes[:, 1] == centre) & (self.hinge_family == family))
+        if not len(hits):
+            raise KeyError(f"the sheet has no free {('warp', 'weft')[family]} hinge at lattice ({i}, {j})")
+        return int(hits[0])
+
+
+def grid_geometry(
+    kept_cells: np.ndarray,
+    spacing: tuple[float, float],
+    origin: np.ndarray,
+    warp_direction: np.ndarray,
+    weft_direction: np.ndarray,
+    is_clamped: Callable[[np.ndarray], np.ndarray],
+    edge_hinge: str = "second_order",
+) -> SheetGeometry:
+    """The geometry of the cut ``kept_cells`` (bool ``[i, j]`` over the lattice's cells),
+    nodes at ``origin + i h_warp d_warp + j h_weft d_weft`` and clamped where
+    ``is_clamped(rest_positions)`` is true. Elements wholly inside the clamp move rigidly
+    and are left out; a hinge with two clamped nodes and one free bends over h/2 under
+    ``edge_hinge = "second_order"`` (scale 2), over h under ``"paper"``."""
+    if edge_hinge not in EDGE_HINGES:
+        raise ValueError(f"edge_hinge must be one of {', '.join(EDGE_HINGES)}, got {edge_hinge!r}")
+    kept = np.asarray(kept_cells, dtype=bool)
+    if not kept.any():
+        raise ValueError("the cut keeps no cell")
+    h_warp, h_weft = spacing
+    n_i, n_j = kept.shape[0] + 1, kept.shape[1] + 1
+    padded = np.zeros((n_i + 1, n_j + 1), dtype=bool)  # padded[i + 1, j + 1] = cell (i, j)
+    padded[1:-1, 1:-1] = kept
+
+    def cell_kept(i: np.ndarray | int, j: np.ndarray | int) -> np.ndarray:
+        return padded[np.asarray(i) + 1, np.asarray(j) + 1]
+
+    ii, jj = np.meshgrid(np.arange(n_i), np.arange(n_j), indexing="ij")
+    around = cell_kept(ii - 1, jj - 1) + 0 + cell_kept(ii - 1, jj) + cell_kept(ii, jj - 1) + cell_kept(ii, jj)
+    active = around > 0
+    index = np.full((n_i, n_j), -1)
+    index[active] = np.arange(active.sum())
+    lattice = np.column_stack([ii[active], jj[active]])
+    rest = (
+        np.asarray(origin, dtype=float)[None, :]
+        + lattice[:, :1] * h_warp * np.asarray(warp_direction, dtype=float)[None, :]
+        + lattice[:, 1:] * h_weft * np.asarray(weft_direction, dtype=float)[None, :]
+    )
+    clamped = np.asarray(is_clamped(rest), dtype=bool)
+    if clamped.all() or not clamped.any():
+        raise ValueError("the clamp must hold some of the sheet's nodes and leave some free")
+    node_area = around[active] * (h_warp * h_weft / 4.0)
+
+    def free(*nodes: np.ndarray) -> np.ndarray:
+        return ~np.logical_and.reduce([clamped[n] for n in nodes])
+
+    edges, families, widths = [], [], []
+    for family, (di, dj), cross in ((WARP, (1, 0), h_weft), (WEFT, (0, 1), h_warp)):
+        for i, j in zip(*np.nonzero(active), strict=True):
+            k, m = i + di, j + dj
+            if k >= n_i or m >= n_j or not active[k, m]:
+                continue
+            # the cells on either side of the segment
+            sides = (cell_kept(i, j - 1), cell_kept(i, j)) if family == WARP else (cell_kept(i - 1, j), cell_kept(i, j))
+            count = int(sides[0]) + int(sides[1])
+            if count:
+                edges.append((index[i, j], index[k, m]))
+                families.append(family)
+                widths.append(count * cross / 2.0)
+    edges_a = np.array(edges, dtype=np.int32).reshape(-1, 2)
+    families_a = np.array(families, dtype=np.int32)
+    widths_a = np.array(widths)
+    segment = {(int(a), int(b)) for a, b in edges_a}
+    keep = free(edges_a[:, 0], edges_a[:, 1])
+
+    hinges, axes, h_families, h_widths, scales = [], [], [], [], []
+    for family, (di, dj), cross in ((WARP, (1, 0), h_weft), (WEFT, (0, 1), h_warp)):
+        ci, cj = dj, di  # the cross direction
+        for i, j in zip(*np.nonzero(active), strict=True):
+            before, after = (i - di, j - dj), (i + di, j + dj)
+            if min(before) < 0 or after[0] >= n_i or after[1] >= n_j:
+                continue
+            a, b, c = index[before], index[i, j], index[after]
+            if a < 0 or c < 0 or (a, b) not in segment or (b, c) not in segment:
+                continue
+            lower, upper = (i - ci, j - cj), (i + ci, j + cj)
+            lo = index[lower] if min(lower) >= 0 and (index[lower], b) in segment else -1
+            hi = index[upper] if upper[0] < n_i and upper[1] < n_j and (b, index[upper]) in segment else -1
+            if lo < 0 and hi < 0:
+                continue
+            axis = (lo if lo >= 0 else b, hi if hi >= 0 else b)
+            count = int(around[i, j])
+            hinges.append((a, b, c))
+            axes.append(axis)
+            h_families.append(family)
+            h_widths.append(count * cross / 4.0)
+            at_edge = (clamped[a] and clamped[b] and not clamped[c]) or (clamped[c] and clamped[b] and not clamped[a])
+            scales.append(2.0 if at_edge and edge_hinge == "second_order" else 1.0)
+    hinges_a = np.array(hinges, dtype=np.int32).reshape(-1, 3)
+    h_keep = free(hinges_a[:, 0], hinges_a[:, 1], hinges_a[:, 2]) if len(hinges_a) else np.zeros(0, dtype=bool)
+
+    ci_, cj_ = np.nonzero(kept)
+    cells = np.column_stack(
+        [index[ci_, cj_], index[ci_ + 1, cj_], index[ci_, cj_ + 1], index[ci_ + 1, cj_ + 1]]
+    ).astype(np.int32)
+    c_keep = free(cells[:, 0], cells[:, 1], cells[:, 2], cells[:, 3])
+    return SheetGeometry(
+        lattice=lattice,
+        rest_positions=rest,
+        clamped=clamped,
+        node_area=node_area,
+        spacing=(float(h_warp), float(h_weft)),
+        edge_nodes=edges_a[keep],
+        edge_family=families_a[keep],
+        edge_width=widths_a[keep],
+        hinge_nodes=hinges_a[h_keep],
+        hinge_axis_nodes=np.array(axes, dtype=np.int32).reshape(-1, 2)[h_keep],
+        hinge_family=np.array(h_families, dtype=np.int32)[h_keep],
+        hinge_width=np.array(h_widths)[h_keep],
+        hinge_curvature_scale=np.array(scales)[h_keep],
+        cell_nodes=cells[c_keep],
+        cell_area=np.full(int(c_keep.sum()), h_warp * h_weft),
+    )
+
+
+def rectangle(
+    free_length: float,
+    width: float,
+    clamp_length: float,
+    spacing: tuple[float, float],
+    edge_hinge: str = "second_order",
+) -> SheetGeometry:
+    """A rectangular sheet hanging from a clamp along its top edge: warp down (−y), weft
+    across (+z), ``clamp_length`` of it held above the clamp edge (y = 0), ``free_length``
+    below, ``width`` across, centred on z = 0 (m; lengths whole multiples of the spacing)."""
+    h_warp, h_weft = spacing
+    rows = _cells(free_length + clamp_length, h_warp, "free_length + clamp_length")
+    columns = _cells(width, h_weft, "width")
+    clamp_rows = _cells(clamp_length, h_warp, "clamp_length")
+    if clamp_rows < 1:
+        raise ValueError(f"clamp_length = {clamp_length:g} m must hold at least one row of cells")
+    return grid_geometry(
+        np.ones((rows, columns), dtype=bool),
+        spacing,
+        origin=np.array([0.0, clamp_length, -width / 2.0]),
+        warp_direction=np.array([0.0, -1.0, 0.0]),
+        weft_direction=np.array([0.0, 0.0, 1.0]),
+        is_clamped=lambda x: x[:, 1] >= -1e-9 * h_warp,
+        edge_hinge=edge_hinge,
+    )
+
+
+def bias_strip(
+    free_length: float,
+    width: float,
+    clamp_length: float,
+    spacing: float,
+    edge_hinge: str = "second_order",
+) -> SheetGeometry:
+    """A strip cut at 45° to warp and weft, hanging from its top edge: the lattice turned
+    45° in the sheet's plane, keeping every cell whose corners lie within the strip's
+    rectangle (``width`` across z, from ``free_length`` below the clamp edge to
+    ``clamp_length`` above it), so its sides are staircases of cells of diagonal
+    h√2. Nodes at or above the clamp edge are clamped."""
+    h = float(spacing)
+    r = np.sqrt(0.5)
+    warp_direction = np.array([0.0, -r, r])
+    weft_direction = np.array([0.0, -r, -r])
+    # node (i, j) at y = y0 − (i + j) h/√2, z = (i − j) h/√2: from a first node high enough
+    # above the clamp's top that the lattice spans its whole width there
+    top = clamp_length + width / 2 + h
+    n = int(np.ceil((top + free_length + width / 2) / (h * r))) + 2
+    origin = np.array([0.0, top, 0.0])
+    ii, jj = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    corners = origin + ii[..., None] * h * warp_direction + jj[..., None] * h * weft_direction
+    inside = (
+        (np.abs(corners[..., 2]) <= width / 2 + 1e-9 * h)
+        & (corners[..., 1] <= clamp_length + 1e-9 * h)
+        & (corners[..., 1] >= -free_length - 1e-9 * h)
+    )
+    kept = inside[:-1, :-1] & inside[1:, :-1] & inside[:-1, 1:] & inside[1:, 1:]
+    return grid_geometry(
+        kept,
+        (h, h),
+        origin=origin,
+        warp_direction=warp_direction,
+        weft_direction=weft_direction,
+        is_clamped=lambda x: x[:, 1] >= -1e-9 * h,
+        edge_hinge=edge_hinge,
+    )
+
+
+def _cells(length: float, h: float, name: str) -> int:
+    count = round(length / h)
+    if count < 1 or abs(count * h - length) > 1e-9 * length:
+        raise ValueError(f"{name} = {length:g} m is not a whole number of cells of {h:g} m")
+    return int(count)

@@ -1,0 +1,170 @@
+"""What advances a batch of sheets: symplectic Euler in the fused sheet kernel, every sheet
+through a chunk of output samples per launch (docs/model.md §17.5)."""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+import warp as wp
+
+from warpcloth.kernels import STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
+from warpcloth.kernels.status import STATUS_CELL_COLLAPSED
+
+from .model import SheetControl, SheetModel, SheetState
+
+SHEETS_PER_THREAD = 4
+"""A CPU launch is split among threads only into ranges of at least this many sheets."""
+
+QUANTITY = {
+    STATUS_STRAIN: ("tensile strain", "segment"),
+    STATUS_FOLDED: ("hinge chord |p1 + p2|/h (the line folded onto itself)", "hinge"),
+    STATUS_CELL_COLLAPSED: ("shear angle (rad)", "cell"),
+    STATUS_NONFINITE_ENERGY: ("total energy (not finite)", ""),
+}
+
+
+@dataclass(frozen=True)
+class SheetDivergence:
+    """Where and how one sheet stopped: its index, the step and time, the quantity, the
+    element (segment, hinge or cell) and its value."""
+
+    sheet: int
+    code: int
+    step: int
+    time_s: float
+    element: int
+    value: float
+    dt_s: float
+    stable_step_s: float
+
+    def describe(self) -> str:
+        """One sentence a user can act on."""
+        quantity, kind = QUANTITY[self.code]
+        where = f" at {kind} {self.element}" if kind else ""
+        phase = "while settling before t = 0" if self.time_s < 0 else "after t = 0"
+        return (
+            f"sheet {self.sheet} diverged {phase}, at t = {self.time_s:.6g} s (step {self.step}): {quantity} = "
+            f"{self.value:.4g}{where}; try a smaller integrator.dt_s (now {self.dt_s:g} s; the linearised "
+            f"stability estimate is {self.stable_step_s:.3g} s)"
+        )
+
+
+class SheetSolver:
+    """Symplectic Euler on every free node (velocities first, positions with the new
+    velocity), the clamp's nodes on their prescribed motion, fixed ``dt``.
+
+    A sheet stops, and is reported, when a segment's strain leaves ± ``divergence_strain``,
+    a line folds onto itself, a cell's shear angle leaves ± ``divergence_shear`` (rad), or
+    its energy is not finite.
+    """
+
+    label = "symplectic Euler"
+
+    def __init__(
+        self, model: SheetModel, dt: float, divergence_strain: float = 0.25, divergence_shear: float = math.radians(60)
+    ) -> None:
+        self.model = model
+        self.dt = float(dt)
+        self.divergence_strain = float(divergence_strain)
+        self.divergence_shear = float(divergence_shear)
+
+    def stable_step(self) -> float:
+        """A linearised estimate of the longest stable dt (s): symplectic Euler needs
+        ω_max dt < 2, and ω_max² is at most the sum of the stiffest stretching mode's
+        4 (a1 + 2G)/(ρ_A h²) and the stiffest bending mode's 64 D s²/(ρ_A h⁴) (s the
+        largest hinge curvature scale) over the batch's materials and both directions."""
+        g = self.model.geometry
+        scale = float(g.hinge_curvature_scale.max()) if len(g.hinge_curvature_scale) else 1.0
+        worst = 0.0
+        for spec in self.model.sheets:
+            m = spec.material
+            for family, h in ((m.warp, g.spacing[0]), (m.weft, g.spacing[1])):
+                stretch = 4 * (family.tensile[0] + 2 * m.shear_rigidity) / (m.density * h * h)
+                bend = 64 * family.bending_rigidity * scale * scale / (m.density * h**4)
+                worst = max(worst, stretch + bend)
+        return 2.0 / math.sqrt(worst) if worst > 0 else math.inf
+
+    def release_step(self, control: SheetControl) -> int:
+        """Step index of t = 0 under ``control``."""
+        return round(control.release_time / self.dt)
+
+    def stepping(self, control: SheetControl) -> object:
+        """The kernel's SheetStepping struct."""
+        s = self.model.kernels.structs.SheetStepping()
+        s.dt = self.model.scalar(self.dt)
+        s.max_strain = self.model.scalar(self.divergence_strain)
+        s.max_shear = self.model.scalar(self.divergence_shear)
+        s.release_step = self.release_step(control)
+        return s
+
+    def advance(
+        self,
+        state: SheetState,
+        control: SheetControl,
+        settings: object,
+        output_steps: np.ndarray,
+        first_output: int,
+        first_frame: int,
+        buffers: tuple[wp.array, wp.array, wp.array],
+        threads: int = 1,
+    ) -> None:
+        """Advance every healthy sheet to each of ``output_steps``, recording probes,
+        markers and frames into ``buffers``; on a CPU, ``threads`` launches over contiguous
+        ranges of sheets (each sheet's arithmetic is the same either way, bit for bit)."""
+        model = self.model
+        steps = wp.array(np.asarray(output_steps, dtype=np.int32), dtype=int, device=model.device)
+        inputs = [model.struct, control.struct, self.stepping(control), state.struct, settings, steps]
+        inputs += [int(first_output), int(first_frame), *buffers]
+        parts = max(1, min(threads, model.n_sheets // SHEETS_PER_THREAD)) if model.device.is_cpu else 1
+        bounds = np.linspace(0, model.n_sheets, parts + 1).round().astype(int)
+
+        def launch(part: int) -> None:
+            wp.launch(
+                model.kernels.advance,
+                dim=int(bounds[part + 1] - bounds[part]),
+                device=model.device,
+                inputs=[*inputs, int(bounds[part])],
+            )
+
+        if parts == 1:
+            launch(0)
+            return
+        with ThreadPoolExecutor(parts) as pool:
+            list(pool.map(launch, range(parts)))
+
+    def divergence_report(self, state: SheetState, control: SheetControl, sheet: int) -> SheetDivergence | None:
+        """Where and how ``sheet`` diverged, or None while it is healthy."""
+        code = int(state.struct.status.numpy()[sheet])
+        if code == STATUS_OK:
+            return None
+        step = int(state.struct.status_step.numpy()[sheet])
+        return SheetDivergence(
+            sheet=sheet,
+            code=code,
+            step=step,
+            time_s=(step - self.release_step(control)) * self.dt,
+            element=int(state.struct.status_index.numpy()[sheet]),
+            value=float(state.struct.status_value.numpy()[sheet]),
+            dt_s=self.dt,
+            stable_step_s=self.stable_step(),
+        )
+
+    def internal_forces(self, state: SheetState, control: SheetControl) -> dict[str, np.ndarray]:
+        """The internal forces at the state's positions, ``[node, sheet, xyz]`` N, by kind
+        (``tensile``, ``elastic``, ``hysteretic``); the laws' memory follows to them."""
+        model = self.model
+        wp.launch(
+            model.kernels.internal_forces,
+            dim=model.n_sheets,
+            inputs=[model.struct, self.stepping(control), state.struct],
+            device=model.device,
+        )
+        s = state.struct
+        return {
+            "tensile": s.force_tensile.numpy(),
+            "elastic": s.force_elastic.numpy(),
+            "hysteretic": s.force_hysteretic.numpy(),
+        }
