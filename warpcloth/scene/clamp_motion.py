@@ -19,12 +19,7 @@ def clamp_pieces(clamp: ClampSection) -> tuple[np.ndarray, np.ndarray, np.ndarra
     if clamp.motion == "fixed":
         return np.zeros(0), np.zeros(0), np.zeros((0, MAX_DEGREE + 1))
     if clamp.motion == "piecewise":
-        start = np.array([s.t_start_s for s in clamp.segments])
-        end = np.array([s.t_end_s for s in clamp.segments])
-        coefficients = np.zeros((len(clamp.segments), MAX_DEGREE + 1))
-        for i, seg in enumerate(clamp.segments):
-            coefficients[i, : len(seg.theta_coefficients_si)] = seg.theta_coefficients_si
-        return start, end, coefficients
+        return segment_pieces(clamp.segments, "theta_coefficients_si")
     t = np.asarray(clamp.table_t_s, dtype=float)
     theta = np.asarray(clamp.table_theta_rad, dtype=float)
     h = np.diff(t)
@@ -38,6 +33,20 @@ def clamp_pieces(clamp: ClampSection) -> tuple[np.ndarray, np.ndarray, np.ndarra
         coefficients[:, 2] = m[:-1] / 2
         coefficients[:, 3] = np.diff(m) / (6 * h)
     return t[:-1], t[1:], coefficients
+
+
+def segment_pieces(
+    segments: list, coefficients: str, scale: float = 1.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(start [S], end [S], coefficients [S, 5]) of scene segments whose attribute
+    ``coefficients`` holds c_0..c_k, times ``scale`` (to SI)."""
+    start = np.array([s.t_start_s for s in segments], dtype=float)
+    end = np.array([s.t_end_s for s in segments], dtype=float)
+    out = np.zeros((len(segments), MAX_DEGREE + 1))
+    for i, seg in enumerate(segments):
+        values = getattr(seg, coefficients)
+        out[i, : len(values)] = np.asarray(values, dtype=float) * scale
+    return start, end, out
 
 
 def natural_spline_second_derivatives(t: np.ndarray, y: np.ndarray) -> np.ndarray:

@@ -22,6 +22,11 @@ from .schema import MaterialSection
 from .shear import SHEAR_TABLE, ShearMaterial, parse_shear
 
 MATERIAL_FILE_KEY = "material.from_file"
+WEFT_TABLE = "weft"
+"""A material file's table of the weft direction's tensile and bending fields, where they
+differ from [material]'s (the warp's); the woven sheet reads it, a strip ignores it."""
+ONE_PER_FABRIC = ("name", "density_g_per_cm2", "from_file")
+"""[material] fields that have no per-direction value: a woven fabric has one areal density."""
 
 
 def si_value(parameter: LawParameter, value: float) -> float:
@@ -163,12 +168,12 @@ def read_material_file(ref: str | Path) -> dict:
         text = resource.read_text()
         where = f"bundled material {ref}"
     data = parse_toml(text, where, MATERIAL_FILE_KEY)
-    extra = sorted(set(data) - {"material", "fit", SHEAR_TABLE})
+    extra = sorted(set(data) - {"material", "fit", SHEAR_TABLE, WEFT_TABLE})
     if extra:
         raise SceneError(
             MATERIAL_FILE_KEY,
             f"{where}: unknown top-level entry {extra[0]!r}; a material file "
-            "has a [material] and optionally a [shear] and a [fit] table",
+            "has a [material] and optionally a [weft], a [shear] and a [fit] table",
         )
     material = data.get("material")
     if not isinstance(material, dict) or not isinstance(data.get("fit", {}), dict):
@@ -198,10 +203,28 @@ def read_material_file(ref: str | Path) -> dict:
         parse_section(MaterialSection, {k: v for k, v in material.items() if k != "source"}, "material")
         if SHEAR_TABLE in data:
             parse_shear(data[SHEAR_TABLE])
+        if WEFT_TABLE in data:
+            parse_weft(data[WEFT_TABLE])
     except SceneError as exc:
         line = field_line(text, exc.field)
         raise SceneError(MATERIAL_FILE_KEY, f"{where}{f', line {line}' if line else ''}: {exc}") from None
     return data
+
+
+def parse_weft(table: object, prefix: str = WEFT_TABLE) -> dict:
+    """The ``[weft]`` table of a material file or sheet scene, checked: [material] fields
+    other than :data:`ONE_PER_FABRIC`, each valid as a [material] field; else a SceneError
+    of ``weft.<field>``. Returns the table."""
+    if not isinstance(table, dict):
+        raise SceneError(prefix, f"[{prefix}] must be a table, got {table!r}")
+    for key in table:
+        if key in ONE_PER_FABRIC:
+            raise SceneError(
+                f"{prefix}.{key}",
+                "has one value per fabric, in [material]; [weft] gives only the weft's tensile and bending fields",
+            )
+    parse_section(MaterialSection, table, prefix)
+    return table
 
 
 def material_shear(ref: str | Path) -> ShearMaterial | None:

@@ -180,31 +180,7 @@ def _validate_clamp(clamp: ClampSection) -> None:
     if clamp.motion == "piecewise":
         if not clamp.segments:
             raise SceneError("clamp.segments", "motion = 'piecewise' needs at least one segment")
-        for i, seg in enumerate(clamp.segments):
-            where = f"clamp.segments[{i}]"
-            if not seg.t_end_s > seg.t_start_s:
-                raise SceneError(f"{where}.t_end_s", f"{seg.t_end_s:g} must be after t_start_s {seg.t_start_s:g}")
-            if not 1 <= len(seg.theta_coefficients_si) <= 5:
-                raise SceneError(
-                    f"{where}.theta_coefficients_si",
-                    f"needs 1 to 5 coefficients (up to a quartic), got {len(seg.theta_coefficients_si)}",
-                )
-            if i:
-                prev = clamp.segments[i - 1]
-                if abs(seg.t_start_s - prev.t_end_s) > 1e-12:
-                    raise SceneError(
-                        f"{where}.t_start_s",
-                        f"{seg.t_start_s:g} s must equal the previous segment's t_end_s {prev.t_end_s:g} s",
-                    )
-                tau = prev.t_end_s - prev.t_start_s
-                end = sum(c * tau**k for k, c in enumerate(prev.theta_coefficients_si))
-                jump = seg.theta_coefficients_si[0] - end
-                if abs(jump) > 1e-9 * max(1.0, abs(end)):
-                    raise SceneError(
-                        f"{where}.theta_coefficients_si",
-                        f"θ jumps by {jump:.3g} rad at t = {seg.t_start_s:g} s; the clamp "
-                        "cannot teleport (make c_0 equal the previous segment's end value)",
-                    )
+        validate_segments(clamp.segments, "clamp.segments", "theta_coefficients_si", "θ", "rad")
     elif clamp.motion == "table":
         t, th = clamp.table_t_s, clamp.table_theta_rad
         if len(t) < 2 or len(t) != len(th):
@@ -215,3 +191,35 @@ def _validate_clamp(clamp: ClampSection) -> None:
         for i in range(1, len(t)):
             if not t[i] > t[i - 1]:
                 raise SceneError(f"clamp.table_t_s[{i}]", f"{t[i]:g} s must be after {t[i - 1]:g} s")
+
+
+def validate_segments(segments: list, prefix: str, coefficients: str, symbol: str, unit: str) -> None:
+    """Pieces of a clamp motion (the strip's θ, the sheet's rotation and translation):
+    each ends after it starts, holds 1 to 5 coefficients (its attribute ``coefficients``),
+    starts where the previous ended and continues its value (``symbol`` in ``unit``)."""
+    for i, seg in enumerate(segments):
+        where = f"{prefix}[{i}]"
+        values = getattr(seg, coefficients)
+        if not seg.t_end_s > seg.t_start_s:
+            raise SceneError(f"{where}.t_end_s", f"{seg.t_end_s:g} must be after t_start_s {seg.t_start_s:g}")
+        if not 1 <= len(values) <= 5:
+            raise SceneError(
+                f"{where}.{coefficients}",
+                f"needs 1 to 5 coefficients (up to a quartic), got {len(values)}",
+            )
+        if i:
+            prev = segments[i - 1]
+            if abs(seg.t_start_s - prev.t_end_s) > 1e-12:
+                raise SceneError(
+                    f"{where}.t_start_s",
+                    f"{seg.t_start_s:g} s must equal the previous segment's t_end_s {prev.t_end_s:g} s",
+                )
+            tau = prev.t_end_s - prev.t_start_s
+            end = sum(c * tau**k for k, c in enumerate(getattr(prev, coefficients)))
+            jump = values[0] - end
+            if abs(jump) > 1e-9 * max(1.0, abs(end)):
+                raise SceneError(
+                    f"{where}.{coefficients}",
+                    f"{symbol} jumps by {jump:.3g} {unit} at t = {seg.t_start_s:g} s; the clamp "
+                    "cannot teleport (make c_0 equal the previous segment's end value)",
+                )

@@ -1,0 +1,398 @@
+"""Sheet scenes (stage 3, docs/model.md §17): a scene file with a ``[sheet]`` table instead
+of ``[strip]``, parsed, overridden, validated and located by the strip's machinery
+(:mod:`.parse`, :mod:`.overrides`, :mod:`.locate`).
+
+The material is the strip's ``[material]`` (the warp direction), a ``[weft]`` table of the
+weft's tensile and bending fields where they differ, and a ``[shear]`` table (a law on
+the shear angle, :func:`~warpcloth.scene.shear.parse_shear`); a material file fills all
+three. The resolved scene (``to_dict``) holds every value, so it re-reads without the
+file. Offsets are in mm from the middle of the clamp edge, in the strip's frame: x out of
+the sheet's rest plane, y up, z across.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import MISSING, dataclass, field
+from pathlib import Path
+
+from warpcloth import units
+from warpcloth.errors import SceneError
+from warpcloth.sheet.geometry import EDGE_HINGES
+
+from .files import _read_scene
+from .locate import located
+from .materials import MATERIAL_FILE_KEY, ONE_PER_FABRIC, WEFT_TABLE, material_fields, read_material_file
+from .materials import parse_weft, validate_material, with_material_file
+from .overrides import Overrides, apply_overrides
+from .parse import parse_section
+from .schema import ClampSegment, DampingSection, MaterialSection, RunSection, _field, field_types
+from .shear import SHEAR_TABLE, ShearMaterial, parse_shear
+from .validate import MAX_STEPS, _multiple, validate_segments
+
+CUTS = ("rectangle", "bias")
+"""Choices of ``sheet.cut``."""
+
+AUTO = "auto"
+AUTO_FRACTION = 0.5
+"""``integrator.dt_s = "auto"`` takes this fraction of the linearised stability estimate
+(:meth:`~warpcloth.sheet.SheetSolver.stable_step`): the estimate is at the tensile
+curve's initial slope a1, and a strained segment is stiffer (a4 ε³ adds 4 a4 ε³ to it),
+so the full estimate is not safe in motion."""
+
+
+@dataclass(frozen=True)
+class SheetSection:
+    """Geometry of the sheet (docs/model.md §17.2)."""
+
+    cut: str = _field(
+        "rectangle",
+        "rectangle (warp down −y, weft across +z) | bias (the lattice turned 45° in the sheet's "
+        "plane, warp and weft at 45° to the vertical; the sides are staircases of cells)",
+        choices=CUTS,
+    )
+    free_length_mm: float = _field(100.0, "length hanging below the clamp edge", gt=0)
+    width_mm: float = _field(100.0, "width across (z), centred on the middle of the clamp edge", gt=0)
+    clamp_length_mm: float = _field(10.0, "length held in the clamp above its edge (kinematic nodes)", gt=0)
+    spacing_warp_mm: float = _field(
+        5.0,
+        "node spacing along the warp; rectangle: divides free_length_mm and clamp_length_mm; "
+        "bias: the one spacing of both yarns",
+        gt=0,
+    )
+    spacing_weft_mm: float = _field(
+        5.0, "node spacing along the weft; rectangle: divides width_mm; bias: equal to spacing_warp_mm", gt=0
+    )
+    edge_hinge: str = _field(
+        "second_order",
+        "second_order (a hinge at the clamp edge bends over h/2) | paper (over h), as clamp.edge_hinge of a strip",
+        choices=EDGE_HINGES,
+    )
+
+
+def _weft_section() -> type:
+    # [weft]: every [material] field with a value per direction, with its type, default and doc
+    hints = field_types(MaterialSection)
+    fields = []
+    for f in dataclasses.fields(MaterialSection):
+        if f.name in ONE_PER_FABRIC:
+            continue
+        meta = {**f.metadata, "doc": f"the weft's {f.name}, where it differs from material.{f.name} (the warp's)"}
+        if f.default_factory is not MISSING:
+            fields.append((f.name, hints[f.name], field(default_factory=f.default_factory, metadata=meta)))
+        else:
+            fields.append((f.name, hints[f.name], field(default=f.default, metadata=meta)))
+    section = dataclasses.make_dataclass("WeftSection", fields, frozen=True)
+    section.__module__ = __name__
+    section.__doc__ = "The weft direction's tensile and bending fields (KES units); unset ones are the warp's."
+    return section
+
+
+WeftSection = _weft_section()
+
+
+@dataclass(frozen=True)
+class TranslationSegment:
+    """One piece of d(t) = Σ c_k (t − t_start)^k on [t_start, t_end], along clamp.direction."""
+
+    t_start_s: float = _field(0.0, "segment start time")
+    t_end_s: float = _field(0.0, "segment end time (> t_start_s)")
+    d_coefficients_mm: list[float] = _field([0.0], "c_0..c_4 in mm/s^k (at most a quartic)")
+
+
+@dataclass(frozen=True)
+class SheetClampSection:
+    """The clamp's rigid motion: a rotation θ(t) about an axis through a centre, then a
+    translation d(t) along a direction (docs/model.md §17.4); no segments: it stands still."""
+
+    rotation_segments: list[ClampSegment] = _field([], "pieces of θ(t) (rad), as a strip's clamp.segments")
+    axis_x: float = _field(0.0, "rotation axis, x component (normalised)")
+    axis_y: float = _field(0.0, "rotation axis, y component (up)")
+    axis_z: float = _field(1.0, "rotation axis, z component (across; z: the strip's swing)")
+    centre_dx_mm: float = _field(0.0, "rotation centre, x offset from the middle of the clamp edge")
+    centre_dy_mm: float = _field(0.0, "rotation centre, y offset (up +)")
+    centre_dz_mm: float = _field(0.0, "rotation centre, z offset (across)")
+    translation_segments: list[TranslationSegment] = _field([], "pieces of d(t) (mm) along the direction")
+    direction_x: float = _field(0.0, "translation direction, x component (normalised)")
+    direction_y: float = _field(0.0, "translation direction, y component")
+    direction_z: float = _field(1.0, "translation direction, z component (z: sideways in the sheet's plane)")
+
+
+@dataclass(frozen=True)
+class SheetReleaseSection:
+    """The sheet settles under gravity, damped, before t = 0 (the clamp moves from t = 0)."""
+
+    settle_time_s: float = _field(0.5, "time to settle before t = 0 (0: start from the flat rest shape)", ge=0)
+    settle_damping_per_s: float = _field(20.0, "γ while settling", ge=0)
+
+
+@dataclass(frozen=True)
+class SheetIntegratorSection:
+    """Symplectic Euler at a fixed step (docs/model.md §17.5)."""
+
+    dt_s: float = _field(
+        AUTO,
+        'time step, at most the linearised stability estimate SheetSolver.stable_step(); "auto": '
+        f"{AUTO_FRACTION:g} of it, shortened to a whole fraction of the probe interval",
+        gt=0,
+        words=(AUTO,),
+    )
+    dt_chosen_by: str = _field(
+        "scene",
+        '"auto" when dt_s = "auto" chose the step (the recorded scene keeps the number), else "scene"',
+        choices=("scene", "auto"),
+    )
+    precision: str = _field("float64", "float64 | float32", choices=("float64", "float32"))
+    divergence_strain: float = _field(0.25, "|ε| of a segment beyond which a sheet counts as diverged", gt=0)
+    divergence_shear_deg: float = _field(60.0, "|φ| of a cell beyond which a sheet counts as diverged", gt=0)
+    reversal_memory: int = _field(128, "masing: open reversal points each hinge and cell keeps", ge=1)
+
+
+@dataclass(frozen=True)
+class SheetOutputSection:
+    """What is recorded and how often."""
+
+    frame_rate_hz: float = _field(60.0, "shape frames per second (a lab video's rate)", gt=0)
+    probes_per_frame: int = _field(10, "probe and marker samples per frame interval", ge=1)
+    markers_ij: list[list[int]] = _field(
+        [], "tracked nodes by lattice position [i, j] (i along the warp, j along the weft, from the cut's first node)"
+    )
+    markers_mm: list[list[float]] = _field(
+        [],
+        "tracked nodes by rest position [y, z] in mm from the middle of the clamp edge (y up: "
+        "−50 is 50 mm below it); each the nearest node, within half a spacing",
+    )
+    probe_cell_mm: list[float] = _field(
+        [0.0, 0.0], "[y, z] mm: the free cell whose centre is nearest is probed (cell_shear_angle, cell_shear_force)"
+    )
+    probe_hinge_mm: list[float] = _field(
+        [0.0, 0.0], "[y, z] mm: the free hinge of probe_hinge_family nearest is probed (hinge_curvature, hinge_moment)"
+    )
+    probe_hinge_family: str = _field("warp", "warp | weft: the line the probed hinge bends", choices=("warp", "weft"))
+
+
+@dataclass(frozen=True)
+class SheetScene:
+    """A complete, validated description of one woven-sheet experiment."""
+
+    sheet: SheetSection = field(default_factory=SheetSection)
+    material: MaterialSection = field(default_factory=MaterialSection)
+    weft: WeftSection = field(default_factory=WeftSection)  # type: ignore[valid-type]
+    shear: ShearMaterial | None = None
+    damping: DampingSection = field(default_factory=DampingSection)
+    clamp: SheetClampSection = field(default_factory=SheetClampSection)
+    release: SheetReleaseSection = field(default_factory=SheetReleaseSection)
+    integrator: SheetIntegratorSection = field(default_factory=SheetIntegratorSection)
+    run: RunSection = field(default_factory=RunSection)
+    output: SheetOutputSection = field(default_factory=SheetOutputSection)
+
+    @property
+    def spacing(self) -> tuple[float, float]:
+        """(h_warp, h_weft) in metres."""
+        return (self.sheet.spacing_warp_mm * units.LENGTH_MM, self.sheet.spacing_weft_mm * units.LENGTH_MM)
+
+    @property
+    def output_interval(self) -> float:
+        """Seconds between probe samples."""
+        return 1.0 / (self.output.frame_rate_hz * self.output.probes_per_frame)
+
+    def weft_material(self) -> MaterialSection:
+        """The weft as a [material] section: the fabric's name and density, the weft's fields."""
+        values = {k: getattr(self.weft, k) for k in material_fields() if k not in ONE_PER_FABRIC}
+        return MaterialSection(
+            name=f"{self.material.name} (weft)",
+            density_g_per_cm2=self.material.density_g_per_cm2,
+            bending_law=self.weft.bending_law,
+            **values,
+        )
+
+    def to_dict(self) -> dict:
+        """Plain nested dict (TOML-ready) of every field, defaults included."""
+        out = {f.name: dataclasses.asdict(getattr(self, f.name)) for f in dataclasses.fields(self) if f.name != "shear"}
+        out[SHEAR_TABLE] = self.shear.table()
+        return out
+
+
+SHEET_SECTIONS = tuple(f.name for f in dataclasses.fields(SheetScene))
+
+
+def scene_kind(data: dict, where: str = "the scene") -> str:
+    """``"strip"`` or ``"sheet"``: which table raw scene ``data`` has; a SceneError when it
+    has both or neither."""
+    has = [name for name in ("strip", "sheet") if name in data]
+    if len(has) == 2:
+        raise SceneError("sheet", f"{where} has both [strip] and [sheet]; a scene is one strip or one sheet")
+    if not has:
+        raise SceneError(
+            "strip",
+            f"{where} has neither [strip] nor [sheet]; say which it is (a strip scene with the "
+            "default geometry is an empty [strip] table)",
+        )
+    return has[0]
+
+
+def _complete(table: dict, law_key: str = "bending_law") -> bool:
+    law = table.get(law_key)
+    return isinstance(law, str) and all(k in table for k in material_fields(law) if k not in ONE_PER_FABRIC)
+
+
+def _with_sheet_material(data: dict) -> dict:
+    # The material file fills [material] (as for a strip), [weft] and [shear]; the scene's
+    # own values win. A resolved scene holds all three whole, so the file is not read.
+    data = dict(data)
+    material = data.get("material")
+    ref = material.get("from_file", "") if isinstance(material, dict) else ""
+    weft = data.get(WEFT_TABLE, {})
+    shear = data.get(SHEAR_TABLE)
+    filled = with_material_file(data)
+    full_weft = _complete(weft) if isinstance(weft, dict) else True
+    if isinstance(ref, str) and ref.strip() and not (shear is not None and full_weft and filled is data):
+        file = read_material_file(ref)
+        if isinstance(weft, dict):
+            weft = {**file.get(WEFT_TABLE, {}), **weft}
+        if SHEAR_TABLE in file:
+            given = file[SHEAR_TABLE]
+            if isinstance(shear, dict) and shear.get("law", given["law"]) == given["law"]:
+                shear = {**given, **shear}
+            elif shear is None:
+                shear = dict(given)
+    data = dict(filled)
+    if isinstance(weft, dict) and isinstance(data.get("material"), dict):
+        warp = data["material"]
+        law = weft.get("bending_law", warp.get("bending_law", MaterialSection().bending_law))
+        carried = {k: warp[k] for k in material_fields(law) if k in warp and k not in ONE_PER_FABRIC}
+        weft = {**carried, "bending_law": law, **weft}
+    data[WEFT_TABLE] = weft
+    if shear is not None:
+        data[SHEAR_TABLE] = shear
+    return data
+
+
+def sheet_scene_from_dict(data: dict) -> SheetScene:
+    """Parse and validate raw sheet-scene data (a material file filling [material],
+    [weft] and [shear]); ``dt_s = "auto"`` stays a word until :func:`check_sheet_scene`."""
+    if not isinstance(data, dict):
+        raise SceneError("scene", f"expected a table, got {data!r}")
+    scene_kind(data)
+    data = _with_sheet_material(data)
+    shear = data.pop(SHEAR_TABLE, None)
+    if shear is None:
+        ref = data.get("material", {}).get("from_file", "") if isinstance(data.get("material"), dict) else ""
+        raise SceneError(
+            SHEAR_TABLE,
+            "a sheet needs a shear law: give a [shear] table "
+            + (f"(its material file {ref!r} has none)" if ref else "or a material.from_file that has one"),
+            related=(MATERIAL_FILE_KEY,),
+        )
+    parse_weft(data[WEFT_TABLE])
+    scene = parse_section(SheetScene, data, "")
+    scene = dataclasses.replace(scene, shear=parse_shear(shear))
+    validate_sheet_scene(scene)
+    return scene
+
+
+def validate_sheet_scene(scene: SheetScene) -> None:
+    """Cross-field checks that single fields cannot express; raises SceneError."""
+    st = scene.sheet
+    if st.cut == "rectangle":
+        for name, spacing in (
+            ("free_length_mm", "spacing_warp_mm"),
+            ("clamp_length_mm", "spacing_warp_mm"),
+            ("width_mm", "spacing_weft_mm"),
+        ):
+            if not _multiple(getattr(st, name), getattr(st, spacing)):
+                raise SceneError(
+                    f"sheet.{spacing}",
+                    f"{getattr(st, spacing):g} mm does not divide sheet.{name} = {getattr(st, name):g} mm "
+                    "into whole cells",
+                    related=(f"sheet.{name}",),
+                )
+    elif st.spacing_weft_mm != st.spacing_warp_mm:
+        raise SceneError(
+            "sheet.spacing_weft_mm",
+            f"{st.spacing_weft_mm:g} mm differs from sheet.spacing_warp_mm = {st.spacing_warp_mm:g} mm; "
+            'a bias cut has one spacing (set both, or leave spacing_weft_mm out of cut = "bias")',
+            related=("sheet.spacing_warp_mm", "sheet.cut"),
+        )
+    limit = scene.integrator.divergence_strain
+    validate_material(scene.material, limit, "material")
+    validate_material(scene.weft_material(), limit, WEFT_TABLE)
+    clamp = scene.clamp
+    validate_segments(clamp.rotation_segments, "clamp.rotation_segments", "theta_coefficients_si", "θ", "rad")
+    validate_segments(clamp.translation_segments, "clamp.translation_segments", "d_coefficients_mm", "d", "mm")
+    for name in ("axis", "direction"):
+        components = [getattr(clamp, f"{name}_{c}") for c in "xyz"]
+        if not any(components):
+            raise SceneError(f"clamp.{name}_z", f"clamp.{name}_x, _y and _z are all 0; the {name} needs a direction")
+    output = scene.output
+    for i, ij in enumerate(output.markers_ij):
+        if len(ij) != 2:
+            raise SceneError(f"output.markers_ij[{i}]", f"a lattice position is [i, j], got {ij!r}")
+    for name in ("markers_mm",):
+        for i, yz in enumerate(getattr(output, name)):
+            if len(yz) != 2:
+                raise SceneError(f"output.{name}[{i}]", f"a rest position is [y, z] in mm, got {yz!r}")
+    for name in ("probe_cell_mm", "probe_hinge_mm"):
+        if len(getattr(output, name)) != 2:
+            raise SceneError(f"output.{name}", f"a rest position is [y, z] in mm, got {getattr(output, name)!r}")
+    dt = scene.integrator.dt_s
+    if isinstance(dt, str):
+        return
+    if dt > scene.output_interval:
+        raise SceneError(
+            "integrator.dt_s",
+            f"{dt:g} s is longer than the probe interval {scene.output_interval:g} s "
+            "(1 / (output.frame_rate_hz × output.probes_per_frame))",
+            related=("output.frame_rate_hz", "output.probes_per_frame"),
+        )
+    steps = (scene.release.settle_time_s + scene.run.duration_s) / dt
+    if steps > MAX_STEPS:
+        raise SceneError(
+            "run.duration_s",
+            f"{scene.release.settle_time_s + scene.run.duration_s:g} s at dt {dt:g} s is {steps:.3g} steps, "
+            f"more than {MAX_STEPS}",
+            related=("integrator.dt_s", "release.settle_time_s"),
+        )
+
+
+def is_sheet_scene(name_or_path: str | Path) -> bool:
+    """Whether the scene file (path or bundled name) is a sheet scene; a SceneError, located
+    in the file, when it has both [strip] and [sheet] or neither."""
+    data, text, where = _read_scene(name_or_path)
+    try:
+        return scene_kind(data, where) == "sheet"
+    except SceneError as exc:
+        raise located(exc, text, where) from None
+
+
+def load_sheet_scene(name_or_path: str | Path, overrides: Overrides = ()) -> SheetScene:
+    """Read a sheet scene by path or bundled name, apply overrides (as :func:`load_scene`),
+    validate it and check it can run (:func:`check_sheet_scene`); every error names the
+    field and where it was set."""
+    from .sheet_build import check_sheet_scene
+
+    data, text, where = _read_scene(name_or_path)
+    try:
+        if "sweep" in data:
+            raise SceneError("sweep", "sheet scenes are run one at a time; a [sweep] takes a strip scene")
+        scene = check_sheet_scene(sheet_scene_from_dict(apply_overrides(data, overrides)))
+    except SceneError as exc:
+        raise located(exc, text, where, overrides) from None
+    return scene
+
+
+def read_sheet_scene(path: str | Path) -> SheetScene:
+    """A recorded (resolved) sheet scene, as a run directory stores it."""
+    data, _, _ = _read_scene(Path(path))
+    return sheet_scene_from_dict(data)
+
+
+def sheet_scene_fields() -> list[str]:
+    """Dotted names of every sheet-scene field (the guide documents each)."""
+    hints = field_types(SheetScene)
+    names = []
+    for section in SHEET_SECTIONS:
+        if section == SHEAR_TABLE:
+            continue
+        names += [f"{section}.{f.name}" for f in dataclasses.fields(hints[section])]
+    return names

@@ -1,0 +1,197 @@
+"""Sheet scenes → simulation objects (SI): the only place that reads a sheet scene's fields
+to simulate, and the checks that need the geometry or the step (markers on the sheet, dt
+within the stability estimate)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from warpcloth import units
+from warpcloth.errors import SceneError
+from warpcloth.kernels.sheet_structs import WARP, WEFT
+from warpcloth.sheet import (
+    SheetBuilder,
+    SheetClampMotion,
+    SheetControl,
+    SheetGeometry,
+    SheetMaterialSI,
+    SheetModel,
+    SheetRecorder,
+    SheetSolver,
+    bias_strip,
+    rectangle,
+)
+from warpcloth.sim import ClampMotion
+from warpcloth.sim.resources import check_memory
+
+from .clamp_motion import segment_pieces
+from .materials import to_si
+from .sheet import AUTO, AUTO_FRACTION, SheetScene
+
+FAMILIES = {"warp": WARP, "weft": WEFT}
+
+
+@dataclass
+class SheetBatch:
+    """What :func:`build_sheet` makes: the model, its drives, the solver and the recorder."""
+
+    model: SheetModel
+    control: SheetControl
+    solver: SheetSolver
+    recorder: SheetRecorder
+
+
+def sheet_geometry(scene: SheetScene) -> SheetGeometry:
+    """The scene's cut, in SI."""
+    st, mm = scene.sheet, units.LENGTH_MM
+    if st.cut == "rectangle":
+        return rectangle(st.free_length_mm * mm, st.width_mm * mm, st.clamp_length_mm * mm, scene.spacing, st.edge_hinge)
+    return bias_strip(st.free_length_mm * mm, st.width_mm * mm, st.clamp_length_mm * mm, scene.spacing[0], st.edge_hinge)
+
+
+def sheet_material(scene: SheetScene) -> SheetMaterialSI:
+    """The fabric in SI: warp and weft by :func:`~warpcloth.scene.to_si`, shear by
+    :meth:`~warpcloth.scene.ShearMaterial.si` (the one KES → SI conversion of each)."""
+    rigidity, shear = scene.shear.si()
+    return SheetMaterialSI(to_si(scene.material), to_si(scene.weft_material()), rigidity, shear)
+
+
+def sheet_clamp(scene: SheetScene) -> SheetClampMotion:
+    """The clamp's rotation and translation in SI, the centre absolute (from the clamp edge's middle)."""
+    c = scene.clamp
+    return SheetClampMotion(
+        rotation=ClampMotion(*segment_pieces(c.rotation_segments, "theta_coefficients_si")),
+        axis=(c.axis_x, c.axis_y, c.axis_z),
+        centre=tuple(units.LENGTH_MM * v for v in (c.centre_dx_mm, c.centre_dy_mm, c.centre_dz_mm)),
+        translation=ClampMotion(*segment_pieces(c.translation_segments, "d_coefficients_mm", units.LENGTH_MM)),
+        direction=(c.direction_x, c.direction_y, c.direction_z),
+    )
+
+
+def _builder(scene: SheetScene, geometry: SheetGeometry) -> SheetBuilder:
+    builder = SheetBuilder(
+        geometry,
+        scene.run.gravity_m_per_s2,
+        release_time=scene.release.settle_time_s,
+        reversal_memory=scene.integrator.reversal_memory,
+    )
+    builder.add_sheet(
+        sheet_material(scene),
+        damping=scene.damping.gamma_per_s,
+        settle_damping=scene.release.settle_damping_per_s,
+        clamp=sheet_clamp(scene),
+    )
+    return builder
+
+
+def _nearest(points: np.ndarray, yz_mm: list[float]) -> tuple[int, float]:
+    target = np.array([0.0, *yz_mm]) * units.LENGTH_MM
+    distance = np.linalg.norm(points - target[None, :], axis=1)
+    k = int(np.argmin(distance))
+    return k, float(distance[k])
+
+
+def marker_nodes(scene: SheetScene, geometry: SheetGeometry) -> list[int]:
+    """The tracked nodes, ``output.markers_ij`` then ``output.markers_mm``; a SceneError
+    naming the marker when it is not on the sheet."""
+    nodes = []
+    for i, (a, b) in enumerate(scene.output.markers_ij):
+        try:
+            nodes.append(geometry.node(a, b))
+        except KeyError:
+            top = geometry.lattice.max(axis=0)
+            raise SceneError(
+                f"output.markers_ij[{i}]",
+                f"[{a}, {b}] is not a node of the sheet (its lattice reaches i ≤ {top[0]}, j ≤ {top[1]}, "
+                "where the cut keeps cells)",
+                related=("sheet.cut", "sheet.spacing_warp_mm", "sheet.spacing_weft_mm"),
+            ) from None
+    reach = 0.5 * max(geometry.spacing) * (1 + 1e-9)
+    for i, yz in enumerate(scene.output.markers_mm):
+        k, distance = _nearest(geometry.rest_positions, yz)
+        if distance > reach:
+            raise SceneError(
+                f"output.markers_mm[{i}]",
+                f"[{yz[0]:g}, {yz[1]:g}] mm is not on the sheet: the nearest node is {distance * 1e3:.3g} mm "
+                f"away (more than half a spacing, {reach * 1e3:.3g} mm); the sheet hangs from y = 0 to "
+                f"-{scene.sheet.free_length_mm:g} mm, z within ±{scene.sheet.width_mm / 2:g} mm",
+                related=("sheet.free_length_mm", "sheet.width_mm"),
+            )
+        nodes.append(k)
+    return nodes
+
+
+def probed_elements(scene: SheetScene, geometry: SheetGeometry) -> tuple[int, int]:
+    """(cell, hinge) probed: the free ones nearest ``output.probe_cell_mm`` and ``probe_hinge_mm``."""
+    rest = geometry.rest_positions
+    cell, _ = _nearest(rest[geometry.cell_nodes].mean(axis=1), scene.output.probe_cell_mm)
+    family = FAMILIES[scene.output.probe_hinge_family]
+    candidates = np.flatnonzero(geometry.hinge_family == family)
+    if not len(candidates):
+        raise SceneError(
+            "output.probe_hinge_family",
+            f"the sheet has no free {scene.output.probe_hinge_family} hinge (a line needs three nodes)",
+        )
+    k, _ = _nearest(rest[geometry.hinge_nodes[candidates, 1]], scene.output.probe_hinge_mm)
+    return cell, int(candidates[k])
+
+
+def check_sheet_scene(scene: SheetScene) -> SheetScene:
+    """The scene ready to run: markers on the sheet, memory that fits, and ``dt_s`` within
+    the stability estimate (``"auto"``: :data:`~warpcloth.scene.sheet.AUTO_FRACTION` of it,
+    a whole fraction of the probe interval, recorded with ``dt_chosen_by = "auto"``)."""
+    try:
+        geometry = sheet_geometry(scene)
+    except ValueError as exc:  # a bias cut narrower than a cell, a clamp holding nothing
+        raise SceneError("sheet.cut", f"{scene.sheet.cut}: {exc}", related=("sheet.width_mm",)) from None
+    marker_nodes(scene, geometry)
+    probed_elements(scene, geometry)
+    check_memory(
+        (200 + 16 * scene.integrator.reversal_memory) * geometry.n_nodes,
+        f"the state of a sheet of {geometry.n_nodes} nodes",
+        "use a coarser sheet.spacing_warp_mm / spacing_weft_mm",
+    )
+    model = _builder(scene, geometry).finalize(device="cpu", precision=scene.integrator.precision)
+    stable = SheetSolver(model, 1.0).stable_step()
+    dt = scene.integrator.dt_s
+    if dt == AUTO:
+        interval = scene.output_interval
+        chosen = interval / math.ceil(interval / (AUTO_FRACTION * stable) * (1 - 1e-12))
+        integrator = dataclasses.replace(scene.integrator, dt_s=chosen, dt_chosen_by=AUTO)
+        return dataclasses.replace(scene, integrator=integrator)
+    if dt > stable:
+        raise SceneError(
+            "integrator.dt_s",
+            f"{dt:g} s is above the sheet's linearised stability estimate {stable:.4g} s "
+            f"(SheetSolver.stable_step(), at sheet.spacing_warp_mm = {scene.sheet.spacing_warp_mm:g}, "
+            f"spacing_weft_mm = {scene.sheet.spacing_weft_mm:g}); use at most {AUTO_FRACTION:g} of it, "
+            'or dt_s = "auto"',
+            related=("sheet.spacing_warp_mm", "sheet.spacing_weft_mm", "material.from_file"),
+        )
+    return scene
+
+
+def build_sheet(scene: SheetScene, device: str | None = None) -> SheetBatch:
+    """Model, control, solver and recorder of one sheet scene (checked by :func:`check_sheet_scene`)."""
+    geometry = sheet_geometry(scene)
+    model = _builder(scene, geometry).finalize(device=device, precision=scene.integrator.precision)
+    solver = SheetSolver(
+        model,
+        scene.integrator.dt_s,
+        divergence_strain=scene.integrator.divergence_strain,
+        divergence_shear=math.radians(scene.integrator.divergence_shear_deg),
+    )
+    cell, hinge = probed_elements(scene, geometry)
+    recorder = SheetRecorder(
+        interval=scene.output_interval,
+        probes_per_frame=scene.output.probes_per_frame,
+        duration=scene.run.duration_s,
+        markers=tuple(marker_nodes(scene, geometry)),
+        probe_cell=cell,
+        probe_hinge=hinge,
+    )
+    return SheetBatch(model, model.control(), solver, recorder)
