@@ -13,7 +13,9 @@ from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
 from .scene import COORDINATES, Scene, build_batch, load_scene
 from .scene.overrides import Overrides, override_pairs
+from .scene.sheet import SheetScene
 from .scene.step import shared_auto_step
+from .sheet import SheetResult, simulate_sheets
 from .sim import RunResult, simulate_batch
 from .sim.runner import check_divergence_policy, check_recording_fits
 from .sim.state import checked_nodes
@@ -91,6 +93,41 @@ def simulate(
         parameters=parameters,
         attrs={"coordinates": f"{COORDINATES}; t = 0 at the release"},
         threads=threads,
+    )
+
+
+def simulate_sheet(
+    scene: SheetScene,
+    *,
+    device: str | None = None,
+    out: str | Path | None = None,
+    progress: bool = False,
+    overwrite: bool = False,
+    threads: int | None = None,
+) -> SheetResult:
+    """Run one sheet scene (:func:`~warpcloth.scene.sheet.load_sheet_scene` makes one) and
+    return what it recorded; ``out`` streams the sheet run directory
+    (:mod:`warpcloth.io.sheet_run_dir`), with the strip's refusal of an existing result
+    unless ``overwrite``, which replaces it only once the new run is complete. A diverged
+    sheet is a DivergenceError whose ``result`` holds what was recorded."""
+    from .io.sheet_run_dir import SheetRunWriter
+    from .scene.sheet_build import build_sheet
+    from .sim.recorder import output_schedule
+
+    if not isinstance(scene, SheetScene):
+        raise TypeError(f"simulate_sheet takes a SheetScene (load_sheet_scene makes one), got {scene!r}")
+    if out is not None:
+        check_output_directory(out, overwrite)
+    batch = build_sheet(scene, device)
+    sink = None
+    if out is not None:
+        schedule = output_schedule(
+            batch.recorder, batch.control.release_time, batch.solver.dt, batch.solver.release_step(batch.control)
+        )
+        frame_times = schedule.times(schedule.frame_samples)
+        sink = SheetRunWriter(out, scene, batch.model.geometry, batch.recorder.markers, frame_times, overwrite)
+    return simulate_sheets(
+        batch.model, batch.control, batch.solver, batch.recorder, sink=sink, progress=progress, threads=threads
     )
 
 

@@ -91,18 +91,18 @@ def check_output_directory(out_dir: str | Path, overwrite: bool = False) -> None
             )
 
 
-class RunWriter:
-    """Streams one batch run into a directory (see the module docstring).
+class StreamedDirectory:
+    """Where a run streams: the staging, the one-writer marker and the final swap that
+    every streamed run directory (a strip batch's, a sheet's) shares.
 
     Into a new or empty directory the run streams in place (an interrupted run reads as
     incomplete there). Over an existing result (``overwrite``) it streams into a hidden
-    sibling ``.<name>.new-<pid>`` and replaces the old directory only in :meth:`close`,
-    so a kill or a failure leaves the old result as it was.
+    sibling ``.<name>.new-<pid>`` and replaces the old directory only in :meth:`finish`,
+    so a kill or a failure leaves the old result as it was. ``disk_bytes`` is checked
+    free before anything is written (``disk_what`` and ``disk_advice`` say it).
     """
 
-    def __init__(
-        self, out_dir: str | Path, scenes: list[Scene], n_nodes: int, frame_times: np.ndarray, overwrite: bool = False
-    ) -> None:
+    def __init__(self, out_dir: str | Path, overwrite: bool, disk_bytes: int, disk_what: str, disk_advice: str) -> None:
         check_output_directory(out_dir, overwrite)
         self.target = Path(out_dir).absolute()
         writer = live_writer(self.target / WRITING)
@@ -116,15 +116,7 @@ class RunWriter:
         self.dir = self.target.with_name(f".{self.target.name}.new-{os.getpid()}") if replacing else self.target
         if replacing and self.dir.exists():
             shutil.rmtree(self.dir)  # a staging directory this process left before
-        n_samples = (len(frame_times) - 1) * scenes[0].output.probes_per_frame + 1
-        row_bytes = 16 + 24 * len(PROBE_FIELDS)  # "%.17g" fields of at most 24 characters
-        check_disk(
-            self.target,
-            16 * len(frame_times) * len(scenes) * n_nodes + n_samples * len(scenes) * row_bytes,
-            "the run's frames.npy and probes.csv",
-            "free space, choose another --out, or record less "
-            "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)",
-        )
+        check_disk(self.target, disk_bytes, disk_what, disk_advice)
         self.dir.mkdir(parents=True, exist_ok=True)
         # One writer per directory: a second process that passed the emptiness check at
         # the same moment finds the marker and stops instead of interleaving its rows.
@@ -142,6 +134,82 @@ class RunWriter:
                 f"{self.target} already holds a run (written meanwhile by another process); "
                 "choose another --out, or pass --overwrite",
             )
+
+    def finish(self) -> None:
+        """Release the marker and, over an old result, swap the complete new one in."""
+        release(self.dir / WRITING)
+        if self.dir != self.target:
+            # Swap: the old result moves aside, the complete new one takes its name, then
+            # the old goes. Killed between the two renames, both survive (hidden names).
+            old = self.target.with_name(f".{self.target.name}.old-{os.getpid()}")
+            os.replace(self.target, old)
+            os.replace(self.dir, self.target)
+            shutil.rmtree(old, ignore_errors=True)  # the new result is in place; the old copy goes if it can
+            self.dir = self.target
+
+
+class StreamedFrames:
+    """frames.npy written as a run goes, by ordinary writes at known offsets (its space
+    reserved at once, see the module docstring); frames never reached read as NaN."""
+
+    def __init__(self, path: Path, shape: tuple[int, ...]) -> None:
+        self.path = path
+        self.shape = shape
+        self.file = open(path, "wb")  # noqa: SIM115 - closed in close()
+        np.lib.format.write_array_header_1_0(self.file, {"descr": "<f8", "fortran_order": False, "shape": shape})
+        self.offset = self.file.tell()
+        self.frame_bytes = int(np.prod(shape[1:])) * 8
+        with naming(path):
+            reserve(self.file, self.offset + shape[0] * self.frame_bytes)
+        self.written = 0
+
+    def write(self, first: int, frames: np.ndarray) -> None:
+        """Store ``frames`` from frame index ``first`` on."""
+        self._write_block(first, np.ascontiguousarray(frames, dtype="<f8"))
+        self.written = max(self.written, first + len(frames))
+
+    def _write_block(self, first: int, block: np.ndarray) -> None:
+        with naming(self.path):
+            self.file.seek(self.offset + first * self.frame_bytes)
+            self.file.write(block.tobytes())
+
+    def sync(self) -> None:
+        """Make what was written durable."""
+        with naming(self.path):
+            self.file.flush()
+            os.fsync(self.file.fileno())
+
+    def fill(self) -> None:
+        """Frames never reached (every strip stopped by a divergence) read as NaN, never
+        as a shape collapsed onto the origin."""
+        missing = self.shape[0] - self.written
+        if missing:
+            self._write_block(self.written, np.full((missing, *self.shape[1:]), np.nan))
+            self.written = self.shape[0]
+
+    def close(self) -> None:
+        """Close the file (after the last :meth:`sync`)."""
+        self.file.close()
+
+
+class RunWriter:
+    """Streams one batch run into a directory (see the module docstring and
+    :class:`StreamedDirectory`)."""
+
+    def __init__(
+        self, out_dir: str | Path, scenes: list[Scene], n_nodes: int, frame_times: np.ndarray, overwrite: bool = False
+    ) -> None:
+        n_samples = (len(frame_times) - 1) * scenes[0].output.probes_per_frame + 1
+        row_bytes = 16 + 24 * len(PROBE_FIELDS)  # "%.17g" fields of at most 24 characters
+        self.place = StreamedDirectory(
+            out_dir,
+            overwrite,
+            16 * len(frame_times) * len(scenes) * n_nodes + n_samples * len(scenes) * row_bytes,
+            "the run's frames.npy and probes.csv",
+            "free space, choose another --out, or record less "
+            "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)",
+        )
+        self.dir = self.place.dir
         if len(scenes) == 1:
             write_scene(self.dir / "scene.toml", scenes[0])
         else:
@@ -169,16 +237,7 @@ class RunWriter:
         self.meta["committed"] = {"probe_rows": 0, "probe_bytes": 0, "frames": 0}
         self._write_meta()
         write_npy_atomically(self.dir / "frame_times.npy", frame_times)
-        self.frame_shape = (len(frame_times), len(scenes), n_nodes, 2)
-        self.frames = open(self.dir / "frames.npy", "wb")  # noqa: SIM115 - closed in close()
-        np.lib.format.write_array_header_1_0(
-            self.frames, {"descr": "<f8", "fortran_order": False, "shape": self.frame_shape}
-        )
-        self.frame_offset = self.frames.tell()
-        self.frame_bytes = int(np.prod(self.frame_shape[1:])) * 8
-        with naming(self.dir / "frames.npy"):
-            reserve(self.frames, self.frame_offset + self.frame_shape[0] * self.frame_bytes)
-        self.frames_written = 0
+        self.frames = StreamedFrames(self.dir / "frames.npy", (len(frame_times), len(scenes), n_nodes, 2))
         self.probes = open(self.dir / "probes.csv", "w", newline="\n")  # noqa: SIM115 - closed in close()
         self.probes.write(",".join(PROBE_COLUMNS) + "\n")
         self._commit(0)
@@ -191,13 +250,11 @@ class RunWriter:
         with naming(self.dir / "probes.csv"):
             self.probes.flush()
             os.fsync(self.probes.fileno())
-        with naming(self.dir / "frames.npy"):
-            self.frames.flush()
-            os.fsync(self.frames.fileno())
+        self.frames.sync()
         committed = self.meta["committed"]
         committed["probe_rows"] += rows
         committed["probe_bytes"] = self.probes.tell()
-        committed["frames"] = self.frames_written
+        committed["frames"] = self.frames.written
         self._write_meta()
 
     def write_probes(self, t: np.ndarray, variant: np.ndarray, values: np.ndarray) -> None:
@@ -210,23 +267,12 @@ class RunWriter:
 
     def write_frames(self, first: int, frames: np.ndarray) -> None:
         """Store frames ``[frame, variant, node, xy]`` starting at frame index ``first``."""
-        self._write_frame_block(first, np.ascontiguousarray(frames, dtype="<f8"))
-        self.frames_written = max(self.frames_written, first + len(frames))
+        self.frames.write(first, frames)
         self._commit(0)
-
-    def _write_frame_block(self, first: int, block: np.ndarray) -> None:
-        with naming(self.dir / "frames.npy"):
-            self.frames.seek(self.frame_offset + first * self.frame_bytes)
-            self.frames.write(block.tobytes())
 
     def close(self, diverged: list, extra: dict) -> None:
         """Finish the files and mark the run complete."""
-        # Frames never reached (every strip stopped by a divergence) read as NaN, never
-        # as a strip collapsed onto the origin.
-        missing = self.frame_shape[0] - self.frames_written
-        if missing:
-            self._write_frame_block(self.frames_written, np.full((missing, *self.frame_shape[1:]), np.nan))
-            self.frames_written = self.frame_shape[0]
+        self.frames.fill()
         self._commit(0)
         self.probes.close()
         self.frames.close()
@@ -235,15 +281,8 @@ class RunWriter:
         self.meta["provenance"] = provenance(extra.get("device"))
         self.meta["complete"] = True
         self._write_meta()
-        release(self.dir / WRITING)
-        if self.dir != self.target:
-            # Swap: the old result moves aside, the complete new one takes its name, then
-            # the old goes. Killed between the two renames, both survive (hidden names).
-            old = self.target.with_name(f".{self.target.name}.old-{os.getpid()}")
-            os.replace(self.target, old)
-            os.replace(self.dir, self.target)
-            shutil.rmtree(old, ignore_errors=True)  # the new result is in place; the old copy goes if it can
-            self.dir = self.target
+        self.place.finish()
+        self.dir = self.place.dir
 
 
 def read_probes(path: Path, meta: dict) -> pd.DataFrame:
@@ -254,35 +293,44 @@ def read_probes(path: Path, meta: dict) -> pd.DataFrame:
     would read orders of magnitude wrong) are ignored in an interrupted run; a complete
     run whose file is not exactly its committed size is refused.
     """
-    file = path / "probes.csv"
     committed = meta["committed"]
+    numbers = read_committed_csv(
+        path / "probes.csv", committed["probe_rows"], committed["probe_bytes"], meta["complete"], PROBE_COLUMNS
+    )
+    numbers["variant"] = numbers["variant"].astype(int)
+    check_time_order(path / "probes.csv", numbers["t"].to_numpy(), numbers["variant"].to_numpy(), line_offset=2)
+    return numbers
+
+
+def read_committed_csv(file: Path, rows: int, size: int, complete: bool, columns: tuple[str, ...]) -> pd.DataFrame:
+    """The committed part of a streamed CSV table (``rows`` rows, ``size`` bytes, as the
+    run's meta.json records), of exactly ``columns``, every cell a number; a DataFrame."""
     with open(file, "rb") as fh:
         data = fh.read()
-    if meta["complete"] and len(data) != committed["probe_bytes"]:
+    if complete and len(data) != size:
         raise DataFileError(
             file,
-            f"holds {len(data)} bytes but meta.json records {committed['probe_bytes']} for "
+            f"holds {len(data)} bytes but meta.json records {size} for "
             "the complete run: the file was truncated or changed",
         )
-    if len(data) < committed["probe_bytes"]:
+    if len(data) < size:
         raise DataFileError(
             file,
-            f"is shorter ({len(data)} bytes) than its committed part "
-            f"({committed['probe_bytes']} bytes): the file was truncated",
+            f"is shorter ({len(data)} bytes) than its committed part ({size} bytes): the file was truncated",
         )
-    text = data[: committed["probe_bytes"]].decode("utf-8", errors="replace")
+    text = data[:size].decode("utf-8", errors="replace")
     try:
         numbers = pd.read_csv(io.StringIO(text))
     except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
-        raise DataFileError(file, f"is not a probe table: {exc}") from None
-    if list(numbers.columns) != list(PROBE_COLUMNS):
+        raise DataFileError(file, f"is not a table of the run: {exc}") from None
+    if list(numbers.columns) != list(columns):
         raise DataFileError(
-            file, f"has columns {', '.join(map(str, numbers.columns))}; a run writes {', '.join(PROBE_COLUMNS)}"
+            file, f"has columns {', '.join(map(str, numbers.columns))}; a run writes {', '.join(columns)}"
         )
     damaged = [c for c in numbers.columns if not pd.api.types.is_numeric_dtype(numbers[c])]
     if damaged:
         # only a changed file gets here: find its first cell that is not a number
-        column = PROBE_COLUMNS.index(damaged[0])
+        column = list(columns).index(damaged[0])
         row = int(
             np.flatnonzero(pd.to_numeric(numbers[damaged[0]], errors="coerce").isna() & numbers[damaged[0]].notna())[0]
         )
@@ -291,12 +339,8 @@ def read_probes(path: Path, meta: dict) -> pd.DataFrame:
             f"{damaged[0]} is {numbers.iat[row, column]!r}, not a number: the file was changed after the run",
             row + 2,
         )
-    if meta["complete"] and len(numbers) != committed["probe_rows"]:
-        raise DataFileError(
-            file, f"holds {len(numbers)} rows but meta.json records {committed['probe_rows']} for the complete run"
-        )
-    numbers["variant"] = numbers["variant"].astype(int)
-    check_time_order(file, numbers["t"].to_numpy(), numbers["variant"].to_numpy(), line_offset=2)
+    if complete and len(numbers) != rows:
+        raise DataFileError(file, f"holds {len(numbers)} rows but meta.json records {rows} for the complete run")
     return numbers
 
 

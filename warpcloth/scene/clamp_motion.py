@@ -35,9 +35,7 @@ def clamp_pieces(clamp: ClampSection) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return t[:-1], t[1:], coefficients
 
 
-def segment_pieces(
-    segments: list, coefficients: str, scale: float = 1.0
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def segment_pieces(segments: list, coefficients: str, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(start [S], end [S], coefficients [S, 5]) of scene segments whose attribute
     ``coefficients`` holds c_0..c_k, times ``scale`` (to SI)."""
     start = np.array([s.t_start_s for s in segments], dtype=float)

@@ -108,6 +108,12 @@ def scene_from_dict(data: dict, choose_step: bool = True) -> Scene:
     :func:`~warpcloth.scene.step.with_chosen_step` picks for this scene alone, unless
     ``choose_step`` is false (a sweep picks one step for all its variants).
     """
+    if isinstance(data, dict) and "sheet" in data:
+        raise SceneError(
+            "sheet",
+            "this is a sheet scene: `warpcloth run` and warpcloth.scene.sheet.load_sheet_scene "
+            "take it (sweeps, fits and the strip's Python API take strip scenes)",
+        )
     scene = parse_section(Scene, with_material_file(data), "")
     validate_scene(scene)
     if choose_step and scene.integrator.dt_s == AUTO:

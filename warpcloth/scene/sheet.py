@@ -22,11 +22,19 @@ from warpcloth.sheet.geometry import EDGE_HINGES
 
 from .files import _read_scene
 from .locate import located
-from .materials import MATERIAL_FILE_KEY, ONE_PER_FABRIC, WEFT_TABLE, material_fields, read_material_file
-from .materials import parse_weft, validate_material, with_material_file
+from .materials import (
+    MATERIAL_FILE_KEY,
+    ONE_PER_FABRIC,
+    WEFT_TABLE,
+    material_fields,
+    parse_weft,
+    read_material_file,
+    validate_material,
+    with_material_file,
+)
 from .overrides import Overrides, apply_overrides
 from .parse import parse_section
-from .schema import ClampSegment, DampingSection, MaterialSection, RunSection, _field, field_types
+from .schema import ClampSection, ClampSegment, DampingSection, MaterialSection, RunSection, _field, field_types
 from .shear import SHEAR_TABLE, ShearMaterial, parse_shear
 from .validate import MAX_STEPS, _multiple, validate_segments
 
@@ -217,18 +225,26 @@ SHEET_SECTIONS = tuple(f.name for f in dataclasses.fields(SheetScene))
 
 
 def scene_kind(data: dict, where: str = "the scene") -> str:
-    """``"strip"`` or ``"sheet"``: which table raw scene ``data`` has; a SceneError when it
-    has both or neither."""
-    has = [name for name in ("strip", "sheet") if name in data]
-    if len(has) == 2:
+    """``"strip"`` or ``"sheet"``: which table raw scene ``data`` has. Both is a SceneError;
+    so is neither in a file that gives a sheet's own tables or clamp fields ([weft],
+    [shear], clamp.rotation_segments, ...), which without [sheet] would be read as a
+    strip's and refused field by field. Neither otherwise is a strip with the default
+    geometry (an empty file is the documented defaults)."""
+    if "strip" in data and "sheet" in data:
         raise SceneError("sheet", f"{where} has both [strip] and [sheet]; a scene is one strip or one sheet")
-    if not has:
+    if "sheet" in data:
+        return "sheet"
+    clamp = data.get("clamp")
+    strip_clamp = {f.name for f in dataclasses.fields(ClampSection)}
+    own = [f"[{t}]" for t in (WEFT_TABLE, SHEAR_TABLE) if t in data]
+    own += [f"clamp.{k}" for k in (clamp if isinstance(clamp, dict) else {}) if k not in strip_clamp]
+    if "strip" not in data and own:
         raise SceneError(
-            "strip",
-            f"{where} has neither [strip] nor [sheet]; say which it is (a strip scene with the "
-            "default geometry is an empty [strip] table)",
+            "sheet",
+            f"{where} has neither [strip] nor [sheet], but gives {', '.join(own)}, which only a sheet "
+            "scene has; add a [sheet] table (or a [strip] one and the strip's fields)",
         )
-    return has[0]
+    return "strip"
 
 
 def _complete(table: dict, law_key: str = "bending_law") -> bool:
@@ -273,7 +289,8 @@ def sheet_scene_from_dict(data: dict) -> SheetScene:
     [weft] and [shear]); ``dt_s = "auto"`` stays a word until :func:`check_sheet_scene`."""
     if not isinstance(data, dict):
         raise SceneError("scene", f"expected a table, got {data!r}")
-    scene_kind(data)
+    if scene_kind(data) != "sheet":
+        raise SceneError("sheet", "is missing: this is a strip scene (warpcloth.load_scene reads it)")
     data = _with_sheet_material(data)
     shear = data.pop(SHEAR_TABLE, None)
     if shear is None:

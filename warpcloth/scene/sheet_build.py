@@ -48,9 +48,10 @@ class SheetBatch:
 def sheet_geometry(scene: SheetScene) -> SheetGeometry:
     """The scene's cut, in SI."""
     st, mm = scene.sheet, units.LENGTH_MM
+    lengths = (st.free_length_mm * mm, st.width_mm * mm, st.clamp_length_mm * mm)
     if st.cut == "rectangle":
-        return rectangle(st.free_length_mm * mm, st.width_mm * mm, st.clamp_length_mm * mm, scene.spacing, st.edge_hinge)
-    return bias_strip(st.free_length_mm * mm, st.width_mm * mm, st.clamp_length_mm * mm, scene.spacing[0], st.edge_hinge)
+        return rectangle(*lengths, scene.spacing, st.edge_hinge)
+    return bias_strip(*lengths, scene.spacing[0], st.edge_hinge)
 
 
 def sheet_material(scene: SheetScene) -> SheetMaterialSI:

@@ -1,0 +1,277 @@
+"""Sheet run directories: a woven sheet's results stream to disk as they are produced
+(with the strip's staging, marker, commit and swap, :mod:`.run_dir`), and are read back.
+
+Layout of a sheet run directory::
+
+    scene.toml          the resolved sheet scene (every field, the material's included)
+    probes.csv          one row per (t, sheet): t, sheet, SHEET_PROBE_FIELDS; SI units
+    markers.csv         long form, one row per (t, sheet, marker): t, sheet, marker, x, y, z (m)
+    frames.npy          float array (frame, sheet, node, xyz) of node positions, m
+    frame_times.npy     (frame,) times of the frames, s
+    geometry.npz        lattice [node, (i, j)], rest_positions [node, xyz] (m), clamped
+                        [node], faces [face, 4] (the mesh's quads, corners in loop order),
+                        cells [cell, 4] (the free cells the kernels shear, in their order)
+    meta.json           kind "sheet", sizes, units, coordinates, the markers' nodes,
+                        health, completeness and what is committed
+
+As for a strip's run, meta.json says ``"complete": false`` until the end, and
+``"committed"`` how many rows and bytes of each CSV file and how many frames are durable;
+a reader of an interrupted run uses exactly that part.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import tomli_w
+
+from warpcloth.errors import DataFileError
+from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS, SHEET_PROBE_UNITS
+from warpcloth.scene.sheet import SheetScene, read_sheet_scene
+from warpcloth.sheet import SheetGeometry
+
+from .atomic import naming, write_npy_atomically, write_text_atomically
+from .json_file import read_json
+from .provenance import provenance
+from .run_dir import StreamedDirectory, StreamedFrames, read_committed_csv
+
+SHEET_COORDINATES = "x out of the sheet's rest plane, y up, z across, m, from the middle of the clamp edge (at rest)"
+"""The frame of every position a sheet run stores, written into its meta.json."""
+SHEET_PROBE_COLUMNS = ("t", "sheet", *SHEET_PROBE_FIELDS)
+MARKER_COLUMNS = ("t", "sheet", "marker", "x", "y", "z")
+ROW_BYTES = 24  # a "%.17g" field at most
+
+
+def mesh_faces(geometry: SheetGeometry) -> np.ndarray:
+    """The sheet's quads ``[face, 4]``, corners (i, j), (i+1, j), (i+1, j+1), (i, j+1) in loop
+    order: every lattice cell whose four corners are nodes (the cut's cells, the clamped
+    ones included)."""
+    index = {(int(i), int(j)): k for k, (i, j) in enumerate(geometry.lattice)}
+    faces = [
+        (k, index[(i + 1, j)], index[(i + 1, j + 1)], index[(i, j + 1)])
+        for (i, j), k in index.items()
+        if (i + 1, j) in index and (i, j + 1) in index and (i + 1, j + 1) in index
+    ]
+    return np.array(sorted(faces), dtype=np.int32).reshape(-1, 4)
+
+
+class SheetRunWriter:
+    """Streams one sheet run into a directory (a :class:`~warpcloth.sheet.SheetSink`)."""
+
+    def __init__(
+        self,
+        out_dir: str | Path,
+        scene: SheetScene,
+        geometry: SheetGeometry,
+        markers: tuple[int, ...],
+        frame_times: np.ndarray,
+        overwrite: bool = False,
+    ) -> None:
+        n_frames, n_nodes = len(frame_times), geometry.n_nodes
+        n_samples = (n_frames - 1) * scene.output.probes_per_frame + 1
+        self.place = StreamedDirectory(
+            out_dir,
+            overwrite,
+            24 * n_frames * n_nodes + n_samples * ROW_BYTES * (len(SHEET_PROBE_COLUMNS) + 6 * len(markers)),
+            "the run's frames.npy, probes.csv and markers.csv",
+            "free space, choose another --out, or record less "
+            "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)",
+        )
+        self.dir = self.place.dir
+        (self.dir / "scene.toml").write_text(tomli_w.dumps(scene.to_dict()))
+        faces = mesh_faces(geometry)
+        write_npy_atomically(self.dir / "frame_times.npy", frame_times)
+        with naming(self.dir / "geometry.npz"):
+            np.savez(
+                self.dir / "geometry.npz",
+                lattice=geometry.lattice,
+                rest_positions=geometry.rest_positions,
+                clamped=geometry.clamped,
+                faces=faces,
+                cells=geometry.cell_nodes,
+            )
+        self.meta = {
+            "kind": "sheet",
+            "complete": False,
+            "n_sheets": 1,
+            "n_nodes": n_nodes,
+            "n_faces": len(faces),
+            "spacing_m": list(geometry.spacing),
+            "coordinates": SHEET_COORDINATES,
+            "probe_columns": list(SHEET_PROBE_COLUMNS),
+            "probe_units": {"t": "s", "sheet": "index", **SHEET_PROBE_UNITS},
+            "marker_columns": list(MARKER_COLUMNS),
+            "marker_units": {"t": "s", "sheet": "index", "marker": "index", "x": "m", "y": "m", "z": "m"},
+            "markers": [
+                {
+                    "marker": k,
+                    "node": int(node),
+                    "lattice": [int(v) for v in geometry.lattice[node]],
+                    "rest_position_m": [float(v) for v in geometry.rest_positions[node]],
+                }
+                for k, node in enumerate(markers)
+            ],
+            "frames": {
+                "file": "frames.npy",
+                "shape": [n_frames, 1, n_nodes, 3],
+                "axes": ["frame", "sheet", "node", "xyz"],
+                "unit": "m",
+                "times_file": "frame_times.npy",
+            },
+            "geometry": {
+                "file": "geometry.npz",
+                "arrays": {
+                    "lattice": "[node, (i, j)]: i along the warp, j along the weft",
+                    "rest_positions": "[node, xyz], m",
+                    "clamped": "[node], bool",
+                    "faces": "[face, 4]: quads, corners in loop order",
+                    "cells": "[cell, 4]: the free cells the kernels shear (probe index), corners (i,j), (i+1,j), "
+                    "(i,j+1), (i+1,j+1)",
+                },
+            },
+            "diverged": [],
+            "committed": {"probe_rows": 0, "probe_bytes": 0, "marker_rows": 0, "marker_bytes": 0, "frames": 0},
+        }
+        self._write_meta()
+        self.frames = StreamedFrames(self.dir / "frames.npy", (n_frames, 1, n_nodes, 3))
+        self.tables = {}
+        for name, columns in (("probes.csv", SHEET_PROBE_COLUMNS), ("markers.csv", MARKER_COLUMNS)):
+            self.tables[name] = open(self.dir / name, "w", newline="\n")  # noqa: SIM115 - closed in close()
+            self.tables[name].write(",".join(columns) + "\n")
+        self._commit(0, 0)
+
+    def _write_meta(self) -> None:
+        write_text_atomically(self.dir / "meta.json", json.dumps(self.meta, indent=2))
+
+    def _commit(self, probe_rows: int, marker_rows: int) -> None:
+        # Data first, durably; then the record of how much of it is valid.
+        for name, table in self.tables.items():
+            with naming(self.dir / name):
+                table.flush()
+                os.fsync(table.fileno())
+        self.frames.sync()
+        committed = self.meta["committed"]
+        committed["probe_rows"] += probe_rows
+        committed["probe_bytes"] = self.tables["probes.csv"].tell()
+        committed["marker_rows"] += marker_rows
+        committed["marker_bytes"] = self.tables["markers.csv"].tell()
+        committed["frames"] = self.frames.written
+        self._write_meta()
+
+    def write_samples(self, t: np.ndarray, probes: np.ndarray, markers: np.ndarray, valid: np.ndarray) -> None:
+        """Append the valid samples: probes ``[sample, field, sheet]``, markers ``[sample,
+        sheet, marker, xyz]`` (rows after a divergence are never written)."""
+        sample, sheet = np.nonzero(valid)
+        rows = np.column_stack([t[sample], sheet, probes[sample, :, sheet]])
+        with naming(self.dir / "probes.csv"):
+            fmt = ["%.10g", "%d"] + ["%.17g"] * probes.shape[1]
+            np.savetxt(self.tables["probes.csv"], rows, fmt=fmt, delimiter=",")
+        n_markers = markers.shape[2]
+        marker = np.tile(np.arange(n_markers), len(sample))
+        positions = markers[sample, sheet].reshape(-1, 3)
+        marks = np.column_stack([np.repeat(t[sample], n_markers), np.repeat(sheet, n_markers), marker, positions])
+        with naming(self.dir / "markers.csv"):
+            np.savetxt(self.tables["markers.csv"], marks, fmt=["%.10g", "%d", "%d"] + ["%.17g"] * 3, delimiter=",")
+        self._commit(len(rows), len(marks))
+
+    def write_frames(self, first: int, frames: np.ndarray) -> None:
+        """Store frames ``[frame, sheet, node, xyz]`` from frame index ``first`` on."""
+        self.frames.write(first, frames)
+        self._commit(0, 0)
+
+    def close(self, diverged: list, extra: dict) -> None:
+        """Finish the files and mark the run complete."""
+        self.frames.fill()
+        self._commit(0, 0)
+        for table in self.tables.values():
+            table.close()
+        self.frames.close()
+        self.meta["diverged"] = [
+            {"sheet": d.sheet, "time_s": d.time_s, "step": d.step, "message": d.describe()} for d in diverged
+        ]
+        self.meta.update(extra)
+        self.meta["provenance"] = provenance(extra.get("device"))
+        self.meta["complete"] = True
+        self._write_meta()
+        self.place.finish()
+        self.dir = self.place.dir
+
+
+@dataclass
+class SheetRun:
+    """A sheet run directory read back (an interrupted run: what it committed)."""
+
+    path: Path
+    scene: SheetScene
+    meta: dict
+    probes: pd.DataFrame
+    markers: pd.DataFrame
+    frame_times: np.ndarray
+    frames: np.ndarray  # [frame, sheet, node, xyz], m
+    lattice: np.ndarray
+    rest_positions: np.ndarray
+    faces: np.ndarray
+    complete: bool
+
+    @property
+    def frame_rate(self) -> float:
+        """Shape frames per second."""
+        return self.scene.output.frame_rate_hz
+
+
+def is_sheet_run(path: str | Path) -> bool:
+    """Whether ``path`` holds a sheet run (its meta.json says kind "sheet")."""
+    meta = Path(path) / "meta.json"
+    return meta.is_file() and read_json(meta).get("kind") == "sheet"
+
+
+def read_sheet_run(path: str | Path) -> SheetRun:
+    """A sheet run directory as a :class:`SheetRun`; a DataFileError naming the file when
+    it is damaged or not a sheet run."""
+    path = Path(path)
+    meta = read_json(path / "meta.json")
+    if meta.get("kind") != "sheet" or meta.get("coordinates") != SHEET_COORDINATES:
+        raise DataFileError(path / "meta.json", 'is not a sheet run\'s (kind "sheet", its coordinates)')
+    committed = meta.get("committed", {})
+    reached = committed.get("frames", 0)
+    if not reached:
+        raise DataFileError(path, "the run was interrupted before its first frame")
+    try:
+        stored = np.load(path / "frames.npy", mmap_mode="r")
+        times = np.load(path / "frame_times.npy")
+        geometry = np.load(path / "geometry.npz")
+        lattice, rest, faces = geometry["lattice"], geometry["rest_positions"], geometry["faces"]
+    except (ValueError, OSError, EOFError, KeyError) as exc:
+        raise DataFileError(path, f"cannot be read as a sheet run ({exc}): the run directory is damaged") from None
+    expected = (len(times), meta["n_sheets"], meta["n_nodes"], 3)
+    if stored.shape != expected or reached > expected[0] or len(rest) != meta["n_nodes"]:
+        raise DataFileError(
+            path / "frames.npy",
+            f"holds frames of shape {stored.shape}, but the run recorded {expected} ({reached} committed) "
+            f"of a geometry of {len(rest)} nodes: the run directory is damaged",
+        )
+    complete = bool(meta["complete"])
+    probes = read_committed_csv(
+        path / "probes.csv", committed["probe_rows"], committed["probe_bytes"], complete, SHEET_PROBE_COLUMNS
+    )
+    markers = read_committed_csv(
+        path / "markers.csv", committed["marker_rows"], committed["marker_bytes"], complete, MARKER_COLUMNS
+    )
+    return SheetRun(
+        path,
+        read_sheet_scene(path / "scene.toml"),
+        meta,
+        probes,
+        markers,
+        times[:reached],
+        np.asarray(stored[:reached]),
+        lattice,
+        rest,
+        faces,
+        complete,
+    )
