@@ -169,8 +169,8 @@ def check_sheet_scene(scene: SheetScene) -> SheetScene:
             "integrator.dt_s",
             f"{dt:g} s is above the sheet's linearised stability estimate {stable:.4g} s "
             f"(SheetSolver.stable_step(), at sheet.spacing_warp_mm = {scene.sheet.spacing_warp_mm:g}, "
-            f"spacing_weft_mm = {scene.sheet.spacing_weft_mm:g}); use at most {AUTO_FRACTION:g} of it, "
-            'or dt_s = "auto"',
+            f"spacing_weft_mm = {scene.sheet.spacing_weft_mm:g}); use a dt_s below it (in motion, where "
+            f'strain stiffens the yarns, {AUTO_FRACTION:g} of it is safe), or dt_s = "auto"',
             related=("sheet.spacing_warp_mm", "sheet.spacing_weft_mm", "material.from_file"),
         )
     return scene

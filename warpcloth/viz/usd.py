@@ -31,8 +31,10 @@ import pandas as pd
 from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdUtils, Vt
 
 from warpcloth.errors import ArgumentError
+from warpcloth.io.atomic import write_atomically
 from warpcloth.io.provenance import provenance
 from warpcloth.io.recording import Recording
+from warpcloth.io.sheet_run_dir import SheetRun
 from warpcloth.viz.geometry import (
     BOX_QUADS,
     clamp_box,
@@ -295,3 +297,60 @@ def _write_clips(
     stitched.subLayerPaths = [f"./{Path(p).name}" for p in stitched.subLayerPaths]
     stitched.Save()
     return Path(stitched.realPath)
+
+
+def export_sheet_usd(run: SheetRun, out_file: str | Path) -> Path:
+    """Write a sheet run (:func:`warpcloth.io.sheet_run_dir.read_sheet_run`) as a USD stage
+    at ``out_file``: one animated ``UsdGeom.Mesh`` per sheet (``/World/Sheets/sheet_0000``),
+    quads from the geometry's faces, the node positions time-sampled per frame, and the
+    weave as primvars: per vertex its lattice position ``warpcloth:lattice`` (i along the
+    warp, j along the weft), per face the rest directions of the warp and the weft
+    (``warpcloth:warp_direction``, ``warpcloth:weft_direction``). Frames after a
+    divergence hold the last shape and are invisible. Written whole under a temporary
+    name and renamed."""
+    out = check_stage_path(out_file)
+    frames = run.frames
+    n_frames = len(frames)
+    faces = run.faces
+    rest = run.rest_positions
+    warp = rest[faces[:, 1]] - rest[faces[:, 0]]
+    weft = rest[faces[:, 3]] - rest[faces[:, 0]]
+    warp /= np.linalg.norm(warp, axis=1, keepdims=True)
+    weft /= np.linalg.norm(weft, axis=1, keepdims=True)
+
+    def author(path: Path) -> None:
+        stage = Usd.Stage.CreateNew(str(path))
+        _set_stage_metadata(stage, n_frames, run.frame_rate)
+        UsdGeom.Xform.Define(stage, "/World")
+        UsdGeom.Scope.Define(stage, "/World/Sheets")
+        for sheet in range(frames.shape[1]):
+            mesh = UsdGeom.Mesh.Define(stage, f"/World/Sheets/sheet_{sheet:04d}")
+            mesh.CreateFaceVertexCountsAttr(Vt.IntArray([4] * len(faces)))
+            mesh.CreateFaceVertexIndicesAttr(Vt.IntArray([int(v) for v in faces.ravel()]))
+            mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+            mesh.CreateDoubleSidedAttr(True)
+            api = UsdGeom.PrimvarsAPI(mesh)
+            api.CreatePrimvar("warpcloth:lattice", Sdf.ValueTypeNames.Int2Array, UsdGeom.Tokens.vertex).Set(
+                Vt.Vec2iArray([Gf.Vec2i(int(i), int(j)) for i, j in run.lattice])
+            )
+            for name, directions in (("warp_direction", warp), ("weft_direction", weft)):
+                api.CreatePrimvar(f"warpcloth:{name}", Sdf.ValueTypeNames.Float3Array, UsdGeom.Tokens.uniform).Set(
+                    Vt.Vec3fArray.FromNumpy(directions.astype(np.float32))
+                )
+            mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.constant).Set(Vt.Vec3fArray([Gf.Vec3f(0.55, 0.45, 0.35)]))
+            visibility = mesh.CreateVisibilityAttr()
+            last = rest
+            for f in range(n_frames):
+                shape = frames[f, sheet]
+                alive = bool(np.isfinite(shape).all())
+                last = shape if alive else last
+                mesh.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(last.astype(np.float32)), f)
+                mesh.GetExtentAttr().Set(_extent(last, 0.0), f)
+                visibility.Set(UsdGeom.Tokens.inherited if alive else UsdGeom.Tokens.invisible, f)
+        stage.SetDefaultPrim(stage.GetPrimAtPath("/World"))
+        stage.GetRootLayer().Save()
+
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with usd_write_errors(out):
+        write_atomically(out, author)
+    return out
