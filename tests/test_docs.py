@@ -36,3 +36,18 @@ def test_the_readme_is_a_landing_page():
     text = README.read_text()
     assert len(text.splitlines()) < 120
     assert "docs/guide.md" in text and "## Documentation" in text
+
+
+def test_every_sheet_scene_field_is_documented():
+    # in the guide's own section for sheets; a [material] field is the strip's, documented there
+    from warpcloth.scene.sheet import sheet_scene_fields
+
+    text = GUIDE.read_text()
+    section = text[text.index("### Sheet scene files") :]
+    section = section[: section.index("\n## ")]
+    missing = [
+        name
+        for name in sheet_scene_fields()
+        if name not in section and not (name.startswith("material.") and name in text)
+    ]
+    assert not missing, f"undocumented sheet scene fields: {missing}"

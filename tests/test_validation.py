@@ -176,7 +176,9 @@ def test_malformed_scene_files(tmp_path):
     bad.write_text("[strip\nspacing_mm = 5\n")
     with pytest.raises(wc.SceneError, match="is not valid TOML"):
         wc.load_scene(bad)
-    with pytest.raises(wc.ArgumentError, match="name_or_path: no bundled scene .no_such_scene. .bundled: damped_swing"):
+    with pytest.raises(
+        wc.ArgumentError, match="name_or_path: no bundled scene .no_such_scene. .bundled: bias_strip, damped_swing"
+    ):
         wc.load_scene("no_such_scene")
     with pytest.raises(wc.SceneError, match="strip: expected a table"):
         scene_from_dict({"strip": 5})

@@ -140,7 +140,8 @@ def sheet_summary(scene: SheetScene, result: SheetResult) -> list[str]:
         lag = moved - clamp  # the marker against the clamp's translation: the swing itself
         peak = 1e3 * np.nanmax(np.abs(moved), axis=0)
         lines.append(
-            f"marker {k} (at y = {start[k, 1] * 1e3 + 0.0:.1f} mm, z = {start[k, 2] * 1e3 + 0.0:.1f} mm at t = 0): "
+            f"marker {k} (at y = {round(start[k, 1] * 1e3, 1) + 0.0:.1f} mm, "
+            f"z = {round(start[k, 2] * 1e3, 1) + 0.0:.1f} mm at t = 0): "
             f"peak sideways (z) {peak[2]:.3f} mm ({1e3 * np.nanmax(np.abs(lag[:, 2])):.3f} mm against the "
             f"clamp), out of plane (x) {peak[0]:.3f} mm"
         )

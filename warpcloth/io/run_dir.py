@@ -347,6 +347,12 @@ def read_committed_csv(file: Path, rows: int, size: int, complete: bool, columns
 def _check_meta(path: Path, meta: dict) -> None:
     # meta.json says what the other files must be; a run whose files disagree is damaged
     file = path / "meta.json"
+    if meta.get("kind") == "sheet":
+        raise DataFileError(
+            file,
+            "is a sheet run's; `warpcloth run SCENE --usd FILE` exports a sheet, and "
+            "warpcloth.io.sheet_run_dir.read_sheet_run reads it",
+        )
     if "committed" not in meta:
         raise DataFileError(
             file,
