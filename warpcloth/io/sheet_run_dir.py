@@ -224,12 +224,6 @@ class SheetRun:
         return self.scene.output.frame_rate_hz
 
 
-def is_sheet_run(path: str | Path) -> bool:
-    """Whether ``path`` holds a sheet run (its meta.json says kind "sheet")."""
-    meta = Path(path) / "meta.json"
-    return meta.is_file() and read_json(meta).get("kind") == "sheet"
-
-
 def read_sheet_run(path: str | Path) -> SheetRun:
     """A sheet run directory as a :class:`SheetRun`; a DataFileError naming the file when
     it is damaged or not a sheet run."""

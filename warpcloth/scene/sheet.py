@@ -36,12 +36,12 @@ from .overrides import Overrides, apply_overrides
 from .parse import parse_section
 from .schema import ClampSection, ClampSegment, DampingSection, MaterialSection, RunSection, _field, field_types
 from .shear import SHEAR_TABLE, ShearMaterial, parse_shear
+from .step import AUTO
 from .validate import MAX_STEPS, _multiple, validate_segments
 
 CUTS = ("rectangle", "bias")
 """Choices of ``sheet.cut``."""
 
-AUTO = "auto"
 AUTO_FRACTION = 0.5
 """``integrator.dt_s = "auto"`` takes this fraction of the linearised stability estimate
 (:meth:`~warpcloth.sheet.SheetSolver.stable_step`): the estimate is at the tensile
