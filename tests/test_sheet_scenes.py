@@ -211,3 +211,27 @@ def test_an_interrupted_sheet_run_reads_as_incomplete(tmp_path, monkeypatch):
     run = read_sheet_run(out)
     assert not run.complete and len(run.frame_times) >= 1 and run.meta["committed"]["frames"] == len(run.frames)
     assert np.isfinite(run.frames).all()
+
+
+def test_a_diverged_sheet_is_one_message_and_keeps_its_record(tmp_path):
+    # a 100 mm jerk in 50 ms shears the corner cell past a 10° limit at t ≈ 0.05 s
+    out = tmp_path / "div"
+    proc = run_cli(
+        "run",
+        "shear_swing",
+        "--out",
+        out,
+        *SHORT,
+        *COARSE["shear_swing"],
+        "--set",
+        "clamp.translation_segments=[{t_start_s = 0.0, t_end_s = 0.05, d_coefficients_mm = [0.0, 0.0, 40000.0]}]",
+        "--set",
+        "integrator.divergence_shear_deg=10",
+    )
+    assert proc.returncode == 3 and "Traceback" not in proc.stderr
+    assert "sheet 0 diverged after t = 0" in proc.stderr and "shear angle (rad)" in proc.stderr
+    run = read_sheet_run(out)
+    (diverged,) = run.meta["diverged"]
+    assert run.complete and run.probes["t"].max() <= diverged["time_s"] < 0.1
+    after = run.frame_times > diverged["time_s"]
+    assert after.any() and np.isnan(run.frames[after]).all() and np.isfinite(run.frames[~after]).all()
