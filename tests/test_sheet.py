@@ -459,3 +459,12 @@ def test_bad_sheet_inputs_are_refused_by_name():
     model, solver = sheet_batch(geometry, [SheetMaterialSI(fabric(), fabric(), 1.0, ELASTIC)])
     with pytest.raises(ArgumentError, match="markers: node 999"):
         simulate_sheets(model, model.control(), solver, SheetRecorder(0.01, 1, 0.01, markers=(999,)))
+
+
+def test_a_sheet_runs_figures_are_written(tmp_path):
+    from warpcloth.viz.figures.sheet import plot_sheet_run
+
+    _geometry, run, _solver = twisted_sheet(0.005, 0.5)
+    paths = plot_sheet_run(run, tmp_path)
+    assert [p.name for p in paths] == ["sheet_run.png", "sheet_shapes.png"]
+    assert all(p.stat().st_size > 10_000 for p in paths)
