@@ -2,7 +2,7 @@
 
     python benchmarks/sheet_throughput.py [--sheets 32] [--sim-time 0.02]
                                           [--laws masing tagawa2003] [--precisions float64 float32]
-                                          [--threads 1 2]
+                                          [--threads 1 2] [--repeats 3] [--only sheet|strip]
 
 The sheet is a realistic one: a 50 mm square at 5 mm spacing in warp and weft (11 × 11
 free nodes and one clamped row of cells, 132 nodes), the illustrative wool of every
@@ -11,9 +11,12 @@ shear with the [shear] table's illustrative numbers (warpcloth/scene/shear.py), 
 by the impulsive rotation's clamp (a rotation about the weft, so every hinge and cell
 moves from the first step). The baseline, measured in the same run and at the same
 thread count, is the strip: the impulsive rotation scene's batch of as many strips
-through warpcloth.sim.simulate_batch, its per-node rate strip-steps/s × nodes. Each row
-prints both per-node rates and their ratio; the thread table prints each one's scaling
-against one thread. Kernels are compiled (and cached) before timing.
+through warpcloth.sim.simulate_batch, its per-node rate strip-steps/s × nodes, over as
+many node-steps as the sheet's run. Sheet and strip run in turn ``--repeats`` times; each
+row prints both median per-node rates and the median of the pairwise ratios (robust to
+the machine's drift); the thread table prints each one's scaling against one thread.
+``--only`` runs one side, for timing whole processes against each other. Kernels are
+compiled (and cached) before timing.
 
 A sheet node costs more than a strip node because it carries more elements: an
 interior node has 2 segments (2 nodes each), 2 hinges (3 line nodes and the 2 nodes of
@@ -28,6 +31,7 @@ from __future__ import annotations
 import argparse
 import platform
 
+import numpy as np
 import warp as wp
 
 import warpcloth as wc
@@ -35,6 +39,7 @@ from warpcloth import units
 from warpcloth.scene import ShearMaterial, build_batch
 from warpcloth.sheet import (
     SheetBuilder,
+    SheetGeometry,
     SheetClampMotion,
     SheetMaterialSI,
     SheetModel,
@@ -51,6 +56,12 @@ SIDE_MM = 50.0
 SPACING_MM = 5.0
 SHEAR_KES = {"hysteresis_d1_gf_per_cm": 0.8, "hysteresis_alpha_per_deg": 0.6, "hysteresis_phi0_deg": 8.0}
 SHEAR_RIGIDITY_KES = 0.6  # G, gf/(cm·degree): the [shear] table's illustrative numbers
+
+
+def square_sheet() -> SheetGeometry:
+    """The 50 mm square at 5 mm, one row of cells held above the clamp edge."""
+    h = SPACING_MM * units.LENGTH_MM
+    return rectangle(SIDE_MM * units.LENGTH_MM, SIDE_MM * units.LENGTH_MM, h, (h, h))
 
 
 def strip_scene(law: str, precision: str, sim_time: float) -> wc.Scene:
@@ -70,8 +81,7 @@ def sheet_batch(
     strip = build_batch([scene]).model.strips[0]
     g, shear = ShearMaterial(law, SHEAR_RIGIDITY_KES, SHEAR_KES).si()
     material = SheetMaterialSI(warp=strip.material, weft=strip.material, shear_rigidity=g, shear=shear)
-    h = SPACING_MM * units.LENGTH_MM
-    geometry = rectangle(SIDE_MM * units.LENGTH_MM, SIDE_MM * units.LENGTH_MM, h, (h, h))
+    geometry = square_sheet()
     centre = (float(strip.rotation_centre[0]), float(strip.rotation_centre[1]), 0.0)
     builder = SheetBuilder(geometry, scene.run.gravity_m_per_s2)
     for _ in range(sheets):
@@ -101,19 +111,25 @@ def strip_rate(law: str, precision: str, strips: int, sim_time: float, threads: 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--sheets", type=int, default=32, help="sheets (and strips) per batch")
-    parser.add_argument("--sim-time", type=float, default=0.02, help="simulated seconds per run")
+    parser.add_argument("--sim-time", type=float, default=0.02, help="simulated seconds per sheet run")
     parser.add_argument("--laws", nargs="+", default=["masing", "tagawa2003"])
     parser.add_argument("--precisions", nargs="+", default=["float64"], choices=["float64", "float32"])
     parser.add_argument("--threads", type=int, nargs="+", default=sorted({1, available_cores()}))
+    parser.add_argument("--repeats", type=int, default=3, help="sheet and strip runs in turn; medians are printed")
+    parser.add_argument("--only", choices=["sheet", "strip"], help="run one side alone (to time whole processes)")
     args = parser.parse_args()
     init_warp_quietly()
+    # the strip's run does as many node-steps as the sheet's, so both take about as long
+    sheet_nodes = square_sheet().n_nodes
+    strip_time = args.sim_time * sheet_nodes / strip_scene("masing", "float64", 0.01).n_nodes
     print(
         f"machine: {platform.processor() or platform.machine()}, {platform.system()}, "
         f"{available_cores()} cores, warp {wp.__version__}"
     )
     print(
-        f"{args.sheets} sheets of {SIDE_MM:g} mm square at {SPACING_MM:g} mm against as many impulsive-rotation "
-        f"strips, {args.sim_time} s simulated per run"
+        f"{args.sheets} sheets of {SIDE_MM:g} mm square at {SPACING_MM:g} mm ({sheet_nodes} nodes), "
+        f"{args.sim_time} s simulated, against as many impulsive-rotation strips, {strip_time:.4f} s simulated; "
+        f"medians of {args.repeats} runs each"
     )
     header = ("law", "precision", "threads", "sheet node-steps/s", "strip node-steps/s", "sheet/strip")
     print("{:11s} {:9s} {:>7} {:>19} {:>19} {:>11}".format(*header))
@@ -122,12 +138,19 @@ def main() -> None:
         for precision in args.precisions:
             one = None
             for threads in args.threads:
-                sheet = sheet_rate(law, precision, args.sheets, args.sim_time, threads)
-                strip = strip_rate(law, precision, args.sheets, args.sim_time, threads)
-                print(f"{law:11s} {precision:9s} {threads:>7} {sheet:19.3e} {strip:19.3e} {sheet / strip:10.3f}x")
-                one = one or (threads, sheet, strip)
-                scaling.append((law, precision, threads, sheet / one[1], strip / one[2], one[0]))
-    print("\nthread scaling (rate against the first thread count's, same law and precision)")
+                sheet, strip = [], []
+                for _ in range(args.repeats):
+                    if args.only != "strip":
+                        sheet.append(sheet_rate(law, precision, args.sheets, args.sim_time, threads))
+                    if args.only != "sheet":
+                        strip.append(strip_rate(law, precision, args.sheets, strip_time, threads))
+                a = float(np.median(sheet)) if sheet else np.nan
+                b = float(np.median(strip)) if strip else np.nan
+                ratio = float(np.median(np.array(sheet) / np.array(strip))) if sheet and strip else np.nan
+                print(f"{law:11s} {precision:9s} {threads:>7} {a:19.3e} {b:19.3e} {ratio:10.3f}x")
+                one = one or (threads, a, b)
+                scaling.append((law, precision, threads, a / one[1], b / one[2], one[0]))
+    print("\nthread scaling (median rate against the first thread count's, same law and precision)")
     for law, precision, threads, sheet, strip, base in scaling:
         print(f"{law:11s} {precision:9s} {threads:>2} vs {base} threads: sheet {sheet:.2f}x, strip {strip:.2f}x")
 
