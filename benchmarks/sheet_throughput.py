@@ -39,8 +39,8 @@ from warpcloth import units
 from warpcloth.scene import ShearMaterial, build_batch
 from warpcloth.sheet import (
     SheetBuilder,
-    SheetGeometry,
     SheetClampMotion,
+    SheetGeometry,
     SheetMaterialSI,
     SheetModel,
     SheetRecorder,
