@@ -108,6 +108,8 @@ def paper_faithful(device: str, batch: int) -> None:
 
 
 def sheets(device: str, sizes: list[int], duration: float) -> None:
+    """Section 4: the sheet's node-steps/s at each of ``sizes`` on ``device`` against the CPU's
+    32 sheets on all its cores (only the CPU rows when ``device`` is the CPU)."""
     print(f"\n4. the woven sheet, 50 mm square at 5 mm, masing, {duration} s simulated per run")
     print("   {:9s} {:>9} {:>13} {:>13}".format("precision", "B", "node-steps/s", "vs CPU B=32"))
     for precision in ("float64", "float32"):
