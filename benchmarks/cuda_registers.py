@@ -12,13 +12,14 @@ tools are looked for on PATH and in NVIDIA's pip packages: ``pip install
 nvidia-cuda-cuobjdump`` (cuobjdump) and ``nvidia-cuda-nvcc`` (ptxas); neither is a project
 dependency, and a column whose tool is missing prints "-".
 
-The occupancy table takes each ``advance`` kernel's registers (one thread per strip) to
-an A100 (sm_80, 108 SMs) and an H100/H200 (sm_90, 132 SMs): 65 536 registers and 64
-resident warps per SM, registers allocated per warp in units of 256, at most 32 blocks
-per SM (NVIDIA's occupancy calculator rules). For B = 1e3, 1e4, 1e5 strips it prints how
-many blocks the launch has, how many SMs they can occupy, the waves, and the resident
-warps as a share of the GPU's warp slots, for Warp's default 256 threads a block and for
-64. An estimate from the rules, not a measurement: benchmarks/gpu.py measures.
+The occupancy table takes each ``advance`` kernel's registers (one thread per strip, or per
+sheet for ``sheet.advance``) to an A100 (sm_80, 108 SMs) and an H100/H200 (sm_90, 132
+SMs): 65 536 registers and 64 resident warps per SM, registers allocated per warp in
+units of 256, at most 32 blocks per SM (NVIDIA's occupancy calculator rules). For B =
+1e3, 1e4, 1e5 strips (or sheets) it prints how many blocks the launch has, how many SMs
+they can occupy, the waves, and the resident warps as a share of the GPU's warp slots,
+for Warp's default 256 threads a block and for 64. An estimate from the rules, not a
+measurement: benchmarks/gpu.py measures.
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import tempfile
 from pathlib import Path
 
 import warp as wp
-from warpcloth.kernels import build_strip, hinge_kernels, laws
+from warpcloth.kernels import build_strip, hinge_kernels, laws, sheet
 
 from warpcloth.sim import PRECISIONS, SOLVERS
 
@@ -46,6 +47,7 @@ def variants() -> dict[str, wp.Kernel]:
             out[f"advance-{precision}-{scheme}"] = build_strip(scalar, scheme).advance
         out[f"initialise_hinges-{precision}"] = hinge_kernels(scalar).initialise_hinges
         out[f"moment_along_path-{precision}"] = laws.build(scalar).moment_along_path
+        out[f"sheet.advance-{precision}"] = sheet.build(scalar).advance
     return out
 
 
@@ -205,9 +207,9 @@ def main() -> None:
                     f"{cell(assembled.get('spill_stores'), 12)} | {cell(assembled.get('spill_loads'), 11)} |"
                 )
                 count = binary.get("REG", assembled.get("registers"))
-                if name.startswith("advance") and arch in SMS and count is not None:
+                if name.split("-")[0] in ("advance", "sheet.advance") and arch in SMS and count is not None:
                     occupancy += occupancy_rows(name, arch, count)
-    print("\noccupancy of the strip kernel (one thread per strip), from the registers above")
+    print("\noccupancy of the strip and sheet kernels (one thread per strip or sheet), from the registers above")
     print(
         f"| {'kernel':<30} | {'GPU':<9} | {'regs':>4} | {'block':>5} | {'blocks/SM':>10} | {'B':>6} | "
         f"{'blocks':>6} | {'SMs busy':>8} | {'waves':>5} | {'warp slots':>10} |"

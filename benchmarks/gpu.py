@@ -10,9 +10,14 @@
    same run; the issue's target is ≥ 2e10 node-steps/s in float64 at B = 1e4–1e5.
 3. Paper-faithful work: 10 000 strip-seconds of the damped swing at dt = 1e-7 s (the
    paper took 210 s for one), timed on a short record and scaled, and stated as such.
+4. The woven sheet (issue 23): node-steps/s of B = 1e3, 1e4 sheets of the 50 mm square at
+   5 mm (benchmarks/sheet_throughput.py), masing bending and shear, float64 and float32,
+   against the CPU's B = 32 on all its cores measured in the same run (one GPU thread
+   advances one sheet, as a CPU task does).
 
 Kernels are compiled (and cached) before timing. Without a CUDA device it says so and
-exits 2 (nothing to measure).
+exits 2 (nothing to measure); ``--device cpu --sheet-only`` runs section 4's CPU rows
+alone (a smoke run of the script on any machine).
 """
 
 from __future__ import annotations
@@ -26,9 +31,11 @@ from pathlib import Path
 
 import numpy as np
 import warp as wp
+from sheet_throughput import sheet_rate
 
 import warpcloth as wc
 from warpcloth.sim.model import init_warp_quietly
+from warpcloth.sim.runner import available_cores
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -100,19 +107,43 @@ def paper_faithful(device: str, batch: int) -> None:
     )
 
 
+def sheets(device: str, sizes: list[int], duration: float) -> None:
+    """Section 4: the sheet's node-steps/s at each of ``sizes`` on ``device`` against the CPU's
+    32 sheets on all its cores (only the CPU rows when ``device`` is the CPU)."""
+    print(f"\n4. the woven sheet, 50 mm square at 5 mm, masing, {duration} s simulated per run")
+    print("   {:9s} {:>9} {:>13} {:>13}".format("precision", "B", "node-steps/s", "vs CPU B=32"))
+    for precision in ("float64", "float32"):
+        cpu = sheet_rate("masing", precision, 32, duration, available_cores())
+        print(f"   {precision:9s} {'cpu 32':>9} {cpu:13.3e} {1.0:12.2f}x")
+        if device == "cpu":
+            continue
+        for b in sizes:
+            rate = sheet_rate("masing", precision, b, duration, 1, device)
+            print(f"   {precision:9s} {b:>9} {rate:13.3e} {rate / cpu:12.2f}x")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--device", default="cuda:0")
     parser.add_argument("--quick", action="store_true", help="B up to 1e4 and shorter records")
+    parser.add_argument("--sheet-only", action="store_true", help="section 4 alone (with --device cpu: its CPU rows)")
     args = parser.parse_args()
     init_warp_quietly()
-    if not wp.is_cuda_available():
+    sheet_sizes = [1000] if args.quick else [1000, 10000]
+    if args.device != "cpu" and not wp.is_cuda_available():
         print("no CUDA device here: run this on a machine with an NVIDIA GPU", file=sys.stderr)
+        return 2
+    if args.sheet_only:
+        sheets(args.device, sheet_sizes, 0.005)
+        return 0
+    if args.device == "cpu":
+        print("sections 1-3 compare a GPU with the CPU: give --device cuda:N, or --sheet-only", file=sys.stderr)
         return 2
     print(f"{platform.node()}: {wp.get_device(args.device).name}, Warp {wp.__version__}")
     agreement(args.device)
     throughput(args.device, [1000, 10000] if args.quick else [1000, 10000, 100000], 0.02 if args.quick else 0.05)
     paper_faithful(args.device, 10000 if args.quick else 100000)
+    sheets(args.device, sheet_sizes, 0.005)
     return 0
 
 

@@ -257,6 +257,11 @@ def build(scalar: Any) -> SheetKernels:
         probes[k, wp.static(slot["hysteresis_work"]), s] = work[1]
         probes[k, wp.static(slot["damping_work"]), s] = work[2]
         probes[k, wp.static(slot["drive_work"]), s] = work[3]
+        # a sheet without cells or hinges (a single line) has nothing there to probe
+        probes[k, wp.static(slot["cell_shear_angle"]), s] = scalar(wp.nan)
+        probes[k, wp.static(slot["cell_shear_force"]), s] = scalar(wp.nan)
+        probes[k, wp.static(slot["hinge_curvature"]), s] = scalar(wp.nan)
+        probes[k, wp.static(slot["hinge_moment"]), s] = scalar(wp.nan)
         if model.cell_nodes.shape[0] > 0:
             memory = state.cell[settings.probe_cell, s]
             p = model.shear[s]

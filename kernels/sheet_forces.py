@@ -48,7 +48,7 @@ def build(scalar: Any) -> SheetForces:
     def turning_angle(e1: vec3, e2: vec3, axis: vec3):
         # The line's two segments projected on the plane normal to the bending axis a:
         # sin, cos of the turning angle there (scaled by |p1||p2|), 1/|p1|, 1/|p2| and the
-        # chord |p1 + p2| (docs/model.md §17.3). A line in the plane normal to a (the
+        # chord |p1 + p2| (docs/model.md §17.4). A line in the plane normal to a (the
         # strip's case) has p = e exactly, and these are the strip's numbers.
         e1a = wp.dot(e1, axis)
         e2a = wp.dot(e2, axis)
@@ -102,7 +102,10 @@ def build(scalar: Any) -> SheetForces:
             inverse_u = one / wp.length(u)
             axis = u * inverse_u
             sine, cosine, inverse_p1, inverse_p2, chord = turning_angle(e1, e2, axis)
-            if not (chord > scalar(1e-3) * model.spacing[family]):
+            fold = scalar(1e-3) * model.spacing[family]
+            # folded onto itself, or a segment turned onto the axis (no plane to bend in);
+            # NaN fails every comparison and stops here too
+            if not (chord > fold and inverse_p1 * fold < one and inverse_p2 * fold < one):
                 return STATUS_FOLDED, h, chord / model.spacing[family]
             # the strip's hinge curvature, 2 sin ψ / chord, in the projected plane (§5.1)
             curvature = two * sine * inverse_p1 * inverse_p2 / chord * model.hinge_curvature_scale[h]

@@ -8,7 +8,8 @@ GPU. Warp ships NVRTC inside its own library and compiles ahead of time without 
 (``wp.compile_aot_module(module, arch=...)``), so this test does the CUDA build here.
 
 Every kernel is a Warp module of its own (``module="unique"``), generated per precision
-and integrator scheme (every bending law is in each: kernels/laws.py); :data:`VARIANTS`
+and integrator scheme (every bending law is in each: kernels/laws.py), the woven sheet's
+three (kernels/sheet.py) per precision; :data:`VARIANTS`
 builds each from the registries the project uses (``PRECISIONS``, ``SOLVERS``), and
 :func:`test_every_kernel_is_built_here` reads kernels/ and warpcloth/ for ``@wp.kernel``
 so a new kernel cannot be left out. Each compiles to CUBIN, what Warp loads on an sm_80 or
@@ -25,7 +26,7 @@ from pathlib import Path
 
 import pytest
 import warp as wp
-from warpcloth.kernels import build_strip, hinge_kernels, laws
+from warpcloth.kernels import build_strip, hinge_kernels, laws, sheet
 
 from warpcloth.sim import PRECISIONS, SOLVERS
 
@@ -39,15 +40,19 @@ def _kernels(namespace: object) -> dict[str, wp.Kernel]:
 
 
 def variants() -> dict[str, wp.Kernel]:
-    """Every kernel the project can load, by ``name-precision[-scheme]``."""
+    """Every kernel the project can load, by ``[sheet.]name-precision[-scheme]``."""
     out = {}
     for precision, scalar in PRECISIONS.items():
         for scheme in SOLVERS:
             for name, kernel in _kernels(build_strip(scalar, scheme)).items():
                 out[f"{name}-{precision}-{scheme}"] = kernel
-        for namespace in (hinge_kernels(scalar), laws.build(scalar)):
+        for prefix, namespace in (
+            ("", hinge_kernels(scalar)),
+            ("", laws.build(scalar)),
+            ("sheet.", sheet.build(scalar)),
+        ):
             for name, kernel in _kernels(namespace).items():
-                out[f"{name}-{precision}"] = kernel
+                out[f"{prefix}{name}-{precision}"] = kernel
     return out
 
 

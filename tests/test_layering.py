@@ -15,12 +15,13 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = {"warpcloth": ROOT / "warpcloth", "warpcloth.kernels": ROOT / "kernels"}
 
-# The layers, lowest first: kernels < sim < scene < io < viz < runs < track < calibrate < sweeps < cli
+# The layers, lowest first: kernels < sim < sheet < scene < io < viz < runs < track < calibrate < sweeps < cli
 # (errors, units and metrics, the one ruler, sit beside all of them). track sits above runs:
 # its synthetic camera films a simulation; nothing of the simulation imports it.
 ORDER = (
     "warpcloth.kernels",
     "warpcloth.sim",
+    "warpcloth.sheet",
     "warpcloth.scene",
     "warpcloth.io",
     "warpcloth.viz",

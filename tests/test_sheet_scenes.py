@@ -12,7 +12,8 @@ from pxr import Usd, UsdGeom
 
 import warpcloth as wc
 from warpcloth.io.sheet_run_dir import read_sheet_run
-from warpcloth.scene.sheet import load_sheet_scene, read_sheet_scene
+from warpcloth.scene.sheet import read_sheet_scene
+from warpcloth.scene.sheet_build import load_sheet_scene
 
 SHEETS = ("shear_swing", "twist", "bias_strip")
 SHORT = ("--set", "run.duration_s=0.1", "--set", "release.settle_time_s=0.05", "--no-progress")

@@ -105,7 +105,7 @@ def simulate_sheet(
     overwrite: bool = False,
     threads: int | None = None,
 ) -> SheetResult:
-    """Run one sheet scene (:func:`~warpcloth.scene.sheet.load_sheet_scene` makes one) and
+    """Run one sheet scene (:func:`~warpcloth.scene.sheet_build.load_sheet_scene` makes one) and
     return what it recorded; ``out`` streams the sheet run directory
     (:mod:`warpcloth.io.sheet_run_dir`), with the strip's refusal of an existing result
     unless ``overwrite``, which replaces it only once the new run is complete. A diverged

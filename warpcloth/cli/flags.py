@@ -67,14 +67,14 @@ LIBRARY_ONLY = frozenset(
         "forms",  # clamp-motion forms: the command tries every one
         "initial_positions",  # simulate()'s start state: no option sets it
         "initial_velocities",
-        "markers",  # SheetRecorder(markers=): a sheet scene's markers are checked as scene fields first
         "j",  # Recording.probe(name, j): the command line selects variants by --variants
+        "markers",  # SheetRecorder(markers=): a scene's output.markers_mm, checked as a scene field first
         "name",  # RunResult.probe(name)
         "path",  # a measured-data reader called directly
-        "precision",  # SheetBuilder.finalize(precision=): a scene's integrator.precision is checked first
-        "release_time",  # SheetBuilder(release_time=): a scene's release.settle_time_s is checked first
-        "sheets",  # SheetBuilder.finalize with none added: the command line adds one
-        "threads",  # simulate_sheets(threads=): the command line passes none
+        "precision",  # SheetBuilder.finalize(precision=): a scene's integrator.precision, checked as a field
+        "release_time",  # SheetBuilder(release_time=): a scene's release.settle_time_s, checked as a field
+        "sheets",  # SheetBuilder.finalize() with none added: a scene always adds its sheet
+        "threads",  # simulate_sheets(threads=): the command line uses every core
         "variant",  # RunResult.probe(..., variant=)
     }
 )

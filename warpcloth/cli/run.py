@@ -12,7 +12,8 @@ from warpcloth.errors import DivergenceError
 from warpcloth.metrics import swing_summary
 from warpcloth.runs import simulate, simulate_sheet
 from warpcloth.scene import bundled_scenes, load_scene
-from warpcloth.scene.sheet import AUTO_FRACTION, SheetScene, is_sheet_scene, load_sheet_scene
+from warpcloth.scene.sheet import AUTO_FRACTION, SheetScene, is_sheet_scene
+from warpcloth.scene.sheet_build import load_sheet_scene
 from warpcloth.scene.step import describe_step
 from warpcloth.sheet import SheetResult
 

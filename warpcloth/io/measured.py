@@ -12,6 +12,9 @@ tracked shapes     ``frame, t, s, x, y``       -, s, mm (arc length of the marke
                                                lowest point at rest, y up); ``warpcloth
                                                track`` adds ``u_px, u_mm`` (read, ignored)
 clamp encoder      ``t, theta``                s, rad (``angle_unit`` overrides the header)
+sheet markers      ``t, marker, x, y, z``      s, -, mm (the index of the marker in the sheet
+                   (a header names them; any   scene's ``output.markers``; positions from the
+                   one to three of x, y, z)    clamp edge's middle at rest, y up, z across)
 =================  ==========================  =============================================
 
 **Units in the header are honoured**: a header name may end in a unit, after an
@@ -44,11 +47,13 @@ from .csv import Table, bundled_data, read_csv, read_text
 __all__ = [
     "ClampAngleTrace",
     "LaserTrace",
+    "SheetMarkers",
     "TrackedShapes",
     "bundled_data",
     "read_encoder",
     "read_laser_trace",
     "read_measurement",
+    "read_sheet_markers",
     "read_table",
     "read_text",
     "read_tracked_shapes",
@@ -81,6 +86,8 @@ _QUANTITY = {
     "s_mm": ("length", "mm"),
     "theta": ("angle", "rad"),
     "frame": (None, None),
+    "marker": (None, None),
+    "z_mm": ("length", "mm"),
 }
 _BRACKETED = re.compile(r"\s*[\[(]\s*([^\[\]()]*?)\s*[\])]\s*$")
 _SUFFIX = re.compile(r"_([A-Za-zµ%]+)\s*$")
@@ -330,3 +337,61 @@ def read_measurement(
         "(frame, t_s, s_mm, x_mm, y_mm), or 7 as warpcloth track writes them (… u_px, u_mm)",
         int(table.lines[0]),
     )
+
+
+@dataclass(frozen=True)
+class SheetMarkers:
+    """Markers tracked on a sheet, SI: per row the time, the marker (its index in the
+    scene's ``output.markers``) and the coordinates the camera saw, ``axes`` (a subset of
+    ``"xyz"``, in that order), from the middle of the clamp edge at rest."""
+
+    t: np.ndarray  # s
+    marker: np.ndarray  # int
+    axes: str
+    position: np.ndarray  # [row, axis], m
+
+
+def read_sheet_markers(path: str | Path, argument: str = "path") -> SheetMarkers:
+    """Read a sheet's tracked markers: a header naming ``t``, ``marker`` and one to three of
+    ``x``, ``y``, ``z`` (any order; units in the names honoured, else s and mm), rows in
+    time order (several markers may share a time)."""
+    table = read_table(path, None, "sheet markers", argument)
+    if not table.header:
+        raise DataFileError(
+            table.path, "sheet markers need a header naming their columns: t_s, marker, and x_mm, y_mm, z_mm (1 to 3)"
+        )
+    roles: dict[str, int] = {}
+    for column, name in enumerate(table.header):
+        stem = _BRACKETED.sub("", name).strip().lower().split("_")[0]  # t_s, y (cm) → t, y
+        role = {"t": "t_s", "time": "t_s", "marker": "marker", "x": "x_mm", "y": "y_mm", "z": "z_mm"}.get(stem)
+        if role is None:
+            continue
+        if role in roles:
+            raise DataFileError(
+                table.path, f"two columns are {stem!r} (columns {roles[role] + 1} and {column + 1})", table.header_line
+            )
+        roles[role] = column
+    axes = "".join(a for a in "xyz" if f"{a}_mm" in roles)
+    if "t_s" not in roles or "marker" not in roles or not axes:
+        raise DataFileError(
+            table.path,
+            f"the header {table.header_text!r} must name t, marker and at least one of x, y, z "
+            "(e.g. t_s, marker, z_mm, y_mm for a camera facing the sheet)",
+            table.header_line,
+        )
+    t = table.values[:, roles["t_s"]] * header_unit(table, roles["t_s"], "t_s")
+    _plausible(table, roles["t_s"], "record length", float(t[-1] - t[0]), "milliseconds? head the column t_ms")
+    if np.any(np.diff(t) < 0):
+        i = int(np.argmax(np.diff(t) < 0))
+        raise DataFileError(
+            table.path, f"times must not decrease; t = {t[i + 1]:g} after {t[i]:g}", int(table.lines[i + 1])
+        )
+    marker = table.values[:, roles["marker"]]
+    bad = (marker < 0) | (marker != np.round(marker))
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise DataFileError(table.path, f"marker must be a whole number ≥ 0, got {marker[i]:g}", int(table.lines[i]))
+    position = np.column_stack(
+        [table.values[:, roles[f"{a}_mm"]] * header_unit(table, roles[f"{a}_mm"], f"{a}_mm") for a in axes]
+    )
+    return SheetMarkers(t, marker.astype(int), axes, position)

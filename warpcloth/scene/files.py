@@ -111,7 +111,7 @@ def scene_from_dict(data: dict, choose_step: bool = True) -> Scene:
     if isinstance(data, dict) and "sheet" in data:
         raise SceneError(
             "sheet",
-            "this is a sheet scene: `warpcloth run` and warpcloth.scene.sheet.load_sheet_scene "
+            "this is a sheet scene: `warpcloth run` and warpcloth.scene.sheet_build.load_sheet_scene "
             "take it (sweeps, fits and the strip's Python API take strip scenes)",
         )
     scene = parse_section(Scene, with_material_file(data), "")

@@ -32,7 +32,6 @@ from .materials import (
     validate_material,
     with_material_file,
 )
-from .overrides import Overrides, apply_overrides
 from .parse import parse_section
 from .schema import ClampSection, ClampSegment, DampingSection, MaterialSection, RunSection, _field, field_types
 from .shear import SHEAR_TABLE, ShearMaterial, parse_shear
@@ -286,7 +285,7 @@ def _with_sheet_material(data: dict) -> dict:
 
 def sheet_scene_from_dict(data: dict) -> SheetScene:
     """Parse and validate raw sheet-scene data (a material file filling [material],
-    [weft] and [shear]); ``dt_s = "auto"`` stays a word until :func:`check_sheet_scene`."""
+    [weft] and [shear]); ``dt_s = "auto"`` stays a word until :func:`~warpcloth.scene.sheet_build.check_sheet_scene`."""
     if not isinstance(data, dict):
         raise SceneError("scene", f"expected a table, got {data!r}")
     if scene_kind(data) != "sheet":
@@ -380,22 +379,6 @@ def is_sheet_scene(name_or_path: str | Path) -> bool:
         return scene_kind(data, where) == "sheet"
     except SceneError as exc:
         raise located(exc, text, where) from None
-
-
-def load_sheet_scene(name_or_path: str | Path, overrides: Overrides = ()) -> SheetScene:
-    """Read a sheet scene by path or bundled name, apply overrides (as :func:`load_scene`),
-    validate it and check it can run (:func:`check_sheet_scene`); every error names the
-    field and where it was set."""
-    from .sheet_build import check_sheet_scene
-
-    data, text, where = _read_scene(name_or_path)
-    try:
-        if "sweep" in data:
-            raise SceneError("sweep", "sheet scenes are run one at a time; a [sweep] takes a strip scene")
-        scene = check_sheet_scene(sheet_scene_from_dict(apply_overrides(data, overrides)))
-    except SceneError as exc:
-        raise located(exc, text, where, overrides) from None
-    return scene
 
 
 def read_sheet_scene(path: str | Path) -> SheetScene:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -29,8 +30,11 @@ from warpcloth.sim import ClampMotion
 from warpcloth.sim.resources import check_memory
 
 from .clamp_motion import segment_pieces
+from .files import _read_scene
+from .locate import located
 from .materials import to_si
-from .sheet import AUTO, AUTO_FRACTION, SheetScene
+from .overrides import Overrides, apply_overrides
+from .sheet import AUTO, AUTO_FRACTION, SheetScene, sheet_scene_from_dict
 
 FAMILIES = {"warp": WARP, "weft": WEFT}
 
@@ -173,6 +177,20 @@ def check_sheet_scene(scene: SheetScene) -> SheetScene:
             f'strain stiffens the yarns, {AUTO_FRACTION:g} of it is safe), or dt_s = "auto"',
             related=("sheet.spacing_warp_mm", "sheet.spacing_weft_mm", "material.from_file"),
         )
+    return scene
+
+
+def load_sheet_scene(name_or_path: str | Path, overrides: Overrides = ()) -> SheetScene:
+    """Read a sheet scene by path or bundled name, apply overrides (as :func:`load_scene`),
+    validate it and check it can run (:func:`check_sheet_scene`); every error names the
+    field and where it was set."""
+    data, text, where = _read_scene(name_or_path)
+    try:
+        if "sweep" in data:
+            raise SceneError("sweep", "sheet scenes are run one at a time; a [sweep] takes a strip scene")
+        scene = check_sheet_scene(sheet_scene_from_dict(apply_overrides(data, overrides)))
+    except SceneError as exc:
+        raise located(exc, text, where, overrides) from None
     return scene
 
 
