@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -77,19 +78,53 @@ def sheet_clamp(scene: SheetScene) -> SheetClampMotion:
     )
 
 
-def _builder(scene: SheetScene, geometry: SheetGeometry) -> SheetBuilder:
+SHARED_SECTIONS = ("sheet", "integrator", "run", "output")
+"""What every sheet of a batch shares (the cut, the step, the duration, what is recorded),
+with the settling time: a batch's sheets differ in material, weft, shear, damping,
+settling damping and clamp motion only."""
+
+
+def check_sheet_batch(scenes: Sequence[SheetScene]) -> None:
+    """Refuse, naming the field, a batch whose scenes differ where sheets of one launch
+    cannot (:data:`SHARED_SECTIONS`, ``release.settle_time_s``)."""
+    if not scenes:
+        raise SceneError("scenes", "a batch needs at least one sheet scene")
+    first = scenes[0]
+    for j, scene in enumerate(scenes[1:], start=1):
+        for section in SHARED_SECTIONS:
+            ours, theirs = getattr(first, section), getattr(scene, section)
+            for f in dataclasses.fields(ours):
+                if getattr(ours, f.name) != getattr(theirs, f.name):
+                    raise SceneError(
+                        f"{section}.{f.name}",
+                        f"sheets of one batch share it: variant {j} has {getattr(theirs, f.name)!r}, "
+                        f"variant 0 {getattr(ours, f.name)!r}",
+                        variant=j,
+                    )
+        if scene.release.settle_time_s != first.release.settle_time_s:
+            raise SceneError(
+                "release.settle_time_s",
+                f"sheets of one batch share it: variant {j} has {scene.release.settle_time_s!r}, "
+                f"variant 0 {first.release.settle_time_s!r}",
+                variant=j,
+            )
+
+
+def _builder(scenes: Sequence[SheetScene], geometry: SheetGeometry) -> SheetBuilder:
+    first = scenes[0]
     builder = SheetBuilder(
         geometry,
-        scene.run.gravity_m_per_s2,
-        release_time=scene.release.settle_time_s,
-        reversal_memory=scene.integrator.reversal_memory,
+        first.run.gravity_m_per_s2,
+        release_time=first.release.settle_time_s,
+        reversal_memory=first.integrator.reversal_memory,
     )
-    builder.add_sheet(
-        sheet_material(scene),
-        damping=scene.damping.gamma_per_s,
-        settle_damping=scene.release.settle_damping_per_s,
-        clamp=sheet_clamp(scene),
-    )
+    for scene in scenes:
+        builder.add_sheet(
+            sheet_material(scene),
+            damping=scene.damping.gamma_per_s,
+            settle_damping=scene.release.settle_damping_per_s,
+            clamp=sheet_clamp(scene),
+        )
     return builder
 
 
@@ -160,7 +195,7 @@ def check_sheet_scene(scene: SheetScene) -> SheetScene:
         f"the state of a sheet of {geometry.n_nodes} nodes",
         "use a coarser sheet.spacing_warp_mm / spacing_weft_mm",
     )
-    model = _builder(scene, geometry).finalize(device="cpu", precision=scene.integrator.precision)
+    model = _builder([scene], geometry).finalize(device="cpu", precision=scene.integrator.precision)
     stable = SheetSolver(model, 1.0).stable_step()
     dt = scene.integrator.dt_s
     if dt == AUTO:
@@ -196,8 +231,16 @@ def load_sheet_scene(name_or_path: str | Path, overrides: Overrides = ()) -> She
 
 def build_sheet(scene: SheetScene, device: str | None = None) -> SheetBatch:
     """Model, control, solver and recorder of one sheet scene (checked by :func:`check_sheet_scene`)."""
+    return build_sheets([scene], device)
+
+
+def build_sheets(scenes: Sequence[SheetScene], device: str | None = None) -> SheetBatch:
+    """One batch of sheet scenes (each checked by :func:`check_sheet_scene`), every sheet in
+    the same launches: they must agree on what sheets of a batch share (:func:`check_sheet_batch`)."""
+    check_sheet_batch(scenes)
+    scene = scenes[0]
     geometry = sheet_geometry(scene)
-    model = _builder(scene, geometry).finalize(device=device, precision=scene.integrator.precision)
+    model = _builder(scenes, geometry).finalize(device=device, precision=scene.integrator.precision)
     solver = SheetSolver(
         model,
         scene.integrator.dt_s,
