@@ -11,7 +11,7 @@ import numpy as np
 from tqdm import tqdm
 
 from warpcloth.errors import ArgumentError
-from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.sim import RunResult
 from warpcloth.sim.resources import check_memory
@@ -21,6 +21,7 @@ from . import lm
 from .objective import SHIFT, Objective
 from .parameters import FreeParameter, initial_point
 from .report import FitResult, summarise
+from .sheet import make_objective, sheet_mesh_note
 from .verdict import ended_at_bound, judged_noise, mesh_note, spacing_shift
 
 MAX_SPACE_FILLING = 10_000
@@ -28,7 +29,7 @@ MAX_SPACE_FILLING = 10_000
 
 def fit_motion(
     base: dict,
-    measurement: LaserTrace | TrackedShapes,
+    measurement: LaserTrace | TrackedShapes | SheetMarkers,
     free: list[FreeParameter],
     *,
     align_start_s: float = 0.0,
@@ -50,7 +51,10 @@ def fit_motion(
     far that would move each parameter (:func:`spacing_shift`); a move beyond its σ makes
     the status ``spacing_limited``."""
     started = time.perf_counter()
-    objective = Objective(base, measurement, free, align_start_s, device)
+    sheet = isinstance(measurement, SheetMarkers)
+    if sheet and check_spacing:
+        raise ArgumentError("check_spacing", "is not available for a sheet yet (it refines a strip's spacing)")
+    objective = make_objective(base, measurement, free, align_start_s, device)
     rng = np.random.default_rng(seed)
     n0 = space_filling or max(16, 8 * len(free))
     if n0 > MAX_SPACE_FILLING:
@@ -89,7 +93,7 @@ def fit_motion(
         fit.spacing_check = spacing_shift(objective, u, shift, jac, residual)
     # result row 0 is the reported point (accepted last, or re-run above)
     fit.judge(int(np.isnan(objective.residuals(result, 0, shift, penalise=False)).sum()))
-    fit.mesh_note = mesh_note(base)
+    fit.mesh_note = sheet_mesh_note(base) if sheet else mesh_note(base)
     fit.dt_s = objective.scene.integrator.dt_s
     return fit
 
