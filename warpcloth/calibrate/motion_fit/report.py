@@ -17,7 +17,7 @@ from warpcloth.scene.sheet import sheet_scene_from_dict
 from warpcloth.scene.step import AUTO
 
 from . import lm
-from .objective import SHIFT, Objective
+from .objective import SHIFT, FitObjective
 from .sheet import make_objective
 from .verdict import judge
 
@@ -89,7 +89,7 @@ class FitResult:
 
 
 def summarise(
-    objective: Objective,
+    objective: FitObjective,
     u: np.ndarray,
     shift: float,
     jac: np.ndarray,
@@ -148,12 +148,11 @@ def write_fit(
     if best.get("integrator", {}).get("dt_s") == AUTO and math.isfinite(fit.dt_s):
         set_field(best, "integrator.dt_s", fit.dt_s)  # the box's step, which the RMS was measured at
         set_field(best, "integrator.dt_chosen_by", AUTO)
-    sheet = isinstance(measurement, SheetMarkers)
-    scene = (sheet_scene_from_dict if sheet else scene_from_dict)(copy.deepcopy(best))
+    scene = (sheet_scene_from_dict if isinstance(measurement, SheetMarkers) else scene_from_dict)(copy.deepcopy(best))
     objective = make_objective(best, measurement, [], abs(fit.shift_s), device)
     result = objective.run(np.zeros((1, 0)))
     residual = objective.residuals(result, 0, fit.shift_s, penalise=False)
-    if sheet:
+    if isinstance(measurement, SheetMarkers):
         r = residual.reshape(-1, len(measurement.axes))
         table = pd.DataFrame(
             {"t_s": measurement.t, "marker": measurement.marker}

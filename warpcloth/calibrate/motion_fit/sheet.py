@@ -15,7 +15,7 @@ from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.kernels import bending_law
 from warpcloth.kernels.laws import LAW_PARAMETERS
 from warpcloth.scene import set_field
-from warpcloth.scene.shear import RIGIDITY_FIELD, shear_field
+from warpcloth.scene.shear import RIGIDITY_FIELD, ShearMaterial, shear_field
 from warpcloth.scene.sheet import SheetScene, sheet_scene_from_dict
 from warpcloth.scene.sheet_build import (
     SHARED_SECTIONS,
@@ -27,7 +27,7 @@ from warpcloth.scene.sheet_build import (
 from warpcloth.scene.step import AUTO
 from warpcloth.sheet import SheetResult, simulate_sheets
 
-from .objective import MAX_STEP_CORNERS_FREE, Objective
+from .objective import MAX_STEP_CORNERS_FREE, FitObjective, Objective
 from .parameters import FreeParameter, default_range, parse_bounds
 
 SHEET_ALIASES = {
@@ -52,14 +52,22 @@ SHEET_AMPLITUDES = frozenset(
 hysteresis) to 4× the scene's value by default."""
 
 
+def checked_shear(scene: SheetScene) -> ShearMaterial:
+    """The scene's shear law (a parsed sheet scene always has one)."""
+    if scene.shear is None:
+        raise SceneError("shear", "a sheet needs a shear law: give a [shear] table")
+    return scene.shear
+
+
 def sheet_value(scene: SheetScene, dotted: str) -> object:
     """The value of the sheet scene's field ``dotted`` (``shear.<field>`` included); KeyError if none."""
     section, _, key = dotted.partition(".")
     if section == "shear":
+        shear = checked_shear(scene)
         if key == RIGIDITY_FIELD:
-            return scene.shear.rigidity_gf_per_cm_deg
-        if key in scene.shear.parameters:
-            return scene.shear.parameters[key]
+            return shear.rigidity_gf_per_cm_deg
+        if key in shear.parameters:
+            return shear.parameters[key]
         raise KeyError(dotted)
     if not key or not hasattr(scene, section) or not hasattr(getattr(scene, section), key):
         raise KeyError(dotted)
@@ -81,13 +89,14 @@ def sheet_free_parameters(names: str | list[str], base: SheetScene, bounds: str 
         try:
             value = sheet_value(base, dotted)
         except KeyError:
-            shear = ", ".join(f"shear.{f}" for f in (RIGIDITY_FIELD, *base.shear.parameters))
+            shear = ", ".join(f"shear.{f}" for f in (RIGIDITY_FIELD, *checked_shear(base).parameters))
             raise ArgumentError(
                 "names",
                 f"{name!r} is neither a field of this sheet scene nor one of {', '.join(SHEET_ALIASES)} "
                 f"(its shear law's fields: {shear})",
             ) from None
-        if dotted.split(".")[0] in SHARED_SECTIONS or dotted == "release.settle_time_s" or not _is_number(value):
+        shared = dotted.split(".")[0] in SHARED_SECTIONS or dotted == "release.settle_time_s"
+        if shared or isinstance(value, bool) or not isinstance(value, int | float):
             raise ArgumentError(
                 "names",
                 f"{name} ({dotted}) is shared by the sheets of one batch or is not a number; only "
@@ -118,11 +127,7 @@ def sheet_free_parameters(names: str | list[str], base: SheetScene, bounds: str 
     return out
 
 
-def _is_number(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-class SheetObjective(Objective):
+class SheetObjective(FitObjective):
     """Residuals of simulated against tracked sheet markers for batches of parameter points
     (the strip's :class:`~.objective.Objective`: the unit box, the clock offset, the
     Jacobian; here a batch is sheets and a residual a marker coordinate)."""
@@ -135,7 +140,7 @@ class SheetObjective(Objective):
         align_start_s: float = 0.0,
         device: str | None = None,
     ) -> None:
-        self.measurement = measurement
+        self.measurement: SheetMarkers = measurement
         self.free = free
         self.align = float(align_start_s)
         self.device = device
@@ -216,8 +221,8 @@ def sheet_mesh_note(base: dict) -> str:
     scene = sheet_scene_from_dict(copy.deepcopy(base))
     laws = {
         "the warp's bending": scene.material.bending_law,
-        "the weft's bending": scene.weft.bending_law,
-        "the shear": scene.shear.law,
+        "the weft's bending": scene.weft_material().bending_law,
+        "the shear": checked_shear(scene).law,
     }
     dependent = [f"{what} ({law})" for what, law in laws.items() if not bending_law(law).mesh_independent]
     if not dependent:
@@ -235,9 +240,10 @@ def make_objective(
     free: list[FreeParameter],
     align_start_s: float = 0.0,
     device: str | None = None,
-) -> Objective:
+) -> FitObjective:
     """The objective of a measurement: a sheet's tracked markers are fitted with a sheet
     scene (:class:`SheetObjective`), a laser trace or a strip's tracked shapes with a strip
     scene (:class:`~.objective.Objective`)."""
-    kind = SheetObjective if isinstance(measurement, SheetMarkers) else Objective
-    return kind(base, measurement, free, align_start_s, device)
+    if isinstance(measurement, SheetMarkers):
+        return SheetObjective(base, measurement, free, align_start_s, device)
+    return Objective(base, measurement, free, align_start_s, device)

@@ -10,14 +10,13 @@ either importing the other.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
 from warpcloth.errors import ArgumentError
 from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene import Scene
-from warpcloth.sim import RunResult
 
 from . import common
 from .common import MM, X_LABEL, Y_LABEL, field_label, field_unit, inside, plt
@@ -48,7 +47,7 @@ class FitResiduals(Protocol):
 
     @property
     def scene(self) -> Scene: ...
-    def residuals(self, result: RunResult, j: int, shift: float, penalise: bool = True) -> np.ndarray: ...
+    def residuals(self, result: Any, j: int, shift: float, penalise: bool = True) -> np.ndarray: ...
 
 
 class ClampFit(Protocol):
@@ -69,7 +68,7 @@ class ClampFit(Protocol):
 
 
 def plot_fit_overlay(
-    result: RunResult,
+    result: Any,
     objective: FitResiduals,
     measurement: LaserTrace | TrackedShapes | SheetMarkers,
     fit: MotionFit,
@@ -128,7 +127,7 @@ def plot_fit_overlay(
 
 
 def _sheet_markers_overlay(
-    result: object,
+    result: Any,
     objective: FitResiduals,
     measurement: SheetMarkers,
     fit: MotionFit,
@@ -146,7 +145,7 @@ def _sheet_markers_overlay(
     residual = objective.residuals(result, 0, shift, penalise=False).reshape(-1, rows)
     for a, axis in enumerate(measurement.axes):
         track, misfit = axes[a]
-        for colour, marker in zip(plt.cm.tab10.colors, np.unique(measurement.marker), strict=False):
+        for colour, marker in zip(plt.get_cmap("tab10")(np.arange(10)), np.unique(measurement.marker), strict=False):
             mine = measurement.marker == marker
             simulated = result.markers[:, 0, marker, "xyz".index(axis)]
             track.plot((result.t - shift)[keep], simulated[keep] * MM, color=colour, lw=1.2, label=f"marker {marker}")
