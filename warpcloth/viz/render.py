@@ -177,7 +177,9 @@ class SheetRenderer(Renderer):
         self.shapes = drawable_sheet_frames(run.frames[:, sheet], run.rest_positions)
         faces = np.hstack([np.full((len(run.faces), 1), 4), run.faces]).ravel()
         self.mesh = pv.PolyData(self.shapes[0].copy(), faces)
-        self.plotter.add_mesh(self.mesh, color=SHEET_COLOUR, smooth_shading=True, show_edges=True, edge_color="grey")
+        self.plotter.add_mesh(
+            self.mesh, color=SHEET_COLOUR, smooth_shading=True, show_edges=True, edge_color="grey", ambient=0.4
+        )
         self._stamp()
         points = self.shapes.reshape(-1, 3)
         lo, hi = points.min(axis=0), points.max(axis=0)
