@@ -91,8 +91,8 @@ plt.show()
 # The probed cell's shear loop in KES-FB1's units
 # -----------------------------------------------
 # Fs against φ, in gf/cm and degrees as KES-FB1 reports them. KES-FB1 defines G as the
-# slope between 0.5° and 5° of shear either way, and 2HG, 2HG5 as the loop's width at ±0.5° and ±5°
-# (docs/model.md §17.1); this push shears the corner cell far less than 0.5° (−0.11° to
+# slope between 0.5° and 5° of shear either way, and 2HG, 2HG5 as the loop's width at
+# ±0.5° and ±5° (docs/model.md §17.1); this push shears the corner cell far less than 0.5° (−0.11° to
 # +0.13° in the full run), so the loop here is the law's small-amplitude branch, and its
 # slope is not KES's G. The masing law's branch leaves a reversal with the tangent
 # G + D1·α (docs/model.md §4.10: the hysteretic part's slope D1·α adds to G), 2.8
