@@ -292,3 +292,51 @@ def test_every_kind_has_its_bending_and_its_shear_unit():
     for _, constant, _ in units.SHEAR_UNITS.values():
         assert constant == "" or isinstance(getattr(units, constant), float)
     assert units.from_kes(2.0, "ANGLE_DEGREE") == 2.0 * units.ANGLE_DEGREE and units.from_kes(2.0, "") == 2.0
+
+
+def test_fit_kes_with_the_wefts_loops_writes_a_weft_a_sheet_reads(tmp_path):
+    from warpcloth.scene.sheet_build import load_sheet_scene
+
+    out = tmp_path / "fabric.toml"
+    done = run_cli(
+        "material",
+        "fit-kes",
+        "--tensile",
+        "kes_fb1_example",
+        "--bending",
+        "kes_fb2_example",
+        "--weft-tensile",
+        "kes_fb1_example",
+        "--weft-bending",
+        "kes_fb2_inner_loops",
+        "--shear",
+        "kes_fb1_shear_example",
+        "--density-g-per-cm2",
+        "0.0203",
+        "-o",
+        out,
+    )
+    assert done.returncode == 0, done.stderr
+    data = tomllib.loads(out.read_text())
+    assert "density_g_per_cm2" not in data["weft"] and "name" not in data["weft"]
+    assert data["weft"]["bending_rigidity_gf_cm2_per_cm"] != data["material"]["bending_rigidity_gf_cm2_per_cm"]
+    scene = load_sheet_scene("bias_strip", {"material.from_file": str(out), "run.duration_s": 0.01})
+    assert scene.weft.bending_rigidity_gf_cm2_per_cm == data["weft"]["bending_rigidity_gf_cm2_per_cm"]
+    assert scene.material.bending_rigidity_gf_cm2_per_cm == data["material"]["bending_rigidity_gf_cm2_per_cm"]
+    assert scene.shear.rigidity_gf_per_cm_deg == data["shear"]["rigidity_gf_per_cm_deg"]
+    alone = run_cli(
+        "material",
+        "fit-kes",
+        "--tensile",
+        "kes_fb1_example",
+        "--bending",
+        "kes_fb2_example",
+        "--weft-tensile",
+        "kes_fb1_example",
+        "--density-g-per-cm2",
+        "0.0203",
+        "-o",
+        tmp_path / "other.toml",
+    )
+    assert alone.returncode == 2
+    assert "--weft-tensile: the weft is fitted from both its loops: give --weft-bending too" in alone.stderr

@@ -7,10 +7,11 @@ import argparse
 import csv
 import io
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from warpcloth.errors import OptionError
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
+from warpcloth.scene.materials import ONE_PER_FABRIC
 
 from .options import EXIT_FIT_STATUS, add_overwrite, figure_path, new_result, path_text, positive
 
@@ -53,6 +54,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=f"also fit the fabric's in-plane shear: {SHEAR_HELP}; "
         "the material file gains a [shear] table (for the woven sheet being built, docs/model.md §17; "
         "strips ignore it)",
+    )
+    kes_p.add_argument(
+        "--weft-tensile",
+        metavar="FB1.csv",
+        help="also the weft's KES-FB1 tensile loop (with --weft-bending): --tensile and --bending are then the "
+        "warp's, and the material file gains a [weft] table (the woven sheet's second direction; strips ignore it)",
+    )
+    kes_p.add_argument(
+        "--weft-bending", metavar="FB2.csv", help="the weft's KES-FB2 bending loop (with --weft-tensile)"
     )
     kes_p.add_argument(
         "--shear-law",
@@ -254,6 +264,67 @@ def _compare(args: argparse.Namespace) -> int:
     )
 
 
+def _fit_direction(
+    tensile_path: str,
+    bending_path: str,
+    flags: tuple[str, str],
+    laws: list[str],
+    max_strain: float,
+    gauge: float,
+    strain_unit: str | None,
+) -> tuple[Any, Any, str]:
+    """One yarn direction's KES fit: its tensile quartic and its bending law (the lowest
+    AIC of ``laws``), with the comparison it came from."""
+    from warpcloth.calibrate import kes
+
+    tensile = kes.read_tensile_csv(tensile_path, strain_unit, gauge, argument=flags[0])
+    comparison = kes.compare_laws(kes.read_bending_csv(bending_path, argument=flags[1]), laws)
+    law = comparison.recommended
+    return kes.fit_kes(tensile, comparison.loop, max_strain, bending_fit=comparison.fits[law]), comparison, law
+
+
+def _print_direction(
+    label: str, tensile: str, bending: str, fit: Any, comparison: Any, law: str, compared: bool
+) -> None:
+    """What a direction's fit prints: the tensile quartic and its KES values, the bending
+    law and its (``label``: "" for the one direction or the warp, "weft")."""
+    from warpcloth.calibrate import kes
+
+    prefix = f"{label} " if label else ""
+    print(f"{prefix}tensile file's first column read as {fit.tensile_loop.strain_unit}")
+    t, tk, b, bk = fit.tensile, fit.tensile_kes, fit.bending, fit.bending_kes
+    rt = f", RT {tk.rt_percent:.1f} %" if tk.rt_percent is not None else " (no unloading branch: no RT)"
+    print(
+        f"{prefix}tensile ({tensile}, {fit.summary_table()['tensile_loading_points']} loading points): T(ε) = "
+        f"a1 ε + a2 ε² + a3 ε³ + a4 ε⁴, a = ({', '.join(f'{a:.6g}' for a in t.coefficients)}) gf/cm"
+    )
+    print(f"  RMS {t.rms_gf_per_cm:.4g} gf/cm ({t.rms_relative:.3%} of the force range)")
+    if t.note:
+        print(f"  note: {t.note}")
+    print(
+        f"  KES: EMT {tk.emt_percent:.4g} %, WT {tk.wt_gf_cm_per_cm2:.4g} gf·cm/cm², LT {tk.lt:.4g}{rt} "
+        f"(Fm {tk.fm_gf_per_cm:.4g} gf/cm)"
+    )
+    if compared:
+        _print_comparison(comparison, bending)
+    print(
+        f"{prefix}bending ({bending}, {len(fit.bending_loop.curvature)} points), law {law}: "
+        f"{kes.LAW_FITTERS[law].describe(b)}"
+    )
+    print(
+        f"  RMS {b.rms_gf_cm_per_cm:.4g} gf·cm/cm ({b.rms_relative:.3%} of the moment range), AIC {b.aic():.2f}, "
+        f"BIC {b.bic():.2f} ({b.free_parameters} free parameters)"
+    )
+    if b.note:
+        print(f"  note: {b.note}")
+    model = comparison.reproduced[law]
+    print(
+        f"  KES: B {_kes_value(bk.b_gf_cm2_per_cm, 'gf·cm²/cm')}, 2HB {_kes_value(bk.hb2_gf_cm_per_cm, 'gf·cm/cm')} "
+        f"(the data's; the fitted law along 0 → +K0 → −K0 → 0: B {_kes_value(model.b_gf_cm2_per_cm, 'gf·cm²/cm')}, "
+        f"2HB {_kes_value(model.hb2_gf_cm_per_cm, 'gf·cm/cm')})"
+    )
+
+
 def _fit_kes(args: argparse.Namespace) -> int:
     from warpcloth.calibrate import kes
 
@@ -272,56 +343,44 @@ def _fit_kes(args: argparse.Namespace) -> int:
     if not max_strain > 0:
         raise OptionError("--divergence-strain", f"must be > 0, got {max_strain:g}")
     gauge = kes.KES_FB1_GAUGE_MM if args.gauge_length_mm is None else args.gauge_length_mm
-    tensile = kes.read_tensile_csv(args.tensile, args.strain_unit, gauge, argument="--tensile")
+    if (args.weft_tensile is None) != (args.weft_bending is None):
+        given, missing = (
+            ("--weft-tensile", "--weft-bending") if args.weft_bending is None else ("--weft-bending", "--weft-tensile")
+        )
+        raise OptionError(given, f"the weft is fitted from both its loops: give {missing} too")
     if args.shear_law is not None and not args.shear:
         raise OptionError("--shear-law", f"{args.shear_law}: there is no --shear loop to fit it to")
     shear_law = args.shear_law or DEFAULT_SHEAR_LAW
     shear = kes.fit_shear(kes.read_shear_csv(args.shear, argument="--shear"), shear_law) if args.shear else None
-    comparison = kes.compare_laws(kes.read_bending_csv(args.bending, argument="--bending"), laws)
-    law = comparison.recommended
-    fit = kes.fit_kes(tensile, comparison.loop, max_strain, bending_fit=comparison.fits[law])
+    directions = [("", args.tensile, args.bending, "--tensile", "--bending")]
+    if args.weft_tensile is not None:
+        directions.append(("weft", args.weft_tensile, args.weft_bending, "--weft-tensile", "--weft-bending"))
+    fits = [
+        _fit_direction(tensile, bending, (t_flag, b_flag), laws, max_strain, gauge, args.strain_unit)
+        for _label, tensile, bending, t_flag, b_flag in directions
+    ]
+    fit, comparison, law = fits[0]
     chosen = f"; bending law {law}, the lowest AIC of {', '.join(laws)}" if len(laws) > 1 else ""
     source = (
         f"fitted by warpcloth material fit-kes to {args.tensile} (KES-FB1) and {args.bending} (KES-FB2)"
         f"{chosen}; density {args.density_g_per_cm2:g} g/cm² given on the command line"
     )
+    if len(fits) > 1:
+        source += f"; the weft to {args.weft_tensile} and {args.weft_bending}"
     if shear is not None:
         source += f"; shear ({shear_law}) fitted to {args.shear} (KES-FB1 shear)"
     data = kes.material_file_data(fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain, shear)
     if len(laws) > 1:
         data["fit"] |= comparison.fit_table()
-    print(f"tensile file's first column read as {fit.tensile_loop.strain_unit}")
-    t, tk, b, bk = fit.tensile, fit.tensile_kes, fit.bending, fit.bending_kes
-    rt = f", RT {tk.rt_percent:.1f} %" if tk.rt_percent is not None else " (no unloading branch: no RT)"
-    print(
-        f"tensile ({args.tensile}, {data['fit']['tensile_loading_points']} loading points): T(ε) = a1 ε + a2 ε² "
-        f"+ a3 ε³ + a4 ε⁴, a = ({', '.join(f'{a:.6g}' for a in t.coefficients)}) gf/cm"
-    )
-    print(f"  RMS {t.rms_gf_per_cm:.4g} gf/cm ({t.rms_relative:.3%} of the force range)")
-    if t.note:
-        print(f"  note: {t.note}")
-    print(
-        f"  KES: EMT {tk.emt_percent:.4g} %, WT {tk.wt_gf_cm_per_cm2:.4g} gf·cm/cm², LT {tk.lt:.4g}{rt} "
-        f"(Fm {tk.fm_gf_per_cm:.4g} gf/cm)"
-    )
-    if len(laws) > 1:
-        _print_comparison(comparison, args.bending)
-    print(
-        f"bending ({args.bending}, {len(fit.bending_loop.curvature)} points), law {law}: "
-        f"{kes.LAW_FITTERS[law].describe(b)}"
-    )
-    print(
-        f"  RMS {b.rms_gf_cm_per_cm:.4g} gf·cm/cm ({b.rms_relative:.3%} of the moment range), AIC {b.aic():.2f}, "
-        f"BIC {b.bic():.2f} ({b.free_parameters} free parameters)"
-    )
-    if b.note:
-        print(f"  note: {b.note}")
-    model = comparison.reproduced[law]
-    print(
-        f"  KES: B {_kes_value(bk.b_gf_cm2_per_cm, 'gf·cm²/cm')}, 2HB {_kes_value(bk.hb2_gf_cm_per_cm, 'gf·cm/cm')} "
-        f"(the data's; the fitted law along 0 → +K0 → −K0 → 0: B {_kes_value(model.b_gf_cm2_per_cm, 'gf·cm²/cm')}, "
-        f"2HB {_kes_value(model.hb2_gf_cm_per_cm, 'gf·cm/cm')})"
-    )
+    if len(fits) > 1:
+        weft_fit = fits[1][0]
+        weft = kes.material_file_data(weft_fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain)
+        data["weft"] = {k: v for k, v in weft["material"].items() if k not in (*ONE_PER_FABRIC, "source")}
+        data["fit"] |= {f"weft_{k}": v for k, v in weft["fit"].items()}
+    for (label, tensile, bending, _t, _b), (direction_fit, direction_comparison, direction_law) in zip(
+        directions, fits, strict=True
+    ):
+        _print_direction(label, tensile, bending, direction_fit, direction_comparison, direction_law, len(laws) > 1)
     if shear is not None:
         _print_shear(shear, args.shear)
     which = f" with the {law} bending law, the one AIC recommends" if len(laws) > 1 else ""
@@ -335,6 +394,10 @@ def _fit_kes(args: argparse.Namespace) -> int:
         figure = plot_kes_fit(fit, plot) if laws == ["tagawa2003"] else plot_bending_law_comparison(comparison, plot)
         print(f"wrote {figure}")
     status, problems = fit.verdict()
+    if len(fits) > 1:
+        weft_status, weft_problems = fits[1][0].verdict()
+        problems += [f"weft: {p}" for p in weft_problems]
+        status = kes.worst_status(status, weft_status)
     if shear is not None:
         shear_status, shear_problems = shear.verdict()
         problems += [f"shear: {p}" for p in shear_problems]
