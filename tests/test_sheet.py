@@ -447,6 +447,12 @@ def test_a_diverging_sheet_says_where_and_what():
     assert message.startswith("sheet 0 diverged after t = 0")
     assert "integrator.dt_s" in message and "stability estimate" in message
     assert np.isnan(caught.value.result.probes[-1]).all()  # nothing recorded past it reads as valid
+    # a step just past the limit, with the strain and shear limits out of reach: the
+    # energy the unstable step feeds in stops it, as a strip's (docs/model.md §11)
+    slightly = SheetSolver(model, 1.2 * solver.dt / 3.0, divergence_strain=100.0, divergence_shear=1.5)
+    with pytest.raises(DivergenceError, match="energy budget gain, in peak kinetic energies") as caught:
+        simulate_sheets(model, model.control(), slightly, SheetRecorder(0.001, 1, 0.1), threads=1)
+    assert caught.value.diverged[0].time_s < 0.01
 
 
 def test_bad_sheet_inputs_are_refused_by_name():

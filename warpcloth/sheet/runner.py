@@ -13,6 +13,7 @@ from tqdm import tqdm
 
 from warpcloth.errors import ArgumentError, DivergenceError
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS, SHEET_PROBE_INDEX
+from warpcloth.sim.divergence import BudgetWatch, stop_unbalanced
 from warpcloth.sim.recorder import output_schedule
 from warpcloth.sim.resources import check_memory
 from warpcloth.sim.runner import ChunkPlan, available_cores, check_divergence_policy
@@ -22,6 +23,20 @@ from .model import SheetControl, SheetModel, SheetState
 from .solver import SheetDivergence, SheetSolver
 
 BUFFER_BYTES = 64 * 2**20
+KINETIC = SHEET_PROBE_INDEX["kinetic"]
+
+
+def sheet_budget_floor(model: SheetModel) -> np.ndarray:
+    """The least energy scale each sheet's budget is judged at (the strip's rule,
+    :data:`warpcloth.sim.divergence.BUDGET_TOLERANCE`): 1e-3 of its free nodes' weight
+    times its free length, or of its warp's D W / L where that is larger (without gravity)."""
+    g = model.geometry
+    free = ~g.clamped
+    length = float(np.ptp(g.rest_positions[:, 1])) or max(g.spacing)
+    width = float(np.ptp(g.rest_positions[:, 2])) or max(g.spacing)
+    weight = model.density * float(g.node_area[free].sum()) * model.gravity * length
+    bending = np.array([s.material.warp.bending_rigidity for s in model.sheets]) * width / length
+    return 1e-3 * np.maximum(weight, bending)
 
 
 @dataclass(frozen=True)
@@ -163,6 +178,7 @@ def simulate_sheets(
     marker_buffer = wp.zeros((capacity, max(nm, 1), b), dtype=vec3, device=model.device)
     frame_buffer = wp.zeros((capacity // ppf + 1, n, b), dtype=vec3, device=model.device)
     plan = ChunkPlan(schedule, capacity)
+    budget = BudgetWatch(sheet_budget_floor(model))
     span = float(schedule.times(schedule.k_min + len(schedule.steps) - 1) - schedule.times(schedule.k_min))
     bar = tqdm(
         total=span,
@@ -192,6 +208,20 @@ def simulate_sheets(
             wp.synchronize_device(model.device)
             wall = time.perf_counter() - tic
             plan.took(wall)
+            k = schedule.k_min + np.arange(i, j)
+            kept = k >= 0
+            if kept.any():
+                # an unstable step feeds energy in before any strain limit is reached
+                values = probe_buffer[: j - i].numpy()[kept]
+                known = set(diverged)
+                stop_unbalanced(
+                    state,
+                    budget,
+                    sheet_energy_total(values),
+                    values[:, KINETIC],
+                    schedule.steps[k[kept] - schedule.k_min],
+                    known,
+                )
             status = state.struct.status.numpy()
             for s in np.flatnonzero(status):
                 if int(s) not in diverged:
@@ -199,8 +229,7 @@ def simulate_sheets(
                     if report is not None:
                         diverged[int(s)] = report
                         stopped_at[s] = report.step
-            k = schedule.k_min + np.arange(i, j)
-            keep = k >= 0
+            keep = kept
             if keep.any():
                 steps = schedule.steps[k - schedule.k_min]
                 valid = steps[:, None] < stopped_at[None, :]

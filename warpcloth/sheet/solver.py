@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 import warp as wp
 
-from warpcloth.kernels import STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
+from warpcloth.kernels import STATUS_BUDGET, STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
 from warpcloth.kernels.status import STATUS_CELL_COLLAPSED
 
 from .model import SheetControl, SheetModel, SheetState
@@ -23,6 +23,11 @@ QUANTITY = {
     STATUS_FOLDED: ("hinge chord |p1 + p2|/h (the line folded onto itself)", "hinge"),
     STATUS_CELL_COLLAPSED: ("shear angle (rad)", "cell"),
     STATUS_NONFINITE_ENERGY: ("total energy (not finite)", ""),
+    STATUS_BUDGET: (
+        "energy budget gain, in peak kinetic energies (at least 1e-3 of the sheet's weight times its length; "
+        "the step is unstable)",
+        "",
+    ),
 }
 
 

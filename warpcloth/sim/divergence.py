@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -124,36 +124,44 @@ class Divergence:
 
 
 class BudgetWatch:
-    """Each strip's energy budget at the release and its peak kinetic energy so far, to
-    stop a strip whose budget no longer closes (:data:`BUDGET_TOLERANCE`)."""
+    """Each body's energy budget at the release and its peak kinetic energy so far, to
+    stop a body whose budget no longer closes (:data:`BUDGET_TOLERANCE`): a strip's
+    (:meth:`for_strips`) or a sheet's, ``floor`` the least energy scale of each."""
 
-    def __init__(self, model: Model) -> None:
-        self.reference = np.full(model.n_strips, np.nan)
-        self.peak_kinetic = np.zeros(model.n_strips)
+    def __init__(self, floor: np.ndarray) -> None:
+        self.floor = np.asarray(floor, dtype=float)
+        self.reference = np.full(len(self.floor), np.nan)
+        self.peak_kinetic = np.zeros(len(self.floor))
+
+    @classmethod
+    def for_strips(cls, model: Model) -> BudgetWatch:
+        """The watch of a batch of strips: the floor 1e-3 of each strip's weight times its
+        free length, or of D W / L where that is larger."""
         free = model.n_nodes - model.n_clamped
         weight = model.node_mass * (free - 0.5) * model.gravity * free * model.spacing
         # without gravity (a set strip curling at rest) the scale is bending's: D W over the
         # free length, the work of bending it through one radian
         bending = model.bending[:, 0] * model.width / (free * model.spacing)
-        self.floor = 1e-3 * np.maximum(weight, bending)
+        return cls(1e-3 * np.maximum(weight, bending))
 
-    def first_violation(self, values: np.ndarray, usable: np.ndarray) -> dict[int, tuple[int, float]]:
-        """``strip → (sample index, residual / scale)`` of the first failing sample of
-        each strip in the chunk ``values[sample, field, strip]`` (samples from the release
-        on), looking only where ``usable[sample, strip]``."""
-        total = sum(values[:, PROBE_INDEX[name], :] for name in BUDGET_TERMS) - values[:, PROBE_INDEX["drive_work"], :]
-        kinetic = np.where(usable, values[:, PROBE_INDEX["kinetic"], :], 0.0)
+    def first_violation(
+        self, total: np.ndarray, kinetic: np.ndarray, usable: np.ndarray
+    ) -> dict[int, tuple[int, float]]:
+        """``body → (sample index, residual / scale)`` of the first failing sample of each
+        body in a chunk of its budget ``total[sample, body]`` and kinetic energy (samples
+        from the release on), looking only where ``usable[sample, body]``."""
+        kinetic = np.where(usable, kinetic, 0.0)
         self.reference = np.where(np.isnan(self.reference), total[0], self.reference)
         peak = np.maximum(self.peak_kinetic, np.fmax.accumulate(np.nan_to_num(kinetic, nan=0.0), axis=0))
         self.peak_kinetic = peak[-1]
         with np.errstate(invalid="ignore"):
             bad = usable & (total - self.reference > BUDGET_TOLERANCE * np.maximum(peak, self.floor))
         out = {}
-        for strip in np.flatnonzero(bad.any(axis=0)):
-            n = int(np.argmax(bad[:, strip]))
-            out[int(strip)] = (
+        for body in np.flatnonzero(bad.any(axis=0)):
+            n = int(np.argmax(bad[:, body]))
+            out[int(body)] = (
                 n,
-                float((total[n, strip] - self.reference[strip]) / max(peak[n, strip], self.floor[strip])),
+                float((total[n, body] - self.reference[body]) / max(peak[n, body], self.floor[body])),
             )
         return out
 
@@ -165,7 +173,7 @@ class DivergenceMonitor:
 
     def __init__(self, model: Model, solver: Solver, control: Control) -> None:
         self.solver, self.control = solver, control
-        self.budget = BudgetWatch(model)
+        self.budget = BudgetWatch.for_strips(model)
         self.diverged: list[Divergence] = []
         self.n_strips = model.n_strips
 
@@ -174,7 +182,10 @@ class DivergenceMonitor:
         ``steps``, the samples from the release on), each reported once."""
         known = {d.strip for d in self.diverged}
         if len(steps):
-            _stop_unbalanced(state, self.budget, values, steps, known)
+            total = (
+                sum(values[:, PROBE_INDEX[name], :] for name in BUDGET_TERMS) - values[:, PROBE_INDEX["drive_work"], :]
+            )
+            stop_unbalanced(state, self.budget, total, values[:, PROBE_INDEX["kinetic"], :], steps, known)
         status = state.struct.status.numpy()
         new = [
             self.solver.divergence_report(state, self.control, int(s)) for s in np.nonzero(status)[0] if s not in known
@@ -196,10 +207,14 @@ class DivergenceMonitor:
         return len(self.diverged) == self.n_strips
 
 
-def _stop_unbalanced(state: State, budget: BudgetWatch, values: np.ndarray, steps: np.ndarray, known: set[int]) -> None:
-    # A strip whose budget fails stops at that sample, unless the kernel stopped it
-    # earlier; the first of the two events is the one reported, however the run is cut
-    # into launches (the samples from it on are dropped like others').
+def stop_unbalanced(
+    state: Any, budget: BudgetWatch, total: np.ndarray, kinetic: np.ndarray, steps: np.ndarray, known: set[int]
+) -> None:
+    """Stop, with STATUS_BUDGET in ``state.struct``'s health fields, every body (a strip, a
+    sheet) not in ``known`` whose budget ``total[sample, body]`` fails at ``steps`` (its
+    kinetic energy ``kinetic``), unless the kernel stopped it earlier: the first of the two
+    events is the one reported, however the run is cut into launches (the samples from it
+    on are dropped like others')."""
     fields = {
         name: getattr(state.struct, name).numpy() for name in ("status", "status_step", "status_index", "status_value")
     }
@@ -208,7 +223,7 @@ def _stop_unbalanced(state: State, budget: BudgetWatch, values: np.ndarray, step
     stopped = fields["status"] != 0
     through = np.where(fields["status"] == STATUS_NONFINITE_ENERGY, fields["status_step"] - 1, fields["status_step"])
     usable = ~stopped[None, :] | (steps[:, None] <= through[None, :])
-    failed = {s: v for s, v in budget.first_violation(values, usable).items() if s not in known}
+    failed = {s: v for s, v in budget.first_violation(total, kinetic, usable).items() if s not in known}
     if not failed:
         return
     for strip, (sample, residual) in failed.items():
