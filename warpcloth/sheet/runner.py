@@ -209,17 +209,17 @@ def simulate_sheets(
             wall = time.perf_counter() - tic
             plan.took(wall)
             k = schedule.k_min + np.arange(i, j)
-            kept = k >= 0
-            if kept.any():
+            recorded = k >= 0
+            if recorded.any():
                 # an unstable step feeds energy in before any strain limit is reached
-                values = probe_buffer[: j - i].numpy()[kept]
+                values = probe_buffer[: j - i].numpy()[recorded]
                 known = set(diverged)
                 stop_unbalanced(
                     state,
                     budget,
                     sheet_energy_total(values),
                     values[:, KINETIC],
-                    schedule.steps[k[kept] - schedule.k_min],
+                    schedule.steps[k[recorded] - schedule.k_min],
                     known,
                 )
             status = state.struct.status.numpy()
@@ -229,7 +229,7 @@ def simulate_sheets(
                     if report is not None:
                         diverged[int(s)] = report
                         stopped_at[s] = report.step
-            keep = kept
+            keep = recorded
             if keep.any():
                 steps = schedule.steps[k - schedule.k_min]
                 valid = steps[:, None] < stopped_at[None, :]
