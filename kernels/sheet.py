@@ -87,11 +87,8 @@ def build(scalar: Any) -> SheetKernels:
     law = sheet.law
     piecewise_polynomial = drives.build(scalar).piecewise_polynomial
     forces = sheet_forces.build(scalar)
-    accumulate_sheet_forces, turning_angle, shear_angle = (
-        forces.accumulate_sheet_forces,
-        forces.turning_angle,
-        forces.shear_angle,
-    )
+    accumulate_sheet_forces, shear_angle = forces.accumulate_sheet_forces, forces.shear_angle
+    hinge_geometry, hinge_curvature, cell_sides = forces.hinge_geometry, forces.hinge_curvature, forces.cell_sides
     tensile_energy = tensile.build(scalar).energy_per_width
     slot = SHEET_PROBE_INDEX
 
@@ -334,24 +331,16 @@ def build(scalar: Any) -> SheetKernels:
         """Start every hinge and cell fresh at its current curvature and shear angle."""
         s = wp.tid()
         for h in range(model.hinge_nodes.shape[0]):
-            nodes = model.hinge_nodes[h]
-            across = model.hinge_axis_nodes[h]
-            x1 = state.position[nodes[1], s]
-            u = state.position[across[1], s] - state.position[across[0], s]
-            sine, _cosine, inverse_p1, inverse_p2, chord = turning_angle(
-                x1 - state.position[nodes[0], s], state.position[nodes[2], s] - x1, u / wp.length(u)
+            _e1, _e2, _axis, _inverse_u, sine, _cosine, inverse_p1, inverse_p2, chord = hinge_geometry(
+                model, state, h, s
             )
-            curvature = two * sine * inverse_p1 * inverse_p2 / chord * model.hinge_curvature_scale[h]
+            curvature = hinge_curvature(model, h, sine, inverse_p1, inverse_p2, chord)
             state.hinge[h, s] = law.fresh_memory(
                 curvature, model.bending[model.hinge_family[h], s], state.hinge_history, h, s
             )
         for c in range(model.cell_nodes.shape[0]):
-            q = model.cell_nodes[c]
-            x00 = state.position[q[0], s]
-            x10 = state.position[q[1], s]
-            x01 = state.position[q[2], s]
-            x11 = state.position[q[3], s]
-            phi, _sn, _d_w, _d_f = shear_angle((x10 - x00 + x11 - x01) * half, (x01 - x00 + x11 - x10) * half)
+            w, f = cell_sides(model, state, c, s)
+            phi, _sn, _d_w, _d_f = shear_angle(w, f)
             state.cell[c, s] = law.fresh_memory(phi, model.shear[s], state.cell_history, c, s)
 
     @wp.kernel(module="unique", enable_backward=False)

@@ -24,7 +24,9 @@ class SheetForces:
     """The force pass and the elements' coordinates, for one precision."""
 
     accumulate_sheet_forces: Any
-    turning_angle: Any
+    hinge_geometry: Any
+    hinge_curvature: Any
+    cell_sides: Any
     shear_angle: Any
 
 
@@ -74,6 +76,36 @@ def build(scalar: Any) -> SheetForces:
         return phi, sn, d_w, d_f
 
     @wp.func
+    def hinge_geometry(model: SheetModel, state: SheetState, h: int, s: int):
+        # hinge h's two segments, its bending axis (and 1/|u|), and its turning angle's pieces
+        nodes = model.hinge_nodes[h]
+        across = model.hinge_axis_nodes[h]
+        x1 = state.position[nodes[1], s]
+        e1 = x1 - state.position[nodes[0], s]
+        e2 = state.position[nodes[2], s] - x1
+        u = state.position[across[1], s] - state.position[across[0], s]
+        inverse_u = one / wp.length(u)
+        axis = u * inverse_u
+        sine, cosine, inverse_p1, inverse_p2, chord = turning_angle(e1, e2, axis)
+        return e1, e2, axis, inverse_u, sine, cosine, inverse_p1, inverse_p2, chord
+
+    @wp.func
+    def hinge_curvature(model: SheetModel, h: int, sine: scalar, inverse_p1: scalar, inverse_p2: scalar, chord: scalar):
+        # the strip's hinge curvature, 2 sin ψ / chord, in the projected plane (§5.1), times
+        # the hinge's scale (2 at a clamp edge)
+        return two * sine * inverse_p1 * inverse_p2 / chord * model.hinge_curvature_scale[h]
+
+    @wp.func
+    def cell_sides(model: SheetModel, state: SheetState, c: int, s: int):
+        # cell c's mean warp and mean weft sides
+        q = model.cell_nodes[c]
+        x00 = state.position[q[0], s]
+        x10 = state.position[q[1], s]
+        x01 = state.position[q[2], s]
+        x11 = state.position[q[3], s]
+        return (x10 - x00 + x11 - x01) * half, (x01 - x00 + x11 - x10) * half
+
+    @wp.func
     def segments(model: SheetModel, stepping: SheetStepping, state: SheetState, s: int):
         for e in range(model.edge_nodes.shape[0]):
             ends = model.edge_nodes[e]
@@ -95,20 +127,13 @@ def build(scalar: Any) -> SheetForces:
             nodes = model.hinge_nodes[h]
             across = model.hinge_axis_nodes[h]
             family = model.hinge_family[h]
-            x1 = state.position[nodes[1], s]
-            e1 = x1 - state.position[nodes[0], s]
-            e2 = state.position[nodes[2], s] - x1
-            u = state.position[across[1], s] - state.position[across[0], s]
-            inverse_u = one / wp.length(u)
-            axis = u * inverse_u
-            sine, cosine, inverse_p1, inverse_p2, chord = turning_angle(e1, e2, axis)
+            e1, e2, axis, inverse_u, sine, cosine, inverse_p1, inverse_p2, chord = hinge_geometry(model, state, h, s)
             fold = scalar(1e-3) * model.spacing[family]
             # folded onto itself, or a segment turned onto the axis (no plane to bend in);
             # NaN fails every comparison and stops here too
             if not (chord > fold and inverse_p1 * fold < one and inverse_p2 * fold < one):
                 return STATUS_FOLDED, h, chord / model.spacing[family]
-            # the strip's hinge curvature, 2 sin ψ / chord, in the projected plane (§5.1)
-            curvature = two * sine * inverse_p1 * inverse_p2 / chord * model.hinge_curvature_scale[h]
+            curvature = hinge_curvature(model, h, sine, inverse_p1, inverse_p2, chord)
             p = model.bending[family, s]
             memory = law.follow(curvature, state.hinge[h, s], p, state.hinge_history, h, s)
             state.hinge[h, s] = memory
@@ -141,12 +166,7 @@ def build(scalar: Any) -> SheetForces:
         p = model.shear[s]
         for c in range(model.cell_nodes.shape[0]):
             q = model.cell_nodes[c]
-            x00 = state.position[q[0], s]
-            x10 = state.position[q[1], s]
-            x01 = state.position[q[2], s]
-            x11 = state.position[q[3], s]
-            w = (x10 - x00 + x11 - x01) * half
-            f = (x01 - x00 + x11 - x10) * half
+            w, f = cell_sides(model, state, c, s)
             phi, sn, d_w, d_f = shear_angle(w, f)
             if not (wp.abs(phi) <= stepping.max_shear):  # also catches NaN
                 return STATUS_CELL_COLLAPSED, c, phi
@@ -186,5 +206,9 @@ def build(scalar: Any) -> SheetForces:
         return cells(model, stepping, state, s)
 
     return SheetForces(
-        accumulate_sheet_forces=accumulate_sheet_forces, turning_angle=turning_angle, shear_angle=shear_angle
+        accumulate_sheet_forces=accumulate_sheet_forces,
+        hinge_geometry=hinge_geometry,
+        hinge_curvature=hinge_curvature,
+        cell_sides=cell_sides,
+        shear_angle=shear_angle,
     )

@@ -4,7 +4,6 @@ through a chunk of output samples per launch (docs/model.md §17.5)."""
 from __future__ import annotations
 
 import math
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -12,6 +11,7 @@ import warp as wp
 
 from warpcloth.kernels import STATUS_BUDGET, STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
 from warpcloth.kernels.status import STATUS_CELL_COLLAPSED
+from warpcloth.sim.solvers import launch_over_threads
 
 from .model import SheetControl, SheetModel, SheetState
 
@@ -123,22 +123,7 @@ class SheetSolver:
         steps = wp.array(np.asarray(output_steps, dtype=np.int32), dtype=int, device=model.device)
         inputs = [model.struct, control.struct, self.stepping(control), state.struct, settings, steps]
         inputs += [int(first_output), int(first_frame), *buffers]
-        parts = max(1, min(threads, model.n_sheets // SHEETS_PER_THREAD)) if model.device.is_cpu else 1
-        bounds = np.linspace(0, model.n_sheets, parts + 1).round().astype(int)
-
-        def launch(part: int) -> None:
-            wp.launch(
-                model.kernels.advance,
-                dim=int(bounds[part + 1] - bounds[part]),
-                device=model.device,
-                inputs=[*inputs, int(bounds[part])],
-            )
-
-        if parts == 1:
-            launch(0)
-            return
-        with ThreadPoolExecutor(parts) as pool:
-            list(pool.map(launch, range(parts)))
+        launch_over_threads(model.kernels.advance, model.n_sheets, inputs, model.device, threads, SHEETS_PER_THREAD)
 
     def divergence_report(self, state: SheetState, control: SheetControl, sheet: int) -> SheetDivergence | None:
         """Where and how ``sheet`` diverged, or None while it is healthy."""

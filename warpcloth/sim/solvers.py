@@ -34,6 +34,26 @@ STRIPS_PER_THREAD = 8
 """A CPU launch is split among threads only into ranges of at least this many strips."""
 
 
+def launch_over_threads(
+    kernel: object, n_bodies: int, inputs: list, device: object, threads: int, per_thread: int
+) -> None:
+    """Launch ``kernel`` over ``n_bodies`` (strips, sheets) whose last input is the first
+    body's index: on a CPU as ``threads`` launches of contiguous ranges of at least
+    ``per_thread`` bodies, each from its own thread (Warp runs a CPU launch on one thread
+    and releases the GIL), else one launch. Every body's arithmetic is the same either way."""
+    parts = max(1, min(threads, n_bodies // per_thread)) if device.is_cpu else 1
+    bounds = np.linspace(0, n_bodies, parts + 1).round().astype(int)
+
+    def launch(part: int) -> None:
+        wp.launch(kernel, dim=int(bounds[part + 1] - bounds[part]), device=device, inputs=[*inputs, int(bounds[part])])
+
+    if parts == 1:
+        launch(0)
+        return
+    with ThreadPoolExecutor(parts) as pool:
+        list(pool.map(launch, range(parts)))
+
+
 @dataclass(frozen=True)
 class StepBound:
     """The longest step a scheme runs stably, the mode that sets it and whether the bound
@@ -151,22 +171,7 @@ class FusedStripSolver:
         # at least STRIPS_PER_THREAD strips per thread: a small batch gains nothing from
         # splitting and, measured in the test suite, can lose (2-strip to 8-strip batches
         # ran 20 % slower on 2 threads there)
-        parts = max(1, min(threads, model.n_strips // STRIPS_PER_THREAD)) if model.device.is_cpu else 1
-        bounds = np.linspace(0, model.n_strips, parts + 1).round().astype(int)
-
-        def launch(part: int) -> None:
-            wp.launch(
-                self.kernels.advance,
-                dim=int(bounds[part + 1] - bounds[part]),
-                device=model.device,
-                inputs=[*inputs, int(bounds[part])],
-            )
-
-        if parts == 1:
-            launch(0)
-            return
-        with ThreadPoolExecutor(parts) as pool:
-            list(pool.map(launch, range(parts)))
+        launch_over_threads(self.kernels.advance, model.n_strips, inputs, model.device, threads, STRIPS_PER_THREAD)
 
     def divergence_report(self, state: State, control: Control, strip: int) -> Divergence | None:
         """Where and how ``strip`` diverged, or None while it is healthy."""

@@ -79,6 +79,29 @@ class FitObjective:
             set_field(data, name, value)
         return data
 
+    def _choose_step(self) -> None:
+        # dt_s = "auto": one step for every candidate (a batch shares it, and a fit's cost
+        # must not jump between launches), the one that suits every corner of the box:
+        # the step bounds move with the fitted stiffnesses and density
+        if self.base.get("integrator", {}).get("dt_s") != AUTO:
+            return
+        if len(self.free) > MAX_STEP_CORNERS_FREE:
+            raise ArgumentError(
+                "free",
+                f"integrator.dt_s = auto checks every corner of the box, 2^{len(self.free)} "
+                f"scenes for {len(self.free)} free parameters (at most {MAX_STEP_CORNERS_FREE}); "
+                "give integrator.dt_s a number",
+            )
+        corners = [
+            self.scene_data(np.array(c, dtype=float)) for c in itertools.product((0.0, 1.0), repeat=len(self.free))
+        ]
+        set_field(self.base, "integrator.dt_s", self.corner_step(corners))
+        set_field(self.base, "integrator.dt_chosen_by", AUTO)
+
+    def corner_step(self, corners: list[dict]) -> float:
+        """The step that suits every corner scene (raw data) of the box."""
+        raise NotImplementedError
+
     def run(self, points: np.ndarray) -> Any:
         """Simulate every point (rows) in one batch."""
         raise NotImplementedError
@@ -163,24 +186,9 @@ class Objective(FitObjective):
         self.launches = 0
         self.variants = 0
 
-    def _choose_step(self) -> None:
-        # dt_s = "auto": one step for every candidate (a batch shares it), the one that
-        # suits every corner of the box: the step bounds move with D, D1, α and density
-        if self.base.get("integrator", {}).get("dt_s") != AUTO:
-            return
-        if len(self.free) > MAX_STEP_CORNERS_FREE:
-            raise ArgumentError(
-                "free",
-                f"integrator.dt_s = auto checks every corner of the box, 2^{len(self.free)} "
-                f"scenes for {len(self.free)} free parameters (at most {MAX_STEP_CORNERS_FREE}); "
-                "give integrator.dt_s a number",
-            )
-        corners = [
-            scene_from_dict(self.scene_data(np.array(c, dtype=float)), choose_step=False)
-            for c in itertools.product((0.0, 1.0), repeat=len(self.free))
-        ]
-        set_field(self.base, "integrator.dt_s", choose_step(corners).dt_s)
-        set_field(self.base, "integrator.dt_chosen_by", AUTO)
+    def corner_step(self, corners: list[dict]) -> float:
+        """The step that suits every corner scene of the box (the strip's own choice)."""
+        return choose_step([scene_from_dict(data, choose_step=False) for data in corners]).dt_s
 
     def run(self, points: np.ndarray) -> RunResult:
         """Simulate every point (rows) in one batch."""

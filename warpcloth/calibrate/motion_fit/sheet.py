@@ -6,7 +6,6 @@ residuals, every batch of candidates one batch of sheets (one launch per chunk).
 from __future__ import annotations
 
 import copy
-import itertools
 
 import numpy as np
 
@@ -27,7 +26,7 @@ from warpcloth.scene.sheet_build import (
 from warpcloth.scene.step import AUTO
 from warpcloth.sheet import SheetResult, simulate_sheets
 
-from .objective import MAX_STEP_CORNERS_FREE, FitObjective, Objective
+from .objective import FitObjective, Objective
 from .parameters import FreeParameter, default_range, parse_bounds
 
 SHEET_ALIASES = {
@@ -173,23 +172,9 @@ class SheetObjective(FitObjective):
     def _scene(self, data: dict) -> SheetScene:
         return check_sheet_scene(sheet_scene_from_dict(data))
 
-    def _choose_step(self) -> None:
-        # dt_s = "auto": the shortest step any corner of the box chooses, one for every
-        # candidate (a batch shares it, and a fit's cost must not jump between launches)
-        if self.base.get("integrator", {}).get("dt_s") != AUTO:
-            return
-        if len(self.free) > MAX_STEP_CORNERS_FREE:
-            raise ArgumentError(
-                "free",
-                f"integrator.dt_s = auto checks every corner of the box, 2^{len(self.free)} scenes for "
-                f"{len(self.free)} free parameters (at most {MAX_STEP_CORNERS_FREE}); give integrator.dt_s a number",
-            )
-        steps = [
-            self._scene(self.scene_data(np.array(c, dtype=float))).integrator.dt_s
-            for c in itertools.product((0.0, 1.0), repeat=len(self.free))
-        ]
-        set_field(self.base, "integrator.dt_s", min(steps))
-        set_field(self.base, "integrator.dt_chosen_by", AUTO)
+    def corner_step(self, corners: list[dict]) -> float:
+        """The shortest step any corner sheet chooses (``dt_s = "auto"``, :func:`check_sheet_scene`)."""
+        return min(self._scene(data).integrator.dt_s for data in corners)
 
     def run(self, points: np.ndarray) -> SheetResult:
         """Simulate every point (rows) as one batch of sheets."""
