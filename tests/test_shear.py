@@ -297,25 +297,11 @@ def test_every_kind_has_its_bending_and_its_shear_unit():
 def test_fit_kes_with_the_wefts_loops_writes_a_weft_a_sheet_reads(tmp_path):
     from warpcloth.scene.sheet_build import load_sheet_scene
 
+    warp = ("material", "fit-kes", "--tensile", "kes_fb1_example", "--bending", "kes_fb2_example")
+    density = ("--density-g-per-cm2", "0.0203")
     out = tmp_path / "fabric.toml"
-    done = run_cli(
-        "material",
-        "fit-kes",
-        "--tensile",
-        "kes_fb1_example",
-        "--bending",
-        "kes_fb2_example",
-        "--weft-tensile",
-        "kes_fb1_example",
-        "--weft-bending",
-        "kes_fb2_inner_loops",
-        "--shear",
-        "kes_fb1_shear_example",
-        "--density-g-per-cm2",
-        "0.0203",
-        "-o",
-        out,
-    )
+    weft = ("--weft-tensile", "kes_fb1_example", "--weft-bending", "kes_fb2_inner_loops")
+    done = run_cli(*warp, *weft, "--shear", "kes_fb1_shear_example", *density, "-o", out)
     assert done.returncode == 0, done.stderr
     data = tomllib.loads(out.read_text())
     assert "density_g_per_cm2" not in data["weft"] and "name" not in data["weft"]
@@ -324,19 +310,6 @@ def test_fit_kes_with_the_wefts_loops_writes_a_weft_a_sheet_reads(tmp_path):
     assert scene.weft.bending_rigidity_gf_cm2_per_cm == data["weft"]["bending_rigidity_gf_cm2_per_cm"]
     assert scene.material.bending_rigidity_gf_cm2_per_cm == data["material"]["bending_rigidity_gf_cm2_per_cm"]
     assert scene.shear.rigidity_gf_per_cm_deg == data["shear"]["rigidity_gf_per_cm_deg"]
-    alone = run_cli(
-        "material",
-        "fit-kes",
-        "--tensile",
-        "kes_fb1_example",
-        "--bending",
-        "kes_fb2_example",
-        "--weft-tensile",
-        "kes_fb1_example",
-        "--density-g-per-cm2",
-        "0.0203",
-        "-o",
-        tmp_path / "other.toml",
-    )
+    alone = run_cli(*warp, *weft[:2], *density, "-o", tmp_path / "other.toml")
     assert alone.returncode == 2
     assert "--weft-tensile: the weft is fitted from both its loops: give --weft-bending too" in alone.stderr
