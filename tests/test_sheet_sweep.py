@@ -7,8 +7,8 @@ import pandas as pd
 import pytest
 import tomli_w
 from conftest import run_cli
-
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
+
 from warpcloth.runs import sheet_result_metrics, simulate_sheet
 from warpcloth.scene import load_sweep, read_scene_file
 from warpcloth.scene.sheet_build import load_sheet_scene

@@ -8,11 +8,12 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ArgumentError
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
-from .metrics import sheet_metrics
+
+from .errors import ArgumentError
 from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
+from .metrics import sheet_metrics
 from .scene import COORDINATES, Scene, build_batch, load_scene
 from .scene.overrides import Overrides, override_pairs
 from .scene.sheet import SheetScene
