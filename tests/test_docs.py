@@ -56,8 +56,8 @@ def test_every_sheet_scene_field_is_documented():
 def test_every_sheet_sweep_summary_column_is_documented():
     # the guide's table of a sheet sweep's summary names every column sheet_metrics gives
     import numpy as np
-
     from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
+
     from warpcloth.metrics import sheet_metrics
 
     series = np.linspace(0.0, 1.0, 5)
