@@ -4,8 +4,9 @@
 Each strip's result does not depend on the batch it ran in (tests/test_batch.py), nor
 does each sheet's (tests/test_sheet_sweep.py), so the final results are identical however
 often the sweep was interrupted. A sweep of sheet scenes runs through the same directory,
-threads, Dask tasks and resume; only its batch (:func:`run_sheet_batch`), its size
-estimates and its summary's metrics (:func:`~warpcloth.metrics.sheet_metrics`) are its own.
+threads, Dask tasks and resume; only how its batch is simulated
+(:func:`simulate_sheet_batch`), its size estimates and its summary's metrics
+(:func:`~warpcloth.metrics.sheet_metrics`) are its own.
 """
 
 from __future__ import annotations
@@ -165,6 +166,102 @@ def _peak(series: np.ndarray) -> float:
     return float(np.max(series)) if len(series) else float("nan")
 
 
+@dataclass
+class SimulatedBatch:
+    """One batch simulated, as its files need it: the probe store's columns ``names``,
+    their series ``values[sample, column, variant]`` at ``t`` and which samples each
+    variant recorded (``ok[sample, variant]``: not after a divergence), per variant its
+    summary's metric columns, the frames (or None), and the steps done (strip- or node-)."""
+
+    names: list[str]
+    t: np.ndarray
+    values: np.ndarray
+    ok: np.ndarray
+    metrics: list[dict[str, object]]
+    frames: np.ndarray | None
+    steps: int
+
+
+def simulate_strips(scene_dicts: list[dict], device: str | None, frames: bool) -> SimulatedBatch:
+    """A batch of strips, one launch sequence; each strip's swing metrics."""
+    scenes = [scene_from_dict(d) for d in scene_dicts]
+    # one thread per batch: the sweep already runs its batches on the cores
+    result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
+    diverged = {d.strip: d for d in result.diverged}
+    ok = np.isfinite(result.probes[:, PROBE_FIELDS.index("tip_x")])
+    rows = []
+    for local, scene in enumerate(scenes):
+        kept = ok[:, local]
+        metrics = swing_summary(
+            result.t[kept],
+            result.probe("laser_x", local)[kept],
+            result.probe("tip_x", local)[kept],
+            starts_at_rest=scene.release.enabled,
+        )
+        metrics.pop("signal")
+        report = diverged.get(local)
+        row: dict[str, object] = metrics | {
+            "peak_tip_speed_m_per_s": _peak(result.probe("tip_speed", local)[kept]),
+            "hysteresis_work_J": _last(result.probe("hysteresis_work", local)[kept]),
+            "damping_work_J": _last(result.probe("damping_work", local)[kept]),
+            "diverged": report is not None,
+            "diverged_time_s": report.time_s if report else float("nan"),
+            "diverged_phase": report.phase if report else "",
+            "diverged_quantity": report.quantity if report else "",
+        }
+        rows.append(row | _overflows(result.reversal_memory, local))
+    return SimulatedBatch(
+        list(PROBE_FIELDS), result.t, result.probes, ok, rows, result.frames if frames else None, result.strip_steps
+    )
+
+
+def _overflows(reversal_memory: dict, local: int) -> dict[str, int]:
+    # reversals a full masing memory could not store (no hysteresis in their loops)
+    if not reversal_memory:
+        return {}
+    return {"reversal_overflows": int(np.asarray(reversal_memory["overflows"])[local])}
+
+
+def marker_columns(n_markers: int) -> list[str]:
+    """The probe store's columns of a sheet's markers: ``marker_K_x``, ``_y``, ``_z`` (m)."""
+    return [f"marker_{k}_{axis}" for k in range(n_markers) for axis in "xyz"]
+
+
+def simulate_sheet_batch(scene_dicts: list[dict], device: str | None, frames: bool) -> SimulatedBatch:
+    """A batch of sheets in the same launches; each sheet's :func:`~warpcloth.metrics.sheet_metrics`
+    (NaN for a diverged one: what a sheet did before it diverged is no measurement of it)."""
+    scenes = [sheet_scene_from_dict(d) for d in scene_dicts]  # resolved: checked as the sweep was expanded
+    built = build_sheets(scenes, device)
+    result = simulate_sheets(
+        built.model, built.control, built.solver, built.recorder, on_divergence="record", keep_frames=frames, threads=1
+    )
+    diverged = {d.sheet: d for d in result.diverged}
+    n_samples, b, n_markers = len(result.t), len(scenes), result.markers.shape[2]
+    markers = np.transpose(result.markers.reshape(n_samples, b, 3 * n_markers), (0, 2, 1))
+    rows = []
+    for local, scene in enumerate(scenes):
+        report = diverged.get(local)
+        metrics = sheet_result_metrics(scene, result, local)
+        if report is not None:
+            metrics = dict.fromkeys(metrics, float("nan"))
+        row: dict[str, object] = metrics | {
+            "diverged": report is not None,
+            "diverged_time_s": report.time_s if report else float("nan"),
+            "diverged_phase": ("settle" if report.time_s < 0 else "record") if report else "",
+            "diverged_quantity": QUANTITY[report.code][0] if report else "",
+        }
+        rows.append(row | _overflows(result.reversal_memory, local))
+    return SimulatedBatch(
+        [*SHEET_PROBE_FIELDS, *marker_columns(n_markers)],
+        result.t,
+        np.concatenate([result.probes, markers], axis=1),
+        np.isfinite(result.probes[:, SHEET_PROBE_FIELDS.index("kinetic")]),
+        rows,
+        result.frames if frames else None,
+        result.node_steps,
+    )
+
+
 def run_batch(
     out_dir: str,
     batch: int,
@@ -173,110 +270,27 @@ def run_batch(
     assignments: list[dict],
     device: str | None,
     frames: bool,
+    kind: str = "strip",
 ) -> dict:
-    """Simulate one batch and write its files (runs in a Dask worker or in-process)."""
+    """Simulate one batch of ``kind`` (``"strip"`` or ``"sheet"``) and write its files
+    (runs in a Dask worker or in-process)."""
     init_warp_quietly()  # a worker process starts Warp afresh: no banner or notices in the results
-    scenes = [scene_from_dict(d) for d in scene_dicts]
     started = time.perf_counter()
-    # one thread per batch: the sweep already runs its batches on the cores
-    result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
+    done = BATCH_KINDS[kind].simulate(scene_dicts, device, frames)
     wall = time.perf_counter() - started
-    diverged = {d.strip: d for d in result.diverged}
-
-    columns = {"variant": [], "t": []} | {name: [] for name in PROBE_FIELDS}
+    columns: dict[str, list] = {"variant": [], "t": []} | {name: [] for name in done.names}
     rows = []
     for local, variant in enumerate(variants):
-        values = result.probes[:, :, local]
-        ok = np.isfinite(values[:, PROBE_FIELDS.index("tip_x")])
+        ok = done.ok[:, local]
         columns["variant"].append(np.full(ok.sum(), variant, dtype=np.int32))
-        columns["t"].append(result.t[ok])
-        for q, name in enumerate(PROBE_FIELDS):
-            columns[name].append(values[ok, q])
-        metrics = swing_summary(
-            result.t[ok],
-            result.probe("laser_x", local)[ok],
-            result.probe("tip_x", local)[ok],
-            starts_at_rest=scenes[local].release.enabled,
-        )
-        metrics.pop("signal")
-        report = diverged.get(local)
+        columns["t"].append(done.t[ok])
+        for q, name in enumerate(done.names):
+            columns[name].append(done.values[ok, q, local])
         row: dict[str, object] = {"variant": variant, "batch": batch}
         row |= {key: (json.dumps(v) if isinstance(v, list) else v) for key, v in assignments[local].items()}
-        row |= metrics
-        row |= {
-            "peak_tip_speed_m_per_s": _peak(result.probe("tip_speed", local)[ok]),
-            "hysteresis_work_J": _last(result.probe("hysteresis_work", local)[ok]),
-            "damping_work_J": _last(result.probe("damping_work", local)[ok]),
-            "diverged": report is not None,
-            "diverged_time_s": report.time_s if report else float("nan"),
-            "diverged_phase": report.phase if report else "",
-            "diverged_quantity": report.quantity if report else "",
-        }
-        if result.reversal_memory:  # reversals a full masing memory could not store (no hysteresis in their loops)
-            row["reversal_overflows"] = int(np.asarray(result.reversal_memory["overflows"])[local])
-        rows.append(row)
-    SweepDirectory(out_dir).write_batch(
-        batch, {k: np.concatenate(v) for k, v in columns.items()}, rows, result.frames if frames else None
-    )
-    return {"batch": batch, "n_variants": len(variants), "steps": result.strip_steps, "wall_s": wall}
-
-
-def marker_columns(n_markers: int) -> list[str]:
-    """The probe store's columns of a sheet's markers: ``marker_K_x``, ``_y``, ``_z`` (m)."""
-    return [f"marker_{k}_{axis}" for k in range(n_markers) for axis in "xyz"]
-
-
-def run_sheet_batch(
-    out_dir: str,
-    batch: int,
-    variants: list[int],
-    scene_dicts: list[dict],
-    assignments: list[dict],
-    device: str | None,
-    frames: bool,
-) -> dict:
-    """Simulate one batch of sheets in one launch sequence and write its files, as
-    :func:`run_batch` does a strips' (in a Dask worker or in-process)."""
-    init_warp_quietly()
-    scenes = [sheet_scene_from_dict(d) for d in scene_dicts]  # resolved: checked as the sweep was expanded
-    built = build_sheets(scenes, device)
-    started = time.perf_counter()
-    result = simulate_sheets(
-        built.model, built.control, built.solver, built.recorder, on_divergence="record", keep_frames=frames, threads=1
-    )
-    wall = time.perf_counter() - started
-    diverged = {d.sheet: d for d in result.diverged}
-    n_markers = result.markers.shape[2]
-    names = [*SHEET_PROBE_FIELDS, *marker_columns(n_markers)]
-    columns: dict[str, list] = {"variant": [], "t": []} | {name: [] for name in names}
-    rows = []
-    for local, variant in enumerate(variants):
-        values = np.concatenate([result.probes[:, :, local], result.markers[:, local].reshape(len(result.t), -1)], 1)
-        ok = np.isfinite(values[:, SHEET_PROBE_FIELDS.index("kinetic")])
-        columns["variant"].append(np.full(ok.sum(), variant, dtype=np.int32))
-        columns["t"].append(result.t[ok])
-        for q, name in enumerate(names):
-            columns[name].append(values[ok, q])
-        report = diverged.get(local)
-        metrics = sheet_result_metrics(scenes[local], result, local)
-        if report is not None:  # what a sheet did before it diverged is no measurement of it
-            metrics = dict.fromkeys(metrics, float("nan"))
-        row: dict[str, object] = {"variant": variant, "batch": batch}
-        row |= {key: (json.dumps(v) if isinstance(v, list) else v) for key, v in assignments[local].items()}
-        row |= metrics
-        row |= {
-            "diverged": report is not None,
-            "diverged_time_s": report.time_s if report else float("nan"),
-            "diverged_phase": ("settle" if report.time_s < 0 else "record") if report else "",
-            "diverged_quantity": QUANTITY[report.code][0] if report else "",
-        }
-        if result.reversal_memory:  # reversals a full masing memory could not store
-            row["reversal_overflows"] = int(np.asarray(result.reversal_memory["overflows"])[local])
-        rows.append(row)
-    SweepDirectory(out_dir).write_batch(
-        batch, {k: np.concatenate(v) for k, v in columns.items()}, rows, result.frames if frames else None
-    )
-    return {"batch": batch, "n_variants": len(variants), "steps": result.node_steps, "wall_s": wall}
+        rows.append(row | done.metrics[local])
+    SweepDirectory(out_dir).write_batch(batch, {k: np.concatenate(v) for k, v in columns.items()}, rows, done.frames)
+    return {"batch": batch, "n_variants": len(variants), "steps": done.steps, "wall_s": wall}
 
 
 def warm_sheet_kernel_cache(scenes: list[SheetScene], device: str | None) -> None:
@@ -294,11 +308,11 @@ def warm_sheet_kernel_cache(scenes: list[SheetScene], device: str | None) -> Non
 
 @dataclass(frozen=True)
 class BatchKind:
-    """What running a sweep's batches takes of the kind of scene it varies: the batch
-    (a module-level function, so Dask can send it), the kernel warm-up, what the
-    progress bar counts, and the coordinates its directory states."""
+    """What running a sweep's batches takes of the kind of scene it varies: how a batch
+    is simulated, the kernel warm-up, what the progress bar counts, and the coordinates
+    its directory states."""
 
-    run_batch: Callable[..., dict]
+    simulate: Callable[[list[dict], str | None, bool], SimulatedBatch]
     warm: Callable[[list, str | None], None]
     steps: str
     coordinates: str
@@ -319,8 +333,8 @@ def warm_kernel_cache(scenes: list[Scene], device: str | None) -> None:
 
 
 BATCH_KINDS = {
-    "strip": BatchKind(run_batch, warm_kernel_cache, "strip-steps", COORDINATES),
-    "sheet": BatchKind(run_sheet_batch, warm_sheet_kernel_cache, "node-steps", SHEET_COORDINATES),
+    "strip": BatchKind(simulate_strips, warm_kernel_cache, "strip-steps", COORDINATES),
+    "sheet": BatchKind(simulate_sheet_batch, warm_sheet_kernel_cache, "node-steps", SHEET_COORDINATES),
 }
 """How the batches of a strip sweep and of a sheet sweep run, by :attr:`Sweep.kind`."""
 
@@ -402,22 +416,23 @@ def run_sweep(
             [sweep.assignments[i] for i in ids],
             device,
             frames,
+            sweep.kind,
         )
 
     try:
         if pending:
             kind.warm([sweep.scenes[batches[b][0]] for b in pending], device)
             if scheduler is not None:
-                _run_on_dask(pending, kind.run_batch, task, finished, scheduler, sweep.fingerprint)
+                _run_on_dask(pending, task, finished, scheduler, sweep.fingerprint)
             elif n_workers == 0:
                 for b in pending:
-                    finished(kind.run_batch(*task(b)))
+                    finished(run_batch(*task(b)))
             else:
                 # Threads, not processes: Warp releases the GIL for a CPU launch, so one
                 # thread per core runs batches side by side in this one process.
                 pool = ThreadPoolExecutor(n_workers)
                 try:
-                    for future in as_completed([pool.submit(kind.run_batch, *task(b)) for b in pending]):
+                    for future in as_completed([pool.submit(run_batch, *task(b)) for b in pending]):
                         finished(future.result())
                 finally:
                     # on Ctrl-C (or a failed batch) the batches not yet started are dropped;
@@ -429,19 +444,14 @@ def run_sweep(
 
 
 def _run_on_dask(
-    pending: list[int],
-    batch: Callable[..., dict],
-    task: Callable[[int], tuple],
-    finished: Callable[[dict], None],
-    scheduler: str,
-    fingerprint: str,
+    pending: list[int], task: Callable[[int], tuple], finished: Callable[[dict], None], scheduler: str, fingerprint: str
 ) -> None:
     from dask.distributed import Client, as_completed
 
     client = Client(scheduler)
     try:
         futures = [
-            client.submit(batch, *task(b), key=f"warpcloth-{fingerprint[:12]}-batch-{b:04d}", pure=False, retries=2)
+            client.submit(run_batch, *task(b), key=f"warpcloth-{fingerprint[:12]}-batch-{b:04d}", pure=False, retries=2)
             for b in pending
         ]
         for future in as_completed(futures):
