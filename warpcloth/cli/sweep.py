@@ -30,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--max-batch",
         type=at_least(1),
         default=None,
-        help="strips per batch (default: from the memory per strip and the worker count)",
+        help="strips (or sheets) per batch (default: from the memory per variant and the worker count)",
     )
     sweep_p.add_argument(
         "--workers",
