@@ -53,11 +53,15 @@ def split_comment(line):
 def samples_at_random(scene):
     """Whether the scene a `warpcloth sweep` names (bundled, or a path in the copy of the
     clone) has a [sweep.random] block, whose samples the README test cuts to 8 (a grid
-    or zip sweep the guide keeps small itself)."""
+    or zip sweep the guide keeps small itself); one that does not read is shortened too."""
+    from warpcloth.errors import WarpclothError
     from warpcloth.scene import read_scene_file
 
     path = ROOT / scene
-    data = read_scene_file(path if path.is_file() else scene)
+    try:
+        data = read_scene_file(path if path.is_file() else scene)
+    except WarpclothError:
+        return True
     return "random" in (data.get("sweep") or {})
 
 
