@@ -58,6 +58,12 @@ def test_a_sheet_sweep_runs_through_the_cli_into_a_sweep_directory(swept):
     assert summary["hysteresis_work_J"].gt(0).all() and summary["energy_drift_relative"].lt(1e-3).all()
     probes = pd.read_parquet(out / "probes")
     assert list(probes.columns) == ["variant", "t", *SHEET_PROBE_FIELDS, *marker_columns(3)]
+    # its summary plots as a strip sweep's; the views of single variants refuse it in one line
+    plotted = run_cli("plot", out, "--metric", "peak_shear_angle_deg", "--x", G, "--out", out.parent / "fig")
+    assert plotted.returncode == 0 and (out.parent / "fig" / f"peak_shear_angle_deg_vs_{G}.png").is_file()
+    refused = run_cli("plot", out, "--out", out.parent / "figs")
+    assert refused.returncode != 0 and len(refused.stderr.strip().splitlines()) == 1
+    assert "is a sweep of sheet scenes" in refused.stderr
 
 
 def test_each_variant_equals_the_same_sheet_run_alone_bit_for_bit(swept):

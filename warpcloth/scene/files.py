@@ -112,7 +112,7 @@ def scene_from_dict(data: dict, choose_step: bool = True) -> Scene:
         raise SceneError(
             "sheet",
             "this is a sheet scene: `warpcloth run` and warpcloth.scene.sheet_build.load_sheet_scene "
-            "take it (sweeps, fits and the strip's Python API take strip scenes)",
+            "take it, and `warpcloth sweep` its [sweep] (fits and the strip's Python API take strip scenes)",
         )
     scene = parse_section(Scene, with_material_file(data), "")
     validate_scene(scene)
