@@ -18,6 +18,10 @@ the parameters below within its reported uncertainty.
 - ``impulsive_rotation_encoder.csv``: the bundled scene's θ(t) (at rest until t = 0,
   3.2e4 t⁴ to 0.05 s, then 16 rad/s to 0.12 s, then held) sampled at 1 kHz from −0.03 s
   to 0.2 s, in degrees, the encoder reading 0.25° at rest; noise σ = 0.1°.
+- ``shear_swing_markers.csv``: the bundled sheet's shear swing at a 10 mm spacing for
+  0.3 s, with the shear rigidity G = 1.2 gf/(cm·°) (the material file says 0.8); its four markers as a camera facing
+  the sheet sees them (z and y) at 120 frames/s; noise σ = 0.02 mm per coordinate
+  (its own seed, so the strip files above stay as they were).
 """
 
 from __future__ import annotations
@@ -35,6 +39,9 @@ from warpcloth.scene import read_scene_file, set_field
 HERE = Path(__file__).parent
 SWING_TRUTH = {"damping.gamma_per_s": 0.55, "material.hysteresis_d1_gf_cm_per_cm": 0.025}
 ROTATION_TRUTH = {"clamp.rotation_centre_dy_mm": 4.0, "damping.gamma_per_s": 0.8}
+SHEET_FIT = {"sheet.spacing_warp_mm": 10.0, "sheet.spacing_weft_mm": 10.0, "run.duration_s": 0.3}
+"""The shear swing's resolution for its example (and for the fit of it the guide runs)."""
+SHEET_TRUTH = {"shear.rigidity_gf_per_cm_deg": 1.2}
 
 
 def scene_with(name: str, fields: dict) -> wc.Scene:
@@ -86,13 +93,31 @@ def encoder(rng: np.random.Generator) -> str:
     )
 
 
+def sheet_markers(rng: np.random.Generator) -> str:
+    """The shear swing's four markers, z and y, at 120 frames/s, σ = 0.02 mm."""
+    from warpcloth.runs import simulate_sheet
+    from warpcloth.scene.sheet_build import load_sheet_scene
+
+    result = simulate_sheet(load_sheet_scene("shear_swing", SHEET_FIT | SHEET_TRUTH))
+    rows = []
+    for k in range(0, len(result.t), 5):
+        for marker, (_x, y, z) in enumerate(result.markers[k, 0] * 1e3):
+            z, y = np.array([z, y]) + rng.normal(0, 0.02, 2)
+            rows.append(f"{result.t[k]:.6f},{marker},{z:.5f},{y:.5f}")
+    return (
+        f"# synthetic: the shear swing with {SHEET_FIT | SHEET_TRUTH}, noise 0.02 mm "
+        "(scenes/data/make_motion_examples.py)\nt_s,marker,z_mm,y_mm\n" + "\n".join(rows) + "\n"
+    )
+
+
 def main() -> None:
-    """Write the three files next to this script."""
+    """Write the four files next to this script."""
     wp.config.log_level = logging.WARNING
     rng = np.random.default_rng(2026)
     (HERE / "damped_swing_laser.csv").write_text(laser_trace(rng))
     (HERE / "impulsive_rotation_shapes.csv").write_text(tracked_shapes(rng))
     (HERE / "impulsive_rotation_encoder.csv").write_text(encoder(rng))
+    (HERE / "shear_swing_markers.csv").write_text(sheet_markers(np.random.default_rng(2027)))
 
 
 if __name__ == "__main__":

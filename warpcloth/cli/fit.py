@@ -30,14 +30,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     fit_p.add_argument(
         "--measured",
         required=True,
-        help="CSV: laser trace 't_s, x_mm' or tracked shapes 'frame, t_s, s_mm, x_mm, y_mm'",
+        help="CSV: laser trace 't_s, x_mm' or tracked shapes 'frame, t_s, s_mm, x_mm, y_mm'; for a sheet "
+        "scene, tracked sheet markers headed 't_s, marker' and one to three of 'x_mm, y_mm, z_mm'",
     )
     fit_p.add_argument(
         "--free",
         required=True,
         help="parameters to fit, e.g. gamma,rotation_centre_dy_mm,D1 "
         "(aliases: gamma D D1 alpha K0 density rotation_centre_dx_mm rotation_centre_dy_mm "
-        "hold_x_mm hold_y_mm; or any per-strip field by dotted name)",
+        "hold_x_mm hold_y_mm; or any per-strip field by dotted name; a sheet scene: gamma G D D_weft "
+        "density centre_dx_mm centre_dy_mm centre_dz_mm, or any per-sheet field, e.g. "
+        "shear.hysteresis_d1_gf_per_cm)",
     )
     fit_p.add_argument(
         "--bounds",
@@ -119,16 +122,25 @@ def register(sub: argparse._SubParsersAction) -> None:
 def fit_command(args: argparse.Namespace) -> int:
     """Fit the free parameters and write the fit directory."""
     from warpcloth.calibrate.motion_fit import fit_motion, free_parameters, write_fit
-    from warpcloth.io.measured import bundled_data, read_measurement
+    from warpcloth.calibrate.motion_fit.sheet import sheet_free_parameters
+    from warpcloth.io.measured import bundled_data, read_measurement, read_sheet_markers
     from warpcloth.io.provenance import file_checksum
     from warpcloth.scene import apply_overrides, load_scene, read_scene_file
+    from warpcloth.scene.sheet import scene_kind
+    from warpcloth.scene.sheet_build import load_sheet_scene
 
-    # a bad field is named with its file and line, or --set (a sweep's own options do not apply to a fit)
-    scene = load_scene(args.scene, [o for o in args.overrides if not o.strip().startswith("sweep.")])
     base = apply_overrides(read_scene_file(args.scene), args.overrides)
-    base.pop("sweep", None)
-    measurement = read_measurement(args.measured, argument="--measured")
-    free = free_parameters(args.free, scene, args.bounds)
+    if scene_kind(base) == "sheet":
+        # a sheet is fitted to its tracked markers (t, marker, and the coordinates a camera saw)
+        scene = load_sheet_scene(args.scene, args.overrides)
+        measurement = read_sheet_markers(args.measured, argument="--measured")
+        free = sheet_free_parameters(args.free, scene, args.bounds)
+    else:
+        # a bad field is named with its file and line, or --set (a sweep's own options do not apply to a fit)
+        scene = load_scene(args.scene, [o for o in args.overrides if not o.strip().startswith("sweep.")])
+        base.pop("sweep", None)
+        measurement = read_measurement(args.measured, argument="--measured")
+        free = free_parameters(args.free, scene, args.bounds)
     out = new_result(args.out or Path("runs") / f"fit-{Path(args.scene).stem}", args.overwrite, "--out")
     fit = fit_motion(
         base,

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import itertools
+from typing import Any
 
 import numpy as np
 
@@ -26,7 +27,89 @@ SHIFT = "time_shift_s"
 """The name of the fitted start-time offset δ (simulated time = measured + δ)."""
 
 
-class Objective:
+class FitObjective:
+    """What the search (:mod:`.search`) needs of an objective, for a strip's measurement
+    (:class:`Objective`) or a sheet's (:class:`~.sheet.SheetObjective`): the free
+    parameters on the unit box, the clock offset, a batch of points run in one launch
+    (:meth:`run`), each variant's residuals (:meth:`residuals`) and their Jacobian."""
+
+    measurement: Any
+    free: list[FreeParameter]
+    align: float
+    device: str | None
+    base: dict
+    scene: Any  # the base scene as the runs see it (a Scene, or a SheetScene)
+    shift_step: float
+    launches: int
+    variants: int
+
+    @property
+    def names(self) -> list[str]:
+        """The fitted quantities: the free fields, then the clock offset when aligning."""
+        return [p.field for p in self.free] + ([SHIFT] if self.align else [])
+
+    @property
+    def ranges(self) -> np.ndarray:
+        """Each fitted quantity's length of the unit box's side (1 for the clock offset):
+        ∂r/∂(field value) is ∂r/∂u divided by it."""
+        return np.array([p.upper - p.lower for p in self.free] + ([1.0] if self.align else []))
+
+    def box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The lower and upper corner of the search's points: the unit box, then the allowed
+        clock offsets when aligning."""
+        d = len(self.free)
+        lower, upper = np.zeros(d), np.ones(d)
+        if self.align:
+            lower, upper = np.append(lower, -self.align), np.append(upper, self.align)
+        return lower, upper
+
+    def shift_of(self, q: np.ndarray) -> float:
+        """The clock offset of a search point (0 when not aligning)."""
+        d = len(self.free)
+        return float(q[d]) if len(q) > d else 0.0
+
+    def values(self, u: np.ndarray) -> dict[str, float]:
+        """Physical values (the scene fields) of a unit-box point."""
+        return {p.field: p.lower + float(x) * (p.upper - p.lower) for p, x in zip(self.free, u, strict=False)}
+
+    def scene_data(self, u: np.ndarray) -> dict:
+        """Raw scene data of a point (the duration and output rate set for fitting)."""
+        data = copy.deepcopy(self.base)
+        for name, value in self.values(u).items():
+            set_field(data, name, value)
+        return data
+
+    def run(self, points: np.ndarray) -> Any:
+        """Simulate every point (rows) in one batch."""
+        raise NotImplementedError
+
+    def residuals(self, result: Any, j: int, shift: float, penalise: bool = True) -> np.ndarray:
+        """Simulated minus measured, SI, for variant j of a result at clock offset δ."""
+        raise NotImplementedError
+
+    def best_shift(self, result: Any, j: int) -> float:
+        """The clock offset minimising the RMS for variant j (a scan; 0 when not aligning)."""
+        if not self.align:
+            return 0.0
+        shifts = np.linspace(-self.align, self.align, 81)
+        costs = [np.mean(self.residuals(result, j, d) ** 2) for d in shifts]
+        return float(shifts[int(np.argmin(costs))])
+
+    def jacobian(self, result: Any, stencil: list[tuple[int, int, float]], centre: int, shift: float) -> np.ndarray:
+        """Columns ∂r/∂u_i from stencil pairs (plus, minus, Δu), and ∂r/∂δ by re-sampling."""
+        columns = [
+            (self.residuals(result, plus, shift) - self.residuals(result, minus, shift)) / du
+            for plus, minus, du in stencil
+        ]
+        if self.align:
+            h = self.shift_step
+            columns.append(
+                (self.residuals(result, centre, shift + h) - self.residuals(result, centre, shift - h)) / (2 * h)
+            )
+        return np.column_stack(columns)
+
+
+class Objective(FitObjective):
     """Residuals of simulated against measured motion for batches of parameter points.
 
     A point is ``u`` in the unit box (one coordinate per free parameter) plus, when
@@ -99,42 +182,6 @@ class Objective:
         set_field(self.base, "integrator.dt_s", choose_step(corners).dt_s)
         set_field(self.base, "integrator.dt_chosen_by", AUTO)
 
-    @property
-    def names(self) -> list[str]:
-        """The fitted quantities: the free fields, then the clock offset when aligning."""
-        return [p.field for p in self.free] + ([SHIFT] if self.align else [])
-
-    @property
-    def ranges(self) -> np.ndarray:
-        """Each fitted quantity's length of the unit box's side (1 for the clock offset):
-        ∂r/∂(field value) is ∂r/∂u divided by it."""
-        return np.array([p.upper - p.lower for p in self.free] + ([1.0] if self.align else []))
-
-    def box(self) -> tuple[np.ndarray, np.ndarray]:
-        """The lower and upper corner of the search's points: the unit box, then the allowed
-        clock offsets when aligning."""
-        d = len(self.free)
-        lower, upper = np.zeros(d), np.ones(d)
-        if self.align:
-            lower, upper = np.append(lower, -self.align), np.append(upper, self.align)
-        return lower, upper
-
-    def shift_of(self, q: np.ndarray) -> float:
-        """The clock offset of a search point (0 when not aligning)."""
-        d = len(self.free)
-        return float(q[d]) if len(q) > d else 0.0
-
-    def values(self, u: np.ndarray) -> dict[str, float]:
-        """Physical values (the scene fields) of a unit-box point."""
-        return {p.field: p.lower + float(x) * (p.upper - p.lower) for p, x in zip(self.free, u, strict=False)}
-
-    def scene_data(self, u: np.ndarray) -> dict:
-        """Raw scene data of a point (the duration and output rate set for fitting)."""
-        data = copy.deepcopy(self.base)
-        for name, value in self.values(u).items():
-            set_field(data, name, value)
-        return data
-
     def run(self, points: np.ndarray) -> RunResult:
         """Simulate every point (rows) in one batch."""
         scenes = [scene_from_dict(self.scene_data(u)) for u in points]
@@ -175,26 +222,3 @@ class Objective:
         diff = sim - np.column_stack([m.x, m.y])
         missing = 0.1 if penalise else np.nan  # a diverged strip: 10 cm per coordinate
         return np.where(np.isfinite(diff), diff, missing).ravel()
-
-    def best_shift(self, result: RunResult, j: int) -> float:
-        """The clock offset minimising the RMS for variant j (a scan; 0 when not aligning)."""
-        if not self.align:
-            return 0.0
-        shifts = np.linspace(-self.align, self.align, 81)
-        costs = [np.mean(self.residuals(result, j, d) ** 2) for d in shifts]
-        return float(shifts[int(np.argmin(costs))])
-
-    def jacobian(
-        self, result: RunResult, stencil: list[tuple[int, int, float]], centre: int, shift: float
-    ) -> np.ndarray:
-        """Columns ∂r/∂u_i from stencil pairs (plus, minus, Δu), and ∂r/∂δ by re-sampling."""
-        columns = [
-            (self.residuals(result, plus, shift) - self.residuals(result, minus, shift)) / du
-            for plus, minus, du in stencil
-        ]
-        if self.align:
-            h = self.shift_step
-            columns.append(
-                (self.residuals(result, centre, shift + h) - self.residuals(result, centre, shift - h)) / (2 * h)
-            )
-        return np.column_stack(columns)

@@ -79,14 +79,18 @@ def free_parameters(names: str | list[str], base: Scene, bounds: str | None = No
     names = [n.strip() for n in (names.split(",") if isinstance(names, str) else names) if n.strip()]
     if not names:
         raise ArgumentError("names", "name at least one parameter to fit, e.g. gamma,D1")
-    given = _parse_bounds(bounds)
+    given = parse_bounds(bounds)
     fixed = set(batch_fields())
     out: list[FreeParameter] = []
     for name in names:
         dotted = _fittable_field(name, base, fixed)
         value = _field_value(base, dotted)
         key = name if name in given else dotted if dotted in given else None
-        lower, upper = given.pop(key) if key is not None else _default_range(name, dotted, value, base)
+        if key is not None:
+            lower, upper = given.pop(key)
+        else:
+            grip = (4 * base.strip.spacing_mm, base.strip.free_length_mm)
+            lower, upper = default_range(name, dotted, value, dotted in HYSTERESIS_AMPLITUDES, grip)
         if not lower < upper:
             raise ArgumentError("bounds", f"{name}: lower bound {lower:g} must be below upper bound {upper:g}")
         if any(p.field == dotted for p in out):
@@ -127,17 +131,22 @@ def _fittable_field(name: str, base: Scene, fixed: set[str]) -> str:
     return dotted
 
 
-def _default_range(name: str, dotted: str, value: float, base: Scene) -> tuple[float, float]:
-    # The range a field is fitted in when --bounds does not give one (free_parameters' doc).
-    if dotted.endswith("_mm") and ("rotation_centre" in dotted or "hold_" in dotted):
+def default_range(
+    name: str, dotted: str, value: float, amplitude: bool = False, grip_limits: tuple[float, float] | None = None
+) -> tuple[float, float]:
+    """The range a field is fitted in when --bounds does not give one (:func:`free_parameters`'
+    doc; a sheet's too): ``amplitude`` says the field sets a law's hysteresis, ``grip_limits``
+    the shortest upper bound and the longest of a grip length (mm)."""
+    centre = "rotation_centre" in dotted or "hold_" in dotted or dotted.startswith("clamp.centre_")
+    if dotted.endswith("_mm") and centre:
         return value - 10.0, value + 10.0
     if dotted == "damping.gamma_per_s":
         return 0.0, max(4 * value, 2.0)
     if dotted == "strip.rest_curvature_per_cm":
         return value - REST_CURVATURE_SPAN, value + REST_CURVATURE_SPAN
-    if dotted == "clamp.grip_length_mm":
-        return 0.0, min(max(4 * value, 4 * base.strip.spacing_mm), base.strip.free_length_mm)
-    if dotted in HYSTERESIS_AMPLITUDES and value > 0:
+    if dotted == "clamp.grip_length_mm" and grip_limits is not None:
+        return 0.0, min(max(4 * value, grip_limits[0]), grip_limits[1])
+    if amplitude and value > 0:
         return 0.0, 4 * value
     if value > 0:
         return value / 4, value * 4
@@ -159,7 +168,8 @@ def _check_box_is_valid(name: str, dotted: str, bounds: tuple[float, float], bas
             raise ArgumentError("bounds", f"{name} = {bound:g} is not a valid scene: {exc}") from None
 
 
-def _parse_bounds(text: str | None) -> dict[str, tuple[float, float]]:
+def parse_bounds(text: str | None) -> dict[str, tuple[float, float]]:
+    """``--bounds name=LOW:HIGH,...`` as ``{name: (low, high)}``; an ArgumentError for an item that is not."""
     out = {}
     for item in (text or "").split(","):
         if not item.strip():

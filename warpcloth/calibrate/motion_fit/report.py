@@ -11,12 +11,14 @@ from pathlib import Path
 
 import numpy as np
 
-from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene import scene_from_dict, set_field
+from warpcloth.scene.sheet import sheet_scene_from_dict
 from warpcloth.scene.step import AUTO
 
 from . import lm
-from .objective import SHIFT, Objective
+from .objective import SHIFT, FitObjective
+from .sheet import make_objective
 from .verdict import judge
 
 
@@ -87,7 +89,7 @@ class FitResult:
 
 
 def summarise(
-    objective: Objective,
+    objective: FitObjective,
     u: np.ndarray,
     shift: float,
     jac: np.ndarray,
@@ -118,7 +120,7 @@ def summarise(
 def write_fit(
     fit: FitResult,
     objective_base: dict,
-    measurement: LaserTrace | TrackedShapes,
+    measurement: LaserTrace | TrackedShapes | SheetMarkers,
     out: str | Path,
     device: str | None = None,
     inputs: dict | None = None,
@@ -146,11 +148,17 @@ def write_fit(
     if best.get("integrator", {}).get("dt_s") == AUTO and math.isfinite(fit.dt_s):
         set_field(best, "integrator.dt_s", fit.dt_s)  # the box's step, which the RMS was measured at
         set_field(best, "integrator.dt_chosen_by", AUTO)
-    scene = scene_from_dict(copy.deepcopy(best))
-    objective = Objective(best, measurement, [], abs(fit.shift_s), device)
+    scene = (sheet_scene_from_dict if isinstance(measurement, SheetMarkers) else scene_from_dict)(copy.deepcopy(best))
+    objective = make_objective(best, measurement, [], abs(fit.shift_s), device)
     result = objective.run(np.zeros((1, 0)))
     residual = objective.residuals(result, 0, fit.shift_s, penalise=False)
-    if isinstance(measurement, LaserTrace):
+    if isinstance(measurement, SheetMarkers):
+        r = residual.reshape(-1, len(measurement.axes))
+        table = pd.DataFrame(
+            {"t_s": measurement.t, "marker": measurement.marker}
+            | {f"residual_{axis}_mm": r[:, a] * 1e3 for a, axis in enumerate(measurement.axes)}
+        )
+    elif isinstance(measurement, LaserTrace):
         table = pd.DataFrame(
             {
                 "t_s": measurement.t,

@@ -11,16 +11,17 @@ import numpy as np
 from tqdm import tqdm
 
 from warpcloth.errors import ArgumentError
-from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.sim import RunResult
 from warpcloth.sim.resources import check_memory
 
 from ..bootstrap import block_bootstrap_sigma
 from . import lm
-from .objective import SHIFT, Objective
+from .objective import SHIFT, FitObjective, Objective
 from .parameters import FreeParameter, initial_point
 from .report import FitResult, summarise
+from .sheet import make_objective, sheet_mesh_note
 from .verdict import ended_at_bound, judged_noise, mesh_note, spacing_shift
 
 MAX_SPACE_FILLING = 10_000
@@ -28,7 +29,7 @@ MAX_SPACE_FILLING = 10_000
 
 def fit_motion(
     base: dict,
-    measurement: LaserTrace | TrackedShapes,
+    measurement: LaserTrace | TrackedShapes | SheetMarkers,
     free: list[FreeParameter],
     *,
     align_start_s: float = 0.0,
@@ -50,7 +51,10 @@ def fit_motion(
     far that would move each parameter (:func:`spacing_shift`); a move beyond its σ makes
     the status ``spacing_limited``."""
     started = time.perf_counter()
-    objective = Objective(base, measurement, free, align_start_s, device)
+    sheet = isinstance(measurement, SheetMarkers)
+    if sheet and check_spacing:
+        raise ArgumentError("check_spacing", "is not available for a sheet yet (it refines a strip's spacing)")
+    objective = make_objective(base, measurement, free, align_start_s, device)
     rng = np.random.default_rng(seed)
     n0 = space_filling or max(16, 8 * len(free))
     if n0 > MAX_SPACE_FILLING:
@@ -85,18 +89,18 @@ def fit_motion(
     )
     fit.noise, fit.noise_source = judged_noise(measurement, noise)
     fit.other_minima = other_minima
-    if check_spacing:
+    if check_spacing and isinstance(objective, Objective):  # a sheet's was refused above
         fit.spacing_check = spacing_shift(objective, u, shift, jac, residual)
     # result row 0 is the reported point (accepted last, or re-run above)
     fit.judge(int(np.isnan(objective.residuals(result, 0, shift, penalise=False)).sum()))
-    fit.mesh_note = mesh_note(base)
+    fit.mesh_note = sheet_mesh_note(base) if sheet else mesh_note(base)
     fit.dt_s = objective.scene.integrator.dt_s
     return fit
 
 
 class _History:
     # The search's history, one row per launch, shown on a progress bar.
-    def __init__(self, objective: Objective, total: int, progress: bool) -> None:
+    def __init__(self, objective: FitObjective, total: int, progress: bool) -> None:
         self.objective = objective
         self.rows: list[dict] = []
         self.bar = tqdm(total=total, desc="fit", unit="launch", disable=not progress)
@@ -113,7 +117,7 @@ class _History:
 
 
 def _space_filling(
-    objective: Objective, n0: int, rng: np.random.Generator, record: _History
+    objective: FitObjective, n0: int, rng: np.random.Generator, record: _History
 ) -> tuple[lm.State, list[dict]]:
     # 1. One launch of a Latin hypercube (the scene's own values join the sample); its
     # best point starts the local search, its other basins are reported.
@@ -131,7 +135,7 @@ def _space_filling(
 
 
 def _levenberg_marquardt(
-    objective: Objective, state: lm.State, max_iterations: int, record: _History
+    objective: FitObjective, state: lm.State, max_iterations: int, record: _History
 ) -> tuple[lm.State, RunResult | None]:
     # 2. Speculative Levenberg–Marquardt (.lm): each launch holds the proposed step, its
     # stencil and the cautious steps. Returns the last launch's result too (None without
@@ -155,7 +159,7 @@ def _levenberg_marquardt(
     return state, result
 
 
-def _jacobian_at(objective: Objective, u: np.ndarray, shift: float) -> tuple[RunResult, np.ndarray, np.ndarray]:
+def _jacobian_at(objective: FitObjective, u: np.ndarray, shift: float) -> tuple[RunResult, np.ndarray, np.ndarray]:
     # One launch of u and its stencil: the result, the Jacobian and the residuals there.
     stencil_rows, pairs = lm.stencil(u)
     result = objective.run(np.vstack([u, *stencil_rows]))
@@ -166,7 +170,7 @@ MINIMA_SEPARATION = 0.25  # unit-box distance beyond which two low points may be
 MINIMA_FACTOR = 2.0  # a basin counts if its cost is within this factor of the best one's
 
 
-def _other_minima(objective: Objective, points: np.ndarray, costs: np.ndarray, best: int) -> list[dict]:
+def _other_minima(objective: FitObjective, points: np.ndarray, costs: np.ndarray, best: int) -> list[dict]:
     """Low points of the space-filling sample in basins other than the best one's.
 
     Candidates are sample points within :data:`MINIMA_FACTOR` of the best cost and

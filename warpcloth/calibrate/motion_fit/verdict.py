@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.kernels import bending_law
 from warpcloth.scene import scene_from_dict, set_field
 from warpcloth.scene.step import AUTO, stable_step_of
@@ -38,7 +38,7 @@ def ended_at_bound(free: list[FreeParameter], u: np.ndarray) -> list[str]:
     return [p.field for p, ui in zip(free, u, strict=True) if min(ui, 1.0 - ui) <= AT_BOUND]
 
 
-def judged_noise(measurement: LaserTrace | TrackedShapes, noise: float | None) -> tuple[float, str]:
+def judged_noise(measurement: LaserTrace | TrackedShapes | SheetMarkers, noise: float | None) -> tuple[float, str]:
     """The noise σ (m) a fit's RMS is judged against, and where it comes from: ``noise``
     if given, else estimated from the measurement (:func:`measurement_noise`)."""
     if noise is None:
@@ -117,10 +117,18 @@ def judge(fit: FitResult, missing: int) -> tuple[str, list[str]]:
     return found[0][0] if found else "converged", [message for _, message in found]
 
 
-def measurement_noise(measurement: LaserTrace | TrackedShapes) -> float:
+def measurement_noise(measurement: LaserTrace | TrackedShapes | SheetMarkers) -> float:
     """σ of a measurement's noise from the data alone (each marker coordinate a series)."""
     if isinstance(measurement, LaserTrace):
         return difference_noise([measurement.x])
+    if isinstance(measurement, SheetMarkers):
+        return difference_noise(
+            [
+                measurement.position[measurement.marker == k, a]
+                for k in np.unique(measurement.marker)
+                for a in range(len(measurement.axes))
+            ]
+        )
     order = np.lexsort((measurement.frame, measurement.s))
     s = measurement.s[order]
     starts = np.flatnonzero(np.r_[True, np.diff(s) != 0, True])

@@ -10,14 +10,13 @@ either importing the other.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
 from warpcloth.errors import ArgumentError
-from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene import Scene
-from warpcloth.sim import RunResult
 
 from . import common
 from .common import MM, X_LABEL, Y_LABEL, field_label, field_unit, inside, plt
@@ -48,7 +47,7 @@ class FitResiduals(Protocol):
 
     @property
     def scene(self) -> Scene: ...
-    def residuals(self, result: RunResult, j: int, shift: float, penalise: bool = True) -> np.ndarray: ...
+    def residuals(self, result: Any, j: int, shift: float, penalise: bool = True) -> np.ndarray: ...
 
 
 class ClampFit(Protocol):
@@ -69,15 +68,22 @@ class ClampFit(Protocol):
 
 
 def plot_fit_overlay(
-    result: RunResult, objective: FitResiduals, measurement: LaserTrace | TrackedShapes, fit: MotionFit, path: Path
+    result: Any,
+    objective: FitResiduals,
+    measurement: LaserTrace | TrackedShapes | SheetMarkers,
+    fit: MotionFit,
+    path: Path,
 ) -> Path:
-    """Measured against the best fit: the laser trace and its residual, or tracked
-    markers over the simulated strip at six of the measured frames (on the measured clock)."""
+    """Measured against the best fit: the laser trace and its residual, tracked markers
+    over the simulated strip at six of the measured frames, or a sheet's tracked markers
+    coordinate by coordinate (on the measured clock)."""
     shift = fit.shift_s
     title = ", ".join(
         f"{field_label(k, units=False)} = {v:.4g} ± {fit.sigma[k]:.2g} {field_unit(k)}".rstrip()
         for k, v in fit.parameters.items()
     )
+    if isinstance(measurement, SheetMarkers):
+        return _sheet_markers_overlay(result, objective, measurement, fit, shift, title, path)
     if isinstance(measurement, LaserTrace):
         fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, height_ratios=[3, 1])
         top.plot(measurement.t, measurement.x * MM, "k.", ms=2.5, label="measured")
@@ -117,6 +123,41 @@ def plot_fit_overlay(
         fontsize=8,
     )
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title="measured t", title_fontsize=7)
+    return common.save(fig, path)
+
+
+def _sheet_markers_overlay(
+    result: Any,
+    objective: FitResiduals,
+    measurement: SheetMarkers,
+    fit: MotionFit,
+    shift: float,
+    title: str,
+    path: Path,
+) -> Path:
+    # a row per measured coordinate: every marker's measured points over its simulated
+    # track, and beside it their residuals (the tracks span the clamp's travel; the
+    # residuals show what the fit resolves)
+    rows = len(measurement.axes)
+    fig, axes = plt.subplots(rows, 2, figsize=(11, 2.6 * rows), sharex=True, squeeze=False)
+    window = (float(measurement.t[0]), float(measurement.t[-1]))
+    keep = inside(result.t - shift, window)
+    residual = objective.residuals(result, 0, shift, penalise=False).reshape(-1, rows)
+    for a, axis in enumerate(measurement.axes):
+        track, misfit = axes[a]
+        for colour, marker in zip(plt.get_cmap("tab10")(np.arange(10)), np.unique(measurement.marker), strict=False):
+            mine = measurement.marker == marker
+            simulated = result.markers[:, 0, marker, "xyz".index(axis)]
+            track.plot((result.t - shift)[keep], simulated[keep] * MM, color=colour, lw=1.2, label=f"marker {marker}")
+            track.plot(measurement.t[mine], measurement.position[mine, a] * MM, ".", color=colour, ms=2.5)
+            misfit.plot(measurement.t[mine], residual[mine, a] * MM, ".", color=colour, ms=2.5)
+        track.set(ylabel=f"{axis} (mm)")
+        misfit.axhline(0, color="0.6", lw=0.6)
+        misfit.set(ylabel=f"simulated − measured {axis} (mm)")
+    axes[0, 0].legend(fontsize=7, ncol=4)
+    for ax in axes[-1]:
+        ax.set(xlabel="measured time (s)")
+    fig.suptitle(f"measured (dots) vs best fit (lines); RMS {fit.rms * MM:.3g} mm; {title}", fontsize=8)
     return common.save(fig, path)
 
 
