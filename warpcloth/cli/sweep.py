@@ -87,7 +87,7 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     if sweep.kind == "sheet":
         print_sheet_steps(sweep)
     groups: dict[tuple[str, float], list] = {}  # one step per scheme and probe interval
-    for s in sweep.scenes if sweep.kind == "strip" else ():
+    for s in sweep.strips:
         if s.integrator.dt_chosen_by == "auto":
             groups.setdefault((s.integrator.scheme, s.output_interval), []).append(s)
     if groups:

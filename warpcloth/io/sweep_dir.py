@@ -244,7 +244,7 @@ def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording
             "its variants no longer resolve to the scenes that were simulated "
             "(a material file it uses has changed?); the stored results cannot be labelled",
         )
-    parameters = per_strip_parameters(sweep.scenes)
+    parameters = per_strip_parameters(sweep.strips)
     parameters.insert(0, "variant", np.arange(len(sweep.scenes)))
     chosen = select_variants(parameters, variants, where)
     where_is = {v: (b, k) for b, ids in enumerate(info["batches"]) for k, v in enumerate(ids)}
@@ -280,7 +280,7 @@ def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording
     return Recording(
         path,
         chosen,
-        [sweep.scenes[i] for i in chosen],
+        [sweep.strips[i] for i in chosen],
         frame_times,
         frames,
         probes,

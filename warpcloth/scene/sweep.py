@@ -136,6 +136,11 @@ class Sweep:
         return "sheet" if isinstance(self.scenes[0], SheetScene) else "strip"
 
     @property
+    def strips(self) -> list[Scene]:
+        """The variants of a sweep of strip scenes (none of a sweep of sheets)."""
+        return [scene for scene in self.scenes if isinstance(scene, Scene)]
+
+    @property
     def fingerprint(self) -> str:
         """Hash of every variant's resolved scene: identifies the sweep for resuming."""
         text = json.dumps([s.to_dict() for s in self.scenes], sort_keys=True)
@@ -369,7 +374,7 @@ def load_sweep(
         sweep = expand(raw, max_variants, progress)
         swept = [key_path(k) for k in sweep.keys]
         # every strip variant's step, before any runs (a sheet's: checked as it was expanded)
-        for i, scene in enumerate(sweep.scenes if sweep.kind == "strip" else ()):
+        for i, scene in enumerate(sweep.strips):
             try:
                 check_step(scene)
             except SceneError as exc:
