@@ -63,6 +63,7 @@ sphinx_gallery_conf = {
             "plot_set_and_grip.py",
             "plot_sweep_heatmap.py",
             "plot_usd_export.py",
+            "plot_sheet_shear_swing.py",
         ]
     ),
     "download_all_examples": False,

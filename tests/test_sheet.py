@@ -252,7 +252,9 @@ def test_every_elements_forces_are_its_coordinates_gradient_and_balance():
         assert np.abs(np.cross(position, f).sum(axis=0)).max() < 1e-12 * scale * 0.05  # no net moment
 
 
-CANTILEVER = {"length": 0.05, "width": 0.02, "d": 1e-5}
+CANTILEVER = {"length": 0.05, "width": 0.02, "d": 2.5e-4}
+"""A stiff plate (ω₁ = 50 rad/s), so that it settles and swings in few steps: the step is
+held by the yarns' stretching, not by bending, down to h = L/20."""
 
 
 @pytest.mark.parametrize("along_warp", [True, False], ids=["warp", "weft"])
@@ -261,10 +263,10 @@ def test_an_orthotropic_cantilever_plate_deflects_as_the_beam(along_warp):
     # direction it spans, whatever the other direction's D and tension and G (no Poisson
     # coupling: every line along it bends alike); second order in h
     length, width, d = CANTILEVER["length"], CANTILEVER["width"], CANTILEVER["d"]
-    gravity = 0.01
+    gravity = 0.25
     deflection = RHO * gravity * length**4 / (8 * d)
     omega = 1.8751**2 * math.sqrt(d / (RHO * length**4))
-    spanning, other = fabric(2000.0, d), fabric(1000.0, 10 * d)
+    spanning, other = fabric(2000.0, d), fabric(1000.0, 3 * d)
     errors = []
     for h in (0.005, 0.0025):
         geometry = horizontal_cantilever(h, length, width, along_warp)
@@ -272,14 +274,14 @@ def test_an_orthotropic_cantilever_plate_deflects_as_the_beam(along_warp):
         model, solver = sheet_batch(geometry, [SheetMaterialSI(warp, weft, 30.0, ELASTIC)], gravity, 2 * omega)
         x = geometry.rest_positions[:, 0]
         tips = tuple(np.flatnonzero(np.isclose(x, x.max())))
-        recorder = SheetRecorder(0.05, 10**6, 1.5, markers=tips)  # 1.5 s: 15 decay times at critical damping
+        recorder = SheetRecorder(0.05, 10**6, 0.35, markers=tips)  # 0.35 s: 17 decay times at critical damping
         run = simulate_sheets(model, model.control(), solver, recorder, keep_frames=False, threads=1)
         tip = -run.markers[-1, 0, :, 1]
         assert np.ptp(tip) < 1e-10 * deflection  # the free edge stays straight across
         errors.append(tip.mean() / deflection - 1)
     direction = "warp" if along_warp else "weft"
     print(f"cantilever along the {direction}: deflection error {errors[0]:+.3%} at h = L/10, {errors[1]:+.3%} at L/20")
-    assert 0 < errors[0] < 0.015  # measured +0.998 %
+    assert 0 < errors[0] < 0.015  # measured +0.999 %
     assert math.log2(errors[0] / errors[1]) == pytest.approx(2.0, abs=0.1)  # measured 2.005
 
 

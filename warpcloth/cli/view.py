@@ -9,6 +9,7 @@ from pathlib import Path
 from warpcloth.errors import OptionError
 from warpcloth.viz import DPI, FORMATS
 
+from .flags import flag_of
 from .options import add_overwrite, at_least, finite, new_result, path_text, positive
 
 
@@ -16,7 +17,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add ``export-usd``, ``plot`` and ``render``."""
 
     def selection(p: argparse.ArgumentParser) -> None:
-        p.add_argument("run_dir", metavar="RUN_DIR", help="a run directory, or a sweep directory run with --frames")
+        p.add_argument(
+            "run_dir",
+            metavar="RUN_DIR",
+            help="a run directory (a strip's or a sheet's), or a sweep directory run with --frames",
+        )
         p.add_argument("--variants", help="which variants: 3, 1,4,9 or 0:50 (default: all)")
         p.add_argument("--where", help="parameter filter: 'field OP value[,...]', e.g. 'damping.gamma_per_s<0.5'")
 
@@ -91,8 +96,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 def export_usd_command(args: argparse.Namespace) -> int:
     """Write the selected variants as an animated USD stage."""
     from warpcloth.io.load import load_recording
-    from warpcloth.viz.usd import export_usd
+    from warpcloth.io.sheet_run_dir import is_sheet_run, read_sheet_run
+    from warpcloth.viz.usd import export_sheet_usd, export_usd
 
+    if is_sheet_run(args.run_dir):
+        refuse_strip_options(args, ("variants", "where", "ribbon", "frames_per_clip"))
+        run = read_sheet_run(args.run_dir)
+        out = export_sheet_usd(run, new_result(args.output, args.overwrite, "-o"))
+        print(f"wrote {out} (a sheet of {run.meta['n_nodes']} nodes, {len(run.frame_times)} frames)")
+        return 0
     recording = load_recording(args.run_dir, args.variants, args.where)
     out = export_usd(
         recording,
@@ -107,9 +119,18 @@ def export_usd_command(args: argparse.Namespace) -> int:
 def plot_command(args: argparse.Namespace) -> int:
     """Figures of a run, or one sweep metric against parameters."""
     from warpcloth.io.load import load_recording
+    from warpcloth.io.sheet_run_dir import is_sheet_run, read_sheet_run
+    from warpcloth.viz.figures.sheet import plot_sheet_run
     from warpcloth.viz.plots import plot_run, plot_sweep, read_sweep_summary
 
+    sheet = is_sheet_run(args.run_dir)
+    if sheet:
+        refuse_strip_options(args, ("variants", "where", "measured", "t_from", "t_to", "times", "metric", "x", "y"))
     out = new_result(args.out or Path(args.run_dir) / "figures", args.overwrite, "--out")
+    if sheet:
+        for path in plot_sheet_run(read_sheet_run(args.run_dir).samples(), out, fmt=args.format, dpi=args.dpi):
+            print(f"wrote {path}")
+        return 0
     if args.metric or args.x:
         if not (args.metric and args.x):
             raise OptionError("--metric", "a sweep plot needs both --metric and --x")
@@ -163,11 +184,30 @@ def material_kes_values(recording: object, variant: int = 0) -> object:
 def render_command(args: argparse.Namespace) -> int:
     """Off-screen 3D PNG frames and an animation."""
     from warpcloth.io.load import load_recording
-    from warpcloth.viz.render import render_run
+    from warpcloth.io.sheet_run_dir import is_sheet_run, read_sheet_run
+    from warpcloth.viz.render import render_run, render_sheet_run
 
-    recording = load_recording(args.run_dir, args.variants, args.where)
     movie = None if args.movie == "none" else args.movie
-    out = new_result(args.out or Path(args.run_dir) / "render", args.overwrite, "--out")
-    for path in render_run(recording, out, times=args.times, movie=movie, stride=args.stride):
+    if is_sheet_run(args.run_dir):
+        refuse_strip_options(args, ("variants", "where"))
+        run = read_sheet_run(args.run_dir)
+        out = new_result(args.out or Path(args.run_dir) / "render", args.overwrite, "--out")
+        paths = render_sheet_run(run, out, times=args.times, movie=movie, stride=args.stride)
+    else:
+        recording = load_recording(args.run_dir, args.variants, args.where)
+        out = new_result(args.out or Path(args.run_dir) / "render", args.overwrite, "--out")
+        paths = render_run(recording, out, times=args.times, movie=movie, stride=args.stride)
+    for path in paths:
         print(f"wrote {path}")
     return 0
+
+
+def refuse_strip_options(args: argparse.Namespace, names: tuple[str, ...]) -> None:
+    """An OptionError naming the first of the options ``names`` (argparse destinations) that
+    was given: they select or draw a strip's run or a sweep, and RUN_DIR is a sheet run."""
+    given = [name for name in names if getattr(args, name) not in (None, False)]
+    if given:
+        raise OptionError(
+            flag_of(given[0]),
+            f"is for a strip's run or a sweep; {args.run_dir} is a sheet run (docs/guide.md, Woven sheets)",
+        )

@@ -60,14 +60,7 @@ class Recording:
 
     def nearest_frames(self, times: np.ndarray) -> np.ndarray:
         """Indices of the frames nearest to ``times`` (s from t = 0: the release, or the clamp motion's start)."""
-        times = np.atleast_1d(np.asarray(times, dtype=float))
-        late = times[(times < self.frame_times[0] - 1e-9) | (times > self.frame_times[-1] + 1e-9)]
-        if len(late):
-            raise ArgumentError(
-                "times",
-                f"{late[0]:g} s is outside the recording ({self.frame_times[0]:g} to {self.frame_times[-1]:g} s)",
-            )
-        return np.abs(self.frame_times[None, :] - times[:, None]).argmin(axis=1)
+        return nearest_frames(self.frame_times, times)
 
     @property
     def varying(self) -> list[str]:
@@ -269,3 +262,15 @@ def check_time_order(path: Path, t: np.ndarray, variant: np.ndarray, line_offset
             "written",
             None if line_offset is None else row + line_offset,
         )
+
+
+def nearest_frames(frame_times: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Indices into ``frame_times`` of the frames nearest to ``times``; an ArgumentError of
+    ``times`` for a time outside them."""
+    times = np.atleast_1d(np.asarray(times, dtype=float))
+    late = times[(times < frame_times[0] - 1e-9) | (times > frame_times[-1] + 1e-9)]
+    if len(late):
+        raise ArgumentError(
+            "times", f"{late[0]:g} s is outside the recording ({frame_times[0]:g} to {frame_times[-1]:g} s)"
+        )
+    return np.abs(frame_times[None, :] - times[:, None]).argmin(axis=1)

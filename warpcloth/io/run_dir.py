@@ -350,7 +350,7 @@ def _check_meta(path: Path, meta: dict) -> None:
     if meta.get("kind") == "sheet":
         raise DataFileError(
             file,
-            "is a sheet run's; `warpcloth run SCENE --usd FILE` exports a sheet, and "
+            "is a sheet run's; `warpcloth plot`, `render` and `export-usd` take a sheet run, and "
             "warpcloth.io.sheet_run_dir.read_sheet_run reads it",
         )
     if "committed" not in meta:

@@ -34,6 +34,7 @@ from warpcloth.errors import DataFileError
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS, SHEET_PROBE_UNITS
 from warpcloth.scene.sheet import SheetScene, read_sheet_scene
 from warpcloth.sheet import SheetGeometry
+from warpcloth.sheet.runner import sheet_energy_total
 
 from .atomic import naming, write_npy_atomically, write_text_atomically
 from .json_file import read_json
@@ -203,6 +204,24 @@ class SheetRunWriter:
 
 
 @dataclass
+class SheetSamples:
+    """A sheet run directory's records as the arrays a :class:`~warpcloth.sheet.SheetResult`
+    holds (what :mod:`warpcloth.viz.figures.sheet` reads), SI: ``probes[sample, field, sheet]``
+    and ``markers[sample, sheet, marker, xyz]`` at ``t``, ``frames[frame, sheet, node, xyz]`` at
+    ``frame_times``; NaN where a sheet recorded nothing (after its divergence)."""
+
+    t: np.ndarray
+    probes: np.ndarray
+    markers: np.ndarray
+    frame_times: np.ndarray
+    frames: np.ndarray
+
+    def energy_total(self) -> np.ndarray:
+        """The budget that should stay constant, ``[sample, sheet]``."""
+        return sheet_energy_total(self.probes)
+
+
+@dataclass
 class SheetRun:
     """A sheet run directory read back (an interrupted run: what it committed)."""
 
@@ -222,6 +241,32 @@ class SheetRun:
     def frame_rate(self) -> float:
         """Shape frames per second."""
         return self.scene.output.frame_rate_hz
+
+    def samples(self) -> SheetSamples:
+        """The long-form tables as arrays by sample, sheet and marker (the committed part of
+        an interrupted run)."""
+        n_sheets, n_markers = self.meta["n_sheets"], len(self.meta["markers"])
+        t = np.unique(self.probes["t"].to_numpy())
+        probes = np.full((len(t), len(SHEET_PROBE_FIELDS), n_sheets), np.nan)
+        rows = np.searchsorted(t, self.probes["t"].to_numpy())
+        probes[rows, :, self.probes["sheet"].to_numpy(dtype=int)] = self.probes[list(SHEET_PROBE_FIELDS)].to_numpy()
+        markers = np.full((len(t), n_sheets, n_markers, 3), np.nan)
+        table = self.markers  # committed with the probes, at the same times
+        markers[
+            np.searchsorted(t, table["t"].to_numpy()),
+            table["sheet"].to_numpy(dtype=int),
+            table["marker"].to_numpy(dtype=int),
+        ] = table[["x", "y", "z"]].to_numpy()
+        return SheetSamples(t, probes, markers, self.frame_times, self.frames)
+
+
+def is_sheet_run(path: str | Path) -> bool:
+    """Whether ``path`` is a sheet run directory (its meta.json says kind "sheet"); a
+    directory whose meta.json cannot be read is left to the reader that names the damage."""
+    try:
+        return read_json(Path(path) / "meta.json").get("kind") == "sheet"
+    except DataFileError:
+        return False
 
 
 def read_sheet_run(path: str | Path) -> SheetRun:

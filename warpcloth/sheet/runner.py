@@ -100,16 +100,26 @@ class SheetResult:
     def energy_total(self) -> np.ndarray:
         """The budget that should stay constant: kinetic + gravitational + tensile + work
         done against the laws and damping − work done by the clamp, ``[sample, sheet]``."""
-        p = self.probe
-        return (
-            p("kinetic")
-            + p("gravitational")
-            + p("tensile")
-            + p("elastic_work")
-            + p("hysteresis_work")
-            + p("damping_work")
-            - p("drive_work")
-        )
+        return sheet_energy_total(self.probes)
+
+
+def sheet_energy_total(probes: np.ndarray) -> np.ndarray:
+    """The sheet's energy budget ``[sample, sheet]`` from its probes ``[sample, field,
+    sheet]``: kinetic + gravitational + tensile + work done against the laws and damping −
+    work done by the clamp (constant to O(dt))."""
+
+    def p(name: str) -> np.ndarray:
+        return probes[:, SHEET_PROBE_INDEX[name], :]
+
+    return (
+        p("kinetic")
+        + p("gravitational")
+        + p("tensile")
+        + p("elastic_work")
+        + p("hysteresis_work")
+        + p("damping_work")
+        - p("drive_work")
+    )
 
 
 def simulate_sheets(

@@ -1,0 +1,132 @@
+"""Looking at a sheet run (stage 3, issue 23): `warpcloth plot`, `export-usd` and `render` on
+a sheet run directory read it back as the run recorded it, write the sheet's figures, its
+mesh and its frames, and refuse a strip's option in one line naming it."""
+
+import numpy as np
+import pytest
+from conftest import overrides, run_cli
+from PIL import Image
+from pxr import Usd, UsdGeom
+
+from warpcloth.io.sheet_run_dir import is_sheet_run, read_sheet_run
+from warpcloth.runs import simulate_sheet
+from warpcloth.scene.sheet_build import load_sheet_scene
+from warpcloth.sheet.runner import sheet_energy_total
+
+COARSE = overrides(
+    run__duration_s=0.1, release__settle_time_s=0.05, sheet__spacing_warp_mm=10.0, sheet__spacing_weft_mm=10.0
+)
+
+
+@pytest.fixture(scope="module")
+def shear_swing(tmp_path_factory):
+    """The bundled shear swing, short and coarse: its run directory and the in-memory result."""
+    out = tmp_path_factory.mktemp("sheet") / "shear_swing"
+    result = simulate_sheet(load_sheet_scene("shear_swing", COARSE), out=out)
+    return out, result
+
+
+def pixels(path):
+    return np.asarray(Image.open(path).convert("RGB"), dtype=float)
+
+
+def one_line_refusal(proc, *words):
+    assert proc.returncode == 2, (proc.returncode, proc.stdout, proc.stderr)
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    for word in words:
+        assert word in lines[0], lines[0]
+
+
+def test_the_run_directory_reads_back_as_the_run_recorded_it(shear_swing):
+    out, result = shear_swing
+    assert is_sheet_run(out) and not is_sheet_run(out / "no_such_run")
+    samples = read_sheet_run(out).samples()
+    # probes and markers are stored as "%.17g", which round-trips a float64 exactly
+    np.testing.assert_array_equal(samples.probes, result.probes)
+    np.testing.assert_array_equal(samples.markers, result.markers)
+    np.testing.assert_allclose(samples.t, result.t, rtol=0, atol=1e-9)  # t as "%.10g"
+    np.testing.assert_array_equal(samples.frames, result.frames)
+    np.testing.assert_array_equal(samples.energy_total(), result.energy_total())
+    assert np.array_equal(sheet_energy_total(result.probes), result.energy_total())
+
+
+def test_plot_writes_the_sheet_figures(shear_swing, tmp_path):
+    out, _ = shear_swing
+    done = run_cli("plot", out, "--out", tmp_path / "fig", "--dpi", "60")
+    assert done.returncode == 0, done.stderr
+    paths = sorted((tmp_path / "fig").iterdir())
+    assert [p.name for p in paths] == ["sheet_run.png", "sheet_shapes.png"]
+    for path in paths:
+        image = pixels(path)
+        assert image.shape[1] >= 600 and image.std() > 5  # 10 in × 60 dpi, more than a flat background
+    # an existing figure directory is not replaced without --overwrite
+    one_line_refusal(run_cli("plot", out, "--out", tmp_path / "fig"), "--out", "--overwrite")
+    done = run_cli("plot", out, "--out", tmp_path / "fig", "--overwrite", "--format", "svg")
+    assert done.returncode == 0, done.stderr
+    assert {"sheet_run.svg", "sheet_shapes.svg"} <= {p.name for p in (tmp_path / "fig").iterdir()}
+
+
+@pytest.mark.parametrize(
+    "command, option, value",
+    [
+        ("plot", "--measured", "laser.csv"),
+        ("plot", "--times", "0.05"),
+        ("plot", "--metric", "first_period_s"),
+        ("plot", "--variants", "0"),
+        ("export-usd", "--ribbon", None),
+        ("export-usd", "--frames-per-clip", "2"),
+        ("render", "--where", "damping.gamma_per_s<1"),
+    ],
+)
+def test_a_strip_option_on_a_sheet_run_is_one_line_naming_it(shear_swing, tmp_path, command, option, value):
+    out, _ = shear_swing
+    target = ("-o", tmp_path / "stage.usda") if command == "export-usd" else ("--out", tmp_path / "result")
+    given = (option,) if value is None else (option, value)
+    one_line_refusal(run_cli(command, out, *target, *given), f"error in option: {option}", "is a sheet run")
+    assert not any(tmp_path.iterdir())  # refused before anything is written
+
+
+def test_export_usd_writes_the_mesh_the_run_recorded(shear_swing, tmp_path):
+    out, result = shear_swing
+    run = read_sheet_run(out)
+    done = run_cli("export-usd", out, "-o", tmp_path / "sheet.usda")
+    assert done.returncode == 0, done.stderr
+    stage = Usd.Stage.Open(str(tmp_path / "sheet.usda"))
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Sheets/sheet_0000"))
+    # a 100 × 110 mm rectangle (10 mm held) at 10 mm: 11 × 12 nodes, 10 × 11 quads
+    counts = mesh.GetFaceVertexCountsAttr().Get()
+    assert len(counts) == 10 * 11 == len(run.faces) and set(counts) == {4}
+    assert np.array_equal(np.array(mesh.GetFaceVertexIndicesAttr().Get()).reshape(-1, 4), run.faces)
+    points = mesh.GetPointsAttr()
+    assert points.GetTimeSamples() == list(range(len(result.frame_times)))
+    for f in (0, len(result.frame_times) - 1):
+        shape = np.array(points.Get(f))
+        assert shape.shape == (11 * 12, 3)
+        np.testing.assert_allclose(shape, result.frames[f, 0], rtol=0, atol=1e-7)  # float32 on the stage
+    one_line_refusal(run_cli("export-usd", out, "-o", tmp_path / "sheet.usda"), "-o", "--overwrite")
+
+
+def test_render_draws_the_sheet_where_it_is(shear_swing, tmp_path):
+    out, result = shear_swing
+    last = len(result.frame_times) - 1
+    done = run_cli("render", out, "--out", tmp_path / "r", "--times", "0", str(result.frame_times[last]))
+    assert done.returncode == 0, done.stderr
+    names = sorted(p.name for p in (tmp_path / "r").iterdir())
+    assert names == ["frame_00000.png", f"frame_{last:05d}.png", "motion.gif"]
+
+    def sheet_columns(path):
+        image = pixels(path)
+        cloth = (image[..., 0] - image[..., 2] > 15) & (image.max(axis=2) < 250)  # brown, not white or grey
+        return np.nonzero(cloth)[1].mean(), cloth.sum()
+
+    # the clamp carries the sheet 20 mm along +z, which the camera (in front, +x) sees as leftward
+    shift = result.markers[-1, 0, :, 2] - result.markers[0, 0, :, 2]  # the last sample is the last frame
+    assert shift.min() > 0.019
+    start, start_count = sheet_columns(tmp_path / "r" / "frame_00000.png")
+    end, end_count = sheet_columns(tmp_path / "r" / f"frame_{last:05d}.png")
+    assert start_count > 10_000 and end_count > 10_000
+    assert end < start - 40
+    gif = Image.open(tmp_path / "r" / "motion.gif")
+    assert gif.n_frames == len(range(0, last + 1, 3))  # 60 frames/s: every third frame plays in real time
+    one_line_refusal(run_cli("render", out, "--out", tmp_path / "r2", "--times", "9"), "--times", "9 s is outside")
