@@ -337,8 +337,8 @@ def sheet_metrics(
     ``marker_k_peak_displacement_mm`` (the largest distance from its t = 0 position),
     ``marker_k_peak_z_mm`` (sideways), ``marker_k_peak_x_mm`` (out of the plane) and
     ``marker_k_peak_z_against_clamp_mm`` (sideways less the clamp's own translation: the
-    swing itself); the probed cell's ``peak_shear_angle_deg`` (|φ|); the works done to
-    the end against the laws' hysteresis (``hysteresis_work_J``, bending and shear), the
+    swing itself); the probed cell's ``peak_shear_angle_deg`` (its largest absolute shear
+    angle); the works done to the end against the laws' hysteresis (``hysteresis_work_J``, bending and shear), the
     air (``damping_work_J``) and by the clamp (``drive_work_J``); and the energy budget's
     largest drift from its t = 0 value, ``energy_drift_J``, also as a part of the largest
     work the clamp did, ``energy_drift_relative`` (NaN when the clamp did none)."""
