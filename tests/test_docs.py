@@ -51,3 +51,22 @@ def test_every_sheet_scene_field_is_documented():
         if name not in section and not (name.startswith("material.") and name in text)
     ]
     assert not missing, f"undocumented sheet scene fields: {missing}"
+
+
+def test_every_sheet_sweep_summary_column_is_documented():
+    # the guide's table of a sheet sweep's summary names every column sheet_metrics gives
+    import numpy as np
+    from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
+
+    from warpcloth.metrics import sheet_metrics
+
+    series = np.linspace(0.0, 1.0, 5)
+    metrics = sheet_metrics(
+        np.zeros((5, 1, 3)), series, (0.0, 0.0, 1.0), dict.fromkeys(SHEET_PROBE_FIELDS, series), series
+    )
+    text = GUIDE.read_text()
+    section = text[text.index("### Sweeps of sheets") :]
+    section = section[: section.index("\n## ")]
+    columns = [name.replace("marker_0_", "marker_K_") for name in metrics]
+    missing = [c for c in [*columns, "diverged_quantity", "reversal_overflows"] if f"`{c}`" not in section]
+    assert not missing, f"undocumented sheet sweep summary columns: {missing}"

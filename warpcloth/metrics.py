@@ -313,3 +313,50 @@ def comparison_window(
             f"{start_name} starts at {start:g} s",
         )
     return float(lower), float(upper)
+
+
+def _peak_abs(series: np.ndarray) -> float:
+    # NaN for an empty record (a sheet that diverged while settling, before t = 0)
+    return float(np.nanmax(np.abs(series))) if np.isfinite(series).any() else float("nan")
+
+
+def sheet_metrics(
+    markers: np.ndarray,
+    clamp_displacement: np.ndarray,
+    direction: tuple[float, float, float],
+    probes: dict[str, np.ndarray],
+    energy_total: np.ndarray,
+) -> dict[str, float]:
+    """What a sheet's record says in numbers, measured from t = 0 (its first sample): the
+    one definition ``warpcloth run``'s sheet summary and a sheet sweep's summary share.
+
+    ``markers`` ``[sample, marker, xyz]`` (m), ``clamp_displacement`` the clamp's
+    translation along ``direction`` ``[sample]`` (m), ``probes`` the sheet's probe series
+    by name (``cell_shear_angle`` and the works, SI), ``energy_total`` the budget that
+    should stay constant (:meth:`~warpcloth.sheet.SheetResult.energy_total`). Per marker ``k``:
+    ``marker_k_peak_displacement_mm`` (the largest distance from its t = 0 position),
+    ``marker_k_peak_z_mm`` (sideways), ``marker_k_peak_x_mm`` (out of the plane) and
+    ``marker_k_peak_z_against_clamp_mm`` (sideways less the clamp's own translation: the
+    swing itself); the probed cell's ``peak_shear_angle_deg`` (its largest absolute shear
+    angle); the works done to the end against the laws' hysteresis (``hysteresis_work_J``, bending and shear), the
+    air (``damping_work_J``) and by the clamp (``drive_work_J``); and the energy budget's
+    largest drift from its t = 0 value, ``energy_drift_J``, also as a part of the largest
+    work the clamp did, ``energy_drift_relative`` (NaN when the clamp did none)."""
+    out: dict[str, float] = {}
+    unit = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
+    clamp = clamp_displacement[:, None] * unit[None, :]
+    for k in range(markers.shape[1]):
+        moved = markers[:, k] - markers[0, k]
+        out[f"marker_{k}_peak_displacement_mm"] = 1e3 * _peak_abs(np.linalg.norm(moved, axis=1))
+        out[f"marker_{k}_peak_z_mm"] = 1e3 * _peak_abs(moved[:, 2])
+        out[f"marker_{k}_peak_x_mm"] = 1e3 * _peak_abs(moved[:, 0])
+        out[f"marker_{k}_peak_z_against_clamp_mm"] = 1e3 * _peak_abs(moved[:, 2] - clamp[:, 2])
+    out["peak_shear_angle_deg"] = float(np.degrees(_peak_abs(probes["cell_shear_angle"])))
+    for name in ("hysteresis_work", "damping_work", "drive_work"):
+        series = probes[name]
+        out[f"{name}_J"] = float(series[-1]) if len(series) else float("nan")
+    drift = _peak_abs(energy_total - energy_total[0]) if len(energy_total) else float("nan")
+    scale = _peak_abs(probes["drive_work"])
+    out["energy_drift_J"] = drift
+    out["energy_drift_relative"] = drift / scale if scale > 0 else float("nan")
+    return out

@@ -8,9 +8,12 @@ from typing import Any
 
 import numpy as np
 
+from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
+
 from .errors import ArgumentError
 from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
+from .metrics import sheet_metrics
 from .scene import COORDINATES, Scene, build_batch, load_scene
 from .scene.overrides import Overrides, override_pairs
 from .scene.sheet import SheetScene
@@ -128,6 +131,19 @@ def simulate_sheet(
         sink = SheetRunWriter(out, scene, batch.model.geometry, batch.recorder.markers, frame_times, overwrite)
     return simulate_sheets(
         batch.model, batch.control, batch.solver, batch.recorder, sink=sink, progress=progress, threads=threads
+    )
+
+
+def sheet_result_metrics(scene: SheetScene, result: SheetResult, sheet: int) -> dict[str, float]:
+    """:func:`~warpcloth.metrics.sheet_metrics` of sheet ``sheet`` of ``result``, a run of
+    ``scene`` (its clamp's translation direction)."""
+    c = scene.clamp
+    return sheet_metrics(
+        result.markers[:, sheet],
+        result.probe("clamp_displacement", sheet),
+        (c.direction_x, c.direction_y, c.direction_z),
+        {name: result.probe(name, sheet) for name in SHEET_PROBE_FIELDS},
+        result.energy_total()[:, sheet],
     )
 
 

@@ -1,8 +1,12 @@
 """Running a sweep: batches as Dask tasks, each streamed to the sweep directory
 (:mod:`warpcloth.io.sweep_dir`) as it finishes, resumable.
 
-Each strip's result does not depend on the batch it ran in (tests/test_batch.py), so the
-final results are identical however often the sweep was interrupted.
+Each strip's result does not depend on the batch it ran in (tests/test_batch.py), nor
+does each sheet's (tests/test_sheet_sweep.py), so the final results are identical however
+often the sweep was interrupted. A sweep of sheet scenes runs through the same directory,
+threads, Dask tasks and resume; only how its batch is simulated
+(:func:`simulate_sheet_batch`), its size estimates and its summary's metrics
+(:func:`~warpcloth.metrics.sheet_metrics`) are its own.
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ import re
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -20,12 +25,18 @@ import pandas as pd
 from tqdm import tqdm
 
 from warpcloth.errors import ArgumentError
+from warpcloth.io.sheet_run_dir import SHEET_COORDINATES
 from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.io.writing import claim_result
 from warpcloth.kernels import PROBE_FIELDS
+from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
 from warpcloth.metrics import swing_summary
-from warpcloth.runs import simulate
-from warpcloth.scene import Scene, Sweep, scene_from_dict
+from warpcloth.runs import sheet_result_metrics, simulate
+from warpcloth.scene import COORDINATES, Scene, Sweep, scene_from_dict
+from warpcloth.scene.sheet import SheetScene, sheet_scene_from_dict
+from warpcloth.scene.sheet_build import build_sheets, sheet_geometry
+from warpcloth.sheet import simulate_sheets
+from warpcloth.sheet.solver import QUANTITY
 from warpcloth.sim.model import init_warp_quietly
 from warpcloth.sim.resources import check_disk, check_memory
 
@@ -73,10 +84,48 @@ def strip_disk_bytes(scene: Scene, frames: bool) -> int:
     return (4 + 8 + 8 * len(PROBE_FIELDS)) * n_samples + (16 * scene.n_nodes * n_frames if frames else 0)
 
 
-def default_max_batch(scene: Scene, n_variants: int, workers: int, frames: bool) -> int:
+def _sheet_recorded(scene: SheetScene) -> tuple[int, int, int]:
+    # probe samples, shape frames and nodes of one sheet's record, as Python integers
+    n_frames = int(scene.run.duration_s * scene.output.frame_rate_hz) + 1
+    return (n_frames - 1) * scene.output.probes_per_frame + 1, n_frames, sheet_geometry(scene).n_nodes
+
+
+def _n_markers(scene: SheetScene) -> int:
+    return len(scene.output.markers_ij) + len(scene.output.markers_mm)
+
+
+def sheet_memory_bytes(scene: SheetScene, frames: bool) -> int:
+    """Memory one sheet's recorded results take while its batch runs (probes, markers and
+    frames twice: as recorded and as written)."""
+    n_samples, n_frames, n_nodes = _sheet_recorded(scene)
+    return 8 * (len(SHEET_PROBE_FIELDS) + 3 * _n_markers(scene)) * n_samples * 2 + (
+        24 * n_nodes * n_frames * 2 if frames else 0
+    )
+
+
+def sheet_disk_bytes(scene: SheetScene, frames: bool) -> int:
+    """Bytes one sheet's files take in the sweep directory: its probe rows (variant, t,
+    the probes and the markers' x, y, z, uncompressed) and, with ``frames``, its frames."""
+    n_samples, n_frames, n_nodes = _sheet_recorded(scene)
+    return (4 + 8 + 8 * (len(SHEET_PROBE_FIELDS) + 3 * _n_markers(scene))) * n_samples + (
+        24 * n_nodes * n_frames if frames else 0
+    )
+
+
+def memory_bytes(scene: Scene | SheetScene, frames: bool) -> int:
+    """Memory one variant's recorded results take while its batch runs."""
+    return sheet_memory_bytes(scene, frames) if isinstance(scene, SheetScene) else strip_memory_bytes(scene, frames)
+
+
+def disk_bytes(scene: Scene | SheetScene, frames: bool) -> int:
+    """Bytes one variant's files take in the sweep directory."""
+    return sheet_disk_bytes(scene, frames) if isinstance(scene, SheetScene) else strip_disk_bytes(scene, frames)
+
+
+def default_max_batch(scene: Scene | SheetScene, n_variants: int, workers: int, frames: bool) -> int:
     """Largest batch whose recorded results fit a worker's memory budget, and small
     enough that every worker gets several batches."""
-    memory_cap = max(1, WORKER_MEMORY_BYTES // strip_memory_bytes(scene, frames))
+    memory_cap = max(1, WORKER_MEMORY_BYTES // memory_bytes(scene, frames))
     balance = -(-n_variants // (BATCHES_PER_WORKER * max(1, workers)))
     return max(1, min(memory_cap, balance))
 
@@ -89,9 +138,9 @@ def check_sweep_fits(
     own) or whose remaining results would not fit the free disk of ``out``."""
     what = "probes and frames" if frames else "probes"
     if workers is not None:
-        sizes = sorted(
-            (sum(strip_memory_bytes(sweep.scenes[v], frames) for v in batches[b]) for b in pending), reverse=True
-        )[: max(1, workers)]
+        sizes = sorted((sum(memory_bytes(sweep.scenes[v], frames) for v in batches[b]) for b in pending), reverse=True)[
+            : max(1, workers)
+        ]
         check_memory(
             sum(sizes),
             f"the recorded {what} of {len(sizes)} sweep batch(es) running side by side",
@@ -101,7 +150,7 @@ def check_sweep_fits(
     variants = [v for b in pending for v in batches[b]]
     check_disk(
         out,
-        sum(strip_disk_bytes(sweep.scenes[v], frames) for v in variants),
+        sum(disk_bytes(sweep.scenes[v], frames) for v in variants),
         f"the {what} of the sweep's {len(variants)} remaining variants",
         "free space, choose another --out, or record less (output.probes_per_frame, output.frame_rate_hz, "
         "run.duration_s" + (", or leave out --frames)" if frames else ")"),
@@ -117,6 +166,102 @@ def _peak(series: np.ndarray) -> float:
     return float(np.max(series)) if len(series) else float("nan")
 
 
+@dataclass
+class SimulatedBatch:
+    """One batch simulated, as its files need it: the probe store's columns ``names``,
+    their series ``values[sample, column, variant]`` at ``t`` and which samples each
+    variant recorded (``ok[sample, variant]``: not after a divergence), per variant its
+    summary's metric columns, the frames (or None), and the steps done (strip- or node-)."""
+
+    names: list[str]
+    t: np.ndarray
+    values: np.ndarray
+    ok: np.ndarray
+    metrics: list[dict[str, object]]
+    frames: np.ndarray | None
+    steps: int
+
+
+def simulate_strips(scene_dicts: list[dict], device: str | None, frames: bool) -> SimulatedBatch:
+    """A batch of strips, one launch sequence; each strip's swing metrics."""
+    scenes = [scene_from_dict(d) for d in scene_dicts]
+    # one thread per batch: the sweep already runs its batches on the cores
+    result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
+    diverged = {d.strip: d for d in result.diverged}
+    ok = np.isfinite(result.probes[:, PROBE_FIELDS.index("tip_x")])
+    rows = []
+    for local, scene in enumerate(scenes):
+        kept = ok[:, local]
+        metrics = swing_summary(
+            result.t[kept],
+            result.probe("laser_x", local)[kept],
+            result.probe("tip_x", local)[kept],
+            starts_at_rest=scene.release.enabled,
+        )
+        metrics.pop("signal")
+        report = diverged.get(local)
+        row: dict[str, object] = metrics | {
+            "peak_tip_speed_m_per_s": _peak(result.probe("tip_speed", local)[kept]),
+            "hysteresis_work_J": _last(result.probe("hysteresis_work", local)[kept]),
+            "damping_work_J": _last(result.probe("damping_work", local)[kept]),
+            "diverged": report is not None,
+            "diverged_time_s": report.time_s if report else float("nan"),
+            "diverged_phase": report.phase if report else "",
+            "diverged_quantity": report.quantity if report else "",
+        }
+        rows.append(row | _overflows(result.reversal_memory, local))
+    return SimulatedBatch(
+        list(PROBE_FIELDS), result.t, result.probes, ok, rows, result.frames if frames else None, result.strip_steps
+    )
+
+
+def _overflows(reversal_memory: dict, local: int) -> dict[str, int]:
+    # reversals a full masing memory could not store (no hysteresis in their loops)
+    if not reversal_memory:
+        return {}
+    return {"reversal_overflows": int(np.asarray(reversal_memory["overflows"])[local])}
+
+
+def marker_columns(n_markers: int) -> list[str]:
+    """The probe store's columns of a sheet's markers: ``marker_K_x``, ``_y``, ``_z`` (m)."""
+    return [f"marker_{k}_{axis}" for k in range(n_markers) for axis in "xyz"]
+
+
+def simulate_sheet_batch(scene_dicts: list[dict], device: str | None, frames: bool) -> SimulatedBatch:
+    """A batch of sheets in the same launches; each sheet's :func:`~warpcloth.metrics.sheet_metrics`
+    (NaN for a diverged one: what a sheet did before it diverged is no measurement of it)."""
+    scenes = [sheet_scene_from_dict(d) for d in scene_dicts]  # resolved: checked as the sweep was expanded
+    built = build_sheets(scenes, device)
+    result = simulate_sheets(
+        built.model, built.control, built.solver, built.recorder, on_divergence="record", keep_frames=frames, threads=1
+    )
+    diverged = {d.sheet: d for d in result.diverged}
+    n_samples, b, n_markers = len(result.t), len(scenes), result.markers.shape[2]
+    markers = np.transpose(result.markers.reshape(n_samples, b, 3 * n_markers), (0, 2, 1))
+    rows = []
+    for local, scene in enumerate(scenes):
+        report = diverged.get(local)
+        metrics = sheet_result_metrics(scene, result, local)
+        if report is not None:
+            metrics = dict.fromkeys(metrics, float("nan"))
+        row: dict[str, object] = metrics | {
+            "diverged": report is not None,
+            "diverged_time_s": report.time_s if report else float("nan"),
+            "diverged_phase": ("settle" if report.time_s < 0 else "record") if report else "",
+            "diverged_quantity": QUANTITY[report.code][0] if report else "",
+        }
+        rows.append(row | _overflows(result.reversal_memory, local))
+    return SimulatedBatch(
+        [*SHEET_PROBE_FIELDS, *marker_columns(n_markers)],
+        result.t,
+        np.concatenate([result.probes, markers], axis=1),
+        np.isfinite(result.probes[:, SHEET_PROBE_FIELDS.index("kinetic")]),
+        rows,
+        result.frames if frames else None,
+        result.node_steps,
+    )
+
+
 def run_batch(
     out_dir: str,
     batch: int,
@@ -125,52 +270,52 @@ def run_batch(
     assignments: list[dict],
     device: str | None,
     frames: bool,
+    kind: str = "strip",
 ) -> dict:
-    """Simulate one batch and write its files (runs in a Dask worker or in-process)."""
+    """Simulate one batch of ``kind`` (``"strip"`` or ``"sheet"``) and write its files
+    (runs in a Dask worker or in-process)."""
     init_warp_quietly()  # a worker process starts Warp afresh: no banner or notices in the results
-    scenes = [scene_from_dict(d) for d in scene_dicts]
     started = time.perf_counter()
-    # one thread per batch: the sweep already runs its batches on the cores
-    result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
+    done = BATCH_KINDS[kind].simulate(scene_dicts, device, frames)
     wall = time.perf_counter() - started
-    diverged = {d.strip: d for d in result.diverged}
-
-    columns = {"variant": [], "t": []} | {name: [] for name in PROBE_FIELDS}
+    columns: dict[str, list] = {"variant": [], "t": []} | {name: [] for name in done.names}
     rows = []
     for local, variant in enumerate(variants):
-        values = result.probes[:, :, local]
-        ok = np.isfinite(values[:, PROBE_FIELDS.index("tip_x")])
+        ok = done.ok[:, local]
         columns["variant"].append(np.full(ok.sum(), variant, dtype=np.int32))
-        columns["t"].append(result.t[ok])
-        for q, name in enumerate(PROBE_FIELDS):
-            columns[name].append(values[ok, q])
-        metrics = swing_summary(
-            result.t[ok],
-            result.probe("laser_x", local)[ok],
-            result.probe("tip_x", local)[ok],
-            starts_at_rest=scenes[local].release.enabled,
-        )
-        metrics.pop("signal")
-        report = diverged.get(local)
+        columns["t"].append(done.t[ok])
+        for q, name in enumerate(done.names):
+            columns[name].append(done.values[ok, q, local])
         row: dict[str, object] = {"variant": variant, "batch": batch}
         row |= {key: (json.dumps(v) if isinstance(v, list) else v) for key, v in assignments[local].items()}
-        row |= metrics
-        row |= {
-            "peak_tip_speed_m_per_s": _peak(result.probe("tip_speed", local)[ok]),
-            "hysteresis_work_J": _last(result.probe("hysteresis_work", local)[ok]),
-            "damping_work_J": _last(result.probe("damping_work", local)[ok]),
-            "diverged": report is not None,
-            "diverged_time_s": report.time_s if report else float("nan"),
-            "diverged_phase": report.phase if report else "",
-            "diverged_quantity": report.quantity if report else "",
-        }
-        if result.reversal_memory:  # reversals a full masing memory could not store (no hysteresis in their loops)
-            row["reversal_overflows"] = int(np.asarray(result.reversal_memory["overflows"])[local])
-        rows.append(row)
-    SweepDirectory(out_dir).write_batch(
-        batch, {k: np.concatenate(v) for k, v in columns.items()}, rows, result.frames if frames else None
-    )
-    return {"batch": batch, "n_variants": len(variants), "strip_steps": result.strip_steps, "wall_s": wall}
+        rows.append(row | done.metrics[local])
+    SweepDirectory(out_dir).write_batch(batch, {k: np.concatenate(v) for k, v in columns.items()}, rows, done.frames)
+    return {"batch": batch, "n_variants": len(variants), "steps": done.steps, "wall_s": wall}
+
+
+def warm_sheet_kernel_cache(scenes: list[SheetScene], device: str | None) -> None:
+    """:func:`warm_kernel_cache` for sheets: one short run per precision the batches use."""
+    for precision in sorted({s.integrator.precision for s in scenes}):
+        scene = next(s for s in scenes if s.integrator.precision == precision)
+        data = scene.to_dict()
+        data["release"]["settle_time_s"] = 0.0
+        data["run"]["duration_s"] = scene.output_interval
+        built = build_sheets([sheet_scene_from_dict(data)], device)
+        simulate_sheets(
+            built.model, built.control, built.solver, built.recorder, on_divergence="record", keep_frames=False
+        )
+
+
+@dataclass(frozen=True)
+class BatchKind:
+    """What running a sweep's batches takes of the kind of scene it varies: how a batch
+    is simulated, the kernel warm-up, what the progress bar counts, and the coordinates
+    its directory states."""
+
+    simulate: Callable[[list[dict], str | None, bool], SimulatedBatch]
+    warm: Callable[[list, str | None], None]
+    steps: str
+    coordinates: str
 
 
 def warm_kernel_cache(scenes: list[Scene], device: str | None) -> None:
@@ -185,6 +330,13 @@ def warm_kernel_cache(scenes: list[Scene], device: str | None) -> None:
         data["release"]["enabled"] = False
         data["run"]["duration_s"] = scene.output_interval
         simulate(scene_from_dict(data), device=device, keep_frames=False, on_divergence="record", threads=1)
+
+
+BATCH_KINDS = {
+    "strip": BatchKind(simulate_strips, warm_kernel_cache, "strip-steps", COORDINATES),
+    "sheet": BatchKind(simulate_sheet_batch, warm_sheet_kernel_cache, "node-steps", SHEET_COORDINATES),
+}
+"""How the batches of a strip sweep and of a sheet sweep run, by :attr:`Sweep.kind`."""
 
 
 def run_sweep(
@@ -203,7 +355,8 @@ def run_sweep(
     The batches run in this process on ``workers`` threads (default: one per core; 0:
     one after another), each batch one launch sequence of its own (Warp releases the GIL
     during a CPU launch, so the threads fill the cores); with ``scheduler`` they are Dask
-    tasks on that running cluster instead. Results do not depend on either.
+    tasks on that running cluster instead. Results do not depend on either. A sweep of
+    sheet scenes runs the same way, each batch's sheets in one launch sequence.
     """
     if workers is not None and workers < 0:
         raise ArgumentError("workers", f"must be ≥ 0 (0 runs the batches in this process), got {workers}")
@@ -225,6 +378,7 @@ def run_sweep(
         raise ArgumentError("out", f"{out} already holds {held}; choose another --out")
     claim_result(out, argument="out")  # two sweeps into one directory never write it at once
     directory = SweepDirectory(out)
+    kind = BATCH_KINDS[sweep.kind]
     n_workers = (os.cpu_count() or 1) if workers is None else workers
     if max_batch is None:
         max_batch = default_max_batch(sweep.scenes[0], len(sweep.scenes), n_workers, frames)
@@ -236,7 +390,7 @@ def run_sweep(
         check_sweep_fits(sweep, layout, list(range(len(layout))), at_once, frames, out)
         return layout
 
-    batches = directory.prepare(sweep, planned)
+    batches = directory.prepare(sweep, planned, kind.coordinates)
     pending = [b for b in range(len(batches)) if not directory.is_done(b)]
     check_sweep_fits(sweep, batches, pending, at_once, frames, out)  # a resumed one: what remains
     done = len(sweep.scenes) - sum(len(batches[b]) for b in pending)
@@ -244,13 +398,13 @@ def run_sweep(
         total=len(sweep.scenes), initial=done, unit="variant", desc="sweep", disable=not progress, dynamic_ncols=True
     )
     started = time.perf_counter()
-    strip_steps = 0
+    steps = 0
 
     def finished(info: dict) -> None:
-        nonlocal strip_steps
-        strip_steps += info["strip_steps"]
+        nonlocal steps
+        steps += info["steps"]
         bar.update(info["n_variants"])
-        bar.set_postfix_str(f"{strip_steps / (time.perf_counter() - started):.3g} strip-steps/s")
+        bar.set_postfix_str(f"{steps / (time.perf_counter() - started):.3g} {kind.steps}/s")
 
     def task(b: int) -> tuple:
         ids = batches[b]
@@ -262,11 +416,12 @@ def run_sweep(
             [sweep.assignments[i] for i in ids],
             device,
             frames,
+            sweep.kind,
         )
 
     try:
         if pending:
-            warm_kernel_cache([sweep.scenes[batches[b][0]] for b in pending], device)
+            kind.warm([sweep.scenes[batches[b][0]] for b in pending], device)
             if scheduler is not None:
                 _run_on_dask(pending, task, finished, scheduler, sweep.fingerprint)
             elif n_workers == 0:

@@ -10,7 +10,7 @@ import numpy as np
 
 from warpcloth.errors import DivergenceError
 from warpcloth.metrics import swing_summary
-from warpcloth.runs import simulate, simulate_sheet
+from warpcloth.runs import sheet_result_metrics, simulate, simulate_sheet
 from warpcloth.scene import bundled_scenes, load_scene
 from warpcloth.scene.sheet import AUTO_FRACTION, SheetScene, is_sheet_scene
 from warpcloth.scene.sheet_build import load_sheet_scene
@@ -129,28 +129,24 @@ def run_sheet_scene(args: argparse.Namespace) -> int:
 
 
 def sheet_summary(scene: SheetScene, result: SheetResult) -> list[str]:
-    """What ``run`` prints of a sheet run: each marker's peak displacement from its start,
+    """What ``run`` prints of a sheet run (:func:`~warpcloth.metrics.sheet_metrics`, as a
+    sheet sweep's summary holds it): each marker's peak displacement from its start,
     sideways (z) and out of the plane (x), in mm; the probed cell's peak shear angle (°);
     the energy budget's largest drift against the work the clamp did."""
+    metrics = sheet_result_metrics(scene, result, 0)
     lines = []
     start = result.markers[0, 0]
-    direction = np.array([scene.clamp.direction_x, scene.clamp.direction_y, scene.clamp.direction_z])
-    clamp = result.probe("clamp_displacement", 0)[:, None] * (direction / np.linalg.norm(direction))[None, :]
     for k in range(result.markers.shape[2]):
-        moved = result.markers[:, 0, k] - start[k]
-        lag = moved - clamp  # the marker against the clamp's translation: the swing itself
-        peak = 1e3 * np.nanmax(np.abs(moved), axis=0)
+        m = {name: metrics[f"marker_{k}_{name}"] for name in ("peak_z_mm", "peak_z_against_clamp_mm", "peak_x_mm")}
         lines.append(
             f"marker {k} (at y = {round(start[k, 1] * 1e3, 1) + 0.0:.1f} mm, "
             f"z = {round(start[k, 2] * 1e3, 1) + 0.0:.1f} mm at t = 0): "
-            f"peak sideways (z) {peak[2]:.3f} mm ({1e3 * np.nanmax(np.abs(lag[:, 2])):.3f} mm against the "
-            f"clamp), out of plane (x) {peak[0]:.3f} mm"
+            f"peak sideways (z) {m['peak_z_mm']:.3f} mm ({m['peak_z_against_clamp_mm']:.3f} mm against the "
+            f"clamp), out of plane (x) {m['peak_x_mm']:.3f} mm"
         )
-    shear = np.degrees(np.nanmax(np.abs(result.probe("cell_shear_angle", 0))))
-    lines.append(f"probed cell: peak shear angle {shear:.4f}°")
-    budget = result.energy_total()[:, 0]
-    drift = float(np.nanmax(np.abs(budget - budget[0])))
+    lines.append(f"probed cell: peak shear angle {metrics['peak_shear_angle_deg']:.4f}°")
+    drift, relative = metrics["energy_drift_J"], metrics["energy_drift_relative"]
     scale = float(np.nanmax(np.abs(result.probe("drive_work", 0))))
-    relative = f" ({drift / scale:.2g} of the clamp's work {scale:.3g} J)" if scale > 0 else ""
-    lines.append(f"energy budget: largest drift {drift:.3g} J{relative}")
+    part = f" ({relative:.2g} of the clamp's work {scale:.3g} J)" if np.isfinite(relative) else ""
+    lines.append(f"energy budget: largest drift {drift:.3g} J{part}")
     return lines

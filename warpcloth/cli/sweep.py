@@ -5,6 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from warpcloth.scene import Sweep
 
 from .options import at_least, device, path_text
 
@@ -26,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--max-batch",
         type=at_least(1),
         default=None,
-        help="strips per batch (default: from the memory per strip and the worker count)",
+        help="strips (or sheets) per batch (default: from the memory per variant and the worker count)",
     )
     sweep_p.add_argument(
         "--workers",
@@ -54,6 +58,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p.set_defaults(handler=run_sweep_command)
 
 
+def print_sheet_steps(sweep: Sweep) -> None:
+    """The step each group of a sheet sweep's variants runs at, where ``dt_s = "auto"`` chose it."""
+    from warpcloth.scene.sheet import AUTO_FRACTION
+
+    steps: dict[float, int] = {}
+    for scene in sweep.scenes:
+        if scene.integrator.dt_chosen_by == "auto":
+            steps[scene.integrator.dt_s] = steps.get(scene.integrator.dt_s, 0) + 1
+    for dt, count in sorted(steps.items()):
+        print(
+            f"integrator.dt_s = auto, for {count} of the {len(sweep.scenes)} variants: {dt:.4e} s (the shortest "
+            f"of theirs: {AUTO_FRACTION:g} of the variant's linearised stability estimate, a whole fraction of "
+            "the probe interval)"
+        )
+
+
 def run_sweep_command(args: argparse.Namespace) -> int:
     """Expand the sweep, run its missing batches, report the summary."""
     from warpcloth.io.writing import claim_result
@@ -64,8 +84,10 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     sweep = load_sweep(
         args.scene, args.overrides, max_variants=args.max_variants or MAX_VARIANTS, progress=not args.no_progress
     )
+    if sweep.kind == "sheet":
+        print_sheet_steps(sweep)
     groups: dict[tuple[str, float], list] = {}  # one step per scheme and probe interval
-    for s in sweep.scenes:
+    for s in sweep.strips:
         if s.integrator.dt_chosen_by == "auto":
             groups.setdefault((s.integrator.scheme, s.output_interval), []).append(s)
     if groups:
@@ -96,6 +118,14 @@ def run_sweep_command(args: argparse.Namespace) -> int:
         progress=not args.no_progress,
     )
     n_div = int(summary["diverged"].sum())
+    if n_div and sweep.kind == "sheet":
+        gone = summary.loc[summary["diverged"], "variant"].tolist()
+        print(
+            f"warpcloth sweep: warning: {n_div} sheet variant(s) diverged ({', '.join(map(str, gone[:8]))}"
+            f"{' …' if len(gone) > 8 else ''}); their metrics in the summary are NaN, and diverged_time_s, "
+            "diverged_phase and diverged_quantity say when and how",
+            file=sys.stderr,
+        )
     evenness = (
         ""
         if sweep.discrepancy is None

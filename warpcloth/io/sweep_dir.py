@@ -5,8 +5,10 @@ Layout of a sweep directory::
     sweep.json              fingerprint of the expanded sweep, the batch layout, the spec
     variants.csv            variant, batch and the swept field values (written first)
     summary/batch-NNNN.parquet   per variant: parameters and summary metrics
-    probes/batch-NNNN.parquet    probe series, long format (variant, t, probe fields)
+    probes/batch-NNNN.parquet    probe series, long format (variant, t, probe fields;
+                                 a sheet's: its markers' marker_K_x, _y, _z too)
     frames/batch-NNNN.npy        optional shape frames [frame, variant-in-batch, node, xy]
+                                 (a sheet's: xyz)
     summary.parquet, summary.csv merged summaries, written when every batch is done
 
 ``pandas.read_parquet(DIR / "probes")`` opens the whole probe store (one file per batch,
@@ -101,13 +103,16 @@ class SweepDirectory:
             and (not frames.exists() or _readable(frames, frames=True))
         )
 
-    def prepare(self, sweep: Sweep, plan: Callable[[], list[list[int]]]) -> list[list[int]]:
+    def prepare(
+        self, sweep: Sweep, plan: Callable[[], list[list[int]]], coordinates: str = COORDINATES
+    ) -> list[list[int]]:
         """The batch layout: the stored one when this directory holds the same sweep
-        (resume), else ``plan()``'s, written with the manifest and variants.csv."""
+        (resume), else ``plan()``'s, written with the manifest (stating ``coordinates``,
+        the frame of the positions stored) and variants.csv."""
         manifest = self.path / "sweep.json"
         if manifest.exists():
             stored = read_json(manifest)
-            check_coordinates(manifest, stored)
+            check_coordinates(manifest, stored, coordinates)
             if stored["fingerprint"] != sweep.fingerprint:
                 why = (
                     "was written by an older warpcloth (sweep format 1), whose Latin hypercube drew other "
@@ -136,7 +141,8 @@ class SweepDirectory:
             "sweep": sweep.spec,
             "base_scene": sweep.base,
             "complete": False,
-            "coordinates": COORDINATES,
+            "coordinates": coordinates,
+            "kind": sweep.kind,
             "format": FORMAT,
             "discrepancy": sweep.discrepancy,
             "provenance": provenance(),
@@ -169,14 +175,22 @@ class SweepDirectory:
         return summary
 
 
-def check_coordinates(manifest: Path, info: dict) -> None:
-    """Refuse a sweep whose positions are not from the clamp edge (an older warpcloth's)."""
-    if info.get("coordinates") != COORDINATES:
+def check_coordinates(manifest: Path, info: dict, coordinates: str = COORDINATES) -> None:
+    """Refuse a sweep whose positions are not in ``coordinates`` (a strip's from the clamp
+    edge, or a sheet's :data:`~warpcloth.io.sheet_run_dir.SHEET_COORDINATES`): a sweep of
+    the other kind of scene, or an older warpcloth's, which measured from the clamp's top."""
+    if info.get("coordinates") == coordinates:
+        return
+    stored, ours = info.get("kind", "strip"), "strip" if coordinates == COORDINATES else "sheet"
+    if stored != ours:
         raise DataFileError(
-            manifest,
-            "does not say its positions are from the clamp edge (an older warpcloth "
-            "measured them from the clamp's top); run the sweep again into a new --out directory",
+            manifest, f"holds a sweep of {stored} scenes, not of {ours} scenes; choose a new --out directory"
         )
+    raise DataFileError(
+        manifest,
+        "does not say its positions are from the clamp edge (an older warpcloth "
+        "measured them from the clamp's top); run the sweep again into a new --out directory",
+    )
 
 
 def _older_sample(info: dict) -> bool:
@@ -215,6 +229,13 @@ def stored_sweep(path: Path, info: dict) -> Sweep:
 def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording:
     """Selected variants of a sweep directory run with ``--frames``, as a Recording."""
     info = read_json(path / "sweep.json")
+    if info.get("kind") == "sheet":
+        raise DataFileError(
+            path,
+            "is a sweep of sheet scenes: its summary is plotted with --metric and --x, and its "
+            "probes/ and frames/ ([frame, variant in batch, node, xyz]) are read with pandas and numpy; "
+            "the views of a run's variants take a strip sweep",
+        )
     check_coordinates(path / "sweep.json", info)
     sweep = stored_sweep(path, info)
     if sweep.fingerprint != info["fingerprint"]:
@@ -223,7 +244,7 @@ def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording
             "its variants no longer resolve to the scenes that were simulated "
             "(a material file it uses has changed?); the stored results cannot be labelled",
         )
-    parameters = per_strip_parameters(sweep.scenes)
+    parameters = per_strip_parameters(sweep.strips)
     parameters.insert(0, "variant", np.arange(len(sweep.scenes)))
     chosen = select_variants(parameters, variants, where)
     where_is = {v: (b, k) for b, ids in enumerate(info["batches"]) for k, v in enumerate(ids)}
@@ -259,7 +280,7 @@ def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording
     return Recording(
         path,
         chosen,
-        [sweep.scenes[i] for i in chosen],
+        [sweep.strips[i] for i in chosen],
         frame_times,
         frames,
         probes,

@@ -111,8 +111,8 @@ def scene_from_dict(data: dict, choose_step: bool = True) -> Scene:
     if isinstance(data, dict) and "sheet" in data:
         raise SceneError(
             "sheet",
-            "this is a sheet scene: `warpcloth run` and warpcloth.scene.sheet_build.load_sheet_scene "
-            "take it (sweeps, fits and the strip's Python API take strip scenes)",
+            "this is a sheet scene: `warpcloth run`, `warpcloth sweep` and "
+            "warpcloth.scene.sheet_build.load_sheet_scene take it (the strip's Python API takes strip scenes)",
         )
     scene = parse_section(Scene, with_material_file(data), "")
     validate_scene(scene)

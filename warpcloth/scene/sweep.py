@@ -18,15 +18,22 @@ A sweep varies scene fields given by dotted name (list items by index, e.g.
 The variants are grid × zip × random (each block optional), in that nesting order, so
 the expansion is deterministic under the seed. Fields that cannot vary inside one batch
 (spacing, dt, durations, integrator, ...) split the variants into separate batches.
+
+A sheet scene (a ``[sheet]`` table) sweeps the same way over its own fields: its variants
+are :class:`~warpcloth.scene.sheet.SheetScene` objects, each checked by
+:func:`~warpcloth.scene.sheet_build.check_sheet_scene`, and what a batch of sheets shares
+(:data:`~warpcloth.scene.sheet_build.SHARED_SECTIONS`, the settling time) splits them.
 """
 
 from __future__ import annotations
 
 import copy
+import dataclasses
 import hashlib
 import itertools
 import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -43,6 +50,9 @@ from .locate import located
 from .overrides import apply_overrides, set_field
 from .sampling import discrepancy, latin_hypercube
 from .schema import Scene, batch_fields
+from .sheet import SheetScene, scene_kind, sheet_scene_from_dict
+from .sheet_build import check_sheet_scene, sheet_batch_key
+from .step import AUTO as AUTO_STEP
 from .step import check_step, with_chosen_step
 
 MAX_VARIANTS = 100_000
@@ -58,16 +68,77 @@ RANDOM_KEYS = {"method", "samples", "ranges"}
 METHODS = ("uniform", "latin_hypercube")
 
 
+def _strip_batch_key(scene: Scene) -> str:
+    d = scene.to_dict()
+    return json.dumps([d[n.split(".")[0]][n.split(".")[1]] for n in batch_fields()])
+
+
+def _strip_variants(scenes: list, assignments: list[dict[str, Any]]) -> list[Scene]:
+    # one step for every variant that asks auto for one (checked by load_sweep before a run)
+    return with_chosen_step(scenes)
+
+
+def _sheet_variants(scenes: list, assignments: list[dict[str, Any]]) -> list[SheetScene]:
+    # Each variant checked (markers, memory, its step within its own stability estimate);
+    # those that ask auto for their step share the shortest any of them gets alone among
+    # the variants that may share a batch, so a batch has one step that suits every sheet
+    # (each alone: a whole fraction of the probe interval, so the shortest is one too).
+    checked = []
+    for i, scene in enumerate(scenes):
+        try:
+            checked.append(check_sheet_scene(scene))
+        except SceneError as exc:
+            raise variant_error(exc, i, assignments[i]) from exc
+    shortest: dict[str, float] = {}
+    for asked, scene in zip(scenes, checked, strict=True):
+        if asked.integrator.dt_s == AUTO_STEP:
+            key = sheet_batch_key(scene, with_step=False)
+            shortest[key] = min(shortest.get(key, math.inf), scene.integrator.dt_s)
+    for i, (asked, scene) in enumerate(zip(scenes, checked, strict=True)):
+        if asked.integrator.dt_s == AUTO_STEP:
+            integrator = dataclasses.replace(scene.integrator, dt_s=shortest[sheet_batch_key(scene, with_step=False)])
+            checked[i] = dataclasses.replace(scene, integrator=integrator)
+    return checked
+
+
+@dataclass(frozen=True)
+class SweptKind:
+    """How a sweep reads one kind of scene: raw data → a validated variant (step not yet
+    chosen), all variants → ready to run, and what a batch's variants must share."""
+
+    parse: Callable[[dict], Any]
+    ready: Callable[[list, list[dict[str, Any]]], list]
+    batch_key: Callable[[Any], str]
+
+
+KINDS = {
+    "strip": SweptKind(lambda data: scene_from_dict(data, choose_step=False), _strip_variants, _strip_batch_key),
+    "sheet": SweptKind(sheet_scene_from_dict, _sheet_variants, sheet_batch_key),
+}
+"""The kinds of scene a ``[sweep]`` varies, by :func:`~warpcloth.scene.sheet.scene_kind`."""
+
+
 @dataclass
 class Sweep:
-    """An expanded sweep: one resolved scene per variant, and what each one set."""
+    """An expanded sweep: one resolved scene per variant (strips' :class:`Scene` or
+    sheets' :class:`SheetScene`), and what each one set."""
 
     base: dict  # raw base scene (without [sweep])
     spec: dict  # the raw [sweep] section
     keys: list[str]  # swept fields, in column order
     assignments: list[dict[str, Any]]  # per variant: field -> value
-    scenes: list[Scene]
+    scenes: list[Scene] | list[SheetScene]
     discrepancy: float | None = None  # centred L2 discrepancy of the random block's sample (sampling.discrepancy)
+
+    @property
+    def kind(self) -> str:
+        """``"strip"`` or ``"sheet"``: the kind of scene every variant is."""
+        return "sheet" if isinstance(self.scenes[0], SheetScene) else "strip"
+
+    @property
+    def strips(self) -> list[Scene]:
+        """The variants of a sweep of strip scenes (none of a sweep of sheets)."""
+        return [scene for scene in self.scenes if isinstance(scene, Scene)]
 
     @property
     def fingerprint(self) -> str:
@@ -79,12 +150,10 @@ class Sweep:
         """Variant indices per batch: grouped by batch-level fields, at most max_batch each."""
         if max_batch < 1:
             raise ArgumentError("max_batch", f"must be ≥ 1, got {max_batch}")
-        names = batch_fields()
+        batch_key = KINDS[self.kind].batch_key
         groups: dict[str, list[int]] = {}
         for i, scene in enumerate(self.scenes):
-            d = scene.to_dict()
-            key = json.dumps([d[n.split(".")[0]][n.split(".")[1]] for n in names])
-            groups.setdefault(key, []).append(i)
+            groups.setdefault(batch_key(scene), []).append(i)
         return [ids[j : j + max_batch] for ids in groups.values() for j in range(0, len(ids), max_batch)]
 
 
@@ -214,7 +283,8 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     unknown = set(spec) - SWEEP_KEYS
     if unknown:
         raise SceneError(f"sweep.{sorted(unknown)[0]}", f"unknown field; known: {', '.join(sorted(SWEEP_KEYS))}")
-    resolved = scene_from_dict(copy.deepcopy(base), choose_step=False).to_dict()
+    kind = KINDS[scene_kind(base)]
+    resolved = kind.parse(copy.deepcopy(base)).to_dict()
     grid = _value_lists(_table(spec, "grid"), "sweep.grid")
     zipped = _value_lists(_table(spec, "zip"), "sweep.zip")
     lengths = {len(v) for v in zipped.values()}
@@ -251,9 +321,12 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     return Sweep(base, spec, keys, assignments, variant_scenes(base, assignments, progress), discrepancy(unit))
 
 
-def variant_scenes(base: dict, assignments: list[dict[str, Any]], progress: bool = False) -> list[Scene]:
+def variant_scenes(
+    base: dict, assignments: list[dict[str, Any]], progress: bool = False
+) -> list[Scene] | list[SheetScene]:
     """The validated scene of each variant: the raw ``base`` scene with the variant's
     fields set (``progress`` shows a bar); a refused one is a SceneError naming it."""
+    kind = KINDS[scene_kind(base)]
     scenes = []
     # leave=False: a refused variant's message then starts on a clean line
     with tqdm(
@@ -271,11 +344,11 @@ def variant_scenes(base: dict, assignments: list[dict[str, Any]], progress: bool
                 # swept material fields land on top of it, whatever their order in [sweep].
                 for key, value in sorted(assignment.items(), key=lambda kv: not is_material_file_key(kv[0])):
                     set_field(data, key, value)
-                scenes.append(scene_from_dict(data, choose_step=False))
+                scenes.append(kind.parse(data))
             except SceneError as exc:
                 raise variant_error(exc, i, assignment) from exc
             bar.update()
-    return with_chosen_step(scenes)
+    return kind.ready(scenes, assignments)
 
 
 def load_sweep(
@@ -300,7 +373,8 @@ def load_sweep(
         raw["sweep"] = spec["sweep"]
         sweep = expand(raw, max_variants, progress)
         swept = [key_path(k) for k in sweep.keys]
-        for i, scene in enumerate(sweep.scenes):  # every variant's step, before any runs
+        # every strip variant's step, before any runs (a sheet's: checked as it was expanded)
+        for i, scene in enumerate(sweep.strips):
             try:
                 check_step(scene)
             except SceneError as exc:
