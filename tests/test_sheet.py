@@ -89,7 +89,7 @@ def horizontal_cantilever(h, length, width, along_warp=True):
 def test_a_one_cell_wide_sheet_runs_the_strips_impulsive_rotation():
     # the strip's scene, its own material, spacing, clamp-edge hinge and rotation centre;
     # the sheet's two warp lines carry half its width each and its weft segment spans it
-    scene = load_scene("impulsive_rotation", {"run.duration_s": 0.25})
+    scene = load_scene("impulsive_rotation", {"run.duration_s": 0.15})  # the clamp turns until 0.12 s
     strip = build_batch([scene], device="cpu")
     strip_run = simulate_batch(strip.model, strip.control, strip.solver, strip.recorder, threads=1)
     spec = strip.model.strips[0]
@@ -124,7 +124,7 @@ def test_a_one_cell_wide_sheet_runs_the_strips_impulsive_rotation():
         assert difference < 1e-11, f"column {column} is {difference:.3g} m from the strip"  # measured 1e-13
         assert np.abs(shapes[..., 2] - geometry.rest_positions[nodes, 2]).max() < 1e-12  # no motion across
     swing = np.abs(strip_run.frames[:, 0] - strip_run.frames[0, 0]).max()
-    assert swing > 0.02  # the clamp turned 75° and the strip moved centimetres: not an agreement at rest
+    assert swing > 0.015  # the clamp turned 75° and the strip moved centimetres: not an agreement at rest
     np.testing.assert_allclose(sheet_run.energy_total()[:, 0], strip_run.energy_total()[:, 0], rtol=0, atol=1e-12)
 
 
@@ -476,3 +476,15 @@ def test_a_sheet_runs_figures_are_written(tmp_path):
     paths = plot_sheet_run(run, tmp_path)
     assert [p.name for p in paths] == ["sheet_run.png", "sheet_shapes.png"]
     assert all(p.stat().st_size > 10_000 for p in paths)
+
+
+@pytest.mark.parametrize(("spacing", "width"), [(0.005, 0.03), (0.0025, 0.03), (0.005, 0.05)])
+def test_a_bias_strip_hangs_from_the_clamp_edge_with_its_area(spacing, width):
+    from warpcloth.sheet import bias_strip
+
+    geometry = bias_strip(0.1, width, 0.01, spacing)
+    clamped, rest = geometry.clamped, geometry.rest_positions
+    assert rest[clamped, 1].min() == pytest.approx(0.0, abs=1e-12)  # a row of nodes on the clamp edge
+    assert rest[~clamped, 1].max() == pytest.approx(-spacing * math.sqrt(0.5))
+    area = geometry.node_area[~clamped].sum() / (0.1 * width)
+    assert abs(area - 1) < 0.06  # staircase sides: O(h); measured 1.052, 0.991, 1.051

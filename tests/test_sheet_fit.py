@@ -43,6 +43,8 @@ def test_a_sheets_shear_rigidity_is_fitted_from_its_tracked_markers(tmp_path):
     assert not g["at_bound"]
     print(f"G = {value:.4f} ± {sigma:.4f} gf/(cm·°) against {TRUTH}")
     assert abs(value - TRUTH) < 3 * sigma  # measured 1.188 ± 0.014
+    assert fit["noise_source"] == "estimated from the 4th differences of the fit's residuals"
+    assert 0.015e-3 < fit["noise_mm"] * 1e-3 < 0.03e-3  # the data's σ is 0.02 mm; measured 0.025
     assert sigma < 0.05
     residuals = (out / "residuals.csv").read_text().splitlines()
     assert residuals[0] == "t_s,marker,residual_y_mm,residual_z_mm"
@@ -73,6 +75,14 @@ def test_a_bad_sheet_fit_is_one_line_naming_what(tmp_path, arguments, expected):
     assert len(message) == 1 and "Traceback" not in done.stderr
     assert expected in message[0], message[0]
     assert not (tmp_path / "fit").exists()
+
+
+def test_markers_in_the_wrong_unit_are_refused(tmp_path):
+    measured = tmp_path / "metres.csv"  # headed metres, written in millimetres
+    measured.write_text("t_s,marker,z_m,y_m\n0.0,0,-50,-100\n0.01,0,-49.9,-100\n0.02,0,-49.8,-100\n")
+    done = run_cli("fit", "shear_swing", *RESOLUTION, "--free", "G", "--measured", measured, "--out", tmp_path / "fit")
+    assert done.returncode == 2
+    assert "a marker 100 m from the middle of the clamp edge is no marker on a sheet" in done.stderr
 
 
 def test_a_marker_the_scene_does_not_track_is_refused(tmp_path):

@@ -159,12 +159,43 @@ def test_a_marker_off_the_sheet_is_refused(tmp_path):
     one_line_refusal(
         run_cli("run", "twist", "--set", "output.markers_mm=[[-300.0, 0.0]]", "--out", tmp_path / "r"),
         "output.markers_mm[0]",
-        "is not on the sheet",
+        "is not on a node of the sheet",
+    )
+    # between nodes: the run records nodes, so a point between them is refused, naming the nearest
+    one_line_refusal(
+        run_cli("run", "twist", "--set", "output.markers_mm=[[-52.0, 0.0]]", "--out", tmp_path / "r"),
+        "output.markers_mm[0]",
+        "the nearest, [-50, 0] mm, is 2 mm away",
+    )
+    one_line_refusal(
+        run_cli("run", "twist", "--set", "output.probe_cell_mm=[-300.0, 0.0]", "--out", tmp_path / "r"),
+        "output.probe_cell_mm",
+        "from the nearest free cell's centre",
+    )
+    one_line_refusal(
+        run_cli("run", "twist", "--set", "output.probe_hinge_mm=[500.0, 500.0]", "--out", tmp_path / "r"),
+        "output.probe_hinge_mm",
+        "from the nearest free weft hinge",
     )
     one_line_refusal(
         run_cli("run", "twist", "--set", "output.markers_ij=[[99, 0]]", "--out", tmp_path / "r"),
         "output.markers_ij[0]",
         "not a node of the sheet",
+    )
+
+
+def test_a_clamp_that_would_start_elsewhere_is_refused(tmp_path):
+    one_line_refusal(
+        run_cli(
+            "run",
+            "shear_swing",
+            "--set",
+            "clamp.translation_segments=[{t_start_s = 0.0, t_end_s = 0.05, d_coefficients_mm = [3.0, 0.0, 4000.0]}]",
+            "--out",
+            tmp_path / "r",
+        ),
+        "clamp.translation_segments[0].d_coefficients_mm",
+        "the clamp cannot teleport",
     )
 
 
@@ -234,5 +265,7 @@ def test_a_diverged_sheet_is_one_message_and_keeps_its_record(tmp_path):
     run = read_sheet_run(out)
     (diverged,) = run.meta["diverged"]
     assert run.complete and run.probes["t"].max() <= diverged["time_s"] < 0.1
-    after = run.frame_times > diverged["time_s"]
-    assert after.any() and np.isnan(run.frames[after]).all() and np.isfinite(run.frames[~after]).all()
+    # frames.npy holds NaN from the stop on; the reader gives the frames the sheet reached
+    stored = np.load(out / "frames.npy")
+    assert np.isnan(stored[len(run.frames) :]).all() and len(run.frames) < len(stored)
+    assert np.isfinite(run.frames).all() and run.frame_times[-1] <= diverged["time_s"]

@@ -377,6 +377,8 @@ def _fit_kes(args: argparse.Namespace) -> int:
         weft = kes.material_file_data(weft_fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain)
         data["weft"] = {k: v for k, v in weft["material"].items() if k not in (*ONE_PER_FABRIC, "source")}
         data["fit"] |= {f"weft_{k}": v for k, v in weft["fit"].items()}
+        if len(laws) > 1:
+            data["fit"] |= {f"weft_{k}": v for k, v in fits[1][1].fit_table().items()}
     for (label, tensile, bending, _t, _b), (direction_fit, direction_comparison, direction_law) in zip(
         directions, fits, strict=True
     ):
@@ -384,6 +386,8 @@ def _fit_kes(args: argparse.Namespace) -> int:
     if shear is not None:
         _print_shear(shear, args.shear)
     which = f" with the {law} bending law, the one AIC recommends" if len(laws) > 1 else ""
+    if len(fits) > 1 and len(laws) > 1:
+        which += f" (the weft's: {fits[1][2]})"
     print(
         f'wrote {kes.write_material_file(out, data)}{which} (a scene uses it with from_file = "{out}" in its '
         f"[material], or --set material.from_file={out})"

@@ -339,6 +339,10 @@ def read_measurement(
     )
 
 
+MAX_MARKER_DISTANCE_M = 10.0
+"""A tracked sheet marker farther than this from the clamp (m) is a unit mistake, refused."""
+
+
 @dataclass(frozen=True)
 class SheetMarkers:
     """Markers tracked on a sheet, SI: per row the time, the marker (its index in the
@@ -394,4 +398,13 @@ def read_sheet_markers(path: str | Path, argument: str = "path") -> SheetMarkers
     position = np.column_stack(
         [table.values[:, roles[f"{a}_mm"]] * header_unit(table, roles[f"{a}_mm"], f"{a}_mm") for a in axes]
     )
+    far = np.abs(position).max(axis=1) > MAX_MARKER_DISTANCE_M
+    if far.any():
+        i = int(np.argmax(far))
+        raise DataFileError(
+            table.path,
+            f"a marker {np.abs(position[i]).max():.3g} m from the middle of the clamp edge is no marker on a "
+            f"sheet: are the numbers in the unit the header says (mm unless it names one)?",
+            int(table.lines[i]),
+        )
     return SheetMarkers(t, marker.astype(int), axes, position)

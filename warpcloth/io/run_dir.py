@@ -327,6 +327,8 @@ def read_committed_csv(file: Path, rows: int, size: int, complete: bool, columns
         raise DataFileError(
             file, f"has columns {', '.join(map(str, numbers.columns))}; a run writes {', '.join(columns)}"
         )
+    if numbers.empty:
+        return numbers.astype(float)  # the header alone: the run recorded no sample (it stopped first)
     damaged = [c for c in numbers.columns if not pd.api.types.is_numeric_dtype(numbers[c])]
     if damaged:
         # only a changed file gets here: find its first cell that is not a number

@@ -260,6 +260,14 @@ class SheetRun:
         return SheetSamples(t, probes, markers, self.frame_times, self.frames)
 
 
+def _why_empty(meta: dict) -> str:
+    diverged = meta.get("diverged") or []
+    if diverged:
+        first = diverged[0]
+        return f"it diverged at t = {first.get('time_s', float('nan')):.6g} s, before its first sample"
+    return "it was stopped before its first sample"
+
+
 def is_sheet_run(path: str | Path) -> bool:
     """Whether ``path`` is a sheet run directory (its meta.json says kind "sheet"); a
     directory whose meta.json cannot be read is left to the reader that names the damage."""
@@ -301,6 +309,11 @@ def read_sheet_run(path: str | Path) -> SheetRun:
     markers = read_committed_csv(
         path / "markers.csv", committed["marker_rows"], committed["marker_bytes"], complete, MARKER_COLUMNS
     )
+    frames = np.asarray(stored[:reached])
+    # a sheet that diverged leaves NaN frames from its stop on: what it reached is before them
+    reached = int(np.argmin(np.isfinite(frames).all(axis=(1, 2, 3)))) if not np.isfinite(frames).all() else reached
+    if not reached:
+        raise DataFileError(path, f"recorded no frame: {_why_empty(meta)}")
     return SheetRun(
         path,
         read_sheet_scene(path / "scene.toml"),
@@ -308,7 +321,7 @@ def read_sheet_run(path: str | Path) -> SheetRun:
         probes,
         markers,
         times[:reached],
-        np.asarray(stored[:reached]),
+        frames[:reached],
         lattice,
         rest,
         faces,

@@ -336,6 +336,19 @@ def validate_sheet_scene(scene: SheetScene) -> None:
     clamp = scene.clamp
     validate_segments(clamp.rotation_segments, "clamp.rotation_segments", "theta_coefficients_si", "θ", "rad")
     validate_segments(clamp.translation_segments, "clamp.translation_segments", "d_coefficients_mm", "d", "mm")
+    for name, coefficients, unit in (
+        ("rotation_segments", "theta_coefficients_si", "rad"),
+        ("translation_segments", "d_coefficients_mm", "mm"),
+    ):
+        pieces = getattr(clamp, name)
+        if pieces and getattr(pieces[0], coefficients)[0] != 0:
+            # the sheet hangs from the clamp at rest: a motion that starts elsewhere would
+            # move the clamp there in one step
+            raise SceneError(
+                f"clamp.{name}[0].{coefficients}",
+                f"starts at {getattr(pieces[0], coefficients)[0]:g} {unit}; the clamp starts at rest where the "
+                "sheet hangs, so the first piece's c_0 must be 0 (the clamp cannot teleport)",
+            )
     for name in ("axis", "direction"):
         components = [getattr(clamp, f"{name}_{c}") for c in "xyz"]
         if not any(components):

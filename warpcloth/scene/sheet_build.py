@@ -41,6 +41,10 @@ from .sheet import AUTO, AUTO_FRACTION, SheetScene, SheetSection, sheet_scene_fr
 
 FAMILIES = {"warp": WARP, "weft": WEFT}
 
+ON_NODE = 0.01
+"""A marker given in mm must lie on a node to within this part of the spacing: the run
+records nodes, so a marker between them would be compared with a point it is not."""
+
 
 @dataclass
 class SheetBatch:
@@ -171,25 +175,30 @@ def marker_nodes(scene: SheetScene, geometry: SheetGeometry) -> list[int]:
                 "where the cut keeps cells)",
                 related=("sheet.cut", "sheet.spacing_warp_mm", "sheet.spacing_weft_mm"),
             ) from None
-    reach = 0.5 * max(geometry.spacing) * (1 + 1e-9)
+    reach = ON_NODE * min(geometry.spacing)
     for i, yz in enumerate(scene.output.markers_mm):
         k, distance = _nearest(geometry.rest_positions, yz)
         if distance > reach:
+            y, z = geometry.rest_positions[k, 1:] / units.LENGTH_MM
             raise SceneError(
                 f"output.markers_mm[{i}]",
-                f"[{yz[0]:g}, {yz[1]:g}] mm is not on the sheet: the nearest node is {distance * 1e3:.3g} mm "
-                f"away (more than half a spacing, {reach * 1e3:.3g} mm); the sheet hangs from y = 0 to "
-                f"-{scene.sheet.free_length_mm:g} mm, z within ±{scene.sheet.width_mm / 2:g} mm",
-                related=("sheet.free_length_mm", "sheet.width_mm"),
+                f"[{yz[0]:g}, {yz[1]:g}] mm is not on a node of the sheet: the nearest, [{y:.6g}, {z:.6g}] mm, is "
+                f"{distance * 1e3:.3g} mm away (more than {ON_NODE:.0%} of a spacing); a marker is a node, so "
+                f"give a node's position, or its lattice position in output.markers_ij (the sheet hangs from "
+                f"y = 0 to -{scene.sheet.free_length_mm:g} mm, z within ±{scene.sheet.width_mm / 2:g} mm)",
+                related=("sheet.free_length_mm", "sheet.width_mm", "sheet.spacing_warp_mm", "sheet.spacing_weft_mm"),
             )
         nodes.append(k)
     return nodes
 
 
 def probed_elements(scene: SheetScene, geometry: SheetGeometry) -> tuple[int, int]:
-    """(cell, hinge) probed: the free ones nearest ``output.probe_cell_mm`` and ``probe_hinge_mm``."""
+    """(cell, hinge) probed: the free ones nearest ``output.probe_cell_mm`` (a cell's
+    centre) and ``probe_hinge_mm`` (a hinge's node), each within half a cell's diagonal
+    (as far as a point of the sheet can be from both), else a SceneError naming the field
+    and the nearest one's position."""
     rest = geometry.rest_positions
-    cell, _ = _nearest(rest[geometry.cell_nodes].mean(axis=1), scene.output.probe_cell_mm)
+    reach = 0.5 * float(np.hypot(*geometry.spacing)) * (1 + 1e-9)
     family = FAMILIES[scene.output.probe_hinge_family]
     candidates = np.flatnonzero(geometry.hinge_family == family)
     if not len(candidates):
@@ -197,8 +206,33 @@ def probed_elements(scene: SheetScene, geometry: SheetGeometry) -> tuple[int, in
             "output.probe_hinge_family",
             f"the sheet has no free {scene.output.probe_hinge_family} hinge (a line needs three nodes)",
         )
-    k, _ = _nearest(rest[geometry.hinge_nodes[candidates, 1]], scene.output.probe_hinge_mm)
-    return cell, int(candidates[k])
+    found = []
+    for name, places, what in (
+        ("probe_cell_mm", rest[geometry.cell_nodes].mean(axis=1), "free cell's centre"),
+        ("probe_hinge_mm", rest[geometry.hinge_nodes[candidates, 1]], f"free {scene.output.probe_hinge_family} hinge"),
+    ):
+        yz = getattr(scene.output, name)
+        k, distance = _nearest(places, yz)
+        if distance > reach:
+            y, z = places[k, 1:] / units.LENGTH_MM
+            raise SceneError(
+                f"output.{name}",
+                f"[{yz[0]:g}, {yz[1]:g}] mm is {distance * 1e3:.3g} mm from the nearest {what}, "
+                f"[{y:.6g}, {z:.6g}] mm (more than half a cell's diagonal): give a position on the sheet, "
+                "[y, z] in mm from the middle of the clamp edge (elements wholly inside the clamp are not free)",
+                related=("output.probe_hinge_family",) if name == "probe_hinge_mm" else (),
+            )
+        found.append(k)
+    return found[0], int(candidates[found[1]])
+
+
+def sheet_state_bytes(geometry: SheetGeometry, reversal_memory: int) -> int:
+    """What one sheet's model and state hold, bytes: per node its rest and current
+    position, velocity and three force buffers (float64 3-vectors) and its area; per
+    hinge and per cell its law's memory and, for a law with return-point memory, its
+    reversal points (``reversal_memory`` + 1 pairs)."""
+    elements = len(geometry.hinge_nodes) + len(geometry.cell_nodes)
+    return 6 * 24 * geometry.n_nodes + 8 * geometry.n_nodes + elements * (24 + 16 * (reversal_memory + 1) + 48)
 
 
 def check_sheet_scene(scene: SheetScene) -> SheetScene:
@@ -212,7 +246,7 @@ def check_sheet_scene(scene: SheetScene) -> SheetScene:
     marker_nodes(scene, geometry)
     probed_elements(scene, geometry)
     check_memory(
-        (200 + 16 * scene.integrator.reversal_memory) * geometry.n_nodes,
+        sheet_state_bytes(geometry, scene.integrator.reversal_memory),
         f"the state of a sheet of {geometry.n_nodes} nodes",
         "use a coarser sheet.spacing_warp_mm / spacing_weft_mm",
     )

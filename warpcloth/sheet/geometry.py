@@ -15,6 +15,7 @@ y up, z across it, the origin at the middle of the clamp edge.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -227,27 +228,30 @@ def bias_strip(
     edge_hinge: str = "second_order",
 ) -> SheetGeometry:
     """A strip cut at 45° to warp and weft, hanging from its top edge: the lattice turned
-    45° in the sheet's plane, keeping every cell whose corners lie within the strip's
-    rectangle (``width`` across z, from ``free_length`` below the clamp edge to
-    ``clamp_length`` above it), so its sides are staircases of cells of diagonal
-    h√2. Nodes at or above the clamp edge are clamped."""
+    45° in the sheet's plane, a row of nodes on the clamp edge y = 0, keeping every cell
+    whose centre lies within the strip's rectangle (``width`` across z, from
+    ``free_length`` below the clamp edge to ``clamp_length`` above it), so its sides are
+    staircases of cells of diagonal h√2 whose area is the rectangle's to O(h). Nodes at
+    or above the clamp edge are clamped."""
     h = float(spacing)
     r = np.sqrt(0.5)
     warp_direction = np.array([0.0, -r, r])
     weft_direction = np.array([0.0, -r, -r])
     # node (i, j) at y = y0 − (i + j) h/√2, z = (i − j) h/√2: from a first node high enough
-    # above the clamp's top that the lattice spans its whole width there
-    top = clamp_length + width / 2 + h
-    n = int(np.ceil((top + free_length + width / 2) / (h * r))) + 2
+    # above the clamp's top that the lattice spans its whole width there, on a whole row so
+    # that a row of nodes lies on the clamp edge y = 0
+    row = h * r
+    top = math.ceil((clamp_length + width / 2 + h) / row) * row
+    n = int(np.ceil((top + free_length + width / 2) / row)) + 2
     origin = np.array([0.0, top, 0.0])
-    ii, jj = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-    corners = origin + ii[..., None] * h * warp_direction + jj[..., None] * h * weft_direction
-    inside = (
-        (np.abs(corners[..., 2]) <= width / 2 + 1e-9 * h)
-        & (corners[..., 1] <= clamp_length + 1e-9 * h)
-        & (corners[..., 1] >= -free_length - 1e-9 * h)
+    ii, jj = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
+    centres = origin + (ii[..., None] + 0.5) * h * warp_direction + (jj[..., None] + 0.5) * h * weft_direction
+    # a cell is kept where its centre lies within the rectangle: the staircase sides then
+    # keep the strip's area and width on average, where keeping only cells wholly inside
+    # would lose a cell's half-diagonal along each side
+    kept = (
+        (np.abs(centres[..., 2]) <= width / 2) & (centres[..., 1] <= clamp_length) & (centres[..., 1] >= -free_length)
     )
-    kept = inside[:-1, :-1] & inside[1:, :-1] & inside[:-1, 1:] & inside[1:, 1:]
     return grid_geometry(
         kept,
         (h, h),

@@ -267,7 +267,7 @@ def simulate_sheets(
         frames,
         reports,
         wall_time,
-        b * n * int(schedule.steps[plan.done - 1]),
+        n * int(state.struct.step.numpy().sum()),  # the steps each sheet ran, to its stop
         state.reversal_report(),
     )
     if sink is not None:

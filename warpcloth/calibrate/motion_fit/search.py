@@ -87,7 +87,7 @@ def fit_motion(
     fit.bounds = {p.field: (p.lower, p.upper) for p in free} | (
         {SHIFT: (-objective.align, objective.align)} if objective.align else {}
     )
-    fit.noise, fit.noise_source = judged_noise(measurement, noise)
+    fit.noise, fit.noise_source = judged_noise(measurement, noise, residual)
     fit.other_minima = other_minima
     if check_spacing and isinstance(objective, Objective):  # a sheet's was refused above
         fit.spacing_check = spacing_shift(objective, u, shift, jac, residual)
