@@ -8,6 +8,46 @@ import warp as wp
 wp.config.log_level = logging.WARNING
 
 
+def kernel_variants() -> dict:
+    """Every kernel the project can load, by ``[sheet.]name-precision[-scheme]``: each
+    (precision, scheme) of the strip's fused kernel, the hinge and law-path kernels, the
+    sheet's three (tests/test_cuda_build.py compiles them for CUDA)."""
+    from warpcloth.kernels import build_strip, hinge_kernels, laws, sheet
+
+    from warpcloth.sim import PRECISIONS, SOLVERS
+
+    def kernels(namespace: object) -> dict:
+        return {name: value for name, value in vars(namespace).items() if isinstance(value, wp.Kernel)}
+
+    out = {}
+    for precision, scalar in PRECISIONS.items():
+        for scheme in SOLVERS:
+            for name, kernel in kernels(build_strip(scalar, scheme)).items():
+                out[f"{name}-{precision}-{scheme}"] = kernel
+        for prefix, namespace in (
+            ("", hinge_kernels(scalar)),
+            ("", laws.build(scalar)),
+            ("sheet.", sheet.build(scalar)),
+        ):
+            for name, kernel in kernels(namespace).items():
+                out[f"{prefix}{name}-{precision}"] = kernel
+    return out
+
+
+def pytest_configure(config) -> None:
+    """Fill Warp's kernel cache once, in the process that starts the workers, before any
+    test runs: with a cold cache (a fresh clone in CI) every worker and every command a
+    test starts in a process of its own would otherwise compile the same kernels at the
+    same time (23 s of compiling, done many times over)."""
+    if hasattr(config, "workerinput"):  # a pytest-xdist worker: the controller has done it
+        return
+    from warpcloth.sim.model import init_warp_quietly
+
+    init_warp_quietly()
+    for kernel in kernel_variants().values():
+        wp.load_module(kernel.module, device="cpu")
+
+
 def overrides(**fields):
     """``section__field=value`` keyword arguments as ``--set`` strings."""
     out = []
