@@ -19,7 +19,6 @@ FLAGS = {
     "align_start_s": "--align-start",
     "angle_unit": "--angle-unit",
     "bounds": "--bounds",
-    "check_spacing": "--check-spacing",
     "clamp_edge_px": "--clamp-edge-px",
     "density_g_per_cm2": "--density-g-per-cm2",
     "device": "--device",

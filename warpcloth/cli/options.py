@@ -17,6 +17,7 @@ EXIT_FIT_STATUS = {
     "not_identifiable": 7,
     "failed": 8,
     "spacing_limited": 9,
+    "mesh_dependent": 10,
 }
 """Exit status of a fit by its verdict: only ``converged`` is 0; every other result is
 written (to look at) but must not be read as a fit."""

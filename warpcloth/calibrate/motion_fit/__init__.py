@@ -33,17 +33,25 @@ range of a bound: the optimum lies beyond, the value is not an estimate),
 data do not separate them), ``poor_fit`` (RMS above :data:`~warpcloth.calibrate.noise.POOR_FIT_FACTOR` × the
 measurement noise, given or estimated from the data by
 :func:`~warpcloth.calibrate.noise.difference_noise`: the rule every fit shares,
-:func:`~warpcloth.calibrate.noise.poor_fit_ratio`), ``spacing_limited`` (with
-``check_spacing``: the fit at half the spacing would move a parameter by more than its σ,
-:func:`spacing_shift`), else ``converged``.
+:func:`~warpcloth.calibrate.noise.poor_fit_ratio`), ``mesh_dependent`` (a law without
+return-point memory: its answers do not converge in h, so the values are the mesh's),
+``spacing_limited`` (no continuum estimate the evidence supports, or none asked for), else
+``converged``.
+
+**The continuum limit** (:mod:`.continuum`, on by default): the best point is run at 2h
+and h/2, the observed order checked against the law's, the residual extrapolated to
+h → 0 by Richardson and the parameters moved to it by Gauss–Newton steps; every σ is
+σ_total, with σ_noise and σ_mesh each reported, and the values at the scene's spacing kept
+beside them.
 
 The pieces: :mod:`.parameters` (the free parameters, their aliases and bounds),
 :mod:`.objective` (the residuals of a batch), :mod:`.lm` (the search's algorithm),
-:mod:`.search` (:func:`fit_motion`), :mod:`.verdict` (statuses, bounds, identifiability,
-the spacing check) and :mod:`.report` (:class:`FitResult`, :func:`write_fit`). Every
+:mod:`.search` (:func:`fit_motion`), :mod:`.continuum` (the limit h → 0), :mod:`.verdict`
+(statuses, bounds, identifiability) and :mod:`.report` (:class:`FitResult`, :func:`write_fit`). Every
 public name is importable from here.
 """
 
+from .continuum import ContinuumEstimate, continuum_limit
 from .lm import MAX_LAMBDA, STENCIL_STEP
 from .objective import MAX_STEP_CORNERS_FREE, SHIFT, Objective
 from .parameters import ALIASES, HYSTERESIS_AMPLITUDES, REST_CURVATURE_SPAN, FreeParameter, free_parameters
@@ -57,7 +65,6 @@ from .verdict import (
     identifiability,
     measurement_noise,
     mesh_note,
-    spacing_shift,
     weighted_jacobian,
 )
 
@@ -75,16 +82,17 @@ __all__ = [
     "SHIFT",
     "STATUSES",
     "STENCIL_STEP",
+    "ContinuumEstimate",
     "FitResult",
     "FreeParameter",
     "Identifiability",
     "Objective",
     "fit_motion",
+    "continuum_limit",
     "free_parameters",
     "identifiability",
     "measurement_noise",
     "mesh_note",
-    "spacing_shift",
     "summarise",
     "weighted_jacobian",
     "write_fit",

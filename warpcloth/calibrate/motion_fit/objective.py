@@ -6,14 +6,16 @@ from __future__ import annotations
 
 import copy
 import itertools
+import math
 from typing import Any
 
 import numpy as np
 
 from warpcloth.errors import ArgumentError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
+from warpcloth.kernels import bending_law
 from warpcloth.runs import simulate
-from warpcloth.scene import scene_from_dict, set_field
+from warpcloth.scene import Scene, scene_from_dict, set_field
 from warpcloth.scene.step import AUTO, choose_step
 from warpcloth.sim import RunResult
 
@@ -102,6 +104,49 @@ class FitObjective:
         """The step that suits every corner scene (raw data) of the box."""
         raise NotImplementedError
 
+    spacing_fields: tuple[str, ...] = ()
+    """The scene fields that set the mesh's spacing (mm), refined together."""
+
+    def scene_of(self, data: dict) -> Any:
+        """The scene (checked, ready to run) of raw scene data."""
+        raise NotImplementedError
+
+    def spacing_of(self, name: str) -> float:
+        """The value (mm) of the spacing field ``name`` in the scene the runs see."""
+        section, _, key = name.partition(".")
+        return float(getattr(getattr(self.scene, section), key))
+
+    @property
+    def spacing_mm(self) -> float:
+        """The mesh's spacing (mm; a sheet's along its warp)."""
+        return self.spacing_of(self.spacing_fields[0])
+
+    def continuum_order(self) -> float | None:
+        """The order in h at which the scene's runs converge (None where a law has no
+        continuum limit: its answers depend on the mesh)."""
+        raise NotImplementedError
+
+    def refined(self, factor: float) -> FitObjective:
+        """The same objective on a mesh ``factor`` × as fine in spacing (``factor`` 0.5
+        halves h), its step refined with it: where ``dt_s = "auto"`` chose the step, the
+        step auto chooses over the box at the new spacing; a fixed step × ``factor``, never
+        above that (imex's bending bound shrinks as h²), a whole fraction of the probe
+        interval."""
+        data = copy.deepcopy(self.base)
+        for name in self.spacing_fields:
+            set_field(data, name, self.spacing_of(name) * factor)
+        fixed = self.scene.integrator.dt_chosen_by != AUTO
+        set_field(data, "integrator.dt_s", AUTO)
+        set_field(data, "integrator.dt_chosen_by", "scene")
+        other = type(self)(data, self.measurement, self.free, self.align, self.device)
+        if fixed:
+            interval = other.scene.output_interval
+            dt = min(self.scene.integrator.dt_s * factor, other.scene.integrator.dt_s)
+            set_field(other.base, "integrator.dt_s", interval / math.ceil(interval / dt * (1 - 1e-12)))
+            set_field(other.base, "integrator.dt_chosen_by", "scene")
+            other.scene = other.scene_of(copy.deepcopy(other.base))
+        return other
+
     def run(self, points: np.ndarray) -> Any:
         """Simulate every point (rows) in one batch."""
         raise NotImplementedError
@@ -185,6 +230,19 @@ class Objective(FitObjective):
         self.shift_step = 0.5 * self.scene.output_interval
         self.launches = 0
         self.variants = 0
+
+    spacing_fields = ("strip.spacing_mm",)
+
+    def scene_of(self, data: dict) -> Scene:
+        """The strip scene of raw scene data."""
+        return scene_from_dict(data)
+
+    def continuum_order(self) -> float | None:
+        """2 (the paper's clamp edge: 1, docs/model.md §5.3); None under a law without
+        return-point memory, whose answers do not converge in h (§15.6)."""
+        if not bending_law(self.scene.material.bending_law).mesh_independent:
+            return None
+        return 1.0 if self.scene.clamp.edge_hinge == "paper" else 2.0
 
     def corner_step(self, corners: list[dict]) -> float:
         """The step that suits every corner scene of the box (the strip's own choice)."""

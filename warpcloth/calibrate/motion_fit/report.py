@@ -17,9 +17,10 @@ from warpcloth.scene.sheet import sheet_scene_from_dict
 from warpcloth.scene.step import AUTO
 
 from . import lm
+from .continuum import ContinuumEstimate
 from .objective import SHIFT, FitObjective
 from .sheet import make_objective
-from .verdict import judge
+from .verdict import ended_at_bound, judge
 
 
 @dataclass
@@ -47,8 +48,37 @@ class FitResult:
     status: str = "failed"
     problems: list[str] = field(default_factory=list)  # why the status is not "converged"
     mesh_note: str = ""  # why the values hold at the fitted spacing only (a law whose answers depend on h)
-    spacing_check: dict = field(default_factory=dict)  # check_spacing: the fit's move at h/2 (:func:`spacing_shift`)
-    dt_s: float = float("nan")  # the step every run of the fit took (one per batch)
+    continuum: dict = field(default_factory=dict)  # the extrapolation's evidence (:mod:`.continuum`); {} if none
+    at_spacing: dict[str, float] = field(default_factory=dict)  # the values fitted at the scene's spacing
+    sigma_noise: dict[str, float] = field(default_factory=dict)  # the measurement noise's share of σ
+    sigma_mesh: dict[str, float] = field(default_factory=dict)  # the discretisation's share of σ
+    rms_at_spacing: float = float("nan")  # the RMS at the scene's spacing
+    spacing: dict[str, float] = field(default_factory=dict)  # the mesh best.toml reruns the values on (mm)
+    dt_s: float = float("nan")  # the step best.toml reruns the values with (each level's: ``continuum``)
+
+    def apply_continuum(self, estimate: ContinuumEstimate, objective: FitObjective) -> None:
+        """Report ``estimate`` (:func:`~.continuum.continuum_limit`): the values at h → 0,
+        σ_total² = σ_noise² + σ_mesh², the RMS of the extrapolated residual, the bounds
+        judged there; best.toml reruns them on the finest level's mesh. An unresolved
+        estimate keeps the values at the scene's spacing (the verdict says why)."""
+        self.continuum = estimate.to_json(objective.names) | {
+            "fitted_at_mm": {name: objective.spacing_of(name) for name in objective.spacing_fields}
+        }
+        self.at_spacing = dict(self.parameters)
+        self.sigma_noise = dict(self.sigma)
+        self.rms_at_spacing = self.rms
+        if estimate.q is None or estimate.sigma_mesh is None or estimate.finest is None:
+            return
+        q, mesh = estimate.q, estimate.sigma_mesh
+        d = len(objective.free)
+        self.shift_s = objective.shift_of(q)
+        self.parameters = objective.values(q[:d]) | ({SHIFT: self.shift_s} if objective.align else {})
+        self.sigma_mesh = dict(zip(objective.names, mesh.tolist(), strict=True))
+        self.sigma = {name: math.hypot(self.sigma_noise[name], self.sigma_mesh[name]) for name in self.parameters}
+        self.rms = float(np.sqrt(np.mean(estimate.residual**2)))
+        self.at_bound = ended_at_bound(objective.free, q[:d])
+        self.spacing = {name: estimate.finest.spacing_of(name) for name in objective.spacing_fields}
+        self.dt_s = float(estimate.finest.scene.integrator.dt_s)
 
     def to_json(self) -> dict:
         """The verdict, each parameter with its 1σ and bounds, and how the search went;
@@ -57,14 +87,18 @@ class FitResult:
             "status": self.status,
             "problems": self.problems,
             "mesh_note": self.mesh_note,
-            "spacing_check": self.spacing_check,
+            "continuum": self.continuum,
             "rms_mm": self.rms * 1e3,
+            "rms_at_spacing_mm": self.rms_at_spacing * 1e3,
             "noise_mm": self.noise * 1e3,
             "noise_source": self.noise_source,
             "parameters": {
                 name: {
                     "value": value,
                     "sigma": self.sigma[name],
+                    "sigma_noise": self.sigma_noise.get(name, self.sigma[name]),
+                    "sigma_mesh": self.sigma_mesh.get(name),
+                    "at_spacing": self.at_spacing.get(name, value),
                     "at_bound": name in self.at_bound,
                     "bounds": list(self.bounds.get(name, ())),
                 }
@@ -80,6 +114,8 @@ class FitResult:
             "variants": self.variants,
             "wall_time_s": self.wall_time_s,
             "history": self.history,
+            "spacing_mm": self.spacing,
+            "dt_s": self.dt_s,
         }
 
     def judge(self, missing: int) -> None:
@@ -145,9 +181,12 @@ def write_fit(
     for name, value in fit.parameters.items():
         if name != SHIFT:
             set_field(best, name, value)
-    if best.get("integrator", {}).get("dt_s") == AUTO and math.isfinite(fit.dt_s):
-        set_field(best, "integrator.dt_s", fit.dt_s)  # the box's step, which the RMS was measured at
-        set_field(best, "integrator.dt_chosen_by", AUTO)
+    for name, value in fit.spacing.items():  # the finest level's mesh, where the continuum values belong
+        set_field(best, name, value)
+    if math.isfinite(fit.dt_s):
+        chosen_by = best.get("integrator", {}).get("dt_s") == AUTO
+        set_field(best, "integrator.dt_s", fit.dt_s)  # the step the RMS was measured at
+        set_field(best, "integrator.dt_chosen_by", AUTO if chosen_by else "scene")
     scene = (sheet_scene_from_dict if isinstance(measurement, SheetMarkers) else scene_from_dict)(copy.deepcopy(best))
     objective = make_objective(best, measurement, [], abs(fit.shift_s), device)
     result = objective.run(np.zeros((1, 0)))

@@ -18,11 +18,12 @@ from warpcloth.sim.resources import check_memory
 
 from ..bootstrap import block_bootstrap_sigma
 from . import lm
-from .objective import SHIFT, FitObjective, Objective
+from .continuum import continuum_limit
+from .objective import SHIFT, FitObjective
 from .parameters import FreeParameter, initial_point
 from .report import FitResult, summarise
 from .sheet import make_objective, sheet_mesh_note
-from .verdict import ended_at_bound, judged_noise, mesh_note, spacing_shift
+from .verdict import ended_at_bound, judged_noise, mesh_note
 
 MAX_SPACE_FILLING = 10_000
 
@@ -40,20 +41,18 @@ def fit_motion(
     progress: bool = True,
     noise: float | None = None,
     bootstrap: int = 0,
-    check_spacing: bool = False,
+    continuum: bool = True,
 ) -> FitResult:
     """Fit ``free`` parameters of raw scene ``base`` to ``measurement`` (see the module doc).
 
     ``noise`` is the measurement's σ (m) the RMS is judged against; by default it is
     estimated from the measurement (:func:`measurement_noise`). ``bootstrap`` > 0 adds a
     moving-block bootstrap σ from that many resamples (:mod:`.bootstrap`).
-    ``check_spacing`` runs the best point once more at half the spacing and reports how
-    far that would move each parameter (:func:`spacing_shift`); a move beyond its σ makes
-    the status ``spacing_limited``."""
+    ``continuum`` (the default) reports the values extrapolated to h → 0 with the mesh's
+    share in σ (:mod:`.continuum`); ``False`` reports them at the scene's spacing, where
+    the mesh's error is unknown, so the status is at best ``spacing_limited``."""
     started = time.perf_counter()
     sheet = isinstance(measurement, SheetMarkers)
-    if sheet and check_spacing:
-        raise ArgumentError("check_spacing", "is not available for a sheet yet (it refines a strip's spacing)")
     objective = make_objective(base, measurement, free, align_start_s, device)
     rng = np.random.default_rng(seed)
     n0 = space_filling or max(16, 8 * len(free))
@@ -89,12 +88,20 @@ def fit_motion(
     )
     fit.noise, fit.noise_source = judged_noise(measurement, noise, residual)
     fit.other_minima = other_minima
-    if check_spacing and isinstance(objective, Objective):  # a sheet's was refused above
-        fit.spacing_check = spacing_shift(objective, u, shift, jac, residual)
-    # result row 0 is the reported point (accepted last, or re-run above)
-    fit.judge(int(np.isnan(objective.residuals(result, 0, shift, penalise=False)).sum()))
     fit.mesh_note = sheet_mesh_note(base) if sheet else mesh_note(base)
     fit.dt_s = objective.scene.integrator.dt_s
+    fit.spacing = {name: objective.spacing_of(name) for name in objective.spacing_fields}
+    # result row 0 is the reported point (accepted last, or re-run above)
+    missing = int(np.isnan(objective.residuals(result, 0, shift, penalise=False)).sum())
+    order = objective.continuum_order()
+    if continuum and order is not None and not missing:
+        q = np.append(u, shift) if objective.align else u.copy()
+        noise_sigma = np.array([fit.sigma[name] for name in objective.names])
+        fit.apply_continuum(continuum_limit(objective, q, jac, residual, noise_sigma, order), objective)
+    elif not continuum:
+        fit.continuum = {"status": "not requested"}
+    fit.wall_time_s = time.perf_counter() - started
+    fit.judge(missing)
     return fit
 
 

@@ -144,7 +144,7 @@ class SheetObjective(FitObjective):
         self.align = float(align_start_s)
         self.device = device
         self.base = copy.deepcopy(base)
-        scene = check_sheet_scene(sheet_scene_from_dict(copy.deepcopy(self.base)))
+        scene = self.scene_of(copy.deepcopy(self.base))
         span = float(measurement.t[-1] - measurement.t[0])
         if self.align > span:
             raise ArgumentError("align_start_s", f"{self.align:g} s is longer than the measured record ({span:g} s)")
@@ -156,7 +156,7 @@ class SheetObjective(FitObjective):
             )
         set_field(self.base, "run.duration_s", float(measurement.t[-1]) + self.align + scene.output_interval)
         self._choose_step()
-        self.scene = check_sheet_scene(sheet_scene_from_dict(copy.deepcopy(self.base)))
+        self.scene = self.scene_of(copy.deepcopy(self.base))
         tracked = len(marker_nodes(self.scene, sheet_geometry(self.scene)))
         beyond = measurement.marker >= tracked
         if beyond.any():
@@ -169,16 +169,23 @@ class SheetObjective(FitObjective):
         self.launches = 0
         self.variants = 0
 
-    def _scene(self, data: dict) -> SheetScene:
+    spacing_fields = ("sheet.spacing_warp_mm", "sheet.spacing_weft_mm")
+
+    def scene_of(self, data: dict) -> SheetScene:
+        """The sheet scene of raw scene data, checked (markers, memory, step)."""
         return check_sheet_scene(sheet_scene_from_dict(data))
+
+    def continuum_order(self) -> float | None:
+        """2 (docs/model.md §17.7); None when a bending or shear law has no continuum limit."""
+        return None if sheet_mesh_note(self.base) else 2.0
 
     def corner_step(self, corners: list[dict]) -> float:
         """The shortest step any corner sheet chooses (``dt_s = "auto"``, :func:`check_sheet_scene`)."""
-        return min(self._scene(data).integrator.dt_s for data in corners)
+        return min(self.scene_of(data).integrator.dt_s for data in corners)
 
     def run(self, points: np.ndarray) -> SheetResult:
         """Simulate every point (rows) as one batch of sheets."""
-        scenes = [self._scene(self.scene_data(u)) for u in points]
+        scenes = [self.scene_of(self.scene_data(u)) for u in points]
         self.launches += 1
         self.variants += len(points)
         batch = build_sheets(scenes, self.device)

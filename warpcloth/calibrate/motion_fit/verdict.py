@@ -1,6 +1,6 @@
 """What a motion fit's result may be read as: its status (:data:`STATUSES`), the
 parameters that ended on a bound, the noise its RMS is judged against, whether the strip's
-spacing limits it (:func:`spacing_shift`), and, before any fit, what experiments can
+spacing limits it (:mod:`.continuum`), and, before any fit, what experiments can
 determine at all (:func:`weighted_jacobian`, :func:`identifiability`)."""
 
 from __future__ import annotations
@@ -14,8 +14,7 @@ import numpy as np
 
 from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.kernels import bending_law
-from warpcloth.scene import scene_from_dict, set_field
-from warpcloth.scene.step import AUTO, stable_step_of
+from warpcloth.scene import scene_from_dict
 
 from ..noise import difference_noise, poor_fit_ratio
 from . import lm
@@ -25,7 +24,7 @@ from .parameters import FreeParameter, free_parameters, initial_point
 if TYPE_CHECKING:
     from .report import FitResult
 
-STATUSES = ("converged", "spacing_limited", "at_bound", "poor_fit", "not_identifiable", "failed")
+STATUSES = ("converged", "spacing_limited", "mesh_dependent", "at_bound", "poor_fit", "not_identifiable", "failed")
 """Verdicts of a fit, from the only one that is a fit to the worst (see the package docstring)."""
 AT_BOUND = 1e-3  # a parameter this close to a bound, as a fraction of its range, ended on it
 NOT_IDENTIFIABLE_CORRELATION = 0.95
@@ -112,23 +111,28 @@ def judge(fit: FitResult, missing: int) -> tuple[str, list[str]]:
                 "model with these free parameters does not explain the data",
             )
         )
-    if fit.spacing_check.get("note"):
-        found.append(("failed", f"--check-spacing could not check the spacing: {fit.spacing_check['note']}"))
-    moved = fit.spacing_check.get("moves", {})
-    for name, delta in moved.items():
-        if abs(delta) > fit.sigma.get(name, math.inf):
-            found.append(
-                (
-                    "spacing_limited",
-                    f"refining the strip to strip.spacing_mm = "
-                    f"{fit.spacing_check['spacing_mm']:g} moves {name} by {delta:+.4g} "
-                    f"({abs(delta) / fit.sigma[name]:.1f}σ): the mesh, not the data, "
-                    "limits it; fit at a finer strip.spacing_mm",
-                )
-            )
+    if fit.mesh_note:
+        found.append(("mesh_dependent", f"{fit.mesh_note}; these are not fabric properties"))
+    else:
+        found += [("spacing_limited", problem) for problem in continuum_problems(fit.continuum)]
     if not fit.converged:
         found.append(("failed", "the search stopped at its iteration limit before converging (raise --max-iterations)"))
     return found[0][0] if found else "converged", [message for _, message in found]
+
+
+def continuum_problems(continuum: dict) -> list[str]:
+    """Why a fit's values are not its continuum limit (fit.json's ``continuum``,
+    :mod:`.continuum`); [] when they are."""
+    if continuum.get("status") == "extrapolated":
+        return []
+    if continuum.get("status") == "not requested":
+        return [
+            "the values are the fit at the scene's spacing, whose error nobody estimated (continuum "
+            "estimate not requested); they are the mesh's as much as the fabric's"
+        ]
+    if not continuum:
+        return ["the continuum estimate could not run: the fit at the scene's spacing misses measured points"]
+    return [f"no continuum estimate: {continuum['note']}; the values are the fit at the scene's spacing"]
 
 
 def measurement_noise(measurement: LaserTrace | TrackedShapes | SheetMarkers) -> float:
@@ -148,41 +152,6 @@ def measurement_noise(measurement: LaserTrace | TrackedShapes | SheetMarkers) ->
     starts = np.flatnonzero(np.r_[True, np.diff(s) != 0, True])
     pieces = [slice(a, b) for a, b in zip(starts[:-1], starts[1:], strict=True)]
     return difference_noise([measurement.x[order][p] for p in pieces] + [measurement.y[order][p] for p in pieces])
-
-
-def spacing_shift(objective: Objective, u: np.ndarray, shift: float, jac: np.ndarray, residual: np.ndarray) -> dict:
-    """How far the fit at point ``u`` would move at half the strip's spacing: the best point
-    run once more at h/2 (dt halved, or chosen again where ``dt_s = "auto"`` chose it) and
-    the Gauss–Newton step its residuals ask for, −J⁺(r_{h/2} − r_h) with the fit's own
-    Jacobian J (``jac``, unit-box coordinates) and residuals r_h (``residual``). Returns
-    ``{"spacing_mm": h/2, "moves": {field: Δ}}`` (Δ in the field's units); a move larger
-    than the parameter's σ means the spacing, not the measurement, limits it (docs/
-    calibration.md). A law that converges at second order moves a third as far again
-    from h/2 to the continuum."""
-    fine = copy.deepcopy(objective.base)
-    for name, value in objective.values(u).items():
-        set_field(fine, name, value)
-    scene = scene_from_dict(copy.deepcopy(fine))
-    set_field(fine, "strip.spacing_mm", scene.strip.spacing_mm / 2)
-    if scene.integrator.dt_chosen_by == AUTO:
-        set_field(fine, "integrator.dt_s", AUTO)
-        set_field(fine, "integrator.dt_chosen_by", "scene")
-    else:  # dt/2, or shorter where the bound at h/2 asks (imex's bending bound shrinks as h²)
-        stable = stable_step_of(scene_from_dict(copy.deepcopy(fine), choose_step=False))
-        dt = scene.integrator.dt_s / 2
-        if stable is not None and dt > stable:
-            dt = scene.output_interval / math.ceil(scene.output_interval / stable)
-        set_field(fine, "integrator.dt_s", dt)
-    refined = Objective(fine, objective.measurement, [], objective.align, objective.device)
-    fine_residual = refined.residuals(refined.run(np.zeros((1, 0))), 0, shift, penalise=False)
-    if not np.all(np.isfinite(fine_residual)):
-        return {
-            "spacing_mm": scene.strip.spacing_mm / 2,
-            "moves": {},
-            "note": "the run at half the spacing misses measured points (the laser line, or it diverged)",
-        }
-    step = -np.linalg.lstsq(jac, fine_residual - residual, rcond=None)[0] * objective.ranges
-    return {"spacing_mm": scene.strip.spacing_mm / 2, "moves": dict(zip(objective.names, step.tolist(), strict=True))}
 
 
 def mesh_note(base: dict) -> str:
