@@ -1,26 +1,33 @@
 """Generate the bundled example measurements for ``warpcloth fit`` and ``warpcloth clamp fit-angle``.
 
-    python scenes/data/make_motion_examples.py
+    python scenes/data/make_motion_examples.py      # about 4 minutes on one core
 
 They are synthetic: the paper's measured curves are not in its text, so each file is a
-warpcloth run of a bundled scene with *known* parameters, sampled as the instrument
-would, plus seeded Gaussian noise of a stated size. The runs use the scenes' default edge
-model (``clamp.edge_hinge = "second_order"``). A fit of these files should return
-the parameters below within its reported uncertainty.
+warpcloth run with *known* parameters, sampled as the instrument would, plus seeded
+Gaussian noise of a stated size. A lab record is of the continuum, not of a mesh, so each
+motion is run on a mesh far finer than any a fit uses (the strips at h = 0.625 mm, 4× to
+8× finer than the scenes' 2.5 and 5 mm; the sheet at 1.25 mm, 8× finer than the 10 mm its
+guide fit uses), and the script runs each at half that spacing too and writes the largest
+difference into the file's header: each is a small fraction of the noise (the evidence
+that the record is the continuum's to within its noise). A fit of these files at the
+scenes' spacings must find the truth within its σ_total only because it extrapolates to
+h → 0 (warpcloth.calibrate.motion_fit.continuum); a fit at the scene's spacing alone is
+several σ off (docs/calibration.md, "The node spacing").
 
-- ``damped_swing_laser.csv``: the bundled damped swing with γ = 0.55 /s and
-  D1 = 0.025 gf·cm/cm; laser-line displacement sampled at 300 Hz for
-  1.5 s; noise σ = 0.2 mm.
-- ``impulsive_rotation_shapes.csv``: the impulsive rotation (0.3 s) with the rotation
-  centre 4.0 mm above the clamp's lowest point and γ = 0.8 /s; 11 markers every 10 mm
-  along the strip tracked at 60 frames/s; noise σ = 0.3 mm per coordinate; the camera
-  clock starts 4 ms after the clamp (so ``--align-start`` has something to find).
+- ``damped_swing_laser.csv``: the bundled damped swing (masing) with γ = 0.55 /s and
+  D1 = 0.025 gf·cm/cm; laser-line displacement sampled at 300 Hz for 1.5 s; noise
+  σ = 0.2 mm.
+- ``impulsive_rotation_shapes.csv``: the impulsive rotation (0.3 s, masing) with the
+  rotation centre 4.0 mm above the clamp's lowest point and γ = 0.8 /s; 11 markers every
+  10 mm along the strip tracked at 60 frames/s; noise σ = 0.3 mm per coordinate; the
+  camera clock starts 4 ms after the clamp (so ``--align-start`` has something to find).
 - ``impulsive_rotation_encoder.csv``: the bundled scene's θ(t) (at rest until t = 0,
   3.2e4 t⁴ to 0.05 s, then 16 rad/s to 0.12 s, then held) sampled at 1 kHz from −0.03 s
-  to 0.2 s, in degrees, the encoder reading 0.25° at rest; noise σ = 0.1°.
-- ``shear_swing_markers.csv``: the bundled sheet's shear swing at a 10 mm spacing for
-  0.3 s, with the shear rigidity G = 1.2 gf/(cm·°) (the material file says 0.8); its four markers as a camera facing
-  the sheet sees them (z and y) at 120 frames/s; noise σ = 0.02 mm per coordinate
+  to 0.2 s, in degrees, the encoder reading 0.25° at rest; noise σ = 0.1° (no mesh: the
+  clamp's own motion).
+- ``shear_swing_markers.csv``: the bundled sheet's shear swing for 0.3 s with the shear
+  rigidity G = 1.2 gf/(cm·°) (the material file says 0.8); its four markers as a camera
+  facing the sheet sees them (z and y) at 120 frames/s; noise σ = 0.02 mm per coordinate
   (its own seed, so the strip files above stay as they were).
 """
 
@@ -40,8 +47,14 @@ HERE = Path(__file__).parent
 SWING_TRUTH = {"damping.gamma_per_s": 0.55, "material.hysteresis_d1_gf_cm_per_cm": 0.025}
 ROTATION_TRUTH = {"clamp.rotation_centre_dy_mm": 4.0, "damping.gamma_per_s": 0.8}
 SHEET_FIT = {"sheet.spacing_warp_mm": 10.0, "sheet.spacing_weft_mm": 10.0, "run.duration_s": 0.3}
-"""The shear swing's resolution for its example (and for the fit of it the guide runs)."""
+"""The shear swing's resolution for the fit of its example the guide runs."""
 SHEET_TRUTH = {"shear.rigidity_gf_per_cm_deg": 1.2}
+STRIP_RECORD_MM = 0.625
+"""The strips' records' spacing (h = 0.3125 mm moves them by the headers' amounts)."""
+SHEET_RECORD_MM = 1.25
+"""The sheet's record's spacing (h = 2.5 mm differs from it by the header's amount)."""
+FINE = {"integrator.scheme": "imex", "integrator.dt_s": "auto"}
+"""imex at auto's step, within 0.07 % of the converged solution (docs/model.md §9.6)."""
 
 
 def scene_with(name: str, fields: dict) -> wc.Scene:
@@ -52,31 +65,54 @@ def scene_with(name: str, fields: dict) -> wc.Scene:
     return wc.scene_from_dict(copy.deepcopy(data))
 
 
+def provenance(truth: dict, spacing: str, h: float, moved_mm: float, noise_mm: float) -> str:
+    """The header line saying what made a record and how converged its mesh is."""
+    return (
+        f"# synthetic: {truth}; run at {spacing} = {h:g} mm (masing, imex at auto's step), which "
+        f"{spacing} = {h / 2:g} mm moves by at most {moved_mm:.2g} mm ({moved_mm / noise_mm:.2g} of the "
+        f"noise); noise {noise_mm:g} mm (scenes/data/make_motion_examples.py)"
+    )
+
+
+def laser_signal(h: float) -> tuple[np.ndarray, np.ndarray]:
+    """The damped swing's laser-line displacement (mm) at 300 Hz, run at spacing ``h`` mm."""
+    scene = scene_with("damped_swing", SWING_TRUTH | FINE | {"run.duration_s": 1.5, "strip.spacing_mm": h})
+    result = wc.simulate(scene)
+    return result.t[::2], result.probe("laser_x", 0)[::2] * 1e3
+
+
 def laser_trace(rng: np.random.Generator) -> str:
     """The damped swing's laser-line displacement, 300 Hz, σ = 0.2 mm."""
-    scene = scene_with("damped_swing", SWING_TRUTH | {"run.duration_s": 1.5})
-    result = wc.simulate(scene)
-    t, x = result.t[::2], result.probe("laser_x", 0)[::2] * 1e3 + rng.normal(0, 0.2, len(result.t[::2]))
+    t, x = laser_signal(STRIP_RECORD_MM)
+    moved = float(np.max(np.abs(laser_signal(STRIP_RECORD_MM / 2)[1] - x)))
+    x = x + rng.normal(0, 0.2, len(t))
     rows = "\n".join(f"{ti:.6f},{xi:.4f}" for ti, xi in zip(t, x, strict=True))
-    return f"# synthetic: {SWING_TRUTH}, noise 0.2 mm (scenes/data/make_motion_examples.py)\nt_s,x_mm\n{rows}\n"
+    header = provenance(SWING_TRUTH, "strip.spacing_mm", STRIP_RECORD_MM, moved, 0.2)
+    return f"{header}\nt_s,x_mm\n{rows}\n"
+
+
+def marker_paths(h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Frame times and markers every 10 mm, s = 0 … 100 mm ([frame, marker, xy], mm) of the
+    rotation run at spacing ``h`` mm (a divisor of 10)."""
+    scene = scene_with("impulsive_rotation", ROTATION_TRUTH | FINE | {"run.duration_s": 0.3, "strip.spacing_mm": h})
+    result = wc.simulate(scene)
+    nodes = [scene.n_clamped - 1 + round(s_mm / h) for s_mm in range(0, 101, 10)]
+    return result.frame_times, result.frames[:, 0, nodes] * 1e3
 
 
 def tracked_shapes(rng: np.random.Generator) -> str:
     """Markers every 10 mm on the rotating strip at 60 frames/s, σ = 0.3 mm, clock 4 ms late."""
-    scene = scene_with("impulsive_rotation", ROTATION_TRUTH | {"run.duration_s": 0.3})
-    result = wc.simulate(scene)
-    nc, h = scene.n_clamped, scene.strip.spacing_mm
+    times, paths = marker_paths(STRIP_RECORD_MM)
+    moved = float(np.max(np.abs(marker_paths(STRIP_RECORD_MM / 2)[1] - paths)))
     rows = []
-    for f, t in enumerate(result.frame_times):
+    for f, t in enumerate(times):
         if t < 0.004:
             continue
-        for s_mm in range(0, 101, 10):
-            x, y = result.frames[f, 0, nc - 1 + round(s_mm / h)] * 1e3 + rng.normal(0, 0.3, 2)
+        for k, s_mm in enumerate(range(0, 101, 10)):
+            x, y = paths[f, k] + rng.normal(0, 0.3, 2)
             rows.append(f"{f},{t - 0.004:.6f},{s_mm},{x:.4f},{y:.4f}")
-    return (
-        f"# synthetic: {ROTATION_TRUTH}, noise 0.3 mm, camera clock 4 ms late "
-        "(scenes/data/make_motion_examples.py)\nframe,t_s,s_mm,x_mm,y_mm\n" + "\n".join(rows) + "\n"
-    )
+    header = provenance(ROTATION_TRUTH, "strip.spacing_mm", STRIP_RECORD_MM, moved, 0.3)
+    return f"{header}, camera clock 4 ms late\nframe,t_s,s_mm,x_mm,y_mm\n" + "\n".join(rows) + "\n"
 
 
 def encoder(rng: np.random.Generator) -> str:
@@ -93,21 +129,32 @@ def encoder(rng: np.random.Generator) -> str:
     )
 
 
-def sheet_markers(rng: np.random.Generator) -> str:
-    """The shear swing's four markers, z and y, at 120 frames/s, σ = 0.02 mm."""
+def sheet_paths(h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Times and the shear swing's markers' (y, z) at 120 frames/s ([sample, marker, yz],
+    mm), the sheet run at spacing ``h`` mm along warp and weft."""
     from warpcloth.runs import simulate_sheet
     from warpcloth.scene.sheet_build import load_sheet_scene
 
-    result = simulate_sheet(load_sheet_scene("shear_swing", SHEET_FIT | SHEET_TRUTH))
+    fields = SHEET_TRUTH | {"run.duration_s": 0.3, "sheet.spacing_warp_mm": h, "sheet.spacing_weft_mm": h}
+    result = simulate_sheet(load_sheet_scene("shear_swing", fields))
+    return result.t[::5], result.markers[::5, 0, :, 1:] * 1e3
+
+
+def sheet_markers(rng: np.random.Generator) -> str:
+    """The shear swing's four markers, z and y, at 120 frames/s, σ = 0.02 mm."""
+    times, paths = sheet_paths(SHEET_RECORD_MM)
+    moved = float(np.max(np.abs(sheet_paths(2 * SHEET_RECORD_MM)[1] - paths)))
     rows = []
-    for k in range(0, len(result.t), 5):
-        for marker, (_x, y, z) in enumerate(result.markers[k, 0] * 1e3):
+    for t, sample in zip(times, paths, strict=True):
+        for marker, (y, z) in enumerate(sample):
             z, y = np.array([z, y]) + rng.normal(0, 0.02, 2)
-            rows.append(f"{result.t[k]:.6f},{marker},{z:.5f},{y:.5f}")
-    return (
-        f"# synthetic: the shear swing with {SHEET_FIT | SHEET_TRUTH}, noise 0.02 mm "
-        "(scenes/data/make_motion_examples.py)\nt_s,marker,z_mm,y_mm\n" + "\n".join(rows) + "\n"
+            rows.append(f"{t:.6f},{marker},{z:.5f},{y:.5f}")
+    header = (
+        f"# synthetic: the shear swing (masing) with {SHEET_TRUTH | {'run.duration_s': 0.3}}; run at sheet spacing "
+        f"{SHEET_RECORD_MM:g} mm (auto's step), from which {2 * SHEET_RECORD_MM:g} mm differs by at most "
+        f"{moved:.2g} mm ({moved / 0.02:.2g} of the noise); noise 0.02 mm (scenes/data/make_motion_examples.py)"
     )
+    return f"{header}\nt_s,marker,z_mm,y_mm\n" + "\n".join(rows) + "\n"
 
 
 def main() -> None:

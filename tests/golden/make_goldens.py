@@ -7,7 +7,8 @@ round), and the summaries of a small sweep. tests/test_golden.py requires today'
 reproduce them bitwise; they are regenerated only when a change is *meant* to change
 results, and the commit says why.
 
-Every case runs the paper's clamp-edge model (``clamp.edge_hinge = "paper"``), the one
+Every case runs the paper's bending law (the ``*_paper`` scenes, and the sweep's own)
+and the paper's clamp-edge model (``clamp.edge_hinge = "paper"``), the one
 the code had when they were written; the default second-order edge is guarded by its
 own accuracy tests (tests/test_clamp_root.py).
 
@@ -69,16 +70,16 @@ TABLE = [
     'clamp.interpolation="cubic"',
 ]
 CASES = {
-    "damped_swing": ("damped_swing", []),
-    "impulsive_rotation": ("impulsive_rotation", []),
+    "damped_swing": ("damped_swing_paper", []),
+    "impulsive_rotation": ("impulsive_rotation_paper", []),
     "forward_euler": (
-        "impulsive_rotation",
+        "impulsive_rotation_paper",
         ['integrator.scheme="forward"', "integrator.dt_s=2e-7", "run.duration_s=0.03"],
     ),
-    "float32": ("damped_swing", ['integrator.precision="float32"', "release.settle_time_s=0.2", "run.duration_s=0.5"]),
-    "cubic_table": ("impulsive_rotation", [*TABLE, "run.duration_s=0.2", "clamp.rotation_centre_dx_mm=1.5"]),
+    "float32": ("damped_swing_paper", ['integrator.precision="float32"', "release.settle_time_s=0.2", "run.duration_s=0.5"]),
+    "cubic_table": ("impulsive_rotation_paper", [*TABLE, "run.duration_s=0.2", "clamp.rotation_centre_dx_mm=1.5"]),
     "quartic_and_wrapping_hold": (
-        "damped_swing",
+        "damped_swing_paper",
         [
             "material.tensile_gf_per_cm=[2000.0, 3.0e4, 1.0e5, 2.93e7]",
             "release.hold_x_mm=-50.0",

@@ -142,7 +142,7 @@ def continuum_limit(
     def finish(note: str) -> ContinuumEstimate:
         estimate.note = note
         estimate.levels_mm = sorted((h * f for f in objectives), reverse=True)
-        estimate.dt_s = {h * f: float(obj.scene.integrator.dt_s) for f, obj in sorted(objectives.items())[::-1]}
+        estimate.dt_s = {h * f: obj.dt_s for f, obj in sorted(objectives.items())[::-1]}
         estimate.wall_time_s = time.perf_counter() - started
         return estimate
 

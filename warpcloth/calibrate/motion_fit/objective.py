@@ -111,6 +111,11 @@ class FitObjective:
         """The scene (checked, ready to run) of raw scene data."""
         raise NotImplementedError
 
+    @property
+    def dt_s(self) -> float:
+        """The step every run of this objective takes (s)."""
+        return float(self.scene.integrator.dt_s)
+
     def spacing_of(self, name: str) -> float:
         """The value (mm) of the spacing field ``name`` in the scene the runs see."""
         section, _, key = name.partition(".")

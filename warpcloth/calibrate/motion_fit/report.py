@@ -78,7 +78,7 @@ class FitResult:
         self.rms = float(np.sqrt(np.mean(estimate.residual**2)))
         self.at_bound = ended_at_bound(objective.free, q[:d])
         self.spacing = {name: estimate.finest.spacing_of(name) for name in objective.spacing_fields}
-        self.dt_s = float(estimate.finest.scene.integrator.dt_s)
+        self.dt_s = estimate.finest.dt_s
 
     def to_json(self) -> dict:
         """The verdict, each parameter with its 1σ and bounds, and how the search went;
