@@ -117,7 +117,9 @@ def fit_bundled(name, measured, free, fields=(), **options):
         set_field(base, key, value)
     scene = wc.scene_from_dict(copy.deepcopy(base))
     measurement = read_measurement(measured)
-    return fit_motion(base, measurement, free_parameters(free, scene, options.pop("bounds", None)), progress=False, **options)
+    return fit_motion(
+        base, measurement, free_parameters(free, scene, options.pop("bounds", None)), progress=False, **options
+    )
 
 
 def within(fit, truth: dict) -> None:

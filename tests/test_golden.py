@@ -19,6 +19,18 @@ GOLDEN = Path(__file__).parent / "golden"
 sys.path.insert(0, str(GOLDEN))
 from make_goldens import CASES, scene_outputs, sweep_summary  # noqa: E402
 
+TURNING_POINT_COLUMNS = (
+    "first_period_s",
+    "first_amplitude_m",
+    "mean_log_decrement",
+    "half_cycle_amplitude_m",
+    "log_decrement",
+)
+"""Summary columns read off turning points fitted by NumPy's ``lstsq`` (warpcloth/metrics.py):
+OpenBLAS picks its kernel by the CPU it runs on (DYNAMIC_ARCH), and a Haswell kernel puts
+the last bit of one amplitude elsewhere than the CPU the golden was written on (1.6e-16 of
+it). The simulation's outputs stay bitwise; these are held to 4 ulps."""
+
 
 def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
     return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
@@ -36,6 +48,15 @@ def test_scene_is_bitwise_golden(name):
 def test_sweep_summary_is_bitwise_golden(tmp_path):
     expected = pd.read_parquet(GOLDEN / "sweep_summary.parquet")
     actual = sweep_summary(tmp_path / "sweep")
-    pd.testing.assert_frame_equal(actual.reset_index(drop=True), expected, check_exact=True)
+    actual = actual.reset_index(drop=True)
+    pd.testing.assert_frame_equal(
+        actual.drop(columns=list(TURNING_POINT_COLUMNS)),
+        expected.drop(columns=list(TURNING_POINT_COLUMNS)),
+        check_exact=True,
+    )
+    for column in TURNING_POINT_COLUMNS:  # per variant: a number, or a list of one per half cycle
+        for a, e in zip(actual[column], expected[column], strict=True):
+            np.testing.assert_array_max_ulp(np.asarray(a, float), np.asarray(e, float), maxulp=4)
     for column in expected.select_dtypes("number"):
-        assert same_bits(actual[column].to_numpy(), expected[column].to_numpy()), column
+        if column not in TURNING_POINT_COLUMNS:
+            assert same_bits(actual[column].to_numpy(), expected[column].to_numpy()), column
