@@ -132,7 +132,7 @@ def test_auto_is_refused_where_no_step_is_both_stable_and_accurate():
         wc.load_scene("damped_swing", overrides(integrator__dt_s="auto", integrator__scheme="forward"))
     # the paper's law keeps a floor under imex that no dt removes (§9.5)
     with pytest.raises(SceneError, match=r"integrator\.dt_s.*no accurate imex step for the tagawa2003"):
-        wc.load_scene("damped_swing", overrides(integrator__dt_s="auto", integrator__scheme="imex"))
+        wc.load_scene("damped_swing_paper", overrides(integrator__dt_s="auto", integrator__scheme="imex"))
     elastic = wc.load_scene(
         "damped_swing",
         overrides(integrator__dt_s="auto", integrator__scheme="imex", material__hysteresis_d1_gf_cm_per_cm=0.0),

@@ -244,7 +244,7 @@ def test_a_laws_parameters_are_fitted_only_for_that_law():
     ):
         free_parameters("gamma,D1", dahl)
     with pytest.raises(
-        ArgumentError, match="Mf .* frictional_couple bending law, but the scene's material uses tagawa2003"
+        ArgumentError, match="Mf .* frictional_couple bending law, but the scene's material uses masing"
     ):
         free_parameters("Mf", wc.load_scene("damped_swing"))
 

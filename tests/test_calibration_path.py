@@ -189,11 +189,13 @@ ENCODERS = {
 
 @pytest.mark.parametrize("encoder", ENCODERS)
 def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path, encoder):
-    # Issue 12's and 22's acceptance: an encoder of a general quartic start and a line
+    # Issue 12's, 22's and 34's acceptance: an encoder of a general quartic start and a line
     # that does not stop in the record, at rest before the motion or moving from its
     # first sample; the "measurement" made with that θ(t) given to the simulator as a
-    # dense cubic table (an independent path from the fitted pieces); markers with 0.1 mm
-    # noise. clamp fit-angle, then fit γ, dy, D1 from the command line.
+    # dense cubic table (an independent path from the fitted pieces), on a 0.625 mm mesh
+    # (4× finer than the scene's: the continuum, as a lab's strip is); markers with 0.1 mm
+    # noise. clamp fit-angle, then fit γ, dy, D1 from the command line at its defaults:
+    # converged, each value within 2 σ_total of the truth.
     encoder_t, quartic, break_s = ENCODERS[encoder]
     truth = {
         "clamp.rotation_centre_dy_mm": 2.8,
@@ -206,6 +208,9 @@ def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path, en
         "impulsive_rotation",
         [
             "run.duration_s=0.25",
+            "strip.spacing_mm=0.625",
+            'integrator.scheme="imex"',
+            'integrator.dt_s="auto"',
             'clamp.motion="table"',
             'clamp.interpolation="cubic"',
             f"clamp.table_t_s={table_t.tolist()}",
@@ -251,15 +256,17 @@ def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path, en
     assert done.returncode == 0, done.stdout + done.stderr
     fitted = json.loads((tmp_path / "fit" / "fit.json").read_text())
     assert fitted["status"] == "converged"
-    value = {k: v["value"] for k, v in fitted["parameters"].items()}
     print(
         "fit:",
         {k: f"{v['value']:.5g} ± {v['sigma']:.2g}" for k, v in fitted["parameters"].items()},
         f"RMS {fitted['rms_mm']:.3g} mm, noise {fitted['noise_mm']:.3g} mm",
     )
-    assert abs(value["clamp.rotation_centre_dy_mm"] - 2.8) < 0.05
-    assert abs(value["damping.gamma_per_s"] / 0.4 - 1) < 0.05
-    assert abs(value["material.hysteresis_d1_gf_cm_per_cm"] / 0.05 - 1) < 0.02
+    for name, p in fitted["parameters"].items():
+        assert abs(p["value"] - truth[name]) <= 2 * p["sigma"], name
+    # and σ_total says something: the centre to 0.05 mm, γ to 10 %, D1 to 2 %
+    sigma = {k: v["sigma"] for k, v in fitted["parameters"].items()}
+    assert sigma["clamp.rotation_centre_dy_mm"] < 0.05 and sigma["damping.gamma_per_s"] < 0.04
+    assert sigma["material.hysteresis_d1_gf_cm_per_cm"] < 0.001
 
 
 def test_a_clamp_motion_the_model_cannot_describe_stops_the_path_at_its_first_step(tmp_path):
@@ -283,25 +290,28 @@ def test_a_clamp_motion_the_model_cannot_describe_stops_the_path_at_its_first_st
     assert "1.8× the encoder's noise" in done.stderr and "Traceback" not in done.stderr
 
 
-def test_a_fit_at_5_mm_of_a_converged_fine_measurement_costs_what_the_guide_says():
-    # Issue 22: markers (σ = 0.1 mm) from the impulsive rotation under masing at h = 1.25 mm
-    # (converged: halving dt moves them 0.6 µm, halving h 0.06 mm), fitted at the paper's
-    # h = 5 mm. γ comes back within its σ; the rotation centre and D1 carry the coarse
-    # mesh's error: +0.36 mm (24 σ) and +5.2 % (5 σ), the cost docs/calibration.md states,
-    # shrinking to +0.08 mm and +1.6 % at 2.5 mm (benchmarks/spacing_cost.py). The issue
-    # asked for all three within σ or 2 % at 5 mm: the physics at 5 mm does not give it.
+def test_a_fit_at_5_mm_of_a_converged_fine_measurement_finds_the_continuum():
+    # Issue 22 and 34: markers (σ = 0.1 mm) from the impulsive rotation under masing at
+    # h = 0.625 mm, fitted at the paper's h = 5 mm. At that spacing alone the rotation
+    # centre and D1 carry the coarse mesh's error (dozens of σ_noise and about 5 %: the
+    # cost docs/calibration.md states); the default continuum estimate puts every value
+    # within 2 σ_total of the truth.
     from conftest import SPACING_TRUTH, fine_rotation_markers, rotation_scene_data
 
     from warpcloth.calibrate.motion_fit import fit_motion, free_parameters
 
     base = rotation_scene_data(5.0)
     free = free_parameters("gamma,rotation_centre_dy_mm,D1", wc.scene_from_dict(base))
-    fit = fit_motion(base, fine_rotation_markers(), free, progress=False, noise=1e-4)
-    error = {name: value - SPACING_TRUTH[name] for name, value in fit.parameters.items()}
-    gamma, dy, d1 = "damping.gamma_per_s", "clamp.rotation_centre_dy_mm", "material.hysteresis_d1_gf_cm_per_cm"
-    assert abs(error[gamma]) <= max(fit.sigma[gamma], 0.02 * SPACING_TRUTH[gamma]), fit.parameters
-    assert 0 < error[dy] < 0.4 and 0 < error[d1] / SPACING_TRUTH[d1] < 0.06, fit.parameters
-    assert fit.rms / 1e-4 < 1.5  # the residuals do not show it: only refining h does
+    measured = fine_rotation_markers(0.625)
+    at_h = fit_motion(base, measured, free, progress=False, noise=1e-4, continuum=False)
+    error = {name: value - SPACING_TRUTH[name] for name, value in at_h.parameters.items()}
+    dy, d1 = "clamp.rotation_centre_dy_mm", "material.hysteresis_d1_gf_cm_per_cm"
+    assert error[dy] > 10 * at_h.sigma[dy] and error[d1] > 3 * at_h.sigma[d1], at_h.parameters
+    fit = fit_motion(base, measured, free, progress=False, noise=1e-4)
+    assert fit.status == "converged", fit.problems
+    for name, value in SPACING_TRUTH.items():
+        print(f"{name}: {fit.parameters[name]:.5g} ± {fit.sigma[name]:.2g} (at 5 mm {at_h.parameters[name]:.5g})")
+        assert abs(fit.parameters[name] - value) <= 2 * fit.sigma[name], name
 
 
 @pytest.mark.parametrize("phi", [0.0, 0.9])

@@ -2,11 +2,11 @@
 
 The references are not made at the fit's spacing: an analytic model whose residuals carry
 a known C·h^p error (the extrapolation must remove it exactly), and the bundled records,
-made by runs at 0.625 mm (strips) and 1.25 mm (the sheet) with known truths
-(scenes/data/make_motion_examples.py; each header says how little halving that spacing
-moves it). Fitted at the scenes' spacings, each must find the truth within 2 σ_total, and
-end ``converged``; a law with no continuum ends ``mesh_dependent``; levels that disagree
-with the law's order refine, then refuse.
+made by runs at 0.625 mm with known truths (scenes/data/make_motion_examples.py; each
+header says how little halving that spacing moves it; the sheet's, at 1.25 mm, is fitted
+in tests/test_sheet_fit.py). Fitted at the scenes' spacings, each must find the truth
+within 2 σ_total, and end ``converged``; a law with no continuum ends ``mesh_dependent``;
+levels that disagree with the law's order refine, then refuse.
 """
 
 import copy
@@ -195,6 +195,8 @@ def test_a_fit_under_a_law_without_a_continuum_is_not_converged(tmp_path):
         "gamma,D1",
         "--set",
         "run.duration_s=1.0",
+        "--noise",
+        "0.5",  # the paper's law does not explain masing's record to 0.2 mm: what is judged here is the law
         "--out",
         "fit",
         "--no-progress",
@@ -206,20 +208,3 @@ def test_a_fit_under_a_law_without_a_continuum_is_not_converged(tmp_path):
     assert "these are not fabric properties" in done.stderr
     result = json.loads((tmp_path / "fit" / "fit.json").read_text())
     assert result["status"] == "mesh_dependent" and result["continuum"] == {}
-
-
-def test_the_sheet_fitted_at_10mm_finds_the_continuums_truth():
-    # The shear swing's markers from a 1.25 mm run (G 1.2, σ 0.02 mm), fitted at 10 mm.
-    from warpcloth.calibrate.motion_fit.sheet import sheet_free_parameters
-    from warpcloth.io.measured import read_sheet_markers
-    from warpcloth.scene.sheet_build import load_sheet_scene
-
-    fields = ["sheet.spacing_warp_mm=10", "sheet.spacing_weft_mm=10", "run.duration_s=0.3"]
-    scene = load_sheet_scene("shear_swing", fields)
-    base = read_scene_file("shear_swing")
-    for item in fields:
-        key, value = item.split("=")
-        set_field(base, key, float(value))
-    fit = fit_motion(base, read_sheet_markers("shear_swing_markers"), sheet_free_parameters("G", scene), progress=False)
-    assert fit.status == "converged", fit.problems
-    within(fit, {"shear.rigidity_gf_per_cm_deg": 1.2})

@@ -9,7 +9,7 @@ import warpcloth as wc
 
 
 def tip_x(**fields):
-    scene = wc.load_scene("damped_swing", overrides(run__duration_s=1.0, **fields))
+    scene = wc.load_scene("damped_swing_paper", overrides(run__duration_s=1.0, **fields))
     return wc.simulate(scene).probe("tip_x", 0)
 
 

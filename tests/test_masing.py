@@ -144,7 +144,7 @@ def test_a_run_reports_a_full_memory_and_the_default_is_enough(tmp_path, capsys)
     enough = wc.run("damped_swing", overrides(run__duration_s=0.5, material__bending_law="masing"))
     assert enough.reversal_memory["overflows"] == [0] and enough.memory_warning() is None
     assert 4 < enough.reversal_memory["deepest"][0] < 64
-    assert wc.run("damped_swing", overrides(run__duration_s=0.1)).reversal_memory == {}  # no masing strip
+    assert wc.run("damped_swing_paper", overrides(run__duration_s=0.1)).reversal_memory == {}  # no masing strip
 
     from warpcloth.cli import main
 
@@ -233,7 +233,7 @@ def test_a_fit_says_when_its_law_depends_on_the_mesh():
     from warpcloth.calibrate.motion_fit import mesh_note
     from warpcloth.scene import read_scene_file
 
-    paper = mesh_note(read_scene_file("damped_swing"))
+    paper = mesh_note(read_scene_file("damped_swing_paper"))
     assert "the tagawa2003 law's hysteresis depends on the mesh" in paper and "strip.spacing_mm = 5 only" in paper
     dahl = read_scene_file("damped_swing")
     dahl["material"]["bending_law"] = "dahl"

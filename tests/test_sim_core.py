@@ -157,7 +157,7 @@ def test_every_probe_has_a_slot_and_a_unit():
 
 
 def test_packed_parameters_follow_the_declared_layout():
-    m = to_si(wc.load_scene("damped_swing").material)
+    m = to_si(wc.load_scene("damped_swing_paper").material)
     packed = m.bending_parameters()
     assert len(packed) == LAW_PARAMETER_SLOTS and packed[-1] == 0.0  # tagawa2003 is law 0 (kernels/laws.py)
     layout = dict(zip(bending_tagawa2003.PACKED, packed, strict=False))

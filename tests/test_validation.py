@@ -277,7 +277,7 @@ def test_scene_errors_say_where_the_value_was_set(tmp_path):
         wc.load_scene("damped_swing", [f'material.from_file="{soft}"'])
     with pytest.raises(
         wc.SceneError,
-        match=r"^release.hold_x_mm: .*\(bundled scene damped_swing, line 24; and the "
+        match=r"^release.hold_x_mm: .*\(bundled scene damped_swing, line 26; and the "
         r"override release.hold_y_mm=-500\)$",
     ):
         wc.load_scene("damped_swing", ["release.hold_y_mm=-500"])

@@ -76,7 +76,10 @@ CASES = {
         "impulsive_rotation_paper",
         ['integrator.scheme="forward"', "integrator.dt_s=2e-7", "run.duration_s=0.03"],
     ),
-    "float32": ("damped_swing_paper", ['integrator.precision="float32"', "release.settle_time_s=0.2", "run.duration_s=0.5"]),
+    "float32": (
+        "damped_swing_paper",
+        ['integrator.precision="float32"', "release.settle_time_s=0.2", "run.duration_s=0.5"],
+    ),
     "cubic_table": ("impulsive_rotation_paper", [*TABLE, "run.duration_s=0.2", "clamp.rotation_centre_dx_mm=1.5"]),
     "quartic_and_wrapping_hold": (
         "damped_swing_paper",

@@ -143,7 +143,8 @@ class FitObjective:
         fixed = self.scene.integrator.dt_chosen_by != AUTO
         set_field(data, "integrator.dt_s", AUTO)
         set_field(data, "integrator.dt_chosen_by", "scene")
-        other = type(self)(data, self.measurement, self.free, self.align, self.device)
+        kind: Any = type(self)  # each objective is made from the same arguments
+        other = kind(data, self.measurement, self.free, self.align, self.device)
         if fixed:
             interval = other.scene.output_interval
             dt = min(self.scene.integrator.dt_s * factor, other.scene.integrator.dt_s)

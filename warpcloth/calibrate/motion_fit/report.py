@@ -67,7 +67,7 @@ class FitResult:
         self.at_spacing = dict(self.parameters)
         self.sigma_noise = dict(self.sigma)
         self.rms_at_spacing = self.rms
-        if estimate.q is None or estimate.sigma_mesh is None or estimate.finest is None:
+        if estimate.q is None or estimate.sigma_mesh is None or estimate.finest is None or estimate.residual is None:
             return
         q, mesh = estimate.q, estimate.sigma_mesh
         d = len(objective.free)
