@@ -1,7 +1,12 @@
 """Fitting a swing and a rotation made with the fabric's set and the clamp's grip (docs/model.md
 §5.4): not a fit without them, the truth within σ with them, and which experiments separate
 the set from D (the Jacobians, no fit). Apart from test_fit.py so the two run on different
-cores."""
+cores.
+
+The records are made at the fits' own spacing, so these test the search and the model's
+identifiability, not the values' continuum limit (tests/test_continuum.py does that): the
+fits run without the continuum estimate (which would move the values to h → 0, away from
+the mesh that made the record) and say ``spacing_limited``."""
 
 import copy
 
@@ -34,7 +39,7 @@ def test_a_swing_with_set_and_grip_is_not_fitted_without_them(swing_with_set_and
     # (−13 %), D and D1 correlated beyond 0.95: not_identifiable and poor_fit, not converged.
     base, _, measured = swing_with_set_and_grip
     free = free_parameters("gamma,D,D1", wc.scene_from_dict(copy.deepcopy(base)))
-    fit = fit_motion(base, measured, free, progress=False, noise=2e-4)
+    fit = fit_motion(base, measured, free, progress=False, noise=2e-4, continuum=False)
     print(f"without set and grip: {fit.status}, RMS {fit.rms * 1e3:.3f} mm, {fit.parameters}")
     assert fit.status != "converged" and any("the measurement noise" in p for p in fit.problems)
 
@@ -49,14 +54,15 @@ def test_a_swing_with_set_and_grip_is_fitted_back_with_them(swing_with_set_and_g
 
 
 def fitted_back_with_set_and_grip(base, measured, truth, noise):
-    """The fit of γ, K_rest and the grip factor, asserted converged with the truth within 3σ."""
+    """The fit of γ, K_rest and the grip factor at the record's own spacing, asserted a fit
+    but for that (spacing_limited, nothing else) with the truth within 3σ."""
     free = free_parameters("gamma,K_rest,grip_factor", wc.scene_from_dict(copy.deepcopy(base)))
-    fit = fit_motion(base, measured, free, progress=False, noise=noise)
+    fit = fit_motion(base, measured, free, progress=False, noise=noise, continuum=False)
     print(
         f"with set and grip: {fit.status}, RMS {fit.rms * 1e3:.3f} mm, "
         + ", ".join(f"{k} {v:.5g} ± {fit.sigma[k]:.2g}" for k, v in fit.parameters.items())
     )
-    assert fit.status == "converged", fit.problems
+    assert fit.status == "spacing_limited" and len(fit.problems) == 1, fit.problems
     for name, value in truth.items():
         assert abs(fit.parameters[name] - value) < 3 * fit.sigma[name]
     return fit
@@ -67,15 +73,17 @@ def test_the_swing_alone_does_not_separate_the_set_from_d_a_horizontal_still_doe
     # swing alone (D, D1, γ, K_rest, grip factor, ℓ_g) are not all determined: K_rest
     # against D is −0.965 (D1 against D −0.939); the still of the strip turned horizontal
     # and settled (the bending-length test's pose) adds what separates them (largest
-    # |correlation| 0.908; the full table: benchmarks/identifiability.py).
+    # |correlation| 0.908; the full table: benchmarks/identifiability.py). Under the paper's
+    # law, as that table was measured: under masing the pair swing + still leaves K_rest
+    # against D at −0.961 (the rotation beside the swing is the pair to use there).
     names = ["D", "D1", "gamma", "K_rest", "grip_factor", "grip_length"]
     truth = {"clamp__grip_length_mm": 10.0, "clamp__grip_bending_factor": 3.0, "strip__rest_curvature_per_cm": 0.1}
-    swing = raw("damped_swing", release__settle_time_s=0.3, run__duration_s=0.8, **truth)
+    swing = raw("damped_swing_paper", release__settle_time_s=0.3, run__duration_s=0.8, **truth)
     result = wc.simulate(wc.scene_from_dict(copy.deepcopy(swing)))
     trace = LaserTrace(result.t[::2], result.probe("laser_x", 0)[::2])
     ramp = 0.5
     cantilever = raw(
-        "damped_swing",
+        "damped_swing_paper",
         release__enabled=False,
         run__duration_s=2.0,
         damping__gamma_per_s=5.0,
@@ -122,9 +130,8 @@ def test_a_rotation_with_set_and_grip_is_fitted_back():
     truth = {"damping.gamma_per_s": 0.8, **SET_AND_GRIP}
     scene = with_fields(base, truth)
     measured = tracked_markers(wc.simulate(scene), scene, 0.0, 3e-4, np.random.default_rng(8))
-    without = fit_motion(
-        base, measured, free_parameters("gamma", wc.scene_from_dict(copy.deepcopy(base))), progress=False, noise=3e-4
-    )
+    free = free_parameters("gamma", wc.scene_from_dict(copy.deepcopy(base)))
+    without = fit_motion(base, measured, free, progress=False, noise=3e-4, continuum=False)
     print(f"rotation without set and grip: {without.status}, RMS {without.rms * 1e3:.3f} mm")
     assert without.status != "converged"
     fitted_back_with_set_and_grip(base, measured, truth, 3e-4)
