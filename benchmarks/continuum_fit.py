@@ -110,6 +110,7 @@ def main() -> None:
     args = parser.parse_args()
     print(f"machine: {platform.processor() or platform.machine()}, Python {platform.python_version()}")
     runs = [(name, h) for name in args.cases for h in args.spacings] + ([("sheet", 10.0)] if args.sheet else [])
+    fit_at("rotation", 5.0, continuum=False)  # loads every kernel before anything is timed
     for name, h in runs:
         print(f"{name}:")
         plain, base_wall, truth = fit_at(name, h, continuum=False)

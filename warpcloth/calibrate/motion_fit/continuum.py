@@ -22,7 +22,7 @@ the fitted point q obey r_h(q) = r_0(q) + C(q) h^p + …, so
    of the parameters themselves: (2^p / (2^p − 1)) × the move that refitting at h/2 would
    make (the old ``--check-spacing`` move, ×4/3 at p = 2).
 3. **The mesh's share of σ** is the size of the extrapolation's correction from the
-   finest level, σ_mesh = |J⁺(r_f − r_c)| / (2^p − 1), with the last (unapplied) step
+   finest level, σ_mesh = ``|J⁺(r_f − r_c)|`` / (2^p − 1), with the last (unapplied) step
    added in quadrature. It bounds the extrapolation's error whenever the true order lies
    within p ± 1/2, the band the order check accepts (at order 1.5 the correction with
    p = 2 is 0.21 of the level difference short, at 2.5 0.12 too long; the correction
@@ -161,12 +161,15 @@ def continuum_limit(
         except (SceneError, ArgumentError) as exc:  # a level the scene cannot be built at (a marker off its nodes)
             unavailable.append(f"h = {h * f:g} mm cannot be run ({exc})")
             continue
-        for f in levels:
-            if not np.all(np.isfinite(residuals[f])):
-                return finish(
-                    f"the best fit run at h = {h * f:g} mm misses measured points (the laser line, or it "
-                    "diverged): no continuum estimate"
-                )
+        missing = [f for f in levels if not np.all(np.isfinite(residuals[f]))]
+        if missing and missing[0] > 1.0:  # the coarser level alone: the finer rung does without it
+            unavailable.append(f"at h = {h * missing[0]:g} mm the best fit misses measured points")
+            continue
+        if missing:
+            return finish(
+                f"the best fit run at h = {h * missing[0]:g} mm misses measured points (the laser line, or it "
+                "diverged): no continuum estimate"
+            )
         p_obs = observed_order(*(residuals[f] for f in levels))
         estimate.observed_orders.append({"levels_mm": [h * f for f in levels], "order": p_obs})
         if abs(p_obs - order) <= ORDER_TOLERANCE or p_obs == math.inf:
@@ -218,4 +221,4 @@ def continuum_limit(
     estimate.residual = extrapolated(rc, rf)
     estimate.sigma_mesh = np.hypot(correction, estimate.moves[-1])
     estimate.finest = level(fine)
-    return finish("")
+    return finish("; ".join(unavailable))  # why the ladder started finer, if it did
