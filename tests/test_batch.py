@@ -89,6 +89,7 @@ def test_batch_level_fields_must_agree():
         wc.simulate([scene(), scene(integrator__dt_s=2e-6)])
 
 
+@pytest.mark.slow
 def test_a_batch_on_threads_is_the_batch_on_one_thread_bit_for_bit():
     # one launch per thread over contiguous ranges of strips (Warp's CPU launch runs on one
     # thread and releases the GIL): the same arithmetic per strip, a diverging strip included

@@ -79,6 +79,7 @@ def moving_quartic(a=2000.0):
     return (0.0, a, float(b), float(c))
 
 
+@pytest.mark.slow
 def test_a_record_that_starts_in_motion_gets_the_same_theta_with_0_3_or_30_ms_of_rest():
     # Issue 22: the recording triggered on the motion. Each record has the same samples
     # (and noise, σ = 1 mrad) from t = 0 on; only the rest before differs.
@@ -187,6 +188,7 @@ ENCODERS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("encoder", ENCODERS)
 def test_the_documented_path_recovers_centre_damping_and_hysteresis(tmp_path, encoder):
     # Issue 12's, 22's and 34's acceptance: an encoder of a general quartic start and a line
@@ -290,6 +292,7 @@ def test_a_clamp_motion_the_model_cannot_describe_stops_the_path_at_its_first_st
     assert "1.8× the encoder's noise" in done.stderr and "Traceback" not in done.stderr
 
 
+@pytest.mark.slow
 def test_a_fit_at_5_mm_of_a_converged_fine_measurement_finds_the_continuum():
     # Issue 22 and 34: markers (σ = 0.1 mm) from the impulsive rotation under masing at
     # h = 0.625 mm, fitted at the paper's h = 5 mm. At that spacing alone the rotation
@@ -388,6 +391,7 @@ def test_separate_basins_of_the_space_filling_stage_are_reported(name, cost, exp
     assert [round(f["x"], 1) for f in found] == expected, name
 
 
+@pytest.mark.slow
 def test_a_wrong_clamp_motion_is_not_reported_as_a_fit(tmp_path):
     # The bundled markers (rotation at 16 rad/s) fitted with the clamp's speed set 25 %
     # low: the best γ, dy (6.98 mm against the truth 4.0) leave an RMS 2.0× the noise.

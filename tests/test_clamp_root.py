@@ -87,6 +87,7 @@ def period_errors():
     return errors
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", CASES)
 def test_second_order_edge_is_second_order_and_within_half_a_percent_at_5_mm(period_errors, case):
     # Measured at h = 5, 2.5, 1.25 mm: γ = 203: +0.317 %, +0.091 %, +0.026 % (orders 1.80,

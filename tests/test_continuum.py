@@ -3,8 +3,9 @@
 The references are not made at the fit's spacing: an analytic model whose residuals carry
 a known C·h^p error (the extrapolation must remove it exactly), and the bundled records,
 made by runs at 0.625 mm with known truths (scenes/data/make_motion_examples.py; each
-header says how little halving that spacing moves it; the sheet's, at 1.25 mm, is fitted
-in tests/test_sheet_fit.py). Fitted at the scenes' spacings, each must find the truth
+header says how little halving that spacing moves it; the rotation's is fitted by the
+command in tests/test_fit.py, the sheet's, at 1.25 mm, in tests/test_sheet_fit.py, the
+documented path's in tests/test_calibration_path.py). Fitted at the scenes' spacings, each must find the truth
 within 2 σ_total, and end ``converged``; a law with no continuum ends ``mesh_dependent``;
 levels that disagree with the law's order refine, then refuse.
 """
@@ -134,6 +135,7 @@ def within(fit, truth: dict) -> None:
         assert fit.sigma[name] == pytest.approx(math.hypot(fit.sigma_noise[name], fit.sigma_mesh[name]))
 
 
+@pytest.mark.slow
 def test_the_swing_fitted_at_5mm_finds_the_continuums_truth():
     # The laser trace of a 0.625 mm run (γ 0.55, D1 0.025, σ 0.2 mm) fitted at the scene's
     # 5 mm: at that spacing alone D1 is ~20 % (dozens of σ_noise) off; extrapolated it is
@@ -152,39 +154,7 @@ def test_the_swing_fitted_at_5mm_finds_the_continuums_truth():
     assert fit.continuum["levels_mm"][:3] == [10.0, 5.0, 2.5]
 
 
-def test_the_rotation_fitted_at_its_spacing_finds_the_continuums_truth(tmp_path):
-    # The markers of a 0.625 mm run (centre 4.0 mm, γ 0.8, σ 0.3 mm, clock 4 ms late) fitted
-    # by the command at the scene's 2.5 mm, its defaults: converged, within 2 σ_total.
-    done = run_cli(
-        "fit",
-        "impulsive_rotation",
-        "--measured",
-        "impulsive_rotation_shapes",
-        "--free",
-        "gamma,rotation_centre_dy_mm",
-        "--align-start",
-        "0.01",
-        "--set",
-        'integrator.scheme="imex"',
-        "--set",
-        'integrator.dt_s="auto"',
-        "--out",
-        "fit",
-        "--no-progress",
-        cwd=tmp_path,
-    )
-    assert done.returncode == 0, done.stderr
-    assert "continuum limit h → 0 (fitted at strip.spacing_mm = 2.5; observed order" in done.stdout
-    result = json.loads((tmp_path / "fit" / "fit.json").read_text())
-    assert result["status"] == "converged" and result["continuum"]["status"] == "extrapolated"
-    for name, value in {"clamp.rotation_centre_dy_mm": 4.0, "damping.gamma_per_s": 0.8}.items():
-        p = result["parameters"][name]
-        assert abs(p["value"] - value) <= 2 * p["sigma"]
-        assert p["sigma"] == pytest.approx(math.hypot(p["sigma_noise"], p["sigma_mesh"]))
-    best = wc.load_scene(tmp_path / "fit" / "best.toml")  # the continuum values on the finest level's mesh
-    assert best.strip.spacing_mm == result["continuum"]["extrapolated_from_mm"][1]
-
-
+@pytest.mark.slow
 def test_a_fit_under_a_law_without_a_continuum_is_not_converged(tmp_path):
     done = run_cli(
         "fit",

@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pytest
 from conftest import overrides
 
 import warpcloth as wc
@@ -30,6 +31,7 @@ def test_time_step_convergence():
     assert np.max(np.abs(runs[1e-5] - extrapolated)) < 2e-5
 
 
+@pytest.mark.slow
 def test_spacing_convergence():
     # Same dt for all (2.5e-6 s, stable at h = 1.25 mm), so only h changes; the default
     # second-order clamp edge (docs/model.md §5.3). Without hysteresis (D1 = 0) the swing

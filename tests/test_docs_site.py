@@ -26,6 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted(p.stem for p in (ROOT / "examples").glob("plot_*.py"))
 QUICK = {"WARPCLOTH_EXAMPLES_QUICK": "1", "MPLBACKEND": "Agg"}
 DOC_TOOLS = ("sphinx", "sphinx_gallery", "myst_parser")
+pytestmark = pytest.mark.slow  # the site is built once for the module (about a minute)
 MISSING_TOOLS = [name for name in DOC_TOOLS if importlib.util.find_spec(name) is None]
 
 

@@ -88,6 +88,7 @@ def test_the_reference_has_the_small_deflection_limit():
     assert small["root_slope"] == pytest.approx(0.1 / 2, rel=2e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kappa", KAPPAS)
 def test_second_order_edge_gives_the_elastica_within_half_a_percent(settled, kappa):
     # Measured tip drop: κ = 2: +0.245 %, +0.064 %, +0.018 %; κ = 8: +0.214 %, +0.058 %,

@@ -440,6 +440,7 @@ def test_overwrite_replaces_a_run_never_other_files(tmp_path):
     assert (keep / "thesis.tex").read_text() == "months of work"
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_a_threaded_sweep_promptly_and_it_resumes(tmp_path):
     # Batches on two threads: Ctrl-C drops the batches not started (the running ones
     # finish their files), exits 130 within a batch's time, and a rerun completes the rest.
@@ -687,6 +688,7 @@ def test_a_size_beyond_a_float_is_written_without_overflowing():
         check_memory(10**400, "x", "y")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "args, message",
     [

@@ -33,6 +33,7 @@ def swing_with_set_and_grip():
     return base, truth, LaserTrace(t, result.probe("laser_x", 0)[::2] + rng.normal(0, 2e-4, len(t)))
 
 
+@pytest.mark.slow
 def test_a_swing_with_set_and_grip_is_not_fitted_without_them(swing_with_set_and_grip):
     # γ, D and D1 alone cannot absorb a set and a grip: measured RMS 1.89 mm, 9.5× the
     # noise, with D pushed to 0.139 (+39 %), D1 to 0.082 (+104 %) and γ to 0.477 /s
@@ -44,6 +45,7 @@ def test_a_swing_with_set_and_grip_is_not_fitted_without_them(swing_with_set_and
     assert fit.status != "converged" and any("the measurement noise" in p for p in fit.problems)
 
 
+@pytest.mark.slow
 def test_a_swing_with_set_and_grip_is_fitted_back_with_them(swing_with_set_and_grip):
     # With D and D1 known (the KES bending test) and the zone's 10 mm, γ, K_rest and the
     # grip factor are recovered within 3σ: measured γ 0.5505 ± 0.0017, K_rest 0.09933 ±
@@ -109,6 +111,7 @@ def test_the_swing_alone_does_not_separate_the_set_from_d_a_horizontal_still_doe
     assert together.not_identifiable == []
 
 
+@pytest.mark.slow
 def test_a_rotation_with_set_and_grip_is_fitted_back():
     # Truth: a set K_rest = 0.1 1/cm, a 10 mm grip at 3×, γ = 0.8 /s; the strip settles
     # freely first (release.hold_free_end = false: it starts from its own hanging shape),

@@ -101,6 +101,7 @@ def with_gravity():
     return periods(5.0, names), periods(2.5, names)
 
 
+@pytest.mark.slow
 def test_a_stiff_grip_zone_gives_the_two_section_beam_period_at_5_mm(with_gravity):
     # Measured at h = 5 mm (2.5 mm): +0.260 % (+0.067 %), +0.112 % (+0.065 %), +0.213 %
     # (+0.056 %), where the grip itself moves the period by 3.3 %, 4.0 % and 10.2 %:

@@ -194,6 +194,7 @@ def swing(h, duration, hold_x_mm=50.0, strips=1):
     return wc.simulate(scenes, threads=1)
 
 
+@pytest.mark.slow
 def test_the_hysteretic_swing_converges_in_h_and_is_not_chaotic():
     # docs/model.md §15.6. Over the first second after release (benchmarks/masing_convergence.py
     # has 3 s and tagawa2003): mean log decrement 0.16087, 0.15766, 0.15679, 0.15653 and

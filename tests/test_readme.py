@@ -12,6 +12,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+import pytest
 from conftest import run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -151,6 +152,7 @@ def test_readme_conventions_are_parsed():
     ]
 
 
+@pytest.mark.slow
 def test_readme_runs_as_written(tmp_path):
     text = README.read_text(encoding="utf-8") + "\n" + GUIDE.read_text(encoding="utf-8")
     steps = readme_steps(text)

@@ -21,6 +21,7 @@ TRUTH = 1.2  # gf/(cm·°), scenes/data/make_motion_examples.py SHEET_TRUTH
 RESOLUTION = ("--set", "sheet.spacing_warp_mm=10", "--set", "sheet.spacing_weft_mm=10", "--set", "run.duration_s=0.3")
 
 
+@pytest.mark.slow
 def test_a_sheets_shear_rigidity_is_fitted_from_its_tracked_markers(tmp_path):
     out = tmp_path / "fit"
     done = run_cli(

@@ -233,6 +233,7 @@ def test_threads_give_the_serial_results_bit_for_bit(tmp_path):
             pd.testing.assert_frame_equal(mine, theirs, check_exact=True)
 
 
+@pytest.mark.slow
 def test_scheduler_and_workers_as_processes_survive_a_killed_worker(tmp_path):
     # A scheduler and two workers started as separate processes on loopback; one worker
     # is killed once results start arriving. Dask reruns its batch elsewhere; results

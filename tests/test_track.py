@@ -82,6 +82,7 @@ def test_track_recovers_the_simulated_markers(tracked):
     assert np.allclose(movie.t, truth.t[::10]) and not movie.dropped
 
 
+@pytest.mark.slow
 def test_fit_of_the_tracked_shapes_recovers_the_rotation_centre(tracked):
     done = run_cli(
         "fit",
@@ -123,6 +124,7 @@ def centreline(tracked):
     return tracked / "centreline.csv"
 
 
+@pytest.mark.slow
 def test_the_centreline_without_markers_recovers_the_simulated_strip(centreline):
     # the same arc lengths as the markers, from the free end: the same truth
     shapes, truth = read_tracked_shapes(centreline), read_tracked_shapes(DATA / "truth.csv")
