@@ -223,8 +223,9 @@ def continuum_line(fit: FitResult) -> str:
         pair = "/".join(f"{h:g}" for h in c["extrapolated_from_mm"])
         return (
             f"continuum limit h → 0 (fitted at {spacing}; observed order {orders}, the law's {c['law_order']:g}; "
-            f"extrapolated from h = {pair} mm, {c['runs']} runs, {c['wall_time_s']:.1f} s); ± is "
-            "σ_total = √(σ_noise² + σ_mesh²):"
+            f"extrapolated from h = {pair} mm, {c['runs']} runs, {c['wall_time_s']:.1f} s"
+            + (f"; {c['note']}" if c["note"] else "")
+            + "); ± is σ_total = √(σ_noise² + σ_mesh²):"
         )
     return f"at {spacing} (not the continuum limit: the status says why):"
 
