@@ -178,3 +178,22 @@ def test_a_fit_under_a_law_without_a_continuum_is_not_converged(tmp_path):
     assert "these are not fabric properties" in done.stderr
     result = json.loads((tmp_path / "fit" / "fit.json").read_text())
     assert result["status"] == "mesh_dependent" and result["continuum"] == {}
+
+
+@pytest.mark.slow
+def test_a_swing_fitted_too_coarse_for_its_order_refines_then_refuses():
+    # The bundled swing at 10 mm: its motion at 20, 10, 5 mm converges at order 0.8 and at
+    # 10, 5, 2.5 mm at 1.45, outside masing's 2 ± 0.5 (measured), so no value is
+    # extrapolated and the fit is not converged, whatever its RMS says.
+    fit = fit_bundled(
+        "damped_swing",
+        "damped_swing_laser",
+        "gamma,D1",
+        [("integrator.scheme", "imex"), ("integrator.dt_s", "auto"), ("strip.spacing_mm", 10.0)],
+    )
+    c = fit.continuum
+    assert c["status"] == "unresolved" and fit.status != "converged"
+    assert [o["levels_mm"] for o in c["observed_orders"]] == [[20.0, 10.0, 5.0], [10.0, 5.0, 2.5]]
+    assert all(abs(o["order"] - 2) > ORDER_TOLERANCE for o in c["observed_orders"])
+    assert any(p.startswith("no continuum estimate: the simulated motion converges at order") for p in fit.problems)
+    assert fit.sigma_mesh == {} and fit.parameters == fit.at_spacing  # the values stay the mesh's, and say so
