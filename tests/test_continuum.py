@@ -197,3 +197,14 @@ def test_a_swing_fitted_too_coarse_for_its_order_refines_then_refuses():
     assert all(abs(o["order"] - 2) > ORDER_TOLERANCE for o in c["observed_orders"])
     assert any(p.startswith("no continuum estimate: the simulated motion converges at order") for p in fit.problems)
     assert fit.sigma_mesh == {} and fit.parameters == fit.at_spacing  # the values stay the mesh's, and say so
+
+
+def test_the_old_spacing_check_is_refused_in_one_line_saying_what_replaced_it(tmp_path):
+    args = ("damped_swing", "--measured", "damped_swing_laser", "--free", "gamma", "--check-spacing")
+    done = run_cli("fit", *args, "--out", "fit", cwd=tmp_path)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "warpcloth fit: error in option: --check-spacing: is gone: every fit now runs its best point at 2h and "
+        "h/2 and reports the values extrapolated to h → 0, the mesh's share in σ (--at-spacing skips that)"
+    ]
+    assert not (tmp_path / "fit").exists()

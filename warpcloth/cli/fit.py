@@ -8,6 +8,7 @@ from pathlib import Path
 
 from warpcloth.calibrate.motion_fit.report import FitResult
 from warpcloth.calibrate.noise import POOR_FIT_FACTOR
+from warpcloth.errors import OptionError
 from warpcloth.scene import scene_from_dict
 
 from .options import (
@@ -96,6 +97,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "(default: extrapolated to h → 0 from runs at 2h, h/2 and, if needed, h/4, the mesh's "
         "share in σ); such values are the mesh's as much as the fabric's: status spacing_limited (exit 9)",
     )
+    fit_p.add_argument("--check-spacing", action="store_true", help=argparse.SUPPRESS)  # gone: said so below
     fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda (default: Warp's preferred device)")
     fit_p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_overwrite(fit_p, "fit directory --out")
@@ -131,6 +133,12 @@ def fit_command(args: argparse.Namespace) -> int:
     from warpcloth.scene.sheet import scene_kind
     from warpcloth.scene.sheet_build import load_sheet_scene
 
+    if args.check_spacing:
+        raise OptionError(
+            "--check-spacing",
+            "is gone: every fit now runs its best point at 2h and h/2 and reports the values extrapolated to "
+            "h → 0, the mesh's share in σ (--at-spacing skips that)",
+        )
     base = apply_overrides(read_scene_file(args.scene), args.overrides)
     if scene_kind(base) == "sheet":
         # a sheet is fitted to its tracked markers (t, marker, and the coordinates a camera saw)
