@@ -179,7 +179,12 @@ def fit_command(args: argparse.Namespace) -> int:
         "at_spacing": args.at_spacing,
     }
     write_fit(fit, base, measurement, out, args.device, inputs)
-    at_h = f" (at the scene's spacing {fit.rms_at_spacing * 1e3:.4g} mm)" if fit.sigma_mesh else ""
+    at_h = (
+        f" on the finest level's mesh, h = {next(iter(fit.spacing.values())):g} mm (at the scene's spacing "
+        f"{fit.rms_at_spacing * 1e3:.4g} mm; extrapolated to h → 0 {fit.continuum['rms_extrapolated_mm']:.4g} mm)"
+        if fit.sigma_mesh
+        else ""
+    )
     print(
         f"RMS {fit.rms * 1e3:.4g} mm{at_h} over {fit.n_residuals} residuals (noise {fit.noise * 1e3:.3g} mm, "
         f"{fit.noise_source}); {fit.launches} launches, {fit.variants} variants, {fit.wall_time_s:.1f} s"

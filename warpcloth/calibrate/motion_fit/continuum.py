@@ -54,6 +54,9 @@ SETTLED = 1.0 / 3.0
 """A Gauss–Newton step on the extrapolated residual below this × σ_noise for every
 parameter ends the iteration."""
 MAX_STEPS = 4
+NEGLIGIBLE = 1e-3
+"""Finer levels whose values differ by less than this × σ_noise (all together) leave the
+mesh nothing that matters to converge: no order is needed."""
 ROUND_OFF = 1e-10
 """Levels whose residuals differ by less than this × the residuals' norm agree to
 round-off: the mesh does not move the fit."""
@@ -70,7 +73,8 @@ class ContinuumEstimate:
     observed_orders: list[dict] = field(default_factory=list)  # {"levels_mm": [3], "order": p_obs}
     q: np.ndarray | None = None  # the extrapolated search point (unit box, clock offset)
     sigma_mesh: np.ndarray | None = None  # per search coordinate, in the field's units
-    residual: np.ndarray | None = None  # r_∞ at q
+    residual: np.ndarray | None = None  # r_∞ at q (extrapolated: no run made it)
+    residual_finest: np.ndarray | None = None  # the finest level's residual at q (its run, and the last step)
     moves: list[np.ndarray] = field(default_factory=list)  # each Gauss–Newton step, field units
     note: str = ""
     runs: int = 0
@@ -98,11 +102,12 @@ class ContinuumEstimate:
         return out
 
 
-def observed_order(coarse: np.ndarray, middle: np.ndarray, fine: np.ndarray) -> float:
+def observed_order(coarse: np.ndarray, middle: np.ndarray, fine: np.ndarray, negligible: float = 0.0) -> float:
     """log₂ of the ratio of successive level differences (levels at spacing ratio 2);
-    +inf when the two finer levels agree to round-off (nothing left to converge)."""
+    +inf when the two finer levels agree to round-off, or within ``negligible`` (nothing
+    left to converge that matters)."""
     far, near = float(np.linalg.norm(middle - coarse)), float(np.linalg.norm(fine - middle))
-    scale = ROUND_OFF * max(float(np.linalg.norm(fine)), 1e-300)
+    scale = max(ROUND_OFF * max(float(np.linalg.norm(fine)), 1e-300), negligible)
     if near <= scale:
         return math.inf
     return math.log(far / near, LEVEL_RATIO) if far > 0 else -math.inf
@@ -150,6 +155,10 @@ def continuum_limit(
         # the Gauss–Newton step −J⁺ r in search coordinates
         return -np.linalg.lstsq(jac, r, rcond=None)[0]
 
+    def weighted(r: np.ndarray) -> np.ndarray:
+        # what of a level's motion the values see: its Gauss–Newton point, in units of σ_noise
+        return move(r) * ranges / sigma_noise
+
     residuals = {1.0: residual}
     ladder = [(LEVEL_RATIO, 1.0, 1 / LEVEL_RATIO), (1.0, 1 / LEVEL_RATIO, 1 / LEVEL_RATIO**2)]
     pair: tuple[float, float] | None = None
@@ -170,7 +179,8 @@ def continuum_limit(
                 f"the best fit run at h = {h * missing[0]:g} mm misses measured points (the laser line, or it "
                 "diverged): no continuum estimate"
             )
-        p_obs = observed_order(*(residuals[f] for f in levels))
+        coarse_point, middle_point, fine_point = (weighted(residuals[f]) for f in levels)
+        p_obs = observed_order(coarse_point, middle_point, fine_point, negligible=NEGLIGIBLE)
         estimate.observed_orders.append({"levels_mm": [h * f for f in levels], "order": p_obs})
         if abs(p_obs - order) <= ORDER_TOLERANCE or p_obs == math.inf:
             pair = levels[1], levels[2]
@@ -196,16 +206,27 @@ def continuum_limit(
     def extrapolated(rc: np.ndarray, rf: np.ndarray) -> np.ndarray:
         return rf + (rf - rc) * gain
 
-    correction = np.abs(move(residuals[fine] - residuals[coarse]) * gain) * ranges
+    # σ_mesh: the correction from the finest level, or, if larger, what extrapolating at the
+    # observed order instead of the law's would change (at p = 1 the band reaches orders
+    # whose true correction exceeds the law's)
+    level_move = np.abs(move(residuals[fine] - residuals[coarse])) * ranges
+    p_obs = estimate.observed_orders[-1]["order"]
+    gain_observed = 0.0 if p_obs == math.inf else 1.0 / (LEVEL_RATIO ** max(p_obs, 1e-3) - 1.0)
+    correction = level_move * max(gain, abs(gain_observed - gain))
     point = q.copy()
     rc, rf = residuals[coarse], residuals[fine]
     lower, upper = objective.box()
-    for _ in range(MAX_STEPS):
-        step = move(extrapolated(rc, rf))
-        estimate.moves.append(step * ranges)
-        if np.all(np.abs(step * ranges) <= SETTLED * sigma_noise):
+    for _ in range(MAX_STEPS + 1):
+        target = np.clip(point + move(extrapolated(rc, rf)), lower, upper)  # a coordinate on a bound stays
+        applied = target - point
+        estimate.moves.append(applied * ranges)
+        if np.all(np.abs(applied * ranges) <= SETTLED * sigma_noise):
+            # small enough to take linearly: applied, its residual predicted, its size in σ_mesh
+            estimate.residual_finest = rf + jac @ applied
+            estimate.residual = extrapolated(rc, rf) + jac @ applied
+            point = target
             break
-        point = np.clip(point + step, lower, upper)
+        point = target
         rc, rf = at(coarse, point), at(fine, point)
         if not (np.all(np.isfinite(rc)) and np.all(np.isfinite(rf))):
             return finish("a run on the way to the continuum estimate misses measured points: no estimate")
@@ -218,7 +239,6 @@ def continuum_limit(
     estimate.status = "extrapolated"
     estimate.pair_mm = (h * coarse, h * fine)
     estimate.q = point
-    estimate.residual = extrapolated(rc, rf)
     estimate.sigma_mesh = np.hypot(correction, estimate.moves[-1])
     estimate.finest = level(fine)
     return finish("; ".join(unavailable))  # why the ladder started finer, if it did

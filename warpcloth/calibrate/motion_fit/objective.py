@@ -133,25 +133,24 @@ class FitObjective:
 
     def refined(self, factor: float) -> FitObjective:
         """The same objective on a mesh ``factor`` × as fine in spacing (``factor`` 0.5
-        halves h), its step refined with it: where ``dt_s = "auto"`` chose the step, the
-        step auto chooses over the box at the new spacing; a fixed step × ``factor``, never
-        above that (imex's bending bound shrinks as h²), a whole fraction of the probe
-        interval."""
+        halves h), its step scaled with it: the fit's step × ``factor``, never above the
+        longest step the new spacing allows (where ``dt_s = "auto"`` chose the fit's step:
+        auto's choice over the box there; imex's bending bound shrinks as h², and the probe
+        interval caps every step), a whole fraction of the probe interval. A fixed step is
+        scaled as given: one the new spacing cannot run stably is the scene's refusal."""
         data = copy.deepcopy(self.base)
         for name in self.spacing_fields:
             set_field(data, name, self.spacing_of(name) * factor)
-        fixed = self.scene.integrator.dt_chosen_by != AUTO
-        set_field(data, "integrator.dt_s", AUTO)
-        set_field(data, "integrator.dt_chosen_by", "scene")
         kind: Any = type(self)  # each objective is made from the same arguments
-        other = kind(data, self.measurement, self.free, self.align, self.device)
-        if fixed:
-            interval = other.scene.output_interval
-            dt = min(self.scene.integrator.dt_s * factor, other.scene.integrator.dt_s)
-            set_field(other.base, "integrator.dt_s", interval / math.ceil(interval / dt * (1 - 1e-12)))
-            set_field(other.base, "integrator.dt_chosen_by", "scene")
-            other.scene = other.scene_of(copy.deepcopy(other.base))
-        return other
+        dt = self.dt_s * factor
+        if self.scene.integrator.dt_chosen_by == AUTO:
+            set_field(data, "integrator.dt_s", AUTO)
+            set_field(data, "integrator.dt_chosen_by", "scene")
+            dt = min(dt, kind(copy.deepcopy(data), self.measurement, self.free, self.align, self.device).dt_s)
+        interval = self.scene.output_interval
+        set_field(data, "integrator.dt_s", interval / math.ceil(interval / dt * (1 - 1e-12)))
+        set_field(data, "integrator.dt_chosen_by", "scene")
+        return kind(data, self.measurement, self.free, self.align, self.device)
 
     def run(self, points: np.ndarray) -> Any:
         """Simulate every point (rows) in one batch."""

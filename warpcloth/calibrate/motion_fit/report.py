@@ -67,7 +67,9 @@ class FitResult:
         self.at_spacing = dict(self.parameters)
         self.sigma_noise = dict(self.sigma)
         self.rms_at_spacing = self.rms
-        if estimate.q is None or estimate.sigma_mesh is None or estimate.finest is None or estimate.residual is None:
+        if estimate.q is None or estimate.sigma_mesh is None or estimate.finest is None:
+            return
+        if estimate.residual is None or estimate.residual_finest is None:
             return
         q, mesh = estimate.q, estimate.sigma_mesh
         d = len(objective.free)
@@ -75,7 +77,10 @@ class FitResult:
         self.parameters = objective.values(q[:d]) | ({SHIFT: self.shift_s} if objective.align else {})
         self.sigma_mesh = dict(zip(objective.names, mesh.tolist(), strict=True))
         self.sigma = {name: math.hypot(self.sigma_noise[name], self.sigma_mesh[name]) for name in self.parameters}
-        self.rms = float(np.sqrt(np.mean(estimate.residual**2)))
+        # judged on the finest level's run at these values (a run that happened), the
+        # extrapolated residual's RMS beside it
+        self.rms = float(np.sqrt(np.mean(estimate.residual_finest**2)))
+        self.continuum["rms_extrapolated_mm"] = float(np.sqrt(np.mean(estimate.residual**2))) * 1e3
         self.at_bound = ended_at_bound(objective.free, q[:d])
         self.spacing = {name: estimate.finest.spacing_of(name) for name in objective.spacing_fields}
         self.dt_s = estimate.finest.dt_s

@@ -176,8 +176,11 @@ class SheetObjective(FitObjective):
         return check_sheet_scene(sheet_scene_from_dict(data))
 
     def continuum_order(self) -> float | None:
-        """2 (docs/model.md §17.7); None when a bending or shear law has no continuum limit."""
-        return None if sheet_mesh_note(self.base) else 2.0
+        """2 (docs/model.md §17.7), 1 with the paper's clamp edge (``sheet.edge_hinge``, as a
+        strip's); None when a bending or shear law has no continuum limit."""
+        if sheet_mesh_note(self.base):
+            return None
+        return 1.0 if self.scene.sheet.edge_hinge == "paper" else 2.0
 
     def corner_step(self, corners: list[dict]) -> float:
         """The shortest step any corner sheet chooses (``dt_s = "auto"``, :func:`check_sheet_scene`)."""
