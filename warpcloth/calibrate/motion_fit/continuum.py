@@ -8,8 +8,9 @@ p = 2 with the second-order clamp edge, 1 with the paper's), the simulated obser
 the fitted point q obey r_h(q) = r_0(q) + C(q) h^p + …, so
 
 1. **The order is checked.** The best point is run at 2h and h/2 (one variant each; the
-   step refined with h as :meth:`~.objective.FitObjective.refined` says) and the
-   observed order p_obs = log₂(‖r_h − r_2h‖ / ‖r_h/2 − r_h‖) compared with p. Outside
+   step scaled with h as :meth:`~.objective.FitObjective.refined` says) and the observed
+   order p_obs = log₂(‖x_h − x_2h‖ / ‖x_h/2 − x_h‖) compared with p, x_k = −J⁺ r_k the
+   point level k's motion asks for in units of σ_noise (what the values see). Outside
    p ± :data:`ORDER_TOLERANCE` the ladder is refined once (h, h/2, h/4); if the three
    finer levels still disagree, there is no extrapolation the evidence supports and the
    fit says so (``spacing_limited``).
@@ -22,15 +23,19 @@ the fitted point q obey r_h(q) = r_0(q) + C(q) h^p + …, so
    of the parameters themselves: (2^p / (2^p − 1)) × the move that refitting at h/2 would
    make (the old ``--check-spacing`` move, ×4/3 at p = 2).
 3. **The mesh's share of σ** is the size of the extrapolation's correction from the
-   finest level, σ_mesh = ``|J⁺(r_f − r_c)|`` / (2^p − 1), with the last (unapplied) step
-   added in quadrature. It bounds the extrapolation's error whenever the true order lies
+   finest level, σ_mesh = ``|J⁺(r_f − r_c)|`` / (2^p − 1) (or, where larger, what
+   extrapolating at the observed order would change), with the last, linearly applied
+   step added in quadrature. It bounds the extrapolation's error whenever the true order lies
    within p ± 1/2, the band the order check accepts (at order 1.5 the correction with
    p = 2 is 0.21 of the level difference short, at 2.5 0.12 too long; the correction
    itself is 0.33 of it), and σ_total² = σ_noise² + σ_mesh².
 
-Why this method, measured against refitting at each level and against a ladder of fits
-(benchmarks/continuum_fit.py, docs/calibration.md): it costs 2–4 runs at h/2 and one at
-2h, about as much again as the fit at h, where a refit at h/2 alone costs 8× the fit.
+The Jacobian is the fit's at h (refreshing it at the finest level would cost 2d + 1 fine
+runs), so the values carry a bias of order σ_noise × its relative change between levels.
+
+Why this method, measured against a ladder of refits (benchmarks/continuum_fit.py,
+docs/calibration.md): as accurate, at 1.1–1.7× the fit alone on the bundled strips where
+the ladder costs 1.9–9.5×.
 """
 
 from __future__ import annotations
