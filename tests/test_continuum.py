@@ -23,6 +23,7 @@ from warpcloth.calibrate.motion_fit import continuum_limit, fit_motion, free_par
 from warpcloth.calibrate.motion_fit.continuum import ORDER_TOLERANCE, observed_order
 from warpcloth.calibrate.motion_fit.objective import FitObjective
 from warpcloth.calibrate.motion_fit.parameters import FreeParameter
+from warpcloth.calibrate.motion_fit.verdict import ended_at_bound
 from warpcloth.io.measured import read_measurement
 from warpcloth.scene import read_scene_file, set_field
 
@@ -33,13 +34,13 @@ class LinearMesh(FitObjective):
 
     spacing_fields = ("strip.spacing_mm",)
 
-    def __init__(self, h: float, order: float, higher: float = 0.0) -> None:
+    def __init__(self, h: float, order: float, higher: float = 0.0, bounds: tuple = (-10.0, 10.0)) -> None:
         rng = np.random.default_rng(3)
         self.a = rng.normal(size=(40, 2))
         self.b = rng.normal(size=40)
         self.c = rng.normal(size=40)
-        self.h, self.order, self.higher = h, order, higher
-        self.free = [FreeParameter("x", "x", -10.0, 10.0, 0.0), FreeParameter("y", "y", -10.0, 10.0, 0.0)]
+        self.h, self.order, self.higher, self.bounds = h, order, higher, bounds
+        self.free = [FreeParameter("x", "x", *bounds, 0.0), FreeParameter("y", "y", -10.0, 10.0, 0.0)]
         self.align = 0.0
         self.launches = self.variants = 0
 
@@ -49,7 +50,7 @@ class LinearMesh(FitObjective):
         return self.h
 
     def refined(self, factor: float) -> "LinearMesh":
-        return LinearMesh(self.h * factor, self.order, self.higher)
+        return LinearMesh(self.h * factor, self.order, self.higher, self.bounds)
 
     def run(self, points: np.ndarray) -> np.ndarray:
         return points
@@ -104,6 +105,31 @@ def test_levels_that_disagree_with_the_laws_order_refine_then_refuse():
     first, second = (o["order"] for o in estimate.observed_orders)
     assert abs(first - 2) > ORDER_TOLERANCE >= abs(second - 2)
     assert estimate.status == "extrapolated" and estimate.pair_mm == (1.0, 0.5)
+
+
+def test_a_first_order_law_is_extrapolated_at_its_order():
+    # the paper's clamp edge: first order, and the law says so; the extrapolation is exact
+    model = LinearMesh(h=2.0, order=1.0)
+    u, r = fitted_at(model)
+    estimate = continuum_limit(model, u, model.jacobian_u(), r, np.full(2, 1e-4), order=1.0)
+    assert estimate.status == "extrapolated" and estimate.pair_mm == (2.0, 1.0)
+    truth = np.linalg.lstsq(model.a, model.b, rcond=None)[0]
+    np.testing.assert_allclose(list(model.values(estimate.q).values()), truth, atol=1e-9)
+
+
+def test_a_continuum_optimum_beyond_the_box_ends_on_its_bound():
+    # bounds that hold the fit at h but not its continuum limit: the estimate stops on the
+    # bound (the fit then says at_bound), not in a loop that never settles
+    wide = LinearMesh(h=2.0, order=2.0)
+    truth = np.linalg.lstsq(wide.a, wide.b, rcond=None)[0]
+    at_h = np.array(list(wide.values(fitted_at(wide)[0]).values()))
+    edge = float(at_h[0] + 0.3 * (truth[0] - at_h[0]))  # a third of the way from the fit at h to the limit
+    bounds = (edge, 10.0) if truth[0] < at_h[0] else (-10.0, edge)
+    model = LinearMesh(h=2.0, order=2.0, bounds=bounds)
+    u, r = fitted_at(model)
+    estimate = continuum_limit(model, u, model.jacobian_u(), r, np.full(2, 1e-4), order=2.0)
+    assert estimate.status == "extrapolated"
+    assert ended_at_bound(model.free, estimate.q) == ["x"]
 
 
 def test_observed_order_of_levels_that_agree_to_round_off_is_infinite():
