@@ -215,7 +215,6 @@ def continuum_limit(
     # observed order instead of the law's would change (at p = 1 the band reaches orders
     # whose true correction exceeds the law's)
     level_move = np.abs(move(residuals[fine] - residuals[coarse])) * ranges
-    p_obs = estimate.observed_orders[-1]["order"]
     gain_observed = 0.0 if p_obs == math.inf else 1.0 / (LEVEL_RATIO ** max(p_obs, 1e-3) - 1.0)
     correction = level_move * max(gain, abs(gain_observed - gain))
     point = q.copy()

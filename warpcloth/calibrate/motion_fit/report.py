@@ -58,19 +58,20 @@ class FitResult:
 
     def apply_continuum(self, estimate: ContinuumEstimate, objective: FitObjective) -> None:
         """Report ``estimate`` (:func:`~.continuum.continuum_limit`): the values at h → 0,
-        σ_total² = σ_noise² + σ_mesh², the RMS of the extrapolated residual, the bounds
-        judged there; best.toml reruns them on the finest level's mesh. An unresolved
-        estimate keeps the values at the scene's spacing (the verdict says why)."""
+        σ_total² = σ_noise² + σ_mesh², the RMS of the finest level's run there (the
+        extrapolated residual's beside it), the bounds judged there; best.toml reruns them
+        on the finest level's mesh. An unresolved estimate keeps the values at the scene's
+        spacing (the verdict says why)."""
         self.continuum = estimate.to_json(objective.names) | {
             "fitted_at_mm": {name: objective.spacing_of(name) for name in objective.spacing_fields}
         }
         self.at_spacing = dict(self.parameters)
         self.sigma_noise = dict(self.sigma)
         self.rms_at_spacing = self.rms
-        if estimate.q is None or estimate.sigma_mesh is None or estimate.finest is None:
+        if estimate.status != "extrapolated":
             return
-        if estimate.residual is None or estimate.residual_finest is None:
-            return
+        assert estimate.q is not None and estimate.sigma_mesh is not None and estimate.finest is not None
+        assert estimate.residual is not None and estimate.residual_finest is not None  # set together
         q, mesh = estimate.q, estimate.sigma_mesh
         d = len(objective.free)
         self.shift_s = objective.shift_of(q)

@@ -89,7 +89,7 @@ def fit_motion(
     fit.noise, fit.noise_source = judged_noise(measurement, noise, residual)
     fit.other_minima = other_minima
     fit.mesh_note = sheet_mesh_note(base) if sheet else mesh_note(base)
-    fit.dt_s = objective.scene.integrator.dt_s
+    fit.dt_s = objective.dt_s
     fit.spacing = {name: objective.spacing_of(name) for name in objective.spacing_fields}
     # result row 0 is the reported point (accepted last, or re-run above)
     missing = int(np.isnan(objective.residuals(result, 0, shift, penalise=False)).sum())
