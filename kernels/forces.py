@@ -14,12 +14,12 @@ from .types import precision
 
 
 @functools.cache
-def build(scalar: Any) -> SimpleNamespace:
-    """``accumulate_internal_forces`` for ``scalar``."""
+def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
+    """``accumulate_internal_forces`` for ``scalar`` (the structs of a model with force ``terms``)."""
     vec2 = precision(scalar).vec2
     zero = scalar(0.0)
     one = scalar(1.0)
-    strip = structs.build(scalar)
+    strip = structs.build(scalar, terms)
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
     Stepping = integrators.build(scalar).Stepping
     tension = tensile.build(scalar).force_per_width

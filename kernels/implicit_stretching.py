@@ -29,24 +29,26 @@ from typing import Any
 
 import warp as wp
 
-from . import drives, integrators, structs, tensile
+from . import drives, force_terms, fused, integrators, structs, tensile
 from .types import precision
 
 
 @functools.cache
-def build(scalar: Any) -> SimpleNamespace:
-    """``stretching_corrections`` for ``scalar``."""
+def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
+    """``stretching_corrections`` for ``scalar`` and the model's force ``terms``."""
     types = precision(scalar)
     vec2, mat22 = types.vec2, types.mat22
     zero = scalar(0.0)
     one = scalar(1.0)
     two = scalar(2.0)
-    strip = structs.build(scalar)
+    strip = structs.build(scalar, terms)
     StripModel, StripState = strip.StripModel, strip.StripState
     drive = drives.build(scalar)
     StripControl, clamp_angle, held_free_end = drive.StripControl, drive.clamp_angle, drive.held_free_end
     Stepping = integrators.build(scalar).Stepping
     stiffness = tensile.build(scalar).stiffness_per_width
+    internal_force = fused.internal_forces(StripState)
+    applied = force_terms.build(terms, scalar, vec2, strip.tally, structs.STRIP_CHANNELS)
 
     @wp.func
     def inverse_mass(model: StripModel, i: int, s: int, held: bool):
@@ -100,8 +102,9 @@ def build(scalar: Any) -> SimpleNamespace:
         if i == n - 1:
             m = m * scalar(0.5)
         v = state.velocity[i, s]
-        f = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
-        f = f - gamma * m * v + m * vec2(zero, -model.gravity)
+        f = internal_force(state, i, s) - gamma * m * v + m * vec2(zero, -model.gravity)
+        if wp.static(applied.present):
+            f = f + applied.force(x, v, m)
         return v + f * (dt / m)
 
     @wp.func

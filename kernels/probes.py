@@ -1,8 +1,9 @@
 """What is recorded of every strip at each output sample (docs/model.md §12).
 
-The probe buffer is ``[sample, field, strip]`` with fields in :data:`PROBE_FIELDS`
+The probe buffer is ``[sample, field, strip]`` with fields in :data:`STRIP_PROBES`
 order; the kernel writes each field through its named slot, so adding a probe is one
-name and its unit here and one line in ``record_probes``.
+description here and one line in ``record_probes`` (the budget and units follow from
+the description).
 """
 
 import functools
@@ -11,54 +12,48 @@ from typing import Any
 
 import warp as wp
 
-from . import drives, integrators, structs, tensile
+from . import drives, fused, integrators, structs, tensile
+from .probe_set import STORED, WORK_AGAINST, WORK_BY, Probe, ProbeSet
 
-PROBE_FIELDS = (
-    "tip_x",
-    "tip_y",
-    "tip_speed",
-    "laser_x",
-    "clamp_angle",
-    "kinetic",
-    "gravitational",
-    "tensile",
-    "bending_elastic_work",
-    "hysteresis_work",
-    "damping_work",
-    "drive_work",
-    "loop_curvature",
-    "loop_moment",
+STRIP_PROBES = ProbeSet(
+    (
+        Probe("tip_x", "m"),
+        Probe("tip_y", "m"),
+        Probe("tip_speed", "m/s"),
+        Probe("laser_x", "m (NaN when the strip misses the line)"),
+        Probe("clamp_angle", "rad"),
+        Probe("kinetic", "J", STORED),
+        Probe("gravitational", "J", STORED),
+        Probe("tensile", "J", STORED),
+        Probe("bending_elastic_work", "J", WORK_AGAINST),
+        Probe("hysteresis_work", "J", WORK_AGAINST),
+        Probe("damping_work", "J", WORK_AGAINST),
+        Probe("drive_work", "J", WORK_BY),
+        Probe("loop_curvature", "1/m (output.loop_hinge_mm)"),
+        Probe("loop_moment", "N·m/m (moment per width)"),
+    )
 )
-"""Probe quantities, in the order of the probe buffer's second axis (SI)."""
+"""What a strip records, in the order of the probe buffer's second axis (SI), with each
+quantity's place in the energy budget; a model's force terms append their channels."""
 
-PROBE_INDEX = {name: i for i, name in enumerate(PROBE_FIELDS)}
+PROBE_FIELDS = STRIP_PROBES.fields
+"""Probe quantities of a strip without force terms, in buffer order."""
+
+PROBE_INDEX = STRIP_PROBES.index
 """Slot of each probe quantity."""
 
-PROBE_UNITS = {
-    "tip_x": "m",
-    "tip_y": "m",
-    "tip_speed": "m/s",
-    "laser_x": "m (NaN when the strip misses the line)",
-    "clamp_angle": "rad",
-    "kinetic": "J",
-    "gravitational": "J",
-    "tensile": "J",
-    "bending_elastic_work": "J",
-    "hysteresis_work": "J",
-    "damping_work": "J",
-    "drive_work": "J",
-    "loop_curvature": "1/m (output.loop_hinge_mm)",
-    "loop_moment": "N·m/m (moment per width)",
-}
+PROBE_UNITS = STRIP_PROBES.units
 """SI unit of each probe quantity, as written into a run directory's meta.json."""
 
 
 @functools.cache
-def build(scalar: Any) -> SimpleNamespace:
-    """The ``ProbeSettings`` struct and ``record_probes`` for ``scalar``."""
+def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
+    """The ``ProbeSettings`` struct and ``record_probes`` for ``scalar`` and force ``terms``."""
     zero = scalar(0.0)
     half = scalar(0.5)
-    strip = structs.build(scalar)
+    strip = structs.build(scalar, terms)
+    probe_set = STRIP_PROBES.with_terms(terms)
+    record_work = fused.tally_recorder(scalar, strip.tally, probe_set.channel_slots, probe_set.channel_signs)
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
     drive = drives.build(scalar)
     StripControl, clamp_angle = drive.StripControl, drive.clamp_angle
@@ -73,8 +68,6 @@ def build(scalar: Any) -> SimpleNamespace:
         slot.clamp_angle,
     )
     KINETIC, GRAVITATIONAL, TENSILE = slot.kinetic, slot.gravitational, slot.tensile
-    BENDING_ELASTIC_WORK, HYSTERESIS_WORK = slot.bending_elastic_work, slot.hysteresis_work
-    DAMPING_WORK, DRIVE_WORK = slot.damping_work, slot.drive_work
     LOOP_CURVATURE, LOOP_MOMENT = slot.loop_curvature, slot.loop_moment
 
     @wp.struct
@@ -129,7 +122,6 @@ def build(scalar: Any) -> SimpleNamespace:
             tensile = tensile + tensile_energy(strain, a) * model.width[s] * model.rest_length
         theta, rate = clamp_angle(control, s, t)
         tip = state.position[n - 1, s]
-        work = state.work[s]
         probes[k, TIP_X, s] = tip[0]
         probes[k, TIP_Y, s] = tip[1]
         probes[k, TIP_SPEED, s] = wp.length(state.velocity[n - 1, s])
@@ -138,10 +130,6 @@ def build(scalar: Any) -> SimpleNamespace:
         probes[k, KINETIC, s] = kinetic
         probes[k, GRAVITATIONAL, s] = gravitational
         probes[k, TENSILE, s] = tensile
-        probes[k, BENDING_ELASTIC_WORK, s] = work[0]
-        probes[k, HYSTERESIS_WORK, s] = work[1]
-        probes[k, DAMPING_WORK, s] = work[2]
-        probes[k, DRIVE_WORK, s] = work[3]
         # The loop hinge's curvature at the last force evaluation and the moment per
         # width there, read back from its memory (no extra force pass).
         # The memory holds K − K_rest (the law's argument); the probe is the strip's own K.
@@ -157,6 +145,6 @@ def build(scalar: Any) -> SimpleNamespace:
         probes[k, LOOP_MOMENT, s] = (
             law.elastic_moment(curvature, p) * grip[0] + law.hysteretic_moment(curvature, memory, p) * grip[1]
         )
-        return kinetic + gravitational + tensile + work[0] + work[1] + work[2]
+        return record_work(probes, k, s, state.work[s], kinetic + gravitational + tensile)
 
     return SimpleNamespace(ProbeSettings=ProbeSettings, record_probes=record_probes)

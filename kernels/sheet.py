@@ -13,47 +13,41 @@ from typing import Any
 
 import warp as wp
 
-from . import drives, sheet_forces, sheet_structs, tensile
-from .status import STATUS_NONFINITE_ENERGY, STATUS_OK
+from . import drives, force_terms, fused, sheet_forces, sheet_structs, tensile
+from .probe_set import STORED, WORK_AGAINST, WORK_BY, Probe, ProbeSet
+from .status import STATUS_OK
 from .types import precision
 
 wp.set_module_options({"enable_backward": False})
 
-SHEET_PROBE_FIELDS = (
-    "clamp_angle",
-    "clamp_displacement",
-    "kinetic",
-    "gravitational",
-    "tensile",
-    "elastic_work",
-    "hysteresis_work",
-    "damping_work",
-    "drive_work",
-    "cell_shear_angle",
-    "cell_shear_force",
-    "hinge_curvature",
-    "hinge_moment",
+SHEET_PROBES = ProbeSet(
+    (
+        Probe("clamp_angle", "rad"),
+        Probe("clamp_displacement", "m"),
+        Probe("kinetic", "J", STORED),
+        Probe("gravitational", "J", STORED),
+        Probe("tensile", "J", STORED),
+        Probe("elastic_work", "J (against bending D K and shear G φ)", WORK_AGAINST),
+        Probe("hysteresis_work", "J (against the laws' hysteretic parts)", WORK_AGAINST),
+        Probe("damping_work", "J", WORK_AGAINST),
+        Probe("drive_work", "J (done by the clamp)", WORK_BY),
+        Probe("cell_shear_angle", "rad (the probed cell)"),
+        Probe("cell_shear_force", "N/m (shear force per width of the probed cell)"),
+        Probe("hinge_curvature", "1/m (the probed hinge)"),
+        Probe("hinge_moment", "N·m/m (moment per width of the probed hinge)"),
+    )
 )
-"""What is recorded of every sheet at each output sample, in the probe buffer's order."""
+"""What a sheet records at each output sample, in the probe buffer's order, with each
+quantity's place in the energy budget; a model's force terms append their channels."""
 
-SHEET_PROBE_UNITS = {
-    "clamp_angle": "rad",
-    "clamp_displacement": "m",
-    "kinetic": "J",
-    "gravitational": "J",
-    "tensile": "J",
-    "elastic_work": "J (against bending D K and shear G φ)",
-    "hysteresis_work": "J (against the laws' hysteretic parts)",
-    "damping_work": "J",
-    "drive_work": "J (done by the clamp)",
-    "cell_shear_angle": "rad (the probed cell)",
-    "cell_shear_force": "N/m (shear force per width of the probed cell)",
-    "hinge_curvature": "1/m (the probed hinge)",
-    "hinge_moment": "N·m/m (moment per width of the probed hinge)",
-}
+SHEET_PROBE_FIELDS = SHEET_PROBES.fields
+"""Probe quantities of a sheet without force terms, in buffer order."""
+
+SHEET_PROBE_UNITS = SHEET_PROBES.units
 """SI unit of each sheet probe."""
 
-SHEET_PROBE_INDEX = {name: i for i, name in enumerate(SHEET_PROBE_FIELDS)}
+SHEET_PROBE_INDEX = SHEET_PROBES.index
+"""Slot of each sheet probe."""
 
 
 @dataclass(frozen=True)
@@ -69,28 +63,37 @@ class SheetKernels:
 
 
 @functools.cache
-def build(scalar: Any) -> SheetKernels:
-    """The sheet's types and kernels for ``scalar``."""
+def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetKernels:
+    """The sheet's types and kernels for ``scalar`` and the model's force ``terms``."""
     types = precision(scalar)
-    vec3, vec4 = types.vec3, types.vec4
+    vec3 = types.vec3
     zero = scalar(0.0)
     half = scalar(0.5)
     one = scalar(1.0)
     two = scalar(2.0)
-    sheet = sheet_structs.build(scalar)
+    sheet = sheet_structs.build(scalar, terms)
     SheetModel, SheetState, SheetControl, SheetStepping = (
         sheet.SheetModel,
         sheet.SheetState,
         sheet.SheetControl,
         sheet.SheetStepping,
     )
-    law = sheet.law
+    law, tally = sheet.law, sheet.tally
     piecewise_polynomial = drives.build(scalar).piecewise_polynomial
-    forces = sheet_forces.build(scalar)
+    forces = sheet_forces.build(scalar, terms)
     accumulate_sheet_forces, shear_angle = forces.accumulate_sheet_forces, forces.shear_angle
     hinge_geometry, hinge_curvature, cell_sides = forces.hinge_geometry, forces.hinge_curvature, forces.cell_sides
     tensile_energy = tensile.build(scalar).energy_per_width
     slot = SHEET_PROBE_INDEX
+    probe_set = SHEET_PROBES.with_terms(terms)
+    record_work = fused.tally_recorder(scalar, tally, probe_set.channel_slots, probe_set.channel_signs)
+    work_on = fused.law_work(
+        SheetState, vec3, tally, SHEET_PROBES.channel("elastic_work"), SHEET_PROBES.channel("hysteresis_work")
+    )
+    damping_work = fused.channel(scalar, tally, SHEET_PROBES.channel("damping_work"))
+    drive_work = fused.channel(scalar, tally, SHEET_PROBES.channel("drive_work"))
+    internal_force = fused.internal_forces(SheetState)
+    applied = force_terms.build(terms, scalar, vec3, tally, sheet_structs.SHEET_CHANNELS)
 
     @wp.struct
     class SheetProbeSettings:
@@ -99,6 +102,7 @@ def build(scalar: Any) -> SheetKernels:
         probe_cell: int
         probe_hinge: int
         markers: wp.array(dtype=int)  # nodes whose positions are recorded at every sample
+        marker_positions: wp.array3d(dtype=vec3)  # [sample of the launch, marker, sheet], m
         probes_per_frame: int
 
     @wp.func
@@ -136,20 +140,10 @@ def build(scalar: Any) -> SheetKernels:
         return centre + arm + d * control.direction[s]
 
     @wp.func
-    def work_on(state: SheetState, i: int, s: int, displacement: vec3):
-        # Work done against the laws' forces at node i over the centred displacement
-        # (x_{n+1} − x_{n−1}) / 2, as the strip tallies it (§10.3).
-        return vec4(
-            -wp.dot(state.force_elastic[i, s], displacement),
-            -wp.dot(state.force_hysteretic[i, s], displacement),
-            zero,
-            zero,
-        )
-
-    @wp.func
     def advance_free_nodes(
-        model: SheetModel, stepping: SheetStepping, state: SheetState, s: int, gamma: scalar, work: vec4
+        model: SheetModel, stepping: SheetStepping, state: SheetState, s: int, gamma: scalar, work: tally
     ):
+        # every free node under its internal forces, damping, gravity and the model's force terms
         dt = stepping.dt
         g = vec3(zero, -model.gravity, zero)
         rho = model.density[s]
@@ -157,14 +151,18 @@ def build(scalar: Any) -> SheetKernels:
             if model.clamped[i] != 0:
                 continue
             m = rho * model.node_area[i]
+            x = state.position[i, s]
             v = state.velocity[i, s]
             f_damp = -gamma * m * v
-            f = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
-            f = f + f_damp + m * g
+            f = internal_force(state, i, s) + f_damp + m * g
+            if wp.static(applied.present):
+                f = f + applied.force(x, v, m)
             v_new = v + f * (dt / m)
             sweep = (v + v_new) * (half * dt)
-            work = work + work_on(state, i, s, sweep) + vec4(zero, zero, -wp.dot(f_damp, sweep), zero)
-            state.position[i, s] = state.position[i, s] + v_new * dt
+            work = work + work_on(state, i, s, sweep) + damping_work(-wp.dot(f_damp, sweep))
+            if wp.static(applied.present):
+                work = work + applied.work(x, v, m, sweep)
+            state.position[i, s] = x + v_new * dt
             state.velocity[i, s] = v_new
         return work
 
@@ -176,7 +174,7 @@ def build(scalar: Any) -> SheetKernels:
         state: SheetState,
         s: int,
         t_next: scalar,
-        work: vec4,
+        work: tally,
     ):
         theta, rate, d, d_rate = clamp_pose(control, s, t_next)
         theta_before, _rate, d_before, _d_rate = clamp_pose(control, s, t_next - two * stepping.dt)
@@ -187,8 +185,8 @@ def build(scalar: Any) -> SheetKernels:
                 continue
             x_new = clamped_position(model, control, s, i, theta, d)
             sweep = (x_new - clamped_position(model, control, s, i, theta_before, d_before)) * half
-            f_int = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
-            work = work + work_on(state, i, s, sweep) + vec4(zero, zero, zero, -wp.dot(f_int, sweep))
+            f_int = internal_force(state, i, s)
+            work = work + work_on(state, i, s, sweep) + drive_work(-wp.dot(f_int, sweep))
             arm = x_new - control.centre[s] - d * direction
             state.position[i, s] = x_new
             state.velocity[i, s] = rate * wp.cross(axis, arm) + d_rate * direction
@@ -208,7 +206,7 @@ def build(scalar: Any) -> SheetKernels:
         work = advance_free_nodes(model, stepping, state, s, gamma, state.work[s])
         work = move_clamp(model, control, stepping, state, s, t_next, work)
         if step + 1 == stepping.release_step:
-            work = vec4()  # the energy budget is reported from the release on
+            work = tally()  # the energy budget is reported from the release on
         state.work[s] = work
         return STATUS_OK, 0, zero
 
@@ -222,7 +220,6 @@ def build(scalar: Any) -> SheetKernels:
         s: int,
         step: int,
         probes: wp.array3d(dtype=scalar),
-        markers: wp.array3d(dtype=vec3),
         k: int,
     ):
         # Writes sample k of sheet s; returns the energy budget's state-and-work sum.
@@ -244,16 +241,11 @@ def build(scalar: Any) -> SheetKernels:
             stretch = stretch + tensile_energy(strain, model.tensile[family, s]) * model.edge_width[e] * l0
         t = scalar(step - stepping.release_step) * stepping.dt
         theta, _rate, d, _d_rate = clamp_pose(control, s, t)
-        work = state.work[s]
         probes[k, wp.static(slot["clamp_angle"]), s] = theta
         probes[k, wp.static(slot["clamp_displacement"]), s] = d
         probes[k, wp.static(slot["kinetic"]), s] = kinetic
         probes[k, wp.static(slot["gravitational"]), s] = gravitational
         probes[k, wp.static(slot["tensile"]), s] = stretch
-        probes[k, wp.static(slot["elastic_work"]), s] = work[0]
-        probes[k, wp.static(slot["hysteresis_work"]), s] = work[1]
-        probes[k, wp.static(slot["damping_work"]), s] = work[2]
-        probes[k, wp.static(slot["drive_work"]), s] = work[3]
         # a sheet without cells or hinges (a single line) has nothing there to probe
         probes[k, wp.static(slot["cell_shear_angle"]), s] = scalar(wp.nan)
         probes[k, wp.static(slot["cell_shear_force"]), s] = scalar(wp.nan)
@@ -276,55 +268,13 @@ def build(scalar: Any) -> SheetKernels:
                 curvature, memory, p
             )
         for j in range(settings.markers.shape[0]):
-            markers[k, j, s] = state.position[settings.markers[j], s]
-        return kinetic + gravitational + stretch + work[0] + work[1] + work[2]
+            settings.marker_positions[k, j, s] = state.position[settings.markers[j], s]
+        return record_work(probes, k, s, state.work[s], kinetic + gravitational + stretch)
 
-    @wp.func
-    def stop(state: SheetState, s: int, code: int, step: int, index: int, value: scalar):
-        state.status[s] = code
-        state.status_step[s] = step
-        state.status_index[s] = index
-        state.status_value[s] = value
-        state.step[s] = step
-
-    @wp.kernel(module="unique", enable_backward=False)
-    def advance(
-        model: SheetModel,
-        control: SheetControl,
-        stepping: SheetStepping,
-        state: SheetState,
-        settings: SheetProbeSettings,
-        output_steps: wp.array(dtype=int),
-        first_output: int,
-        first_frame: int,
-        probes: wp.array3d(dtype=scalar),
-        markers: wp.array3d(dtype=vec3),
-        frames: wp.array3d(dtype=vec3),
-        first_sheet: int,
-    ):
-        """Advance sheets ``first_sheet`` … ``first_sheet + dim − 1`` to each output step in
-        turn, recording probes, markers (and frames)."""
-        s = first_sheet + wp.tid()
-        if state.status[s] != STATUS_OK:
-            return
-        step = state.step[s]
-        for k in range(output_steps.shape[0]):
-            while step < output_steps[k]:
-                code, index, value = substep(model, control, stepping, state, s, step)
-                if code != STATUS_OK:
-                    stop(state, s, code, step, index, value)
-                    return
-                step += 1
-            energy = record_probes(model, control, stepping, state, settings, s, step, probes, markers, k)
-            if not wp.isfinite(energy):
-                stop(state, s, STATUS_NONFINITE_ENERGY, step, -1, energy)
-                return
-            output = first_output + k
-            if output >= 0 and output % settings.probes_per_frame == 0 and frames.shape[0] > 0:
-                f = output / settings.probes_per_frame - first_frame
-                for i in range(model.n_nodes):
-                    frames[f, i, s] = state.position[i, s]
-        state.step[s] = step
+    stop = fused.stopper(SheetState, scalar)
+    advance = fused.build_advance(
+        SheetModel, SheetControl, SheetStepping, SheetState, SheetProbeSettings, scalar, vec3, substep, record_probes
+    )
 
     @wp.kernel(module="unique", enable_backward=False)
     def initialise_memory(model: SheetModel, state: SheetState):

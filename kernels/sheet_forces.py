@@ -31,14 +31,14 @@ class SheetForces:
 
 
 @functools.cache
-def build(scalar: Any) -> SheetForces:
-    """``accumulate_sheet_forces`` for ``scalar``."""
+def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
+    """``accumulate_sheet_forces`` for ``scalar`` (the structs of a model with force ``terms``)."""
     vec3 = precision(scalar).vec3
     zero = scalar(0.0)
     one = scalar(1.0)
     half = scalar(0.5)
     two = scalar(2.0)
-    sheet = sheet_structs.build(scalar)
+    sheet = sheet_structs.build(scalar, terms)
     SheetModel, SheetState, SheetStepping, law = sheet.SheetModel, sheet.SheetState, sheet.SheetStepping, sheet.law
     tension = tensile.build(scalar).force_per_width
 

@@ -15,11 +15,14 @@ from typing import Any
 
 import warp as wp
 
-from . import laws
+from . import fused, laws
 from .types import precision
 
 WARP, WEFT = 0, 1
 """The two yarn families, the first index of every per-direction array."""
+
+SHEET_CHANNELS = 4
+"""The sheet's own work channels: elastic, hysteresis, damping, drive (kernels/sheet.py)."""
 
 
 @dataclass(frozen=True)
@@ -31,14 +34,17 @@ class SheetTypes:
     SheetControl: Any
     SheetStepping: Any
     law: Any
+    tally: Any
 
 
 @functools.cache
-def build(scalar: Any) -> SheetTypes:
-    """``SheetModel``, ``SheetState`` and ``SheetControl`` for ``scalar``."""
+def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetTypes:
+    """``SheetModel``, ``SheetState`` and ``SheetControl`` for ``scalar``, with an energy
+    tally channel for each force term of ``terms``."""
     types = precision(scalar)
     vec3, vec4, vec5 = types.vec3, types.vec4, types.vec5
     law = laws.build(scalar)
+    tally = fused.tally_type(scalar, SHEET_CHANNELS + len(terms))
 
     @wp.struct
     class SheetModel:
@@ -79,7 +85,7 @@ def build(scalar: Any) -> SheetTypes:
         cell: wp.array2d(dtype=law.Memory)  # [cell, sheet]
         hinge_history: law.History  # reversal points of hinges whose law has return-point memory
         cell_history: law.History
-        work: wp.array(dtype=vec4)  # (elastic, hysteresis, damping, drive), J
+        work: wp.array(dtype=tally)  # the work channels of kernels/sheet.py SHEET_PROBES (+ force terms'), J
         step: wp.array(dtype=int)
         status: wp.array(dtype=int)
         status_step: wp.array(dtype=int)
@@ -115,5 +121,10 @@ def build(scalar: Any) -> SheetTypes:
         release_step: int  # step index of t = 0; the clamp settles before it
 
     return SheetTypes(
-        SheetModel=SheetModel, SheetState=SheetState, SheetControl=SheetControl, SheetStepping=SheetStepping, law=law
+        SheetModel=SheetModel,
+        SheetState=SheetState,
+        SheetControl=SheetControl,
+        SheetStepping=SheetStepping,
+        law=law,
+        tally=tally,
     )

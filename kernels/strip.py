@@ -15,8 +15,8 @@ from typing import Any
 
 import warp as wp
 
-from . import drives, forces, geometry, implicit_stretching, integrators, probes, structs
-from .status import STATUS_NONFINITE_ENERGY, STATUS_OK
+from . import drives, force_terms, forces, fused, geometry, implicit_stretching, integrators, probes, structs
+from .status import STATUS_OK
 from .types import precision
 
 # Forward simulation only: no adjoint code to generate, compile and carry. Each kernel
@@ -48,49 +48,45 @@ class HingeKernels:
 
 
 @functools.cache
-def build(scalar: Any, scheme: str) -> StripKernels:
-    """Types and the ``advance`` kernel of one configuration."""
+def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels:
+    """Types and the ``advance`` kernel of one configuration (a model's force ``terms``
+    included: kernels/force_terms.py)."""
     types = precision(scalar)
-    vec2, vec4, mat22 = types.vec2, types.vec4, types.mat22
+    vec2, mat22 = types.vec2, types.mat22
     zero = scalar(0.0)
     half = scalar(0.5)
-    strip = structs.build(scalar)
-    StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
+    strip = structs.build(scalar, terms)
+    StripModel, StripState, law, tally = strip.StripModel, strip.StripState, strip.law, strip.tally
     drive = drives.build(scalar)
     StripControl, clamp_angle, held_free_end = drive.StripControl, drive.clamp_angle, drive.held_free_end
     stepping_types = integrators.build(scalar)
     Stepping = stepping_types.Stepping
     update_node = stepping_types.schemes[scheme]
-    accumulate_internal_forces = forces.build(scalar).accumulate_internal_forces
-    recorder = probes.build(scalar)
+    accumulate_internal_forces = forces.build(scalar, terms).accumulate_internal_forces
+    recorder = probes.build(scalar, terms)
     ProbeSettings, record_probes = recorder.ProbeSettings, recorder.record_probes
     perp = geometry.build(scalar).perp
     implicit = scheme in integrators.IMPLICIT_STRETCHING  # resolved when the kernel is generated (wp.static)
-    stretching_corrections = implicit_stretching.build(scalar).stretching_corrections
-
-    @wp.func
-    def work_on(state: StripState, i: int, s: int, displacement: vec2):
-        # Work done *against* the bending forces at node i. Callers pass the centred
-        # displacement (v_n + v_{n+1}) dt / 2 = (x_{n+1} - x_{n-1}) / 2 for semi-implicit
-        # Euler: the left-point F_n·(x_{n+1} - x_n) would add ½ΔxᵀHΔx every step, a
-        # systematic O(dt) drift of the budget; the centred rule does not.
-        return vec4(
-            -wp.dot(state.force_elastic[i, s], displacement),
-            -wp.dot(state.force_hysteretic[i, s], displacement),
-            zero,
-            zero,
-        )
+    stretching_corrections = implicit_stretching.build(scalar, terms).stretching_corrections
+    channel = probes.STRIP_PROBES.channel
+    work_on = fused.law_work(
+        StripState, vec2, tally, channel("bending_elastic_work"), channel("hysteresis_work")
+    )
+    damping_work = fused.channel(scalar, tally, channel("damping_work"))
+    drive_work = fused.channel(scalar, tally, channel("drive_work"))
+    laws_force = fused.internal_forces(StripState)
+    applied = force_terms.build(terms, scalar, vec2, tally, structs.STRIP_CHANNELS)
 
     @wp.func
     def internal_force(state: StripState, i: int, s: int):
-        f = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
+        f = laws_force(state, i, s)
         if wp.static(implicit):
             f = f + state.correction[i, s]
         return f
 
     @wp.func
     def carry_held_end(
-        model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int, step: int, work: vec4
+        model: StripModel, control: StripControl, stepping: Stepping, state: StripState, s: int, step: int, work: tally
     ):
         # The held free end moves as prescribed; the internal forces do work on it.
         i = model.n_nodes - 1
@@ -105,17 +101,18 @@ def build(scalar: Any, scheme: str) -> StripKernels:
         )
         sweep = (state.velocity[i, s] + v_new) * (half * stepping.dt)
         f_int = internal_force(state, i, s)
-        work = work + work_on(state, i, s, sweep) + vec4(zero, zero, zero, -wp.dot(f_int, sweep))
+        work = work + work_on(state, i, s, sweep) + drive_work(-wp.dot(f_int, sweep))
         state.position[i, s] = x_new
         state.velocity[i, s] = v_new
         return work
 
     @wp.func
     def advance_free_nodes(
-        model: StripModel, stepping: Stepping, state: StripState, s: int, last: int, gamma: scalar, work: vec4
+        model: StripModel, stepping: Stepping, state: StripState, s: int, last: int, gamma: scalar, work: tally
     ):
         # Nodes below the clamp, up to ``last``, by the scheme's node update under their
-        # internal forces, damping and gravity; the free end carries half a node's mass.
+        # internal forces, damping, gravity and the model's force terms; the free end
+        # carries half a node's mass.
         n = model.n_nodes
         dt = stepping.dt
         g = vec2(zero, -model.gravity)
@@ -127,13 +124,16 @@ def build(scalar: Any, scheme: str) -> StripKernels:
                 m = half * m_node
             v = state.velocity[i, s]
             f_damp = -gamma * m * v
-            f = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
-            f = f + f_damp + m * g
+            f = laws_force(state, i, s) + f_damp + m * g
+            if wp.static(applied.present):
+                f = f + applied.force(x, v, m)
             if wp.static(implicit):
                 f = f + state.correction[i, s]
             x_new, v_new = update_node(x, v, f, m, dt)
             sweep = (v + v_new) * (half * dt)
-            work = work + work_on(state, i, s, sweep) + vec4(zero, zero, -wp.dot(f_damp, sweep), zero)
+            work = work + work_on(state, i, s, sweep) + damping_work(-wp.dot(f_damp, sweep))
+            if wp.static(applied.present):
+                work = work + applied.work(x, v, m, sweep)
             state.position[i, s] = x_new
             state.velocity[i, s] = v_new
         return work
@@ -146,7 +146,7 @@ def build(scalar: Any, scheme: str) -> StripKernels:
         state: StripState,
         s: int,
         t_next: scalar,
-        work: vec4,
+        work: tally,
     ):
         # Clamp nodes follow the rigid rotation; only the two above the edge carry forces.
         dt = stepping.dt
@@ -168,10 +168,10 @@ def build(scalar: Any, scheme: str) -> StripKernels:
             if i >= model.n_clamped - 2:
                 before = rotation_before * (model.rest_position[i, s] - centre)
                 sweep = (arm - before) * half
-                f_int = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
+                f_int = laws_force(state, i, s)
                 if wp.static(implicit) and i == model.n_clamped - 1:
                     f_int = f_int + state.correction[i, s]  # the implicit tension on the clamp-edge node
-                work = work + work_on(state, i, s, sweep) + vec4(zero, zero, zero, -wp.dot(f_int, sweep))
+                work = work + work_on(state, i, s, sweep) + drive_work(-wp.dot(f_int, sweep))
             if theta == zero:
                 # A clamp at rest sits exactly on its rest positions, wherever its rotation
                 # centre is: centre + (X - centre) would move it by rounding.
@@ -205,56 +205,13 @@ def build(scalar: Any, scheme: str) -> StripKernels:
             work = advance_free_nodes(model, stepping, state, s, n - 1, gamma, work)
         work = move_clamp(model, control, stepping, state, s, t_next, work)
         if step + 1 == stepping.release_step:
-            work = vec4()  # the energy budget is reported from the release on
+            work = tally()  # the energy budget is reported from the release on
         state.work[s] = work
         return STATUS_OK, 0, zero
 
-    @wp.func
-    def stop(state: StripState, s: int, code: int, step: int, index: int, value: scalar):
-        state.status[s] = code
-        state.status_step[s] = step
-        state.status_index[s] = index
-        state.status_value[s] = value
-        state.step[s] = step
-
-    @wp.kernel(module="unique", enable_backward=False)
-    def advance(
-        model: StripModel,
-        control: StripControl,
-        stepping: Stepping,
-        state: StripState,
-        settings: ProbeSettings,
-        output_steps: wp.array(dtype=int),
-        first_output: int,
-        first_frame: int,
-        probes: wp.array3d(dtype=scalar),
-        frames: wp.array3d(dtype=vec2),
-        first_strip: int,
-    ):
-        """Advance strips ``first_strip`` … ``first_strip + dim − 1`` to each output step in
-        turn, recording probes (and frames); a batch may be split into such ranges, each
-        launched from its own CPU thread (every strip is independent)."""
-        s = first_strip + wp.tid()
-        if state.status[s] != STATUS_OK:
-            return
-        step = state.step[s]
-        for k in range(output_steps.shape[0]):
-            while step < output_steps[k]:
-                code, index, value = substep(model, control, stepping, state, s, step)
-                if code != STATUS_OK:
-                    stop(state, s, code, step, index, value)
-                    return
-                step += 1
-            energy = record_probes(model, control, stepping, state, settings, s, step, probes, k)
-            if not wp.isfinite(energy):
-                stop(state, s, STATUS_NONFINITE_ENERGY, step, -1, energy)
-                return
-            output = first_output + k
-            if output >= 0 and output % settings.probes_per_frame == 0 and frames.shape[0] > 0:
-                f = output / settings.probes_per_frame - first_frame
-                for i in range(model.n_nodes):
-                    frames[f, i, s] = state.position[i, s]
-        state.step[s] = step
+    advance = fused.build_advance(
+        StripModel, StripControl, Stepping, StripState, ProbeSettings, scalar, vec2, substep, record_probes
+    )
 
     return StripKernels(
         types=types,
@@ -269,9 +226,9 @@ def build(scalar: Any, scheme: str) -> StripKernels:
 
 
 @functools.cache
-def hinge_kernels(scalar: Any) -> HingeKernels:
-    """The ``initialise_hinges`` kernel for ``scalar``."""
-    strip = structs.build(scalar)
+def hinge_kernels(scalar: Any, terms: tuple[Any, ...] = ()) -> HingeKernels:
+    """The ``initialise_hinges`` kernel for ``scalar`` (the structs of a model with ``terms``)."""
+    strip = structs.build(scalar, terms)
     StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
     signed_curvature = geometry.build(scalar).signed_curvature
     one = scalar(1.0)

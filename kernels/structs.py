@@ -11,16 +11,21 @@ from typing import Any
 
 import warp as wp
 
-from . import laws
+from . import fused, laws
 from .types import precision
+
+STRIP_CHANNELS = 4
+"""The strip's own work channels: bending elastic, hysteresis, damping, drive (kernels/probes.py)."""
 
 
 @functools.cache
-def build(scalar: Any) -> SimpleNamespace:
-    """``StripModel`` and ``StripState`` for ``scalar`` (every bending law: kernels/laws.py)."""
+def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
+    """``StripModel`` and ``StripState`` for ``scalar`` (every bending law: kernels/laws.py),
+    with an energy tally channel for each force term of ``terms``."""
     types = precision(scalar)
     vec2, vec4 = types.vec2, types.vec4
     law = laws.build(scalar)
+    tally = fused.tally_type(scalar, STRIP_CHANNELS + len(terms))
 
     @wp.struct
     class StripModel:
@@ -53,11 +58,11 @@ def build(scalar: Any) -> SimpleNamespace:
         elimination: wp.array2d(dtype=vec2)  # scratch, imex: [segment, strip] (c', d') of the tridiagonal solve
         hinge: wp.array2d(dtype=law.Memory)  # [hinge, strip], the bending law's memory
         history: law.History  # the open reversal points of a law with return-point memory
-        work: wp.array(dtype=vec4)  # (bending elastic, hysteresis, damping, drive), J
+        work: wp.array(dtype=tally)  # the work channels of kernels/probes.py STRIP_PROBES (+ force terms'), J
         step: wp.array(dtype=int)  # substeps done so far
         status: wp.array(dtype=int)
         status_step: wp.array(dtype=int)
         status_index: wp.array(dtype=int)  # segment or hinge where it happened
         status_value: wp.array(dtype=scalar)
 
-    return SimpleNamespace(StripModel=StripModel, StripState=StripState, law=law)
+    return SimpleNamespace(StripModel=StripModel, StripState=StripState, law=law, tally=tally)

@@ -17,7 +17,7 @@ import pytest
 
 GOLDEN = Path(__file__).parent / "golden"
 sys.path.insert(0, str(GOLDEN))
-from make_goldens import CASES, scene_outputs, sweep_summary  # noqa: E402
+from make_goldens import CASES, SHEET_CASES, scene_outputs, sheet_outputs, sweep_summary  # noqa: E402
 
 TURNING_POINT_COLUMNS = (
     "first_period_s",
@@ -40,6 +40,15 @@ def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
 def test_scene_is_bitwise_golden(name):
     expected = np.load(GOLDEN / f"{name}.npz")
     actual = scene_outputs(name)
+    assert set(actual) == set(expected.files)
+    for key, value in actual.items():
+        assert same_bits(value, expected[key]), f"{name}: {key} differs from the golden output"
+
+
+@pytest.mark.parametrize("name", SHEET_CASES)
+def test_sheet_scene_is_bitwise_golden(name):
+    expected = np.load(GOLDEN / f"{name}.npz")
+    actual = sheet_outputs(name)
     assert set(actual) == set(expected.files)
     for key, value in actual.items():
         assert same_bits(value, expected[key]), f"{name}: {key} differs from the golden output"

@@ -93,6 +93,13 @@ CASES = {
     ),
 }
 SWEEP_OVERRIDES = ["sweep.random.samples=6", "run.duration_s=0.4", PAPER]
+SHEET_CASES = {
+    "sheet_shear_swing": ("shear_swing", ["run.duration_s=0.15", "release.settle_time_s=0.05"]),
+    "sheet_twist": ("twist", ["run.duration_s=0.15", "release.settle_time_s=0.05"]),
+}
+"""Sheets: a swing that shears the cells and a twist about the sheet's own axis (3D), with
+their markers. Written by commit 16f6c7c's code, before the strip and the sheet shared one
+core (issue 37), and reproduced bit for bit after it."""
 
 
 def scene_outputs(case: str) -> dict[str, np.ndarray]:
@@ -100,6 +107,19 @@ def scene_outputs(case: str) -> dict[str, np.ndarray]:
     name, overrides = CASES[case]
     result = wc.simulate(wc.load_scene(name, [*overrides, PAPER]), on_divergence="record")
     return {"t": result.t, "probes": result.probes, "frame_times": result.frame_times, "frames": result.frames}
+
+
+def sheet_outputs(case: str) -> dict[str, np.ndarray]:
+    """Probes, markers, times and frames of one sheet case."""
+    name, overrides = SHEET_CASES[case]
+    result = wc.simulate(wc.load_scene(name, overrides), on_divergence="record")
+    return {
+        "t": result.t,
+        "probes": result.probes,
+        "markers": result.markers,
+        "frame_times": result.frame_times,
+        "frames": result.frames,
+    }
 
 
 def sweep_summary(out: Path) -> "object":
@@ -110,11 +130,12 @@ def sweep_summary(out: Path) -> "object":
 if __name__ == "__main__":
     import tempfile
 
-    chosen = sys.argv[1:] or [*CASES, "sweep"]
+    chosen = sys.argv[1:] or [*CASES, *SHEET_CASES, "sweep"]
     for case in chosen:
         if case == "sweep":
             with tempfile.TemporaryDirectory() as tmp:
                 sweep_summary(Path(tmp) / "sweep").to_parquet(HERE / "sweep_summary.parquet", index=False)
         else:
-            np.savez_compressed(HERE / f"{case}.npz", **scene_outputs(case))
+            outputs = sheet_outputs(case) if case in SHEET_CASES else scene_outputs(case)
+            np.savez_compressed(HERE / f"{case}.npz", **outputs)
         print("wrote", case)

@@ -207,7 +207,7 @@ class SheetState:
         s.cell_history = allocate_reversal_memory(
             law.History, model.reversal_memory, max(1, n_cells), b, t.vec2, model.device
         )
-        s.work = wp.zeros(b, dtype=t.vec4, device=model.device)
+        s.work = wp.zeros(b, dtype=model.kernels.structs.tally, device=model.device)
         s.step = wp.zeros(b, dtype=int, device=model.device)
         s.status = wp.zeros(b, dtype=int, device=model.device)
         s.status_step = wp.zeros(b, dtype=int, device=model.device)

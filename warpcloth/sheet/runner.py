@@ -177,6 +177,7 @@ def simulate_sheets(
     probe_buffer = wp.zeros((capacity, nq, b), dtype=model.scalar, device=model.device)
     marker_buffer = wp.zeros((capacity, max(nm, 1), b), dtype=vec3, device=model.device)
     frame_buffer = wp.zeros((capacity // ppf + 1, n, b), dtype=vec3, device=model.device)
+    settings.marker_positions = marker_buffer
     plan = ChunkPlan(schedule, capacity)
     budget = BudgetWatch(sheet_budget_floor(model))
     span = float(schedule.times(schedule.k_min + len(schedule.steps) - 1) - schedule.times(schedule.k_min))
@@ -202,7 +203,7 @@ def simulate_sheets(
                 schedule.steps[i:j],
                 k0,
                 -(-max(k0, 0) // ppf),
-                (probe_buffer, marker_buffer, frame_buffer),
+                (probe_buffer, frame_buffer),
                 threads,
             )
             wp.synchronize_device(model.device)

@@ -113,7 +113,7 @@ class SheetSolver:
         output_steps: np.ndarray,
         first_output: int,
         first_frame: int,
-        buffers: tuple[wp.array, wp.array, wp.array],
+        buffers: tuple[wp.array, wp.array],
         threads: int = 1,
     ) -> None:
         """Advance every healthy sheet to each of ``output_steps``, recording probes,

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from warpcloth.errors import ArgumentError
 from warpcloth.kernels import MAX_DEGREE, bending_masing
 
 from .material import MaterialSI
@@ -229,8 +230,9 @@ class StripBuilder:
         :func:`hinge_intervals`."""
         return hinge_intervals(self.spacing, len(self.rest_positions) - self.n_clamped)
 
-    def finalize(self, device: str | None = None, precision: str = "float64") -> Model:
-        """The :class:`Model` of every strip added, on ``device`` in ``precision``."""
+    def finalize(self, device: str | None = None, precision: str = "float64", terms: tuple = ()) -> Model:
+        """The :class:`Model` of every strip added, on ``device`` in ``precision``, with the
+        force ``terms`` (kernels/force_terms.py) acting on every free node."""
         if not self.strips:
-            raise ValueError("a batch needs at least one strip")
-        return Model(self, device=device, precision=precision)
+            raise ArgumentError("strips", "a batch needs at least one strip")
+        return Model(self, device=device, precision=precision, terms=terms)

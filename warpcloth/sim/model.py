@@ -13,6 +13,8 @@ import warp as wp
 
 from warpcloth.errors import ArgumentError
 from warpcloth.kernels import bending_law, structs
+from warpcloth.core.terms import checked_terms
+from warpcloth.kernels.probes import STRIP_PROBES
 from warpcloth.kernels import precision as precision_types
 
 if TYPE_CHECKING:
@@ -75,12 +77,18 @@ class Model:
     and drives.
     """
 
-    def __init__(self, builder: StripBuilder, device: str | None = None, precision: str = "float64") -> None:
+    def __init__(
+        self, builder: StripBuilder, device: str | None = None, precision: str = "float64", terms: tuple = ()
+    ) -> None:
         self.device = machine_device(device)
         self.precision = precision
         self.scalar = PRECISIONS[precision]
         self.types = precision_types(self.scalar)
-        self.structs = structs.build(self.scalar)
+        self.terms = checked_terms(terms)
+        """The force terms acting on every free node besides damping and gravity (kernels/force_terms.py)."""
+        self.probes = STRIP_PROBES.with_terms(self.terms)
+        """What the strips record: :data:`~warpcloth.kernels.probes.STRIP_PROBES` and the terms' channels."""
+        self.structs = structs.build(self.scalar, self.terms)
         # A copy of what was built: adding strips to the builder afterwards does not
         # change this model.
         self.strips = tuple(builder.strips)

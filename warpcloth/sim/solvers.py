@@ -104,7 +104,7 @@ class FusedStripSolver:
         self.model = model
         self.dt = dt
         self.divergence_strain = divergence_strain
-        self.kernels = build_strip(model.scalar, self.scheme)
+        self.kernels = build_strip(model.scalar, self.scheme, model.terms)
 
     @staticmethod
     def step_limit(material: MaterialSI, spacing: float, free_nodes: int) -> float | None:

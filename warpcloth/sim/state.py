@@ -86,7 +86,7 @@ class State:
         s.history = allocate_reversal_memory(
             model.structs.law.History, model.reversal_memory, n_hinges, b, t.vec2, model.device
         )
-        s.work = per_strip(t.vec4)
+        s.work = per_strip(model.structs.tally)
         s.step = per_strip(int)
         s.status = per_strip(int)
         s.status_step = per_strip(int)
@@ -119,5 +119,5 @@ class State:
         """Make every hinge fresh at its current curvature (no memory of past bending)."""
         self.struct.history.overflows.zero_()
         self.struct.history.deepest.zero_()
-        kernel = hinge_kernels(self.model.scalar).initialise_hinges
+        kernel = hinge_kernels(self.model.scalar, self.model.terms).initialise_hinges
         wp.launch(kernel, dim=self.model.n_strips, inputs=[self.model.struct, self.struct], device=self.model.device)

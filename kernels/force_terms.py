@@ -1,0 +1,96 @@
+"""Force terms: external forces on every free node of a strip or a sheet, each with the
+energy channel its work is tallied in (docs/model.md §10.4).
+
+A term is a frozen dataclass with a ``channel`` name and a ``build(scalar, vec)`` that
+returns a Warp function ``(x, v, m) -> force`` of a node's position, velocity and mass.
+The bodies' fused substeps add every term of their model to the free nodes' forces and
+tally the work done against each over the step's centred displacement, as they do for
+damping, so the budget closes with the term's channel in it (:meth:`ProbeSet.with_terms`).
+Adding a term is this file (or one of its own) and a test: no substep, probe or budget
+is edited.
+"""
+
+
+import functools
+from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import Any
+
+import warp as wp
+
+
+@dataclass(frozen=True)
+class LinearDrag:
+    """A drag proportional to the node's velocity and mass, ``−rate · m · v`` (``rate`` in
+    1/s): still air around a body whose own damping γ stays a material property."""
+
+    rate: float
+    channel: str = "drag_work"
+
+    def build(self, scalar: Any, vec: Any) -> Any:
+        """The term's Warp function for ``scalar`` and the body's vector type ``vec``."""
+        rate = scalar(self.rate)
+
+        @wp.func
+        def drag(x: vec, v: vec, m: scalar):
+            return -(rate * m) * v
+
+        return drag
+
+
+@dataclass(frozen=True)
+class RigidFloor:
+    """A rigid horizontal floor at ``height`` (m): a node below it is pushed up by a
+    penalty spring ``m ω² (height − y)``, ``ω`` (rad/s) fast against the motion so the
+    penetration is small. Conservative: the work done against it is its spring's energy,
+    returned as the node leaves."""
+
+    height: float
+    omega: float
+    channel: str = "floor_work"
+
+    def build(self, scalar: Any, vec: Any) -> Any:
+        """The term's Warp function for ``scalar`` and the body's vector type ``vec``."""
+        height = scalar(self.height)
+        stiffness = scalar(self.omega * self.omega)
+        up = vec()
+        up[1] = scalar(1.0)
+
+        @wp.func
+        def floor(x: vec, v: vec, m: scalar):
+            depth = height - x[1]
+            if depth > scalar(0.0):
+                return (m * stiffness * depth) * up
+            return vec()
+
+        return floor
+
+
+FORCE_TERMS = {"drag": LinearDrag, "floor": RigidFloor}
+"""The force terms by name."""
+
+
+@functools.cache
+def build(terms: tuple[Any, ...], scalar: Any, vec: Any, tally: Any, first_channel: int) -> SimpleNamespace:
+    """``force(x, v, m)``, the sum of ``terms``' forces on a node, and ``work(x, v, m,
+    sweep)``, the tally with the work done against each term over the displacement
+    ``sweep`` in its channel (``first_channel`` + its place in ``terms``)."""
+    functions = tuple(t.build(scalar, vec) for t in terms)
+    n = len(functions)
+
+    @wp.func
+    def force(x: vec, v: vec, m: scalar):
+        f = vec()
+        for j in range(wp.static(n)):
+            f = f + wp.static(functions[j])(x, v, m)
+        return f
+
+    @wp.func
+    def work(x: vec, v: vec, m: scalar, sweep: vec):
+        w = tally()
+        for j in range(wp.static(n)):
+            w[wp.static(first_channel + j)] = -wp.dot(wp.static(functions[j])(x, v, m), sweep)
+        return w
+
+    return SimpleNamespace(force=force, work=work, present=n > 0)
+
