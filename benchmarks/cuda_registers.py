@@ -36,7 +36,7 @@ from pathlib import Path
 import warp as wp
 from warpcloth.kernels import build_strip, hinge_kernels, laws, sheet
 
-from warpcloth.sim import PRECISIONS, SOLVERS
+from warpcloth.strip import PRECISIONS, SOLVERS
 
 
 def variants() -> dict[str, wp.Kernel]:

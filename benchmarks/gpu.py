@@ -32,10 +32,10 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 from sheet_throughput import sheet_rate
+from warpcloth.strip.runner import available_cores
 
 import warpcloth as wc
-from warpcloth.sim.model import init_warp_quietly
-from warpcloth.sim.runner import available_cores
+from warpcloth.strip.model import init_warp_quietly
 
 ROOT = Path(__file__).resolve().parents[1]
 

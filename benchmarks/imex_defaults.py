@@ -39,7 +39,7 @@ import warp as wp
 
 import warpcloth as wc
 from warpcloth.scene import build_batch, to_si
-from warpcloth.sim import SemiImplicitEulerSolver, simulate_batch
+from warpcloth.strip import SemiImplicitEulerSolver, simulate_batch
 
 LADDER = (2.5e-6, 5e-6, 1e-5, 2.5e-5, 5e-5, 1e-4, 2e-4, 4e-4, 8e-4)
 TOLERANCE = 5e-3

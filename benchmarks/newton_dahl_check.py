@@ -48,7 +48,7 @@ def newton_states(curvature: np.ndarray) -> np.ndarray:
 def warpcloth_states(curvature: np.ndarray) -> np.ndarray:
     import warpcloth as wc
     from warpcloth.scene import to_si
-    from warpcloth.sim import moment_along_path
+    from warpcloth.strip import moment_along_path
 
     material = to_si(
         wc.load_scene(

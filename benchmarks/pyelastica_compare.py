@@ -48,7 +48,7 @@ import warpcloth as wc
 from warpcloth.calibrate.references import hanging_beam_mode
 from warpcloth.metrics import first_period
 from warpcloth.scene import build_batch, rest_positions, to_si
-from warpcloth.sim import SemiImplicitEulerSolver, simulate_batch
+from warpcloth.strip import SemiImplicitEulerSolver, simulate_batch
 
 AMPLITUDE = 1e-3  # m, tip amplitude of the initial mode shape
 EQUAL_DT = 1e-6  # s, the common step of the throughput comparison

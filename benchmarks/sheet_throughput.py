@@ -11,7 +11,7 @@ shear with the [shear] table's illustrative numbers (warpcloth/scene/shear.py), 
 by the impulsive rotation's clamp (a rotation about the weft, so every hinge and cell
 moves from the first step). The baseline, measured in the same run and at the same
 thread count, is the strip: the impulsive rotation scene's batch of as many strips
-through warpcloth.sim.simulate_batch, its per-node rate strip-steps/s × nodes, over as
+through warpcloth.strip.simulate_batch, its per-node rate strip-steps/s × nodes, over as
 many node-steps as the sheet's run. Sheet and strip run in turn ``--repeats`` times; each
 row prints both median per-node rates and the median of the pairwise ratios (robust to
 the machine's drift); the thread table prints each one's scaling against one thread.
@@ -33,6 +33,7 @@ import platform
 
 import numpy as np
 import warp as wp
+from warpcloth.strip.runner import available_cores
 
 import warpcloth as wc
 from warpcloth import units
@@ -48,9 +49,8 @@ from warpcloth.sheet import (
     rectangle,
     simulate_sheets,
 )
-from warpcloth.sim import simulate_batch
-from warpcloth.sim.model import init_warp_quietly
-from warpcloth.sim.runner import available_cores
+from warpcloth.strip import simulate_batch
+from warpcloth.strip.model import init_warp_quietly
 
 SIDE_MM = 50.0
 SPACING_MM = 5.0

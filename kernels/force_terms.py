@@ -10,7 +10,6 @@ Adding a term is this file (or one of its own) and a test: no substep, probe or 
 is edited.
 """
 
-
 import functools
 from dataclasses import dataclass
 from types import SimpleNamespace
@@ -93,4 +92,3 @@ def build(terms: tuple[Any, ...], scalar: Any, vec: Any, tally: Any, first_chann
         return w
 
     return SimpleNamespace(force=force, work=work, present=n > 0)
-

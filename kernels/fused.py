@@ -9,7 +9,6 @@ substeps per launch, recording at each output step. The tally of the work done i
 vector with one named channel per work probe (:class:`~.probe_set.ProbeSet`).
 """
 
-
 import functools
 from typing import Any
 

@@ -48,7 +48,7 @@ class LawParameter:
     """One parameter of a bending law, as the kernels, scene files, fits and figures see it."""
 
     name: str
-    """The SI name, the key in :class:`warpcloth.sim.LawParameters` (``dahl_moment``)."""
+    """The SI name, the key in :class:`warpcloth.strip.LawParameters` (``dahl_moment``)."""
     scene_field: str
     """The [material] field of a scene, in KES units (``dahl_moment_gf_cm_per_cm``)."""
     kind: str

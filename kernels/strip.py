@@ -69,9 +69,7 @@ def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels
     implicit = scheme in integrators.IMPLICIT_STRETCHING  # resolved when the kernel is generated (wp.static)
     stretching_corrections = implicit_stretching.build(scalar, terms).stretching_corrections
     channel = probes.STRIP_PROBES.channel
-    work_on = fused.law_work(
-        StripState, vec2, tally, channel("bending_elastic_work"), channel("hysteresis_work")
-    )
+    work_on = fused.law_work(StripState, vec2, tally, channel("bending_elastic_work"), channel("hysteresis_work"))
     damping_work = fused.channel(scalar, tally, channel("damping_work"))
     drive_work = fused.channel(scalar, tally, channel("drive_work"))
     laws_force = fused.internal_forces(StripState)

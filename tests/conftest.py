@@ -14,7 +14,7 @@ def kernel_variants() -> dict:
     sheet's three (tests/test_cuda_build.py compiles them for CUDA)."""
     from warpcloth.kernels import build_strip, hinge_kernels, laws, sheet
 
-    from warpcloth.sim import PRECISIONS, SOLVERS
+    from warpcloth.strip import PRECISIONS, SOLVERS
 
     def kernels(namespace: object) -> dict:
         return {name: value for name, value in vars(namespace).items() if isinstance(value, wp.Kernel)}
@@ -41,7 +41,7 @@ def pytest_configure(config) -> None:
     same time (23 s of compiling, done many times over)."""
     if hasattr(config, "workerinput"):  # a pytest-xdist worker: the controller has done it
         return
-    from warpcloth.sim.model import init_warp_quietly
+    from warpcloth.strip.model import init_warp_quietly
 
     init_warp_quietly()
     for kernel in kernel_variants().values():
@@ -80,7 +80,7 @@ def loop_asymptote_of(material):
 
 def paper_loop(d1, alpha, k0, law="tagawa2003"):
     """The LawParameters of the paper's loop (SI)."""
-    from warpcloth.sim import LawParameters
+    from warpcloth.strip import LawParameters
 
     return LawParameters.of(law, {"hysteresis_d1": d1, "hysteresis_alpha": alpha, "hysteresis_k0": k0})
 
@@ -98,7 +98,7 @@ def kes_moment(material, k):
 
     from warpcloth import units
     from warpcloth.scene import to_si
-    from warpcloth.sim import moment_along_path
+    from warpcloth.strip import moment_along_path
 
     m, _ = moment_along_path(to_si(material), np.asarray(k) * units.CURVATURE_PER_CM)
     return m / units.MOMENT_GF_CM_PER_CM

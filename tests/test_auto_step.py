@@ -12,7 +12,7 @@ import warpcloth as wc
 from warpcloth.errors import SceneError
 from warpcloth.scene import to_si
 from warpcloth.scene.step import STABILITY_MARGIN, choose_step, describe_step, requesting_auto
-from warpcloth.sim.stability import is_hysteretic, stiffest_tangent
+from warpcloth.strip.stability import is_hysteretic, stiffest_tangent
 
 
 @pytest.mark.parametrize(

@@ -8,7 +8,7 @@ from conftest import loop_asymptote_of, overrides
 
 import warpcloth as wc
 from warpcloth.scene import to_si
-from warpcloth.sim import moment_along_path
+from warpcloth.strip import moment_along_path
 
 GF_CM = 9.80665e-3  # gf·cm/cm → N (units.MOMENT_GF_CM_PER_CM)
 PER_CM = 100.0  # 1/cm → 1/m

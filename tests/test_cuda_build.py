@@ -29,7 +29,7 @@ import pytest
 import warp as wp
 from conftest import kernel_variants
 
-from warpcloth.sim import PRECISIONS
+from warpcloth.strip import PRECISIONS
 
 ROOT = Path(__file__).resolve().parents[1]
 ARCHS = (80, 90)  # Ampere (A100) and Hopper (H100, H200)

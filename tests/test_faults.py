@@ -177,7 +177,7 @@ def test_work_too_large_for_memory_is_refused_with_its_numbers_and_knobs(tmp_pat
         r"available; record less \(output.probes_per_frame, output.frame_rate_hz, run.duration_s\)",
     ):
         wc.simulate(wc.load_scene("damped_swing", ABSURD))
-    from warpcloth.sim.resources import check_memory
+    from warpcloth.core.resources import check_memory
 
     check_memory(10_000, "x", "y", available=21_000)
     with pytest.raises(wc.ResourceError, match="x would take 11 kB of memory, more than 50% of the 20 kB available; y"):
@@ -218,7 +218,7 @@ def test_output_too_large_for_the_disk_is_refused_before_anything_is_written(tmp
     ):
         RunWriter(tmp_path / "big", [scene], scene.n_nodes, np.zeros(2_000_000))
     assert not (tmp_path / "big").exists()
-    from warpcloth.sim.resources import check_disk
+    from warpcloth.core.resources import check_disk
 
     check_disk(tmp_path / "new" / "deeper", 1, "x", "y")  # a path that does not exist yet is measured by its parent
 
@@ -681,7 +681,7 @@ def test_sizes_are_checked_in_closed_form_before_anything_is_allocated(tmp_path,
 
 
 def test_a_size_beyond_a_float_is_written_without_overflowing():
-    from warpcloth.sim.resources import check_memory, size_text
+    from warpcloth.core.resources import check_memory, size_text
 
     assert size_text(10**400) == "1.00e+388 TB" and size_text(3 * 10**12) == "3 TB"
     with pytest.raises(wc.ResourceError, match=r"x would take 1.00e\+388 TB of memory"):

@@ -15,7 +15,7 @@ from test_clamp_root import smoothed_period
 import warpcloth as wc
 from warpcloth.calibrate.references import hanging_beam_eigenvalue, two_section_beam_mode
 from warpcloth.scene import to_si
-from warpcloth.sim import Grip
+from warpcloth.strip import Grip
 
 LENGTH_M = 0.1
 CASES = {  # gravity (m/s²), D (gf·cm²/cm), ℓ_g (mm), factor on D

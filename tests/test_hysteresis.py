@@ -1,6 +1,6 @@
 """The hysteretic bending law (paper eqs. 3-4, docs/model.md §4) on a single hinge.
 
-Runs the kernel's own hinge logic through warpcloth.sim.moment_along_path.
+Runs the kernel's own hinge logic through warpcloth.strip.moment_along_path.
 """
 
 import math
@@ -10,7 +10,7 @@ import pytest
 from conftest import loop_asymptote_of, overrides, paper_loop  # noqa: F401  (keeps Warp quiet)
 
 from warpcloth.scene import MaterialSection, to_si
-from warpcloth.sim import MaterialSI, moment_along_path
+from warpcloth.strip import MaterialSI, moment_along_path
 
 DEFAULT = to_si(MaterialSection())
 

@@ -17,7 +17,7 @@ from warpcloth.calibrate import kes
 from warpcloth.cli import main
 from warpcloth.errors import ArgumentError
 from warpcloth.scene import MaterialSection, material_fields, read_material_file, to_si
-from warpcloth.sim import moment_along_path
+from warpcloth.strip import moment_along_path
 
 ROOT = Path(__file__).resolve().parents[1]
 FB1 = ROOT / "scenes" / "data" / "kes_fb1_example.csv"

@@ -15,11 +15,14 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = {"warpcloth": ROOT / "warpcloth", "warpcloth.kernels": ROOT / "kernels"}
 
-# The layers, lowest first: kernels < sim < sheet < scene < io < viz < runs < track < calibrate < sweeps < cli
+# The layers, lowest first: kernels < core < strip < sim (the strip's former name) < sheet < scene < io
+# < viz < runs < track < calibrate < sweeps < cli
 # (errors, units and metrics, the one ruler, sit beside all of them). track sits above runs:
 # its synthetic camera films a simulation; nothing of the simulation imports it.
 ORDER = (
     "warpcloth.kernels",
+    "warpcloth.core",
+    "warpcloth.strip",
     "warpcloth.sim",
     "warpcloth.sheet",
     "warpcloth.scene",
@@ -165,7 +168,7 @@ def reachable(edges: dict[str, set[str]], start: str) -> set[str]:
 def test_the_graph_sees_the_layers(graph):
     # guards the test itself: it must find the packages and real edges between them
     expected = {
-        "warpcloth.sim.model",
+        "warpcloth.strip.model",
         "warpcloth.kernels.strip",
         "warpcloth.scene.build",
         "warpcloth.cli.app",
@@ -175,5 +178,5 @@ def test_the_graph_sees_the_layers(graph):
     assert expected <= set(graph)
     assert "warpcloth.track.calibration" in graph["warpcloth.track.markers"]
     assert "warpcloth.runs" in graph["warpcloth.track.render"]
-    assert "warpcloth.sim" in graph["warpcloth.scene.build"]
+    assert "warpcloth.strip" in graph["warpcloth.scene.build"]
     assert "warpcloth.kernels.forces" in graph["warpcloth.kernels.strip"]

@@ -13,7 +13,7 @@ from conftest import overrides
 from test_bending_laws import kes_path, material, wandering_path
 
 import warpcloth as wc
-from warpcloth.sim import moment_along_path
+from warpcloth.strip import moment_along_path
 
 _spec = importlib.util.spec_from_file_location(
     "make_kes_examples", Path(__file__).resolve().parents[1] / "scenes" / "data" / "make_kes_examples.py"

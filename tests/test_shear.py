@@ -19,7 +19,7 @@ from warpcloth import units
 from warpcloth.calibrate import kes
 from warpcloth.errors import DataFileError, SceneError
 from warpcloth.scene import MaterialSection, ShearMaterial, parse_shear, shear_fields, to_si
-from warpcloth.sim import moment_along_path, shear_force_along_path
+from warpcloth.strip import moment_along_path, shear_force_along_path
 
 TRUTH = {"rigidity_gf_per_cm_deg": 0.6, "hysteresis_d1_gf_per_cm": 0.8, "hysteresis_alpha_per_deg": 0.6}
 

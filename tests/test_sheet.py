@@ -33,7 +33,7 @@ from warpcloth.sheet import (
     rectangle,
     simulate_sheets,
 )
-from warpcloth.sim import ClampMotion, LawParameters, MaterialSI, shear_force_along_path, simulate_batch
+from warpcloth.strip import ClampMotion, LawParameters, MaterialSI, shear_force_along_path, simulate_batch
 
 RHO = 0.2  # kg/m²
 ELASTIC = LawParameters.of("masing", {"hysteresis_d1": 0.0, "hysteresis_alpha": 10.0, "hysteresis_k0": 1.0})

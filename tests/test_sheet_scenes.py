@@ -11,6 +11,7 @@ from conftest import run_cli
 from pxr import Usd, UsdGeom
 
 import warpcloth as wc
+from warpcloth.scene.sheet import SheetScene
 from warpcloth.io.sheet_run_dir import read_sheet_run
 from warpcloth.scene.sheet import read_sheet_scene
 from warpcloth.scene.sheet_build import load_sheet_scene
@@ -138,8 +139,12 @@ def test_a_scene_is_a_strip_or_a_sheet(tmp_path):
     neither = tmp_path / "neither.toml"
     neither.write_text(bundled_text("twist").replace("[sheet]", "[geometry]"))
     one_line_refusal(run_cli("run", neither), "neither [strip] nor [sheet]", "clamp.rotation_segments")
-    with pytest.raises(wc.SceneError, match="this is a sheet scene"):
-        wc.load_scene("twist")
+    # the public API takes either body the same way (issue 37: it used to refuse a sheet)
+    sheet = wc.load_scene("twist", ["run.duration_s=0.01"])
+    assert isinstance(sheet, SheetScene)
+    assert wc.simulate(sheet).body == "sheet"
+    with pytest.raises(wc.SceneError, match="both"):
+        wc.scene_from_dict({"strip": {}, "sheet": {}})
 
 
 def test_a_step_above_the_stability_estimate_is_refused(tmp_path):

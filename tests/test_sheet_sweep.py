@@ -9,7 +9,7 @@ import tomli_w
 from conftest import run_cli
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
 
-from warpcloth.runs import sheet_result_metrics, simulate_sheet
+from warpcloth.runs import sheet_result_metrics, simulate
 from warpcloth.scene import load_sweep, read_scene_file
 from warpcloth.scene.sheet_build import load_sheet_scene
 from warpcloth.sweeps import marker_columns
@@ -80,7 +80,7 @@ def test_each_variant_equals_the_same_sheet_run_alone_bit_for_bit(swept):
             "shear_swing_sweep",
             [*SHORT[1::2], f"{G}={row[G]}", f"{GAMMA}={row[GAMMA]}", f"integrator.dt_s={dt!r}"],
         )
-        alone = simulate_sheet(scene)
+        alone = simulate(scene)
         mine = probes[probes.variant == i].sort_values("t")
         np.testing.assert_array_equal(mine["t"], alone.t)
         for q, name in enumerate(SHEET_PROBE_FIELDS):

@@ -51,7 +51,7 @@ def past_the_check(scene, dt):
     """Run ``scene`` at ``dt`` through the simulation core, which takes any dt (the scene
     layer is what refuses an unstable one)."""
     from warpcloth.scene import build_batch
-    from warpcloth.sim import SemiImplicitEulerSolver, simulate_batch
+    from warpcloth.strip import SemiImplicitEulerSolver, simulate_batch
 
     batch = build_batch([scene])
     solver = SemiImplicitEulerSolver(batch.model, dt=dt, divergence_strain=scene.integrator.divergence_strain)
@@ -69,7 +69,7 @@ def test_the_refused_step_is_the_stretching_stability_limit(material, free_lengt
     # 8 % from 1) is where the undamped hanging strip stops being stable: a run at 0.98
     # of it stays at the static sag, one at 1.02 of it diverges within 0.2 s.
     from warpcloth.scene import to_si
-    from warpcloth.sim.solvers import SemiImplicitEulerSolver
+    from warpcloth.strip.solvers import SemiImplicitEulerSolver
 
     strip = dict(
         release__enabled=False,
@@ -115,7 +115,7 @@ def test_a_recorded_run_past_the_limit_stays_readable(tmp_path):
 
 def test_the_slack_above_the_limit_is_for_softening_laws_only():
     from warpcloth.scene import to_si
-    from warpcloth.sim.solvers import SemiImplicitEulerSolver
+    from warpcloth.strip.solvers import SemiImplicitEulerSolver
 
     scene = wc.load_scene("damped_swing")
     limit = SemiImplicitEulerSolver.step_limit(to_si(scene.material), scene.spacing, scene.n_nodes - scene.n_clamped)

@@ -7,7 +7,7 @@ Evaluation Experiments in Vacuum", as written up in docs/model.md. Typical use::
     result = wc.run("damped_swing", ["damping.gamma_per_s=0.3"])
     tip_x = result.probe("tip_x", variant=0)
 
-The namespaces :mod:`warpcloth.sim` (the SI simulation core), :mod:`warpcloth.scene`,
+The namespaces :mod:`warpcloth.strip` (the SI simulation core), :mod:`warpcloth.scene`,
 :mod:`warpcloth.calibrate`, :mod:`warpcloth.viz` and :mod:`warpcloth.io` hold the rest.
 
 The names below are imported when first used (PEP 562), so ``import warpcloth.cli``

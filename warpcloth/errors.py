@@ -43,6 +43,11 @@ class ArgumentError(WarpclothError, ValueError):
         super().__init__(f"{argument}: {message}")
 
 
+class ArgumentTypeError(ArgumentError, TypeError):
+    """An argument of a library function is of a type it cannot use (a :class:`TypeError`
+    too, so ``except TypeError`` still catches it); ``argument`` names it."""
+
+
 class OptionError(ArgumentError):
     """A command-line option has an unusable value.
 
@@ -77,7 +82,7 @@ class ResourceError(WarpclothError, ValueError):
 class DivergenceError(WarpclothError, RuntimeError):
     """A strip's state became non-finite or physically absurd during a run.
 
-    ``diverged`` lists one :class:`warpcloth.sim.Divergence` per diverged strip (strip,
+    ``diverged`` lists one :class:`warpcloth.strip.Divergence` per diverged strip (strip,
     time, step, quantity, where, value); ``result`` holds everything recorded before the
     divergence.
     """

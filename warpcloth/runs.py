@@ -10,21 +10,35 @@ import numpy as np
 
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
 
-from .errors import ArgumentError
+from . import bodies
+from .core.result import RunResult
+from .core.runner import check_divergence_policy, check_recording_fits, simulate_batch
+from .errors import ArgumentError, ArgumentTypeError
 from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
+from .io.sheet_run_dir import SHEET_COORDINATES
 from .metrics import sheet_metrics
 from .scene import COORDINATES, Scene, build_batch, load_scene
 from .scene.overrides import Overrides, override_pairs
 from .scene.sheet import SheetScene
 from .scene.step import shared_auto_step
-from .sheet import SheetResult, simulate_sheets
-from .sim import RunResult, simulate_batch
-from .sim.runner import check_divergence_policy, check_recording_fits
-from .sim.state import checked_nodes
+from .strip.state import checked_nodes
 
 
-def simulate(
+def simulate(scenes: Any, **options: Any) -> RunResult:
+    """Run one batch of scenes of either body (one scene per variant; a strip's
+    :class:`~warpcloth.scene.Scene` or a sheet's :class:`~warpcloth.scene.sheet.SheetScene`,
+    :func:`~warpcloth.scene.load_scene` makes either) and return what it recorded. The
+    options are the body's: :func:`simulate_strips` and :func:`simulate_sheets` list them
+    (``device``, ``out``, ``progress``, ``on_divergence``, ``keep_frames``, ``overwrite``,
+    ``threads``; strips also take initial positions and velocities)."""
+    batch = [scenes] if not isinstance(scenes, Sequence) else list(scenes)
+    if not batch:
+        raise ArgumentError("scenes", "simulate needs at least one scene")
+    return bodies.of_scenes(batch)("simulate", batch, **options)
+
+
+def simulate_strips(
     scenes: Scene | Sequence[Scene],
     *,
     device: str | None = None,
@@ -54,10 +68,11 @@ def simulate(
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
     wrong = next((s for s in scenes if not isinstance(s, Scene)), None)
     if wrong is not None or not scenes:
-        raise TypeError(
-            f"simulate takes Scene objects (wc.load_scene(name_or_path) makes one), got {wrong!r}"
+        raise ArgumentTypeError(
+            "scenes",
+            f"simulate_strips takes strip scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}"
             if scenes
-            else "simulate needs at least one scene"
+            else "simulate needs at least one scene",
         )
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
     scenes = shared_auto_step(scenes)
@@ -99,42 +114,60 @@ def simulate(
     )
 
 
-def simulate_sheet(
-    scene: SheetScene,
+def simulate_sheets(
+    scenes: SheetScene | Sequence[SheetScene],
     *,
     device: str | None = None,
     out: str | Path | None = None,
     progress: bool = False,
+    on_divergence: str = "raise",
+    keep_frames: bool = True,
     overwrite: bool = False,
     threads: int | None = None,
-) -> SheetResult:
-    """Run one sheet scene (:func:`~warpcloth.scene.sheet_build.load_sheet_scene` makes one) and
-    return what it recorded; ``out`` streams the sheet run directory
+) -> RunResult:
+    """Run one batch of sheet scenes (one sheet per scene, in the same launches; they must
+    agree on what a batch shares: :func:`~warpcloth.scene.sheet_build.check_sheet_batch`)
+    and return what it recorded; ``out`` streams the sheet run directory
     (:mod:`warpcloth.io.sheet_run_dir`), with the strip's refusal of an existing result
-    unless ``overwrite``, which replaces it only once the new run is complete. A diverged
-    sheet is a DivergenceError whose ``result`` holds what was recorded."""
+    unless ``overwrite``, which replaces it only once the new run is complete. The other
+    options are :func:`simulate_strips`'."""
     from .io.sheet_run_dir import SheetRunWriter
-    from .scene.sheet_build import build_sheet
-    from .sim.recorder import output_schedule
+    from .scene.sheet_build import build_sheets
 
-    if not isinstance(scene, SheetScene):
-        raise TypeError(f"simulate_sheet takes a SheetScene (load_sheet_scene makes one), got {scene!r}")
+    scenes = [scenes] if isinstance(scenes, SheetScene) else list(scenes)
+    wrong = next((s for s in scenes if not isinstance(s, SheetScene)), None)
+    if wrong is not None or not scenes:
+        raise ArgumentTypeError(
+            "scenes",
+            f"simulate_sheets takes sheet scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}"
+            if scenes
+            else "simulate needs at least one scene",
+        )
+    check_divergence_policy(on_divergence)
     if out is not None:
         check_output_directory(out, overwrite)
-    batch = build_sheet(scene, device)
+    batch = build_sheets(scenes, device)
+    check_recording_fits(batch.model, batch.control, batch.recorder, keep_frames)
     sink = None
     if out is not None:
-        schedule = output_schedule(
-            batch.recorder, batch.control.release_time, batch.solver.dt, batch.solver.release_step(batch.control)
-        )
-        frame_times = schedule.times(schedule.frame_samples)
-        sink = SheetRunWriter(out, scene, batch.model.geometry, batch.recorder.markers, frame_times, overwrite)
-    return simulate_sheets(
-        batch.model, batch.control, batch.solver, batch.recorder, sink=sink, progress=progress, threads=threads
+        frame_times = batch.recorder.schedule(batch.control, batch.solver).frame_times
+        sink = SheetRunWriter(out, scenes, batch.model.geometry, batch.recorder.markers, frame_times, overwrite)
+    return simulate_batch(
+        batch.model,
+        batch.control,
+        batch.solver,
+        batch.recorder,
+        sink=sink,
+        progress=progress,
+        on_divergence=on_divergence,
+        keep_frames=keep_frames,
+        labels=scenes,
+        attrs={"coordinates": f"{SHEET_COORDINATES}; t = 0 at the release"},
+        threads=threads,
     )
 
 
-def sheet_result_metrics(scene: SheetScene, result: SheetResult, sheet: int) -> dict[str, float]:
+def sheet_result_metrics(scene: SheetScene, result: RunResult, sheet: int) -> dict[str, float]:
     """:func:`~warpcloth.metrics.sheet_metrics` of sheet ``sheet`` of ``result``, a run of
     ``scene`` (its clamp's translation direction)."""
     c = scene.clamp
@@ -147,16 +180,18 @@ def sheet_result_metrics(scene: SheetScene, result: SheetResult, sheet: int) -> 
     )
 
 
-def run(scene: str | Path | Scene, overrides: Overrides = (), **kwargs: Any) -> RunResult:
+def run(scene: Any, overrides: Overrides = (), **kwargs: Any) -> RunResult:
     """Load a scene (path or bundled name), apply overrides, simulate it.
 
     ``overrides`` are ``"key=value"`` strings or a mapping ``{"damping.gamma_per_s": 0.5}``
     (values as Python numbers, strings, booleans or lists). Keyword arguments go to
     :func:`simulate` (``out``, ``device``, ``progress``, ...).
     """
-    if isinstance(scene, Scene):
+    if not isinstance(scene, str | Path):
         if override_pairs(overrides):
-            raise TypeError("overrides apply to a scene being loaded; a Scene is immutable (load it with them)")
+            raise ArgumentTypeError(
+                "overrides", "apply to a scene being loaded; a Scene is immutable (load it with them)"
+            )
     else:
         scene = load_scene(scene, overrides)
     return simulate(scene, **kwargs)

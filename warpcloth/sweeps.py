@@ -24,21 +24,21 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from warpcloth import bodies
+from warpcloth.core.resources import check_disk, check_memory
 from warpcloth.errors import ArgumentError
-from warpcloth.io.sheet_run_dir import SHEET_COORDINATES
 from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.io.writing import claim_result
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
 from warpcloth.metrics import swing_summary
 from warpcloth.runs import sheet_result_metrics, simulate
-from warpcloth.scene import COORDINATES, Scene, Sweep, scene_from_dict
+from warpcloth.scene import Scene, Sweep, scene_from_dict
 from warpcloth.scene.sheet import SheetScene, sheet_scene_from_dict
 from warpcloth.scene.sheet_build import build_sheets, sheet_geometry
 from warpcloth.sheet import simulate_sheets
 from warpcloth.sheet.solver import QUANTITY
-from warpcloth.sim.model import init_warp_quietly
-from warpcloth.sim.resources import check_disk, check_memory
+from warpcloth.strip.model import init_warp_quietly
 
 WORKER_MEMORY_BYTES = 1 << 30  # per-batch result memory a worker may hold
 MAX_WORKERS_PER_CORE = 4
@@ -113,13 +113,13 @@ def sheet_disk_bytes(scene: SheetScene, frames: bool) -> int:
 
 
 def memory_bytes(scene: Scene | SheetScene, frames: bool) -> int:
-    """Memory one variant's recorded results take while its batch runs."""
-    return sheet_memory_bytes(scene, frames) if isinstance(scene, SheetScene) else strip_memory_bytes(scene, frames)
+    """Memory one variant's recorded results take while its batch runs (its body's hook)."""
+    return bodies.of_scene(scene)("memory_bytes", scene, frames)
 
 
 def disk_bytes(scene: Scene | SheetScene, frames: bool) -> int:
-    """Bytes one variant's files take in the sweep directory."""
-    return sheet_disk_bytes(scene, frames) if isinstance(scene, SheetScene) else strip_disk_bytes(scene, frames)
+    """Bytes one variant's files take in the sweep directory (its body's hook)."""
+    return bodies.of_scene(scene)("disk_bytes", scene, frames)
 
 
 def default_max_batch(scene: Scene | SheetScene, n_variants: int, workers: int, frames: bool) -> int:
@@ -187,7 +187,7 @@ def simulate_strips(scene_dicts: list[dict], device: str | None, frames: bool) -
     scenes = [scene_from_dict(d) for d in scene_dicts]
     # one thread per batch: the sweep already runs its batches on the cores
     result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
-    diverged = {d.strip: d for d in result.diverged}
+    diverged = {d.body: d for d in result.diverged}
     ok = np.isfinite(result.probes[:, PROBE_FIELDS.index("tip_x")])
     rows = []
     for local, scene in enumerate(scenes):
@@ -235,7 +235,7 @@ def simulate_sheet_batch(scene_dicts: list[dict], device: str | None, frames: bo
     result = simulate_sheets(
         built.model, built.control, built.solver, built.recorder, on_divergence="record", keep_frames=frames, threads=1
     )
-    diverged = {d.sheet: d for d in result.diverged}
+    diverged = {d.body: d for d in result.diverged}
     n_samples, b, n_markers = len(result.t), len(scenes), result.markers.shape[2]
     markers = np.transpose(result.markers.reshape(n_samples, b, 3 * n_markers), (0, 2, 1))
     rows = []
@@ -272,11 +272,11 @@ def run_batch(
     frames: bool,
     kind: str = "strip",
 ) -> dict:
-    """Simulate one batch of ``kind`` (``"strip"`` or ``"sheet"``) and write its files
+    """Simulate one batch of body ``kind`` (:mod:`warpcloth.bodies`) and write its files
     (runs in a Dask worker or in-process)."""
     init_warp_quietly()  # a worker process starts Warp afresh: no banner or notices in the results
     started = time.perf_counter()
-    done = BATCH_KINDS[kind].simulate(scene_dicts, device, frames)
+    done = bodies.named(kind)("sweep_batch", scene_dicts, device, frames)
     wall = time.perf_counter() - started
     columns: dict[str, list] = {"variant": [], "t": []} | {name: [] for name in done.names}
     rows = []
@@ -306,18 +306,6 @@ def warm_sheet_kernel_cache(scenes: list[SheetScene], device: str | None) -> Non
         )
 
 
-@dataclass(frozen=True)
-class BatchKind:
-    """What running a sweep's batches takes of the kind of scene it varies: how a batch
-    is simulated, the kernel warm-up, what the progress bar counts, and the coordinates
-    its directory states."""
-
-    simulate: Callable[[list[dict], str | None, bool], SimulatedBatch]
-    warm: Callable[[list, str | None], None]
-    steps: str
-    coordinates: str
-
-
 def warm_kernel_cache(scenes: list[Scene], device: str | None) -> None:
     """Compile the kernels once in this process, so workers load them from Warp's cache
     instead of several processes compiling into it at once (Warp FAQ). Each kernel is a
@@ -330,13 +318,6 @@ def warm_kernel_cache(scenes: list[Scene], device: str | None) -> None:
         data["release"]["enabled"] = False
         data["run"]["duration_s"] = scene.output_interval
         simulate(scene_from_dict(data), device=device, keep_frames=False, on_divergence="record", threads=1)
-
-
-BATCH_KINDS = {
-    "strip": BatchKind(simulate_strips, warm_kernel_cache, "strip-steps", COORDINATES),
-    "sheet": BatchKind(simulate_sheet_batch, warm_sheet_kernel_cache, "node-steps", SHEET_COORDINATES),
-}
-"""How the batches of a strip sweep and of a sheet sweep run, by :attr:`Sweep.kind`."""
 
 
 def run_sweep(
@@ -378,7 +359,7 @@ def run_sweep(
         raise ArgumentError("out", f"{out} already holds {held}; choose another --out")
     claim_result(out, argument="out")  # two sweeps into one directory never write it at once
     directory = SweepDirectory(out)
-    kind = BATCH_KINDS[sweep.kind]
+    body = bodies.named(sweep.kind)
     n_workers = (os.cpu_count() or 1) if workers is None else workers
     if max_batch is None:
         max_batch = default_max_batch(sweep.scenes[0], len(sweep.scenes), n_workers, frames)
@@ -390,7 +371,7 @@ def run_sweep(
         check_sweep_fits(sweep, layout, list(range(len(layout))), at_once, frames, out)
         return layout
 
-    batches = directory.prepare(sweep, planned, kind.coordinates)
+    batches = directory.prepare(sweep, planned, body.hook("coordinates"))
     pending = [b for b in range(len(batches)) if not directory.is_done(b)]
     check_sweep_fits(sweep, batches, pending, at_once, frames, out)  # a resumed one: what remains
     done = len(sweep.scenes) - sum(len(batches[b]) for b in pending)
@@ -404,7 +385,7 @@ def run_sweep(
         nonlocal steps
         steps += info["steps"]
         bar.update(info["n_variants"])
-        bar.set_postfix_str(f"{steps / (time.perf_counter() - started):.3g} {kind.steps}/s")
+        bar.set_postfix_str(f"{steps / (time.perf_counter() - started):.3g} {body.steps}/s")
 
     def task(b: int) -> tuple:
         ids = batches[b]
@@ -421,7 +402,7 @@ def run_sweep(
 
     try:
         if pending:
-            kind.warm([sweep.scenes[batches[b][0]] for b in pending], device)
+            body("warm", [sweep.scenes[batches[b][0]] for b in pending], device)
             if scheduler is not None:
                 _run_on_dask(pending, task, finished, scheduler, sweep.fingerprint)
             elif n_workers == 0:

@@ -18,7 +18,7 @@ noise: EMT 6.001 %, WT 8.162 gf·cm/cm², LT 0.544, RT 52.6 %). Noise: Gaussian,
 
 ``kes_fb2_example.csv`` (header ``curvature_per_cm,moment_gf_cm_per_cm``): the standard
 KES-FB2 cycle 0 → +2.5 → −2.5 → 0 1/cm in steps of 0.02 1/cm (501 points); the moment is
-the strip kernel's own hinge law along that path (``warpcloth.sim.moment_along_path``,
+the strip kernel's own hinge law along that path (``warpcloth.strip.moment_along_path``,
 the hinge starting fresh at K = 0; without noise B = 0.1004 gf·cm²/cm, 2HB = 0.0399
 gf·cm/cm), plus Gaussian noise σ = 0.002 gf·cm/cm (seed 2027); curvature noise-free (the
 instruments' controlled variable).
@@ -51,7 +51,7 @@ import numpy as np
 from warpcloth import units
 from warpcloth.calibrate.kes import PERCENT, standard_cycle
 from warpcloth.scene import DEFAULT_MATERIAL, MaterialSection, to_si
-from warpcloth.sim import moment_along_path
+from warpcloth.strip import moment_along_path
 
 HERE = Path(__file__).resolve().parent
 MAX_LOAD_GF_PER_CM = 500.0

@@ -132,11 +132,11 @@ def encoder(rng: np.random.Generator) -> str:
 def sheet_paths(h: float) -> tuple[np.ndarray, np.ndarray]:
     """Times and the shear swing's markers' (y, z) at 120 frames/s ([sample, marker, yz],
     mm), the sheet run at spacing ``h`` mm along warp and weft."""
-    from warpcloth.runs import simulate_sheet
+    from warpcloth.runs import simulate
     from warpcloth.scene.sheet_build import load_sheet_scene
 
     fields = SHEET_TRUTH | {"run.duration_s": 0.3, "sheet.spacing_warp_mm": h, "sheet.spacing_weft_mm": h}
-    result = simulate_sheet(load_sheet_scene("shear_swing", fields))
+    result = simulate(load_sheet_scene("shear_swing", fields))
     return result.t[::5], result.markers[::5, 0, :, 1:] * 1e3
 
 

@@ -44,7 +44,7 @@ divisions per hinge instead of five): float64 frames within 1.3e-12 of their lar
 value, probes within 3e-10 (tensile energy; the rest ≤ 1e-11), forward Euler's frames
 4e-15, float32 7e-5 (its rounding); the sweep summary within 3.5e-12 (peak speed, works).
 ``forward_euler`` was rewritten when the runner began stopping a strip whose energy budget
-no longer closes (warpcloth/sim/runner.py): forward Euler's growing oscillation is now
+no longer closes (warpcloth/strip/runner.py): forward Euler's growing oscillation is now
 stopped at t = 0.015 s by the budget (10 samples kept) instead of at 0.023 s by the
 strain (15 kept); the 10 samples both keep are bitwise equal.
 The sweep summary was rewritten when the Latin hypercube became SciPy's

@@ -27,7 +27,7 @@ from warpcloth.errors import (
     WarpclothError,
 )
 from warpcloth.kernels.law import LawRegistryError
-from warpcloth.sim.model import init_warp_quietly
+from warpcloth.strip.model import init_warp_quietly
 
 from . import analyse, fit, material, run, scene, sweep, track, view
 from .flags import as_option

@@ -125,13 +125,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def fit_command(args: argparse.Namespace) -> int:
     """Fit the free parameters and write the fit directory."""
-    from warpcloth.calibrate.motion_fit import fit_motion, free_parameters, write_fit
-    from warpcloth.calibrate.motion_fit.sheet import sheet_free_parameters
-    from warpcloth.io.measured import bundled_data, read_measurement, read_sheet_markers
+    from warpcloth import bodies
+    from warpcloth.calibrate.motion_fit import fit_motion, write_fit
+    from warpcloth.io.measured import bundled_data
     from warpcloth.io.provenance import file_checksum
     from warpcloth.scene import apply_overrides, load_scene, read_scene_file
-    from warpcloth.scene.sheet import scene_kind
-    from warpcloth.scene.sheet_build import load_sheet_scene
 
     if args.check_spacing:
         raise OptionError(
@@ -140,17 +138,12 @@ def fit_command(args: argparse.Namespace) -> int:
             "h → 0, the mesh's share in σ (--at-spacing skips that)",
         )
     base = apply_overrides(read_scene_file(args.scene), args.overrides)
-    if scene_kind(base) == "sheet":
-        # a sheet is fitted to its tracked markers (t, marker, and the coordinates a camera saw)
-        scene = load_sheet_scene(args.scene, args.overrides)
-        measurement = read_sheet_markers(args.measured, argument="--measured")
-        free = sheet_free_parameters(args.free, scene, args.bounds)
-    else:
-        # a bad field is named with its file and line, or --set (a sweep's own options do not apply to a fit)
-        scene = load_scene(args.scene, [o for o in args.overrides if not o.strip().startswith("sweep.")])
-        base.pop("sweep", None)
-        measurement = read_measurement(args.measured, argument="--measured")
-        free = free_parameters(args.free, scene, args.bounds)
+    base.pop("sweep", None)
+    # a bad field is named with its file and line, or --set (a sweep's own options do not apply to a fit)
+    scene = load_scene(args.scene, [o for o in args.overrides if not o.strip().startswith("sweep.")])
+    body = bodies.of_scene(scene)  # a strip is fitted to a laser trace or shapes, a sheet to its markers
+    measurement = body("read_measurement", args.measured, argument="--measured")
+    free = body("free_parameters", args.free, scene, args.bounds)
     out = new_result(args.out or Path("runs") / f"fit-{Path(args.scene).stem}", args.overwrite, "--out")
     fit = fit_motion(
         base,

@@ -25,7 +25,7 @@ written (to look at) but must not be read as a fit."""
 
 def device(value: str) -> str:
     """``--device``: a Warp device of this machine (checked before anything runs)."""
-    from warpcloth.sim.model import machine_device
+    from warpcloth.strip.model import machine_device
 
     try:
         machine_device(value)

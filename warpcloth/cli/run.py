@@ -8,14 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
+from warpcloth import bodies
+from warpcloth.core.result import RunResult
 from warpcloth.errors import DivergenceError
 from warpcloth.metrics import swing_summary
-from warpcloth.runs import sheet_result_metrics, simulate, simulate_sheet
-from warpcloth.scene import bundled_scenes, load_scene
-from warpcloth.scene.sheet import AUTO_FRACTION, SheetScene, is_sheet_scene
-from warpcloth.scene.sheet_build import load_sheet_scene
-from warpcloth.scene.step import describe_step
-from warpcloth.sheet import SheetResult
+from warpcloth.runs import sheet_result_metrics, simulate
+from warpcloth.scene import Scene, bundled_scenes, load_scene
+from warpcloth.scene.sheet import SheetScene
 
 from .options import device, new_result, path_text
 
@@ -45,35 +44,46 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run_scene(args: argparse.Namespace) -> int:
-    """Simulate one scene, report where its free end ended and its first period."""
+    """Simulate one scene of either body into a run directory and print what its body
+    reports of it (:mod:`warpcloth.bodies`' ``summary``)."""
     if args.usd:
         from warpcloth.viz.usd import check_stage_path
 
         check_stage_path(args.usd, "--usd")  # before the run, not after it
         new_result(args.usd, args.overwrite, "--usd")
-    if is_sheet_scene(args.scene):
-        return run_sheet_scene(args)
     scene = load_scene(args.scene, args.overrides)
+    body = bodies.of_scene(scene)
     if scene.integrator.dt_chosen_by == "auto":
-        print(describe_step(scene))
+        print(body("describe_step", scene))
     out = Path(args.out or Path("runs") / Path(args.scene).stem)
     try:
         result = simulate(scene, device=args.device, out=out, progress=not args.no_progress, overwrite=args.overwrite)
     except DivergenceError as exc:
         raise DivergenceError(f"{exc}\nRecorded up to the divergence: {out}", exc.diverged, exc.result) from None
+    print(f"wrote {out}/ ({', '.join(sorted(p.name for p in out.iterdir()))})")
+    for line in body("summary", scene, result):
+        print(line)
+    warning = result.memory_warning()
+    if warning:
+        print(f"warpcloth run: warning: {warning}", file=sys.stderr)
+    if args.usd:
+        print(f"wrote {body('export_usd', out, args.usd)}")
+    return 0
+
+
+def strip_summary(scene: Scene, result: RunResult) -> list[str]:
+    """What ``run`` prints of a strip's run: its throughput, where its free end ended and
+    its first period (as the sweep summary and ``warpcloth analyse`` measure it)."""
     tip = result.probe("tip_x", 0)
-    print(f"wrote {out}/ (probes.csv, frames.npy, frame_times.npy, scene.toml, meta.json)")
-    print(
+    lines = [
         f"{result.strip_steps:.3g} strip-steps in {result.wall_time_s:.2f} s "
-        f"({result.strip_steps / result.wall_time_s:.3g} strip-steps/s)"
-    )
-    print(
+        f"({result.strip_steps / result.wall_time_s:.3g} strip-steps/s)",
         f"final free end ({tip[-1] * 1e3:.2f}, {result.probe('tip_y', 0)[-1] * 1e3:.2f}) mm, "
-        f"clamp angle {result.probe('clamp_angle', 0)[-1]:.4f} rad"
-    )
+        f"clamp angle {result.probe('clamp_angle', 0)[-1]:.4f} rad",
+    ]
     summary = swing_summary(result.t, result.probe("laser_x", 0), tip, starts_at_rest=True)
     if scene.release.enabled and summary["n_half_cycles"] >= 2:  # a released swing
-        print(
+        lines.append(
             f"first period {summary['first_period_s']:.4f} s, first amplitude "
             f"{summary['first_amplitude_m'] * 1e3:.2f} mm, mean log decrement {summary['mean_log_decrement']:.4f} "
             f"per half-cycle over {summary['n_half_cycles'] - 1} ratios of {summary['n_half_cycles']} "
@@ -81,60 +91,24 @@ def run_scene(args: argparse.Namespace) -> int:
             "summary and `warpcloth analyse` measure the same way)"
         )
     elif scene.release.enabled:
-        print(
+        lines.append(
             f"no first period: the record ({scene.run.duration_s:g} s after the release) holds "
             f"{summary['n_half_cycles']} half-cycle(s) of the {summary['signal']} signal; a period needs two "
             "(run longer: run.duration_s)"
         )
-    warning = result.memory_warning()
-    if warning:
-        print(f"warpcloth run: warning: {warning}", file=sys.stderr)
-    if args.usd:
-        from warpcloth.io.load import load_recording
-        from warpcloth.viz.usd import export_usd
-
-        print(f"wrote {export_usd(load_recording(out), args.usd)}")
-    return 0
+    return lines
 
 
-def run_sheet_scene(args: argparse.Namespace) -> int:
-    """Simulate one sheet scene into a sheet run directory; report its markers' peak
-    sideways displacement, the probed cell's peak shear angle and the energy budget."""
-    scene = load_sheet_scene(args.scene, args.overrides)
-    if scene.integrator.dt_chosen_by == "auto":
-        print(
-            f"integrator.dt_s = auto: {scene.integrator.dt_s:.4e} s ({AUTO_FRACTION:g} of the linearised "
-            "stability estimate, a whole fraction of the probe interval)"
-        )
-    out = Path(args.out or Path("runs") / Path(args.scene).stem)
-    try:
-        result = simulate_sheet(
-            scene, device=args.device, out=out, progress=not args.no_progress, overwrite=args.overwrite
-        )
-    except DivergenceError as exc:
-        raise DivergenceError(f"{exc}\nRecorded up to the divergence: {out}", exc.diverged, exc.result) from None
-    print(f"wrote {out}/ (probes.csv, markers.csv, frames.npy, frame_times.npy, geometry.npz, scene.toml, meta.json)")
-    print(
+def sheet_summary(scene: SheetScene, result: RunResult) -> list[str]:
+    """What ``run`` prints of a sheet run (:func:`~warpcloth.metrics.sheet_metrics`, as a
+    sheet sweep's summary holds it): its throughput; each marker's peak displacement from
+    its start, sideways (z) and out of the plane (x), in mm; the probed cell's peak shear
+    angle (°); the energy budget's largest drift against the work the clamp did."""
+    metrics = sheet_result_metrics(scene, result, 0)
+    lines = [
         f"{result.node_steps:.3g} node-steps in {result.wall_time_s:.2f} s "
         f"({result.node_steps / result.wall_time_s:.3g} node-steps/s)"
-    )
-    for line in sheet_summary(scene, result):
-        print(line)
-    if args.usd:
-        from warpcloth.io.sheet_run_dir import read_sheet_run
-        from warpcloth.viz.usd import export_sheet_usd
-
-        print(f"wrote {export_sheet_usd(read_sheet_run(out), args.usd)}")
-    return 0
-
-
-def sheet_summary(scene: SheetScene, result: SheetResult) -> list[str]:
-    """What ``run`` prints of a sheet run (:func:`~warpcloth.metrics.sheet_metrics`, as a
-    sheet sweep's summary holds it): each marker's peak displacement from its start,
-    sideways (z) and out of the plane (x), in mm; the probed cell's peak shear angle (°);
-    the energy budget's largest drift against the work the clamp did."""
-    metrics = sheet_result_metrics(scene, result, 0)
-    lines = []
+    ]
     start = result.markers[0, 0]
     for k in range(result.markers.shape[2]):
         m = {name: metrics[f"marker_{k}_{name}"] for name in ("peak_z_mm", "peak_z_against_clamp_mm", "peak_x_mm")}

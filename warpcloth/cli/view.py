@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from warpcloth import bodies
 from warpcloth.errors import OptionError
 from warpcloth.viz import DPI, FORMATS
 
@@ -94,17 +95,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def export_usd_command(args: argparse.Namespace) -> int:
-    """Write the selected variants as an animated USD stage."""
-    from warpcloth.io.load import load_recording
-    from warpcloth.io.sheet_run_dir import is_sheet_run, read_sheet_run
-    from warpcloth.viz.usd import export_sheet_usd, export_usd
+    """Write a run as an animated USD stage (its body's way: :mod:`warpcloth.bodies`)."""
+    return bodies.of_run(args.run_dir)("usd_command", args)
 
-    if is_sheet_run(args.run_dir):
-        refuse_strip_options(args, ("variants", "where", "ribbon", "frames_per_clip"))
-        run = read_sheet_run(args.run_dir)
-        out = export_sheet_usd(run, new_result(args.output, args.overwrite, "-o"))
-        print(f"wrote {out} (a sheet of {run.meta['n_nodes']} nodes, {len(run.frame_times)} frames)")
-        return 0
+
+def strip_usd_command(args: argparse.Namespace) -> int:
+    """``export-usd`` of a strip's run or a sweep: the selected variants as curves."""
+    from warpcloth.io.load import load_recording
+    from warpcloth.viz.usd import export_usd
+
     recording = load_recording(args.run_dir, args.variants, args.where)
     out = export_usd(
         recording,
@@ -116,21 +115,41 @@ def export_usd_command(args: argparse.Namespace) -> int:
     return 0
 
 
+def sheet_usd_command(args: argparse.Namespace) -> int:
+    """``export-usd`` of a sheet run: the sheet as an animated mesh."""
+    from warpcloth.io.sheet_run_dir import read_sheet_run
+    from warpcloth.viz.usd import export_sheet_usd
+
+    refuse_strip_options(args, ("variants", "where", "ribbon", "frames_per_clip"))
+    run = read_sheet_run(args.run_dir)
+    out = export_sheet_usd(run, new_result(args.output, args.overwrite, "-o"))
+    print(f"wrote {out} (a sheet of {run.meta['n_nodes']} nodes, {len(run.frame_times)} frames)")
+    return 0
+
+
 def plot_command(args: argparse.Namespace) -> int:
-    """Figures of a run, or one sweep metric against parameters."""
-    from warpcloth.io.load import load_recording
-    from warpcloth.io.sheet_run_dir import is_sheet_run, read_sheet_run
+    """Figures of a run, or one sweep metric against parameters (its body's way)."""
+    return bodies.of_run(args.run_dir)("plot_command", args)
+
+
+def sheet_plot_command(args: argparse.Namespace) -> int:
+    """``plot`` of a sheet run: its markers, shear and energy figures."""
+    from warpcloth.io.sheet_run_dir import read_sheet_run
     from warpcloth.viz.figures.sheet import plot_sheet_run
+
+    refuse_strip_options(args, ("variants", "where", "measured", "t_from", "t_to", "times", "metric", "x", "y"))
+    out = new_result(args.out or Path(args.run_dir) / "figures", args.overwrite, "--out")
+    for path in plot_sheet_run(read_sheet_run(args.run_dir).samples(), out, fmt=args.format, dpi=args.dpi):
+        print(f"wrote {path}")
+    return 0
+
+
+def strip_plot_command(args: argparse.Namespace) -> int:
+    """``plot`` of a strip's run, or one sweep metric against parameters."""
+    from warpcloth.io.load import load_recording
     from warpcloth.viz.plots import plot_run, plot_sweep, read_sweep_summary
 
-    sheet = is_sheet_run(args.run_dir)
-    if sheet:
-        refuse_strip_options(args, ("variants", "where", "measured", "t_from", "t_to", "times", "metric", "x", "y"))
     out = new_result(args.out or Path(args.run_dir) / "figures", args.overwrite, "--out")
-    if sheet:
-        for path in plot_sheet_run(read_sheet_run(args.run_dir).samples(), out, fmt=args.format, dpi=args.dpi):
-            print(f"wrote {path}")
-        return 0
     if args.metric or args.x:
         if not (args.metric and args.x):
             raise OptionError("--metric", "a sweep plot needs both --metric and --x")
@@ -182,24 +201,37 @@ def material_kes_values(recording: object, variant: int = 0) -> object:
 
 
 def render_command(args: argparse.Namespace) -> int:
-    """Off-screen 3D PNG frames and an animation."""
-    from warpcloth.io.load import load_recording
-    from warpcloth.io.sheet_run_dir import is_sheet_run, read_sheet_run
-    from warpcloth.viz.render import render_run, render_sheet_run
-
-    movie = None if args.movie == "none" else args.movie
-    if is_sheet_run(args.run_dir):
-        refuse_strip_options(args, ("variants", "where"))
-        run = read_sheet_run(args.run_dir)
-        out = new_result(args.out or Path(args.run_dir) / "render", args.overwrite, "--out")
-        paths = render_sheet_run(run, out, times=args.times, movie=movie, stride=args.stride)
-    else:
-        recording = load_recording(args.run_dir, args.variants, args.where)
-        out = new_result(args.out or Path(args.run_dir) / "render", args.overwrite, "--out")
-        paths = render_run(recording, out, times=args.times, movie=movie, stride=args.stride)
-    for path in paths:
+    """Off-screen 3D PNG frames and an animation (its body's way)."""
+    for path in bodies.of_run(args.run_dir)("render", args):
         print(f"wrote {path}")
     return 0
+
+
+def _render_target(args: argparse.Namespace) -> tuple[Path, str | None]:
+    # where the frames go, and the animation asked for
+    out = new_result(args.out or Path(args.run_dir) / "render", args.overwrite, "--out")
+    return out, None if args.movie == "none" else args.movie
+
+
+def strip_render(args: argparse.Namespace) -> list[Path]:
+    """``render`` of a strip's run: the selected variants' frames."""
+    from warpcloth.io.load import load_recording
+    from warpcloth.viz.render import render_run
+
+    recording = load_recording(args.run_dir, args.variants, args.where)
+    out, movie = _render_target(args)
+    return render_run(recording, out, times=args.times, movie=movie, stride=args.stride)
+
+
+def sheet_render(args: argparse.Namespace) -> list[Path]:
+    """``render`` of a sheet run: the sheet's mesh."""
+    from warpcloth.io.sheet_run_dir import read_sheet_run
+    from warpcloth.viz.render import render_sheet_run
+
+    refuse_strip_options(args, ("variants", "where"))
+    run = read_sheet_run(args.run_dir)
+    out, movie = _render_target(args)
+    return render_sheet_run(run, out, times=args.times, movie=movie, stride=args.stride)
 
 
 def refuse_strip_options(args: argparse.Namespace, names: tuple[str, ...]) -> None:

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from warpcloth.errors import ArgumentError
 from warpcloth.kernels.force_terms import FORCE_TERMS
+
+from warpcloth.errors import ArgumentError
 
 
 def checked_terms(terms: object) -> tuple[Any, ...]:

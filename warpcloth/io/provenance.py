@@ -43,7 +43,7 @@ def _git_commit() -> str | None:
 
 
 def _default_device() -> str:
-    from warpcloth.sim.model import machine_device  # starts Warp quietly, as a run does
+    from warpcloth.strip.model import machine_device  # starts Warp quietly, as a run does
 
     return machine_device(None).alias
 

@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from warpcloth.core.result import checked_probe
 from warpcloth.errors import ArgumentError, DataFileError, checked_index
 from warpcloth.scene import COORDINATES, Scene, batch_fields, choice_fields, rest_positions
-from warpcloth.sim.runner import checked_probe
 
 
 @dataclass
@@ -94,9 +94,9 @@ class Recording:
         """An ``xarray.Dataset``: every probe as a variable over (t, variant), the frames
         over (frame_time, variant, node, xy), the per-variant parameters as coordinates
         along ``variant``, units in ``attrs`` (needs ``pip install 'warpcloth[xarray]'``);
-        the layout of :meth:`warpcloth.sim.RunResult.to_xarray`."""
+        the layout of :meth:`warpcloth.strip.RunResult.to_xarray`."""
+        from warpcloth.core.labelled import probes_dataset
         from warpcloth.kernels import PROBE_FIELDS
-        from warpcloth.sim.labelled import probes_dataset
 
         # samples a strip never reached (after its divergence) are NaN, as in memory
         table = self.probes.pivot_table(index="t", columns="variant", values=list(PROBE_FIELDS), dropna=False)

@@ -7,7 +7,8 @@ Layout of a run directory::
     probes.csv          one row per (t, variant); columns PROBE_COLUMNS, SI units
     frames.npy          float array (frame, variant, node, xy) of node positions, m
     frame_times.npy     (frame,) times of the frames, s
-    meta.json           sizes, units, health of every strip, completeness
+    meta.json           the body ("kind": "strip"), sizes, units, health of every strip,
+                        completeness
 
 ``meta.json`` is written first with ``"complete": false`` and rewritten at the end,
 so an interrupted run is recognisable. After every chunk is durable (flushed and
@@ -28,16 +29,17 @@ import io
 import json
 import os
 import shutil
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import tomli_w
 
+from warpcloth.core.resources import check_disk
 from warpcloth.errors import ArgumentError, DataFileError
 from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 from warpcloth.scene import COORDINATES, Scene, read_scene_file, scene_from_dict
-from warpcloth.sim.resources import check_disk
 
 from .atomic import naming, write_npy_atomically, write_text_atomically
 from .json_file import read_json
@@ -51,6 +53,17 @@ PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
 def write_scene(path: Path, scene: Scene) -> None:
     """Write a resolved scene as TOML."""
     path.write_text(tomli_w.dumps(scene.to_dict()))
+
+
+def write_scenes(directory: Path, scenes: list) -> None:
+    """The resolved scene of a run of one variant (scene.toml), or of each variant of a
+    batch (variants/NNNN.toml), of either body."""
+    if len(scenes) == 1:
+        write_scene(directory / "scene.toml", scenes[0])
+        return
+    (directory / "variants").mkdir(exist_ok=True)
+    for i, scene in enumerate(scenes):
+        write_scene(directory / "variants" / f"{i:04d}.toml", scene)
 
 
 def reserve(file: io.BufferedWriter, size: int) -> None:
@@ -192,16 +205,116 @@ class StreamedFrames:
         self.file.close()
 
 
-class RunWriter:
-    """Streams one batch run into a directory (see the module docstring and
-    :class:`StreamedDirectory`)."""
+@dataclass(frozen=True)
+class StreamedTable:
+    """A CSV table a run streams: its ``file``, ``columns`` and their printf ``formats``;
+    meta.json's ``committed`` records ``<key>_rows`` and ``<key>_bytes`` of it."""
+
+    file: str
+    columns: tuple[str, ...]
+    formats: tuple[str, ...]
+    key: str
+
+
+def probe_table(index: str, fields: tuple[str, ...]) -> StreamedTable:
+    """probes.csv: one row per (t, body) with ``index`` naming the body's column."""
+    return StreamedTable("probes.csv", ("t", index, *fields), ("%.10g", "%d", *["%.17g"] * len(fields)), "probe")
+
+
+class StreamedRun:
+    """What every run writer shares: the declared tables and frames.npy streamed into a
+    :class:`StreamedDirectory`, each chunk made durable and then recorded as committed in
+    meta.json, and the close that marks the run complete (see the module docstring). A
+    body's writer declares its tables and meta and turns the runner's samples into rows
+    (:meth:`write_samples`); it is a :class:`~warpcloth.core.runner.Sink`."""
+
+    def __init__(
+        self,
+        place: StreamedDirectory,
+        meta: dict,
+        tables: tuple[StreamedTable, ...],
+        frame_times: np.ndarray,
+        frames_shape: tuple[int, ...],
+    ) -> None:
+        self.place = place
+        self.dir = place.dir
+        self.meta = meta
+        self.meta["committed"] = {f"{t.key}_{what}": 0 for t in tables for what in ("rows", "bytes")} | {"frames": 0}
+        self._write_meta()
+        write_npy_atomically(self.dir / "frame_times.npy", frame_times)
+        self.frames = StreamedFrames(self.dir / "frames.npy", frames_shape)
+        self.tables = {t.file: t for t in tables}
+        self.files = {}
+        for t in tables:
+            self.files[t.file] = open(self.dir / t.file, "w", newline="\n")  # noqa: SIM115 - closed in close()
+            self.files[t.file].write(",".join(t.columns) + "\n")
+        self.commit({})
+
+    def _write_meta(self) -> None:
+        write_text_atomically(self.dir / "meta.json", json.dumps(self.meta, indent=2))
+
+    def append(self, file: str, rows: np.ndarray) -> int:
+        """Append ``rows`` to table ``file`` (not yet committed); how many."""
+        with naming(self.dir / file):
+            np.savetxt(self.files[file], rows, fmt=list(self.tables[file].formats), delimiter=",")
+        return len(rows)
+
+    def commit(self, rows: dict[str, int]) -> None:
+        """Make what was written durable, then record it (``rows`` appended per file)."""
+        for file, handle in self.files.items():
+            with naming(self.dir / file):
+                handle.flush()
+                os.fsync(handle.fileno())
+        self.frames.sync()
+        committed = self.meta["committed"]
+        for file, table in self.tables.items():
+            committed[f"{table.key}_rows"] += rows.get(file, 0)
+            committed[f"{table.key}_bytes"] = self.files[file].tell()
+        committed["frames"] = self.frames.written
+        self._write_meta()
+
+    def probe_rows(self, t: np.ndarray, probes: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """The rows of probes.csv for the valid (sample, body) of ``probes[sample, field,
+        body]`` at ``t``, sample by sample (rows after a divergence are never written)."""
+        sample, body = np.nonzero(valid)
+        return np.column_stack([t[sample], body, probes[sample, :, body]])
+
+    def write_samples(
+        self, t: np.ndarray, probes: np.ndarray, tables: dict[str, np.ndarray], valid: np.ndarray
+    ) -> None:
+        """Append the valid samples' probe rows (a body with other tables extends this)."""
+        self.commit({"probes.csv": self.append("probes.csv", self.probe_rows(t, probes, valid))})
+
+    def write_frames(self, first: int, frames: np.ndarray) -> None:
+        """Store frames ``[frame, body, node, component]`` from frame index ``first`` on."""
+        self.frames.write(first, frames)
+        self.commit({})
+
+    def close(self, diverged: list, extra: dict) -> None:
+        """Finish the files and mark the run complete."""
+        self.frames.fill()
+        self.commit({})
+        for handle in self.files.values():
+            handle.close()
+        self.frames.close()
+        self.meta["diverged"] = [d.as_dict() for d in diverged]
+        self.meta.update(extra)
+        self.meta["provenance"] = provenance(extra.get("device"))
+        self.meta["complete"] = True
+        self._write_meta()
+        self.place.finish()
+        self.dir = self.place.dir
+
+
+class RunWriter(StreamedRun):
+    """Streams one batch run of strips into a directory (see the module docstring)."""
 
     def __init__(
         self, out_dir: str | Path, scenes: list[Scene], n_nodes: int, frame_times: np.ndarray, overwrite: bool = False
     ) -> None:
         n_samples = (len(frame_times) - 1) * scenes[0].output.probes_per_frame + 1
         row_bytes = 16 + 24 * len(PROBE_FIELDS)  # "%.17g" fields of at most 24 characters
-        self.place = StreamedDirectory(
+        place = StreamedDirectory(
             out_dir,
             overwrite,
             16 * len(frame_times) * len(scenes) * n_nodes + n_samples * len(scenes) * row_bytes,
@@ -209,14 +322,10 @@ class RunWriter:
             "free space, choose another --out, or record less "
             "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)",
         )
-        self.dir = self.place.dir
-        if len(scenes) == 1:
-            write_scene(self.dir / "scene.toml", scenes[0])
-        else:
-            (self.dir / "variants").mkdir(exist_ok=True)
-            for i, scene in enumerate(scenes):
-                write_scene(self.dir / "variants" / f"{i:04d}.toml", scene)
-        self.meta = {
+        write_scenes(place.dir, scenes)
+        frames_shape = (len(frame_times), len(scenes), n_nodes, 2)
+        meta = {
+            "kind": "strip",
             "complete": False,
             "n_variants": len(scenes),
             "n_nodes": n_nodes,
@@ -227,62 +336,14 @@ class RunWriter:
             "coordinates": COORDINATES,
             "frames": {
                 "file": "frames.npy",
-                "shape": [len(frame_times), len(scenes), n_nodes, 2],
+                "shape": list(frames_shape),
                 "axes": ["frame", "variant", "node", "xy"],
                 "unit": "m",
                 "times_file": "frame_times.npy",
             },
             "diverged": [],
         }
-        self.meta["committed"] = {"probe_rows": 0, "probe_bytes": 0, "frames": 0}
-        self._write_meta()
-        write_npy_atomically(self.dir / "frame_times.npy", frame_times)
-        self.frames = StreamedFrames(self.dir / "frames.npy", (len(frame_times), len(scenes), n_nodes, 2))
-        self.probes = open(self.dir / "probes.csv", "w", newline="\n")  # noqa: SIM115 - closed in close()
-        self.probes.write(",".join(PROBE_COLUMNS) + "\n")
-        self._commit(0)
-
-    def _write_meta(self) -> None:
-        write_text_atomically(self.dir / "meta.json", json.dumps(self.meta, indent=2))
-
-    def _commit(self, rows: int) -> None:
-        # Data first, durably; then the record of how much of it is valid.
-        with naming(self.dir / "probes.csv"):
-            self.probes.flush()
-            os.fsync(self.probes.fileno())
-        self.frames.sync()
-        committed = self.meta["committed"]
-        committed["probe_rows"] += rows
-        committed["probe_bytes"] = self.probes.tell()
-        committed["frames"] = self.frames.written
-        self._write_meta()
-
-    def write_probes(self, t: np.ndarray, variant: np.ndarray, values: np.ndarray) -> None:
-        """Append rows: times, variant indices and values ``[row, field]``."""
-        rows = np.column_stack([t, variant, values])
-        fmt = ["%.10g", "%d"] + ["%.17g"] * values.shape[1]
-        with naming(self.dir / "probes.csv"):
-            np.savetxt(self.probes, rows, fmt=fmt, delimiter=",")
-        self._commit(len(rows))
-
-    def write_frames(self, first: int, frames: np.ndarray) -> None:
-        """Store frames ``[frame, variant, node, xy]`` starting at frame index ``first``."""
-        self.frames.write(first, frames)
-        self._commit(0)
-
-    def close(self, diverged: list, extra: dict) -> None:
-        """Finish the files and mark the run complete."""
-        self.frames.fill()
-        self._commit(0)
-        self.probes.close()
-        self.frames.close()
-        self.meta["diverged"] = [d.as_dict() for d in diverged]
-        self.meta.update(extra)
-        self.meta["provenance"] = provenance(extra.get("device"))
-        self.meta["complete"] = True
-        self._write_meta()
-        self.place.finish()
-        self.dir = self.place.dir
+        super().__init__(place, meta, (probe_table("variant", PROBE_FIELDS),), frame_times, frames_shape)
 
 
 def read_probes(path: Path, meta: dict) -> pd.DataFrame:

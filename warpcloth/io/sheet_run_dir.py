@@ -21,25 +21,20 @@ a reader of an interrupted run uses exactly that part.
 
 from __future__ import annotations
 
-import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import tomli_w
 
 from warpcloth.errors import DataFileError
-from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS, SHEET_PROBE_UNITS
+from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS, SHEET_PROBE_UNITS, SHEET_PROBES
 from warpcloth.scene.sheet import SheetScene, read_sheet_scene
 from warpcloth.sheet import SheetGeometry
-from warpcloth.sheet.runner import sheet_energy_total
 
-from .atomic import naming, write_npy_atomically, write_text_atomically
+from .atomic import naming
 from .json_file import read_json
-from .provenance import provenance
-from .run_dir import StreamedDirectory, StreamedFrames, read_committed_csv
+from .run_dir import StreamedDirectory, StreamedRun, StreamedTable, probe_table, read_committed_csv, write_scenes
 
 SHEET_COORDINATES = "x out of the sheet's rest plane, y up, z across, m, from the middle of the clamp edge (at rest)"
 """The frame of every position a sheet run stores, written into its meta.json."""
@@ -61,45 +56,49 @@ def mesh_faces(geometry: SheetGeometry) -> np.ndarray:
     return np.array(sorted(faces), dtype=np.int32).reshape(-1, 4)
 
 
-class SheetRunWriter:
-    """Streams one sheet run into a directory (a :class:`~warpcloth.sheet.SheetSink`)."""
+MARKER_TABLE = StreamedTable("markers.csv", MARKER_COLUMNS, ("%.10g", "%d", "%d", "%.17g", "%.17g", "%.17g"), "marker")
+
+
+class SheetRunWriter(StreamedRun):
+    """Streams one sheet run into a directory: the shared streamed run
+    (:class:`~warpcloth.io.run_dir.StreamedRun`) with the markers' table and the geometry."""
 
     def __init__(
         self,
         out_dir: str | Path,
-        scene: SheetScene,
+        scenes: SheetScene | list[SheetScene],
         geometry: SheetGeometry,
         markers: tuple[int, ...],
         frame_times: np.ndarray,
         overwrite: bool = False,
     ) -> None:
-        n_frames, n_nodes = len(frame_times), geometry.n_nodes
-        n_samples = (n_frames - 1) * scene.output.probes_per_frame + 1
-        self.place = StreamedDirectory(
+        scenes = [scenes] if isinstance(scenes, SheetScene) else list(scenes)
+        n_frames, n_nodes, b = len(frame_times), geometry.n_nodes, len(scenes)
+        n_samples = (n_frames - 1) * scenes[0].output.probes_per_frame + 1
+        place = StreamedDirectory(
             out_dir,
             overwrite,
-            24 * n_frames * n_nodes + n_samples * ROW_BYTES * (len(SHEET_PROBE_COLUMNS) + 6 * len(markers)),
+            b * (24 * n_frames * n_nodes + n_samples * ROW_BYTES * (len(SHEET_PROBE_COLUMNS) + 6 * len(markers))),
             "the run's frames.npy, probes.csv and markers.csv",
             "free space, choose another --out, or record less "
             "(output.probes_per_frame, output.frame_rate_hz, run.duration_s)",
         )
-        self.dir = self.place.dir
-        (self.dir / "scene.toml").write_text(tomli_w.dumps(scene.to_dict()))
+        write_scenes(place.dir, scenes)
         faces = mesh_faces(geometry)
-        write_npy_atomically(self.dir / "frame_times.npy", frame_times)
-        with naming(self.dir / "geometry.npz"):
+        with naming(place.dir / "geometry.npz"):
             np.savez(
-                self.dir / "geometry.npz",
+                place.dir / "geometry.npz",
                 lattice=geometry.lattice,
                 rest_positions=geometry.rest_positions,
                 clamped=geometry.clamped,
                 faces=faces,
                 cells=geometry.cell_nodes,
             )
-        self.meta = {
+        frames_shape = (n_frames, b, n_nodes, 3)
+        meta = {
             "kind": "sheet",
             "complete": False,
-            "n_sheets": 1,
+            "n_sheets": b,
             "n_nodes": n_nodes,
             "n_faces": len(faces),
             "spacing_m": list(geometry.spacing),
@@ -119,7 +118,7 @@ class SheetRunWriter:
             ],
             "frames": {
                 "file": "frames.npy",
-                "shape": [n_frames, 1, n_nodes, 3],
+                "shape": list(frames_shape),
                 "axes": ["frame", "sheet", "node", "xyz"],
                 "unit": "m",
                 "times_file": "frame_times.npy",
@@ -136,71 +135,27 @@ class SheetRunWriter:
                 },
             },
             "diverged": [],
-            "committed": {"probe_rows": 0, "probe_bytes": 0, "marker_rows": 0, "marker_bytes": 0, "frames": 0},
         }
-        self._write_meta()
-        self.frames = StreamedFrames(self.dir / "frames.npy", (n_frames, 1, n_nodes, 3))
-        self.tables = {}
-        for name, columns in (("probes.csv", SHEET_PROBE_COLUMNS), ("markers.csv", MARKER_COLUMNS)):
-            self.tables[name] = open(self.dir / name, "w", newline="\n")  # noqa: SIM115 - closed in close()
-            self.tables[name].write(",".join(columns) + "\n")
-        self._commit(0, 0)
+        tables = (probe_table("sheet", SHEET_PROBE_FIELDS), MARKER_TABLE)
+        super().__init__(place, meta, tables, frame_times, frames_shape)
 
-    def _write_meta(self) -> None:
-        write_text_atomically(self.dir / "meta.json", json.dumps(self.meta, indent=2))
-
-    def _commit(self, probe_rows: int, marker_rows: int) -> None:
-        # Data first, durably; then the record of how much of it is valid.
-        for name, table in self.tables.items():
-            with naming(self.dir / name):
-                table.flush()
-                os.fsync(table.fileno())
-        self.frames.sync()
-        committed = self.meta["committed"]
-        committed["probe_rows"] += probe_rows
-        committed["probe_bytes"] = self.tables["probes.csv"].tell()
-        committed["marker_rows"] += marker_rows
-        committed["marker_bytes"] = self.tables["markers.csv"].tell()
-        committed["frames"] = self.frames.written
-        self._write_meta()
-
-    def write_samples(self, t: np.ndarray, probes: np.ndarray, markers: np.ndarray, valid: np.ndarray) -> None:
-        """Append the valid samples: probes ``[sample, field, sheet]``, markers ``[sample,
-        sheet, marker, xyz]`` (rows after a divergence are never written)."""
+    def write_samples(
+        self, t: np.ndarray, probes: np.ndarray, tables: dict[str, np.ndarray], valid: np.ndarray
+    ) -> None:
+        """Append the valid samples: probes ``[sample, field, sheet]`` and the markers
+        ``[sample, sheet, marker, xyz]`` in long form (rows after a divergence are never
+        written), committed together."""
+        markers = tables["markers"]
         sample, sheet = np.nonzero(valid)
-        rows = np.column_stack([t[sample], sheet, probes[sample, :, sheet]])
-        with naming(self.dir / "probes.csv"):
-            fmt = ["%.10g", "%d"] + ["%.17g"] * probes.shape[1]
-            np.savetxt(self.tables["probes.csv"], rows, fmt=fmt, delimiter=",")
         n_markers = markers.shape[2]
         marker = np.tile(np.arange(n_markers), len(sample))
         positions = markers[sample, sheet].reshape(-1, 3)
         marks = np.column_stack([np.repeat(t[sample], n_markers), np.repeat(sheet, n_markers), marker, positions])
-        with naming(self.dir / "markers.csv"):
-            np.savetxt(self.tables["markers.csv"], marks, fmt=["%.10g", "%d", "%d"] + ["%.17g"] * 3, delimiter=",")
-        self._commit(len(rows), len(marks))
-
-    def write_frames(self, first: int, frames: np.ndarray) -> None:
-        """Store frames ``[frame, sheet, node, xyz]`` from frame index ``first`` on."""
-        self.frames.write(first, frames)
-        self._commit(0, 0)
-
-    def close(self, diverged: list, extra: dict) -> None:
-        """Finish the files and mark the run complete."""
-        self.frames.fill()
-        self._commit(0, 0)
-        for table in self.tables.values():
-            table.close()
-        self.frames.close()
-        self.meta["diverged"] = [
-            {"sheet": d.sheet, "time_s": d.time_s, "step": d.step, "message": d.describe()} for d in diverged
-        ]
-        self.meta.update(extra)
-        self.meta["provenance"] = provenance(extra.get("device"))
-        self.meta["complete"] = True
-        self._write_meta()
-        self.place.finish()
-        self.dir = self.place.dir
+        rows = {
+            "probes.csv": self.append("probes.csv", self.probe_rows(t, probes, valid)),
+            "markers.csv": self.append("markers.csv", marks),
+        }
+        self.commit(rows)
 
 
 @dataclass
@@ -218,7 +173,7 @@ class SheetSamples:
 
     def energy_total(self) -> np.ndarray:
         """The budget that should stay constant, ``[sample, sheet]``."""
-        return sheet_energy_total(self.probes)
+        return SHEET_PROBES.energy_total(self.probes)
 
 
 @dataclass
@@ -310,13 +265,16 @@ def read_sheet_run(path: str | Path) -> SheetRun:
         path / "markers.csv", committed["marker_rows"], committed["marker_bytes"], complete, MARKER_COLUMNS
     )
     frames = np.asarray(stored[:reached])
-    # a sheet that diverged leaves NaN frames from its stop on: what it reached is before them
-    reached = int(np.argmin(np.isfinite(frames).all(axis=(1, 2, 3)))) if not np.isfinite(frames).all() else reached
+    # a sheet that diverged leaves NaN frames from its stop on: the run reached as far as
+    # its last sheet to stop did
+    alive = np.isfinite(frames).all(axis=(2, 3)).any(axis=1)
+    reached = int(np.argmin(alive)) if not alive.all() else reached
     if not reached:
         raise DataFileError(path, f"recorded no frame: {_why_empty(meta)}")
+    scene_file = path / "scene.toml" if meta["n_sheets"] == 1 else path / "variants" / "0000.toml"
     return SheetRun(
         path,
-        read_sheet_scene(path / "scene.toml"),
+        read_sheet_scene(scene_file),
         meta,
         probes,
         markers,

@@ -2,7 +2,7 @@
 :func:`build_batch`, the one step from scenes to simulation objects (SI)."""
 
 from .build import Batch, build_batch, builder_for, check_batch
-from .files import bundled_scenes, load_scene, read_scene_file, scene_from_dict
+from .files import bundled_scenes, load_scene, read_scene_file, scene_from_dict, strip_scene_from_dict
 from .geometry import COORDINATES, rest_positions
 from .materials import (
     MATERIAL_FILE_KEY,
@@ -74,6 +74,7 @@ __all__ = [
     "rest_positions",
     "scene_from_dict",
     "set_field",
+    "strip_scene_from_dict",
     "tensile_slope_minimum",
     "to_si",
     "validate_material",

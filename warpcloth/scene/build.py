@@ -13,11 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from warpcloth import units
+from warpcloth.core.resources import check_memory
 from warpcloth.errors import SceneError
 from warpcloth.kernels import bending_law
-from warpcloth.sim import SOLVERS, ClampMotion, Control, FabricSet, Model, Recorder, Solver, StripBuilder
-from warpcloth.sim.resources import check_memory
-from warpcloth.sim.stability import cycle_response
+from warpcloth.strip import SOLVERS, ClampMotion, Control, FabricSet, Model, Recorder, Solver, StripBuilder
+from warpcloth.strip.stability import cycle_response
 
 from .clamp_motion import clamp_pieces
 from .geometry import rest_positions

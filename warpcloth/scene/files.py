@@ -6,6 +6,7 @@ import importlib.resources
 from pathlib import Path
 from typing import Any
 
+from warpcloth import bodies
 from warpcloth.errors import ArgumentError, DataFileError, SceneError
 
 from .locate import located
@@ -13,7 +14,7 @@ from .materials import MATERIAL_FILE_KEY, with_material_file
 from .overrides import Overrides, apply_overrides
 from .parse import parse_section, parse_toml, read_toml_text
 from .schema import Scene
-from .step import AUTO, check_step, with_chosen_step
+from .step import AUTO, with_chosen_step
 from .validate import validate_scene
 
 
@@ -99,8 +100,8 @@ def read_scene_file(name_or_path: str | Path) -> dict:
     return _read_scene(name_or_path)[0]
 
 
-def scene_from_dict(data: dict, choose_step: bool = True) -> Scene:
-    """Parse and validate raw scene data.
+def strip_scene_from_dict(data: dict, choose_step: bool = True) -> Scene:
+    """Parse and validate raw strip-scene data.
 
     A ``material.from_file`` (path or bundled name) fills every [material] field the data
     do not set; the scene holds the explicit values afterwards, so ``to_dict()`` re-reads
@@ -109,11 +110,7 @@ def scene_from_dict(data: dict, choose_step: bool = True) -> Scene:
     ``choose_step`` is false (a sweep picks one step for all its variants).
     """
     if isinstance(data, dict) and "sheet" in data:
-        raise SceneError(
-            "sheet",
-            "this is a sheet scene: `warpcloth run`, `warpcloth sweep` and "
-            "warpcloth.scene.sheet_build.load_sheet_scene take it (the strip's Python API takes strip scenes)",
-        )
+        raise SceneError("sheet", "this is a sheet scene (warpcloth.scene_from_dict reads either body's)")
     scene = parse_section(Scene, with_material_file(data), "")
     validate_scene(scene)
     if choose_step and scene.integrator.dt_s == AUTO:
@@ -121,17 +118,28 @@ def scene_from_dict(data: dict, choose_step: bool = True) -> Scene:
     return scene
 
 
-def load_scene(name_or_path: str | Path, overrides: Overrides = ()) -> Scene:
-    """Read a scene by path or bundled name, apply overrides (``"key=value"`` strings as
-    ``--set`` takes them, or a dict ``{"damping.gamma_per_s": 0.5}``), validate it.
+def scene_from_dict(data: dict) -> Any:
+    """Parse and validate raw scene data of either body (a strip's :class:`Scene`, a sheet's
+    :class:`~warpcloth.scene.sheet.SheetScene`, by the table it has: :func:`warpcloth.bodies.of_data`).
+    ``integrator.dt_s = "auto"`` of a strip is replaced by the step chosen for it alone."""
+    if not isinstance(data, dict):
+        raise SceneError("scene", f"expected a table of scene sections, got {type(data).__name__}")
+    return bodies.of_data(data)("scene_from_dict", data)
+
+
+def load_scene(name_or_path: str | Path, overrides: Overrides = ()) -> Any:
+    """Read a scene of either body by path or bundled name, apply overrides (``"key=value"``
+    strings as ``--set`` takes them, or a dict ``{"damping.gamma_per_s": 0.5}``), validate
+    it and check it can run (its step within the stability bound); every error names the
+    field and where it was set.
 
     A ``[sweep]`` section is ignored here: this is the sweep's base scene.
     """
     data, text, where = _read_scene(name_or_path)
     data.pop("sweep", None)
     try:
-        scene = scene_from_dict(apply_overrides(data, overrides))
-        check_step(scene)
+        body = bodies.of_data(data, where)
+        scene = body("check_scene", body("scene_from_dict", apply_overrides(data, overrides)))
     except SceneError as exc:
         raise located(exc, text, where, overrides) from None
     return scene

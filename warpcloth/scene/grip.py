@@ -4,7 +4,7 @@ the step's stability bound."""
 from __future__ import annotations
 
 from warpcloth import units
-from warpcloth.sim import Grip
+from warpcloth.strip import Grip
 
 from .schema import Scene
 

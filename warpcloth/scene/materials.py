@@ -14,7 +14,7 @@ from warpcloth.errors import SceneError
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_law
 from warpcloth.kernels.law import BENDING_RIGIDITY, LawParameter
 from warpcloth.kernels.laws import LAW_PARAMETERS
-from warpcloth.sim import LawParameters, MaterialSI
+from warpcloth.strip import LawParameters, MaterialSI
 
 from .keys import field_line
 from .parse import coerce_value, parse_section, parse_toml, read_toml_text

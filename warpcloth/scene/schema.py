@@ -20,7 +20,7 @@ from warpcloth import units
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW, bending_masing
 from warpcloth.kernels.law import BENDING_RIGIDITY, LawParameter
 from warpcloth.kernels.laws import LAW_PARAMETERS
-from warpcloth.sim import SOLVERS
+from warpcloth.strip import SOLVERS
 
 EDGE_HINGES = ("second_order", "paper")
 """Choices of ``clamp.edge_hinge``, the treatment of the built-in end (docs/model.md §5.3)."""

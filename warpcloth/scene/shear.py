@@ -27,7 +27,7 @@ from warpcloth import units
 from warpcloth.errors import SceneError
 from warpcloth.kernels import BENDING_LAWS, bending_law
 from warpcloth.kernels.law import BENDING_RIGIDITY, LawParameter
-from warpcloth.sim import LawParameters
+from warpcloth.strip import LawParameters
 
 SHEAR_TABLE = "shear"
 

@@ -18,10 +18,10 @@ from pathlib import Path
 
 from warpcloth import units
 from warpcloth.errors import SceneError
+from warpcloth.kernels import bending_masing
 from warpcloth.sheet.geometry import EDGE_HINGES
 
 from .files import _read_scene
-from .locate import located
 from .materials import (
     MATERIAL_FILE_KEY,
     ONE_PER_FABRIC,
@@ -152,7 +152,9 @@ class SheetIntegratorSection:
     precision: str = _field("float64", "float64 | float32", choices=("float64", "float32"))
     divergence_strain: float = _field(0.25, "|ε| of a segment beyond which a sheet counts as diverged", gt=0)
     divergence_shear_deg: float = _field(60.0, "|φ| of a cell beyond which a sheet counts as diverged", gt=0)
-    reversal_memory: int = _field(128, "masing: open reversal points each hinge and cell keeps", ge=1)
+    reversal_memory: int = _field(
+        bending_masing.DEFAULT_CAPACITY, "masing: open reversal points each hinge and cell keeps", ge=1
+    )
 
 
 @dataclass(frozen=True)
@@ -382,16 +384,6 @@ def validate_sheet_scene(scene: SheetScene) -> None:
             f"more than {MAX_STEPS}",
             related=("integrator.dt_s", "release.settle_time_s"),
         )
-
-
-def is_sheet_scene(name_or_path: str | Path) -> bool:
-    """Whether the scene file (path or bundled name) is a sheet scene; a SceneError, located
-    in the file, when it has both [strip] and [sheet] or neither."""
-    data, text, where = _read_scene(name_or_path)
-    try:
-        return scene_kind(data, where) == "sheet"
-    except SceneError as exc:
-        raise located(exc, text, where) from None
 
 
 def read_sheet_scene(path: str | Path) -> SheetScene:

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from warpcloth import units
+from warpcloth.core.resources import check_memory
 from warpcloth.errors import SceneError
 from warpcloth.kernels.sheet_structs import WARP, WEFT
 from warpcloth.sheet import (
@@ -29,8 +30,7 @@ from warpcloth.sheet import (
     bias_strip,
     rectangle,
 )
-from warpcloth.sim import ClampMotion
-from warpcloth.sim.resources import check_memory
+from warpcloth.strip import ClampMotion
 
 from .clamp_motion import segment_pieces
 from .files import _read_scene
@@ -268,6 +268,14 @@ def check_sheet_scene(scene: SheetScene) -> SheetScene:
             related=("sheet.spacing_warp_mm", "sheet.spacing_weft_mm", "material.from_file"),
         )
     return scene
+
+
+def describe_sheet_step(scene: SheetScene) -> str:
+    """The sentence ``warpcloth run`` prints of a step auto chose for a sheet."""
+    return (
+        f"integrator.dt_s = auto: {scene.integrator.dt_s:.4e} s ({AUTO_FRACTION:g} of the linearised "
+        "stability estimate, a whole fraction of the probe interval)"
+    )
 
 
 def load_sheet_scene(name_or_path: str | Path, overrides: Overrides = ()) -> SheetScene:

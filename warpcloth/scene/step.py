@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 from warpcloth.errors import SceneError
 from warpcloth.kernels import bending_law
-from warpcloth.sim import SOLVERS, MaterialSI
-from warpcloth.sim.solvers import StepBound
-from warpcloth.sim.stability import cycle_response
+from warpcloth.strip import SOLVERS, MaterialSI
+from warpcloth.strip.solvers import StepBound
+from warpcloth.strip.stability import cycle_response
 from warpcloth.units import check_plausible
 
 from .grip import grip_of
@@ -259,3 +259,10 @@ def check_step(scene: Scene) -> None:
             "integrator.scheme",
         ),
     )
+
+
+def checked_step(scene: Scene) -> Scene:
+    """``scene``, after :func:`check_step` found it runnable (the strip's ``check_scene``
+    hook in :mod:`warpcloth.bodies`)."""
+    check_step(scene)
+    return scene

@@ -33,7 +33,6 @@ import hashlib
 import itertools
 import json
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -41,16 +40,17 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from warpcloth import bodies
+from warpcloth.core.resources import check_memory
 from warpcloth.errors import ArgumentError, SceneError
-from warpcloth.sim.resources import check_memory
 
-from .files import read_scene_file, scene_from_dict, scene_source
+from .files import read_scene_file, scene_source, strip_scene_from_dict
 from .keys import is_material_file_key, key_path, key_path_or_none, overlaps
 from .locate import located
 from .overrides import apply_overrides, set_field
 from .sampling import discrepancy, latin_hypercube
 from .schema import Scene, batch_fields
-from .sheet import SheetScene, scene_kind, sheet_scene_from_dict
+from .sheet import SheetScene
 from .sheet_build import check_sheet_scene, sheet_batch_key
 from .step import AUTO as AUTO_STEP
 from .step import check_step, with_chosen_step
@@ -68,21 +68,29 @@ RANDOM_KEYS = {"method", "samples", "ranges"}
 METHODS = ("uniform", "latin_hypercube")
 
 
-def _strip_batch_key(scene: Scene) -> str:
+def strip_batch_key(scene: Scene) -> str:
+    """What strips sharing one launch sequence must agree on (:func:`batch_fields`)."""
     d = scene.to_dict()
     return json.dumps([d[n.split(".")[0]][n.split(".")[1]] for n in batch_fields()])
 
 
-def _strip_variants(scenes: list, assignments: list[dict[str, Any]]) -> list[Scene]:
-    # one step for every variant that asks auto for one (checked by load_sweep before a run)
+def strip_variant(data: dict) -> Scene:
+    """One strip variant of a sweep, its step not yet chosen (the sweep picks one for all)."""
+    return strip_scene_from_dict(data, choose_step=False)
+
+
+def strip_variants(scenes: list, assignments: list[dict[str, Any]]) -> list[Scene]:
+    """The strip variants ready to run: one step for every variant that asks auto for one
+    (checked by :func:`load_sweep` before a run)."""
     return with_chosen_step(scenes)
 
 
-def _sheet_variants(scenes: list, assignments: list[dict[str, Any]]) -> list[SheetScene]:
-    # Each variant checked (markers, memory, its step within its own stability estimate);
-    # those that ask auto for their step share the shortest any of them gets alone among
-    # the variants that may share a batch, so a batch has one step that suits every sheet
-    # (each alone: a whole fraction of the probe interval, so the shortest is one too).
+def sheet_variants(scenes: list, assignments: list[dict[str, Any]]) -> list[SheetScene]:
+    """The sheet variants ready to run: each checked (markers, memory, its step within its
+    own stability estimate); those that ask auto for their step share the shortest any of
+    them gets alone among the variants that may share a batch, so a batch has one step
+    that suits every sheet (each alone: a whole fraction of the probe interval, so the
+    shortest is one too)."""
     checked = []
     for i, scene in enumerate(scenes):
         try:
@@ -101,23 +109,6 @@ def _sheet_variants(scenes: list, assignments: list[dict[str, Any]]) -> list[She
     return checked
 
 
-@dataclass(frozen=True)
-class SweptKind:
-    """How a sweep reads one kind of scene: raw data → a validated variant (step not yet
-    chosen), all variants → ready to run, and what a batch's variants must share."""
-
-    parse: Callable[[dict], Any]
-    ready: Callable[[list, list[dict[str, Any]]], list]
-    batch_key: Callable[[Any], str]
-
-
-KINDS = {
-    "strip": SweptKind(lambda data: scene_from_dict(data, choose_step=False), _strip_variants, _strip_batch_key),
-    "sheet": SweptKind(sheet_scene_from_dict, _sheet_variants, sheet_batch_key),
-}
-"""The kinds of scene a ``[sweep]`` varies, by :func:`~warpcloth.scene.sheet.scene_kind`."""
-
-
 @dataclass
 class Sweep:
     """An expanded sweep: one resolved scene per variant (strips' :class:`Scene` or
@@ -132,8 +123,8 @@ class Sweep:
 
     @property
     def kind(self) -> str:
-        """``"strip"`` or ``"sheet"``: the kind of scene every variant is."""
-        return "sheet" if isinstance(self.scenes[0], SheetScene) else "strip"
+        """The body every variant is (:mod:`warpcloth.bodies`): ``"strip"`` or ``"sheet"``."""
+        return bodies.of_scene(self.scenes[0]).name
 
     @property
     def strips(self) -> list[Scene]:
@@ -150,7 +141,7 @@ class Sweep:
         """Variant indices per batch: grouped by batch-level fields, at most max_batch each."""
         if max_batch < 1:
             raise ArgumentError("max_batch", f"must be ≥ 1, got {max_batch}")
-        batch_key = KINDS[self.kind].batch_key
+        batch_key = bodies.named(self.kind).hook("batch_key")
         groups: dict[str, list[int]] = {}
         for i, scene in enumerate(self.scenes):
             groups.setdefault(batch_key(scene), []).append(i)
@@ -283,8 +274,8 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     unknown = set(spec) - SWEEP_KEYS
     if unknown:
         raise SceneError(f"sweep.{sorted(unknown)[0]}", f"unknown field; known: {', '.join(sorted(SWEEP_KEYS))}")
-    kind = KINDS[scene_kind(base)]
-    resolved = kind.parse(copy.deepcopy(base)).to_dict()
+    body = bodies.of_data(base)
+    resolved = body("sweep_variant", copy.deepcopy(base)).to_dict()
     grid = _value_lists(_table(spec, "grid"), "sweep.grid")
     zipped = _value_lists(_table(spec, "zip"), "sweep.zip")
     lengths = {len(v) for v in zipped.values()}
@@ -326,7 +317,7 @@ def variant_scenes(
 ) -> list[Scene] | list[SheetScene]:
     """The validated scene of each variant: the raw ``base`` scene with the variant's
     fields set (``progress`` shows a bar); a refused one is a SceneError naming it."""
-    kind = KINDS[scene_kind(base)]
+    body = bodies.of_data(base)
     scenes = []
     # leave=False: a refused variant's message then starts on a clean line
     with tqdm(
@@ -344,11 +335,11 @@ def variant_scenes(
                 # swept material fields land on top of it, whatever their order in [sweep].
                 for key, value in sorted(assignment.items(), key=lambda kv: not is_material_file_key(kv[0])):
                     set_field(data, key, value)
-                scenes.append(kind.parse(data))
+                scenes.append(body("sweep_variant", data))
             except SceneError as exc:
                 raise variant_error(exc, i, assignment) from exc
             bar.update()
-    return kind.ready(scenes, assignments)
+    return body("sweep_ready", scenes, assignments)
 
 
 def load_sweep(

@@ -7,14 +7,20 @@ each with its own law from :mod:`warpcloth.kernels.laws`, batched in one launch.
 - :class:`SheetBuilder` with :class:`SheetMaterialSI` per sheet → :class:`SheetModel`,
   ``model.state()`` → :class:`SheetState`, ``model.control()`` → :class:`SheetControl`
   (:class:`SheetClampMotion`: rotation about any axis, translation);
-- :class:`SheetSolver` advances them; :func:`simulate_sheets` runs a
-  :class:`SheetRecorder`'s schedule and returns a :class:`SheetResult`.
+- :class:`SheetSolver` advances them; :func:`simulate_sheets` (the core's one runner,
+  :func:`warpcloth.core.runner.simulate_batch`, under the sheet's name) runs a
+  :class:`SheetRecorder`'s schedule and returns a :class:`SheetResult` (the core's
+  :class:`~warpcloth.core.result.RunResult`, with the markers in its ``tables``).
 """
+
+from warpcloth.core.result import RunResult as SheetResult
+from warpcloth.core.runner import Sink as SheetSink
+from warpcloth.core.runner import simulate_batch as simulate_sheets
 
 from .geometry import EDGE_HINGES, SheetGeometry, bias_strip, grid_geometry, rectangle
 from .material import SheetMaterialSI
 from .model import SheetBuilder, SheetClampMotion, SheetControl, SheetModel, SheetState
-from .runner import SheetRecorder, SheetResult, SheetSink, simulate_sheets
+from .recorder import SheetRecorder
 from .solver import SheetDivergence, SheetSolver
 
 __all__ = [

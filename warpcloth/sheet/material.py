@@ -6,13 +6,13 @@ from dataclasses import dataclass
 
 from warpcloth.kernels.law import BENDING_RIGIDITY
 from warpcloth.kernels.laws import packed_parameters
-from warpcloth.sim.material import LawParameters, MaterialSI
+from warpcloth.strip.material import LawParameters, MaterialSI
 
 
 @dataclass(frozen=True)
 class SheetMaterialSI:
     """Tension and bending along the warp and along the weft (each a strip's
-    :class:`~warpcloth.sim.MaterialSI`, its tensile quartic and bending law), and the shear
+    :class:`~warpcloth.strip.MaterialSI`, its tensile quartic and bending law), and the shear
     law on the shear angle: Fs = G φ + h(φ) (G in N/(m·rad), the law's parameters in SI,
     :meth:`warpcloth.scene.ShearMaterial.si`). The areal density is the warp's; the weft's
     must agree."""

@@ -8,14 +8,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import warp as wp
 
+from warpcloth.core.terms import checked_terms
 from warpcloth.errors import ArgumentError
 from warpcloth.kernels import bending_law
 from warpcloth.kernels import sheet as sheet_kernels
 from warpcloth.kernels.bending_masing import DEFAULT_CAPACITY
 from warpcloth.kernels.drives import MAX_DEGREE
-from warpcloth.sim.builder import ClampMotion
-from warpcloth.sim.model import PRECISIONS, machine_device
-from warpcloth.sim.state import allocate_reversal_memory
+from warpcloth.kernels.sheet import SHEET_PROBES
+from warpcloth.strip.builder import ClampMotion
+from warpcloth.strip.model import PRECISIONS, machine_device
+from warpcloth.strip.state import allocate_reversal_memory
 
 from .geometry import SheetGeometry
 from .material import SheetMaterialSI
@@ -33,7 +35,7 @@ def _unit(name: str, vector: object) -> np.ndarray:
 class SheetClampMotion:
     """The clamp's rigid motion: a rotation θ(t) (rad) about the unit ``axis`` through
     ``centre`` (m, absolute) and then a translation d(t) (m) along the unit ``direction``,
-    each as pieces of polynomials in t (:class:`~warpcloth.sim.ClampMotion`); no pieces:
+    each as pieces of polynomials in t (:class:`~warpcloth.strip.ClampMotion`); no pieces:
     the clamp stands still."""
 
     rotation: ClampMotion = field(default_factory=ClampMotion)
@@ -90,24 +92,34 @@ class SheetBuilder:
         self.sheets.append(SheetSpec(material, float(damping), float(settle_damping), clamp))
         return len(self.sheets) - 1
 
-    def finalize(self, device: str | None = None, precision: str = "float64") -> SheetModel:
-        """The :class:`SheetModel` of every sheet added, on ``device`` in ``precision``."""
+    def finalize(self, device: str | None = None, precision: str = "float64", terms: tuple = ()) -> SheetModel:
+        """The :class:`SheetModel` of every sheet added, on ``device`` in ``precision``, with
+        the force ``terms`` (kernels/force_terms.py) acting on every free node."""
         if not self.sheets:
             raise ArgumentError("sheets", "a batch needs at least one sheet")
         if precision not in PRECISIONS:
             raise ArgumentError("precision", f"must be one of {', '.join(PRECISIONS)}, got {precision!r}")
-        return SheetModel(self, device, precision)
+        return SheetModel(self, device, precision, terms)
 
 
 class SheetModel:
     """Static description of B sheets sharing one geometry and gravity; material, damping
     and drive per sheet (made by :meth:`SheetBuilder.finalize`)."""
 
-    def __init__(self, builder: SheetBuilder, device: str | None, precision: str) -> None:
+    body = "sheet"
+    """The body these are (:mod:`warpcloth.core.bodies`)."""
+    dim = 3
+    """Components of a node position: x, y, z."""
+
+    def __init__(self, builder: SheetBuilder, device: str | None, precision: str, terms: tuple = ()) -> None:
         self.device = machine_device(device)
         self.precision = precision
         self.scalar = PRECISIONS[precision]
-        self.kernels = sheet_kernels.build(self.scalar)
+        self.terms = checked_terms(terms)
+        """The force terms acting on every free node besides damping and gravity (kernels/force_terms.py)."""
+        self.probes = SHEET_PROBES.with_terms(self.terms)
+        """What the sheets record: :data:`~warpcloth.kernels.sheet.SHEET_PROBES` and the terms' channels."""
+        self.kernels = sheet_kernels.build(self.scalar, self.terms)
         self.types = self.kernels.types
         self.geometry = builder.geometry
         self.sheets = tuple(builder.sheets)
@@ -128,6 +140,28 @@ class SheetModel:
     def array(self, values: np.ndarray, dtype: object = None) -> wp.array:
         """A Warp array of ``values`` on this model's device in its precision."""
         return wp.array(np.ascontiguousarray(values), dtype=dtype or self.scalar, device=self.device)
+
+    @property
+    def n_bodies(self) -> int:
+        """The sheets of the batch (the name every body's model shares)."""
+        return self.n_sheets
+
+    @property
+    def position_type(self) -> object:
+        """The Warp vector of a node position."""
+        return self.types.vec3
+
+    def budget_floor(self) -> np.ndarray:
+        """The least energy scale each sheet's budget is judged at (the strip's rule,
+        :data:`~warpcloth.core.divergence.BUDGET_TOLERANCE`): 1e-3 of its free nodes' weight
+        times its free length, or of its warp's D W / L where that is larger (without gravity)."""
+        g = self.geometry
+        free = ~g.clamped
+        length = float(np.ptp(g.rest_positions[:, 1])) or max(g.spacing)
+        width = float(np.ptp(g.rest_positions[:, 2])) or max(g.spacing)
+        weight = self.density * float(g.node_area[free].sum()) * self.gravity * length
+        bending = np.array([s.material.warp.bending_rigidity for s in self.sheets]) * width / length
+        return 1e-3 * np.maximum(weight, bending)
 
     def node_mass(self) -> np.ndarray:
         """``[node, sheet]`` masses, kg."""

@@ -4,14 +4,15 @@ through a chunk of output samples per launch (docs/model.md §17.5)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 import warp as wp
 
-from warpcloth.kernels import STATUS_BUDGET, STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_OK, STATUS_STRAIN
+from warpcloth.core.divergence import sample_lost
+from warpcloth.core.solver import FusedSolver
+from warpcloth.kernels import STATUS_BUDGET, STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_STRAIN
 from warpcloth.kernels.status import STATUS_CELL_COLLAPSED
-from warpcloth.sim.solvers import launch_over_threads
 
 from .model import SheetControl, SheetModel, SheetState
 
@@ -45,6 +46,21 @@ class SheetDivergence:
     dt_s: float
     stable_step_s: float
 
+    @property
+    def body(self) -> int:
+        """The sheet's index in the batch (the name every body's report shares)."""
+        return self.sheet
+
+    @property
+    def sample_lost(self) -> bool:
+        """Whether the sample at :attr:`step` is unusable (an energy not finite or off
+        budget); a strain, a fold or a collapsed cell keeps it, as a strip's does."""
+        return sample_lost(self.code)
+
+    def as_dict(self) -> dict:
+        """The report as a run directory's meta.json writes it."""
+        return asdict(self) | {"quantity": QUANTITY[self.code][0], "message": self.describe()}
+
     def describe(self) -> str:
         """One sentence a user can act on."""
         quantity, kind = QUANTITY[self.code]
@@ -57,7 +73,7 @@ class SheetDivergence:
         )
 
 
-class SheetSolver:
+class SheetSolver(FusedSolver):
     """Symplectic Euler on every free node (velocities first, positions with the new
     velocity), the clamp's nodes on their prescribed motion, fixed ``dt``.
 
@@ -67,12 +83,13 @@ class SheetSolver:
     """
 
     label = "symplectic Euler"
+    bodies_per_thread = SHEETS_PER_THREAD
 
     def __init__(
         self, model: SheetModel, dt: float, divergence_strain: float = 0.25, divergence_shear: float = math.radians(60)
     ) -> None:
-        self.model = model
-        self.dt = float(dt)
+        super().__init__(model, dt)
+        self.kernel = model.kernels.advance
         self.divergence_strain = float(divergence_strain)
         self.divergence_shear = float(divergence_shear)
 
@@ -92,10 +109,6 @@ class SheetSolver:
                 worst = max(worst, stretch + bend)
         return 2.0 / math.sqrt(worst) if worst > 0 else math.inf
 
-    def release_step(self, control: SheetControl) -> int:
-        """Step index of t = 0 under ``control``."""
-        return round(control.release_time / self.dt)
-
     def stepping(self, control: SheetControl) -> object:
         """The kernel's SheetStepping struct."""
         s = self.model.kernels.structs.SheetStepping()
@@ -105,39 +118,19 @@ class SheetSolver:
         s.release_step = self.release_step(control)
         return s
 
-    def advance(
-        self,
-        state: SheetState,
-        control: SheetControl,
-        settings: object,
-        output_steps: np.ndarray,
-        first_output: int,
-        first_frame: int,
-        buffers: tuple[wp.array, wp.array],
-        threads: int = 1,
-    ) -> None:
-        """Advance every healthy sheet to each of ``output_steps``, recording probes,
-        markers and frames into ``buffers``; on a CPU, ``threads`` launches over contiguous
-        ranges of sheets (each sheet's arithmetic is the same either way, bit for bit)."""
-        model = self.model
-        steps = wp.array(np.asarray(output_steps, dtype=np.int32), dtype=int, device=model.device)
-        inputs = [model.struct, control.struct, self.stepping(control), state.struct, settings, steps]
-        inputs += [int(first_output), int(first_frame), *buffers]
-        launch_over_threads(model.kernels.advance, model.n_sheets, inputs, model.device, threads, SHEETS_PER_THREAD)
-
     def divergence_report(self, state: SheetState, control: SheetControl, sheet: int) -> SheetDivergence | None:
         """Where and how ``sheet`` diverged, or None while it is healthy."""
-        code = int(state.struct.status.numpy()[sheet])
-        if code == STATUS_OK:
+        stopped = self.health(state, sheet)
+        if stopped is None:
             return None
-        step = int(state.struct.status_step.numpy()[sheet])
+        code, step, element, value = stopped
         return SheetDivergence(
             sheet=sheet,
             code=code,
             step=step,
             time_s=(step - self.release_step(control)) * self.dt,
-            element=int(state.struct.status_index.numpy()[sheet]),
-            value=float(state.struct.status_value.numpy()[sheet]),
+            element=element,
+            value=value,
             dt_s=self.dt,
             stable_step_s=self.stable_step(),
         )

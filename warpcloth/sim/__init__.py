@@ -1,57 +1,6 @@
-r"""The simulation core, in SI arrays only: no scene files, no KES units, no file formats.
+"""The strip's package under its former name: ``warpcloth.sim`` is :mod:`warpcloth.strip`
+(the strip and the sheet are sibling bodies on :mod:`warpcloth.core` since issue 37).
+Scripts that import from here keep working; new code imports :mod:`warpcloth.strip`."""
 
-- :class:`StripBuilder` → :class:`Model` (what the strips *are*), ``model.state()`` →
-  :class:`State` (what they *are doing*), ``model.control()`` → :class:`Control` (what
-  drives them);
-- a solver per integrator (:data:`SOLVERS`) advances them (what advances them);
-- a :class:`Recorder` says what is recorded and when; :func:`simulate_batch` runs the
-  chunked launches with progress and the divergence policy (a
-  :class:`DivergenceMonitor` says which strips stopped, as typed :class:`Divergence`\ s).
-"""
-
-from .bending import law_along_path, moment_along_path, shear_force_along_path
-from .builder import ClampMotion, FabricSet, Grip, StripBuilder
-from .control import Control
-from .divergence import Divergence, DivergenceMonitor
-from .material import LawParameters, MaterialSI
-from .model import PRECISIONS, Model
-from .recorder import Recorder, Schedule
-from .runner import RunResult, Sink, simulate_batch
-from .solvers import (
-    SOLVERS,
-    ForwardEulerSolver,
-    FusedStripSolver,
-    ImexSolver,
-    SemiImplicitEulerSolver,
-    Solver,
-)
-from .state import State
-
-__all__ = [
-    "Divergence",
-    "DivergenceMonitor",
-    "PRECISIONS",
-    "SOLVERS",
-    "ClampMotion",
-    "Control",
-    "FusedStripSolver",
-    "FabricSet",
-    "ForwardEulerSolver",
-    "Grip",
-    "ImexSolver",
-    "LawParameters",
-    "MaterialSI",
-    "Model",
-    "Recorder",
-    "RunResult",
-    "Schedule",
-    "SemiImplicitEulerSolver",
-    "Sink",
-    "Solver",
-    "State",
-    "StripBuilder",
-    "law_along_path",
-    "moment_along_path",
-    "shear_force_along_path",
-    "simulate_batch",
-]
+from warpcloth.strip import *  # noqa: F403
+from warpcloth.strip import __all__  # noqa: F401

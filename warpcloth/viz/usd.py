@@ -354,3 +354,17 @@ def export_sheet_usd(run: SheetRun, out_file: str | Path) -> Path:
     with usd_write_errors(out):
         write_atomically(out, author)
     return out
+
+
+def export_run_usd(run_dir: str | Path, out_file: str | Path) -> Path:
+    """A strip run directory's every variant as an animated USD stage (:func:`export_usd`)."""
+    from warpcloth.io.load import load_recording
+
+    return export_usd(load_recording(run_dir), out_file)
+
+
+def export_sheet_run_usd(run_dir: str | Path, out_file: str | Path) -> Path:
+    """A sheet run directory as an animated USD mesh (:func:`export_sheet_usd`)."""
+    from warpcloth.io.sheet_run_dir import read_sheet_run
+
+    return export_sheet_usd(read_sheet_run(run_dir), out_file)

@@ -4,7 +4,7 @@ Each law's moment is M = D K + A g(K; θ): an elastic centre line plus a hystere
 moment that is proportional to the law's amplitude A (tagawa2003: D1, dahl: M_s,
 frictional_couple: M_f) at fixed shape parameters θ (α; K_s, n; K_w), the hinge starting
 fresh at the first sample. g is run along the *measured* curvature path by the kernels'
-own hinge logic (:func:`warpcloth.sim.moment_along_path`) for A = 1 gf·cm/cm and D = 0, so
+own hinge logic (:func:`warpcloth.strip.moment_along_path`) for A = 1 gf·cm/cm and D = 0, so
 for each θ, (D, A) is a linear least-squares problem with D, A ≥ 0 (NNLS,
 :func:`scipy.optimize.nnls`). θ is searched on a logarithmic grid (every grid point in
 one kernel launch), then refined from the best grid point by SciPy's bounded Nelder–Mead
@@ -24,7 +24,7 @@ from scipy.optimize import minimize, nnls
 
 from warpcloth import units
 from warpcloth.scene import MaterialSection, to_si
-from warpcloth.sim import moment_along_path
+from warpcloth.strip import moment_along_path
 
 from ..noise import difference_noise, poor_fit_ratio
 from .readers import BendingLoop

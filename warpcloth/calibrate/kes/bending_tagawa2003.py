@@ -59,7 +59,7 @@ def hysteretic_offsets(
 ) -> np.ndarray:
     """Offset h(α; path) per gf·cm/cm of D1 along a curvature path, one column per α.
 
-    All α run in one kernel launch (warpcloth.sim.moment_along_path, the strip
+    All α run in one kernel launch (warpcloth.strip.moment_along_path, the strip
     kernel's hinge logic) with D = 0 and D1 = 1 gf·cm/cm; the hinge starts fresh at the
     path's first sample. Returns ``[sample, alpha]``, in gf·cm/cm per gf·cm/cm of D1.
     """

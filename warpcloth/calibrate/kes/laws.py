@@ -24,7 +24,7 @@ from warpcloth.errors import ArgumentError
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
 from warpcloth.kernels.law import BENDING_RIGIDITY, BendingLaw, LawRegistryError
 from warpcloth.scene import to_si
-from warpcloth.sim import moment_along_path
+from warpcloth.strip import moment_along_path
 
 from ..noise import difference_noise, poor_fit_ratio
 from .bending_fit import AIC_TIE, BendingFit, LawFitter, bending_problems

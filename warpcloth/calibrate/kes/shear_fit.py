@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 from warpcloth import units
 from warpcloth.scene import RIGIDITY_FIELD, ShearMaterial, shear_field, shear_parameters, shear_unit
-from warpcloth.sim import shear_force_along_path
+from warpcloth.strip import shear_force_along_path
 
 from ..noise import difference_noise
 from .bending_fit import STATUS_ORDER, BendingFit, bending_problems

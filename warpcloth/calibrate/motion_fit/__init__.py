@@ -53,7 +53,7 @@ public name is importable from here.
 
 from .continuum import ContinuumEstimate, continuum_limit
 from .lm import MAX_LAMBDA, STENCIL_STEP
-from .objective import MAX_STEP_CORNERS_FREE, SHIFT, Objective
+from .objective import MAX_STEP_CORNERS_FREE, SHIFT, Objective, make_objective, mesh_note
 from .parameters import ALIASES, HYSTERESIS_AMPLITUDES, REST_CURVATURE_SPAN, FreeParameter, free_parameters
 from .report import FitResult, summarise, write_fit
 from .search import MAX_SPACE_FILLING, MINIMA_FACTOR, MINIMA_SEPARATION, _other_minima, fit_motion
@@ -64,7 +64,6 @@ from .verdict import (
     Identifiability,
     identifiability,
     measurement_noise,
-    mesh_note,
     weighted_jacobian,
 )
 
@@ -92,6 +91,7 @@ __all__ = [
     "free_parameters",
     "identifiability",
     "measurement_noise",
+    "make_objective",
     "mesh_note",
     "summarise",
     "weighted_jacobian",

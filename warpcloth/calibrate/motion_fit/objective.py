@@ -11,13 +11,14 @@ from typing import Any
 
 import numpy as np
 
-from warpcloth.errors import ArgumentError
+from warpcloth import bodies
+from warpcloth.errors import ArgumentError, ArgumentTypeError
 from warpcloth.io.measured import LaserTrace, TrackedShapes
 from warpcloth.kernels import bending_law
 from warpcloth.runs import simulate
-from warpcloth.scene import Scene, scene_from_dict, set_field
+from warpcloth.scene import Scene, scene_from_dict, set_field, strip_scene_from_dict
 from warpcloth.scene.step import AUTO, choose_step
-from warpcloth.sim import RunResult
+from warpcloth.strip import RunResult
 
 from .parameters import FreeParameter
 
@@ -111,6 +112,11 @@ class FitObjective:
         """The scene (checked, ready to run) of raw scene data."""
         raise NotImplementedError
 
+    def mesh_note(self) -> str:
+        """Why the fit's values hold at its spacing only (a law whose answers depend on the
+        mesh), or "" when every law of the scene converges in h."""
+        raise NotImplementedError
+
     @property
     def dt_s(self) -> float:
         """The step every run of this objective takes (s)."""
@@ -197,6 +203,11 @@ class Objective(FitObjective):
         align_start_s: float = 0.0,
         device: str | None = None,
     ) -> None:
+        if not isinstance(measurement, LaserTrace | TrackedShapes):
+            raise ArgumentTypeError(
+                "measurement",
+                f"a strip scene is fitted to a laser trace or tracked shapes, not a {type(measurement).__name__}",
+            )
         self.measurement = measurement
         self.free = free
         self.align = float(align_start_s)
@@ -238,6 +249,10 @@ class Objective(FitObjective):
 
     spacing_fields = ("strip.spacing_mm",)
 
+    def mesh_note(self) -> str:
+        """Why the fit holds at its spacing only (:func:`mesh_note`), or ""."""
+        return mesh_note(self.base)
+
     def scene_of(self, data: dict) -> Scene:
         """The strip scene of raw scene data."""
         return scene_from_dict(data)
@@ -251,7 +266,7 @@ class Objective(FitObjective):
 
     def corner_step(self, corners: list[dict]) -> float:
         """The step that suits every corner scene of the box (the strip's own choice)."""
-        return choose_step([scene_from_dict(data, choose_step=False) for data in corners]).dt_s
+        return choose_step([strip_scene_from_dict(data, choose_step=False) for data in corners]).dt_s
 
     def run(self, points: np.ndarray) -> RunResult:
         """Simulate every point (rows) in one batch."""
@@ -293,3 +308,30 @@ class Objective(FitObjective):
         diff = sim - np.column_stack([m.x, m.y])
         missing = 0.1 if penalise else np.nan  # a diverged strip: 10 cm per coordinate
         return np.where(np.isfinite(diff), diff, missing).ravel()
+
+
+def mesh_note(base: dict) -> str:
+    """Why a fit of the scene ``base`` (as a dict) holds at its spacing only, when its bending
+    law's answers depend on the mesh; "" for a law that converges in h."""
+    scene = scene_from_dict(base)
+    law = scene.material.bending_law
+    if bending_law(law).mesh_independent:
+        return ""
+    return (
+        f"the {law} law's hysteresis depends on the mesh (no return-point memory, docs/model.md §15.6): these "
+        f"values hold at strip.spacing_mm = {scene.strip.spacing_mm:g} only, and refining h moves them (its "
+        "decrement grows without converging); the masing law takes the same parameters and converges in h"
+    )
+
+
+def make_objective(
+    base: dict,
+    measurement: Any,
+    free: list[FreeParameter],
+    align_start_s: float = 0.0,
+    device: str | None = None,
+) -> FitObjective:
+    """The objective of raw scene ``base`` (its body's, :mod:`warpcloth.bodies`) against
+    ``measurement``: a strip is fitted to a laser trace or tracked shapes, a sheet to its
+    tracked markers; a measurement of the other body's kind is refused, naming it."""
+    return bodies.of_data(base)("objective", base, measurement, free, align_start_s, device)

@@ -13,13 +13,11 @@ import numpy as np
 
 from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene import scene_from_dict, set_field
-from warpcloth.scene.sheet import sheet_scene_from_dict
 from warpcloth.scene.step import AUTO
 
 from . import lm
 from .continuum import ContinuumEstimate
-from .objective import SHIFT, FitObjective
-from .sheet import make_objective
+from .objective import SHIFT, FitObjective, make_objective
 from .verdict import ended_at_bound, judge
 
 
@@ -193,7 +191,7 @@ def write_fit(
         chosen_by = best.get("integrator", {}).get("dt_s") == AUTO
         set_field(best, "integrator.dt_s", fit.dt_s)  # the step the RMS was measured at
         set_field(best, "integrator.dt_chosen_by", AUTO if chosen_by else "scene")
-    scene = (sheet_scene_from_dict if isinstance(measurement, SheetMarkers) else scene_from_dict)(copy.deepcopy(best))
+    scene = scene_from_dict(copy.deepcopy(best))
     objective = make_objective(best, measurement, [], abs(fit.shift_s), device)
     result = objective.run(np.zeros((1, 0)))
     residual = objective.residuals(result, 0, fit.shift_s, penalise=False)

@@ -10,20 +10,19 @@ from functools import partial
 import numpy as np
 from tqdm import tqdm
 
+from warpcloth.core.resources import check_memory
 from warpcloth.errors import ArgumentError
 from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene.sampling import latin_hypercube
-from warpcloth.sim import RunResult
-from warpcloth.sim.resources import check_memory
+from warpcloth.strip import RunResult
 
 from ..bootstrap import block_bootstrap_sigma
 from . import lm
 from .continuum import continuum_limit
-from .objective import SHIFT, FitObjective
+from .objective import SHIFT, FitObjective, make_objective
 from .parameters import FreeParameter, initial_point
 from .report import FitResult, summarise
-from .sheet import make_objective, sheet_mesh_note
-from .verdict import ended_at_bound, judged_noise, mesh_note
+from .verdict import ended_at_bound, judged_noise
 
 MAX_SPACE_FILLING = 10_000
 
@@ -52,7 +51,6 @@ def fit_motion(
     share in σ (:mod:`.continuum`); ``False`` reports them at the scene's spacing, where
     the mesh's error is unknown, so the status is at best ``spacing_limited``."""
     started = time.perf_counter()
-    sheet = isinstance(measurement, SheetMarkers)
     objective = make_objective(base, measurement, free, align_start_s, device)
     rng = np.random.default_rng(seed)
     n0 = space_filling or max(16, 8 * len(free))
@@ -88,7 +86,7 @@ def fit_motion(
     )
     fit.noise, fit.noise_source = judged_noise(measurement, noise, residual)
     fit.other_minima = other_minima
-    fit.mesh_note = sheet_mesh_note(base) if sheet else mesh_note(base)
+    fit.mesh_note = objective.mesh_note()
     fit.dt_s = objective.dt_s
     fit.spacing = {name: objective.spacing_of(name) for name in objective.spacing_fields}
     # result row 0 is the reported point (accepted last, or re-run above)

@@ -9,8 +9,8 @@ import copy
 
 import numpy as np
 
-from warpcloth.errors import ArgumentError, SceneError
-from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
+from warpcloth.errors import ArgumentError, ArgumentTypeError, SceneError
+from warpcloth.io.measured import SheetMarkers
 from warpcloth.kernels import bending_law
 from warpcloth.kernels.laws import LAW_PARAMETERS
 from warpcloth.scene import set_field
@@ -26,7 +26,7 @@ from warpcloth.scene.sheet_build import (
 from warpcloth.scene.step import AUTO
 from warpcloth.sheet import SheetResult, simulate_sheets
 
-from .objective import FitObjective, Objective
+from .objective import FitObjective
 from .parameters import FreeParameter, default_range, parse_bounds
 
 SHEET_ALIASES = {
@@ -139,6 +139,12 @@ class SheetObjective(FitObjective):
         align_start_s: float = 0.0,
         device: str | None = None,
     ) -> None:
+        if not isinstance(measurement, SheetMarkers):
+            raise ArgumentTypeError(
+                "measurement",
+                "a sheet scene is fitted to tracked sheet markers (read_sheet_markers), not a "
+                f"{type(measurement).__name__}",
+            )
         self.measurement: SheetMarkers = measurement
         self.free = free
         self.align = float(align_start_s)
@@ -170,6 +176,10 @@ class SheetObjective(FitObjective):
         self.variants = 0
 
     spacing_fields = ("sheet.spacing_warp_mm", "sheet.spacing_weft_mm")
+
+    def mesh_note(self) -> str:
+        """Why the fit holds at its spacing only (:func:`sheet_mesh_note`), or ""."""
+        return sheet_mesh_note(self.base)
 
     def scene_of(self, data: dict) -> SheetScene:
         """The sheet scene of raw scene data, checked (markers, memory, step)."""
@@ -227,18 +237,3 @@ def sheet_mesh_note(base: dict) -> str:
         f"§15.6): these values hold at sheet.spacing_warp_mm = {scene.sheet.spacing_warp_mm:g}, "
         f"spacing_weft_mm = {scene.sheet.spacing_weft_mm:g} only; the masing law converges in h"
     )
-
-
-def make_objective(
-    base: dict,
-    measurement: LaserTrace | TrackedShapes | SheetMarkers,
-    free: list[FreeParameter],
-    align_start_s: float = 0.0,
-    device: str | None = None,
-) -> FitObjective:
-    """The objective of a measurement: a sheet's tracked markers are fitted with a sheet
-    scene (:class:`SheetObjective`), a laser trace or a strip's tracked shapes with a strip
-    scene (:class:`~.objective.Objective`)."""
-    if isinstance(measurement, SheetMarkers):
-        return SheetObjective(base, measurement, free, align_start_s, device)
-    return Objective(base, measurement, free, align_start_s, device)

@@ -13,7 +13,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
-from warpcloth.kernels import bending_law
 from warpcloth.scene import scene_from_dict
 
 from ..noise import difference_noise, poor_fit_ratio
@@ -152,20 +151,6 @@ def measurement_noise(measurement: LaserTrace | TrackedShapes | SheetMarkers) ->
     starts = np.flatnonzero(np.r_[True, np.diff(s) != 0, True])
     pieces = [slice(a, b) for a, b in zip(starts[:-1], starts[1:], strict=True)]
     return difference_noise([measurement.x[order][p] for p in pieces] + [measurement.y[order][p] for p in pieces])
-
-
-def mesh_note(base: dict) -> str:
-    """Why a fit of the scene ``base`` (as a dict) holds at its spacing only, when its bending
-    law's answers depend on the mesh; "" for a law that converges in h."""
-    scene = scene_from_dict(base)
-    law = scene.material.bending_law
-    if bending_law(law).mesh_independent:
-        return ""
-    return (
-        f"the {law} law's hysteresis depends on the mesh (no return-point memory, docs/model.md §15.6): these "
-        f"values hold at strip.spacing_mm = {scene.strip.spacing_mm:g} only, and refining h moves them (its "
-        "decrement grows without converging); the masing law takes the same parameters and converges in h"
-    )
 
 
 @dataclass

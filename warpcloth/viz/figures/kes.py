@@ -20,7 +20,7 @@ from warpcloth import units
 from warpcloth.io.atomic import write_atomically
 from warpcloth.io.recording import Recording
 from warpcloth.scene import to_si
-from warpcloth.sim import moment_along_path
+from warpcloth.strip import moment_along_path
 
 from . import common
 from .common import DPI, plt, variant_label

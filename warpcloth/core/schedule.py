@@ -1,46 +1,25 @@
-"""What is recorded and when: the named probes, the laser line, the probed hinge, and
-the output schedule of a run (docs/model.md §12)."""
+"""When a run records: the output samples of a body's recorder, the steps they end on,
+which are kept and which are shape frames (docs/model.md §12)."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
-
-if TYPE_CHECKING:
-    import warp as wp
-
-    from .control import Control
-    from .solvers import Solver
+import warp as wp
 
 
-@dataclass(frozen=True)
-class Recorder:
-    """Probes every ``interval`` s (from t = 0 to ``duration``), a shape frame every
-    ``probes_per_frame`` probes; the laser line at height ``laser_height`` (m, absolute)
-    and the moment–curvature loop of hinge ``loop_hinge`` (0 = the clamp-edge hinge)."""
+class RecorderSchedule:
+    """What every body's recorder shares (a mixin of a frozen dataclass with ``interval``,
+    ``probes_per_frame`` and ``duration``): where its samples fall."""
 
-    interval: float
-    probes_per_frame: int
-    duration: float
-    laser_height: float
-    loop_hinge: int = 0
-
-    def settings(self, struct_type: Any, scalar: Any) -> object:
-        """The kernel's ProbeSettings struct."""
-        s = struct_type()
-        s.laser_height = scalar(self.laser_height)
-        s.loop_hinge = self.loop_hinge
-        s.probes_per_frame = self.probes_per_frame
-        return s
-
-    def sample_range(self, control: Control) -> tuple[int, int]:
+    def sample_range(self, control: Any) -> tuple[int, int]:
         """First and last output sample k (k < 0 during the hold), without building arrays."""
         return sample_bounds(self, control.release_time)
 
-    def schedule(self, control: Control, solver: Solver) -> Schedule:
+    def schedule(self, control: Any, solver: Any) -> Schedule:
         """The output samples of a run: hold samples (k < 0) are run, not kept."""
         return output_schedule(self, control.release_time, solver.dt, solver.release_step(control))
 

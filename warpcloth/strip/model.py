@@ -11,11 +11,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 import warp as wp
 
+from warpcloth.core.terms import checked_terms
 from warpcloth.errors import ArgumentError
 from warpcloth.kernels import bending_law, structs
-from warpcloth.core.terms import checked_terms
-from warpcloth.kernels.probes import STRIP_PROBES
 from warpcloth.kernels import precision as precision_types
+from warpcloth.kernels.probes import STRIP_PROBES
 
 if TYPE_CHECKING:
     from .builder import StripBuilder
@@ -72,7 +72,7 @@ def machine_device(device: str | None) -> wp.context.Device:
 class Model:
     """Static description of B strips sharing node count, spacing and gravity.
 
-    Made by :meth:`warpcloth.sim.StripBuilder.finalize`. Material, width and damping may
+    Made by :meth:`warpcloth.strip.StripBuilder.finalize`. Material, width and damping may
     differ per strip; :meth:`state` and :meth:`control` make the matching dynamic state
     and drives.
     """
@@ -115,6 +115,31 @@ class Model:
         uses_history = any(bending_law(s.material.bending_law).uses_reversal_memory for s in strips)
         self.reversal_memory = builder.reversal_memory if uses_history else 0
         self.struct = self._build_struct()
+
+    body = "strip"
+    """The body these are (:mod:`warpcloth.core.bodies`)."""
+    dim = 2
+    """Components of a node position: x, y in the plane of the swing."""
+
+    @property
+    def n_bodies(self) -> int:
+        """The strips of the batch (the name every body's model shares)."""
+        return self.n_strips
+
+    @property
+    def position_type(self) -> object:
+        """The Warp vector of a node position."""
+        return self.types.vec2
+
+    def budget_floor(self) -> np.ndarray:
+        """The least energy scale each strip's budget is judged at
+        (:data:`~warpcloth.core.divergence.BUDGET_TOLERANCE`): 1e-3 of its weight times its
+        free length, or of D W / L where that is larger (without gravity, a set strip curling
+        at rest, the scale is bending's: the work of bending it through one radian)."""
+        free = self.n_nodes - self.n_clamped
+        weight = self.node_mass * (free - 0.5) * self.gravity * free * self.spacing
+        bending = self.bending[:, 0] * self.width / (free * self.spacing)
+        return 1e-3 * np.maximum(weight, bending)
 
     def array(self, values: np.ndarray, dtype: object = None) -> wp.array:
         """A Warp array of ``values`` on this model's device in its precision."""

@@ -137,7 +137,7 @@ class StripBuilder:
     end is carried to its hold target over ``move_time`` s and held until t = 0.
     ``reversal_memory`` is how many open reversal points each hinge of a strip with
     return-point memory (the masing law) keeps; a reversal beyond it is counted and
-    reported (:attr:`warpcloth.sim.RunResult.reversal_memory`).
+    reported (:attr:`warpcloth.strip.RunResult.reversal_memory`).
     """
 
     def __init__(

@@ -1,0 +1,182 @@
+"""The bodies warpcloth simulates, in one registry: the strip and the woven sheet.
+
+Everything that depends on which body a scene, a run directory or a measurement is about
+asks here instead of branching on it: the scene loader (:func:`of_data`), runs
+(:func:`of_scene`), sweeps, fits, run directories (:func:`of_run`) and the command line.
+A body is a name and its hooks, each a ``"module:attribute"`` resolved on first use, so
+this module imports nothing of warpcloth and any layer may consult it. Adding a body is
+its package (model, state, control, solver, recorder on :mod:`warpcloth.core`), its scene
+section, and one entry here (docs/architecture.md counts the files).
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+HOOKS = {
+    "scene_type": "the body's scene class",
+    "scene_from_dict": "raw scene data → a validated scene (data, choose_step=True)",
+    "check_scene": "a validated scene → the scene checked runnable (its step within the stability bound)",
+    "sweep_variant": "raw data of one sweep variant → its scene, the step not yet chosen",
+    "sweep_ready": "(variant scenes, assignments) → the scenes ready to run, one step per batch",
+    "batch_key": "a scene → what variants sharing one launch sequence must agree on",
+    "simulate": "(scenes, **options) → RunResult: the batch run, streamed to out= when given",
+    "sweep_batch": "(scene dicts, device, frames) → a sweep batch's probe store rows and summary",
+    "warm": "(scenes, device) → compile the kernels a sweep's workers will load",
+    "memory_bytes": "(scene, frames) → memory one variant's record takes while its batch runs",
+    "disk_bytes": "(scene, frames) → bytes one variant's files take in a sweep directory",
+    "coordinates": "the frame of every position a run stores (a string)",
+    "read_run": "a run directory → what was recorded (the body's reader)",
+    "objective": "(base, measurement, free, align_start_s, device) → the fit's objective",
+    "read_measurement": "(path, argument=) → the measurement a fit of the body takes",
+    "free_parameters": "(names, scene, bounds) → the fit's free parameters",
+    "describe_step": "a scene whose step auto chose → the sentence `warpcloth run` prints of it",
+    "summary": "(scene, result) → the lines `warpcloth run` prints after the run",
+    "export_usd": "(run directory, stage file) → the USD stage `warpcloth run --usd` writes",
+    "usd_command": "`warpcloth export-usd` of a run directory (args → exit code)",
+    "plot_command": "`warpcloth plot` of a run directory (args → exit code)",
+    "render": "`warpcloth render` of a run directory (args → the files written)",
+}
+"""What every body provides, by hook name."""
+
+
+@dataclass(frozen=True)
+class Body:
+    """One body: its ``name`` (a scene's table, a run's meta.json ``kind``), the unit its
+    throughput is counted in, and its :data:`HOOKS` as ``"module:attribute"``."""
+
+    name: str
+    steps: str
+    hooks: dict[str, str]
+
+    def hook(self, name: str) -> Any:
+        """The object hook ``name`` names (imported on first use)."""
+        return _resolve(self.hooks[name])
+
+    def __call__(self, name: str, *args: Any, **kwargs: Any) -> Any:
+        """Call hook ``name`` with the arguments given."""
+        return self.hook(name)(*args, **kwargs)
+
+
+def _resolve(target: str) -> Any:
+    module, _, attribute = target.partition(":")
+    return getattr(importlib.import_module(module), attribute)
+
+
+BODIES: dict[str, Body] = {
+    "strip": Body(
+        "strip",
+        "strip-steps",
+        {
+            "scene_type": "warpcloth.scene.schema:Scene",
+            "scene_from_dict": "warpcloth.scene.files:strip_scene_from_dict",
+            "check_scene": "warpcloth.scene.step:checked_step",
+            "sweep_variant": "warpcloth.scene.sweep:strip_variant",
+            "sweep_ready": "warpcloth.scene.sweep:strip_variants",
+            "batch_key": "warpcloth.scene.sweep:strip_batch_key",
+            "simulate": "warpcloth.runs:simulate_strips",
+            "sweep_batch": "warpcloth.sweeps:simulate_strips",
+            "warm": "warpcloth.sweeps:warm_kernel_cache",
+            "memory_bytes": "warpcloth.sweeps:strip_memory_bytes",
+            "disk_bytes": "warpcloth.sweeps:strip_disk_bytes",
+            "coordinates": "warpcloth.scene.geometry:COORDINATES",
+            "read_run": "warpcloth.io.run_dir:read_run",
+            "objective": "warpcloth.calibrate.motion_fit.objective:Objective",
+            "read_measurement": "warpcloth.io.measured:read_measurement",
+            "free_parameters": "warpcloth.calibrate.motion_fit.parameters:free_parameters",
+            "describe_step": "warpcloth.scene.step:describe_step",
+            "summary": "warpcloth.cli.run:strip_summary",
+            "export_usd": "warpcloth.viz.usd:export_run_usd",
+            "usd_command": "warpcloth.cli.view:strip_usd_command",
+            "plot_command": "warpcloth.cli.view:strip_plot_command",
+            "render": "warpcloth.cli.view:strip_render",
+        },
+    ),
+    "sheet": Body(
+        "sheet",
+        "node-steps",
+        {
+            "scene_type": "warpcloth.scene.sheet:SheetScene",
+            "scene_from_dict": "warpcloth.scene.sheet:sheet_scene_from_dict",
+            "check_scene": "warpcloth.scene.sheet_build:check_sheet_scene",
+            "sweep_variant": "warpcloth.scene.sheet:sheet_scene_from_dict",
+            "sweep_ready": "warpcloth.scene.sweep:sheet_variants",
+            "batch_key": "warpcloth.scene.sheet_build:sheet_batch_key",
+            "simulate": "warpcloth.runs:simulate_sheets",
+            "sweep_batch": "warpcloth.sweeps:simulate_sheet_batch",
+            "warm": "warpcloth.sweeps:warm_sheet_kernel_cache",
+            "memory_bytes": "warpcloth.sweeps:sheet_memory_bytes",
+            "disk_bytes": "warpcloth.sweeps:sheet_disk_bytes",
+            "coordinates": "warpcloth.io.sheet_run_dir:SHEET_COORDINATES",
+            "read_run": "warpcloth.io.sheet_run_dir:read_sheet_run",
+            "objective": "warpcloth.calibrate.motion_fit.sheet:SheetObjective",
+            "read_measurement": "warpcloth.io.measured:read_sheet_markers",
+            "free_parameters": "warpcloth.calibrate.motion_fit.sheet:sheet_free_parameters",
+            "describe_step": "warpcloth.scene.sheet_build:describe_sheet_step",
+            "summary": "warpcloth.cli.run:sheet_summary",
+            "export_usd": "warpcloth.viz.usd:export_sheet_run_usd",
+            "usd_command": "warpcloth.cli.view:sheet_usd_command",
+            "plot_command": "warpcloth.cli.view:sheet_plot_command",
+            "render": "warpcloth.cli.view:sheet_render",
+        },
+    ),
+}
+"""Every body, by name."""
+
+
+def named(name: str) -> Body:
+    """The body called ``name``, or an ArgumentError listing them."""
+    if name not in BODIES:
+        from warpcloth.errors import ArgumentError
+
+        raise ArgumentError("body", f"{name!r} is not a body warpcloth simulates; they are {', '.join(BODIES)}")
+    return BODIES[name]
+
+
+def of_data(data: dict, where: str = "the scene") -> Body:
+    """The body raw scene ``data`` describes (by its table: [strip] or [sheet]; a
+    SceneError, naming ``where``, when that is ambiguous)."""
+    return named(_resolve("warpcloth.scene.sheet:scene_kind")(data, where))
+
+
+def of_scene(scene: object) -> Body:
+    """The body a validated scene is of, or an ArgumentTypeError naming what it is."""
+    for body in BODIES.values():
+        if isinstance(scene, body.hook("scene_type")):
+            return body
+    from warpcloth.errors import ArgumentTypeError
+
+    raise ArgumentTypeError(
+        "scene", f"{scene!r} is not a scene of any body ({', '.join(BODIES)}); warpcloth.load_scene makes one"
+    )
+
+
+def of_scenes(scenes: list) -> Body:
+    """The one body a batch of scenes is of; mixing bodies in one batch is refused."""
+    found = {of_scene(s).name for s in scenes}
+    if len(found) > 1:
+        from warpcloth.errors import ArgumentError
+
+        raise ArgumentError("scenes", f"a batch is of one body; these mix {' and '.join(sorted(found))} scenes")
+    return named(found.pop())
+
+
+def of_run(path: str | Path) -> Body:
+    """The body run directory ``path`` recorded (its meta.json's ``kind``; a directory
+    written before runs named their body is a strip's)."""
+    meta = Path(path) / "meta.json"
+    try:
+        kind = json.loads(meta.read_text()).get("kind", "strip")
+    except (OSError, ValueError, AttributeError):
+        return BODIES["strip"]  # the strip's reader says what is wrong with the directory
+    return BODIES.get(kind, BODIES["strip"])
+
+
+def each(hook: str) -> dict[str, Callable[..., Any]]:
+    """Hook ``hook`` of every body, by body name."""
+    return {name: body.hook(hook) for name, body in BODIES.items()}
