@@ -10,7 +10,7 @@ import numpy as np
 
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
 
-from .errors import ArgumentError
+from .errors import ArgumentError, ArgumentTypeError
 from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
 from .metrics import sheet_metrics
@@ -52,12 +52,12 @@ def simulate(
     count).
     """
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
+    if not scenes:
+        raise ArgumentError("scenes", "simulate needs at least one scene")
     wrong = next((s for s in scenes if not isinstance(s, Scene)), None)
-    if wrong is not None or not scenes:
-        raise TypeError(
-            f"simulate takes Scene objects (wc.load_scene(name_or_path) makes one), got {wrong!r}"
-            if scenes
-            else "simulate needs at least one scene"
+    if wrong is not None:
+        raise ArgumentTypeError(
+            "scenes", f"simulate takes Scene objects (wc.load_scene(name_or_path) makes one), got {wrong!r}"
         )
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
     scenes = shared_auto_step(scenes)
@@ -118,7 +118,9 @@ def simulate_sheet(
     from .sim.recorder import output_schedule
 
     if not isinstance(scene, SheetScene):
-        raise TypeError(f"simulate_sheet takes a SheetScene (load_sheet_scene makes one), got {scene!r}")
+        raise ArgumentTypeError(
+            "scene", f"simulate_sheet takes a SheetScene (load_sheet_scene makes one), got {scene!r}"
+        )
     if out is not None:
         check_output_directory(out, overwrite)
     batch = build_sheet(scene, device)
@@ -156,7 +158,9 @@ def run(scene: str | Path | Scene, overrides: Overrides = (), **kwargs: Any) -> 
     """
     if isinstance(scene, Scene):
         if override_pairs(overrides):
-            raise TypeError("overrides apply to a scene being loaded; a Scene is immutable (load it with them)")
+            raise ArgumentTypeError(
+                "overrides", "apply to a scene being loaded; a Scene is immutable (load it with them)"
+            )
     else:
         scene = load_scene(scene, overrides)
     return simulate(scene, **kwargs)
