@@ -36,6 +36,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from warpcloth.errors import ArgumentError
+
 
 class LawRegistryError(ImportError):
     """A bending law's description (built in, or from an installed package's entry point)
@@ -116,12 +118,13 @@ class BendingLaw:
     figures chart the loop there instead of on the standard KES cycle."""
 
     def parameter(self, name: str) -> LawParameter:
-        """The parameter called ``name`` (its SI name); KeyError lists the law's."""
+        """The parameter called ``name`` (its SI name); an ArgumentError lists the law's."""
         for p in self.parameters:
             if p.name == name:
                 return p
-        raise KeyError(
-            f"the {self.name} law has no parameter {name!r}; it has {', '.join(q.name for q in self.parameters)}"
+        raise ArgumentError(
+            "name",
+            f"the {self.name} law has no parameter {name!r}; it has {', '.join(q.name for q in self.parameters)}",
         )
 
 

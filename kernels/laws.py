@@ -21,6 +21,8 @@ from typing import Any
 
 import warp as wp
 
+from warpcloth.errors import ArgumentError, InternalError
+
 from . import bending_dahl, bending_frictional_couple, bending_masing, bending_tagawa2003
 from .law import BENDING_RIGIDITY, KINDS, BendingLaw, LawParameter, LawRegistryError
 from .types import LAST_CURVATURE_SLOT, LAW_MEMORY_SLOTS, LAW_PARAMETER_SLOTS, precision
@@ -123,11 +125,10 @@ wp.set_module_options({"enable_backward": False})
 
 
 def bending_law(name: str) -> BendingLaw:
-    """The description of the bending law ``name``; KeyError lists the known ones."""
-    try:
-        return BENDING_LAWS[name]
-    except KeyError:
-        raise KeyError(f"unknown bending law {name!r}; known: {', '.join(BENDING_LAWS)}") from None
+    """The description of the bending law ``name``; an ArgumentError lists the known ones."""
+    if name not in BENDING_LAWS:
+        raise ArgumentError("bending_law", f"unknown bending law {name!r}; known: {', '.join(BENDING_LAWS)}")
+    return BENDING_LAWS[name]
 
 
 def packed_parameters(name: str, values: dict[str, float]) -> tuple[float, ...]:
@@ -136,7 +137,7 @@ def packed_parameters(name: str, values: dict[str, float]) -> tuple[float, ...]:
     law = bending_law(name)
     own = tuple(float(v) for v in law.pack(values[BENDING_RIGIDITY.name], *(values[p.name] for p in law.parameters)))
     if len(own) > LAW_SLOT:
-        raise ValueError(f"the {name} law packs {len(own)} parameters; the shared vector holds {LAW_SLOT}")
+        raise InternalError(f"the {name} law packs {len(own)} parameters; the shared vector holds {LAW_SLOT}")
     return own + (0.0,) * (LAW_SLOT - len(own)) + (float(LAWS.index(law)),)
 
 

@@ -11,7 +11,7 @@ from warpcloth.cli.flags import FLAGS, LIBRARY_ONLY, as_option, flag_of
 from warpcloth.errors import ArgumentError, OptionError
 
 PACKAGE = Path(wc.__file__).parent
-NAMING = ("ArgumentError", "OptionError", "checked_index")
+NAMING = ("ArgumentError", "ArgumentTypeError", "OptionError", "checked_index")
 """Calls whose first argument is the name an error blames."""
 
 
@@ -106,3 +106,72 @@ def test_only_the_command_line_raises_option_errors():
             if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "OptionError"
         ]
     assert raised == []
+
+
+BUILTIN = frozenset({"ValueError", "KeyError", "TypeError", "IndexError", "RuntimeError"})
+"""The builtin exceptions the library must not raise at a user (warpcloth.errors has its own)."""
+
+
+def _raised_builtin(node: ast.Raise) -> str | None:
+    # the builtin a `raise X(...)`, `raise X` or `raise builtins.X(...)` raises, else None
+    exc = node.exc.func if isinstance(node.exc, ast.Call) else node.exc
+    if isinstance(exc, ast.Name):
+        name = exc.id
+    elif isinstance(exc, ast.Attribute) and isinstance(exc.value, ast.Name) and exc.value.id == "builtins":
+        name = exc.attr
+    else:
+        return None
+    return name if name in BUILTIN else None
+
+
+def test_no_bare_raise_in_the_library():
+    # every problem with an argument is warpcloth's own error naming it (ArgumentError,
+    # ArgumentTypeError, SceneError, DataFileError, ...), a broken invariant an
+    # InternalError; a bare builtin names nothing the caller wrote
+    import warpcloth.kernels
+
+    offenders = []
+    for root in (PACKAGE, Path(warpcloth.kernels.__file__).parent):
+        for path in sorted(root.rglob("*.py")):
+            raises = [
+                node
+                for node in ast.walk(ast.parse(path.read_text(), filename=str(path)))
+                if isinstance(node, ast.Raise)
+            ]
+            offenders += [
+                f"{path.relative_to(root.parent)}:{node.lineno}: raise {name}"
+                for node in sorted(raises, key=lambda node: node.lineno)
+                if (name := _raised_builtin(node))
+            ]
+    assert offenders == [], "builtin exceptions raised by the library:\n" + "\n".join(offenders)
+
+
+def test_a_wrong_type_is_an_argument_error_and_a_type_error():
+    from warpcloth.scene.overrides import override_pairs
+
+    with pytest.raises(TypeError, match="^overrides: must be a list of 'key=value' strings or a dict") as raised:
+        override_pairs("damping.gamma_per_s=0.5")
+    assert isinstance(raised.value, ArgumentError) and raised.value.argument == "overrides"
+    assert issubclass(wc.ArgumentTypeError, ValueError) and issubclass(wc.InternalError, RuntimeError)
+
+
+def test_a_lookup_names_its_argument_and_what_there_is():
+    from warpcloth.sheet import rectangle
+    from warpcloth.strip.material import ELASTIC, LawParameters
+
+    geometry = rectangle(0.02, 0.02, 0.005, (0.005, 0.005))
+    with pytest.raises(
+        ArgumentError,
+        match=r"^\(i, j\): the sheet has no node at lattice \(i, j\) = \(9, 0\); its lattice reaches i ≤ 5, j ≤ 4",
+    ):
+        geometry.node(9, 0)
+    with pytest.raises(ArgumentError, match=r"^family: must be WARP \(0\) or WEFT \(1\), got 2"):
+        geometry.hinge(2, 1, 1)
+    with pytest.raises(
+        ArgumentError, match=f"^name: the {ELASTIC.law} law has no parameter 'nope'; it has hysteresis_d1, "
+    ):
+        ELASTIC["nope"]
+    with pytest.raises(AttributeError, match="has no parameter 'nope'"):
+        ELASTIC.nope  # noqa: B018
+    with pytest.raises(ArgumentError, match="^values: the masing law needs hysteresis_d1"):
+        LawParameters.of("masing", {})

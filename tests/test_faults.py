@@ -833,7 +833,7 @@ def short_result():
             wc.ArgumentError,
             r"initial_positions: \[0, 0, 0\] is inf; every value must be finite",
         ),
-        ({"initial_positions": [["a"]]}, TypeError, r"initial_positions must be an array of numbers"),
+        ({"initial_positions": [["a"]]}, wc.ArgumentTypeError, r"initial_positions: must be an array of numbers"),
         (
             {"initial_velocities": np.zeros((25, 1, 2))},
             wc.ArgumentError,
@@ -855,7 +855,7 @@ def test_simulate_names_a_wrong_start_instead_of_diverging(keywords, error, mess
             r"variant: -2 is not one of the 1 variants \(0 to 0\)",
         ),
         (lambda r: r.probe("tip_x", variant=1), wc.ArgumentError, "variant: 1 is not one of the 1 variants"),
-        (lambda r: r.probe("tip_x", variant=0.0), TypeError, "variant must be an integer index"),
+        (lambda r: r.probe("tip_x", variant=0.0), wc.ArgumentTypeError, "variant: must be an integer index"),
         (lambda r: r.probe("tip_z"), wc.ArgumentError, "name: 'tip_z' is not a probe; the probes are tip_x, tip_y"),
     ],
 )

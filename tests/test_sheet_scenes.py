@@ -11,9 +11,8 @@ from conftest import run_cli
 from pxr import Usd, UsdGeom
 
 import warpcloth as wc
-from warpcloth.scene.sheet import SheetScene
 from warpcloth.io.sheet_run_dir import read_sheet_run
-from warpcloth.scene.sheet import read_sheet_scene
+from warpcloth.scene.sheet import SheetScene, read_sheet_scene
 from warpcloth.scene.sheet_build import load_sheet_scene
 
 SHEETS = ("shear_swing", "twist", "bias_strip")

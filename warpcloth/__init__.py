@@ -22,8 +22,10 @@ import importlib.util
 
 from .errors import (
     ArgumentError,
+    ArgumentTypeError,
     DataFileError,
     DivergenceError,
+    InternalError,
     OptionError,
     PlausibilityWarning,
     ResourceError,
@@ -70,8 +72,10 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "ArgumentError",
+    "ArgumentTypeError",
     "DataFileError",
     "DivergenceError",
+    "InternalError",
     "OptionError",
     "PlausibilityWarning",
     "ResourceError",

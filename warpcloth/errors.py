@@ -44,8 +44,13 @@ class ArgumentError(WarpclothError, ValueError):
 
 
 class ArgumentTypeError(ArgumentError, TypeError):
-    """An argument of a library function is of a type it cannot use (a :class:`TypeError`
-    too, so ``except TypeError`` still catches it); ``argument`` names it."""
+    """An argument of a library function has an unusable type (a string where a list is
+    expected, a float where an index is).
+
+    An :class:`ArgumentError` naming the argument, and a :class:`TypeError`, so code that
+    catches either (``except TypeError`` written before the library named its arguments)
+    catches it.
+    """
 
 
 class OptionError(ArgumentError):
@@ -93,6 +98,12 @@ class DivergenceError(WarpclothError, RuntimeError):
         super().__init__(message)
 
 
+class InternalError(WarpclothError, RuntimeError):
+    """A check of warpcloth's own consistency failed: no input should reach it, so it is a
+    bug in warpcloth (or a library it uses) to report, with the message and the command
+    or call that raised it."""
+
+
 class PlausibilityWarning(UserWarning):
     """A finite input outside the range a fabric strip or its measurement plausibly has
     (:data:`warpcloth.units.PLAUSIBLE`): it is used as given, and the warning names the
@@ -100,13 +111,13 @@ class PlausibilityWarning(UserWarning):
 
 
 def checked_index(argument: str, value: object, count: int, what: str) -> int:
-    """``value`` as an index of one of ``count`` ``what`` (0 … count − 1), or a TypeError /
-    ArgumentError naming ``argument``, the value and what is expected. A negative index is
+    """``value`` as an index of one of ``count`` ``what`` (0 … count − 1), or an
+    ArgumentTypeError / ArgumentError naming ``argument``, the value and what is expected. A negative index is
     refused, as the command line refuses ``--variants -1``: it would pick from the end."""
     import numbers
 
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise TypeError(f"{argument} must be an integer index of the {count} {what}, got {value!r}")
+        raise ArgumentTypeError(argument, f"must be an integer index of the {count} {what}, got {value!r}")
     if not 0 <= int(value) < count:
         raise ArgumentError(argument, f"{value} is not one of the {count} {what} (0 to {count - 1})")
     return int(value)

@@ -66,13 +66,12 @@ def simulate_strips(
     count).
     """
     scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
+    if not scenes:
+        raise ArgumentError("scenes", "simulate needs at least one scene")
     wrong = next((s for s in scenes if not isinstance(s, Scene)), None)
-    if wrong is not None or not scenes:
+    if wrong is not None:
         raise ArgumentTypeError(
-            "scenes",
-            f"simulate_strips takes strip scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}"
-            if scenes
-            else "simulate needs at least one scene",
+            "scenes", f"simulate_strips takes strip scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}"
         )
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
     scenes = shared_auto_step(scenes)
@@ -135,13 +134,12 @@ def simulate_sheets(
     from .scene.sheet_build import build_sheets
 
     scenes = [scenes] if isinstance(scenes, SheetScene) else list(scenes)
+    if not scenes:
+        raise ArgumentError("scenes", "simulate needs at least one scene")
     wrong = next((s for s in scenes if not isinstance(s, SheetScene)), None)
-    if wrong is not None or not scenes:
+    if wrong is not None:
         raise ArgumentTypeError(
-            "scenes",
-            f"simulate_sheets takes sheet scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}"
-            if scenes
-            else "simulate needs at least one scene",
+            "scenes", f"simulate_sheets takes sheet scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}"
         )
     check_divergence_policy(on_divergence)
     if out is not None:

@@ -8,6 +8,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy.optimize import brentq
 
+from warpcloth.errors import ArgumentError
+
 
 def hanging_beam_mode(gamma: float, mode: int = 0, n_basis: int = 24) -> tuple[float, Callable]:
     """λ and mode shape W(ξ) of the clamped hanging beam, W⁗ − γ((1−ξ)W′)′ = λ²W.
@@ -112,8 +114,10 @@ def two_section_beam_mode(
     grid of λ (all integrated at once, RK4 in ξ with the section boundary on a step) and
     solved inside the bracket by :func:`scipy.optimize.brentq`.
     """
-    if not 0.0 <= root_length < 1.0 or not root_factor > 0:
-        raise ValueError(f"root_length {root_length:g} must lie in [0, 1) and root_factor {root_factor:g} be > 0")
+    if not 0.0 <= root_length < 1.0:
+        raise ArgumentError("root_length", f"must lie in [0, 1), got {root_length:g}")
+    if not root_factor > 0:
+        raise ArgumentError("root_factor", f"must be > 0, got {root_factor:g}")
     inner = round(steps * root_length)
     grid_xi = np.concatenate(
         [
@@ -153,7 +157,7 @@ def two_section_beam_mode(
     values = determinant(grid)
     change = np.nonzero(np.sign(values[:-1]) != np.sign(values[1:]))[0]
     if not len(change):
-        raise ValueError(f"no eigenvalue below λ = {lambda_max:g} for γ = {gamma:g}")
+        raise ArgumentError("lambda_max", f"no eigenvalue below λ = {lambda_max:g} for γ = {gamma:g}")
     low, high = grid[change[0]], grid[change[0] + 1]
     lam = brentq(lambda lam: float(determinant(lam)[0]), low, high, xtol=1e-15, rtol=4 * np.finfo(float).eps)
     path = integrate(lam, keep=True)[:, 0]  # [ξ, variable, solution]

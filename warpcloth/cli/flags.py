@@ -40,6 +40,7 @@ FLAGS = {
     "out": "--out",
     "out_file": "-o",
     "overlay_video": "--overlay-video",
+    "overrides": "--set",
     "paths": "IMAGE",
     "ribbon": "--ribbon",
     "scheduler": "--scheduler",
@@ -63,19 +64,53 @@ FLAGS = {
 
 LIBRARY_ONLY = frozenset(
     {
+        "(i, j)",  # SheetGeometry.node/cell/hinge(i, j): a scene's output.markers_ij, checked as a scene field
+        "bending_factor",  # Grip(...): a scene's clamp.grip_* fields, checked as fields
+        "body",  # warpcloth.bodies.named(name): a scene or run names its body, read by the registry
+        "blocks",  # identifiability(blocks): the benchmarks' comparison of experiments
+        "clamp_length",  # rectangle(...): a scene's sheet.* lengths, checked as fields (sheet.cut for the rest)
+        "dotted",  # sheet_value(scene, dotted): fit --free names it as "names"
+        "edge_hinge",  # rectangle/bias_strip(edge_hinge=): a scene's sheet.edge_hinge, a choice field
+        "edge_hinge_length",  # StripBuilder.add_strip(): a scene's clamp.edge_hinge, a choice field
+        "family",  # SheetGeometry.hinge(family, ...)
         "fit",  # fit_search_figure(fit): the command line draws no search figure
         "forms",  # clamp-motion forms: the command tries every one
+        "free_length",  # rectangle(...): as clamp_length
+        "h",  # least_squares_above(a, b, g, h): the tensile fit's, which names the loop's file
+        "hysteresis_factor",  # Grip(...): as bending_factor
         "initial_positions",  # simulate()'s start state: no option sets it
         "initial_velocities",
+        "is_clamped",  # grid_geometry(is_clamped=): a scene's cut, reported as sheet.cut
         "j",  # Recording.probe(name, j): the command line selects variants by --variants
+        "kept_cells",  # grid_geometry(kept_cells): a scene's cut, reported as sheet.cut
+        "lambda_max",  # two_section_beam_mode(): the tests' and benchmarks' reference solution
+        "length",  # Grip(length): as bending_factor
         "markers",  # SheetRecorder(markers=): a scene's output.markers_mm, checked as a scene field first
+        "on_divergence",  # simulate(on_divergence=): the command line records or raises as each command needs
+        "n_clamped",  # StripBuilder(n_clamped): a scene's strip.clamp_length_mm and spacing_mm, checked as fields
         "name",  # RunResult.probe(name)
         "path",  # a measured-data reader called directly
         "precision",  # SheetBuilder.finalize(precision=): a scene's integrator.precision, checked as a field
         "release_time",  # SheetBuilder(release_time=): a scene's release.settle_time_s, checked as a field
+        "rest_positions",  # StripBuilder(rest_positions): a scene's straight chain
+        "result",  # a run without frames passed to the tracked-marker residual or figure: fit keeps them
+        "reversal_memory",  # StripBuilder(reversal_memory=): a scene's integrator.reversal_memory, a field
+        "root_factor",  # two_section_beam_mode(): as lambda_max
+        "root_length",
+        "run",  # sheet_shapes_figure(run): plot_sheet_run draws it only when frames were kept
+        "scene",  # simulate_sheet(scene): the command line passes the scene it loaded
+        "scenes",  # simulate(scenes): the command line passes the scenes it loaded
+        "shear_rigidity",  # SheetMaterialSI(shear_rigidity): a scene's shear.rigidity_gf_per_cm_deg, a field
+        "solver",  # FusedStripSolver(...) itself: the base of the strip's solvers, never one a scene names
         "sheets",  # SheetBuilder.finalize() with none added: a scene always adds its sheet
+        "strips",  # StripBuilder.finalize() with none added: a scene always adds its strips
+        "terms",  # StripBuilder/SheetBuilder.finalize(terms=): force terms are added in Python
+        "table_s",  # FabricSet(table_s): a scene's strip.rest_curvature_table_*, checked as fields
         "threads",  # simulate_sheets(threads=): the command line uses every core
+        "values",  # LawParameters.of(law, values): a scene's material fields, checked as fields
         "variant",  # RunResult.probe(..., variant=)
+        "width",  # rectangle(...): as clamp_length
+        "weft",  # SheetMaterialSI(warp, weft): a scene has one density, material.density_g_per_cm2
     }
 )
 """Arguments the command line never passes: an error about one is the library caller's."""

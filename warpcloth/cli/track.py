@@ -137,16 +137,15 @@ def _pair(text: str, option: str, sep: str) -> tuple[int, int]:
 def marker_arcs(text: str, option: str = "--marker-s") -> np.ndarray:
     """``--marker-s`` (or ``--centreline-s``): ``5,15,25`` or ``5:95:10`` (FIRST to LAST
     included, STEP dividing LAST − FIRST), increasing, ≥ 0, at least two."""
+    expected = f"expected S,S,... or FIRST:LAST:STEP (mm, FIRST < LAST, STEP > 0), got {text!r}"
     try:
         values = [float(v) for v in text.split(":" if ":" in text else ",")]
-        if ":" in text and (
-            len(values) != 3 or not np.all(np.isfinite(values)) or not values[0] < values[1] or not values[2] > 0
-        ):
-            raise ValueError
     except ValueError:
-        raise OptionError(
-            option, f"expected S,S,... or FIRST:LAST:STEP (mm, FIRST < LAST, STEP > 0), got {text!r}"
-        ) from None
+        raise OptionError(option, expected) from None
+    if ":" in text and (
+        len(values) != 3 or not np.all(np.isfinite(values)) or not values[0] < values[1] or not values[2] > 0
+    ):
+        raise OptionError(option, expected)
     if ":" in text:
         first, last, step = values
         steps = (last - first) / step

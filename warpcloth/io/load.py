@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from warpcloth.errors import DataFileError
+from warpcloth.errors import ArgumentTypeError, DataFileError
 
 from .recording import Recording
 from .run_dir import read_run
@@ -20,7 +20,7 @@ def load_recording(path: str | Path, variants: str | None = None, where: str | N
     the selection).
     """
     if not isinstance(path, (str, os.PathLike)):
-        raise TypeError(f"load_recording takes the path of a run or sweep directory, got {path!r}")
+        raise ArgumentTypeError("path", f"load_recording takes the path of a run or sweep directory, got {path!r}")
     path = Path(path)
     if (path / "sweep.json").is_file():
         return read_sweep(path, variants, where)

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from warpcloth.core.result import checked_probe
-from warpcloth.errors import ArgumentError, DataFileError, checked_index
+from warpcloth.errors import ArgumentError, ArgumentTypeError, DataFileError, checked_index
 from warpcloth.scene import COORDINATES, Scene, batch_fields, choice_fields, rest_positions
 
 
@@ -144,8 +144,9 @@ def parse_variants(text: str | int | Sequence[int] | None, n_variants: int) -> n
     elif isinstance(text, int) and not isinstance(text, bool):
         text = str(text)
     elif not isinstance(text, str):
-        raise TypeError(
-            f"variants must be a selection such as '3', '1,4,9' or '0:50' (or an int or a list of ints), got {text!r}"
+        raise ArgumentTypeError(
+            "variants",
+            f"must be a selection such as '3', '1,4,9' or '0:50' (or an int or a list of ints), got {text!r}",
         )
     text = text.strip()
     try:

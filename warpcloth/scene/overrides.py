@@ -8,7 +8,7 @@ import typing
 from pathlib import Path
 from typing import Any
 
-from warpcloth.errors import SceneError
+from warpcloth.errors import ArgumentTypeError, SceneError
 
 from .keys import MATERIAL_FILE, SWEPT_NAME_TABLES, is_material_file_key, key_path
 from .materials import MATERIAL_FILE_KEY, bundled_materials, material_fields, with_material_file
@@ -84,13 +84,18 @@ def override_pairs(overrides: Overrides) -> list[tuple[str, Any]]:
     """``(key, value)`` of each override: strings parsed as ``--set`` parses them, a
     mapping's values taken as they are (Python numbers, strings, booleans, lists)."""
     if isinstance(overrides, str):
-        raise TypeError(f"overrides must be a list of 'key=value' strings or a dict, not one string {overrides!r}")
+        raise ArgumentTypeError(
+            "overrides", f"must be a list of 'key=value' strings or a dict, not one string {overrides!r}"
+        )
     if isinstance(overrides, typing.Mapping):
         return [(str(key), value) for key, value in overrides.items()]
     pairs = []
-    for item in overrides:
+    for i, item in enumerate(overrides):
         if not isinstance(item, str):
-            raise TypeError(f"an override must be a 'key=value' string, got {item!r}; pass a dict for Python values")
+            raise ArgumentTypeError(
+                "overrides",
+                f"an override must be a 'key=value' string, got {item!r} (item {i}); pass a dict for Python values",
+            )
         if "=" not in item:
             raise SceneError(item, "an override must look like section.field=value")
         key, text = item.split("=", 1)

@@ -12,7 +12,7 @@ import typing
 from pathlib import Path
 from typing import Any
 
-from warpcloth.errors import DataFileError, SceneError
+from warpcloth.errors import DataFileError, InternalError, SceneError
 
 from .schema import field_types
 
@@ -53,7 +53,10 @@ def coerce_value(value: Any, tp: Any, name: str, meta: dict) -> Any:
             raise SceneError(name, f"must be one of {', '.join(choices)}; got {value!r}")
         return value
     else:  # pragma: no cover - schema error, not user error
-        raise TypeError(f"unsupported field type {tp} for {name}")
+        raise InternalError(
+            f"the scene schema gives {name} the type {tp}, which the parser does not read: "
+            "a bug in warpcloth, please report it"
+        )
     if meta.get("gt") is not None and not out > meta["gt"]:
         raise SceneError(name, f"must be > {meta['gt']:g}, got {out:g}")
     if meta.get("ge") is not None and not out >= meta["ge"]:

@@ -16,7 +16,7 @@ import numpy as np
 
 from warpcloth import units
 from warpcloth.core.resources import check_memory
-from warpcloth.errors import SceneError
+from warpcloth.errors import ArgumentError, SceneError
 from warpcloth.kernels.sheet_structs import WARP, WEFT
 from warpcloth.sheet import (
     SheetBuilder,
@@ -167,7 +167,7 @@ def marker_nodes(scene: SheetScene, geometry: SheetGeometry) -> list[int]:
     for i, (a, b) in enumerate(scene.output.markers_ij):
         try:
             nodes.append(geometry.node(a, b))
-        except KeyError:
+        except ArgumentError:
             top = geometry.lattice.max(axis=0)
             raise SceneError(
                 f"output.markers_ij[{i}]",
@@ -241,8 +241,8 @@ def check_sheet_scene(scene: SheetScene) -> SheetScene:
     a whole fraction of the probe interval, recorded with ``dt_chosen_by = "auto"``)."""
     try:
         geometry = sheet_geometry(scene)
-    except ValueError as exc:  # a bias cut narrower than a cell, a clamp holding nothing
-        raise SceneError("sheet.cut", f"{scene.sheet.cut}: {exc}", related=("sheet.width_mm",)) from None
+    except ArgumentError as exc:  # a bias cut narrower than a cell, a clamp holding nothing
+        raise SceneError("sheet.cut", f"{scene.sheet.cut}: {exc.message}", related=("sheet.width_mm",)) from None
     marker_nodes(scene, geometry)
     probed_elements(scene, geometry)
     check_memory(

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from warpcloth.errors import ArgumentError
 from warpcloth.kernels.sheet_structs import WARP, WEFT
 
 EDGE_HINGES = ("second_order", "paper")
@@ -54,27 +55,45 @@ class SheetGeometry:
         """How many nodes a sheet has."""
         return len(self.rest_positions)
 
+    def _reach(self) -> str:
+        # where the lattice's nodes lie, for an error about one it does not have
+        top = self.lattice.max(axis=0)
+        return f"its lattice reaches i ≤ {top[0]}, j ≤ {top[1]}, where the cut keeps cells"
+
     def node(self, i: int, j: int) -> int:
-        """The index of lattice node (i, j); KeyError if the cut does not keep it."""
+        """The index of lattice node (i, j); an ArgumentError naming ``(i, j)`` if the cut
+        does not keep it."""
         hits = np.flatnonzero((self.lattice[:, 0] == i) & (self.lattice[:, 1] == j))
         if not len(hits):
-            raise KeyError(f"the sheet has no node at lattice (i, j) = ({i}, {j})")
+            raise ArgumentError("(i, j)", f"the sheet has no node at lattice (i, j) = ({i}, {j}); {self._reach()}")
         return int(hits[0])
 
     def cell(self, i: int, j: int) -> int:
-        """The index of the cell whose first corner is lattice node (i, j)."""
+        """The index of the cell whose first corner is lattice node (i, j); an ArgumentError
+        naming ``(i, j)`` if there is no free one."""
         first = self.node(i, j)
         hits = np.flatnonzero(self.cell_nodes[:, 0] == first)
         if not len(hits):
-            raise KeyError(f"the sheet has no free cell at lattice (i, j) = ({i}, {j})")
+            raise ArgumentError(
+                "(i, j)",
+                f"the sheet has no free cell at lattice (i, j) = ({i}, {j}) (a cell wholly inside the clamp "
+                f"is not free); {self._reach()}",
+            )
         return int(hits[0])
 
     def hinge(self, family: int, i: int, j: int) -> int:
-        """The index of the ``family`` (WARP or WEFT) hinge at lattice node (i, j)."""
+        """The index of the ``family`` (WARP or WEFT) hinge at lattice node (i, j); an
+        ArgumentError naming ``family`` or ``(i, j)`` if there is no free one."""
+        if family not in (WARP, WEFT):
+            raise ArgumentError("family", f"must be WARP ({WARP}) or WEFT ({WEFT}), got {family!r}")
         centre = self.node(i, j)
         hits = np.flatnonzero((self.hinge_nodes[:, 1] == centre) & (self.hinge_family == family))
         if not len(hits):
-            raise KeyError(f"the sheet has no free {('warp', 'weft')[family]} hinge at lattice ({i}, {j})")
+            raise ArgumentError(
+                "(i, j)",
+                f"the sheet has no free {('warp', 'weft')[family]} hinge at lattice ({i}, {j}) (a hinge needs "
+                f"three nodes along its line, not all clamped); {self._reach()}",
+            )
         return int(hits[0])
 
 
@@ -93,10 +112,10 @@ def grid_geometry(
     and are left out; a hinge with two clamped nodes and one free bends over h/2 under
     ``edge_hinge = "second_order"`` (scale 2), over h under ``"paper"``."""
     if edge_hinge not in EDGE_HINGES:
-        raise ValueError(f"edge_hinge must be one of {', '.join(EDGE_HINGES)}, got {edge_hinge!r}")
+        raise ArgumentError("edge_hinge", f"must be one of {', '.join(EDGE_HINGES)}, got {edge_hinge!r}")
     kept = np.asarray(kept_cells, dtype=bool)
     if not kept.any():
-        raise ValueError("the cut keeps no cell")
+        raise ArgumentError("kept_cells", "the cut keeps no cell")
     h_warp, h_weft = spacing
     n_i, n_j = kept.shape[0] + 1, kept.shape[1] + 1
     padded = np.zeros((n_i + 1, n_j + 1), dtype=bool)  # padded[i + 1, j + 1] = cell (i, j)
@@ -118,7 +137,7 @@ def grid_geometry(
     )
     clamped = np.asarray(is_clamped(rest), dtype=bool)
     if clamped.all() or not clamped.any():
-        raise ValueError("the clamp must hold some of the sheet's nodes and leave some free")
+        raise ArgumentError("is_clamped", "the clamp must hold some of the sheet's nodes and leave some free")
     node_area = around[active] * (h_warp * h_weft / 4.0)
 
     def free(*nodes: np.ndarray) -> np.ndarray:
@@ -204,11 +223,11 @@ def rectangle(
     across (+z), ``clamp_length`` of it held above the clamp edge (y = 0), ``free_length``
     below, ``width`` across, centred on z = 0 (m; lengths whole multiples of the spacing)."""
     h_warp, h_weft = spacing
-    rows = _cells(free_length + clamp_length, h_warp, "free_length + clamp_length")
-    columns = _cells(width, h_weft, "width")
-    clamp_rows = _cells(clamp_length, h_warp, "clamp_length")
+    rows = _cells(free_length + clamp_length, h_warp, argument="free_length", of="free_length + clamp_length = ")
+    columns = _cells(width, h_weft, argument="width")
+    clamp_rows = _cells(clamp_length, h_warp, argument="clamp_length")
     if clamp_rows < 1:
-        raise ValueError(f"clamp_length = {clamp_length:g} m must hold at least one row of cells")
+        raise ArgumentError("clamp_length", f"{clamp_length:g} m must hold at least one row of cells")
     return grid_geometry(
         np.ones((rows, columns), dtype=bool),
         spacing,
@@ -263,8 +282,10 @@ def bias_strip(
     )
 
 
-def _cells(length: float, h: float, name: str) -> int:
+def _cells(length: float, h: float, argument: str, of: str = "") -> int:
+    # how many cells of h `length` is, or an ArgumentError naming `argument` (`of`: the
+    # sum the length is, when it is not the argument alone)
     count = round(length / h)
     if count < 1 or abs(count * h - length) > 1e-9 * length:
-        raise ValueError(f"{name} = {length:g} m is not a whole number of cells of {h:g} m")
+        raise ArgumentError(argument, f"{of}{length:g} m is not a whole number of cells of {h:g} m")
     return int(count)

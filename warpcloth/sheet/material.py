@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from warpcloth.errors import ArgumentError
 from warpcloth.kernels.law import BENDING_RIGIDITY
 from warpcloth.kernels.laws import packed_parameters
 from warpcloth.strip.material import LawParameters, MaterialSI
@@ -24,12 +25,15 @@ class SheetMaterialSI:
 
     def __post_init__(self) -> None:
         if self.warp.density != self.weft.density:
-            raise ValueError(
+            raise ArgumentError(
+                "weft",
                 f"a sheet has one areal density: the warp's is {self.warp.density:g} kg/m², the weft's "
-                f"{self.weft.density:g} kg/m²"
+                f"{self.weft.density:g} kg/m²",
             )
         if not self.shear_rigidity >= 0:
-            raise ValueError(f"the shear rigidity G must be ≥ 0, got {self.shear_rigidity:g} N/(m·rad)")
+            raise ArgumentError(
+                "shear_rigidity", f"the shear rigidity G must be ≥ 0, got {self.shear_rigidity:g} N/(m·rad)"
+            )
 
     @property
     def density(self) -> float:

@@ -12,12 +12,13 @@ from collections.abc import Sequence
 import numpy as np
 import warp as wp
 
+from warpcloth.errors import ArgumentError
 from warpcloth.kernels import laws, packed_parameters, precision
 from warpcloth.kernels.law import BENDING_RIGIDITY
 
 from .material import LawParameters, MaterialSI
 from .model import machine_device
-from .state import allocate_reversal_memory
+from .state import allocate_reversal_memory, check_reversal_memory
 
 
 def moment_along_path(
@@ -73,14 +74,13 @@ def law_along_path(
     if k.shape[1] == 1 and len(packed) > 1:
         k = np.repeat(k, len(packed), axis=1)
     if k.shape[1] != len(packed):
-        raise ValueError(f"{k.shape[1]} paths for {len(packed)} materials")
+        raise ArgumentError("path", f"{k.shape[1]} paths for {len(packed)} materials")
     device = machine_device(device)  # Warp started quietly, as for a run
     law = laws.build(wp.float64)
     parameters = wp.array(np.array(packed), dtype=law.Parameters, device=device)
     if reversal_memory is None:  # every sign change of dK can open a point
         reversal_memory = int(np.abs(np.diff(np.sign(np.diff(k, axis=0)), axis=0)).sum(axis=0).max(initial=0)) // 2 + 1
-    if not (isinstance(reversal_memory, int) and reversal_memory >= 1):
-        raise ValueError(f"reversal_memory must be a whole number of at least 1, got {reversal_memory!r}")
+    check_reversal_memory(reversal_memory)
     history = allocate_reversal_memory(law.History, reversal_memory, 1, k.shape[1], precision(wp.float64).vec2, device)
     moment = wp.zeros(k.shape, dtype=wp.float64, device=device)
     slope = wp.zeros(k.shape, dtype=wp.float64, device=device)

@@ -22,6 +22,7 @@ from warpcloth.kernels import MAX_DEGREE, bending_masing
 
 from .material import MaterialSI
 from .model import Model
+from .state import check_reversal_memory
 
 
 @dataclass(frozen=True)
@@ -48,9 +49,10 @@ class FabricSet:
     def __post_init__(self) -> None:
         s = np.asarray(self.table_s, dtype=float)
         if len(s) != len(self.table_curvature) or len(s) == 1 or np.any(np.diff(s) <= 0):
-            raise ValueError(
+            raise ArgumentError(
+                "table_s",
                 f"a rest-curvature table needs at least 2 strictly increasing arc lengths, one curvature "
-                f"each; got {len(s)} arc lengths and {len(self.table_curvature)} curvatures"
+                f"each; got {len(s)} arc lengths and {len(self.table_curvature)} curvatures",
             )
 
     def hinge_values(self, intervals: np.ndarray) -> np.ndarray:
@@ -91,11 +93,17 @@ class Grip:
     hysteresis_factor: float = 1.0
 
     def __post_init__(self) -> None:
-        if not (self.length >= 0 and self.bending_factor > 0 and self.hysteresis_factor >= 0):
-            raise ValueError(
-                f"a grip needs length ≥ 0, bending_factor > 0 and hysteresis_factor ≥ 0; got "
-                f"{self.length:g}, {self.bending_factor:g}, {self.hysteresis_factor:g}"
-            )
+        for argument, ok in (
+            ("length", self.length >= 0),
+            ("bending_factor", self.bending_factor > 0),
+            ("hysteresis_factor", self.hysteresis_factor >= 0),
+        ):
+            if not ok:
+                raise ArgumentError(
+                    argument,
+                    f"a grip needs length ≥ 0, bending_factor > 0 and hysteresis_factor ≥ 0; got "
+                    f"{self.length:g}, {self.bending_factor:g}, {self.hysteresis_factor:g}",
+                )
 
     def hinge_factors(self, intervals: np.ndarray) -> np.ndarray:
         """``[hinge, (bending, hysteresis)]`` factors of hinges bending the arc ``intervals``:
@@ -152,23 +160,25 @@ class StripBuilder:
     ) -> None:
         self.rest_positions = np.asarray(rest_positions, dtype=np.float64)
         if self.rest_positions.ndim != 2 or self.rest_positions.shape[1] != 2:
-            raise ValueError(f"rest_positions must be [node, xy], got shape {self.rest_positions.shape}")
+            raise ArgumentError("rest_positions", f"must be [node, xy], got shape {self.rest_positions.shape}")
         if not 2 <= n_clamped <= len(self.rest_positions) - 2:
-            raise ValueError(f"n_clamped = {n_clamped} must leave at least 2 free nodes of {len(rest_positions)}")
+            raise ArgumentError(
+                "n_clamped", f"{n_clamped} clamped nodes must leave at least 2 free nodes of {len(rest_positions)}"
+            )
         lengths = np.linalg.norm(np.diff(self.rest_positions, axis=0), axis=1)
         worst = int(np.argmax(np.abs(lengths - spacing)))
         if not abs(lengths[worst] - spacing) <= 1e-9 * spacing:
             # every segment shares one rest length in the kernel: the chain must be uniform
-            raise ValueError(
-                f"segment {worst} of rest_positions is {lengths[worst]:.6g} m long, not the spacing {spacing:.6g} m"
+            raise ArgumentError(
+                "rest_positions",
+                f"segment {worst} of rest_positions is {lengths[worst]:.6g} m long, not the spacing {spacing:.6g} m",
             )
         self.n_clamped = n_clamped
         self.spacing = spacing
         self.gravity = gravity
         self.release_time = release_time
         self.move_time = move_time
-        if not (isinstance(reversal_memory, int) and reversal_memory >= 1):
-            raise ValueError(f"reversal_memory must be a whole number of at least 1, got {reversal_memory!r}")
+        check_reversal_memory(reversal_memory)
         self.reversal_memory = reversal_memory
         self.strips: list[StripSpec] = []
 
@@ -205,7 +215,7 @@ class StripBuilder:
         """
         edge = 0.5 * self.spacing if edge_hinge_length is None else edge_hinge_length
         if not 0 < edge <= self.spacing:
-            raise ValueError(f"edge_hinge_length = {edge:g} m must lie in (0, spacing = {self.spacing:g} m]")
+            raise ArgumentError("edge_hinge_length", f"{edge:g} m must lie in (0, spacing = {self.spacing:g} m]")
         self.strips.append(
             StripSpec(
                 material=material,
@@ -234,5 +244,5 @@ class StripBuilder:
         """The :class:`Model` of every strip added, on ``device`` in ``precision``, with the
         force ``terms`` (kernels/force_terms.py) acting on every free node."""
         if not self.strips:
-            raise ArgumentError("strips", "a batch needs at least one strip")
+            raise ArgumentError("strips", "a batch needs at least one strip (add_strip adds one)")
         return Model(self, device=device, precision=precision, terms=terms)

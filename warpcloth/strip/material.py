@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from warpcloth.errors import ArgumentError
 from warpcloth.kernels import DEFAULT_BENDING_LAW, bending_law, packed_parameters
 from warpcloth.kernels.law import BENDING_RIGIDITY, BendingLaw
 
@@ -20,19 +21,20 @@ class LawParameters:
 
     @classmethod
     def of(cls, law: str, values: Mapping[str, float] | None = None) -> LawParameters:
-        """The parameters of ``law`` from ``values`` (SI, by name); KeyError for a name the law
-        does not have or a parameter it lacks."""
+        """The parameters of ``law`` from ``values`` (SI, by name); an ArgumentError naming
+        ``values`` for a name the law does not have or a parameter it lacks."""
         description = bending_law(law)
         values = dict(values or {})
         unknown = sorted(set(values) - {p.name for p in description.parameters})
         if unknown:
-            raise KeyError(
+            raise ArgumentError(
+                "values",
                 f"the {law} law has no parameter {unknown[0]!r}; it has "
-                f"{', '.join(p.name for p in description.parameters) or 'none'}"
+                f"{', '.join(p.name for p in description.parameters) or 'none'}",
             )
         missing = [p.name for p in description.parameters if p.name not in values]
         if missing:
-            raise KeyError(f"the {law} law needs {', '.join(missing)}")
+            raise ArgumentError("values", f"the {law} law needs {', '.join(missing)}")
         return cls(law, tuple((p.name, float(values[p.name])) for p in description.parameters))
 
     @property
@@ -41,10 +43,13 @@ class LawParameters:
         return bending_law(self.law)
 
     def __getitem__(self, name: str) -> float:
+        """The parameter ``name`` (SI); an ArgumentError naming ``name`` and the law's
+        parameters if the law has no such one."""
         for key, value in self.values:
             if key == name:
                 return value
-        raise KeyError(f"the {self.law} law has no parameter {name!r}")
+        known = ", ".join(key for key, _ in self.values) or "none"
+        raise ArgumentError("name", f"the {self.law} law has no parameter {name!r}; it has {known}")
 
     def __getattr__(self, name: str) -> float:
         # material.bending.dahl_moment reads as the law's own parameter
@@ -52,8 +57,8 @@ class LawParameters:
             raise AttributeError(name)
         try:
             return self[name]
-        except KeyError as exc:
-            raise AttributeError(str(exc)) from None
+        except ArgumentError as exc:
+            raise AttributeError(exc.message) from None
 
     def replace(self, **values: float) -> LawParameters:
         """The same law with some of its parameters changed (SI, by name)."""

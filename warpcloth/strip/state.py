@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import warp as wp
 
-from warpcloth.errors import ArgumentError
+from warpcloth.errors import ArgumentError, ArgumentTypeError
 from warpcloth.kernels import hinge_kernels
 
 if TYPE_CHECKING:
@@ -28,16 +28,26 @@ def allocate_reversal_memory(
     return history
 
 
+def check_reversal_memory(reversal_memory: object) -> None:
+    """Refuse a ``reversal_memory`` (open reversal points a hinge keeps) that is not a whole
+    number of at least 1: an ArgumentTypeError or ArgumentError naming it."""
+    message = f"must be a whole number of at least 1, got {reversal_memory!r}"
+    if not isinstance(reversal_memory, int):
+        raise ArgumentTypeError("reversal_memory", message)
+    if not reversal_memory >= 1:
+        raise ArgumentError("reversal_memory", message)
+
+
 def checked_nodes(argument: str, value: object, n_nodes: int, n_strips: int) -> np.ndarray:
     """``value`` as a float array ``[node, strip, xy]`` of ``n_nodes`` × ``n_strips`` × 2
-    finite numbers, or a TypeError / ArgumentError naming ``argument``, what it got and what
+    finite numbers, or an ArgumentTypeError / ArgumentError naming ``argument``, what it got and what
     is expected (a NaN start would otherwise read as a divergence of the run)."""
     expected = (n_nodes, n_strips, 2)
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
-        raise TypeError(
-            f"{argument} must be an array of numbers [node, strip, xy] of shape {expected}, got {type(value).__name__}"
+        raise ArgumentTypeError(
+            argument, f"must be an array of numbers [node, strip, xy] of shape {expected}, got {type(value).__name__}"
         ) from None
     if array.shape != expected:
         raise ArgumentError(

@@ -29,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from warpcloth.errors import InternalError
+
 from .camera import Camera, PlanePose, rotation
 
 __all__ = ["EXAMPLE", "make_example"]
@@ -87,7 +89,9 @@ def _ray_grid(camera: Camera) -> tuple[np.ndarray, np.ndarray]:
     back = camera.project(np.stack([x, y, np.ones_like(x)], axis=-1))
     worst = float(np.max(np.abs(back - np.stack([uu, vv], axis=-1))))
     if worst > 1e-6:
-        raise RuntimeError(f"the camera model's inverse is off by {worst:g} px")
+        raise InternalError(
+            f"the camera model's inverse is off by {worst:g} px: a bug in warpcloth's camera model, please report it"
+        )
     return x, y
 
 
@@ -305,7 +309,10 @@ def make_example(out: str | Path, progress: bool = True) -> dict:
     write_atomically(out / "rotation.avi", lambda tmp: write_video(tmp, images, range(n_frames), Fraction(1, rate)))
     back = read_frames(out / "rotation.avi")
     if not (np.array_equal(back.images, np.stack(images)) and np.array_equal(back.t, np.arange(n_frames) / rate)):
-        raise RuntimeError("the video does not read back as written (lossless, exact timestamps)")
+        raise InternalError(
+            "the video does not read back as written (lossless, exact timestamps): a bug in warpcloth or in "
+            "its video library (PyAV, FFmpeg), please report it"
+        )
     write_text_atomically(
         out / "truth.csv",
         "# the simulated markers at each frame's time (python -m "

@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdUtils, Vt
 
-from warpcloth.errors import ArgumentError
+from warpcloth.errors import ArgumentError, InternalError
 from warpcloth.io.atomic import write_atomically
 from warpcloth.io.provenance import provenance
 from warpcloth.io.recording import Recording
@@ -279,7 +279,10 @@ def _write_clips(
         files.append(str(path))
     stitched = Sdf.Layer.CreateNew(str(clips / "stitched.usda"))
     if not UsdUtils.StitchClips(stitched, files, Sdf.Path("/World"), 0, n_frames - 1):
-        raise RuntimeError(f"UsdUtils.StitchClips failed for {clips}")
+        raise InternalError(
+            f"UsdUtils.StitchClips failed for {clips}, the clips this export has just written: a bug in "
+            "warpcloth (or USD), please report it"
+        )
     # Every layer states the frame rate: USD rescales time across layers whose
     # timeCodesPerSecond differ, and an unwritten one reads as 24.
     for layer_path in (stitched.realPath, str(clips / "stitched.topology.usda"), str(clips / "stitched.manifest.usda")):

@@ -8,15 +8,18 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import nnls
 
+from warpcloth.errors import ArgumentError
+
 
 def least_squares_above(a: np.ndarray, b: np.ndarray, g: np.ndarray, h: np.ndarray) -> np.ndarray:
     """min ‖a x − b‖ subject to g x ≥ h (a of full column rank).
 
-    Via the least-distance problem and :func:`scipy.optimize.nnls`; raises ValueError if
-    the constraints are infeasible. SciPy has no solver for this problem itself:
-    :func:`scipy.optimize.lsq_linear` takes bounds on x only, not general rows g x ≥ h, and
-    ``minimize(method="SLSQP")`` or ``"trust-constr"`` are iterative nonlinear solvers that
-    stop at a tolerance, where this reduction is exact to rounding in one NNLS solve.
+    Via the least-distance problem and :func:`scipy.optimize.nnls`; raises an
+    ArgumentError naming ``h`` (a ValueError) if the constraints are infeasible. SciPy has
+    no solver for this problem itself: :func:`scipy.optimize.lsq_linear` takes bounds on x
+    only, not general rows g x ≥ h, and ``minimize(method="SLSQP")`` or ``"trust-constr"``
+    are iterative nonlinear solvers that stop at a tolerance, where this reduction is exact
+    to rounding in one NNLS solve.
     """
     q, r = np.linalg.qr(a)
     rinv = np.linalg.inv(r)
@@ -31,6 +34,6 @@ def least_squares_above(a: np.ndarray, b: np.ndarray, g: np.ndarray, h: np.ndarr
     u, _ = nnls(e, f)
     residual = e @ u - f
     if np.linalg.norm(residual) < 1e-12:
-        raise ValueError("the constraints are infeasible")
+        raise ArgumentError("h", "the constraints g x ≥ h are infeasible")
     z = -residual[:-1] / residual[-1]
     return rinv @ (z + y0)

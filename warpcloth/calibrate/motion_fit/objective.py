@@ -291,7 +291,9 @@ class Objective(FitObjective):
             # whole measured swing as missed there, so the search moves away.
             return np.where(np.isfinite(sim) | (not penalise), sim - m.x, np.ptp(m.x))
         if result.frames is None:
-            raise ValueError("tracked markers are compared with the run's frames: run it with keep_frames=True")
+            raise ArgumentError(
+                "result", "tracked markers are compared with the run's frames: run it with keep_frames=True"
+            )
         frames = result.frames[:, j]  # [time, node, xy], from the clamp's lowest point like the markers
         nc = self.scene.n_clamped
         arc = m.s / self.scene.spacing + (nc - 1)  # fractional node index of each marker

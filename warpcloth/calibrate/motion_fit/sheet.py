@@ -6,6 +6,7 @@ residuals, every batch of candidates one batch of sheets (one launch per chunk).
 from __future__ import annotations
 
 import copy
+import dataclasses
 
 import numpy as np
 
@@ -15,7 +16,7 @@ from warpcloth.kernels import bending_law
 from warpcloth.kernels.laws import LAW_PARAMETERS
 from warpcloth.scene import set_field
 from warpcloth.scene.shear import RIGIDITY_FIELD, ShearMaterial, shear_field
-from warpcloth.scene.sheet import SheetScene, sheet_scene_from_dict
+from warpcloth.scene.sheet import SHEET_SECTIONS, SheetScene, sheet_scene_from_dict
 from warpcloth.scene.sheet_build import (
     SHARED_SECTIONS,
     build_sheets,
@@ -59,7 +60,8 @@ def checked_shear(scene: SheetScene) -> ShearMaterial:
 
 
 def sheet_value(scene: SheetScene, dotted: str) -> object:
-    """The value of the sheet scene's field ``dotted`` (``shear.<field>`` included); KeyError if none."""
+    """The value of the sheet scene's field ``dotted`` (``shear.<field>`` included); an
+    ArgumentError naming ``dotted`` and the fields there are if it has none."""
     section, _, key = dotted.partition(".")
     if section == "shear":
         shear = checked_shear(scene)
@@ -67,9 +69,16 @@ def sheet_value(scene: SheetScene, dotted: str) -> object:
             return shear.rigidity_gf_per_cm_deg
         if key in shear.parameters:
             return shear.parameters[key]
-        raise KeyError(dotted)
+        known = ", ".join(f"shear.{f}" for f in (RIGIDITY_FIELD, *shear.parameters))
+        raise ArgumentError("dotted", f"{dotted!r} is not a field of the sheet scene's shear law; it has {known}")
     if not key or not hasattr(scene, section) or not hasattr(getattr(scene, section), key):
-        raise KeyError(dotted)
+        table = getattr(scene, section, None) if section in SHEET_SECTIONS else None
+        known = (
+            f"[{section}] has {', '.join(f.name for f in dataclasses.fields(table))}"
+            if dataclasses.is_dataclass(table)
+            else f"its sections are {', '.join(SHEET_SECTIONS)}"
+        )
+        raise ArgumentError("dotted", f"{dotted!r} is not a field of the sheet scene; {known}")
     return getattr(getattr(scene, section), key)
 
 
@@ -87,7 +96,7 @@ def sheet_free_parameters(names: str | list[str], base: SheetScene, bounds: str 
         dotted = SHEET_ALIASES.get(name, name)
         try:
             value = sheet_value(base, dotted)
-        except KeyError:
+        except ArgumentError:
             shear = ", ".join(f"shear.{f}" for f in (RIGIDITY_FIELD, *checked_shear(base).parameters))
             raise ArgumentError(
                 "names",

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from warpcloth.errors import ArgumentError
 from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene import scene_from_dict
 
@@ -202,8 +203,13 @@ def identifiability(blocks: list[tuple[list[str], np.ndarray]]) -> Identifiabili
     Jacobian, is a pair the data do not separate (docs/calibration.md, "What the data
     determine")."""
     fields = blocks[0][0]
-    if any(f != fields for f, _ in blocks):
-        raise ValueError("every experiment must have the same free parameters, in the same order")
+    other = next((k for k, (f, _) in enumerate(blocks) if f != fields), None)
+    if other is not None:
+        raise ArgumentError(
+            "blocks",
+            f"every experiment must have the same free parameters, in the same order: block {other} has "
+            f"{', '.join(blocks[other][0])}, block 0 {', '.join(fields)}",
+        )
     sigma, correlation = lm.sigma_and_correlation(lm.covariance(np.vstack([j for _, j in blocks])))
     pairs = [
         (fields[i], fields[j], float(correlation[i, j]))

@@ -102,7 +102,7 @@ def plot_fit_overlay(
         )
         return common.save(fig, path)
     if result.frames is None:
-        raise ValueError("tracked markers are drawn over the run's frames: run it with keep_frames=True")
+        raise ArgumentError("result", "tracked markers are drawn over the run's frames: run it with keep_frames=True")
     fig, ax = plt.subplots(figsize=(6.5, 6))
     frames = np.unique(measurement.frame)
     chosen = frames[np.linspace(0, len(frames) - 1, min(6, len(frames))).round().astype(int)]

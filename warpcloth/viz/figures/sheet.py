@@ -15,6 +15,7 @@ from typing import Protocol
 import numpy as np
 
 from warpcloth import units
+from warpcloth.errors import ArgumentError
 from warpcloth.kernels.sheet import SHEET_PROBE_INDEX
 
 from .common import DPI, MM, plt, save
@@ -76,7 +77,7 @@ def sheet_run_figure(run: SheetRun, sheet: int = 0) -> plt.Figure:
 def sheet_shapes_figure(run: SheetRun, sheet: int = 0, count: int = 6) -> plt.Figure:
     """The sheet's nodes at ``count`` frames, from the side (x, y) and from the front (z, y)."""
     if run.frames is None or not len(run.frame_times):
-        raise ValueError("the run kept no frames: run it with keep_frames=True")
+        raise ArgumentError("run", "the run kept no frames: run it with keep_frames=True")
     fig, (side, front) = plt.subplots(1, 2, figsize=(10, 5), sharey=True)
     picks = np.unique(np.linspace(0, len(run.frame_times) - 1, count).round().astype(int))
     colours = plt.cm.viridis(np.linspace(0, 1, len(picks)))
