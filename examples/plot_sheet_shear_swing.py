@@ -17,8 +17,8 @@ slope is the shear law's in the swing's own, small, range of angles.
 # %%
 # Run the scene into a sheet run directory
 # ----------------------------------------
-# :func:`warpcloth.scene.sheet_build.load_sheet_scene` reads a sheet scene (with ``--set``
-# style overrides), :func:`warpcloth.runs.simulate_sheet` runs it and streams the sheet run
+# :func:`warpcloth.load_scene` reads a sheet scene as it reads a strip's (with ``--set``
+# style overrides), :func:`warpcloth.simulate` runs it and streams the sheet run
 # directory (``warpcloth run shear_swing`` does the same); the figures read the directory
 # back. ``WARPCLOTH_EXAMPLES_QUICK=1`` runs 0.3 s at 10 mm cells instead of the bundled 1 s
 # at 5 mm.
@@ -31,10 +31,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 from warpcloth.kernels.sheet import SHEET_PROBE_INDEX
 
+import warpcloth as wc
 from warpcloth import units
 from warpcloth.io.sheet_run_dir import read_sheet_run
-from warpcloth.runs import simulate_sheet
-from warpcloth.scene.sheet_build import load_sheet_scene
 from warpcloth.viz.figures.sheet import sheet_run_figure, sheet_shapes_figure
 
 QUICK = os.environ.get("WARPCLOTH_EXAMPLES_QUICK") == "1"
@@ -45,8 +44,8 @@ COARSE = [
     "sheet.spacing_weft_mm=10",
 ]
 workdir = Path(tempfile.mkdtemp(prefix="warpcloth-sheet-"))
-scene = load_sheet_scene("shear_swing", COARSE if QUICK else [])
-result = simulate_sheet(scene, out=workdir / "shear_swing")
+scene = wc.load_scene("shear_swing", COARSE if QUICK else [])
+result = wc.simulate(scene, out=workdir / "shear_swing")
 run = read_sheet_run(workdir / "shear_swing")
 samples = run.samples()  # the arrays the figures read: probes, markers, frames
 print(f"{run.meta['n_nodes']} nodes, {len(samples.t)} samples, {len(samples.frame_times)} frames")

@@ -69,26 +69,60 @@ FORCE_TERMS = {"drag": LinearDrag, "floor": RigidFloor}
 """The force terms by name."""
 
 
+def _sum_of(functions: tuple[Any, ...], scalar: Any, vec: Any) -> Any:
+    # Each term's function is called by name, never looked up by a loop index: Warp hashes
+    # the functions a function names, not those a loop's wp.static picks (two terms of one
+    # count would otherwise share a cached kernel, tests/test_bodies.py).
+    head = functions[0]
+    if len(functions) == 1:
+
+        @wp.func
+        def force(x: vec, v: vec, m: scalar):
+            return head(x, v, m)
+
+        return force
+    tail = _sum_of(functions[1:], scalar, vec)
+
+    @wp.func
+    def force_sum(x: vec, v: vec, m: scalar):
+        return head(x, v, m) + tail(x, v, m)
+
+    return force_sum
+
+
+def _work_of(functions: tuple[Any, ...], scalar: Any, vec: Any, tally: Any, slot: int) -> Any:
+    head = functions[0]
+    if len(functions) == 1:
+
+        @wp.func
+        def work(x: vec, v: vec, m: scalar, sweep: vec):
+            w = tally()
+            w[wp.static(slot)] = -wp.dot(head(x, v, m), sweep)
+            return w
+
+        return work
+    tail = _work_of(functions[1:], scalar, vec, tally, slot + 1)
+
+    @wp.func
+    def work_sum(x: vec, v: vec, m: scalar, sweep: vec):
+        w = tail(x, v, m, sweep)
+        w[wp.static(slot)] = -wp.dot(head(x, v, m), sweep)
+        return w
+
+    return work_sum
+
+
 @functools.cache
 def build(terms: tuple[Any, ...], scalar: Any, vec: Any, tally: Any, first_channel: int) -> SimpleNamespace:
     """``force(x, v, m)``, the sum of ``terms``' forces on a node, and ``work(x, v, m,
     sweep)``, the tally with the work done against each term over the displacement
-    ``sweep`` in its channel (``first_channel`` + its place in ``terms``)."""
+    ``sweep`` in its channel (``first_channel`` + its place in ``terms``); ``present`` is
+    False, and neither is called, without terms."""
+    if not terms:
+        return SimpleNamespace(force=None, work=None, present=False)
     functions = tuple(t.build(scalar, vec) for t in terms)
-    n = len(functions)
-
-    @wp.func
-    def force(x: vec, v: vec, m: scalar):
-        f = vec()
-        for j in range(wp.static(n)):
-            f = f + wp.static(functions[j])(x, v, m)
-        return f
-
-    @wp.func
-    def work(x: vec, v: vec, m: scalar, sweep: vec):
-        w = tally()
-        for j in range(wp.static(n)):
-            w[wp.static(first_channel + j)] = -wp.dot(wp.static(functions[j])(x, v, m), sweep)
-        return w
-
-    return SimpleNamespace(force=force, work=work, present=n > 0)
+    return SimpleNamespace(
+        force=_sum_of(functions, scalar, vec),
+        work=_work_of(functions, scalar, vec, tally, first_channel),
+        present=True,
+    )

@@ -66,20 +66,30 @@ def law_work(State: Any, vec: Any, tally: Any, elastic: int, hysteretic: int) ->
 
 
 @functools.cache
-def tally_recorder(scalar: Any, tally: Any, slots: tuple[int, ...], signs: tuple[int, ...]) -> Any:
+def tally_recorder(scalar: Any, tally: Any, slots: tuple[int, ...], signs: tuple[int, ...], first: int = 0) -> Any:
     """``record_work(probes, k, s, work, stored) -> energy``: writes each channel of the tally
-    ``work`` into its probe slot (``slots``) of sample ``k`` and returns ``stored`` plus the
-    channels of the work done against forces (``signs`` +1): the budget's sum without the
-    work done by prescribed motion, which a caller checks is finite."""
+    ``work`` from ``first`` on into its probe slot (``slots``) of sample ``k`` and returns
+    ``stored`` plus the channels of the work done against forces (``signs`` +1): the
+    budget's sum without the work done by prescribed motion, which a caller checks is
+    finite. One function per channel, each naming the next: Warp hashes what a function
+    names, not what a loop's wp.static picks, so two layouts never share a cached kernel."""
+    if first == len(slots):
+
+        @wp.func
+        def recorded(probes: wp.array3d(dtype=scalar), k: int, s: int, work: tally, stored: scalar):
+            return stored
+
+        return recorded
+    rest = tally_recorder(scalar, tally, slots, signs, first + 1)
+    slot, against = slots[first], signs[first] > 0
 
     @wp.func
     def record_work(probes: wp.array3d(dtype=scalar), k: int, s: int, work: tally, stored: scalar):
+        probes[k, wp.static(slot), s] = work[wp.static(first)]
         energy = stored
-        for c in range(wp.static(len(slots))):
-            probes[k, wp.static(slots[c]), s] = work[c]
-            if wp.static(signs[c] > 0):
-                energy = energy + work[c]
-        return energy
+        if wp.static(against):
+            energy = energy + work[wp.static(first)]
+        return rest(probes, k, s, work, energy)
 
     return record_work
 

@@ -123,5 +123,5 @@ def test_a_batch_on_threads_is_the_batch_on_one_thread_bit_for_bit():
         assert np.array_equal(many.probes, one.probes, equal_nan=True)
         assert np.array_equal(many.frames, one.frames, equal_nan=True)
         assert many.diverged == one.diverged
-    with pytest.raises(ValueError, match="threads must be at least 1, got 0"):
+    with pytest.raises(wc.ArgumentError, match="threads: must be at least 1, got 0"):  # the argument named (issue 37)
         wc.simulate(scenes[:1], threads=0)

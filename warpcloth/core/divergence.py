@@ -8,6 +8,7 @@ from __future__ import annotations
 from typing import Any, Protocol
 
 import numpy as np
+
 from warpcloth.kernels import STATUS_BUDGET, STATUS_NONFINITE_ENERGY
 
 BUDGET_TOLERANCE = 0.1

@@ -8,6 +8,7 @@ from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
+
 from warpcloth.kernels.probe_set import ProbeSet
 from warpcloth.kernels.probes import STRIP_PROBES
 

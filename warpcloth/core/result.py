@@ -8,10 +8,10 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from warpcloth.kernels.probe_set import ProbeSet
-from warpcloth.kernels.probes import STRIP_PROBES
 
 from warpcloth.errors import ArgumentError, checked_index
+from warpcloth.kernels.probe_set import ProbeSet
+from warpcloth.kernels.probes import STRIP_PROBES
 
 
 def reversal_memory_warning(report: dict[str, object]) -> str | None:

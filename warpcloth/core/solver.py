@@ -14,6 +14,7 @@ from typing import Any, Protocol
 
 import numpy as np
 import warp as wp
+
 from warpcloth.kernels import STATUS_OK
 
 from .schedule import OutputChunk

@@ -5,9 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from warpcloth.kernels.force_terms import FORCE_TERMS
-
 from warpcloth.errors import ArgumentError
+from warpcloth.kernels.force_terms import FORCE_TERMS
 
 
 def checked_terms(terms: object) -> tuple[Any, ...]:

@@ -113,12 +113,13 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
     return builder
 
 
-def build_batch(scenes: Sequence[Scene], device: str | None = None) -> Batch:
-    """Model, control, solver and recorder of one batch of scenes."""
+def build_batch(scenes: Sequence[Scene], device: str | None = None, terms: tuple = ()) -> Batch:
+    """Model, control, solver and recorder of one batch of scenes, with the force ``terms``
+    (:mod:`warpcloth.kernels.force_terms`) acting on every free node."""
     first = scenes[0] if scenes else None
     builder = builder_for(scenes)
     integrator = first.integrator
-    model = builder.finalize(device=device, precision=integrator.precision)
+    model = builder.finalize(device=device, precision=integrator.precision, terms=terms)
     solver = SOLVERS[integrator.scheme](model, dt=integrator.dt_s, divergence_strain=integrator.divergence_strain)
     recorder = Recorder(
         interval=first.output_interval,

@@ -297,13 +297,14 @@ def build_sheet(scene: SheetScene, device: str | None = None) -> SheetBatch:
     return build_sheets([scene], device)
 
 
-def build_sheets(scenes: Sequence[SheetScene], device: str | None = None) -> SheetBatch:
+def build_sheets(scenes: Sequence[SheetScene], device: str | None = None, terms: tuple = ()) -> SheetBatch:
     """One batch of sheet scenes (each checked by :func:`check_sheet_scene`), every sheet in
-    the same launches: they must agree on what sheets of a batch share (:func:`check_sheet_batch`)."""
+    the same launches: they must agree on what sheets of a batch share (:func:`check_sheet_batch`);
+    the force ``terms`` (:mod:`warpcloth.kernels.force_terms`) act on every free node."""
     check_sheet_batch(scenes)
     scene = scenes[0]
     geometry = sheet_geometry(scene)
-    model = _builder(scenes, geometry).finalize(device=device, precision=scene.integrator.precision)
+    model = _builder(scenes, geometry).finalize(device=device, precision=scene.integrator.precision, terms=terms)
     solver = SheetSolver(
         model,
         scene.integrator.dt_s,
