@@ -199,7 +199,6 @@ def test_each_force_term_compiles_to_a_kernel_of_its_own():
     their force terms (or a term's constants) must never share one (a loop's wp.static
     lookup is not hashed, so the terms are chained by name: kernels/force_terms.py)."""
     import warp as wp
-
     from warpcloth.kernels import build_strip
 
     configurations = [(), (LinearDrag(2.0),), (RigidFloor(-0.095, 2e3),), (RigidFloor(-0.095, 1e4),)]
