@@ -58,7 +58,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p.set_defaults(handler=run_sweep_command)
 
 
-def print_sheet_steps(sweep: Sweep) -> None:
+def sheet_sweep_steps(sweep: Sweep) -> list[str]:
     """The step each group of a sheet sweep's variants runs at, where ``dt_s = "auto"`` chose it."""
     from warpcloth.scene.sheet import AUTO_FRACTION
 
@@ -66,16 +66,57 @@ def print_sheet_steps(sweep: Sweep) -> None:
     for scene in sweep.scenes:
         if scene.integrator.dt_chosen_by == "auto":
             steps[scene.integrator.dt_s] = steps.get(scene.integrator.dt_s, 0) + 1
-    for dt, count in sorted(steps.items()):
-        print(
-            f"integrator.dt_s = auto, for {count} of the {len(sweep.scenes)} variants: {dt:.4e} s (the shortest "
-            f"of theirs: {AUTO_FRACTION:g} of the variant's linearised stability estimate, a whole fraction of "
-            "the probe interval)"
+    return [
+        f"integrator.dt_s = auto, for {count} of the {len(sweep.scenes)} variants: {dt:.4e} s (the shortest "
+        f"of theirs: {AUTO_FRACTION:g} of the variant's linearised stability estimate, a whole fraction of "
+        "the probe interval)"
+        for dt, count in sorted(steps.items())
+    ]
+
+
+def strip_sweep_steps(sweep: Sweep) -> list[str]:
+    """The step each scheme and probe interval of a strip sweep runs at, where ``dt_s = "auto"`` chose it."""
+    from warpcloth.scene.step import choose_step, requesting_auto
+
+    groups: dict[tuple[str, float], list] = {}  # one step per scheme and probe interval
+    for s in sweep.scenes:
+        if s.integrator.dt_chosen_by == "auto":
+            groups.setdefault((s.integrator.scheme, s.output_interval), []).append(s)
+    return [
+        choose_step(requesting_auto(chosen))
+        .describe()
+        .replace(
+            "auto:",
+            f"auto, for the {len(chosen)} {scheme} variants:"
+            if len(groups) > 1
+            else f"auto, for all {len(chosen)} variants:",
+            1,
         )
+        for (scheme, _), chosen in groups.items()
+    ]
+
+
+def sheet_sweep_warnings(summary: object) -> list[str]:
+    """What a sheet sweep warns of: diverged variants, whose metrics are NaN."""
+    gone = summary.loc[summary["diverged"], "variant"].tolist()
+    if not gone:
+        return []
+    return [
+        f"{len(gone)} sheet variant(s) diverged ({', '.join(map(str, gone[:8]))}"
+        f"{' …' if len(gone) > 8 else ''}); their metrics in the summary are NaN, and diverged_time_s, "
+        "diverged_phase and diverged_quantity say when and how"
+    ]
+
+
+def strip_sweep_warnings(summary: object) -> list[str]:
+    """What a strip sweep warns of beyond its last line: nothing (a diverged strip's metrics
+    are measured on what it recorded, and the summary says when it diverged)."""
+    return []
 
 
 def run_sweep_command(args: argparse.Namespace) -> int:
     """Expand the sweep, run its missing batches, report the summary."""
+    from warpcloth import bodies
     from warpcloth.io.writing import claim_result
     from warpcloth.scene.sweep import MAX_VARIANTS, load_sweep
     from warpcloth.sweeps import run_sweep
@@ -84,27 +125,9 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     sweep = load_sweep(
         args.scene, args.overrides, max_variants=args.max_variants or MAX_VARIANTS, progress=not args.no_progress
     )
-    if sweep.kind == "sheet":
-        print_sheet_steps(sweep)
-    groups: dict[tuple[str, float], list] = {}  # one step per scheme and probe interval
-    for s in sweep.strips:
-        if s.integrator.dt_chosen_by == "auto":
-            groups.setdefault((s.integrator.scheme, s.output_interval), []).append(s)
-    if groups:
-        from warpcloth.scene.step import choose_step, requesting_auto
-
-        for (scheme, _), chosen in groups.items():
-            print(
-                choose_step(requesting_auto(chosen))
-                .describe()
-                .replace(
-                    "auto:",
-                    f"auto, for the {len(chosen)} {scheme} variants:"
-                    if len(groups) > 1
-                    else f"auto, for all {len(chosen)} variants:",
-                    1,
-                )
-            )
+    body = bodies.named(sweep.kind)
+    for line in body("sweep_steps", sweep):
+        print(line)
     # claimed as --out here, so a sweep another process is writing is refused naming the option
     claim_result(out, "--out")
     summary = run_sweep(
@@ -118,14 +141,8 @@ def run_sweep_command(args: argparse.Namespace) -> int:
         progress=not args.no_progress,
     )
     n_div = int(summary["diverged"].sum())
-    if n_div and sweep.kind == "sheet":
-        gone = summary.loc[summary["diverged"], "variant"].tolist()
-        print(
-            f"warpcloth sweep: warning: {n_div} sheet variant(s) diverged ({', '.join(map(str, gone[:8]))}"
-            f"{' …' if len(gone) > 8 else ''}); their metrics in the summary are NaN, and diverged_time_s, "
-            "diverged_phase and diverged_quantity say when and how",
-            file=sys.stderr,
-        )
+    for line in body("sweep_warnings", summary):
+        print(f"warpcloth sweep: warning: {line}", file=sys.stderr)
     evenness = (
         ""
         if sweep.discrepancy is None
