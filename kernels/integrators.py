@@ -1,8 +1,9 @@
 """Explicit Euler updates of one free node and the stepping parameters the solver owns
 (docs/model.md §9).
 
-A scheme is a wp.func ``(x, v, f, m, dt) -> (x_new, v_new)``; the strip kernel is
-generated per scheme, so the choice costs no branch inside the substep loop. ``imex``
+A scheme is a wp.func ``(x, v, f, m, dt) -> (x_new, v_new)`` of a node of either body;
+the strip's and the sheet's kernels are generated per scheme, so the choice costs no
+branch inside the substep loop, and a new scheme is one function here for both. ``imex``
 updates nodes as semi-implicit Euler does, with the implicit tension of
 :mod:`.implicit_stretching` added to the forces (:data:`IMPLICIT_STRETCHING`).
 """
@@ -20,9 +21,12 @@ IMPLICIT_STRETCHING = ("imex",)
 
 
 @functools.cache
-def build(scalar: Any) -> SimpleNamespace:
-    """The ``Stepping`` struct and the ``schemes`` (name → node update) for ``scalar``."""
-    vec2 = precision(scalar).vec2
+def build(scalar: Any, dim: int = 2) -> SimpleNamespace:
+    """The strip's ``Stepping`` struct and the ``schemes`` (name → node update) for
+    ``scalar`` and nodes of ``dim`` components (2: a strip's, 3: a sheet's): one node
+    update serves every body."""
+    types = precision(scalar)
+    vec = types.vec2 if dim == 2 else types.vec3
 
     @wp.struct
     class Stepping:
@@ -34,13 +38,13 @@ def build(scalar: Any) -> SimpleNamespace:
         move_steps: int  # steps spent carrying the free end to the hold target
 
     @wp.func
-    def semi_implicit_euler(x: vec2, v: vec2, f: vec2, m: scalar, dt: scalar):
+    def semi_implicit_euler(x: vec, v: vec, f: vec, m: scalar, dt: scalar):
         # Symplectic: the position moves with the updated velocity.
         v_new = v + f * (dt / m)
         return x + v_new * dt, v_new
 
     @wp.func
-    def forward_euler(x: vec2, v: vec2, f: vec2, m: scalar, dt: scalar):
+    def forward_euler(x: vec, v: vec, f: vec, m: scalar, dt: scalar):
         # The paper's eqs. 5-6: the position moves with the old velocity.
         v_new = v + f * (dt / m)
         return x + v * dt, v_new

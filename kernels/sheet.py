@@ -2,8 +2,9 @@
 (docs/model.md §17).
 
 One GPU thread (or CPU task) advances one sheet: its internal forces
-(:mod:`.sheet_forces`), symplectic Euler for every free node under those forces, damping
-and gravity, the clamp's rigid motion in 3D, the work done (the energy budget of §10),
+(:mod:`.sheet_forces`), the node update of its scheme (:mod:`.integrators`, symplectic
+Euler by default) for every free node under those forces, damping, gravity and the
+model's force terms, the clamp's rigid motion in 3D, the work done (the energy budget of §10),
 and the probes, markers and frames at each output step.
 """
 
@@ -13,7 +14,7 @@ from typing import Any
 
 import warp as wp
 
-from . import drives, force_terms, fused, sheet_forces, sheet_structs, tensile
+from . import drives, force_terms, fused, integrators, sheet_forces, sheet_structs, tensile
 from .probe_set import STORED, WORK_AGAINST, WORK_BY, Probe, ProbeSet
 from .status import STATUS_OK
 from .types import precision
@@ -63,8 +64,9 @@ class SheetKernels:
 
 
 @functools.cache
-def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetKernels:
-    """The sheet's types and kernels for ``scalar`` and the model's force ``terms``."""
+def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit") -> SheetKernels:
+    """The sheet's types and kernels for ``scalar``, the model's force ``terms`` and the node
+    update of ``scheme`` (kernels/integrators.py)."""
     types = precision(scalar)
     vec3 = types.vec3
     zero = scalar(0.0)
@@ -94,6 +96,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetKernels:
     drive_work = fused.channel(scalar, tally, SHEET_PROBES.channel("drive_work"))
     internal_force = fused.internal_forces(SheetState)
     applied = force_terms.build(terms, scalar, vec3, tally, sheet_structs.SHEET_CHANNELS)
+    update_node = integrators.build(scalar, 3).schemes[scheme]
 
     @wp.struct
     class SheetProbeSettings:
@@ -157,12 +160,12 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetKernels:
             f = internal_force(state, i, s) + f_damp + m * g
             if wp.static(applied.present):
                 f = f + applied.force(x, v, m)
-            v_new = v + f * (dt / m)
+            x_new, v_new = update_node(x, v, f, m, dt)
             sweep = (v + v_new) * (half * dt)
             work = work + work_on(state, i, s, sweep) + damping_work(-wp.dot(f_damp, sweep))
             if wp.static(applied.present):
                 work = work + applied.work(x, v, m, sweep)
-            state.position[i, s] = x + v_new * dt
+            state.position[i, s] = x_new
             state.velocity[i, s] = v_new
         return work
 

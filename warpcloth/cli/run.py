@@ -6,15 +6,12 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from warpcloth import bodies
 from warpcloth.core.result import RunResult
 from warpcloth.errors import DivergenceError
 from warpcloth.metrics import swing_summary
-from warpcloth.runs import sheet_result_metrics, simulate
+from warpcloth.runs import simulate
 from warpcloth.scene import Scene, bundled_scenes, load_scene
-from warpcloth.scene.sheet import SheetScene
 
 from .options import device, new_result, path_text
 
@@ -96,31 +93,4 @@ def strip_summary(scene: Scene, result: RunResult) -> list[str]:
             f"{summary['n_half_cycles']} half-cycle(s) of the {summary['signal']} signal; a period needs two "
             "(run longer: run.duration_s)"
         )
-    return lines
-
-
-def sheet_summary(scene: SheetScene, result: RunResult) -> list[str]:
-    """What ``run`` prints of a sheet run (:func:`~warpcloth.metrics.sheet_metrics`, as a
-    sheet sweep's summary holds it): its throughput; each marker's peak displacement from
-    its start, sideways (z) and out of the plane (x), in mm; the probed cell's peak shear
-    angle (°); the energy budget's largest drift against the work the clamp did."""
-    metrics = sheet_result_metrics(scene, result, 0)
-    lines = [
-        f"{result.node_steps:.3g} node-steps in {result.wall_time_s:.2f} s "
-        f"({result.node_steps / result.wall_time_s:.3g} node-steps/s)"
-    ]
-    start = result.markers[0, 0]
-    for k in range(result.markers.shape[2]):
-        m = {name: metrics[f"marker_{k}_{name}"] for name in ("peak_z_mm", "peak_z_against_clamp_mm", "peak_x_mm")}
-        lines.append(
-            f"marker {k} (at y = {round(start[k, 1] * 1e3, 1) + 0.0:.1f} mm, "
-            f"z = {round(start[k, 2] * 1e3, 1) + 0.0:.1f} mm at t = 0): "
-            f"peak sideways (z) {m['peak_z_mm']:.3f} mm ({m['peak_z_against_clamp_mm']:.3f} mm against the "
-            f"clamp), out of plane (x) {m['peak_x_mm']:.3f} mm"
-        )
-    lines.append(f"probed cell: peak shear angle {metrics['peak_shear_angle_deg']:.4f}°")
-    drift, relative = metrics["energy_drift_J"], metrics["energy_drift_relative"]
-    scale = float(np.nanmax(np.abs(result.probe("drive_work", 0))))
-    part = f" ({relative:.2g} of the clamp's work {scale:.3g} J)" if np.isfinite(relative) else ""
-    lines.append(f"energy budget: largest drift {drift:.3g} J{part}")
     return lines

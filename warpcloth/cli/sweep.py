@@ -58,22 +58,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p.set_defaults(handler=run_sweep_command)
 
 
-def sheet_sweep_steps(sweep: Sweep) -> list[str]:
-    """The step each group of a sheet sweep's variants runs at, where ``dt_s = "auto"`` chose it."""
-    from warpcloth.scene.sheet import AUTO_FRACTION
-
-    steps: dict[float, int] = {}
-    for scene in sweep.scenes:
-        if scene.integrator.dt_chosen_by == "auto":
-            steps[scene.integrator.dt_s] = steps.get(scene.integrator.dt_s, 0) + 1
-    return [
-        f"integrator.dt_s = auto, for {count} of the {len(sweep.scenes)} variants: {dt:.4e} s (the shortest "
-        f"of theirs: {AUTO_FRACTION:g} of the variant's linearised stability estimate, a whole fraction of "
-        "the probe interval)"
-        for dt, count in sorted(steps.items())
-    ]
-
-
 def strip_sweep_steps(sweep: Sweep) -> list[str]:
     """The step each scheme and probe interval of a strip sweep runs at, where ``dt_s = "auto"`` chose it."""
     from warpcloth.scene.step import choose_step, requesting_auto
@@ -93,18 +77,6 @@ def strip_sweep_steps(sweep: Sweep) -> list[str]:
             1,
         )
         for (scheme, _), chosen in groups.items()
-    ]
-
-
-def sheet_sweep_warnings(summary: object) -> list[str]:
-    """What a sheet sweep warns of: diverged variants, whose metrics are NaN."""
-    gone = summary.loc[summary["diverged"], "variant"].tolist()
-    if not gone:
-        return []
-    return [
-        f"{len(gone)} sheet variant(s) diverged ({', '.join(map(str, gone[:8]))}"
-        f"{' …' if len(gone) > 8 else ''}); their metrics in the summary are NaN, and diverged_time_s, "
-        "diverged_phase and diverged_quantity say when and how"
     ]
 
 

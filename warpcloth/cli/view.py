@@ -115,33 +115,9 @@ def strip_usd_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def sheet_usd_command(args: argparse.Namespace) -> int:
-    """``export-usd`` of a sheet run: the sheet as an animated mesh."""
-    from warpcloth.io.sheet_run_dir import read_sheet_run
-    from warpcloth.viz.usd import export_sheet_usd
-
-    refuse_strip_options(args, ("variants", "where", "ribbon", "frames_per_clip"))
-    run = read_sheet_run(args.run_dir)
-    out = export_sheet_usd(run, new_result(args.output, args.overwrite, "-o"))
-    print(f"wrote {out} (a sheet of {run.meta['n_nodes']} nodes, {len(run.frame_times)} frames)")
-    return 0
-
-
 def plot_command(args: argparse.Namespace) -> int:
     """Figures of a run, or one sweep metric against parameters (its body's way)."""
     return bodies.of_run(args.run_dir)("plot_command", args)
-
-
-def sheet_plot_command(args: argparse.Namespace) -> int:
-    """``plot`` of a sheet run: its markers, shear and energy figures."""
-    from warpcloth.io.sheet_run_dir import read_sheet_run
-    from warpcloth.viz.figures.sheet import plot_sheet_run
-
-    refuse_strip_options(args, ("variants", "where", "measured", "t_from", "t_to", "times", "metric", "x", "y"))
-    out = new_result(args.out or Path(args.run_dir) / "figures", args.overwrite, "--out")
-    for path in plot_sheet_run(read_sheet_run(args.run_dir).samples(), out, fmt=args.format, dpi=args.dpi):
-        print(f"wrote {path}")
-    return 0
 
 
 def strip_plot_command(args: argparse.Namespace) -> int:
@@ -207,8 +183,8 @@ def render_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def _render_target(args: argparse.Namespace) -> tuple[Path, str | None]:
-    # where the frames go, and the animation asked for
+def render_target(args: argparse.Namespace) -> tuple[Path, str | None]:
+    """Where ``render`` writes (``--out``, made new) and the animation it was asked for."""
     out = new_result(args.out or Path(args.run_dir) / "render", args.overwrite, "--out")
     return out, None if args.movie == "none" else args.movie
 
@@ -219,19 +195,8 @@ def strip_render(args: argparse.Namespace) -> list[Path]:
     from warpcloth.viz.render import render_run
 
     recording = load_recording(args.run_dir, args.variants, args.where)
-    out, movie = _render_target(args)
+    out, movie = render_target(args)
     return render_run(recording, out, times=args.times, movie=movie, stride=args.stride)
-
-
-def sheet_render(args: argparse.Namespace) -> list[Path]:
-    """``render`` of a sheet run: the sheet's mesh."""
-    from warpcloth.io.sheet_run_dir import read_sheet_run
-    from warpcloth.viz.render import render_sheet_run
-
-    refuse_strip_options(args, ("variants", "where"))
-    run = read_sheet_run(args.run_dir)
-    out, movie = _render_target(args)
-    return render_sheet_run(run, out, times=args.times, movie=movie, stride=args.stride)
 
 
 def refuse_strip_options(args: argparse.Namespace, names: tuple[str, ...]) -> None:

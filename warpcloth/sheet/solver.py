@@ -12,6 +12,7 @@ import warp as wp
 from warpcloth.core.divergence import sample_lost
 from warpcloth.core.solver import FusedSolver
 from warpcloth.kernels import STATUS_BUDGET, STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_STRAIN
+from warpcloth.kernels import sheet as sheet_kernels
 from warpcloth.kernels.status import STATUS_CELL_COLLAPSED
 
 from .model import SheetControl, SheetModel, SheetState
@@ -83,13 +84,15 @@ class SheetSolver(FusedSolver):
     """
 
     label = "symplectic Euler"
+    scheme = "semi_implicit"
+    """The node update (kernels/integrators.py); a subclass names another."""
     bodies_per_thread = SHEETS_PER_THREAD
 
     def __init__(
         self, model: SheetModel, dt: float, divergence_strain: float = 0.25, divergence_shear: float = math.radians(60)
     ) -> None:
         super().__init__(model, dt)
-        self.kernel = model.kernels.advance
+        self.kernel = sheet_kernels.build(model.scalar, model.terms, self.scheme).advance
         self.divergence_strain = float(divergence_strain)
         self.divergence_shear = float(divergence_shear)
 
