@@ -32,9 +32,9 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 from sheet_throughput import sheet_rate
-from warpcloth.strip.runner import available_cores
 
 import warpcloth as wc
+from warpcloth.core.runner import available_cores
 from warpcloth.strip.model import init_warp_quietly
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -33,10 +33,10 @@ import platform
 
 import numpy as np
 import warp as wp
-from warpcloth.strip.runner import available_cores
 
 import warpcloth as wc
 from warpcloth import units
+from warpcloth.core.runner import available_cores
 from warpcloth.scene import ShearMaterial, build_batch
 from warpcloth.sheet import (
     SheetBuilder,
