@@ -38,6 +38,20 @@ def simulate(scenes: Any, **options: Any) -> RunResult:
     return bodies.of_scenes(batch)("simulate", batch, **options)
 
 
+def batch_of(scenes: Any, scene_type: type, body: str) -> list:
+    """``scenes`` (one, or a sequence) as a non-empty list of ``scene_type``, or an error
+    naming ``scenes``: what the body's ``simulate`` takes."""
+    batch = [scenes] if isinstance(scenes, scene_type) else list(scenes)
+    if not batch:
+        raise ArgumentError("scenes", "simulate needs at least one scene")
+    wrong = next((s for s in batch if not isinstance(s, scene_type)), None)
+    if wrong is not None:
+        raise ArgumentTypeError(
+            "scenes", f"simulate_{body}s takes {body} scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}"
+        )
+    return batch
+
+
 def simulate_strips(
     scenes: Scene | Sequence[Scene],
     *,
@@ -65,14 +79,7 @@ def simulate_strips(
     (default: every core this process may use; the results are bitwise the same for any
     count).
     """
-    scenes = [scenes] if isinstance(scenes, Scene) else list(scenes)
-    if not scenes:
-        raise ArgumentError("scenes", "simulate needs at least one scene")
-    wrong = next((s for s in scenes if not isinstance(s, Scene)), None)
-    if wrong is not None:
-        raise ArgumentTypeError(
-            "scenes", f"simulate_strips takes strip scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}"
-        )
+    scenes = batch_of(scenes, Scene, "strip")
     check_divergence_policy(on_divergence)  # before the batch is built and its hinges set
     scenes = shared_auto_step(scenes)
     if initial_velocities is not None and initial_positions is None:
@@ -133,14 +140,7 @@ def simulate_sheets(
     from .io.sheet_run_dir import SheetRunWriter
     from .scene.sheet_build import build_sheets
 
-    scenes = [scenes] if isinstance(scenes, SheetScene) else list(scenes)
-    if not scenes:
-        raise ArgumentError("scenes", "simulate needs at least one scene")
-    wrong = next((s for s in scenes if not isinstance(s, SheetScene)), None)
-    if wrong is not None:
-        raise ArgumentTypeError(
-            "scenes", f"simulate_sheets takes sheet scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}"
-        )
+    scenes = batch_of(scenes, SheetScene, "sheet")
     check_divergence_policy(on_divergence)
     if out is not None:
         check_output_directory(out, overwrite)
