@@ -17,6 +17,7 @@ sorted by law).
 import functools
 from dataclasses import dataclass
 from importlib.metadata import entry_points
+from types import SimpleNamespace
 from typing import Any
 
 import warp as wp
@@ -169,39 +170,49 @@ def build(scalar: Any) -> LawDispatch:
     def law_of(p: Parameters):
         return int(p[LAW_SLOT])
 
-    # One branch per law, unrolled at code generation; an index past the list (which the
-    # packing never writes) falls back to the first law.
-    @wp.func
-    def fresh_memory(curvature: scalar, p: Parameters, history: History, hinge: int, strip: int):
-        law = law_of(p)
-        for i in range(wp.static(len(functions))):
-            if law == i:
-                return wp.static(functions[i].fresh_memory)(curvature, p, history, hinge, strip)
-        return wp.static(functions[0].fresh_memory)(curvature, p, history, hinge, strip)
+    def dispatch(index: int) -> SimpleNamespace:
+        # One function per law and method, each naming its law's own and the next law's
+        # dispatch (Warp hashes the functions a function names, not those a loop's
+        # wp.static picks, so an edited law never loads a stale cached kernel); an index
+        # past the list (which the packing never writes) falls back to the first law.
+        head = functions[index]
+        rest = dispatch(index + 1) if index + 1 < len(functions) else functions[0]
+        head_fresh, rest_fresh = head.fresh_memory, rest.fresh_memory
+        head_follow, rest_follow = head.follow, rest.follow
+        head_hysteretic, rest_hysteretic = head.hysteretic_moment, rest.hysteretic_moment
+        head_tangent, rest_tangent = head.tangent, rest.tangent
 
-    @wp.func
-    def follow(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
-        law = law_of(p)
-        for i in range(wp.static(len(functions))):
-            if law == i:
-                return wp.static(functions[i].follow)(curvature, memory, p, history, hinge, strip)
-        return wp.static(functions[0].follow)(curvature, memory, p, history, hinge, strip)
+        @wp.func
+        def fresh_memory(curvature: scalar, p: Parameters, history: History, hinge: int, strip: int):
+            if law_of(p) == wp.static(index):
+                return head_fresh(curvature, p, history, hinge, strip)
+            return rest_fresh(curvature, p, history, hinge, strip)
 
-    @wp.func
-    def hysteretic_moment(curvature: scalar, memory: Memory, p: Parameters):
-        law = law_of(p)
-        for i in range(wp.static(len(functions))):
-            if law == i:
-                return wp.static(functions[i].hysteretic_moment)(curvature, memory, p)
-        return wp.static(functions[0].hysteretic_moment)(curvature, memory, p)
+        @wp.func
+        def follow(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
+            if law_of(p) == wp.static(index):
+                return head_follow(curvature, memory, p, history, hinge, strip)
+            return rest_follow(curvature, memory, p, history, hinge, strip)
 
-    @wp.func
-    def tangent(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
-        law = law_of(p)
-        for i in range(wp.static(len(functions))):
-            if law == i:
-                return wp.static(functions[i].tangent)(curvature, memory, p, history, hinge, strip)
-        return wp.static(functions[0].tangent)(curvature, memory, p, history, hinge, strip)
+        @wp.func
+        def hysteretic_moment(curvature: scalar, memory: Memory, p: Parameters):
+            if law_of(p) == wp.static(index):
+                return head_hysteretic(curvature, memory, p)
+            return rest_hysteretic(curvature, memory, p)
+
+        @wp.func
+        def tangent(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
+            if law_of(p) == wp.static(index):
+                return head_tangent(curvature, memory, p, history, hinge, strip)
+            return rest_tangent(curvature, memory, p, history, hinge, strip)
+
+        return SimpleNamespace(
+            fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment, tangent=tangent
+        )
+
+    chain = dispatch(0)
+    fresh_memory, follow = chain.fresh_memory, chain.follow
+    hysteretic_moment, tangent = chain.hysteretic_moment, chain.tangent
 
     @wp.func
     def elastic_moment(curvature: scalar, p: Parameters):

@@ -204,3 +204,30 @@ def test_each_force_term_compiles_to_a_kernel_of_its_own():
     configurations = [(), (LinearDrag(2.0),), (RigidFloor(-0.095, 2e3),), (RigidFloor(-0.095, 1e4),)]
     hashes = {build_strip(wp.float64, "semi_implicit", t).advance.module.hash_module() for t in configurations}
     assert len(hashes) == len(configurations)
+
+
+def test_an_edited_law_changes_the_kernels_hash(monkeypatch):
+    """The laws' dispatch names each law's functions (kernels/laws.py), so Warp's kernel
+    hash, and with it the kernel cache, sees a change to any law, not only the first: a
+    loop's wp.static lookup, which the dispatch used before, is not hashed."""
+    import dataclasses
+
+    import warp as wp
+    from warpcloth.kernels import laws
+
+    def follow_hash(law_list):
+        monkeypatch.setattr(laws, "LAWS", law_list)
+        dispatch = laws.build.__wrapped__(wp.float64)  # past the cache: a dispatch of these laws
+        Parameters, Memory, History = dispatch.Parameters, dispatch.Memory, dispatch.History
+        follow = dispatch.follow
+
+        @wp.kernel(module="unique")
+        def probe(p: wp.array(dtype=Parameters), m: wp.array(dtype=Memory), history: History):
+            m[0] = follow(wp.float64(1.0), m[0], p[0], history, 0, 0)
+
+        return probe.module.hash_module()
+
+    original = laws.LAWS
+    # the last law built as the first one is: same count, same names, other code
+    edited = (*original[:-1], dataclasses.replace(original[-1], build=original[0].build))
+    assert follow_hash(original) != follow_hash(edited)
