@@ -13,9 +13,11 @@ from warpcloth.scene import scene_from_dict
 
 from .options import (
     EXIT_FIT_STATUS,
+    add_device,
+    add_no_progress,
+    add_overrides,
     add_overwrite,
     at_least,
-    device,
     figure_path,
     new_result,
     non_negative,
@@ -57,14 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="SECONDS",
         help="also fit a clock offset between measurement and simulation, within ± this (default: 0, the clocks agree)",
     )
-    fit_p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a field of the scene first",
-    )
+    add_overrides(fit_p, "a field of the scene first")
     fit_p.add_argument("--out", type=path_text, help="fit directory (default: runs/fit-<scene name>)")
     fit_p.add_argument(
         "--space-filling",
@@ -98,8 +93,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "share in σ); such values are the mesh's as much as the fabric's: status spacing_limited (exit 9)",
     )
     fit_p.add_argument("--check-spacing", action="store_true", help=argparse.SUPPRESS)  # gone: said so below
-    fit_p.add_argument("--device", type=device, default=None, help="cpu or cuda (default: Warp's preferred device)")
-    fit_p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_device(fit_p)
+    add_no_progress(fit_p)
     add_overwrite(fit_p, "fit directory --out")
     clamp_p = sub.add_parser("clamp", help="clamp motion tools")
     clamp_sub = clamp_p.add_subparsers(dest="clamp_command", required=True)

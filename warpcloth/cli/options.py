@@ -84,6 +84,25 @@ def at_least(minimum: int) -> Callable[[str], int]:
     return parse
 
 
+def add_overrides(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--set KEY=VALUE`` (repeatable, into ``overrides``): override ``what``'s fields."""
+    parser.add_argument(
+        "--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE", help=f"override {what}"
+    )
+
+
+def add_device(parser: argparse.ArgumentParser, where: str = "") -> None:
+    """``--device``: the Warp device to run on (``where`` says on what, e.g. every worker)."""
+    parser.add_argument(
+        "--device", type=device, default=None, help=f"cpu or cuda{where} (default: Warp's preferred device)"
+    )
+
+
+def add_no_progress(parser: argparse.ArgumentParser) -> None:
+    """``--no-progress``: no progress bar."""
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
 def add_overwrite(parser: argparse.ArgumentParser, what: str) -> None:
     """``--overwrite``: replace an existing ``what`` (default: refuse it)."""
     parser.add_argument("--overwrite", action="store_true", help=f"replace an existing {what} (default: refuse)")

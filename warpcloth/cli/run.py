@@ -13,7 +13,7 @@ from warpcloth.metrics import swing_summary
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, bundled_scenes, load_scene
 
-from .options import device, new_result, path_text
+from .options import add_device, add_no_progress, add_overrides, add_overwrite, new_result, path_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -21,22 +21,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     run_p = sub.add_parser("run", help="simulate a scene and write a run directory")
     run_p.add_argument("scene", help=f"scene file, or a bundled scene: {', '.join(bundled_scenes())}")
     run_p.add_argument("--out", type=path_text, help="run directory (default: runs/<scene name>)")
-    run_p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scene field by dotted name, e.g. integrator.dt_s=1e-7",
-    )
-    run_p.add_argument("--device", type=device, default=None, help="cpu or cuda (default: Warp's preferred device)")
-    run_p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_overrides(run_p, "a scene field by dotted name, e.g. integrator.dt_s=1e-7")
+    add_device(run_p)
+    add_no_progress(run_p)
     run_p.add_argument("--usd", metavar="FILE", help="also export the run as a USD stage (.usd, .usda or .usdc)")
-    run_p.add_argument(
-        "--overwrite",
-        action="store_true",
-        help="replace what --out holds, once the new run is complete (default: refuse)",
-    )
+    add_overwrite(run_p, "--out, once the new run is complete")
     run_p.set_defaults(handler=run_scene)
 
 

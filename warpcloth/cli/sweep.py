@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from warpcloth.scene import Sweep
 
-from .options import at_least, device, path_text
+from .options import add_device, add_no_progress, add_overrides, at_least, path_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -18,14 +18,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     sweep_p = sub.add_parser("sweep", help="run (or resume) the [sweep] of a scene into a sweep directory")
     sweep_p.add_argument("scene", help="scene file with a [sweep] section, or a bundled one")
     sweep_p.add_argument("--out", type=path_text, help="sweep directory (default: runs/<scene name>); rerun to resume")
-    sweep_p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a field of the base scene",
-    )
+    add_overrides(sweep_p, "a field of the base scene")
     sweep_p.add_argument(
         "--max-batch",
         type=at_least(1),
@@ -44,9 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=None,
         help="address of a running Dask scheduler to use instead (default: none, threads in this process)",
     )
-    sweep_p.add_argument(
-        "--device", type=device, default=None, help="cpu or cuda, on every worker (default: Warp's preferred device)"
-    )
+    add_device(sweep_p, ", on every worker")
     sweep_p.add_argument("--frames", action="store_true", help="also store shape frames (large)")
     sweep_p.add_argument(
         "--max-variants",
@@ -54,7 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=None,
         help="refuse a sweep of more variants than this (default: 100000)",
     )
-    sweep_p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_no_progress(sweep_p)
     sweep_p.set_defaults(handler=run_sweep_command)
 
 

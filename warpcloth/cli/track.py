@@ -11,7 +11,7 @@ import numpy as np
 
 from warpcloth.errors import OptionError
 
-from .options import add_overwrite, at_least, figure_path, new_result, path_text, positive
+from .options import add_no_progress, add_overwrite, at_least, figure_path, new_result, path_text, positive
 
 SUBCOMMANDS = ("calibrate", "video")
 
@@ -120,7 +120,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     vid.add_argument(
         "--overlay-frame", type=at_least(0), default=None, help="the frame the overlay shows (default: the middle one)"
     )
-    vid.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_no_progress(vid)
     add_overwrite(vid, "output file -o (and --overlay, --overlay-video)")
 
 
