@@ -20,6 +20,8 @@ from typing import Any
 
 HOOKS = {
     "scene_type": "the body's scene class",
+    "own_sections": "raw scene data → the sections and fields only this body has (a file without its table "
+    "that gives them is refused)",
     "scene_from_dict": "raw scene data → a validated scene (data, choose_step=True)",
     "check_scene": "a validated scene → the scene checked runnable (its step within the stability bound)",
     "sweep_variant": "raw data of one sweep variant → its scene, the step not yet chosen",
@@ -77,6 +79,7 @@ BODIES: dict[str, Body] = {
         "strip-steps",
         {
             "scene_type": "warpcloth.scene.schema:Scene",
+            "own_sections": "warpcloth.scene.files:strip_sections",
             "scene_from_dict": "warpcloth.scene.files:strip_scene_from_dict",
             "check_scene": "warpcloth.scene.step:checked_step",
             "sweep_variant": "warpcloth.scene.sweep:strip_variant",
@@ -108,10 +111,11 @@ BODIES: dict[str, Body] = {
         "node-steps",
         {
             "scene_type": "warpcloth.scene.sheet:SheetScene",
+            "own_sections": "warpcloth.scene.sheet:sheet_sections",
             "scene_from_dict": "warpcloth.scene.sheet:sheet_scene_from_dict",
             "check_scene": "warpcloth.scene.sheet_build:check_sheet_scene",
             "sweep_variant": "warpcloth.scene.sheet:sheet_scene_from_dict",
-            "sweep_ready": "warpcloth.scene.sweep:sheet_variants",
+            "sweep_ready": "warpcloth.scene.sheet_build:sheet_variants",
             "batch_key": "warpcloth.scene.sheet_build:sheet_batch_key",
             "build": "warpcloth.scene.sheet_build:build_sheets",
             "simulate": "warpcloth.runs:simulate_sheets",
@@ -147,10 +151,32 @@ def named(name: str) -> Body:
     return BODIES[name]
 
 
+DEFAULT = "strip"
+"""The body of a scene that names none: a file without a body's table is a strip with the
+default geometry (an empty file is the documented defaults)."""
+
+
 def of_data(data: dict, where: str = "the scene") -> Body:
-    """The body raw scene ``data`` describes (by its table: [strip] or [sheet]; a
-    SceneError, naming ``where``, when that is ambiguous)."""
-    return named(_resolve("warpcloth.scene.sheet:scene_kind")(data, where))
+    """The body raw scene ``data`` describes: the one whose table (its name: [strip],
+    [sheet]) it has. Two tables, or none in a file that gives another body's own sections,
+    is a SceneError naming ``where``."""
+    from warpcloth.errors import SceneError
+
+    tables = [name for name in BODIES if name in data]
+    if len(tables) > 1:
+        both = " and ".join(f"[{t}]" for t in tables)
+        raise SceneError(tables[-1], f"{where} has both {both}; a scene is one {' or one '.join(tables)}")
+    if tables:
+        return BODIES[tables[0]]
+    for body in BODIES.values():
+        own = body("own_sections", data) if body.name != DEFAULT else []
+        if own:
+            raise SceneError(
+                body.name,
+                f"{where} has neither [{DEFAULT}] nor [{body.name}], but gives {', '.join(own)}, which only a "
+                f"{body.name} scene has; add a [{body.name}] table (or a [{DEFAULT}] one and the {DEFAULT}'s fields)",
+            )
+    return BODIES[DEFAULT]
 
 
 def of_scene(scene: object) -> Body:

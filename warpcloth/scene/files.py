@@ -100,6 +100,12 @@ def read_scene_file(name_or_path: str | Path) -> dict:
     return _read_scene(name_or_path)[0]
 
 
+def strip_sections(data: dict) -> list[str]:
+    """The sections only a strip has: none that a file without [strip] could give (a
+    scene without a body's table is a strip with the default geometry)."""
+    return []
+
+
 def strip_scene_from_dict(data: dict, choose_step: bool = True) -> Scene:
     """Parse and validate raw strip-scene data.
 

@@ -84,3 +84,9 @@ def located(error: SceneError, text: str | None, source: str, overrides: Overrid
     if where is None:
         return error
     return SceneError(error.field, f"{error.message} ({where})", error.related, error.variant)
+
+
+def variant_error(error: SceneError, variant: int, assignment: dict) -> SceneError:
+    """``error`` of sweep variant ``variant``, saying which values it was given."""
+    what = ", ".join(f"{k}={v!r}" for k, v in assignment.items())
+    return SceneError(error.field, f"in sweep variant {variant} ({what}): {error.message}", error.related, variant)

@@ -225,27 +225,15 @@ class SheetScene:
 SHEET_SECTIONS = tuple(f.name for f in dataclasses.fields(SheetScene))
 
 
-def scene_kind(data: dict, where: str = "the scene") -> str:
-    """``"strip"`` or ``"sheet"``: which table raw scene ``data`` has. Both is a SceneError;
-    so is neither in a file that gives a sheet's own tables or clamp fields ([weft],
-    [shear], clamp.rotation_segments, ...), which without [sheet] would be read as a
-    strip's and refused field by field. Neither otherwise is a strip with the default
-    geometry (an empty file is the documented defaults)."""
-    if "strip" in data and "sheet" in data:
-        raise SceneError("sheet", f"{where} has both [strip] and [sheet]; a scene is one strip or one sheet")
-    if "sheet" in data:
-        return "sheet"
+def sheet_sections(data: dict) -> list[str]:
+    """The sections and fields of raw scene ``data`` that only a sheet has ([weft], [shear],
+    clamp.rotation_segments, ...): a file without a [sheet] table that gives them is
+    refused by :func:`warpcloth.bodies.of_data` (read as a strip's, they would be refused
+    field by field)."""
     clamp = data.get("clamp")
     strip_clamp = {f.name for f in dataclasses.fields(ClampSection)}
     own = [f"[{t}]" for t in (WEFT_TABLE, SHEAR_TABLE) if t in data]
-    own += [f"clamp.{k}" for k in (clamp if isinstance(clamp, dict) else {}) if k not in strip_clamp]
-    if "strip" not in data and own:
-        raise SceneError(
-            "sheet",
-            f"{where} has neither [strip] nor [sheet], but gives {', '.join(own)}, which only a sheet "
-            "scene has; add a [sheet] table (or a [strip] one and the strip's fields)",
-        )
-    return "strip"
+    return own + [f"clamp.{k}" for k in (clamp if isinstance(clamp, dict) else {}) if k not in strip_clamp]
 
 
 def _complete(table: dict, law_key: str = "bending_law") -> bool:
@@ -290,7 +278,7 @@ def sheet_scene_from_dict(data: dict) -> SheetScene:
     [weft] and [shear]); ``dt_s = "auto"`` stays a word until :func:`~warpcloth.scene.sheet_build.check_sheet_scene`."""
     if not isinstance(data, dict):
         raise SceneError("scene", f"expected a table, got {data!r}")
-    if scene_kind(data) != "sheet":
+    if "sheet" not in data:
         raise SceneError("sheet", "is missing: this is a strip scene (warpcloth.load_scene reads it)")
     data = _with_sheet_material(data)
     shear = data.pop(SHEAR_TABLE, None)

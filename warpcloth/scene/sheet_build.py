@@ -11,6 +11,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -34,7 +35,7 @@ from warpcloth.strip import ClampMotion
 
 from .clamp_motion import segment_pieces
 from .files import _read_scene
-from .locate import located
+from .locate import located, variant_error
 from .materials import to_si
 from .overrides import Overrides, apply_overrides
 from .sheet import AUTO, AUTO_FRACTION, SheetScene, SheetSection, sheet_scene_from_dict
@@ -321,3 +322,27 @@ def build_sheets(scenes: Sequence[SheetScene], device: str | None = None, terms:
         probe_hinge=hinge,
     )
     return SheetBatch(model, model.control(), solver, recorder)
+
+
+def sheet_variants(scenes: list, assignments: list[dict[str, Any]]) -> list[SheetScene]:
+    """The sheet variants ready to run: each checked (markers, memory, its step within its
+    own stability estimate); those that ask auto for their step share the shortest any of
+    them gets alone among the variants that may share a batch, so a batch has one step
+    that suits every sheet (each alone: a whole fraction of the probe interval, so the
+    shortest is one too)."""
+    checked = []
+    for i, scene in enumerate(scenes):
+        try:
+            checked.append(check_sheet_scene(scene))
+        except SceneError as exc:
+            raise variant_error(exc, i, assignments[i]) from exc
+    shortest: dict[str, float] = {}
+    for asked, scene in zip(scenes, checked, strict=True):
+        if asked.integrator.dt_s == AUTO:
+            key = sheet_batch_key(scene, with_step=False)
+            shortest[key] = min(shortest.get(key, math.inf), scene.integrator.dt_s)
+    for i, (asked, scene) in enumerate(zip(scenes, checked, strict=True)):
+        if asked.integrator.dt_s == AUTO:
+            integrator = dataclasses.replace(scene.integrator, dt_s=shortest[sheet_batch_key(scene, with_step=False)])
+            checked[i] = dataclasses.replace(scene, integrator=integrator)
+    return checked

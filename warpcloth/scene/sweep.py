@@ -28,7 +28,6 @@ are :class:`~warpcloth.scene.sheet.SheetScene` objects, each checked by
 from __future__ import annotations
 
 import copy
-import dataclasses
 import hashlib
 import itertools
 import json
@@ -46,13 +45,11 @@ from warpcloth.errors import ArgumentError, SceneError
 
 from .files import read_scene_file, scene_source, strip_scene_from_dict
 from .keys import is_material_file_key, key_path, key_path_or_none, overlaps
-from .locate import located
+from .locate import located, variant_error
 from .overrides import apply_overrides, set_field
 from .sampling import discrepancy, latin_hypercube
 from .schema import Scene, batch_fields
 from .sheet import SheetScene
-from .sheet_build import check_sheet_scene, sheet_batch_key
-from .step import AUTO as AUTO_STEP
 from .step import check_step, with_chosen_step
 
 MAX_VARIANTS = 100_000
@@ -83,30 +80,6 @@ def strip_variants(scenes: list, assignments: list[dict[str, Any]]) -> list[Scen
     """The strip variants ready to run: one step for every variant that asks auto for one
     (checked by :func:`load_sweep` before a run)."""
     return with_chosen_step(scenes)
-
-
-def sheet_variants(scenes: list, assignments: list[dict[str, Any]]) -> list[SheetScene]:
-    """The sheet variants ready to run: each checked (markers, memory, its step within its
-    own stability estimate); those that ask auto for their step share the shortest any of
-    them gets alone among the variants that may share a batch, so a batch has one step
-    that suits every sheet (each alone: a whole fraction of the probe interval, so the
-    shortest is one too)."""
-    checked = []
-    for i, scene in enumerate(scenes):
-        try:
-            checked.append(check_sheet_scene(scene))
-        except SceneError as exc:
-            raise variant_error(exc, i, assignments[i]) from exc
-    shortest: dict[str, float] = {}
-    for asked, scene in zip(scenes, checked, strict=True):
-        if asked.integrator.dt_s == AUTO_STEP:
-            key = sheet_batch_key(scene, with_step=False)
-            shortest[key] = min(shortest.get(key, math.inf), scene.integrator.dt_s)
-    for i, (asked, scene) in enumerate(zip(scenes, checked, strict=True)):
-        if asked.integrator.dt_s == AUTO_STEP:
-            integrator = dataclasses.replace(scene.integrator, dt_s=shortest[sheet_batch_key(scene, with_step=False)])
-            checked[i] = dataclasses.replace(scene, integrator=integrator)
-    return checked
 
 
 @dataclass
@@ -253,12 +226,6 @@ def _random_block(spec: dict) -> RandomBlock:
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise SceneError("sweep.seed", f"expected a non-negative integer, got {seed!r}")
     return RandomBlock(list(ranges), bounds, samples, method, seed)
-
-
-def variant_error(error: SceneError, variant: int, assignment: dict) -> SceneError:
-    """``error`` of sweep variant ``variant``, saying which values it was given."""
-    what = ", ".join(f"{k}={v!r}" for k, v in assignment.items())
-    return SceneError(error.field, f"in sweep variant {variant} ({what}): {error.message}", error.related, variant)
 
 
 def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) -> Sweep:
