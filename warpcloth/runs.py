@@ -29,7 +29,7 @@ def simulate(scenes: Any, **options: Any) -> RunResult:
     """Run one batch of scenes of either body (one scene per variant; a strip's
     :class:`~warpcloth.scene.Scene` or a sheet's :class:`~warpcloth.scene.sheet.SheetScene`,
     :func:`~warpcloth.scene.load_scene` makes either) and return what it recorded. The
-    options are the body's: :func:`simulate_strips` and :func:`simulate_sheets` list them
+    options are the body's: :func:`simulate_strip_scenes` and :func:`simulate_sheet_scenes` list them
     (``device``, ``out``, ``progress``, ``on_divergence``, ``keep_frames``, ``overwrite``,
     ``threads``; strips also take initial positions and velocities)."""
     batch = [scenes] if not isinstance(scenes, Sequence) else list(scenes)
@@ -47,12 +47,13 @@ def batch_of(scenes: Any, scene_type: type, body: str) -> list:
     wrong = next((s for s in batch if not isinstance(s, scene_type)), None)
     if wrong is not None:
         raise ArgumentTypeError(
-            "scenes", f"simulate_{body}s takes {body} scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}"
+            "scenes",
+            f"simulate_{body}_scenes takes {body} scenes (wc.load_scene(name_or_path) makes one), got {wrong!r}",
         )
     return batch
 
 
-def simulate_strips(
+def simulate_strip_scenes(
     scenes: Scene | Sequence[Scene],
     *,
     device: str | None = None,
@@ -120,7 +121,7 @@ def simulate_strips(
     )
 
 
-def simulate_sheets(
+def simulate_sheet_scenes(
     scenes: SheetScene | Sequence[SheetScene],
     *,
     device: str | None = None,
@@ -136,7 +137,7 @@ def simulate_sheets(
     and return what it recorded; ``out`` streams the sheet run directory
     (:mod:`warpcloth.io.sheet_run_dir`), with the strip's refusal of an existing result
     unless ``overwrite``, which replaces it only once the new run is complete. The other
-    options are :func:`simulate_strips`'."""
+    options are :func:`simulate_strip_scenes`'."""
     from .io.sheet_run_dir import SheetRunWriter
     from .scene.sheet_build import build_sheets
 

@@ -5,7 +5,7 @@ Each strip's result does not depend on the batch it ran in (tests/test_batch.py)
 does each sheet's (tests/test_sheet_sweep.py), so the final results are identical however
 often the sweep was interrupted. A sweep of sheet scenes runs through the same directory,
 threads, Dask tasks and resume; only how its batch is simulated
-(:func:`simulate_sheet_batch`), its size estimates and its summary's metrics
+(:func:`sheet_sweep_batch`), its size estimates and its summary's metrics
 (:func:`~warpcloth.metrics.sheet_metrics`) are its own.
 """
 
@@ -182,7 +182,7 @@ class SimulatedBatch:
     steps: int
 
 
-def simulate_strips(scene_dicts: list[dict], device: str | None, frames: bool) -> SimulatedBatch:
+def strip_sweep_batch(scene_dicts: list[dict], device: str | None, frames: bool) -> SimulatedBatch:
     """A batch of strips, one launch sequence; each strip's swing metrics."""
     scenes = [scene_from_dict(d) for d in scene_dicts]
     # one thread per batch: the sweep already runs its batches on the cores
@@ -227,7 +227,7 @@ def marker_columns(n_markers: int) -> list[str]:
     return [f"marker_{k}_{axis}" for k in range(n_markers) for axis in "xyz"]
 
 
-def simulate_sheet_batch(scene_dicts: list[dict], device: str | None, frames: bool) -> SimulatedBatch:
+def sheet_sweep_batch(scene_dicts: list[dict], device: str | None, frames: bool) -> SimulatedBatch:
     """A batch of sheets in the same launches; each sheet's :func:`~warpcloth.metrics.sheet_metrics`
     (NaN for a diverged one: what a sheet did before it diverged is no measurement of it)."""
     scenes = [sheet_scene_from_dict(d) for d in scene_dicts]  # resolved: checked as the sweep was expanded
