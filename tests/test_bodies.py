@@ -293,3 +293,20 @@ def test_a_healthy_run_of_either_body_closes_its_budget(body):
     kinetic energy on a healthy run of either body (docs/model.md §10)."""
     result = wc.simulate(scene(body), threads=1)
     assert budget_drift(result) < 1e-3
+
+
+def test_a_run_writer_refuses_a_model_whose_probes_it_has_no_columns_for(body, tmp_path):
+    """A run directory stores the body's own probes: a model with a force term's channel is
+    refused before it runs, instead of writing rows wider than their header."""
+    from warpcloth.io.run_dir import RunWriter
+    from warpcloth.io.sheet_run_dir import SheetRunWriter
+
+    s = scene(body)
+    batch = bodies.named(body)("build", [s], None, (LinearDrag(1.0),))
+    frame_times = batch.recorder.schedule(batch.control, batch.solver).frame_times
+    if body == "strip":
+        sink = RunWriter(tmp_path / "run", [s], batch.model.n_nodes, frame_times)
+    else:
+        sink = SheetRunWriter(tmp_path / "run", [s], batch.model.geometry, batch.recorder.markers, frame_times)
+    with pytest.raises(wc.ArgumentError, match="sink: its probe table has columns for .* drag_work"):
+        simulate_batch(batch.model, batch.control, batch.solver, batch.recorder, sink=sink, threads=1)

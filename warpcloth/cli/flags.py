@@ -101,6 +101,7 @@ LIBRARY_ONLY = frozenset(
         "scene",  # simulate_sheet(scene): the command line passes the scene it loaded
         "scenes",  # simulate(scenes): the command line passes the scenes it loaded
         "shear_rigidity",  # SheetMaterialSI(shear_rigidity): a scene's shear.rigidity_gf_per_cm_deg, a field
+        "sink",  # simulate_batch(sink=): a run writer made by the library for the model it runs
         "solver",  # FusedStripSolver(...) itself: the base of the strip's solvers, never one a scene names
         "sheets",  # SheetBuilder.finalize() with none added: a scene always adds its sheet
         "strips",  # StripBuilder.finalize() with none added: a scene always adds its strips

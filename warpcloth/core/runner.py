@@ -247,6 +247,13 @@ def simulate_batch(
     check_divergence_policy(on_divergence)
     threads = checked_threads(threads)
     check_recording_fits(model, control, recorder, keep_frames)
+    declared = getattr(sink, "probe_fields", model.probes.fields)
+    if tuple(declared) != model.probes.fields:
+        raise ArgumentError(
+            "sink",
+            f"its probe table has columns for {', '.join(declared)}, but the model records "
+            f"{', '.join(model.probes.fields)} (a force term's channel: a run directory stores the body's own probes)",
+        )
     state = state or model.state()
     schedule = recorder.schedule(control, solver)
     settings = recorder.settings(model)

@@ -253,6 +253,11 @@ class StreamedRun:
     def _write_meta(self) -> None:
         write_text_atomically(self.dir / "meta.json", json.dumps(self.meta, indent=2))
 
+    @property
+    def probe_fields(self) -> tuple[str, ...]:
+        """The probes probes.csv has columns for (after ``t`` and the body's index)."""
+        return self.tables["probes.csv"].columns[2:]
+
     def append(self, file: str, rows: np.ndarray) -> int:
         """Append ``rows`` to table ``file`` (not yet committed); how many."""
         with naming(self.dir / file):
