@@ -7,8 +7,11 @@ Evaluation Experiments in Vacuum", as written up in docs/model.md. Typical use::
     result = wc.run("damped_swing", ["damping.gamma_per_s=0.3"])
     tip_x = result.probe("tip_x", variant=0)
 
-The namespaces :mod:`warpcloth.strip` (the SI simulation core), :mod:`warpcloth.scene`,
-:mod:`warpcloth.calibrate`, :mod:`warpcloth.viz` and :mod:`warpcloth.io` hold the rest.
+The namespaces :mod:`warpcloth.core` (what every body shares), :mod:`warpcloth.strip` and
+:mod:`warpcloth.sheet` (the two bodies, in SI), :mod:`warpcloth.bodies` (their registry),
+:mod:`warpcloth.scene`, :mod:`warpcloth.calibrate`, :mod:`warpcloth.viz` and
+:mod:`warpcloth.io` hold the rest; ``result = wc.run("shear_swing")`` runs a sheet as
+``wc.run("damped_swing")`` runs a strip.
 
 The names below are imported when first used (PEP 562), so ``import warpcloth.cli``
 costs no Warp, NumPy or pandas start: the command installs its Ctrl-C handling before
@@ -33,7 +36,7 @@ from .errors import (
     WarpclothError,
 )
 
-_SUBMODULES = ("calibrate", "io", "scene", "sim", "viz")
+_SUBMODULES = ("bodies", "calibrate", "core", "io", "scene", "sheet", "sim", "strip", "viz")
 _LAZY = {
     "load_recording": "io.load",
     "Recording": "io.recording",
@@ -47,7 +50,7 @@ _LAZY = {
     "load_scene": "scene",
     "load_sweep": "scene",
     "scene_from_dict": "scene",
-    "RunResult": "sim",
+    "RunResult": "core.result",
     "run_sweep": "sweeps",
     "export_usd": "viz.usd",
 }
@@ -100,5 +103,9 @@ __all__ = [
     "scene_from_dict",
     "sim",
     "simulate",
+    "strip",
+    "sheet",
+    "core",
+    "bodies",
     "viz",
 ]

@@ -16,7 +16,7 @@ from warpcloth import units
 from warpcloth.core.resources import check_memory
 from warpcloth.errors import SceneError
 from warpcloth.kernels import bending_law
-from warpcloth.strip import SOLVERS, ClampMotion, Control, FabricSet, Model, Recorder, Solver, StripBuilder
+from warpcloth.strip import SOLVERS, ClampMotion, FabricSet, Recorder, Solver, StripBuilder, StripControl, StripModel
 from warpcloth.strip.stability import cycle_response
 
 from .clamp_motion import clamp_pieces
@@ -31,8 +31,8 @@ from .step import AUTO, check_step
 class Batch:
     """What :func:`build_batch` makes: the model, its drives, the solver and the recorder."""
 
-    model: Model
-    control: Control
+    model: StripModel
+    control: StripControl
     solver: Solver
     recorder: Recorder
 

@@ -1,11 +1,12 @@
-r"""The simulation core, in SI arrays only: no scene files, no KES units, no file formats.
+r"""The strip, one of the two bodies on the core (:mod:`warpcloth.core`), in SI arrays
+only: no scene files, no KES units, no file formats.
 
-- :class:`StripBuilder` → :class:`Model` (what the strips *are*), ``model.state()`` →
-  :class:`State` (what they *are doing*), ``model.control()`` → :class:`Control` (what
-  drives them);
+- :class:`StripBuilder` → :class:`StripModel` (what the strips *are*), ``model.state()`` →
+  :class:`StripState` (what they *are doing*), ``model.control()`` → :class:`StripControl`
+  (what drives them); ``Model``, ``State`` and ``Control`` are their former names;
 - a solver per integrator (:data:`SOLVERS`) advances them (what advances them);
-- a :class:`Recorder` says what is recorded and when; :func:`simulate_batch` runs the
-  chunked launches with progress and the divergence policy (a
+- a :class:`Recorder` says what is recorded and when; :func:`simulate_batch` (the core's
+  one runner) runs the chunked launches with progress and the divergence policy (a
   :class:`DivergenceMonitor` says which strips stopped, as typed :class:`Divergence`\ s).
 """
 
@@ -17,10 +18,10 @@ from warpcloth.core.solver import Solver
 
 from .bending import law_along_path, moment_along_path, shear_force_along_path
 from .builder import ClampMotion, FabricSet, Grip, StripBuilder
-from .control import Control
+from .control import StripControl
 from .divergence import Divergence
 from .material import LawParameters, MaterialSI
-from .model import PRECISIONS, Model
+from .model import PRECISIONS, StripModel
 from .recorder import Recorder
 from .solvers import (
     SOLVERS,
@@ -29,7 +30,9 @@ from .solvers import (
     ImexSolver,
     SemiImplicitEulerSolver,
 )
-from .state import State
+from .state import StripState
+
+Model, State, Control = StripModel, StripState, StripControl  # the former names, kept working
 
 __all__ = [
     "Divergence",
@@ -38,6 +41,9 @@ __all__ = [
     "SOLVERS",
     "ClampMotion",
     "Control",
+    "StripControl",
+    "StripModel",
+    "StripState",
     "FusedStripSolver",
     "FabricSet",
     "ForwardEulerSolver",

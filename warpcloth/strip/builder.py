@@ -21,7 +21,7 @@ from warpcloth.errors import ArgumentError
 from warpcloth.kernels import MAX_DEGREE, bending_masing
 
 from .material import MaterialSI
-from .model import Model
+from .model import StripModel
 from .state import check_reversal_memory
 
 
@@ -240,9 +240,9 @@ class StripBuilder:
         :func:`hinge_intervals`."""
         return hinge_intervals(self.spacing, len(self.rest_positions) - self.n_clamped)
 
-    def finalize(self, device: str | None = None, precision: str = "float64", terms: tuple = ()) -> Model:
+    def finalize(self, device: str | None = None, precision: str = "float64", terms: tuple = ()) -> StripModel:
         """The :class:`Model` of every strip added, on ``device`` in ``precision``, with the
         force ``terms`` (kernels/force_terms.py) acting on every free node."""
         if not self.strips:
             raise ArgumentError("strips", "a batch needs at least one strip (add_strip adds one)")
-        return Model(self, device=device, precision=precision, terms=terms)
+        return StripModel(self, device=device, precision=precision, terms=terms)

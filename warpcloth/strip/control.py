@@ -9,10 +9,10 @@ import numpy as np
 from warpcloth.kernels import MAX_DEGREE, drives
 
 if TYPE_CHECKING:
-    from .model import Model
+    from .model import StripModel
 
 
-class Control:
+class StripControl:
     """Clamp motion θ(t) about each strip's rotation centre, and the hold-and-release.
 
     Times are in seconds: t = 0 is the release (or the start of the clamp motion); the
@@ -20,7 +20,7 @@ class Control:
     free end to its target. The solver converts them to its steps.
     """
 
-    def __init__(self, model: Model) -> None:
+    def __init__(self, model: StripModel) -> None:
         strips = model.strips
         self.release_time = model.release_time
         self.move_time = model.move_time

@@ -12,7 +12,7 @@ from warpcloth.core.divergence import sample_lost
 from warpcloth.kernels import STATUS_BUDGET, STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_STRAIN
 
 if TYPE_CHECKING:
-    from .control import Control
+    from .control import StripControl
 
 QUANTITY = {
     STATUS_STRAIN: "tensile strain",
@@ -30,7 +30,7 @@ PHASES = ("move", "hold", "record")
 settles, then the record from t = 0 (the release, or the start of a run without one)."""
 
 
-def phase_at(time_s: float, control: Control) -> str:
+def phase_at(time_s: float, control: StripControl) -> str:
     """The phase (:data:`PHASES`) a time after the release (negative before it) falls in."""
     if time_s >= 0:
         return "record"

@@ -19,8 +19,8 @@ from warpcloth.kernels.probes import STRIP_PROBES
 
 if TYPE_CHECKING:
     from .builder import StripBuilder
-    from .control import Control
-    from .state import State
+    from .control import StripControl
+    from .state import StripState
 
 PRECISIONS = {"float64": wp.float64, "float32": wp.float32}
 
@@ -69,7 +69,7 @@ def machine_device(device: str | None) -> wp.context.Device:
         raise ArgumentError("device", f"{device!r} is not a device of this machine ({exc}); it has: {known}") from None
 
 
-class Model:
+class StripModel:
     """Static description of B strips sharing node count, spacing and gravity.
 
     Made by :meth:`warpcloth.strip.StripBuilder.finalize`. Material, width and damping may
@@ -145,17 +145,17 @@ class Model:
         """A Warp array of ``values`` on this model's device in its precision."""
         return wp.array(np.ascontiguousarray(values), dtype=dtype or self.scalar, device=self.device)
 
-    def state(self) -> State:
+    def state(self) -> StripState:
         """A state at rest in the rest shape, every hinge fresh."""
-        from .state import State
+        from .state import StripState
 
-        return State(self)
+        return StripState(self)
 
-    def control(self) -> Control:
+    def control(self) -> StripControl:
         """The drives the strips were built with (clamp motion, hold and release)."""
-        from .control import Control
+        from .control import StripControl
 
-        return Control(self)
+        return StripControl(self)
 
     def _build_struct(self) -> object:
         t = self.types

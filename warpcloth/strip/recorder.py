@@ -12,7 +12,7 @@ from warpcloth.core.schedule import RecorderSchedule
 from warpcloth.kernels import probes
 
 if TYPE_CHECKING:
-    from .model import Model
+    from .model import StripModel
 
 
 @dataclass(frozen=True)
@@ -27,7 +27,7 @@ class Recorder(RecorderSchedule):
     laser_height: float
     loop_hinge: int = 0
 
-    def settings(self, model: Model) -> object:
+    def settings(self, model: StripModel) -> object:
         """The kernel's ProbeSettings struct for ``model``'s strips."""
         s = probes.build(model.scalar, model.terms).ProbeSettings()
         s.laser_height = model.scalar(self.laser_height)
@@ -35,6 +35,6 @@ class Recorder(RecorderSchedule):
         s.probes_per_frame = self.probes_per_frame
         return s
 
-    def tables(self, model: Model) -> tuple[SampleTable, ...]:
+    def tables(self, model: StripModel) -> tuple[SampleTable, ...]:
         """What a strip records besides its probes and frames: nothing."""
         return ()

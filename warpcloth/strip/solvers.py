@@ -18,12 +18,12 @@ from warpcloth.errors import ArgumentTypeError
 from warpcloth.kernels import STATUS_BUDGET, build_strip
 
 from .builder import Grip
-from .control import Control
+from .control import StripControl
 from .divergence import QUANTITY, Divergence, phase_at
 from .material import MaterialSI
-from .model import Model
+from .model import StripModel
 from .stability import transverse_step_limit
-from .state import State
+from .state import StripState
 
 STRIPS_PER_THREAD = 8
 """A CPU launch is split among threads only into ranges of at least this many strips: a
@@ -57,7 +57,7 @@ class FusedStripSolver(FusedSolver):
     advice = ""
     bodies_per_thread = STRIPS_PER_THREAD
 
-    def __init__(self, model: Model, dt: float, divergence_strain: float = 0.25) -> None:
+    def __init__(self, model: StripModel, dt: float, divergence_strain: float = 0.25) -> None:
         if not self.scheme:
             raise ArgumentTypeError(
                 "solver",
@@ -93,7 +93,7 @@ class FusedStripSolver(FusedSolver):
         chain's stiffest transverse mode (:func:`~warpcloth.strip.stability.transverse_step_limit`)."""
         return None
 
-    def stepping(self, control: Control) -> object:
+    def stepping(self, control: StripControl) -> object:
         """The kernel's Stepping struct: dt, the strain limit, the release and the carry."""
         s = self.kernels.Stepping()
         s.dt = self.model.scalar(self.dt)
@@ -102,7 +102,7 @@ class FusedStripSolver(FusedSolver):
         s.move_steps = max(1, self.step_of(control.move_time))
         return s
 
-    def divergence_report(self, state: State, control: Control, strip: int) -> Divergence | None:
+    def divergence_report(self, state: StripState, control: StripControl, strip: int) -> Divergence | None:
         """Where and how ``strip`` diverged, or None while it is healthy."""
         stopped = self.health(state, strip)
         if stopped is None:

@@ -12,7 +12,7 @@ from warpcloth.errors import ArgumentError, ArgumentTypeError
 from warpcloth.kernels import hinge_kernels
 
 if TYPE_CHECKING:
-    from .model import Model
+    from .model import StripModel
 
 
 def allocate_reversal_memory(
@@ -63,7 +63,7 @@ def checked_nodes(argument: str, value: object, n_nodes: int, n_strips: int) -> 
     return array
 
 
-class State:
+class StripState:
     """Dynamic state of B strips, laid out ``[node, strip]`` / ``[hinge, strip]``.
 
     Starts in the model's rest shape and at rest with fresh hinges; :meth:`set_positions`
@@ -72,7 +72,7 @@ class State:
     memory, and per strip the reversals a full memory could not hold (:meth:`reversal_report`).
     """
 
-    def __init__(self, model: Model) -> None:
+    def __init__(self, model: StripModel) -> None:
         self.model = model
         t = model.types
         n, b = model.n_nodes, model.n_strips
