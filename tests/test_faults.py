@@ -542,15 +542,19 @@ def one_line_error(done, status):
 )
 def test_ctrl_c_while_starting_is_exit_130_and_one_line(tmp_path, command, delay_s):
     # Whether it lands in the imports, Warp's start or the first step of the work, an early
-    # Ctrl-C is exit 130 with one line, never a KeyboardInterrupt traceback.
+    # Ctrl-C is exit 130 with one line, never a KeyboardInterrupt traceback. The delay counts
+    # from the moment the interpreter runs the program's entry: one that lands in CPython's
+    # own start (site's .pth files, under load) is CPython's fatal error, before warpcloth.
+    entry = "import sys\nprint('entered', file=sys.stderr, flush=True)\nfrom warpcloth.cli import program\nprogram()"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "warpcloth.cli", *command, "--no-progress"],
+        [sys.executable, "-c", entry, *command, "--no-progress"],
         cwd=tmp_path,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
         preexec_fn=interruptible,
     )
+    assert proc.stderr.readline().strip() == "entered"
     time.sleep(delay_s)
     proc.send_signal(signal.SIGINT)
     _, stderr = proc.communicate(timeout=120)
