@@ -175,3 +175,40 @@ def test_a_lookup_names_its_argument_and_what_there_is():
         ELASTIC.nope  # noqa: B018
     with pytest.raises(ArgumentError, match="^values: the masing law needs hysteresis_d1"):
         LawParameters.of("masing", {})
+
+
+@pytest.mark.parametrize(
+    "call, argument",
+    [
+        (lambda wc, s: wc.simulate(s, out=5), "out"),
+        (lambda wc, s: wc.load_scene(5), "name_or_path"),
+        (lambda wc, s: wc.run_sweep("damped_swing_sweep", "unused"), "sweep"),
+        (lambda wc, s: wc.run_sweep(wc.load_sweep("damped_swing_sweep"), "unused", max_batch="2"), "max_batch"),
+        (lambda wc, s: wc.run_sweep(wc.load_sweep("damped_swing_sweep"), "unused", workers=1.5), "workers"),
+        (lambda wc, s: wc.export_usd("a_run_directory", "stage.usda"), "recording"),
+        (lambda wc, s: wc.viz.usd.check_stage_path(7), "out_file"),
+        (lambda wc, s: wc.expand(wc.load_sweep("damped_swing_sweep")), "raw"),
+        (lambda wc, s: wc.simulate(s, threads="2"), "threads"),
+        (lambda wc, s: wc.run(123), "scene"),
+    ],
+)
+def test_a_wrong_type_at_the_api_names_its_argument_where_it_enters(call, argument, tmp_path, monkeypatch):
+    """A number, a name or a result object where the API wants another is refused where it
+    enters, naming the argument and what it got (issue 39: these were bare TypeErrors and
+    AttributeErrors from deep inside)."""
+    import warpcloth as wc
+
+    monkeypatch.chdir(tmp_path)
+    scene = wc.load_scene("damped_swing", ["run.duration_s=0.01"])
+    with pytest.raises(wc.ArgumentTypeError, match=f"^{argument}: "):
+        call(wc, scene)
+    assert not any(tmp_path.iterdir())  # refused before anything was written
+
+
+def test_swing_metrics_refuse_series_of_different_lengths():
+    import numpy as np
+
+    from warpcloth.metrics import swing_summary
+
+    with pytest.raises(ArgumentError, match=r"^laser: t, laser and tip must be one sample each per time; .*'laser': 5"):
+        swing_summary(np.arange(10.0), np.zeros(5), np.zeros(10))

@@ -121,3 +121,36 @@ def checked_index(argument: str, value: object, count: int, what: str) -> int:
     if not 0 <= int(value) < count:
         raise ArgumentError(argument, f"{value} is not one of the {count} {what} (0 to {count - 1})")
     return int(value)
+
+
+def checked_path(argument: str, value: object) -> str | os.PathLike[str]:
+    """``value`` if it is a path (a string or os.PathLike), else an ArgumentTypeError naming
+    ``argument`` and what it got: a number or a result object passed where a file or
+    directory belongs is refused where it enters, not deep in the file system's calls."""
+    if isinstance(value, str | os.PathLike):
+        return value
+    raise ArgumentTypeError(
+        argument, f"must be a path (a string or pathlib.Path), got {type(value).__name__} {value!r}"
+    )
+
+
+def checked_count(argument: str, value: object, minimum: int, meaning: str = "") -> int:
+    """``value`` as a whole number of at least ``minimum``, or an ArgumentTypeError /
+    ArgumentError naming ``argument`` and the value (a string "2" is not a count);
+    ``meaning`` says what the least value does, e.g. " (0 runs the batches in this process)"."""
+    import numbers
+
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ArgumentTypeError(argument, f"must be a whole number ≥ {minimum}, got {type(value).__name__} {value!r}")
+    if value < minimum:
+        raise ArgumentError(argument, f"must be ≥ {minimum}{meaning}, got {value}")
+    return int(value)
+
+
+def checked_instance(argument: str, value: object, kind: type, made_by: str) -> None:
+    """An ArgumentTypeError naming ``argument`` unless ``value`` is a ``kind`` (``made_by``
+    says which call makes one)."""
+    if not isinstance(value, kind):
+        raise ArgumentTypeError(
+            argument, f"must be a {kind.__name__} ({made_by} makes one), got {type(value).__name__} {value!r}"
+        )

@@ -238,6 +238,9 @@ def swing_summary(
     """:func:`swing_metrics` of the laser-line displacement, or of ``tip`` when the strip
     misses the laser line in more than a tenth of the samples; ``"signal"`` says which."""
     laser = np.asarray(laser, dtype=float)
+    lengths = {"t": len(np.asarray(t)), "laser": len(laser)} | ({} if tip is None else {"tip": len(np.asarray(tip))})
+    if len(set(lengths.values())) > 1:
+        raise ArgumentError("laser", f"t, laser and tip must be one sample each per time; their lengths are {lengths}")
     use_laser = tip is None or np.isfinite(laser).sum() > 0.9 * len(laser)
     metrics = swing_metrics(t, laser if use_laser or tip is None else tip, starts_at_rest, noise)
     return {"signal": "laser_x" if use_laser else "tip_x"} | metrics

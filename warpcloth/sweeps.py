@@ -26,7 +26,7 @@ from tqdm import tqdm
 
 from warpcloth import bodies
 from warpcloth.core.resources import check_disk, check_memory
-from warpcloth.errors import ArgumentError
+from warpcloth.errors import ArgumentError, checked_count, checked_instance, checked_path
 from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.io.writing import claim_result
 from warpcloth.kernels import PROBE_FIELDS
@@ -339,8 +339,9 @@ def run_sweep(
     tasks on that running cluster instead. Results do not depend on either. A sweep of
     sheet scenes runs the same way, each batch's sheets in one launch sequence.
     """
-    if workers is not None and workers < 0:
-        raise ArgumentError("workers", f"must be ≥ 0 (0 runs the batches in this process), got {workers}")
+    checked_instance("sweep", sweep, Sweep, "warpcloth.load_sweep(name_or_path)")
+    if workers is not None:
+        checked_count("workers", workers, 0, " (0 runs the batches in this process)")
     cores = os.cpu_count() or 1
     if workers is not None and workers > MAX_WORKERS_PER_CORE * cores:
         raise ArgumentError(
@@ -348,11 +349,13 @@ def run_sweep(
             f"{workers} threads on {cores} cores would only wait on each other "
             f"(at most {MAX_WORKERS_PER_CORE * cores}); a cluster is reached with --scheduler",
         )
-    if scheduler is not None and not re.match(r"^(\w+://)?[\w.\-\[\]:]+:\d+$", scheduler):
+    if scheduler is not None and not (
+        isinstance(scheduler, str) and re.match(r"^(\w+://)?[\w.\-\[\]:]+:\d+$", scheduler)
+    ):
         raise ArgumentError("scheduler", f"{scheduler!r} is not a scheduler address (host:port or tcp://host:port)")
-    if max_batch is not None and max_batch < 1:
-        raise ArgumentError("max_batch", f"must be ≥ 1, got {max_batch}")
-    out = Path(out)
+    if max_batch is not None:
+        checked_count("max_batch", max_batch, 1)
+    out = Path(checked_path("out", out))
     if out.is_dir() and any(out.iterdir()) and not (out / "sweep.json").is_file():
         # resuming is for the same sweep only; a run or other files are never mixed into
         held = "a run" if (out / "meta.json").is_file() else "files that are not a sweep"

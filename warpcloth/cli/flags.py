@@ -83,6 +83,7 @@ LIBRARY_ONLY = frozenset(
         "is_clamped",  # grid_geometry(is_clamped=): a scene's cut, reported as sheet.cut
         "j",  # Recording.probe(name, j): the command line selects variants by --variants
         "kept_cells",  # grid_geometry(kept_cells): a scene's cut, reported as sheet.cut
+        "laser",  # swing_summary(t, laser, tip): analyse reads them from one file, one row per time
         "lambda_max",  # two_section_beam_mode(): the tests' and benchmarks' reference solution
         "length",  # Grip(length): as bending_factor
         "markers",  # SheetRecorder(markers=): a scene's output.markers_mm, checked as a scene field first

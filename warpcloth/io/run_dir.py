@@ -37,7 +37,7 @@ import pandas as pd
 import tomli_w
 
 from warpcloth.core.resources import check_disk
-from warpcloth.errors import ArgumentError, DataFileError
+from warpcloth.errors import ArgumentError, DataFileError, checked_path
 from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 from warpcloth.scene import COORDINATES, Scene, read_scene_file, scene_from_dict
 
@@ -85,7 +85,7 @@ def check_output_directory(out_dir: str | Path, overwrite: bool = False) -> None
     directory is an ArgumentError of ``out``; with it, :class:`RunWriter` writes the new
     run aside and swaps it in only once complete.
     """
-    out = Path(out_dir)
+    out = Path(checked_path("out", out_dir))
     if out.exists() and not out.is_dir():
         raise ArgumentError("out", f"{out} is a file, not a run directory")
     if out.is_dir() and any(out.iterdir()):

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from warpcloth import bodies
-from warpcloth.errors import ArgumentError, DataFileError, SceneError
+from warpcloth.errors import ArgumentError, DataFileError, SceneError, checked_path
 
 from .locate import located
 from .materials import MATERIAL_FILE_KEY, with_material_file
@@ -58,7 +58,7 @@ def scene_source(name_or_path: str | Path) -> tuple[str, str]:
     A path (see :func:`is_path`) must name an existing file: it never falls back on the
     bundled scene of the same stem.
     """
-    path = Path(name_or_path)
+    path = Path(checked_path("name_or_path", name_or_path))
     if is_path(name_or_path):
         if not path.is_file():
             why = (

@@ -41,7 +41,7 @@ from tqdm import tqdm
 
 from warpcloth import bodies
 from warpcloth.core.resources import check_memory
-from warpcloth.errors import ArgumentError, SceneError
+from warpcloth.errors import ArgumentError, SceneError, checked_instance
 
 from .files import read_scene_file, scene_source, strip_scene_from_dict
 from .keys import is_material_file_key, key_path, key_path_or_none, overlaps
@@ -234,6 +234,7 @@ def expand(raw: dict, max_variants: int = MAX_VARIANTS, progress: bool = False) 
     A sweep of more than ``max_variants`` variants is refused before it is expanded;
     ``progress`` shows a bar while a large one is.
     """
+    checked_instance("raw", raw, dict, "warpcloth.scene.read_scene_file(name_or_path)")
     base = copy.deepcopy(raw)
     spec = base.pop("sweep", None)
     if not isinstance(spec, dict) or not (set(spec) & {"grid", "zip", "random"}):

@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdUtils, Vt
 
-from warpcloth.errors import ArgumentError, InternalError
+from warpcloth.errors import ArgumentError, InternalError, checked_instance, checked_path
 from warpcloth.io.atomic import write_atomically
 from warpcloth.io.provenance import provenance
 from warpcloth.io.recording import Recording
@@ -54,7 +54,7 @@ USD_SUFFIXES = (".usd", ".usda", ".usdc")
 def check_stage_path(path: str | Path, argument: str = "out_file") -> Path:
     """``path`` as a Path if it names a USD stage file, else an ArgumentError of
     ``argument`` (the caller's name for ``path``)."""
-    out = Path(path)
+    out = Path(checked_path(argument, path))
     if out.suffix not in USD_SUFFIXES:
         raise ArgumentError(argument, f"{out} must end in one of {', '.join(USD_SUFFIXES)}")
     return out
@@ -221,6 +221,7 @@ def export_usd(
     frames in ``<stem>_clips_<token>/`` beside the file; by default they are split only when
     one layer would hold more than ``CLIP_POINTS`` node positions.
     """
+    checked_instance("recording", recording, Recording, "warpcloth.load_recording(run_dir)")
     out = check_stage_path(out_file)
     if ribbon and len(recording.variants) > PRIM_PER_STRIP_LIMIT:
         raise ArgumentError(
