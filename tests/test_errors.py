@@ -212,3 +212,48 @@ def test_swing_metrics_refuse_series_of_different_lengths():
 
     with pytest.raises(ArgumentError, match=r"^laser: t, laser and tip must be one sample each per time; .*'laser': 5"):
         swing_summary(np.arange(10.0), np.zeros(5), np.zeros(10))
+
+
+def test_json_results_are_strict_json_with_null_for_a_number_without_value():
+    """fit.json, meta.json and sweep.json are read by other tools: NaN or ±inf (a σ from
+    too few resamples, an energy that diverged) is written as null, never as NaN."""
+    import json
+    import math
+
+    import numpy as np
+
+    from warpcloth.io.json_file import json_text
+
+    text = json_text({"sigma": float("nan"), "values": [1.0, float("inf"), np.float64("-inf")], "n": np.int64(3)})
+
+    def refuse(constant):
+        raise AssertionError(f"{constant} is not JSON")
+
+    assert json.loads(text, parse_constant=refuse) == {"sigma": None, "values": [1.0, None, None], "n": 3}
+    assert math.isfinite(json.loads(json_text({"x": 2.5}))["x"])
+
+
+@pytest.mark.parametrize(
+    "option, value, says",
+    [
+        ("--space-filling", "0", "--space-filling: must be ≥ 1, got 0"),
+        ("--bootstrap", "1", "--bootstrap: is 1: a bootstrap σ needs at least 2 resamples"),
+    ],
+)
+def test_a_fit_option_that_would_mean_something_else_is_refused(option, value, says, tmp_path):
+    from conftest import run_cli
+
+    done = run_cli(
+        "fit",
+        "damped_swing",
+        "--measured",
+        "damped_swing_laser",
+        "--free",
+        "gamma",
+        "--out",
+        tmp_path / "f",
+        option,
+        value,
+    )
+    assert done.returncode == 2 and says in done.stderr and "Traceback" not in done.stderr, done.stderr
+    assert not (tmp_path / "f").exists() or not any((tmp_path / "f").iterdir())

@@ -46,6 +46,7 @@ FLAGS = {
     "scheduler": "--scheduler",
     "source": "INPUT",
     "space_filling": "--space-filling",
+    "bootstrap": "--bootstrap",
     "spans": "INPUT",  # the records compared: the run and the measured file
     "strain_unit": "--strain-unit",
     "stride": "--stride",

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from warpcloth.errors import OptionError
+from warpcloth.io.json_file import json_text
 
 from .options import add_no_progress, add_overwrite, at_least, figure_path, new_result, path_text, positive
 
@@ -187,7 +188,6 @@ def _what_to_track(args: argparse.Namespace) -> np.ndarray:
 
 def calibrate_command(args: argparse.Namespace) -> int:
     """Calibrate camera and plane, write plane.json."""
-    import json
 
     from warpcloth.io.atomic import write_text_atomically
     from warpcloth.io.provenance import provenance
@@ -209,7 +209,7 @@ def calibrate_command(args: argparse.Namespace) -> int:
         max_rms_px=args.max_rms_px,
     )
     record["provenance"] = provenance(device="cpu")
-    write_text_atomically(out, json.dumps(record, indent=1) + "\n")
+    write_text_atomically(out, json_text(record) + "\n")
     view = record["plane_view"]
     print(
         f"{len(args.images)} board images: reprojection RMS {record['reprojection_rms_px']:.3g} px (worst image "

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import errno
 import io
-import json
 import os
 import shutil
 from dataclasses import dataclass
@@ -42,7 +41,7 @@ from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 from warpcloth.scene import COORDINATES, Scene, read_scene_file, scene_from_dict
 
 from .atomic import naming, write_npy_atomically, write_text_atomically
-from .json_file import read_json
+from .json_file import json_text, read_json
 from .provenance import provenance
 from .recording import Recording, check_time_order, per_strip_parameters, select_variants
 from .writing import WRITING, hold, live_writer, release
@@ -251,7 +250,7 @@ class StreamedRun:
         self.commit({})
 
     def _write_meta(self) -> None:
-        write_text_atomically(self.dir / "meta.json", json.dumps(self.meta, indent=2))
+        write_text_atomically(self.dir / "meta.json", json_text(self.meta, indent=2))
 
     @property
     def probe_fields(self) -> tuple[str, ...]:

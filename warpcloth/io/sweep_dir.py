@@ -42,7 +42,7 @@ from warpcloth.scene import COORDINATES, Sweep, expand
 from warpcloth.scene.sweep import samples_latin_hypercube, variant_scenes
 
 from .atomic import write_atomically, write_npy_atomically
-from .json_file import read_json
+from .json_file import json_text, read_json
 from .provenance import provenance
 from .recording import Recording, check_time_order, per_strip_parameters, select_variants
 
@@ -147,7 +147,7 @@ class SweepDirectory:
             "discrepancy": sweep.discrepancy,
             "provenance": provenance(),
         }
-        write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
+        write_atomically(manifest, lambda p: p.write_text(json_text(info)))
         return batches
 
     def write_batch(
@@ -171,7 +171,7 @@ class SweepDirectory:
         write_atomically(self.path / "summary.csv", lambda p: summary[scalar].to_csv(p, index=False))
         manifest = self.path / "sweep.json"
         info = read_json(manifest) | {"complete": True}
-        write_atomically(manifest, lambda p: p.write_text(json.dumps(info, indent=1, default=str)))
+        write_atomically(manifest, lambda p: p.write_text(json_text(info)))
         return summary
 
 

@@ -22,7 +22,6 @@ frame's timestamp (the middle of its exposure).
 
 from __future__ import annotations
 
-import json
 import sys
 from fractions import Fraction
 from pathlib import Path
@@ -30,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from warpcloth.errors import InternalError
+from warpcloth.io.json_file import json_text
 
 from .camera import Camera, PlanePose, rotation
 
@@ -334,7 +334,7 @@ def make_example(out: str | Path, progress: bool = True) -> dict:
             "truth": "truth.csv",
         },
     }
-    write_text_atomically(out / "truth.json", json.dumps(described, indent=1) + "\n")
+    write_text_atomically(out / "truth.json", json_text(described) + "\n")
     return described
 
 

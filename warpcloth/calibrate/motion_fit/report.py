@@ -4,13 +4,13 @@ and the files :func:`write_fit` writes."""
 from __future__ import annotations
 
 import copy
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from warpcloth.io.json_file import json_text
 from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene import scene_from_dict, set_field
 from warpcloth.scene.step import AUTO
@@ -226,7 +226,7 @@ def write_fit(
         {
             "best.toml": lambda p: p.write_text(tomli_w.dumps(scene.to_dict())),
             "fit.json": lambda p: p.write_text(
-                json.dumps(fit.to_json() | {"inputs": inputs or {}, "provenance": provenance(device)}, indent=1)
+                json_text(fit.to_json() | {"inputs": inputs or {}, "provenance": provenance(device)})
             ),
             "history.csv": lambda p: pd.DataFrame(fit.history).to_csv(p, index=False),
             "residuals.csv": lambda p: table.to_csv(p, index=False),

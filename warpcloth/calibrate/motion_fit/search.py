@@ -11,7 +11,7 @@ import numpy as np
 from tqdm import tqdm
 
 from warpcloth.core.resources import check_memory
-from warpcloth.errors import ArgumentError
+from warpcloth.errors import ArgumentError, checked_count
 from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene.sampling import latin_hypercube
 from warpcloth.strip import RunResult
@@ -51,9 +51,13 @@ def fit_motion(
     share in σ (:mod:`.continuum`); ``False`` reports them at the scene's spacing, where
     the mesh's error is unknown, so the status is at best ``spacing_limited``."""
     started = time.perf_counter()
+    # 0 is not "the default": a batch of none is refused, as is a σ from one resample
+    n0 = max(16, 8 * len(free)) if space_filling is None else checked_count("space_filling", space_filling, 1)
+    bootstrap = checked_count("bootstrap", bootstrap, 0)
+    if bootstrap == 1:
+        raise ArgumentError("bootstrap", "is 1: a bootstrap σ needs at least 2 resamples (0: no bootstrap)")
     objective = make_objective(base, measurement, free, align_start_s, device)
     rng = np.random.default_rng(seed)
-    n0 = space_filling or max(16, 8 * len(free))
     if n0 > MAX_SPACE_FILLING:
         raise ArgumentError(
             "space_filling",
