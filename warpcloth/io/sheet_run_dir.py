@@ -223,15 +223,6 @@ def _why_empty(meta: dict) -> str:
     return "it was stopped before its first sample"
 
 
-def is_sheet_run(path: str | Path) -> bool:
-    """Whether ``path`` is a sheet run directory (its meta.json says kind "sheet"); a
-    directory whose meta.json cannot be read is left to the reader that names the damage."""
-    try:
-        return read_json(Path(path) / "meta.json").get("kind") == "sheet"
-    except DataFileError:
-        return False
-
-
 def read_sheet_run(path: str | Path) -> SheetRun:
     """A sheet run directory as a :class:`SheetRun`; a DataFileError naming the file when
     it is damaged or not a sheet run."""
