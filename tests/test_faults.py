@@ -334,6 +334,8 @@ def test_an_overwrite_never_pulls_a_directory_from_under_a_running_writer(tmp_pa
         "rows miscounted",
         "complete is a string",
         "frames of another shape",
+        "a row of a variant the run lacks",
+        "the run's scene copy changed",
     ],
 )
 def test_a_damaged_complete_run_is_refused_by_name(tmp_path, damage):
@@ -352,6 +354,16 @@ def test_a_damaged_complete_run_is_refused_by_name(tmp_path, damage):
     elif damage == "rows miscounted":
         meta["committed"]["probe_rows"] += 5
         expected = "probes.csv: holds 61 rows but meta.json records 66"
+    elif damage == "a row of a variant the run lacks":
+        text = (out / "probes.csv").read_text().splitlines()
+        cells = text[5].split(",")
+        text[5] = ",".join([cells[0], "4", *cells[2:]])
+        (out / "probes.csv").write_text("\n".join(text) + "\n")
+        expected = "probes.csv, line 6: variant is 4, but the run has 1"
+    elif damage == "the run's scene copy changed":
+        scene = (out / "scene.toml").read_text()
+        (out / "scene.toml").write_text(scene.replace("free_length_mm = ", "free_length_mm = -", 1))
+        expected = "scene.toml: is the run's copy of its scene and no longer reads as one"
     elif damage == "complete is a string":
         meta["complete"] = "yes"
         expected = "meta.json: complete must be true or false"

@@ -2,6 +2,10 @@
 a sheet run directory read it back as the run recorded it, write the sheet's figures, its
 mesh and its frames, and refuse a strip's option in one line naming it."""
 
+import json
+import re
+import shutil
+
 import numpy as np
 import pytest
 from conftest import overrides, run_cli
@@ -9,6 +13,7 @@ from PIL import Image
 from pxr import Usd, UsdGeom
 
 from warpcloth import bodies
+from warpcloth.errors import DataFileError
 from warpcloth.io.sheet_run_dir import read_sheet_run
 from warpcloth.runs import simulate
 from warpcloth.scene.sheet_build import load_sheet_scene
@@ -142,3 +147,97 @@ def test_render_draws_the_sheet_where_it_is(shear_swing, tmp_path):
     gif = Image.open(tmp_path / "r" / "motion.gif")
     assert gif.n_frames == len(range(0, last + 1, 3))  # 60 frames/s: every third frame plays in real time
     one_line_refusal(run_cli("render", out, "--out", tmp_path / "r2", "--times", "9"), "--times", "9 s is outside")
+
+
+def _rewrite_csv(file, change):
+    lines = file.read_text().splitlines()
+    change(lines)
+    file.write_text("\n".join(lines) + "\n")
+
+
+def _swap(lines, a, b):
+    lines[a], lines[b] = lines[b], lines[a]
+
+
+def _set_cell(lines, line, column, value):
+    cells = lines[line].split(",")
+    cells[column] = value
+    lines[line] = ",".join(cells)
+
+
+def _meta(out, change):
+    meta = json.loads((out / "meta.json").read_text())
+    change(meta)
+    (out / "meta.json").write_text(json.dumps(meta))
+
+
+def _geometry(out, name, change):
+    with np.load(out / "geometry.npz") as archive:
+        arrays = dict(archive)
+    change(arrays[name])
+    np.savez(out / "geometry.npz", **arrays)
+
+
+DAMAGE = {
+    # issue 39: each was read as valid, or ended in a traceback or a segmentation fault
+    "a face past the nodes": (
+        lambda out: _geometry(out, "faces", lambda a: a.__setitem__((3, 1), 10**6)),
+        "geometry.npz: faces is not the geometry of the run's scene",
+    ),
+    "a shifted lattice": (
+        lambda out: _geometry(out, "lattice", lambda a: a.__setitem__((0, 0), 7)),
+        "geometry.npz: lattice is not the geometry of the run's scene",
+    ),
+    "a marker dropped from meta.json": (
+        lambda out: _meta(out, lambda m: m["markers"].pop()),
+        "meta.json: markers name nodes",
+    ),
+    "a marker moved to another node": (
+        lambda out: _meta(out, lambda m: m["markers"][0].__setitem__("node", 5)),
+        "meta.json: markers name nodes [5,",
+    ),
+    "a marker index past the markers": (
+        lambda out: _rewrite_csv(out / "markers.csv", lambda ls: _set_cell(ls, 6, 2, "9")),
+        "markers.csv, line 7: marker is 9, but this row is marker 1 of sheet 0",
+    ),
+    "marker rows out of time order": (
+        lambda out: _rewrite_csv(out / "markers.csv", lambda ls: _swap(ls, 2, 10)),
+        "markers.csv, line 3: t is",
+    ),
+    "probe rows out of time order": (
+        lambda out: _rewrite_csv(out / "probes.csv", lambda ls: _swap(ls, 3, 4)),
+        "probes.csv, line 5: t = 0.003333333333 s of sheet 0 comes after t = 0.005 s (line 4)",
+    ),
+    "a probe row of a sheet the run lacks": (
+        lambda out: _rewrite_csv(out / "probes.csv", lambda ls: _set_cell(ls, 5, 1, "3")),
+        "probes.csv, line 6: sheet is 3, but the run has 1",
+    ),
+    "frame times that go back": (
+        lambda out: np.save(out / "frame_times.npy", np.load(out / "frame_times.npy")[::-1].copy()),
+        "frame_times.npy: frame 1 at t = ",
+    ),
+    "the run's scene copy changed": (
+        lambda out: (out / "scene.toml").write_text(
+            (out / "scene.toml").read_text().replace("free_length_mm = ", 'free_length_mm = "x" # ', 1)
+        ),
+        "scene.toml: is the run's copy of its scene and no longer reads as one (sheet.free_length_mm",
+    ),
+    "two sheets claimed": (
+        lambda out: _meta(out, lambda m: m.__setitem__("n_sheets", 2)),
+        "meta.json: n_sheets is 2, but the run directory holds one scene.toml",
+    ),
+}
+
+
+@pytest.mark.parametrize("damage", sorted(DAMAGE))
+def test_a_damaged_sheet_run_is_refused_by_every_reader_naming_the_file(shear_swing, tmp_path, damage):
+    original, _ = shear_swing
+    out = tmp_path / "damaged"
+    shutil.copytree(original, out)
+    change, message = DAMAGE[damage]
+    change(out)
+    with pytest.raises(DataFileError, match=re.escape(message)):
+        read_sheet_run(out)
+    for command in (("plot", out, "--out", tmp_path / "fig"), ("export-usd", out, "-o", tmp_path / "s.usda")):
+        one_line_refusal(run_cli(*command), message)
+    assert not (tmp_path / "fig").exists() and not (tmp_path / "s.usda").exists()

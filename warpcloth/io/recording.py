@@ -245,11 +245,14 @@ def select_variants(parameters: pd.DataFrame, variants: str | None, where: str |
     return chosen
 
 
-def check_time_order(path: Path, t: np.ndarray, variant: np.ndarray, line_offset: int | None = None) -> None:
+def check_time_order(
+    path: Path, t: np.ndarray, variant: np.ndarray, line_offset: int | None = None, index: str = "variant"
+) -> None:
     """Refuse stored probe rows whose times do not increase within each variant (rows
     reordered after the run: same counts and sizes, but every period read from them
     would be wrong). ``line_offset`` turns a row index into the file's line (None: a file
-    without lines, e.g. Parquet, where the row is named instead)."""
+    without lines, e.g. Parquet, where the row is named instead); ``index`` names what
+    ``variant`` counts (a sheet run's ``sheet``)."""
     order = np.argsort(variant, kind="stable")
     same = variant[order][1:] == variant[order][:-1]
     back = np.flatnonzero(same & ~(np.diff(t[order]) > 0))  # NaN is out of order too
@@ -258,7 +261,7 @@ def check_time_order(path: Path, t: np.ndarray, variant: np.ndarray, line_offset
         where = f"row {before + 1}" if line_offset is None else f"line {before + line_offset}"
         raise DataFileError(
             path,
-            f"t = {t[row]:.10g} s of variant {variant[row]} comes after t = {t[before]:.10g} s "
+            f"t = {t[row]:.10g} s of {index} {variant[row]} comes after t = {t[before]:.10g} s "
             f"({where}): the rows are out of time order, so the file was changed after it was "
             "written",
             None if line_offset is None else row + line_offset,

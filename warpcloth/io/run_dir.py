@@ -28,15 +28,17 @@ import errno
 import io
 import os
 import shutil
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 import tomli_w
 
 from warpcloth.core.resources import check_disk
-from warpcloth.errors import ArgumentError, DataFileError, checked_path
+from warpcloth.errors import ArgumentError, DataFileError, SceneError, checked_path
 from warpcloth.kernels import PROBE_FIELDS, PROBE_UNITS
 from warpcloth.scene import COORDINATES, Scene, read_scene_file, scene_from_dict
 
@@ -362,6 +364,7 @@ def read_probes(path: Path, meta: dict) -> pd.DataFrame:
     numbers = read_committed_csv(
         path / "probes.csv", committed["probe_rows"], committed["probe_bytes"], meta["complete"], PROBE_COLUMNS
     )
+    check_index_column(path / "probes.csv", numbers["variant"].to_numpy(), meta["n_variants"], "variant")
     numbers["variant"] = numbers["variant"].astype(int)
     check_time_order(path / "probes.csv", numbers["t"].to_numpy(), numbers["variant"].to_numpy(), line_offset=2)
     return numbers
@@ -451,38 +454,73 @@ def _check_meta(path: Path, meta: dict) -> None:
             raise DataFileError(file, f"{why}: the run directory is damaged")
 
 
-def _check_scene_files(path: Path, n_variants: int) -> None:
-    # the scenes meta.json's n_variants says are there: scene.toml for one, variants/NNNN.toml for more
+def read_run_scenes(path: Path, n_variants: int, parse: Callable[[Path], Any], count: str = "n_variants") -> list:
+    """The scenes a run directory stores, each read by ``parse`` (a file → a scene): one
+    scene.toml for one variant, variants/NNNN.toml for more, as meta.json's ``count``
+    (``n_variants``) says; a DataFileError naming the file when the directory holds others or a copy no
+    longer reads as a scene (the run's copy, not a scene of the user's)."""
     stored = sorted(p.name for p in (path / "variants").glob("*.toml")) if (path / "variants").is_dir() else []
     if n_variants == 1 and (path / "scene.toml").is_file() and not stored:
-        return
-    if n_variants > 1 and stored == [f"{i:04d}.toml" for i in range(n_variants)]:
-        return
-    held = (
-        f"{len(stored)} variant scene(s) in variants/"
-        if stored
-        else "one scene.toml"
-        if (path / "scene.toml").is_file()
-        else "no scene file"
-    )
-    raise DataFileError(
-        path / "meta.json",
-        f"n_variants is {n_variants}, but the run directory holds {held}: "
-        "meta.json or the directory was changed after the run",
-    )
+        files = [path / "scene.toml"]
+    elif n_variants > 1 and stored == [f"{i:04d}.toml" for i in range(n_variants)]:
+        files = [path / "variants" / name for name in stored]
+    else:
+        held = (
+            f"{len(stored)} variant scene(s) in variants/"
+            if stored
+            else "one scene.toml"
+            if (path / "scene.toml").is_file()
+            else "no scene file"
+        )
+        raise DataFileError(
+            path / "meta.json",
+            f"{count} is {n_variants}, but the run directory holds {held}: "
+            "meta.json or the directory was changed after the run",
+        )
+    scenes = []
+    for file in files:
+        try:
+            scenes.append(parse(file))
+        except SceneError as exc:
+            raise DataFileError(
+                file,
+                f"is the run's copy of its scene and no longer reads as one ({exc}): the run directory was "
+                "changed after the run",
+            ) from None
+    return scenes
+
+
+def check_frame_times(file: Path, times: np.ndarray) -> None:
+    """Refuse stored frame times that are not finite and strictly increasing (a changed
+    frame_times.npy: every frame would be shown at another time)."""
+    later = np.diff(times) > 0
+    if not np.all(np.isfinite(times)) or not np.all(later):
+        first = int(np.argmin(later)) if not np.all(later) else int(np.argmin(np.isfinite(times))) - 1
+        raise DataFileError(
+            file,
+            f"frame {first + 1} at t = {times[first + 1]:.10g} s does not come after frame {first} at "
+            f"{times[first]:.10g} s: the frame times are out of order, so the run directory is damaged",
+        )
+
+
+def check_index_column(file: Path, values: np.ndarray, count: int, column: str, line_offset: int = 2) -> None:
+    """Refuse a stored table whose ``column`` holds an index outside 0 … ``count`` − 1 (a
+    row of a variant, sheet or marker the run does not have)."""
+    bad = np.flatnonzero((values < 0) | (values >= count) | (values != np.round(values)))
+    if len(bad):
+        raise DataFileError(
+            file,
+            f"{column} is {values[bad[0]]:g}, but the run has {count} (0 to {count - 1}): the file was changed "
+            "after the run",
+            int(bad[0]) + line_offset,
+        )
 
 
 def read_run(path: Path, variants: str | None = None, where: str | None = None) -> Recording:
     """Selected variants of a run directory as a Recording (an interrupted run: the frames it reached)."""
     meta = read_json(path / "meta.json")
     _check_meta(path, meta)
-    _check_scene_files(path, meta["n_variants"])
-    if meta["n_variants"] == 1:
-        scenes = [scene_from_dict(read_scene_file(path / "scene.toml"))]
-    else:
-        scenes = [
-            scene_from_dict(read_scene_file(path / "variants" / f"{i:04d}.toml")) for i in range(meta["n_variants"])
-        ]
+    scenes = read_run_scenes(path, meta["n_variants"], lambda file: scene_from_dict(read_scene_file(file)))
     parameters = per_strip_parameters(scenes)
     parameters.insert(0, "variant", np.arange(len(scenes)))
     chosen = select_variants(parameters, variants, where)
@@ -506,14 +544,7 @@ def read_run(path: Path, variants: str | None = None, where: str | None = None) 
         )
     frames = np.asarray(stored[:reached, chosen])
     times = np.load(path / "frame_times.npy")[:reached]
-    if np.any(~(np.diff(times) > 0)):
-        first = int(np.argmax(~(np.diff(times) > 0)))
-        raise DataFileError(
-            path / "frame_times.npy",
-            f"frame {first + 1} at t = {times[first + 1]:.10g} s does not "
-            f"come after frame {first} at {times[first]:.10g} s: the frame times are out of order, "
-            "so the run directory is damaged",
-        )
+    check_frame_times(path / "frame_times.npy", times)
     probes = read_probes(path, meta)
     return Recording(
         path,

@@ -30,17 +30,30 @@ import pandas as pd
 from warpcloth.errors import DataFileError
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS, SHEET_PROBE_UNITS, SHEET_PROBES
 from warpcloth.scene.sheet import SheetScene, read_sheet_scene
+from warpcloth.scene.sheet_build import marker_nodes, sheet_geometry
 from warpcloth.sheet import SheetGeometry
 
 from .atomic import naming
 from .json_file import read_json
-from .run_dir import StreamedDirectory, StreamedRun, StreamedTable, probe_table, read_committed_csv, write_scenes
+from .recording import check_time_order
+from .run_dir import (
+    StreamedDirectory,
+    StreamedRun,
+    StreamedTable,
+    check_frame_times,
+    check_index_column,
+    probe_table,
+    read_committed_csv,
+    read_run_scenes,
+    write_scenes,
+)
 
 SHEET_COORDINATES = "x out of the sheet's rest plane, y up, z across, m, from the middle of the clamp edge (at rest)"
 """The frame of every position a sheet run stores, written into its meta.json."""
 SHEET_PROBE_COLUMNS = ("t", "sheet", *SHEET_PROBE_FIELDS)
 MARKER_COLUMNS = ("t", "sheet", "marker", "x", "y", "z")
 ROW_BYTES = 24  # a "%.17g" field at most
+GEOMETRY_ARRAYS = ("lattice", "rest_positions", "clamped", "faces", "cells")
 
 
 def mesh_faces(geometry: SheetGeometry) -> np.ndarray:
@@ -223,38 +236,152 @@ def _why_empty(meta: dict) -> str:
     return "it was stopped before its first sample"
 
 
+META_COUNTS = ("probe_rows", "probe_bytes", "marker_rows", "marker_bytes", "frames")
+
+
+def _check_sheet_meta(path: Path, meta: dict) -> None:
+    # meta.json says what every other file must be; one that is not what a run writes is damaged
+    file = path / "meta.json"
+    if meta.get("kind") != "sheet" or meta.get("coordinates") != SHEET_COORDINATES:
+        raise DataFileError(file, 'is not a sheet run\'s (kind "sheet", its coordinates)')
+    committed = meta.get("committed")
+    markers = meta.get("markers")
+    checks = [
+        (isinstance(meta.get("complete"), bool), "complete must be true or false"),
+        (isinstance(meta.get("n_sheets"), int) and meta["n_sheets"] >= 1, "n_sheets must be a count ≥ 1"),
+        (isinstance(meta.get("n_nodes"), int) and meta["n_nodes"] >= 4, "n_nodes must be a count ≥ 4"),
+        (meta.get("probe_columns") == list(SHEET_PROBE_COLUMNS), "probe_columns differ from what a run writes"),
+        (meta.get("marker_columns") == list(MARKER_COLUMNS), "marker_columns differ from what a run writes"),
+        (
+            isinstance(markers, list)
+            and all(
+                isinstance(m, dict) and m.get("marker") == k and isinstance(m.get("node"), int)
+                for k, m in enumerate(markers)
+            ),
+            "markers must list each marker (0, 1, …) with its node",
+        ),
+        (
+            isinstance(committed, dict)
+            and all(isinstance(committed.get(k), int) and committed[k] >= 0 for k in META_COUNTS),
+            f"committed must give {', '.join(META_COUNTS)} as counts ≥ 0",
+        ),
+    ]
+    for ok, why in checks:
+        if not ok:
+            raise DataFileError(file, f"{why}: the run directory is damaged")
+
+
+def _check_geometry(path: Path, meta: dict, scene: SheetScene, stored: dict[str, np.ndarray]) -> None:
+    # every array of geometry.npz and every marker's node follow from the run's scene: rebuilt
+    # from it, they must be what the file holds (an index changed there would be read as a node)
+    geometry = sheet_geometry(scene)
+    built = {
+        "lattice": geometry.lattice,
+        "rest_positions": geometry.rest_positions,
+        "clamped": geometry.clamped,
+        "faces": mesh_faces(geometry),
+        "cells": geometry.cell_nodes,
+    }
+    for name, expected in built.items():
+        held = stored[name]
+        same = held.shape == expected.shape and (
+            np.allclose(held, expected, rtol=0, atol=1e-12)
+            if name == "rest_positions"
+            else np.array_equal(held, expected)
+        )
+        if not same:
+            if held.shape != expected.shape:
+                how = f"holds shape {held.shape}, the scene's cut {expected.shape}"
+            else:
+                at = np.unravel_index(int(np.argmax(np.abs(held.astype(float) - expected) > 1e-12)), held.shape)
+                how = f"[{', '.join(map(str, at))}] is {held[at]}, the scene's cut has {expected[at]}"
+            raise DataFileError(
+                path / "geometry.npz",
+                f"{name} is not the geometry of the run's scene ({how}): the run directory was changed after the run",
+            )
+    nodes = [m["node"] for m in meta["markers"]]
+    expected_nodes = marker_nodes(scene, geometry)
+    if nodes != expected_nodes:
+        raise DataFileError(
+            path / "meta.json",
+            f"markers name nodes {nodes}, but the run's scene puts its markers at nodes {expected_nodes}: "
+            "the run directory was changed after the run",
+        )
+    if meta["n_nodes"] != geometry.n_nodes:
+        raise DataFileError(
+            path / "meta.json",
+            f"n_nodes is {meta['n_nodes']}, but the run's scene cuts a sheet of {geometry.n_nodes}: "
+            "the run directory was changed after the run",
+        )
+
+
+def _check_tables(path: Path, meta: dict, probes: pd.DataFrame, markers: pd.DataFrame) -> None:
+    # rows in time order per sheet, of sheets the run has; the markers' table is the probes'
+    # rows, each repeated once per marker in marker order (they are written and committed together)
+    n_sheets, n_markers = meta["n_sheets"], len(meta["markers"])
+    check_index_column(path / "probes.csv", probes["sheet"].to_numpy(), n_sheets, "sheet")
+    check_time_order(path / "probes.csv", probes["t"].to_numpy(), probes["sheet"].to_numpy(), 2, "sheet")
+    expected = {
+        "t": np.repeat(probes["t"].to_numpy(), n_markers),
+        "sheet": np.repeat(probes["sheet"].to_numpy(), n_markers),
+        "marker": np.tile(np.arange(n_markers), len(probes)),
+    }
+    if len(markers) != len(expected["t"]):
+        raise DataFileError(
+            path / "markers.csv",
+            f"holds {len(markers)} rows, but the {len(probes)} committed probe rows of {n_markers} markers make "
+            f"{len(expected['t'])}: the run directory was changed after the run",
+        )
+    for column, values in expected.items():
+        wrong = np.flatnonzero(markers[column].to_numpy() != values)
+        if len(wrong):
+            row = int(wrong[0])
+            raise DataFileError(
+                path / "markers.csv",
+                f"{column} is {markers[column].iat[row]:.10g}, but this row is marker {expected['marker'][row]} "
+                f"of sheet {expected['sheet'][row]} at t = {expected['t'][row]:.10g} s (the probes' row "
+                f"{row // max(n_markers, 1) + 2}): the rows were changed or reordered after the run",
+                row + 2,
+            )
+
+
 def read_sheet_run(path: str | Path) -> SheetRun:
     """A sheet run directory as a :class:`SheetRun`; a DataFileError naming the file when
-    it is damaged or not a sheet run."""
+    it is damaged or not a sheet run: every file is checked against meta.json and the
+    run's scene before any number of it is used (the geometry rebuilt from the scene, the
+    tables' indices and time order, the frames' shape and times)."""
     path = Path(path)
     meta = read_json(path / "meta.json")
-    if meta.get("kind") != "sheet" or meta.get("coordinates") != SHEET_COORDINATES:
-        raise DataFileError(path / "meta.json", 'is not a sheet run\'s (kind "sheet", its coordinates)')
-    committed = meta.get("committed", {})
-    reached = committed.get("frames", 0)
+    _check_sheet_meta(path, meta)
+    scenes = read_run_scenes(path, meta["n_sheets"], read_sheet_scene, "n_sheets")
+    committed = meta["committed"]
+    reached = committed["frames"]
     if not reached:
         raise DataFileError(path, "the run was interrupted before its first frame")
     try:
         stored = np.load(path / "frames.npy", mmap_mode="r")
         times = np.load(path / "frame_times.npy")
-        geometry = np.load(path / "geometry.npz")
-        lattice, rest, faces = geometry["lattice"], geometry["rest_positions"], geometry["faces"]
+        with np.load(path / "geometry.npz") as archive:
+            geometry = {name: archive[name] for name in GEOMETRY_ARRAYS}
     except (ValueError, OSError, EOFError, KeyError) as exc:
         raise DataFileError(path, f"cannot be read as a sheet run ({exc}): the run directory is damaged") from None
+    _check_geometry(path, meta, scenes[0], geometry)
     expected = (len(times), meta["n_sheets"], meta["n_nodes"], 3)
-    if stored.shape != expected or reached > expected[0] or len(rest) != meta["n_nodes"]:
+    if stored.shape != expected or reached > expected[0]:
         raise DataFileError(
             path / "frames.npy",
-            f"holds frames of shape {stored.shape}, but the run recorded {expected} ({reached} committed) "
-            f"of a geometry of {len(rest)} nodes: the run directory is damaged",
+            f"holds frames of shape {stored.shape}, but the run recorded {expected} ({reached} committed): "
+            "the run directory is damaged",
         )
-    complete = bool(meta["complete"])
+    check_frame_times(path / "frame_times.npy", times[:reached])
+    complete = meta["complete"]
     probes = read_committed_csv(
         path / "probes.csv", committed["probe_rows"], committed["probe_bytes"], complete, SHEET_PROBE_COLUMNS
     )
     markers = read_committed_csv(
         path / "markers.csv", committed["marker_rows"], committed["marker_bytes"], complete, MARKER_COLUMNS
     )
+    _check_tables(path, meta, probes, markers)
     frames = np.asarray(stored[:reached])
     # a sheet that diverged leaves NaN frames from its stop on: the run reached as far as
     # its last sheet to stop did
@@ -262,17 +389,16 @@ def read_sheet_run(path: str | Path) -> SheetRun:
     reached = int(np.argmin(alive)) if not alive.all() else reached
     if not reached:
         raise DataFileError(path, f"recorded no frame: {_why_empty(meta)}")
-    scene_file = path / "scene.toml" if meta["n_sheets"] == 1 else path / "variants" / "0000.toml"
     return SheetRun(
         path,
-        read_sheet_scene(scene_file),
+        scenes[0],
         meta,
         probes,
         markers,
         times[:reached],
         frames[:reached],
-        lattice,
-        rest,
-        faces,
+        geometry["lattice"],
+        geometry["rest_positions"],
+        geometry["faces"],
         complete,
     )
