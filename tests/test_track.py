@@ -357,7 +357,9 @@ def test_a_background_model_that_holds_the_strip_is_an_error(tracked, tmp_path):
         "-o",
         str(tmp_path / "out.csv"),
     )
-    one_line_error(done, "lost", "give --background")
+    # the first frame's nearest dark blob to the clamp is then the strip's root, 2.1 mm below
+    # it, not the marker at 5 mm
+    one_line_error(done, "labelled s = 5 mm, is 2.13 mm from the clamp's lowest point", "give --background")
     assert not (tmp_path / "out.csv").exists()
 
 
@@ -526,3 +528,41 @@ def test_overlay_video_times_finer_than_avi_holds_are_rounded_or_refused():
     with pytest.raises(ArgumentError, match="^overlay_video: frames less than 0.001 s apart") as raised:
         avi_timing([Fraction(k, 2000) for k in range(4)])
     assert raised.value.argument == "overlay_video"
+
+
+def test_a_board_counted_the_other_way_round_is_refused_not_turned(tmp_path):
+    # issue 39: the 11 × 10 board given as 10x11 was calibrated, the plane turned 90°
+    done = run_cli(*CALIBRATE[:8], "--board", "10x11", *CALIBRATE[10:], "-o", str(tmp_path / "p.json"))
+    one_line_error(done, "--board: 10x11", "rows of 10 inner corners run up the image", "lies as 11x10")
+    assert not (tmp_path / "p.json").exists()
+
+
+def test_the_square_size_scales_the_plane_and_an_impossible_one_is_refused(tracked, tmp_path):
+    # the board is calibrated in squares and scaled to mm afterwards: any filmable square
+    # gives the same plane, scaled (1e300 mm ended in an OpenCV assertion)
+    done = run_cli(*CALIBRATE[:11], "1000", *CALIBRATE[12:], "-o", str(tmp_path / "p.json"))
+    assert done.returncode == 0, done.stderr
+    pixels = np.array([[200.0, 150.0], [400.0, 500.0], [600.0, 300.0]])
+    at_10 = read_plane(tracked / "plane.json").to_plane(pixels)
+    np.testing.assert_allclose(read_plane(tmp_path / "p.json").to_plane(pixels), 100 * at_10, rtol=1e-9, atol=1e-9)
+    for square in ("1e300", "0.001"):
+        done = run_cli(*CALIBRATE[:11], square, *CALIBRATE[12:], "-o", str(tmp_path / "q.json"))
+        one_line_error(done, f"--square-mm: {float(square):g} mm", "0.01 to 10000 mm")
+    assert not (tmp_path / "q.json").exists()
+
+
+@pytest.mark.parametrize(
+    "options, words",
+    [
+        # labels shifted by a step either way: each marker would be named 10 or -5 mm off
+        (("--marker-s", "15:105:10", "--marker-diameter-mm", "2.4"), ("--marker-s", "labelled s = 15 mm", "+10 mm")),
+        (("--marker-s", "0:90:10", "--marker-diameter-mm", "2.4"), ("--marker-s", "labelled s = 0 mm", "-5 mm")),
+        # a diameter that fits no marker: the option, its value and the size the blobs have
+        (("--marker-s", "5:95:10", "--marker-diameter-mm", "10"), ("--marker-diameter-mm: 10 mm", "a disc of 2.")),
+        (("--marker-s", "5:95:10", "--marker-diameter-mm", "1e300"), ("--marker-diameter-mm: 1e+300 mm", "px across")),
+    ],
+)
+def test_markers_named_wrongly_are_refused_naming_the_option(tracked, first_frames, tmp_path, options, words):
+    clip = short_clip(first_frames, tracked, tmp_path)
+    one_line_error(track_with(clip, tmp_path, *options), *words)
+    assert not (tmp_path / "out.csv").exists()

@@ -29,6 +29,9 @@ FORMAT = "warpcloth plane 1"
 """The ``format`` of a plane.json this code writes and reads."""
 
 MIN_IMAGES = 3
+SQUARE_MM = (0.01, 1e4)
+"""A chessboard square that can be filmed beside a strip, mm: a side outside is a slip of
+unit or digits (1e300 mm would overflow the plane's numbers), refused by name."""
 MIN_EDGE_PX = 10
 """--clamp-edge-px's two pixels at least this far apart: a half-pixel error in either then
 turns the x axis by at most atan(0.5 / 10) ≈ 3°."""
@@ -116,12 +119,30 @@ def _corners(image: np.ndarray, path: Path, inner: tuple[int, int]) -> np.ndarra
     return cv2.cornerSubPix(image, corners, (5, 5), (-1, -1), criteria).reshape(-1, 2).astype(np.float64)
 
 
-def _level(corners: np.ndarray, inner: tuple[int, int]) -> np.ndarray:
+def _level(corners: np.ndarray, inner: tuple[int, int], path: Path, by_corner: bool) -> np.ndarray:
     # the plane view's corners ordered as the board lies in the image: along a row left to
     # right, rows downwards (findChessboardCorners may start from any end). Relabelling a
     # flat board's corners by a symmetry of their lattice is a rotation of the board, so
-    # the calibration is the same; only --origin-corner's counting is fixed by it.
+    # the calibration is the same; only --origin-corner's counting is fixed by it, and the
+    # plane's y (up, against the board's rows' order) by the labels' handedness.
     grid = corners.reshape(inner[1], inner[0], 2)
+    along_row = np.abs(grid[:, -1] - grid[:, 0]).mean(axis=0)
+    if along_row[1] > along_row[0]:
+        # the rows run up the image: the board as counted is turned 90° from how it lies
+        if inner[0] == inner[1]:
+            grid = grid.transpose(1, 0, 2)
+        elif by_corner:
+            angle = np.degrees(np.arctan2(along_row[1], along_row[0]))
+            raise ArgumentError(
+                "inner",
+                f"{inner[0]}x{inner[1]}: in the plane view {path.name} the board's rows of {inner[0]} inner corners "
+                f"run up the image ({angle:.0f}° from its horizontal), so with the rows level the plane would be "
+                f"turned 90°; the board lies as {inner[1]}x{inner[0]} (columns × rows as the plane view shows it), "
+                "or, with a camera on its side, place the plane by --clamp-edge-px",
+            )
+        else:  # the clamp's edge gives x; only the labels' handedness must be the image's
+            row, column = grid[0, -1] - grid[0, 0], grid[-1, 0] - grid[0, 0]
+            return (grid[:, ::-1] if row[0] * column[1] - row[1] * column[0] < 0 else grid).reshape(-1, 2)
     if grid[0, -1, 0] < grid[0, 0, 0]:
         grid = grid[:, ::-1]
     if grid[-1, 0, 1] < grid[0, 0, 1]:
@@ -186,6 +207,12 @@ def calibrate_plane(
             f"{len(paths)} board image(s) given; at least {MIN_IMAGES} are needed (the plane "
             "view first, then views in other poses for the lens distortion)",
         )
+    if not SQUARE_MM[0] <= square_mm <= SQUARE_MM[1]:
+        raise ArgumentError(
+            "square_mm",
+            f"{square_mm:g} mm is not the side of a chessboard's square filmed beside a strip "
+            f"({SQUARE_MM[0]:g} to {SQUARE_MM[1]:g} mm)",
+        )
     if (origin_corner is None) == (clamp_edge_px is None):
         raise ArgumentError(
             "origin_corner",
@@ -209,18 +236,24 @@ def calibrate_plane(
             )
     edge = None if clamp_edge_px is None else _pixel_pair(clamp_edge_px, size)
     corners = [_corners(image, path, inner) for path, image in zip(paths, images, strict=True)]
-    corners[0] = _level(corners[0], inner)
+    corners[0] = _level(corners[0], inner, paths[0], by_corner=origin_corner is not None)
+    # the board in squares (OpenCV's float32 points hold any board then); mm only afterwards
     board = np.zeros((inner[0] * inner[1], 3), np.float32)
-    board[:, :2] = np.mgrid[0 : inner[0], 0 : inner[1]].T.reshape(-1, 2) * square_mm
-    rms, matrix, distortion, rvecs, tvecs = cv2.calibrateCamera(
-        [board] * len(images),
-        [c.astype(np.float32).reshape(-1, 1, 2) for c in corners],
-        size,
-        None,
-        None,
-        flags=cv2.CALIB_FIX_K3,
-        criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12),
-    )
+    board[:, :2] = np.mgrid[0 : inner[0], 0 : inner[1]].T.reshape(-1, 2)
+    try:
+        rms, matrix, distortion, rvecs, tvecs = cv2.calibrateCamera(
+            [board] * len(images),
+            [c.astype(np.float32).reshape(-1, 1, 2) for c in corners],
+            size,
+            None,
+            None,
+            flags=cv2.CALIB_FIX_K3,
+            criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12),
+        )
+    except cv2.error as exc:
+        raise DataFileError(
+            paths[0], f"OpenCV cannot calibrate a camera from these board images ({exc.err}): no plane file is written"
+        ) from None
     view_rms = []
     for c, rvec, tvec in zip(corners, rvecs, tvecs, strict=True):
         projected, _ = cv2.projectPoints(board, rvec, tvec, matrix, distortion)
@@ -235,7 +268,9 @@ def calibrate_plane(
             "(a changed zoom or focus, a resized image, or a board that is not flat)",
         )
     r = cv2.Rodrigues(rvecs[0])[0]
-    to_board = np.linalg.inv(np.column_stack([r[:, 0], r[:, 1], tvecs[0].ravel()]))
+    to_board = np.diag([square_mm, square_mm, 1.0]) @ np.linalg.inv(
+        np.column_stack([r[:, 0], r[:, 1], tvecs[0].ravel()])
+    )
     distortion = distortion.ravel()[:5].astype(np.float64)
     board_mapping = PlaneMapping(matrix, distortion, to_board, (int(size[0]), int(size[1])))
     if origin_corner is not None:
@@ -249,7 +284,10 @@ def calibrate_plane(
     y_axis = np.array([x_axis[1], -x_axis[0]])  # the board's Y runs down the image: up is −Y
     move = np.array([[*x_axis, -x_axis @ origin], [*y_axis, -y_axis @ origin], [0.0, 0.0, 1.0]])
     mapping = PlaneMapping(matrix, distortion, move @ to_board, board_mapping.image_size)
-    expected = board[:, :2] @ np.vstack([x_axis, y_axis]).T - [x_axis @ origin, y_axis @ origin]
+    expected = board[:, :2].astype(np.float64) * square_mm @ np.vstack([x_axis, y_axis]).T - [
+        x_axis @ origin,
+        y_axis @ origin,
+    ]
     plane_error = mapping.to_plane(corners[0]) - expected
     scale = mapping.mm_per_px(corners[0])
     record = {

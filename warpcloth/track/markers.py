@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from warpcloth.errors import DataFileError
+from warpcloth.errors import ArgumentError, DataFileError
 
 from .calibration import PlaneMapping
 from .video import Frames, FrameStream
@@ -81,16 +81,18 @@ def noise_sigma(darkening: np.ndarray) -> float:
 
 def _blobs(
     darkening: np.ndarray, threshold: float, areas: tuple[float, float], noise: float
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    # the marker-sized dark blobs' centres and uncertainties, and the areas of the others (px²)
     import cv2
 
     mask = (darkening > threshold).astype(np.uint8)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     kernel = np.ones((2 * GROW_PX + 1, 2 * GROW_PX + 1), np.uint8)
-    centres, sigmas = [], []
+    centres, sigmas, others = [], [], []
     for label in range(1, n):
         x0, y0, w, h, area = stats[label]
         if not areas[0] <= area <= areas[1]:
+            others.append(int(area))
             continue
         r0, c0 = max(y0 - GROW_PX, 0), max(x0 - GROW_PX, 0)
         r1, c1 = min(y0 + h + GROW_PX, mask.shape[0]), min(x0 + w + GROW_PX, mask.shape[1])
@@ -102,7 +104,40 @@ def _blobs(
         spread = np.array([((cols - cx) ** 2)[region].sum(), ((rows - cy) ** 2)[region].sum()])
         centres.append((cx, cy))
         sigmas.append(noise * np.sqrt(spread) / total)
-    return np.array(centres).reshape(-1, 2), np.array(sigmas).reshape(-1, 2)
+    return np.array(centres).reshape(-1, 2), np.array(sigmas).reshape(-1, 2), others
+
+
+def _marker_areas(mapping: PlaneMapping, diameter_mm: float) -> tuple[float, float, float]:
+    # the area a marker covers at the image's centre and the range taken as one (px²), or
+    # an error naming the diameter when no marker of it could be seen in these frames
+    centre_px = np.array([[mapping.image_size[0] / 2, mapping.image_size[1] / 2]])
+    scale = float(mapping.mm_per_px(centre_px)[0])
+    radius_px = 0.5 * diameter_mm / scale
+    if not 0.5 <= radius_px <= 0.5 * min(mapping.image_size):
+        raise ArgumentError(
+            "diameter_mm",
+            f"{diameter_mm:g} mm is {2 * radius_px:.3g} px across at the image's centre ({scale:.3g} mm/px): a "
+            f"marker must span at least a pixel and fit in the {mapping.image_size[0]} × {mapping.image_size[1]} px "
+            "frame; give the markers' diameter in mm",
+        )
+    area = np.pi * radius_px**2
+    return area, AREA_RANGE[0] * area, AREA_RANGE[1] * area
+
+
+def _check_first_marker(plane: np.ndarray, s_mm: np.ndarray, where: str) -> None:
+    # in the first frame the strip hangs at rest from the clamp: its first marker is as far
+    # from the clamp's lowest point as its arc length says (a strip is straight over its
+    # first marker's few mm), or every marker's label is shifted
+    chord = float(np.linalg.norm(plane[0]))
+    if not s_mm[0] / STRETCH - SLACK_MM <= chord <= STRETCH * s_mm[0] + SLACK_MM:
+        raise ArgumentError(
+            "s_mm",
+            f"the first marker, labelled s = {s_mm[0]:g} mm, is {chord:.3g} mm from the clamp's lowest point in "
+            f"{where}, where the strip hangs at rest: the arc lengths are shifted (each marker would be labelled "
+            f"{s_mm[0] - chord:+.3g} mm from where it is), or the plane's origin (--plane) is not the clamp's "
+            "lowest point, or the blob is not a marker (a background model that holds the strip or the clamp: "
+            "give --background)",
+        )
 
 
 def _chain(plane: np.ndarray, start: np.ndarray, reach: float, s_mm: np.ndarray, where: str, path: Path) -> np.ndarray:
@@ -165,9 +200,7 @@ def track_markers(
     from tqdm import tqdm
 
     path = Path(path)
-    centre_px = np.array([[mapping.image_size[0] / 2, mapping.image_size[1] / 2]])
-    expected_area = np.pi * (0.5 * diameter_mm / float(mapping.mm_per_px(centre_px)[0])) ** 2
-    areas = (AREA_RANGE[0] * expected_area, AREA_RANGE[1] * expected_area)
+    expected_area, *areas = _marker_areas(mapping, diameter_mm)
     index, t, px, sig, noise = [], [], [], [], []
     previous = np.zeros(2)  # the clamp's lowest point at rest
     bg = background.astype(np.float64)
@@ -175,12 +208,23 @@ def track_markers(
         darkening = bg - image
         noise.append(noise_sigma(darkening))
         threshold = threshold_dn if threshold_dn is not None else max(10.0 * noise[-1], 5.0)
-        centres, sigmas = _blobs(darkening, threshold, areas, noise[-1])
+        centres, sigmas, others = _blobs(darkening, threshold, tuple(areas), noise[-1])
+        where = f"frame {i} (t = {time:.6g} s)"
+        if not index and len(centres) < len(s_mm) and others:
+            raise ArgumentError(
+                "diameter_mm",
+                f"{diameter_mm:g} mm: {where} holds {len(centres)} blobs of a marker's area ({expected_area:.3g} px², "
+                f"taken from {areas[0]:.3g} to {areas[1]:.3g}) for {len(s_mm)} markers, and {len(others)} dark blobs "
+                f"of other areas (median {np.median(others):.3g} px², a disc of "
+                f"{diameter_mm * np.sqrt(np.median(others) / expected_area):.3g} mm): give the markers' diameter",
+            )
         plane = mapping.to_plane(centres) if len(centres) else centres
         # the first marker: near the clamp's lowest point at rest in the first frame, then
         # within half the spacing of where it was (it moves least: it is nearest the clamp)
         reach = 0.5 * (s_mm[1] - s_mm[0]) + (s_mm[0] if not index else 0.0)
-        order = _chain(plane, previous, reach, s_mm, f"frame {i} (t = {time:.6g} s)", path)
+        order = _chain(plane, previous, reach, s_mm, where, path)
+        if not index:
+            _check_first_marker(plane[order], s_mm, where)
         index.append(i)
         t.append(time)
         px.append(centres[order])
