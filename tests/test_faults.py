@@ -1036,3 +1036,46 @@ def test_a_kes_fit_that_overflows_writes_no_material_file(tmp_path, scale):
         else "fb1.csv: no quartic T(ε) rising on [0, 0.25] fits this loop"
     ) in done.stderr
     assert not (tmp_path / "m.toml").exists()
+
+
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        # issue 39: the sheet's auto step collapsed to 1.06e-10 s and ran for minutes without a word
+        (
+            ("run", "shear_swing", "--set", "shear.rigidity_gf_per_cm_deg=1e12"),
+            ('integrator.dt_s: 1.063e-10 s (chosen by dt_s = "auto"', "1.13e+10 steps of each sheet", "days"),
+        ),
+        (
+            ("run", "damped_swing", "--set", "integrator.dt_s=1e-8"),
+            ("integrator.dt_s: 1e-08 s over 4.3 s", "4.3e+08 steps of each strip", "max_steps = 100000000"),
+        ),
+        (
+            ("sweep", "damped_swing_sweep", "--set", "integrator.dt_s=1e-8"),
+            ("integrator.dt_s: 1e-08 s", "steps of each strip", "raise integrator.max_steps"),
+        ),
+        (
+            ("run", "damped_swing", "--set", "integrator.max_steps=3000000000"),
+            ("integrator.max_steps: 3000000000 is more than a kernel counts (2147483647)",),
+        ),
+    ],
+)
+def test_a_step_count_beyond_reason_is_refused_before_it_starts(tmp_path, args, words):
+    done = run_cli(*args, "--no-progress", "--out", tmp_path / "o")
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1, done.stderr
+    for word in words:
+        assert word in done.stderr, done.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_long_run_asked_for_runs_and_says_how_long_first(monkeypatch):
+    import warpcloth.core.runner as runner
+
+    # raising integrator.max_steps lets the refused step through (checked, not run: 4.3e8 steps)
+    scene = wc.load_scene("damped_swing", ["integrator.dt_s=1e-8", "integrator.max_steps=500000000"])
+    assert scene.integrator.max_steps == 500_000_000
+    # a run past LONG_RUN_STEPS says its steps and estimated time before the first launch
+    monkeypatch.setattr(runner, "LONG_RUN_STEPS", 1000)
+    with pytest.warns(wc.errors.LongRunWarning, match=r"1\.4e\+05 steps of each of 1 strip\(s\) of 25 nodes .* CPU core"):
+        wc.run("damped_swing", ["run.duration_s=0.1"], device="cpu")

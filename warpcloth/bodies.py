@@ -53,10 +53,13 @@ HOOKS = {
 @dataclass(frozen=True)
 class Body:
     """One body: its ``name`` (a scene's table, a run's meta.json ``kind``), the unit its
-    throughput is counted in, and its :data:`HOOKS` as ``"module:attribute"``."""
+    throughput is counted in, what a node-step costs one CPU core (ns, measured: the
+    estimate a run too long to start is refused with), and its :data:`HOOKS` as
+    ``"module:attribute"``."""
 
     name: str
     steps: str
+    cpu_ns_per_node_step: float
     hooks: dict[str, str]
 
     def hook(self, name: str) -> Any:
@@ -77,6 +80,7 @@ BODIES: dict[str, Body] = {
     "strip": Body(
         "strip",
         "strip-steps",
+        40.0,  # damped_swing, one core of the 2-core CI machine (benchmarks/RESULTS.md: 28-45 ns)
         {
             "scene_type": "warpcloth.scene.schema:Scene",
             "own_sections": "warpcloth.scene.files:strip_sections",
@@ -109,6 +113,7 @@ BODIES: dict[str, Body] = {
     "sheet": Body(
         "sheet",
         "node-steps",
+        170.0,  # shear_swing at 5 mm, one core of the 2-core CI machine
         {
             "scene_type": "warpcloth.scene.sheet:SheetScene",
             "own_sections": "warpcloth.scene.sheet:sheet_sections",

@@ -104,6 +104,12 @@ class InternalError(WarpclothError, RuntimeError):
     or call that raised it."""
 
 
+class LongRunWarning(UserWarning):
+    """A run long enough to be a mistake is about to start: its steps of each body and its
+    estimated time, before the first launch (a run past ``integrator.max_steps`` is refused
+    instead). The command line prints it as one line."""
+
+
 class PlausibilityWarning(UserWarning):
     """A finite input outside the range a fabric strip or its measurement plausibly has
     (:data:`warpcloth.units.PLAUSIBLE`): it is used as given, and the warning names the

@@ -20,6 +20,7 @@ from warpcloth.errors import (
     ArgumentError,
     DataFileError,
     DivergenceError,
+    LongRunWarning,
     OptionError,
     PlausibilityWarning,
     ResourceError,
@@ -74,12 +75,13 @@ def parser() -> argparse.ArgumentParser:
 
 
 def show_warnings_as_lines(command: str) -> None:
-    """Print each :class:`~warpcloth.errors.PlausibilityWarning` as one line
+    """Print each :class:`~warpcloth.errors.PlausibilityWarning` and
+    :class:`~warpcloth.errors.LongRunWarning` as one line
     ``warpcloth COMMAND: warning: ...`` (no source line), each text once; NumPy's
     RuntimeWarnings are not shown."""
 
     def show(message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
-        if issubclass(category, PlausibilityWarning):
+        if issubclass(category, PlausibilityWarning | LongRunWarning):
             if str(message) not in seen:
                 seen.add(str(message))
                 print(f"warpcloth {command}: warning: {message}", file=sys.stderr)

@@ -38,6 +38,14 @@ def size_text(n: float) -> str:
     return f"{float(value):.3g} {unit}" if value < Decimal("1e300") else f"{value:.3g} {unit}"
 
 
+def duration_text(seconds: float) -> str:
+    """A duration as a person reads it: seconds, minutes, hours or days, 3 digits."""
+    for unit, size in (("days", 86400.0), ("hours", 3600.0), ("minutes", 60.0)):
+        if seconds >= size:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds:.3g} s"
+
+
 def check_memory(needed: int, what: str, knobs: str, available: int | None = None) -> None:
     """Refuse ``needed`` bytes of ``what`` when over :data:`MEMORY_FRACTION` of the memory available."""
     available = available_memory() if available is None else available

@@ -14,14 +14,17 @@ import numpy as np
 import warp as wp
 from tqdm import tqdm
 
-from warpcloth.errors import ArgumentError, ArgumentTypeError, DivergenceError
+from warpcloth.errors import ArgumentError, ArgumentTypeError, DivergenceError, LongRunWarning
 
 from .divergence import DivergenceMonitor
-from .resources import check_memory
+from .resources import check_memory, duration_text
 from .result import RunResult
 from .schedule import OutputChunk, Schedule, sample_bounds
 from .solver import Solver
 
+LONG_RUN_STEPS = 10**7
+"""Steps of each body past which a run says, before it starts, how many and how long
+(a tenth of the default ``integrator.max_steps``, where it is refused)."""
 TARGET_LAUNCH_SECONDS = 0.5  # long enough to amortise launch cost, short enough for progress
 BUFFER_BYTES = 64 * 2**20  # cap on the per-chunk probe, table and frame buffers
 DIVERGENCE_POLICIES = ("raise", "record")
@@ -218,6 +221,33 @@ def _progress_bar(schedule: Schedule, show: bool) -> tqdm:
     )
 
 
+def announce_long_run(model: Any, steps: int, dt: float, threads: int) -> None:
+    """A :class:`~warpcloth.errors.LongRunWarning` with the steps of each body and the
+    time they take on ``threads`` CPU cores (the body's measured cost per node-step) when
+    a body takes more than :data:`LONG_RUN_STEPS`."""
+    if steps <= LONG_RUN_STEPS:
+        return
+    import warnings
+
+    from warpcloth import bodies
+
+    node_steps = float(steps) * model.n_nodes * model.n_bodies
+    if model.device.is_cpu:
+        cores = min(threads, model.n_bodies)
+        ns = bodies.named(model.body).cpu_ns_per_node_step
+        estimate = (
+            f"about {duration_text(node_steps * ns * 1e-9 / cores)} on {cores} CPU core(s) at ~{ns:g} ns a node-step"
+        )
+    else:
+        estimate = f"{node_steps:.3g} node-steps on {model.device}"
+    warnings.warn(
+        f"{steps:.3g} steps of each of {model.n_bodies} {model.body}(s) of {model.n_nodes} nodes (dt {dt:.4g} s), "
+        f"{estimate}; Ctrl-C stops it and keeps what was recorded",
+        LongRunWarning,
+        stacklevel=3,
+    )
+
+
 def simulate_batch(
     model: Any,
     control: Any,
@@ -256,6 +286,7 @@ def simulate_batch(
         )
     state = state or model.state()
     schedule = recorder.schedule(control, solver)
+    announce_long_run(model, int(schedule.steps[-1]), solver.dt, threads)
     settings = recorder.settings(model)
     record = RecordBuffers(model, schedule, recorder.tables(model), settings, keep_frames)
     monitor = DivergenceMonitor(model, solver, control)

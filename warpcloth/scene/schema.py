@@ -41,6 +41,15 @@ docs/model.md's illustrative wool 90 % / nylon 10 % (warp direction). The paper'
 Fig. 8 curves are not in its text, so these numbers are plausible, not measured."""
 
 
+AUTO = "auto"
+"""The word ``integrator.dt_s`` takes for a step warpcloth chooses."""
+
+MAX_STEPS_DEFAULT = 10**8
+"""Steps of each body a run may take unless its scene's ``integrator.max_steps`` says more:
+23 times the paper's own step count (dt = 1e-7 s over a 4.3 s hold and swing), and beyond it
+a step has collapsed under a stiffness or spacing no fabric has (docs/promises.md)."""
+
+
 def _field(
     default: Any,
     doc: str,
@@ -266,6 +275,13 @@ class IntegratorSection:
         bending_masing.DEFAULT_CAPACITY,
         "masing: open reversal points each hinge keeps (16 B each per hinge); a reversal "
         "beyond it is counted and reported (docs/model.md §4.10)",
+        ge=1,
+    )
+    max_steps: int = _field(
+        MAX_STEPS_DEFAULT,
+        "steps of each strip a run may take (settling and the record together); a step that "
+        "collapses (a stiffness or spacing beyond reason) is refused past it: raise it to run a long "
+        "run on purpose, up to 2147483647",
         ge=1,
     )
 

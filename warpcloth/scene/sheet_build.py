@@ -39,6 +39,7 @@ from .locate import located, variant_error
 from .materials import to_si
 from .overrides import Overrides, apply_overrides
 from .sheet import AUTO, AUTO_FRACTION, SheetScene, SheetSection, sheet_scene_from_dict
+from .validate import check_step_count
 
 FAMILIES = {"warp": WARP, "weft": WEFT}
 
@@ -258,8 +259,8 @@ def check_sheet_scene(scene: SheetScene) -> SheetScene:
         interval = scene.output_interval
         chosen = interval / math.ceil(interval / (AUTO_FRACTION * stable) * (1 - 1e-12))
         integrator = dataclasses.replace(scene.integrator, dt_s=chosen, dt_chosen_by=AUTO)
-        return dataclasses.replace(scene, integrator=integrator)
-    if dt > stable:
+        scene = dataclasses.replace(scene, integrator=integrator)
+    elif dt > stable:
         raise SceneError(
             "integrator.dt_s",
             f"{dt:g} s is above the sheet's linearised stability estimate {stable:.4g} s "
@@ -268,6 +269,13 @@ def check_sheet_scene(scene: SheetScene) -> SheetScene:
             f'strain stiffens the yarns, {AUTO_FRACTION:g} of it is safe), or dt_s = "auto"',
             related=("sheet.spacing_warp_mm", "sheet.spacing_weft_mm", "material.from_file"),
         )
+    check_step_count(
+        scene.release.settle_time_s + scene.run.duration_s,
+        scene.integrator,
+        geometry.n_nodes,
+        "sheet",
+        ("run.duration_s", "release.settle_time_s", "sheet.spacing_warp_mm", "sheet.spacing_weft_mm"),
+    )
     return scene
 
 

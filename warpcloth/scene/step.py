@@ -27,11 +27,8 @@ from warpcloth.units import check_plausible
 
 from .grip import grip_of
 from .materials import to_si
-from .schema import Scene
+from .schema import AUTO, Scene
 from .validate import validate_scene
-
-AUTO = "auto"
-"""The value of ``integrator.dt_s`` that asks for this choice."""
 
 STABILITY_MARGIN = {True: 0.9, False: 0.8}
 """The fraction of the stability bound taken: 0.9 of an exact bound (strain and damping

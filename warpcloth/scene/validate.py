@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import math
 
+from warpcloth.core.resources import duration_text
 from warpcloth.errors import SceneError
 
 from .materials import validate_material
-from .schema import ClampSection, ReleaseSection, Scene
+from .schema import AUTO, ClampSection, ReleaseSection, Scene
 
 MAX_STEPS = 2**31 - 1
 MAX_NODES = 2**31 - 1
@@ -97,13 +98,41 @@ def validate_scene(scene: Scene) -> None:
             f"{scene.output_interval:g} s (1 / (output.frame_rate_hz × output.probes_per_frame))",
             related=("output.frame_rate_hz", "output.probes_per_frame"),
         )
-    steps = (scene.preroll + scene.run.duration_s) / dt
-    if steps > MAX_STEPS:
-        raise SceneError(
-            "run.duration_s",
-            f"{scene.preroll + scene.run.duration_s:g} s at dt {dt:g} s is {steps:.3g} steps, more than {MAX_STEPS}",
-            related=("integrator.dt_s", "release.settle_time_s", "release.move_time_s"),
-        )
+    check_step_count(
+        scene.preroll + scene.run.duration_s,
+        scene.integrator,
+        scene.n_nodes,
+        "strip",
+        ("run.duration_s", "release.settle_time_s", "release.move_time_s", "strip.spacing_mm"),
+    )
+
+
+def check_step_count(total_s: float, integrator: object, n_nodes: int, body: str, related: tuple[str, ...]) -> None:
+    """Refuse, naming ``integrator.dt_s``, a run whose step count (``total_s`` of
+    settling and record at the integrator's step) is beyond ``integrator.max_steps``
+    (what a kernel counts at most, :data:`MAX_STEPS`, in any case), with its estimated
+    time on one CPU core: a step that collapsed under a stiffness or spacing beyond
+    reason would otherwise run for hours without a word."""
+    from warpcloth import bodies
+
+    if integrator.max_steps > MAX_STEPS:
+        raise SceneError("integrator.max_steps", f"{integrator.max_steps} is more than a kernel counts ({MAX_STEPS})")
+    dt = integrator.dt_s
+    steps = total_s / dt
+    if steps <= integrator.max_steps:
+        return
+    ns = bodies.named(body).cpu_ns_per_node_step
+    chosen = (
+        ' (chosen by dt_s = "auto": the stiffest element allows no longer)' if integrator.dt_chosen_by == AUTO else ""
+    )
+    raise SceneError(
+        "integrator.dt_s",
+        f"{dt:.4g} s{chosen} over {total_s:g} s of settling and record is {steps:.3g} steps of each {body}, more "
+        f"than integrator.max_steps = {integrator.max_steps}: about {duration_text(steps * n_nodes * ns * 1e-9)} "
+        f"of a CPU core per {body} ({n_nodes} nodes at ~{ns:g} ns a node-step); a step this short comes from a "
+        "stiffness or spacing beyond reason; raise integrator.max_steps to run it on purpose",
+        related=related,
+    )
 
 
 def _validate_rest_curvature(scene: Scene) -> None:
