@@ -1077,5 +1077,7 @@ def test_a_long_run_asked_for_runs_and_says_how_long_first(monkeypatch):
     assert scene.integrator.max_steps == 500_000_000
     # a run past LONG_RUN_STEPS says its steps and estimated time before the first launch
     monkeypatch.setattr(runner, "LONG_RUN_STEPS", 1000)
-    with pytest.warns(wc.errors.LongRunWarning, match=r"1\.4e\+05 steps of each of 1 strip\(s\) of 25 nodes .* CPU core"):
+    with pytest.warns(
+        wc.errors.LongRunWarning, match=r"1\.4e\+05 steps of each of 1 strip\(s\) of 25 nodes .* CPU core"
+    ):
         wc.run("damped_swing", ["run.duration_s=0.1"], device="cpu")

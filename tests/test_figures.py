@@ -235,6 +235,22 @@ def test_sweep_metric_plots(tmp_path):
     assert_not_blank(heat)
     with pytest.raises(wc.ArgumentError, match="metric: .no_such_metric. is not a column of the sweep summary"):
         plot_sweep(summary, tmp_path / "bad.png", "no_such_metric", "damping.gamma_per_s")
+    # --where and --variants choose the variants drawn (issue 39: they were ignored, and a
+    # selection that matched nothing drew every variant)
+    metric = ("--metric", "first_amplitude_m", "--x", "damping.gamma_per_s")
+    done = run_cli(
+        "plot", str(tmp_path / "sweep"), *metric, "--where", "damping.gamma_per_s<2", "--out", str(tmp_path / "w")
+    )
+    assert done.returncode == 0 and "(4 of the variants)" in done.stdout, done.stderr
+    done = run_cli("plot", str(tmp_path / "sweep"), *metric, "--variants", "0,5", "--out", str(tmp_path / "v"))
+    assert done.returncode == 0 and "(2 of the variants)" in done.stdout, done.stderr
+    for selection, words in (
+        (("--where", "damping.gamma_per_s<0"), "--where: 'damping.gamma_per_s<0' matches no variant"),
+        (("--variants", "7"), "--variants: variant 7 does not exist (there are 6)"),
+    ):
+        done = run_cli("plot", str(tmp_path / "sweep"), *metric, *selection, "--out", str(tmp_path / "none"))
+        assert done.returncode == 2 and words in done.stderr, done.stderr
+        assert not (tmp_path / "none").exists()
 
 
 def ribbon_columns(image):

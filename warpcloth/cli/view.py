@@ -123,18 +123,20 @@ def plot_command(args: argparse.Namespace) -> int:
 def strip_plot_command(args: argparse.Namespace) -> int:
     """``plot`` of a strip's run, or one sweep metric against parameters."""
     from warpcloth.io.load import load_recording
+    from warpcloth.io.recording import select_summary_rows
     from warpcloth.viz.plots import plot_run, plot_sweep, read_sweep_summary
 
     out = new_result(args.out or Path(args.run_dir) / "figures", args.overwrite, "--out")
     if args.metric or args.x:
         if not (args.metric and args.x):
             raise OptionError("--metric", "a sweep plot needs both --metric and --x")
-        out.mkdir(parents=True, exist_ok=True)
         name = f"{args.metric}_vs_{args.x}" + (f"_{args.y}" if args.y else "")
         summary = read_sweep_summary(args.run_dir)
-        path = plot_sweep(summary, out / f"{name}.{args.format}", args.metric, args.x, args.y, dpi=args.dpi)
-        print(f"wrote {path}")
         total = json.loads((Path(args.run_dir) / "sweep.json").read_text())["n_variants"]
+        chosen = select_summary_rows(summary, args.variants, args.where, total)
+        out.mkdir(parents=True, exist_ok=True)
+        path = plot_sweep(chosen, out / f"{name}.{args.format}", args.metric, args.x, args.y, dpi=args.dpi)
+        print(f"wrote {path}" + (f" ({len(chosen)} of the variants)" if len(chosen) < len(summary) else ""))
         if len(summary) < total:
             print(
                 f"note: the sweep has not finished: the figure shows the {len(summary)} of its {total} variants "

@@ -245,6 +245,20 @@ def select_variants(parameters: pd.DataFrame, variants: str | None, where: str |
     return chosen
 
 
+def select_summary_rows(summary: pd.DataFrame, variants: str | None, where: str | None, total: int) -> pd.DataFrame:
+    """The rows of a sweep's summary (one per finished variant, a ``variant`` column and
+    the parameters) that a ``--variants`` selection of the sweep's ``total`` variants and a
+    ``--where`` filter choose; an ArgumentError naming the one that leaves none."""
+    rows = summary
+    if variants is not None:
+        rows = rows[rows["variant"].isin(parse_variants(variants, total))]
+        if rows.empty:
+            raise ArgumentError("variants", f"{variants!r} selects no variant the sweep has finished")
+    if where:
+        rows = rows[rows["variant"].isin(filter_variants(rows, where))]
+    return rows
+
+
 def check_time_order(
     path: Path, t: np.ndarray, variant: np.ndarray, line_offset: int | None = None, index: str = "variant"
 ) -> None:
