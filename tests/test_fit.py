@@ -251,3 +251,31 @@ def test_only_a_continuum_estimate_is_converged():
     assert judged({}).status == "spacing_limited"
     dependent = judged({}, mesh_note="the tagawa2003 law's hysteresis depends on the mesh")
     assert dependent.status == "mesh_dependent" and dependent.problems[0].endswith("not fabric properties")
+
+
+def test_a_given_noise_the_data_contradict_is_refused_or_named(tmp_path):
+    # issue 39: --noise 1e4 (10 m on a 50 mm swing) turned a poor fit into "converged"
+    from warpcloth import bodies
+    from warpcloth.calibrate.motion_fit.verdict import check_given_noise, measurement_noise
+
+    laser = bodies.named("strip")("read_measurement", "damped_swing_laser")
+    shown = measurement_noise(laser)  # 0.19 mm
+    check_given_noise(laser, 3 * shown)  # a calibration's systematic share: taken as given
+    with pytest.warns(wc.errors.PlausibilityWarning, match=r"--noise 5 mm is 2\d\.\d× the noise the data"):
+        check_given_noise(laser, 5e-3)
+    with pytest.raises(wc.ArgumentError, match=r"noise: 1e\+04 mm is as large as the measured motion itself"):
+        check_given_noise(laser, 10.0)
+    done = run_cli(
+        "fit",
+        "damped_swing",
+        "--measured",
+        "damped_swing_laser",
+        "--free",
+        "gamma",
+        "--noise",
+        "1e4",
+        "--out",
+        tmp_path / "fit",
+    )
+    assert done.returncode == 2 and "--noise: 1e+04 mm is as large as the measured motion" in done.stderr
+    assert not (tmp_path / "fit").exists()

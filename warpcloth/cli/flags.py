@@ -37,6 +37,7 @@ FLAGS = {
     "metric": "--metric",
     "movie": "--movie",
     "name_or_path": "SCENE",
+    "noise": "--noise",
     "origin_corner": "--origin-corner",
     "names": "--free",
     "out": "--out",

@@ -22,7 +22,7 @@ from .continuum import continuum_limit
 from .objective import SHIFT, FitObjective, make_objective
 from .parameters import FreeParameter, initial_point
 from .report import FitResult, summarise
-from .verdict import ended_at_bound, judged_noise
+from .verdict import check_given_noise, ended_at_bound, judged_noise
 
 MAX_SPACE_FILLING = 10_000
 
@@ -56,6 +56,7 @@ def fit_motion(
     bootstrap = checked_count("bootstrap", bootstrap, 0)
     if bootstrap == 1:
         raise ArgumentError("bootstrap", "is 1: a bootstrap σ needs at least 2 resamples (0: no bootstrap)")
+    check_given_noise(measurement, noise)
     objective = make_objective(base, measurement, free, align_start_s, device)
     rng = np.random.default_rng(seed)
     if n0 > MAX_SPACE_FILLING:

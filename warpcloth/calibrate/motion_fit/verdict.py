@@ -7,12 +7,13 @@ from __future__ import annotations
 
 import copy
 import math
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from warpcloth.errors import ArgumentError
+from warpcloth.errors import ArgumentError, PlausibilityWarning
 from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene import scene_from_dict
 
@@ -28,6 +29,9 @@ STATUSES = ("converged", "spacing_limited", "mesh_dependent", "at_bound", "poor_
 """Verdicts of a fit, from the only one that is a fit to the worst (see the package docstring)."""
 AT_BOUND = 1e-3  # a parameter this close to a bound, as a fraction of its range, ended on it
 NOT_IDENTIFIABLE_CORRELATION = 0.95
+NOISE_GIVEN_FACTOR = 10.0
+"""A given noise σ above this many times the one the data show is named (a calibration's
+systematic error can make the right σ a few times the random one, not ten)."""
 
 
 def ended_at_bound(free: list[FreeParameter], u: np.ndarray) -> list[str]:
@@ -135,23 +139,56 @@ def continuum_problems(continuum: dict) -> list[str]:
     return [f"no continuum estimate: {continuum['note']}; the values are the fit at the scene's spacing"]
 
 
-def measurement_noise(measurement: LaserTrace | TrackedShapes | SheetMarkers) -> float:
-    """σ of a measurement's noise from the data alone (each marker coordinate a series)."""
+def measured_series(measurement: LaserTrace | TrackedShapes | SheetMarkers) -> list[np.ndarray]:
+    """A measurement's coordinates as series in time (m): the laser's x; each marker's (or
+    arc length's) coordinates, one series per axis."""
     if isinstance(measurement, LaserTrace):
-        return difference_noise([measurement.x])
+        return [measurement.x]
     if isinstance(measurement, SheetMarkers):
-        return difference_noise(
-            [
-                measurement.position[measurement.marker == k, a]
-                for k in np.unique(measurement.marker)
-                for a in range(len(measurement.axes))
-            ]
-        )
+        return [
+            measurement.position[measurement.marker == k, a]
+            for k in np.unique(measurement.marker)
+            for a in range(len(measurement.axes))
+        ]
     order = np.lexsort((measurement.frame, measurement.s))
     s = measurement.s[order]
     starts = np.flatnonzero(np.r_[True, np.diff(s) != 0, True])
     pieces = [slice(a, b) for a, b in zip(starts[:-1], starts[1:], strict=True)]
-    return difference_noise([measurement.x[order][p] for p in pieces] + [measurement.y[order][p] for p in pieces])
+    return [measurement.x[order][p] for p in pieces] + [measurement.y[order][p] for p in pieces]
+
+
+def measurement_noise(measurement: LaserTrace | TrackedShapes | SheetMarkers) -> float:
+    """σ of a measurement's noise from the data alone (each marker coordinate a series)."""
+    return difference_noise(measured_series(measurement))
+
+
+def check_given_noise(measurement: LaserTrace | TrackedShapes | SheetMarkers, noise: float | None) -> None:
+    """Refuse a given noise σ (m) as large as the measured motion itself (every model would
+    fit within it, so the RMS could judge nothing), and warn of one above
+    :data:`NOISE_GIVEN_FACTOR` × the noise the data show: the fit's status is judged
+    against it, so a poor fit may read as converged."""
+    if noise is None:
+        return
+    if not (isinstance(noise, int | float) and math.isfinite(noise) and noise > 0):
+        raise ArgumentError("noise", f"a noise σ is a positive number of metres, got {noise!r}")
+    series = measured_series(measurement)
+    spread = float(np.sqrt(np.mean(np.concatenate([(x - x.mean()) ** 2 for x in series]))))
+    if noise >= spread:
+        raise ArgumentError(
+            "noise",
+            f"{noise * 1e3:.4g} mm is as large as the measured motion itself (its RMS about the mean, "
+            f"{spread * 1e3:.3g} mm): any model would fit within it, so the fit could judge nothing; give the "
+            "measurement's σ (or leave it out: it is estimated from the data)",
+        )
+    shown = measurement_noise(measurement)
+    if noise > NOISE_GIVEN_FACTOR * shown:
+        warnings.warn(
+            f"--noise {noise * 1e3:.4g} mm is {noise / shown:.3g}× the noise the data's 4th differences show "
+            f"({shown * 1e3:.3g} mm); the fit's RMS is judged against the value given, so a fit that does not "
+            "explain the data may read as converged",
+            PlausibilityWarning,
+            stacklevel=3,
+        )
 
 
 @dataclass
