@@ -426,3 +426,35 @@ def test_a_quantised_encoder_and_a_named_trace_column_are_read_right(tmp_path):
     trace = tmp_path / "trace.csv"
     trace.write_text("t_s,laser_x\n0,1\n0.1,2\n")
     np.testing.assert_allclose(read_measurement(trace).x, [0.001, 0.002])
+
+
+@pytest.mark.parametrize(
+    "header, shift_s, scale, words",
+    [
+        # issue 39: a clock 5 s late gave "converged" and a scene whose clamp never moves
+        ("t_s", 5.0, 1.0, ("ENCODER: the clamp's motion starts at 5.0", "after the scene's record ends at 0.5 s")),
+        ("t_s", -5.0, 1.0, ("ENCODER: the clamp's motion ends at -4.86", "its clock is early")),
+        # times in ms under a header without a unit (the onset, 0.03 s, read as 31 s): named by
+        # their step and by the scene
+        ("t", 0.0, 1e3, ("sampling interval 1 s is outside the plausible", "motion starts at 3", "(t_ms)")),
+    ],
+)
+def test_an_encoder_whose_clock_does_not_fit_the_scene_is_refused(tmp_path, header, shift_s, scale, words):
+    theta = motion(T, onset=0.02, quartic=(0.0, 0.0, 0.0, 3.2e4), break_s=0.07, stop=0.14)
+    theta += np.random.default_rng(5).normal(0, 1e-3, len(T))
+    encoder = tmp_path / "encoder.csv"
+    rows = "\n".join(f"{(t + shift_s) * scale:.6g},{v:.6f}" for t, v in zip(T, theta, strict=True))
+    encoder.write_text(f"{header},theta_rad\n{rows}\n")
+    done = run_cli(
+        "clamp",
+        "fit-angle",
+        str(encoder),
+        "--scene",
+        "impulsive_rotation",
+        "-o",
+        str(tmp_path / "c.toml"),
+    )
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    for word in words:
+        assert word in done.stderr, done.stderr
+    assert not (tmp_path / "c.toml").exists()

@@ -953,12 +953,18 @@ def test_an_implausible_kes_input_is_named_with_its_range(tmp_path, case, warnin
             "t,x\n" + "".join(f"{i * 10},{0.02 * np.sin(i / 3):.5f}\n" for i in range(400)),  # ms and metres
             [
                 "column 1 (headed 't', no unit): record length 3990 s is outside the plausible 0.01 to 3600 s",
+                "column 1 (headed 't', no unit): sampling interval 10 s is outside the plausible 1e-07 to 0.1 s",
                 "column 2 (headed 'x', no unit): largest displacement 0.02 mm is outside the plausible 0.1 to 2000 mm",
             ],
         ),
         (
             "".join(f"{i / 100},{30 * np.sin(i / 9):.4f}\n" for i in range(300)),  # millimetres, no header: fine
             [],
+        ),
+        (
+            # ms over a record short enough to pass as seconds: named by its sampling interval alone
+            "t,x\n" + "".join(f"{i},{30 * np.sin(i / 9):.4f}\n" for i in range(300)),
+            ["column 1 (headed 't', no unit): sampling interval 1 s is outside the plausible 1e-07 to 0.1 s"],
         ),
     ],
 )

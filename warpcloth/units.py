@@ -92,6 +92,12 @@ PLAUSIBLE = {
         "0.1–100 %: a KES-FB1 loop to 500 gf/cm stretches a fabric by a few to some tens of percent",
     ),
     "record length": (0.01, 3600.0, "s", "a swing is measured for seconds to minutes"),
+    "sampling interval": (
+        1e-7,
+        0.1,
+        "s",
+        "a swing of a fraction of a second's period is sampled every few milliseconds or more often",
+    ),
     "largest displacement": (0.1, 2000.0, "mm", "a hanging strip swings by millimetres to some hundreds of them"),
     "largest clamp angle": (1e-3, 20.0, "rad", "a clamp turns by a fraction of a turn to a few turns"),
 }

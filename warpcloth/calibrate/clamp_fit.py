@@ -350,7 +350,26 @@ def fit_clamp_motion(t: np.ndarray, theta: np.ndarray, forms: tuple[str, ...] = 
 
 def scene_with_clamp_motion(raw_scene: dict, fit: ClampMotionFit, until_s: float | None = None) -> dict:
     """A copy of raw scene data whose clamp follows ``fit`` (motion = "piecewise"); a
-    motion still going at the end of the record continues to ``until_s``."""
+    motion still going at the end of the record continues to ``until_s`` (the scene's
+    ``run.duration_s``). The scene's t = 0 is the motion's start, on the record's clock: a
+    motion that starts after the scene's record ends, or ends before its t = 0, is an
+    ArgumentError naming the record's times (a late clock, or times not in seconds),
+    never a scene whose clamp does not move."""
+    if until_s is not None and fit.onset_s >= until_s:
+        raise ArgumentError(
+            "t",
+            f"the clamp's motion starts at {fit.onset_s:.4g} s on the record's clock, after the scene's record "
+            f"ends at {until_s:g} s (run.duration_s), so its clamp would never move: the scene's t = 0 is the "
+            "start of the motion; shift the record's times (its clock is late), or state their unit in the "
+            "header (t_ms) if they are not seconds",
+        )
+    if fit.stop_s is not None and fit.stop_s <= 0:
+        raise ArgumentError(
+            "t",
+            f"the clamp's motion ends at {fit.stop_s:.4g} s on the record's clock, before the scene's t = 0 (the "
+            "start of the motion), so the clamp would stand turned while the strip starts from its hanging "
+            "rest shape: shift the record's times (its clock is early)",
+        )
     data = copy.deepcopy(raw_scene)
     clamp = data.setdefault("clamp", {})
     clamp["motion"] = "piecewise"

@@ -178,6 +178,8 @@ def _plausible(table: Table, column: int, quantity: str, value: float, guess: st
 def _increasing(table: Table, t: np.ndarray) -> None:
     _plausible(table, 0, "record length", float(t[-1] - t[0]), "milliseconds? head the column t_ms")
     step = np.diff(t)
+    if len(step) and np.all(step > 0):
+        _plausible(table, 0, "sampling interval", float(np.median(step)), "milliseconds? head the column t_ms")
     if np.any(step <= 0):
         i = int(np.argmax(step <= 0))
         raise DataFileError(
