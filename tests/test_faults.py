@@ -1044,6 +1044,36 @@ def test_a_kes_fit_that_overflows_writes_no_material_file(tmp_path, scale):
     assert not (tmp_path / "m.toml").exists()
 
 
+def test_a_kes_shear_fit_that_overflows_writes_no_material_file(tmp_path):
+    # issue 39: a shear loop scaled by 1e300 was "failed", yet written with
+    # hysteresis_d1_gf_per_cm ≈ 1e302; tensile and bending fits already refused this
+    from warpcloth.io.measured import bundled_data
+
+    rows = bundled_data("kes_fb1_shear_example").read_text().splitlines()
+    scaled = [f"{r.split(',')[0]},{float(r.split(',')[1]) * 1e300:.6g}" for r in rows[1:]]
+    (tmp_path / "fb1s.csv").write_text("\n".join([rows[0], *scaled]) + "\n")
+    done = cli(
+        "material",
+        "fit-kes",
+        "--tensile",
+        "kes_fb1_example",
+        "--bending",
+        "kes_fb2_example",
+        "--shear",
+        "fb1s.csv",
+        "--density-g-per-cm2",
+        "0.02",
+        "-o",
+        "m.toml",
+        "--accept",
+        cwd=tmp_path,
+    )
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert "fb1s.csv, column 2: largest shear force 5.2e+300 gf/cm is outside the plausible" in done.stderr
+    assert "fb1s.csv: the shear fit gave shear_rms_gf_per_cm = inf, not a finite number" in done.stderr
+    assert not (tmp_path / "m.toml").exists()
+
+
 @pytest.mark.parametrize(
     "args, words",
     [

@@ -91,6 +91,12 @@ PLAUSIBLE = {
         "(fraction)",
         "0.1–100 %: a KES-FB1 loop to 500 gf/cm stretches a fabric by a few to some tens of percent",
     ),
+    "largest shear force": (
+        1e-3,
+        200.0,
+        "gf/cm",
+        "a KES-FB1 shear loop to ±8° reads a fraction of a gf/cm (gauze) to some tens (heavy canvas)",
+    ),
     "record length": (0.01, 3600.0, "s", "a swing is measured for seconds to minutes"),
     "sampling interval": (
         1e-7,

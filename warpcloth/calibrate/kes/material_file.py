@@ -61,11 +61,15 @@ def material_file_data(
     data = {"material": ordered, "fit": fit.summary_table()}
     if shear is not None:
         table = shear.shear.table()
-        bad = [k for k, v in table.items() if isinstance(v, float) and not math.isfinite(v)]
+        # the law's values and the fit's own numbers (an RMS that overflowed): a shear fit
+        # is refused as the tensile and bending ones are
+        numbers = table | shear.summary_table()
+        bad = [k for k, v in numbers.items() if isinstance(v, float) and not math.isfinite(v)]
         if bad:
             raise DataFileError(
                 shear.loop.source,
-                f"the shear fit gave {bad[0]} = {table[bad[0]]!r}, not a finite number: no material file is written",
+                f"the shear fit gave {bad[0]} = {numbers[bad[0]]!r}, not a finite number: no material file is written "
+                "(are the numbers in the units the header says?)",
             )
         parse_shear(table, "the shear fit")
         data["shear"] = table

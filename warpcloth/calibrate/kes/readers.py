@@ -309,7 +309,11 @@ def read_shear_csv(path: str | Path, *, argument: str | None = None) -> ShearLoo
         (_SHEAR_NAMES[1], [{"gf", "cm"}], "shear force per width in gf/cm (e.g. shear_force_gf_per_cm)"),
     )
     table = _read_loop(path, "KES-FB1 shear", ("angle", "force"), columns, argument)
-    return shear_loop(table.values[:, 0], table.values[:, 1], source=str(path), rows=table.lines)
+    loop = shear_loop(table.values[:, 0], table.values[:, 1], source=str(path), rows=table.lines)
+    check_plausible(
+        "largest shear force", float(np.max(np.abs(loop.force))), f"{path}, column 2", "is it in gf/cm per width?"
+    )
+    return loop
 
 
 # ---------------------------------------------------------------------------------- validation
