@@ -167,7 +167,8 @@ def test_a_run_killed_while_streaming_reads_back_its_committed_part(tmp_path):
     assert len(recording.frame_times) == meta["committed"]["frames"] and np.isfinite(recording.frames).all()
 
 
-ABSURD = ["run.duration_s=20000", "output.probes_per_frame=1666"]  # 2e9 probe samples: 0.2 TB in memory, 0.7 on disk
+# 2e9 probe samples: 0.2 TB in memory, 0.7 on disk (its 2e9 steps asked for, to reach the sizes)
+ABSURD = ["run.duration_s=20000", "output.probes_per_frame=1666", "integrator.max_steps=2147483647"]
 
 
 def test_work_too_large_for_memory_is_refused_with_its_numbers_and_knobs(tmp_path):
@@ -714,6 +715,8 @@ def test_a_size_beyond_a_float_is_written_without_overflowing():
                 "--set",
                 "run.duration_s=20000",
                 "--set",
+                "integrator.max_steps=2147483647",
+                "--set",
                 "output.probes_per_frame=1",
                 "--set",
                 "sweep.random.samples=3000",
@@ -731,6 +734,8 @@ def test_a_size_beyond_a_float_is_written_without_overflowing():
             (
                 "--set",
                 "run.duration_s=20000",
+                "--set",
+                "integrator.max_steps=2147483647",
                 "--set",
                 "output.probes_per_frame=1666",
                 "--set",
