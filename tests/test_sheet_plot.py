@@ -241,3 +241,8 @@ def test_a_damaged_sheet_run_is_refused_by_every_reader_naming_the_file(shear_sw
     for command in (("plot", out, "--out", tmp_path / "fig"), ("export-usd", out, "-o", tmp_path / "s.usda")):
         one_line_refusal(run_cli(*command), message)
     assert not (tmp_path / "fig").exists() and not (tmp_path / "s.usda").exists()
+
+
+def test_analyse_refuses_a_sheet_run_in_one_line(shear_swing):
+    out, _ = shear_swing
+    one_line_refusal(run_cli("analyse", out), "is a sheet run: analyse measures a strip's swing", "`plot` draws")

@@ -131,6 +131,23 @@ def test_a_wrong_sheet_field_names_the_field_file_and_line(tmp_path):
     assert not (tmp_path / "r").exists()
 
 
+@pytest.mark.parametrize(
+    "command, scene, override, words",
+    [
+        # issue 39: these blamed the scene ("this is a sheet scene") or listed fields as unknown
+        ("run", "damped_swing", "sheet.cut=rectangle", ("sheet: bundled scene damped_swing is a strip scene",)),
+        ("run", "shear_swing", "strip.spacing_mm=2", ("strip: bundled scene shear_swing is a sheet scene",)),
+        ("sweep", "damped_swing_sweep", "sheet.cut=bias", ("bundled scene damped_swing_sweep is a strip scene",)),
+        # a length whose node count overflows is named before the cut is built (it was NumPy's ValueError)
+        ("run", "shear_swing", "sheet.free_length_mm=1e308", ("sheet.free_length_mm: 1e+308 mm", "inf nodes")),
+    ],
+)
+def test_an_override_of_the_other_body_or_beyond_a_count_is_named(tmp_path, command, scene, override, words):
+    done = run_cli(command, scene, "--set", override, "--out", tmp_path / "o")
+    one_line_refusal(done, *words, f"(set by the override {override})")
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_scene_is_a_strip_or_a_sheet(tmp_path):
     both = tmp_path / "both.toml"
     both.write_text("[strip]\nspacing_mm = 5.0\n" + bundled_text("twist"))

@@ -64,6 +64,10 @@ def test_a_sheet_sweep_runs_through_the_cli_into_a_sweep_directory(swept):
     refused = run_cli("plot", out, "--out", out.parent / "figs")
     assert refused.returncode != 0 and len(refused.stderr.strip().splitlines()) == 1
     assert "is a sweep of sheet scenes" in refused.stderr
+    # analyse measures a strip's swing: a sheet sweep is refused in one line (issue 39: a KeyError)
+    analysed = run_cli("analyse", out)
+    assert analysed.returncode == 2 and len(analysed.stderr.strip().splitlines()) == 1, analysed.stderr
+    assert "is a sheet sweep: analyse measures a strip's swing" in analysed.stderr
 
 
 def test_each_variant_equals_the_same_sheet_run_alone_bit_for_bit(swept):

@@ -55,7 +55,7 @@ def load(**fields):
         (dict(output__probes_per_frame=0), "output.probes_per_frame", "must be ≥ 1"),
         (dict(output__probes_per_frame=2.5), "output.probes_per_frame", "expected an integer"),
         (dict(release__hold_x_mm=150.0), "release.hold_x_mm", "the free end reaches between"),
-        (dict(run__duration_s=1e9), "run.duration_s", "steps, more than"),
+        (dict(run__duration_s=1e9), "run.duration_s", "steps of each strip, more than integrator.max_steps"),
         (dict(strip__width_mm="wide"), "strip.width_mm", "expected a number, got 'wide'"),
         (dict(release__enabled=1), "release.enabled", "expected true or false"),
         (dict(clamp__motion="wobble"), "clamp.motion", "must be one of fixed, piecewise, table"),

@@ -184,6 +184,24 @@ def of_data(data: dict, where: str = "the scene") -> Body:
     return BODIES[DEFAULT]
 
 
+def of_overridden(data: dict, overridden: dict, where: str = "the scene") -> Body:
+    """The body of raw scene ``data`` (:func:`of_data`, decided before any override), and a
+    SceneError naming the table when the overrides (``overridden``: the data with them)
+    give another body's table: a strip's field set on a sheet scene is that override's
+    mistake, not a scene of both bodies."""
+    from warpcloth.errors import SceneError
+
+    body = of_data(data, where)
+    foreign = [name for name in BODIES if name != body.name and name in overridden and name not in data]
+    if foreign:
+        raise SceneError(
+            foreign[0],
+            f"{where} is a {body.name} scene, and [{foreign[0]}] is a {foreign[0]} scene's table: its fields do not "
+            f"apply here (the {body.name}'s own are under [{body.name}])",
+        )
+    return body
+
+
 def of_scene(scene: object) -> Body:
     """The body a validated scene is of, or an ArgumentTypeError naming what it is."""
     for body in BODIES.values():

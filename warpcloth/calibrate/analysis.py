@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from warpcloth import bodies
 from warpcloth.errors import DataFileError
 from warpcloth.io.json_file import read_json
 from warpcloth.io.load import load_recording
@@ -53,6 +54,19 @@ def swing_records(source: str | Path, starts_at_rest: bool = True) -> list[Swing
     ``starts_at_rest`` is False; a run's or sweep's own scenes say whether they do.
     """
     path = Path(source)
+    what = "sweep" if (path / "sweep.json").is_file() else "run" if (path / "meta.json").is_file() else None
+    kind = (
+        (read_json(path / "sweep.json").get("kind", "strip") if what == "sweep" else bodies.of_run(path).name)
+        if what
+        else "strip"
+    )
+    if kind != "strip":
+        raise DataFileError(
+            path,
+            f"is a {kind} {what}: analyse measures a strip's swing (its laser line and tip); a {kind}'s own metrics "
+            f"(its markers' peak displacements, its shear) are "
+            + ("in the sweep's summary.csv" if what == "sweep" else "what `warpcloth run` printed, and `plot` draws"),
+        )
     if (path / "sweep.json").is_file() and not (path / "summary.parquet").is_file():
         raise DataFileError(path, "the sweep has not finished (no summary.parquet); rerun it to complete it")
     if (path / "sweep.json").is_file():  # its probe store: a sweep need not have kept shape frames

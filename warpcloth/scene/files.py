@@ -144,8 +144,9 @@ def load_scene(name_or_path: str | Path, overrides: Overrides = ()) -> Any:
     data, text, where = _read_scene(name_or_path)
     data.pop("sweep", None)
     try:
-        body = bodies.of_data(data, where)
-        scene = body("check_scene", body("scene_from_dict", apply_overrides(data, overrides)))
+        overridden = apply_overrides(data, overrides)
+        body = bodies.of_overridden(data, overridden, where)
+        scene = body("check_scene", body("scene_from_dict", overridden))
     except SceneError as exc:
         raise located(exc, text, where, overrides) from None
     return scene

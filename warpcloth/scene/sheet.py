@@ -45,7 +45,7 @@ from .schema import (
 )
 from .shear import SHEAR_TABLE, ShearMaterial, parse_shear
 from .step import AUTO
-from .validate import _multiple, validate_segments
+from .validate import MAX_NODES, _multiple, validate_segments
 
 CUTS = ("rectangle", "bias")
 """Choices of ``sheet.cut``."""
@@ -313,9 +313,24 @@ def sheet_scene_from_dict(data: dict) -> SheetScene:
     return scene
 
 
+def nodes_at_most(st: SheetSection) -> float:
+    """The nodes of the sheet's cut at most, in floats, before the cut counts one (a length
+    of 1e308 mm is inf of them): its bounding rectangle's, which a bias cut does not exceed."""
+    return ((st.free_length_mm + st.clamp_length_mm) / st.spacing_warp_mm + 1) * (st.width_mm / st.spacing_weft_mm + 1)
+
+
 def validate_sheet_scene(scene: SheetScene) -> None:
     """Cross-field checks that single fields cannot express; raises SceneError."""
     st = scene.sheet
+    nodes = nodes_at_most(st)
+    if not nodes <= MAX_NODES:
+        raise SceneError(
+            "sheet.free_length_mm",
+            f"{st.free_length_mm:g} mm below and sheet.clamp_length_mm = {st.clamp_length_mm:g} mm in the clamp, "
+            f"sheet.width_mm = {st.width_mm:g} mm across, at spacings {st.spacing_warp_mm:g} and "
+            f"{st.spacing_weft_mm:g} mm, are {nodes:.3g} nodes, more than {MAX_NODES}",
+            related=("sheet.clamp_length_mm", "sheet.width_mm", "sheet.spacing_warp_mm", "sheet.spacing_weft_mm"),
+        )
     if st.cut == "rectangle":
         for name, spacing in (
             ("free_length_mm", "spacing_warp_mm"),

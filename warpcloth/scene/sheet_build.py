@@ -38,7 +38,7 @@ from .files import _read_scene
 from .locate import located, variant_error
 from .materials import to_si
 from .overrides import Overrides, apply_overrides
-from .sheet import AUTO, AUTO_FRACTION, SheetScene, SheetSection, sheet_scene_from_dict
+from .sheet import AUTO, AUTO_FRACTION, SheetScene, SheetSection, nodes_at_most, sheet_scene_from_dict
 from .validate import check_step_count
 
 FAMILIES = {"warp": WARP, "weft": WEFT}
@@ -228,19 +228,26 @@ def probed_elements(scene: SheetScene, geometry: SheetGeometry) -> tuple[int, in
     return found[0], int(candidates[found[1]])
 
 
-def sheet_state_bytes(geometry: SheetGeometry, reversal_memory: int) -> int:
+def sheet_state_bytes(n_nodes: float, n_elements: float, reversal_memory: int) -> float:
     """What one sheet's model and state hold, bytes: per node its rest and current
     position, velocity and three force buffers (float64 3-vectors) and its area; per
     hinge and per cell its law's memory and, for a law with return-point memory, its
     reversal points (``reversal_memory`` + 1 pairs)."""
-    elements = len(geometry.hinge_nodes) + len(geometry.cell_nodes)
-    return 6 * 24 * geometry.n_nodes + 8 * geometry.n_nodes + elements * (24 + 16 * (reversal_memory + 1) + 48)
+    return 6 * 24 * n_nodes + 8 * n_nodes + n_elements * (24 + 16 * (reversal_memory + 1) + 48)
 
 
 def check_sheet_scene(scene: SheetScene) -> SheetScene:
     """The scene ready to run: markers on the sheet, memory that fits, and ``dt_s`` within
     the stability estimate (``"auto"``: :data:`~warpcloth.scene.sheet.AUTO_FRACTION` of it,
     a whole fraction of the probe interval, recorded with ``dt_chosen_by = "auto"``)."""
+    # sized from the cut's bounding rectangle before the cut is built (node by node, in Python)
+    nodes = nodes_at_most(scene.sheet)
+    knobs = "use a coarser sheet.spacing_warp_mm / spacing_weft_mm"
+    check_memory(
+        sheet_state_bytes(nodes, 3 * nodes, scene.integrator.reversal_memory),
+        f"the state of a sheet of up to {nodes:.3g} nodes",
+        knobs,
+    )
     try:
         geometry = sheet_geometry(scene)
     except ArgumentError as exc:  # a bias cut narrower than a cell, a clamp holding nothing
@@ -248,9 +255,11 @@ def check_sheet_scene(scene: SheetScene) -> SheetScene:
     marker_nodes(scene, geometry)
     probed_elements(scene, geometry)
     check_memory(
-        sheet_state_bytes(geometry, scene.integrator.reversal_memory),
+        sheet_state_bytes(
+            geometry.n_nodes, len(geometry.hinge_nodes) + len(geometry.cell_nodes), scene.integrator.reversal_memory
+        ),
         f"the state of a sheet of {geometry.n_nodes} nodes",
-        "use a coarser sheet.spacing_warp_mm / spacing_weft_mm",
+        knobs,
     )
     model = _builder([scene], geometry).finalize(device="cpu", precision=scene.integrator.precision)
     stable = SheetSolver(model, 1.0).stable_step()

@@ -328,7 +328,9 @@ def load_sweep(
     own = [o for o in overrides if o.split("=", 1)[0].strip().startswith("sweep.")]
     try:
         spec = apply_overrides(spec, own)
-        raw = apply_overrides(raw, [o for o in overrides if o not in own])
+        overridden = apply_overrides(raw, [o for o in overrides if o not in own])
+        bodies.of_overridden(raw, overridden, where)
+        raw = overridden
         raw["sweep"] = spec["sweep"]
         sweep = expand(raw, max_variants, progress)
         swept = [key_path(k) for k in sweep.keys]

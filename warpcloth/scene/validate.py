@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from warpcloth import units
 from warpcloth.core.resources import duration_text
 from warpcloth.errors import SceneError
 
@@ -108,7 +109,8 @@ def validate_scene(scene: Scene) -> None:
 
 
 def check_step_count(total_s: float, integrator: object, n_nodes: int, body: str, related: tuple[str, ...]) -> None:
-    """Refuse, naming ``integrator.dt_s``, a run whose step count (``total_s`` of
+    """Refuse, naming ``integrator.dt_s`` (``run.duration_s`` for a record longer than
+    any swing is measured for), a run whose step count (``total_s`` of
     settling and record at the integrator's step) is beyond ``integrator.max_steps``
     (what a kernel counts at most, :data:`MAX_STEPS`, in any case), with its estimated
     time on one CPU core: a step that collapsed under a stiffness or spacing beyond
@@ -125,13 +127,20 @@ def check_step_count(total_s: float, integrator: object, n_nodes: int, body: str
     chosen = (
         ' (chosen by dt_s = "auto": the stiffest element allows no longer)' if integrator.dt_chosen_by == AUTO else ""
     )
+    # the field to blame: a record longer than any swing is measured for, else the step
+    long_record = total_s > units.PLAUSIBLE["record length"][1]
+    cause = (
+        "a record longer than any swing is measured for"
+        if long_record
+        else "a step this short comes from a stiffness or spacing beyond reason"
+    )
     raise SceneError(
-        "integrator.dt_s",
-        f"{dt:.4g} s{chosen} over {total_s:g} s of settling and record is {steps:.3g} steps of each {body}, more "
+        "run.duration_s" if long_record else "integrator.dt_s",
+        f"{total_s:g} s of settling and record at dt = {dt:.4g} s{chosen} is {steps:.3g} steps of each {body}, more "
         f"than integrator.max_steps = {integrator.max_steps}: about {duration_text(steps * n_nodes * ns * 1e-9)} "
-        f"of a CPU core per {body} ({n_nodes} nodes at ~{ns:g} ns a node-step); a step this short comes from a "
-        "stiffness or spacing beyond reason; raise integrator.max_steps to run it on purpose",
-        related=related,
+        f"of a CPU core per {body} ({n_nodes} nodes at ~{ns:g} ns a node-step); {cause}; raise "
+        "integrator.max_steps to run it on purpose",
+        related=("integrator.dt_s", *related) if long_record else related,
     )
 
 
