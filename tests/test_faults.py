@@ -1130,3 +1130,47 @@ def test_a_long_run_asked_for_runs_and_says_how_long_first(monkeypatch):
         wc.errors.LongRunWarning, match=r"1\.4e\+05 steps of each of 1 strip\(s\) of 25 nodes .* CPU core"
     ):
         wc.run("damped_swing", ["run.duration_s=0.1"], device="cpu")
+
+
+def test_messages_name_what_the_user_gave(tmp_path):
+    # issue 39: each of these named a hidden temporary file, printed a codec's own line
+    # first, or read "pid -1"
+    import fcntl
+    import os
+
+    from warpcloth.io.writing import claim_result, marker_of
+
+    wc.run("damped_swing", ["run.duration_s=0.05"], out=tmp_path / "r")
+    (tmp_path / "s.usda").mkdir()
+    done = run_cli("export-usd", tmp_path / "r", "-o", tmp_path / "s.usda", "--overwrite")
+    assert done.returncode == 2 and "-o: " in done.stderr and "s.usda is a directory; -o names the file" in done.stderr
+    from pathlib import Path
+
+    board = Path(__file__).resolve().parents[1] / "scenes" / "data" / "track" / "board_0.png"
+    (tmp_path / "cut.png").write_bytes(board.read_bytes()[:20000])
+    done = run_cli(
+        "track",
+        "calibrate",
+        tmp_path / "cut.png",
+        board,
+        board,
+        "--board",
+        "11x10",
+        "--square-mm",
+        "10",
+        "--origin-corner",
+        "1,1",
+        "-o",
+        tmp_path / "p.json",
+    )
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "cut.png: cannot be read as an image" in lines[0], lines
+    # a writer that has taken its marker but not yet written its pid
+    marker = marker_of(tmp_path / "busy.csv")
+    fd = os.open(marker, os.O_CREAT | os.O_RDWR)
+    fcntl.flock(fd, fcntl.LOCK_EX)
+    try:
+        with pytest.raises(wc.ArgumentError, match="another warpcloth process .one just starting, its pid not yet"):
+            claim_result(tmp_path / "busy.csv", "-o")
+    finally:
+        os.close(fd)

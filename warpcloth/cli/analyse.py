@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .options import add_overwrite, finite, new_result
+from .options import add_overwrite, finite, new_file
 
 COLUMNS = (
     "source",
@@ -65,7 +65,7 @@ def analyse_command(args: argparse.Namespace) -> int:
 
     from warpcloth.calibrate.analysis import analyse
 
-    out = new_result(args.csv, args.overwrite, "--csv") if args.csv else None
+    out = new_file(args.csv, args.overwrite, "--csv") if args.csv else None
     rows = analyse(args.inputs, starts_at_rest=not args.in_motion, t_from=args.t_from, t_to=args.t_to)
     table = pd.DataFrame(rows, columns=list(COLUMNS))
     table["variant"] = table["variant"].astype("Int64")  # empty for a measured trace

@@ -19,6 +19,7 @@ from .options import (
     add_overwrite,
     at_least,
     figure_path,
+    new_file,
     new_result,
     non_negative,
     path_text,
@@ -242,7 +243,7 @@ def clamp_fit_angle_command(args: argparse.Namespace) -> int:
     from warpcloth.scene.step import AUTO
 
     until = load_scene(args.scene).run.duration_s  # a bad field is named with its file and line
-    out = new_result(args.output, args.overwrite, "-o")
+    out = new_file(args.output, args.overwrite, "-o")
     plot = figure_path(args.plot, args.overwrite) if args.plot else None
     t, theta = read_encoder(args.encoder, args.angle_unit, argument="ENCODER")
     fit = fit_clamp_motion(t, theta)

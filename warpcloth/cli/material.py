@@ -13,7 +13,7 @@ from warpcloth.errors import OptionError
 from warpcloth.kernels import BENDING_LAWS, DEFAULT_BENDING_LAW
 from warpcloth.scene.materials import ONE_PER_FABRIC
 
-from .options import EXIT_FIT_STATUS, add_overwrite, figure_path, new_result, path_text, positive
+from .options import EXIT_FIT_STATUS, add_overwrite, figure_path, new_file, path_text, positive
 
 if TYPE_CHECKING:
     from warpcloth.calibrate.kes import LawComparison, ShearFit
@@ -236,7 +236,7 @@ def _compare(args: argparse.Namespace) -> int:
     from warpcloth.io.atomic import write_text_atomically
 
     plot = figure_path(args.plot, args.overwrite) if args.plot else None
-    table = new_result(args.csv, args.overwrite, "--csv") if args.csv else None
+    table = new_file(args.csv, args.overwrite, "--csv") if args.csv else None
     if table is not None and (table.suffix.lower() != ".csv" or table.is_dir()):
         raise OptionError("--csv", f"{table} must be a file ending in .csv")
     comparison = kes.compare_laws(kes.read_bending_csv(args.bending, argument="--bending"))
@@ -335,7 +335,7 @@ def _fit_kes(args: argparse.Namespace) -> int:
             "the mass per area is not part of KES-FB1/FB2 data; weigh a "
             "sample and give it in g/cm² (e.g. 2.03e-2 for the illustrative wool/nylon)",
         )
-    out = new_result(args.output, args.overwrite, "--output")
+    out = new_file(args.output, args.overwrite, "--output")
     plot = figure_path(args.plot, args.overwrite) if args.plot else None
     if out.suffix != ".toml":
         raise OptionError("--output", f"{out} must end in .toml (scenes refer to material files by such a path)")

@@ -116,6 +116,15 @@ def figure_path(path: str | Path, overwrite: bool, option: str = "--plot") -> Pa
     return new_result(out, overwrite, option)
 
 
+def new_file(path: str | Path, overwrite: bool, option: str) -> Path:
+    """:func:`new_result` for a result that is one file: a directory there is refused by
+    name (the atomic writer would otherwise fail on its hidden temporary file)."""
+    out = Path(path)
+    if out.is_dir():
+        raise OptionError(option, f"{out} is a directory; {option} names the file to write")
+    return new_result(out, overwrite, option)
+
+
 def new_result(path: str | Path, overwrite: bool, option: str) -> Path:
     """``path`` for a result about to be written: refused when another warpcloth process is
     writing it (this one holds its marker from now until it exits:

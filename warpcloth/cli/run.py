@@ -13,7 +13,7 @@ from warpcloth.metrics import swing_summary
 from warpcloth.runs import simulate
 from warpcloth.scene import Scene, bundled_scenes, load_scene
 
-from .options import add_device, add_no_progress, add_overrides, add_overwrite, new_result, path_text
+from .options import add_device, add_no_progress, add_overrides, add_overwrite, new_file, path_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -36,7 +36,7 @@ def run_scene(args: argparse.Namespace) -> int:
         from warpcloth.viz.usd import check_stage_path
 
         check_stage_path(args.usd, "--usd")  # before the run, not after it
-        new_result(args.usd, args.overwrite, "--usd")
+        new_file(args.usd, args.overwrite, "--usd")
     scene = load_scene(args.scene, args.overrides)
     body = bodies.of_scene(scene)
     if scene.integrator.dt_chosen_by == "auto":

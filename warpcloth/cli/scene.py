@@ -7,7 +7,7 @@ import importlib.resources
 
 from warpcloth.errors import OptionError
 
-from .options import add_overwrite, new_result, path_text
+from .options import add_overwrite, new_file, path_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -47,7 +47,7 @@ def show_command(args: argparse.Namespace) -> int:
     if args.output is None:
         print(text, end="")
         return 0
-    out = new_result(args.output, args.overwrite, "-o")
+    out = new_file(args.output, args.overwrite, "-o")
     if out.suffix != ".toml":
         raise OptionError("-o", f"{out} must end in .toml (a scene file is read as a path by that suffix)")
     from warpcloth.io.atomic import write_text_atomically

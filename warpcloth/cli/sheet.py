@@ -14,7 +14,7 @@ from warpcloth.runs import sheet_result_metrics
 from warpcloth.scene.sheet import SheetScene
 from warpcloth.scene.sweep import Sweep
 
-from .options import new_result
+from .options import new_file, new_result
 from .view import refuse_strip_options, render_target
 
 
@@ -52,7 +52,7 @@ def sheet_usd_command(args: argparse.Namespace) -> int:
 
     refuse_strip_options(args, ("variants", "where", "ribbon", "frames_per_clip"))
     run = read_sheet_run(args.run_dir)
-    out = export_sheet_usd(run, new_result(args.output, args.overwrite, "-o"))
+    out = export_sheet_usd(run, new_file(args.output, args.overwrite, "-o"))
     print(f"wrote {out} (a sheet of {run.meta['n_nodes']} nodes, {len(run.frame_times)} frames)")
     return 0
 

@@ -12,7 +12,7 @@ import numpy as np
 from warpcloth.errors import OptionError
 from warpcloth.io.json_file import json_text
 
-from .options import add_no_progress, add_overwrite, at_least, figure_path, new_result, path_text, positive
+from .options import add_no_progress, add_overwrite, at_least, figure_path, new_file, path_text, positive
 
 SUBCOMMANDS = ("calibrate", "video")
 
@@ -197,7 +197,7 @@ def calibrate_command(args: argparse.Namespace) -> int:
     if min(inner) < 2:
         raise OptionError("--board", f"{args.board}: a chessboard has at least 2 × 2 inner corners")
     corner = _pair(args.origin_corner, "--origin-corner", ",") if args.origin_corner else None
-    out = new_result(args.output, args.overwrite, "-o")
+    out = new_file(args.output, args.overwrite, "-o")
     if out.suffix.lower() != ".json":
         raise OptionError("-o", f"{out} must end in .json")
     _, record = calibrate_plane(
@@ -235,13 +235,13 @@ def _outputs(args: argparse.Namespace) -> tuple[Path, Path | None, Path | None]:
         seen[where] = option
     if named["-o"].suffix.lower() != ".csv":
         raise OptionError("-o", f"{named['-o']} must end in .csv (the tracked shapes)")
-    out = new_result(named["-o"], args.overwrite, "-o")
+    out = new_file(named["-o"], args.overwrite, "-o")
     overlay = figure_path(named["--overlay"], args.overwrite, "--overlay") if args.overlay else None
     movie = None
     if args.overlay_video:
         if named["--overlay-video"].suffix.lower() != ".avi":
             raise OptionError("--overlay-video", f"{args.overlay_video} must end in .avi")
-        movie = new_result(named["--overlay-video"], args.overwrite, "--overlay-video")
+        movie = new_file(named["--overlay-video"], args.overwrite, "--overlay-video")
     return out, overlay, movie
 
 

@@ -11,7 +11,7 @@ from warpcloth.errors import OptionError
 from warpcloth.viz import DPI, FORMATS
 
 from .flags import flag_of
-from .options import add_overwrite, at_least, finite, new_result, path_text, positive
+from .options import add_overwrite, at_least, finite, new_file, new_result, path_text, positive
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -107,7 +107,7 @@ def strip_usd_command(args: argparse.Namespace) -> int:
     recording = load_recording(args.run_dir, args.variants, args.where)
     out = export_usd(
         recording,
-        new_result(args.output, args.overwrite, "-o"),
+        new_file(args.output, args.overwrite, "-o"),
         ribbon=args.ribbon,
         frames_per_clip=args.frames_per_clip,
     )

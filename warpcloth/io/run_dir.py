@@ -46,7 +46,7 @@ from .atomic import naming, write_npy_atomically, write_text_atomically
 from .json_file import json_text, read_json
 from .provenance import provenance
 from .recording import Recording, check_time_order, per_strip_parameters, select_variants
-from .writing import WRITING, hold, live_writer, release
+from .writing import WRITING, busy, hold, live_writer, release
 
 PROBE_COLUMNS = ("t", "variant", *PROBE_FIELDS)
 
@@ -121,11 +121,7 @@ class StreamedDirectory:
         self.target = Path(out_dir).absolute()
         writer = live_writer(self.target / WRITING)
         if writer is not None:
-            raise ArgumentError(
-                "out",
-                f"{out_dir} is being written by another warpcloth process (pid {writer}); "
-                "wait for it, or choose another --out",
-            )
+            raise busy(out_dir, writer, "out")
         replacing = self.target.is_dir() and any(self.target.iterdir())
         self.dir = self.target.with_name(f".{self.target.name}.new-{os.getpid()}") if replacing else self.target
         if replacing and self.dir.exists():
@@ -136,10 +132,7 @@ class StreamedDirectory:
         # the same moment finds the marker and stops instead of interleaving its rows.
         writer = hold(self.dir / WRITING)
         if writer is not None:
-            raise ArgumentError(
-                "out",
-                f"{self.target} is being written by another warpcloth process (pid {writer}); choose another --out",
-            )
+            raise busy(self.target, writer, "out")
         if any(p.name != WRITING for p in self.dir.iterdir()):
             # another writer finished here between the emptiness check and the marker
             release(self.dir / WRITING)

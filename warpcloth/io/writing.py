@@ -15,6 +15,7 @@ from __future__ import annotations
 import atexit
 import fcntl
 import os
+import time
 from pathlib import Path
 
 from warpcloth.errors import ArgumentError
@@ -36,11 +37,25 @@ def marker_of(result: str | Path) -> Path:
 
 
 def _holder(fd: int) -> int:
-    # the pid a held marker names (-1 when it names none yet: its holder is just starting)
-    try:
-        return int(os.pread(fd, 32, 0) or -1)
-    except ValueError:
-        return -1
+    # the pid a held marker names; its holder writes it just after taking the lock, so an
+    # empty marker is read again for a moment (-1 when it still names none)
+    for _ in range(50):
+        try:
+            return int(os.pread(fd, 32, 0))
+        except ValueError:
+            time.sleep(0.01)
+    return -1
+
+
+def busy(
+    result: str | Path, writer: int, argument: str, advice: str = "wait for it, or choose another"
+) -> ArgumentError:
+    """The refusal of ``argument`` (the caller's name for ``result``) while process
+    ``writer`` writes ``result`` (-1: one whose pid is not written yet)."""
+    who = f"pid {writer}" if writer > 0 else "one just starting, its pid not yet written"
+    return ArgumentError(
+        argument, f"{result} is being written by another warpcloth process ({who}); {advice} {argument}"
+    )
 
 
 def live_writer(marker: str | Path) -> int | None:
@@ -107,11 +122,7 @@ def claim_result(result: str | Path, argument: str) -> None:
         marker.parent.mkdir(parents=True, exist_ok=True)
     writer = hold(marker)
     if writer is not None:
-        raise ArgumentError(
-            argument,
-            f"{result} is being written by another warpcloth process (pid {writer}); "
-            f"wait for it, or choose another {argument}",
-        )
+        raise busy(result, writer, argument)
     _CLAIMED.add(marker)
     atexit.register(release, marker)
 

@@ -44,6 +44,15 @@ def read_image(path: str | Path, argument: str = "path") -> np.ndarray:
     path = Path(path)
     if not path.is_file():
         raise ArgumentError(argument, f"{path} does not exist" if not path.exists() else f"{path} is not a file")
+    from PIL import Image, UnidentifiedImageError
+
+    # decoded whole by Pillow first: a truncated or damaged file is then one error naming
+    # it, never a partly read image or a codec's own line on stderr (libpng, libjpeg)
+    try:
+        with Image.open(path) as whole:
+            whole.load()
+    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as exc:
+        raise DataFileError(path, f"cannot be read as an image (PNG, JPEG, TIFF, BMP): {exc}") from None
     image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise DataFileError(path, "cannot be read as an image (PNG, JPEG, TIFF, BMP)")
