@@ -1,6 +1,7 @@
 """Bad input is refused before any kernel runs, with the field and value named."""
 
 import importlib.resources
+import math
 import re
 
 import pytest
@@ -349,3 +350,29 @@ def test_override_keys_index_lists_and_quote_dotted_names():
     # a dict with a key that is not a string: an error, not a traceback
     with pytest.raises(wc.SceneError, match=r"^1: unknown field"):
         wc.load_scene("damped_swing", {1: 2})
+
+
+def test_a_hanging_chain_sags_as_the_catenary_says():
+    from warpcloth.scene.validate import hanging_sag
+
+    # taut or with its lowest point at an end: no sag (the bundled swing, 100 mm held 94.3 mm away)
+    assert hanging_sag(50.0, -80.0, 100.0) == 0.0 and hanging_sag(60.0, -80.0, 100.0) == 0.0
+    # held straight below: the slack folds down and back up, half of it below the end
+    assert hanging_sag(0.0, -80.0, 100.0) == pytest.approx(10.0)
+    # a level chain: the textbook catenary, sag a(cosh(x/2a) − 1) with 2a·sinh(x/2a) = L
+    span, length = 100.0, 120.0
+    from scipy.optimize import brentq
+
+    a = brentq(lambda a: 2 * a * math.sinh(span / (2 * a)) - length, 1.0, 1e4)
+    assert hanging_sag(span, 0.0, length) == pytest.approx(a * (math.cosh(span / (2 * a)) - 1), rel=1e-9)
+    # mirror images sag alike
+    assert hanging_sag(-50.0, -80.0, 150.0) == pytest.approx(hanging_sag(50.0, -80.0, 150.0))
+
+
+def test_a_longer_strip_held_where_the_shorter_one_was_is_refused_not_folded():
+    # issue 39: 150 mm held at the 100 mm strip's (50, -80) mm was released from a U and
+    # printed a first period of 0.318 s without a word
+    with pytest.raises(wc.SceneError, match=r"release.hold_x_mm: .* sags 26.2 mm below the held end .*\(74.7, -120\)"):
+        wc.load_scene("damped_swing", ["strip.free_length_mm=150"])
+    # the position it suggests is taken
+    wc.load_scene("damped_swing", ["strip.free_length_mm=150", "release.hold_x_mm=74.7", "release.hold_y_mm=-120"])

@@ -17,6 +17,34 @@ MAX_NODES = 2**31 - 1
 :func:`warpcloth.scene.build.builder_for` refuses far fewer on a real machine)."""
 
 
+MAX_HELD_SAG = 0.1
+"""The most a held strip's slack may sag below its held end, as a part of its length (a
+hanging chain's, which a strip with bending rigidity sags less than): more is a fold."""
+TAUT_HOLD = 0.94
+"""The suggested held position's distance, as a part of the length: the bundled
+damped_swing's (94.3 mm of 100), whose slack sags nowhere below the held end."""
+
+
+def hanging_sag(x_mm: float, y_mm: float, length_mm: float) -> float:
+    """How far below the point (``x_mm``, ``y_mm``) (y up, from the clamp's lowest point) a
+    hanging chain of ``length_mm`` from the clamp to that point sags, mm: 0 when its
+    lowest point is an end. The catenary through both ends (span x, height difference y)
+    has parameter a with 2a·sinh(x / 2a) = √(L² − y²) and its vertex at
+    x/2 − a·atanh(y / L) from the clamp; a vertex between the ends is a sag below them."""
+    from scipy.optimize import brentq
+
+    span = abs(x_mm)
+    chord = math.sqrt(max(length_mm**2 - y_mm**2, 0.0))
+    if chord <= span:
+        return 0.0
+    if span < 1e-9 * length_mm:  # held straight below: the slack folds down and back up
+        return max((length_mm + y_mm) / 2, 0.0)
+    u = brentq(lambda u: math.sinh(u) / u - chord / span, 1e-9, 700.0)  # u = span / 2a
+    a = span / (2 * u)
+    vertex = span / 2 - a * math.atanh(y_mm / length_mm)
+    return a * (math.cosh((span - vertex) / a) - 1) if 0 < vertex < span else 0.0
+
+
 def _multiple(length: float, spacing: float) -> bool:
     ratio = length / spacing
     return abs(ratio - round(ratio)) < 1e-9 * max(1.0, ratio)
@@ -79,6 +107,18 @@ def validate_scene(scene: Scene) -> None:
                 f"{scene.release.hold_y_mm:g}) mm is {r:g} mm from the clamp's lowest point; "
                 f"the free end reaches between {st.spacing_mm:g} and {st.free_length_mm:g} mm",
                 related=("release.hold_y_mm", "strip.free_length_mm", "strip.spacing_mm"),
+            )
+        sag = hanging_sag(scene.release.hold_x_mm, scene.release.hold_y_mm, st.free_length_mm)
+        if sag > MAX_HELD_SAG * st.free_length_mm:
+            x, y = (v * TAUT_HOLD * st.free_length_mm / r for v in (scene.release.hold_x_mm, scene.release.hold_y_mm))
+            raise SceneError(
+                "release.hold_x_mm",
+                f"the free end held at ({scene.release.hold_x_mm:g}, {scene.release.hold_y_mm:g}) mm, {r:.3g} mm "
+                f"from the clamp's lowest point, leaves {st.free_length_mm - r:.3g} mm of the {st.free_length_mm:g} "
+                f"mm strip slack: hanging, it sags {sag:.3g} mm below the held end (more than "
+                f"{MAX_HELD_SAG:.0%} of its length), so the swing would start from a fold, not an arc; hold it "
+                f"farther out, e.g. at ({x:.3g}, {y:.3g}) mm (the same direction, {TAUT_HOLD:g} of the length away)",
+                related=("release.hold_y_mm", "strip.free_length_mm"),
             )
     n_hinges = scene.n_nodes - scene.n_clamped
     if not _multiple(scene.output.loop_hinge_mm, st.spacing_mm) or scene.loop_hinge >= n_hinges:
