@@ -87,6 +87,7 @@ CASES = {
             "material.tensile_gf_per_cm=[2000.0, 3.0e4, 1.0e5, 2.93e7]",
             "release.hold_x_mm=-50.0",
             "release.hold_y_mm=10.0",
+            "release.allow_fold=true",  # held above the clamp on purpose: the hold's path wraps
             "release.settle_time_s=0.2",
             "run.duration_s=0.5",
         ],

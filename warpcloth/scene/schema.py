@@ -239,6 +239,11 @@ class ReleaseSection:
     )
     hold_x_mm: float = _field(50.0, "held free-end x, from the clamp's lowest point", per_strip=True)
     hold_y_mm: float = _field(-80.0, "held free-end y (up +), from the clamp's lowest point", per_strip=True)
+    allow_fold: bool = _field(
+        False,
+        "hold the free end where the strip's slack sags below it by more than a tenth of its length "
+        "(a hanging chain's sag): the swing then starts from a fold, which is refused unless true",
+    )
     move_time_s: float = _field(0.3, "time to carry the free end to the held position", gt=0)
     settle_time_s: float = _field(1.0, "time held before release", ge=0)
     settle_damping_per_s: float = _field(20.0, "γ while held, so the strip settles", ge=0, per_strip=True)

@@ -109,7 +109,7 @@ def validate_scene(scene: Scene) -> None:
                 related=("release.hold_y_mm", "strip.free_length_mm", "strip.spacing_mm"),
             )
         sag = hanging_sag(scene.release.hold_x_mm, scene.release.hold_y_mm, st.free_length_mm)
-        if sag > MAX_HELD_SAG * st.free_length_mm:
+        if sag > MAX_HELD_SAG * st.free_length_mm and not scene.release.allow_fold:
             x, y = (v * TAUT_HOLD * st.free_length_mm / r for v in (scene.release.hold_x_mm, scene.release.hold_y_mm))
             raise SceneError(
                 "release.hold_x_mm",
@@ -117,8 +117,9 @@ def validate_scene(scene: Scene) -> None:
                 f"from the clamp's lowest point, leaves {st.free_length_mm - r:.3g} mm of the {st.free_length_mm:g} "
                 f"mm strip slack: hanging, it sags {sag:.3g} mm below the held end (more than "
                 f"{MAX_HELD_SAG:.0%} of its length), so the swing would start from a fold, not an arc; hold it "
-                f"farther out, e.g. at ({x:.3g}, {y:.3g}) mm (the same direction, {TAUT_HOLD:g} of the length away)",
-                related=("release.hold_y_mm", "strip.free_length_mm"),
+                f"farther out, e.g. at ({x:.3g}, {y:.3g}) mm (the same direction, {TAUT_HOLD:g} of the length away), "
+                "or set release.allow_fold = true to start from the fold on purpose",
+                related=("release.hold_y_mm", "strip.free_length_mm", "release.allow_fold"),
             )
     n_hinges = scene.n_nodes - scene.n_clamped
     if not _multiple(scene.output.loop_hinge_mm, st.spacing_mm) or scene.loop_hinge >= n_hinges:
