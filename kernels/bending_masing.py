@@ -60,6 +60,15 @@ def packed_parameters(bending_rigidity: float, d1: float, alpha: float, k0: floa
 @functools.cache
 def build(scalar: Any) -> LawFunctions:
     """The law's Warp functions for ``scalar``, on the shared parameter, memory and reversal types."""
+    return masing_functions(scalar, growing=False)
+
+
+def masing_functions(scalar: Any, growing: bool) -> LawFunctions:
+    """Masing's rules on the paper's branch shape for ``scalar``; with ``growing``, the
+    friction of every Jenkins element of the equivalent Iwan model grows with the distance
+    from the hinge's origin K_o by g(K) = √(1 + (β (K − K_o))²), β the packed parameter
+    after K0 (:mod:`.bending_masing_growing` says why and derives the branches). Without it
+    g ≡ 1 and every expression reduces, bit for bit, to Masing's."""
     types = precision(scalar)
     Memory, Parameters, ReversalMemory, vec2 = types.law_memory, types.law_parameters, types.reversal_memory, types.vec2
     zero = scalar(0.0)
@@ -68,13 +77,61 @@ def build(scalar: Any) -> LawFunctions:
     two = scalar(2.0)
 
     @wp.func
-    def virgin(y: scalar, p: Parameters):
-        # F(y) = ½ D1 (1 − e^{−2α|y|}) sgn y
-        return wp.sign(y) * half * p[1] * (one - wp.exp(-two * p[2] * wp.abs(y)))
+    def growth(curvature: scalar, origin: scalar, p: Parameters):
+        # g(K): the friction's scale at curvature K (1 without growth)
+        if wp.static(growing):
+            x = p[4] * (curvature - origin)
+            return wp.sqrt(one + x * x)
+        return one
 
     @wp.func
-    def branch(curvature: scalar, top: vec2, s: scalar, p: Parameters):
-        return top[1] + s * p[1] * (one - wp.exp(-p[2] * s * (curvature - top[0])))
+    def growth_slope(curvature: scalar, origin: scalar, p: Parameters):
+        # dg/dK
+        if wp.static(growing):
+            x = p[4] * (curvature - origin)
+            return p[4] * x / wp.sqrt(one + x * x)
+        return zero
+
+    @wp.func
+    def shape(u: scalar, p: Parameters):
+        # F(u) = ½ D1 (1 − e^{−2αu}), u ≥ 0: the virgin curve of the Iwan model without growth
+        return half * p[1] * (one - wp.exp(-two * p[2] * u))
+
+    @wp.func
+    def shape_slope(u: scalar, p: Parameters):
+        # F'(u) = α D1 e^{−2αu}
+        return p[2] * p[1] * wp.exp(-two * p[2] * u)
+
+    @wp.func
+    def virgin(curvature: scalar, origin: scalar, p: Parameters):
+        # H = g F(|y| / g) sgn y, y = K − K_o (F(|y|) sgn y without growth)
+        y = curvature - origin
+        g = growth(curvature, origin, p)
+        return wp.sign(y) * g * shape(wp.abs(y) / g, p)
+
+    @wp.func
+    def branch(curvature: scalar, top: vec2, s: scalar, origin: scalar, p: Parameters):
+        # H = H_r + s G F(s (K − K_r) / G), G = g(K) + g(K_r) (Masing's rule: G = 2)
+        total = growth(curvature, origin, p) + growth(top[0], origin, p)
+        return top[1] + s * total * shape(s * (curvature - top[0]) / total, p)
+
+    @wp.func
+    def slope(curvature: scalar, start: scalar, s: scalar, total: scalar, origin: scalar, p: Parameters):
+        # d/dK of s G F(u), u = s (K − K_start) / G, with dG/dK = g'(K): s G' F(u) + F'(u) (1 − s u G')
+        u = s * (curvature - start) / total
+        rising = growth_slope(curvature, origin, p)
+        return s * rising * shape(u, p) + shape_slope(u, p) * (one - s * u * rising)
+
+    @wp.func
+    def meets_virgin(top: scalar, s: scalar, origin: scalar, p: Parameters):
+        # where the first branch from a reversal on the virgin curve at K_r meets the virgin
+        # curve on the other side: K_m − K_o = s y_r g(K_m), y_r = |K_r − K_o| / g(K_r)
+        # (Masing: the mirror point 2 K_o − K_r)
+        if wp.static(growing):
+            y = wp.abs(top - origin) / growth(top, origin, p)
+            by = p[4] * y
+            return origin + s * y / wp.sqrt(one - by * by)
+        return two * origin - top
 
     @wp.func
     def direction_from(top: scalar, below: scalar):
@@ -140,14 +197,14 @@ def build(scalar: Any) -> LawFunctions:
         while d == s and depth > 0:
             target = below
             if depth == 1:
-                target = two * origin - top[0]  # the first branch meets the virgin curve mirrored
+                target = meets_virgin(top[0], s, origin, p)  # the first branch meets the virgin curve
             if s * (curvature - target) < zero:
                 break
             depth = wp.max(depth - 2, 0)
             top, below = open_point(history, depth, origin, hinge, strip)
-        h = virgin(curvature - origin, p)
+        h = virgin(curvature, origin, p)
         if depth > 0:
-            h = branch(curvature, top, s, p)
+            h = branch(curvature, top, s, origin, p)
         return Memory(h, d * scalar(depth + 1), curvature)
 
     @wp.func
@@ -162,10 +219,12 @@ def build(scalar: Any) -> LawFunctions:
         depth = int(wp.abs(memory[1])) - 1
         origin = history.points[0, hinge, strip][0]
         if depth == 0:
-            return p[0] + p[2] * p[1] * wp.exp(-two * p[2] * wp.abs(curvature - origin))
+            y = curvature - origin
+            return p[0] + slope(curvature, origin, wp.sign(y), growth(curvature, origin, p), origin, p)
         top, below = open_point(history, depth, origin, hinge, strip)
         s = direction_from(top[0], below)
-        return p[0] + p[2] * p[1] * wp.exp(-p[2] * s * (curvature - top[0]))
+        total = growth(curvature, origin, p) + growth(top[0], origin, p)
+        return p[0] + slope(curvature, top[0], s, total, origin, p)
 
     return LawFunctions(fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment, tangent=tangent)
 

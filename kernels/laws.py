@@ -24,14 +24,20 @@ import warp as wp
 
 from warpcloth.errors import ArgumentError, InternalError
 
-from . import bending_dahl, bending_frictional_couple, bending_masing, bending_tagawa2003
+from . import bending_dahl, bending_frictional_couple, bending_masing, bending_masing_growing, bending_tagawa2003
 from .law import BENDING_RIGIDITY, KINDS, BendingLaw, LawParameter, LawRegistryError
 from .types import LAST_CURVATURE_SLOT, LAW_MEMORY_SLOTS, LAW_PARAMETER_SLOTS, precision
 
 ENTRY_POINT_GROUP = "warpcloth.bending_laws"
 """Where an installed package registers a bending law of its own."""
 
-BUILT_IN = (bending_tagawa2003.LAW, bending_dahl.LAW, bending_frictional_couple.LAW, bending_masing.LAW)
+BUILT_IN = (
+    bending_tagawa2003.LAW,
+    bending_dahl.LAW,
+    bending_frictional_couple.LAW,
+    bending_masing.LAW,
+    bending_masing_growing.LAW,
+)
 """The laws warpcloth ships, in the order of their index in the packed parameters."""
 
 LAW_SLOT = LAW_PARAMETER_SLOTS - 1

@@ -240,7 +240,7 @@ def test_a_laws_parameters_are_fitted_only_for_that_law():
     with pytest.raises(
         ArgumentError,
         match=r"names: D1 \(material.hysteresis_d1_gf_cm_per_cm\) is a parameter of "
-        r"the tagawa2003 or masing bending law, but the scene's material uses dahl",
+        r"the tagawa2003 or masing or masing_growing bending law, but the scene's material uses dahl",
     ):
         free_parameters("gamma,D1", dahl)
     with pytest.raises(

@@ -158,7 +158,7 @@ def test_a_law_from_an_entry_point_is_a_law_everywhere(plugin):
     done = child(plugin, "-c", textwrap.dedent(CHECKS))
     assert done.returncode == 0, done.stderr
     out = json.loads(done.stdout.strip().splitlines()[-1])
-    assert out["laws"] == ["tagawa2003", "dahl", "frictional_couple", "masing", "toy_jenkins"]
+    assert out["laws"] == ["tagawa2003", "dahl", "frictional_couple", "masing", "masing_growing", "toy_jenkins"]
     # the one KES → SI conversion, by the units the description names
     assert list(out["si"].values()) == list(out["twin_si"].values())
     assert out["same_run"]  # the dispatch reaches the toy's own kernel, batched beside a built-in law

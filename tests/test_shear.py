@@ -97,10 +97,12 @@ def test_laws_without_return_point_memory_are_told_apart_on_the_iwan_loop(exampl
 
 
 @pytest.mark.parametrize("noise", [0.005, 0.2])
-def test_a_loop_that_widens_away_from_zero_is_no_fit_for_any_law(noise):
-    # woven fabrics often have 2HG5 > 2HG (the yarns jam); every law's loop narrows or
-    # saturates away from φ = 0, so none may pass such a loop as a fit — however noisy the
-    # data, so that the RMS alone could not tell (the missed KES values do)
+def test_a_loop_that_widens_away_from_zero_is_no_fit_for_a_law_whose_loop_narrows(noise):
+    # woven fabrics often have 2HG5 > 2HG (the yarns jam); the loop of every law without
+    # growing friction narrows or saturates away from φ = 0, so none may pass such a loop as
+    # a fit — however noisy the data, so that the RMS alone could not tell (the missed KES
+    # values do). masing_growing is built for such loops (tests/test_masing_growing.py); this
+    # one switches at each reversal in no angle at all, which its α can only approach (at_bound)
     phi = kes.standard_cycle(8.0, 0.05)
     direction = np.sign(np.diff(phi, prepend=-1.0))
     force = (
@@ -113,6 +115,9 @@ def test_a_loop_that_widens_away_from_zero_is_no_fit_for_any_law(noise):
     assert data.hg2_5_gf_per_cm > 1.5 * data.hg2_gf_per_cm
     for law in BENDING_LAWS:
         status, problems = kes.fit_shear(loop, law).verdict()
+        if law == "masing_growing":
+            assert status != "converged", (law, problems)
+            continue
         assert status == "poor_fit", law
         assert any("2HG" in p and "misses the data's" in p for p in problems), (law, problems)
 

@@ -93,17 +93,23 @@ INNER_KNOTS_PER_CM = (0.0, 2.5, -2.5, 2.0, 1.6, 2.0, 1.6, 2.0, 1.6, -0.8, -0.4, 
 IWAN_ELEMENTS = 4096
 
 
-def iwan_moment(curvature_per_cm: np.ndarray, d1: float, alpha_cm: float, elements: int = IWAN_ELEMENTS) -> np.ndarray:
+def iwan_moment(
+    curvature_per_cm: np.ndarray, d1: float, alpha_cm: float, elements: int = IWAN_ELEMENTS, growth_cm: float = 0.0
+) -> np.ndarray:
     """Hysteretic moment (units of ``d1``) of an Iwan model along a curvature path from rest:
     Jenkins elements of stiffness α D1 / N whose sliders slip at curvatures κ_i, the midpoint
-    quantiles of the density 2α e^{−2ακ} (virgin curve ½ D1 (1 − e^{−2α|K|}) as N → ∞)."""
+    quantiles of the density 2α e^{−2ακ} (virgin curve ½ D1 (1 − e^{−2α|K|}) as N → ∞).
+    With ``growth_cm`` β every slider's friction grows by √(1 + (β (K − K_start))²) with
+    the distance from the path's first curvature (the masing_growing law's continuum limit)."""
     q = (np.arange(elements) + 0.5) / elements
     stiffness = alpha_cm * d1 / elements
     slip = stiffness * -np.log1p(-q) / (2 * alpha_cm)
     force = np.zeros(elements)
     out = [0.0]
+    start = curvature_per_cm[0]
     for a, b in zip(curvature_per_cm[:-1], curvature_per_cm[1:], strict=True):
-        force = np.clip(force + stiffness * (b - a), -slip, slip)
+        limit = slip * np.sqrt(1.0 + (growth_cm * (b - start)) ** 2)
+        force = np.clip(force + stiffness * (b - a), -limit, limit)
         out.append(force.sum())
     return np.array(out)
 
