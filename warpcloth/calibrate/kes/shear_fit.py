@@ -13,11 +13,11 @@ the data's 4th differences, the elastic line as the baseline, the search's edges
 The KES values G, 2HG and 2HG5 are computed from the data and, for the fitted law, along
 the standard cycle 0 → +φ0 → −φ0 → 0 (φ0 the loop's largest ``|φ|``).
 
-None of the four laws can make a loop that widens away from φ = 0: their width at φ is
-2 M0 − D1 (e^{−α(φ0+φ)} + e^{−α(φ0−φ)}) (tagawa2003, masing) or saturates (dahl,
-frictional_couple), so a measured loop with 2HG5 > 2HG (common for woven fabrics, whose
-yarns jam as they shear) is not reproduced. The verdict therefore also compares the KES
-values: a fitted law that misses the data's G by more than :data:`KES_TOLERANCE`, or its
+The laws without growing friction cannot make a loop that widens away from φ = 0: their
+width at φ is 2 M0 − D1 (e^{−α(φ0+φ)} + e^{−α(φ0−φ)}) (tagawa2003, masing) or saturates
+(dahl, frictional_couple), so a measured loop with 2HG5 > 2HG (common for woven fabrics,
+whose yarns jam as they shear) is reproduced only by masing_growing (docs/model.md §4.11,
+§17.1). The verdict therefore also compares the KES values: a fitted law that misses the data's G by more than :data:`KES_TOLERANCE`, or its
 2HG or 2HG5 by more than that plus twice the data's noise, is ``poor_fit``, however small
 its RMS.
 """
