@@ -17,9 +17,9 @@ The laws without growing friction cannot make a loop that widens away from φ = 
 width at φ is 2 M0 − D1 (e^{−α(φ0+φ)} + e^{−α(φ0−φ)}) (tagawa2003, masing) or saturates
 (dahl, frictional_couple), so a measured loop with 2HG5 > 2HG (common for woven fabrics,
 whose yarns jam as they shear) is reproduced only by masing_growing (docs/model.md §4.11,
-§17.1). The verdict therefore also compares the KES values: a fitted law that misses the data's G by more than :data:`KES_TOLERANCE`, or its
-2HG or 2HG5 by more than that plus twice the data's noise, is ``poor_fit``, however small
-its RMS.
+§17.1). The verdict therefore also compares the KES values: a fitted law that misses
+the data's G by more than :data:`KES_TOLERANCE`, or its 2HG or 2HG5 by more than that plus
+twice the data's noise, is ``poor_fit``, however small its RMS.
 """
 
 from __future__ import annotations
