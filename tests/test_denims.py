@@ -8,6 +8,7 @@ laws whose loops narrow are poor fits. Their bending loops are masing's."""
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import run_cli
 
@@ -60,3 +61,17 @@ def test_each_denims_bending_record_is_fitted_to_its_published_values(fabric):
     reproduced = comparison.reproduced["masing"]
     assert reproduced.b_gf_cm2_per_cm == pytest.approx(published["B"], rel=TOLERANCE)
     assert reproduced.hb2_gf_cm_per_cm == pytest.approx(published["2HB"], rel=TOLERANCE)
+
+
+@pytest.mark.parametrize("scene", ["shear_swing", "bias_strip", "twist"])
+def test_a_denim_sheet_runs_every_stage_3_scene_and_closes_its_budget(scene):
+    # scenes/materials/denim-D.toml: fitted to denim D's records, its shear masing_growing
+    import warpcloth as wc
+
+    loaded = wc.load_scene(scene, ["material.from_file=denim-D", "run.duration_s=0.1", "release.settle_time_s=0.05"])
+    assert loaded.shear.law == "masing_growing" and loaded.shear.parameters["hysteresis_growth_per_deg"] > 0.3
+    result = wc.simulate(loaded, threads=1)
+    budget = result.energy_total()[:, 0]
+    scale = max(np.nanmax(result.probe("kinetic", 0)), np.nanmax(np.abs(result.probe("drive_work", 0))))
+    assert np.abs(budget - budget[0]).max() < 1e-3 * scale
+    assert result.probe("hysteresis_work", 0)[-1] > 0  # its friction dissipated
