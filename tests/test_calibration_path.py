@@ -112,6 +112,7 @@ def test_a_record_that_starts_in_motion_gets_the_same_theta_with_0_3_or_30_ms_of
     assert segments[0]["t_start_s"] == 0.0 and segments[0]["theta_coefficients_si"][0] == 0.0
 
 
+@pytest.mark.slow  # its module fixture or its fits take 4 s or more
 def test_an_encoder_no_form_describes_is_a_poor_fit_and_the_command_says_so(tmp_path):
     wobble = 0.3 * np.sin(100 * np.clip(T, 0, None)) + np.random.default_rng(1).normal(0, 1e-3, len(T))
     fit = fit_clamp_motion(T, wobble)

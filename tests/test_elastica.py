@@ -101,6 +101,7 @@ def test_second_order_edge_gives_the_elastica_within_half_a_percent(settled, kap
     assert abs(drop[2]) < abs(drop[1]) / 2.5
 
 
+@pytest.mark.slow  # its module fixture or its fits take 4 s or more
 @pytest.mark.parametrize("kappa", KAPPAS)
 def test_the_papers_edge_droops_too_far_at_first_order(settled, kappa):
     # Measured tip drop at 5 mm: +9.5 % (κ = 2), +5.7 % (8), +2.8 % (40), halving with h.
@@ -109,6 +110,7 @@ def test_the_papers_edge_droops_too_far_at_first_order(settled, kappa):
     assert 0.8 < math.log2(drop[0] / drop[1]) < 1.2 and 0.8 < math.log2(drop[1] / drop[2]) < 1.2
 
 
+@pytest.mark.slow  # its module fixture or its fits take 4 s or more
 def test_peirce_cantilever_chord_angle(settled):
     # Peirce: a strip of length l = 2c, c = (D / (ρ_A g))^(1/3) its bending length (κ = 8),
     # droops until its chord makes 41.5° with the horizontal (ASTM D1388, JIS L1096).
