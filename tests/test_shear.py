@@ -17,7 +17,7 @@ from warpcloth.kernels import BENDING_LAWS
 
 from warpcloth import units
 from warpcloth.calibrate import kes
-from warpcloth.errors import DataFileError, SceneError
+from warpcloth.errors import ArgumentError, DataFileError, SceneError
 from warpcloth.scene import MaterialSection, ShearMaterial, parse_shear, shear_fields, to_si
 from warpcloth.strip import moment_along_path, shear_force_along_path
 
@@ -320,3 +320,32 @@ def test_fit_kes_with_the_wefts_loops_writes_a_weft_a_sheet_reads(tmp_path):
     alone = run_cli(*warp, *weft[:2], *density, "-o", tmp_path / "other.toml")
     assert alone.returncode == 2
     assert "--weft-tensile: the weft is fitted from both its loops: give --weft-bending too" in alone.stderr
+
+
+def test_a_chucks_reading_is_the_fabrics_shear_by_virtual_work():
+    # KES-FB1 shears at a fixed gauge L: the chuck moves d, the fabric turns by arctan(d/L),
+    # and the chuck's lateral force F does the fabric's work: ∫ Fs dφ = ∫ F d(d/L) on any path
+    recorded = np.concatenate([np.linspace(0, 8, 4001), np.linspace(8, -8, 8001)[1:], np.linspace(-8, 0, 4001)[1:]])
+    force = 1.5 * recorded + 2.0 * np.tanh(recorded)
+    phi, shear_force = kes.fabric_shear(recorded, force)
+    chuck_work = np.trapezoid(force, np.radians(recorded))
+    fabric_work = np.trapezoid(shear_force, np.radians(phi))
+    assert fabric_work == pytest.approx(chuck_work, rel=1e-6)
+    # small angles are the same either way; at KES's ±8° the angle moves by 0.66 %, the force by 2 %
+    assert phi[250] / recorded[250] == pytest.approx(1.0, abs=3e-5)  # 0.5°: arctan ≈ its argument
+    assert phi[2000] / recorded[2000] == pytest.approx(0.99838, abs=1e-5)  # 4°: 0.16 % already
+    assert phi[4000] == pytest.approx(np.degrees(np.arctan(np.radians(8.0))))
+    assert shear_force[4000] / force[4000] == pytest.approx(1 / np.cos(np.radians(phi[4000])) ** 2)
+
+
+def test_reading_a_denims_loop_as_the_chucks_moves_its_kes_values_by_more_than_0_2_percent():
+    # which reading a KES-FB1 file holds is in its instrument's manual: the option says it,
+    # and the difference is not negligible (G +1.1 %, 2HG5 +0.9 % on denim D's record)
+    fabric = kes.shear_summary(kes.read_shear_csv("denim_D_fb1_shear"))
+    chuck = kes.shear_summary(kes.read_shear_csv("denim_D_fb1_shear", geometry="chuck"))
+    assert chuck.g_gf_per_cm_deg / fabric.g_gf_per_cm_deg - 1 > 0.002
+    assert chuck.hg2_5_gf_per_cm / fabric.hg2_5_gf_per_cm - 1 > 0.002
+    with pytest.raises(ArgumentError, match="geometry: must be one of fabric, chuck"):
+        kes.read_shear_csv("denim_D_fb1_shear", geometry="trellis")
+    done = run_cli("material", "compare", "--shear", "denim_D_fb1_shear", "--shear-geometry", "chuck", "--accept")
+    assert done.returncode == 0 and "G 1.631 gf/(cm·°)" in done.stdout, done.stderr

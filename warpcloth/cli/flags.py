@@ -28,6 +28,7 @@ FLAGS = {
     "frames_per_clip": "--frames-per-clip",
     "free": "--free",
     "gauge_length_mm": "--gauge-length-mm",
+    "geometry": "--shear-geometry",
     "inner": "--board",
     "law": "--law",
     "max_batch": "--max-batch",

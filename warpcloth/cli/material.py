@@ -25,6 +25,19 @@ DEFAULT_SHEAR_LAW = "masing"
 memory, which converges as a sheet's mesh and step are refined (docs/model.md §17.1)."""
 
 
+def add_shear_geometry(parser: argparse.ArgumentParser) -> None:
+    """``--shear-geometry``: what a KES-FB1 shear file's columns are."""
+    parser.add_argument(
+        "--shear-geometry",
+        choices=("fabric", "chuck"),
+        default="fabric",
+        help="what --shear's columns are: fabric (default): the fabric's shear angle and shear force per width; "
+        "chuck: the chuck's displacement over the gauge length as a small angle in degrees and its lateral "
+        "force per width, converted by φ = arctan(d/L), Fs = F / cos²φ (virtual work at a fixed gauge; "
+        "which one an instrument records is in its manual; docs/model.md §17.1)",
+    )
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``material fit-kes``, ``material compare`` and ``material list``."""
     material_p = sub.add_parser("material", help="material files: fit one to KES-FB data, list the bundled ones")
@@ -64,6 +77,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     kes_p.add_argument(
         "--weft-bending", metavar="FB2.csv", help="the weft's KES-FB2 bending loop (with --weft-tensile)"
     )
+    add_shear_geometry(kes_p)
     kes_p.add_argument(
         "--shear-law",
         default=None,
@@ -112,6 +126,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     loop_p = compare_p.add_mutually_exclusive_group(required=True)
     loop_p.add_argument("--bending", metavar="FB2.csv", help=BENDING_HELP)
     loop_p.add_argument("--shear", metavar="FB1S.csv", help=f"{SHEAR_HELP} (--plot and --csv: bending only)")
+    add_shear_geometry(compare_p)
     compare_p.add_argument(
         "--plot", metavar="FIG.png", help="write a PNG of each law's fit over the loop and its residuals"
     )
@@ -203,7 +218,7 @@ def _compare_shear(args: argparse.Namespace) -> int:
             "--plot" if args.plot else "--csv",
             "the comparison figure and table are of bending loops; with --shear the comparison is printed",
         )
-    loop = kes.read_shear_csv(args.shear, argument="--shear")
+    loop = kes.read_shear_csv(args.shear, argument="--shear", geometry=args.shear_geometry)
     fits = {law: kes.fit_shear(loop, law) for law in BENDING_LAWS}
     best = min(f.law_fit.aic() for f in fits.values())
     ranking = sorted(fits, key=lambda law: (fits[law].law_fit.aic(), fits[law].law_fit.free_parameters))
@@ -351,7 +366,13 @@ def _fit_kes(args: argparse.Namespace) -> int:
     if args.shear_law is not None and not args.shear:
         raise OptionError("--shear-law", f"{args.shear_law}: there is no --shear loop to fit it to")
     shear_law = args.shear_law or DEFAULT_SHEAR_LAW
-    shear = kes.fit_shear(kes.read_shear_csv(args.shear, argument="--shear"), shear_law) if args.shear else None
+    if args.shear_geometry != "fabric" and not args.shear:
+        raise OptionError("--shear-geometry", f"{args.shear_geometry}: there is no --shear loop to read that way")
+    shear = (
+        kes.fit_shear(kes.read_shear_csv(args.shear, argument="--shear", geometry=args.shear_geometry), shear_law)
+        if args.shear
+        else None
+    )
     directions = [("", args.tensile, args.bending, "--tensile", "--bending")]
     if args.weft_tensile is not None:
         directions.append(("weft", args.weft_tensile, args.weft_bending, "--weft-tensile", "--weft-bending"))
@@ -368,7 +389,8 @@ def _fit_kes(args: argparse.Namespace) -> int:
     if len(fits) > 1:
         source += f"; the weft to {args.weft_tensile} and {args.weft_bending}"
     if shear is not None:
-        source += f"; shear ({shear_law}) fitted to {args.shear} (KES-FB1 shear)"
+        read = "; its columns read as the chuck's, converted to the fabric's" if args.shear_geometry == "chuck" else ""
+        source += f"; shear ({shear_law}) fitted to {args.shear} (KES-FB1 shear{read})"
     data = kes.material_file_data(fit, args.name or out.stem, args.density_g_per_cm2, source, max_strain, shear)
     if len(laws) > 1:
         data["fit"] |= comparison.fit_table()

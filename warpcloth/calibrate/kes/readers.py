@@ -293,13 +293,33 @@ def read_bending_csv(path: str | Path, *, argument: str | None = None) -> Bendin
     return bending_loop(table.values[:, 0], table.values[:, 1], source=str(path), rows=table.lines)
 
 
-def read_shear_csv(path: str | Path, *, argument: str | None = None) -> ShearLoop:
+SHEAR_GEOMETRIES = ("fabric", "chuck")
+"""How a KES-FB1 shear file's columns are read: the fabric's shear angle and shear force
+per width, or the chuck's displacement over the gauge length (a small angle, in degrees)
+and its lateral force per width (:func:`fabric_shear` converts them)."""
+
+
+def fabric_shear(chuck_angle_deg: np.ndarray, chuck_force: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The fabric's shear angle (degrees) and shear force per width from the chuck's
+    reading: displacement d over the fixed gauge length L recorded as the small angle
+    d/L (in degrees) and the lateral force F per width. Simple shear at a fixed gauge turns
+    the fabric by φ = arctan(d/L), and by virtual work (the chuck's F dd per area L equals
+    Fs dφ) its shear force is Fs = F / cos²φ (docs/model.md §17.1)."""
+    phi = np.arctan(np.radians(chuck_angle_deg))
+    return np.degrees(phi), chuck_force / np.cos(phi) ** 2
+
+
+def read_shear_csv(path: str | Path, *, argument: str | None = None, geometry: str = "fabric") -> ShearLoop:
     """Read a KES-FB1 shear loop: columns shear angle (degree) and shear force per width (gf/cm).
 
     ``path`` may also name a bundled example (``kes_fb1_shear_example``); ``argument`` is
     the caller's name for the path, if it wants one blamed. A header that gives the angle
-    in radians is refused rather than read as degrees.
+    in radians is refused rather than read as degrees. ``geometry`` says what the columns
+    are (:data:`SHEAR_GEOMETRIES`): ``"chuck"`` converts the chuck's reading to the
+    fabric's by :func:`fabric_shear`.
     """
+    if geometry not in SHEAR_GEOMETRIES:
+        raise ArgumentError("geometry", f"must be one of {', '.join(SHEAR_GEOMETRIES)}, got {geometry!r}")
     columns = (
         (
             _SHEAR_NAMES[0],
@@ -309,7 +329,10 @@ def read_shear_csv(path: str | Path, *, argument: str | None = None) -> ShearLoo
         (_SHEAR_NAMES[1], [{"gf", "cm"}], "shear force per width in gf/cm (e.g. shear_force_gf_per_cm)"),
     )
     table = _read_loop(path, "KES-FB1 shear", ("angle", "force"), columns, argument)
-    loop = shear_loop(table.values[:, 0], table.values[:, 1], source=str(path), rows=table.lines)
+    angle, force = table.values[:, 0], table.values[:, 1]
+    if geometry == "chuck":
+        angle, force = fabric_shear(angle, force)
+    loop = shear_loop(angle, force, source=str(path), rows=table.lines)
     check_plausible(
         "largest shear force", float(np.max(np.abs(loop.force))), f"{path}, column 2", "is it in gf/cm per width?"
     )
