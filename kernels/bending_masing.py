@@ -123,17 +123,6 @@ def masing_functions(scalar: Any, growing: bool) -> LawFunctions:
         return s * rising * shape(u, p) + shape_slope(u, p) * (one - s * u * rising)
 
     @wp.func
-    def meets_virgin(top: scalar, s: scalar, origin: scalar, p: Parameters):
-        # where the first branch from a reversal on the virgin curve at K_r meets the virgin
-        # curve on the other side: K_m − K_o = s y_r g(K_m), y_r = |K_r − K_o| / g(K_r)
-        # (Masing: the mirror point 2 K_o − K_r)
-        if wp.static(growing):
-            y = wp.abs(top - origin) / growth(top, origin, p)
-            by = p[4] * y
-            return origin + s * y / wp.sqrt(one - by * by)
-        return two * origin - top
-
-    @wp.func
     def direction_from(top: scalar, below: scalar):
         # A branch leaves its reversal point opposite to the way the curvature came to it.
         if top > below:
@@ -197,7 +186,9 @@ def masing_functions(scalar: Any, growing: bool) -> LawFunctions:
         while d == s and depth > 0:
             target = below
             if depth == 1:
-                target = meets_virgin(top[0], s, origin, p)  # the first branch meets the virgin curve
+                # the first branch meets the virgin curve at the mirror point, with or without
+                # growth: K_m − K_o = s y_r g(K_m) with y_r = |K_r − K_o| / g(K_r) solves to it
+                target = two * origin - top[0]
             if s * (curvature - target) < zero:
                 break
             depth = wp.max(depth - 2, 0)

@@ -19,8 +19,9 @@ the branches follow in closed form (derived in docs/model.md §4.11):
 - the branch after a reversal at (K_r, H_r), direction s:  H = H_r + s G F(s (K − K_r) / G),
   G = g(K) + g(K_r) (Masing's rule is G = 2);
 - return-point memory as for masing: an inner loop closes where it began, and the first
-  branch meets the virgin curve on the other side at K_m − K_o = s y_r / √(1 − (β y_r)²),
-  y_r = |K_r − K_o| / g(K_r) (the mirror point 2 K_o − K_r when β = 0).
+  branch meets the virgin curve on the other side where K_m − K_o = s y_r g(K_m),
+  y_r = |K_r − K_o| / g(K_r): g depends on |K − K_o| alone, so that is the mirror point
+  2 K_o − K_r, as for masing.
 
 The formulas hold because the elements that have slid on a branch are exactly those of
 yield y ≤ s (K − K_r) / G, a number that grows along every branch for this g (g(K) + g(K_r)

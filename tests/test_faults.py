@@ -364,7 +364,7 @@ def test_a_damaged_complete_run_is_refused_by_name(tmp_path, damage):
     elif damage == "the run's scene copy changed":
         scene = (out / "scene.toml").read_text()
         (out / "scene.toml").write_text(scene.replace("free_length_mm = ", "free_length_mm = -", 1))
-        expected = "scene.toml: is the run's copy of its scene and no longer reads as one"
+        expected = "scene.toml: is the run's copy of its scene and this warpcloth refuses it"
     elif damage == "complete is a string":
         meta["complete"] = "yes"
         expected = "meta.json: complete must be true or false"

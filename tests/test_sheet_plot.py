@@ -182,11 +182,11 @@ DAMAGE = {
     # issue 39: each was read as valid, or ended in a traceback or a segmentation fault
     "a face past the nodes": (
         lambda out: _geometry(out, "faces", lambda a: a.__setitem__((3, 1), 10**6)),
-        "geometry.npz: faces is not the geometry of the run's scene",
+        "geometry.npz: faces is not the geometry this warpcloth cuts from the run's scene",
     ),
     "a shifted lattice": (
         lambda out: _geometry(out, "lattice", lambda a: a.__setitem__((0, 0), 7)),
-        "geometry.npz: lattice is not the geometry of the run's scene",
+        "geometry.npz: lattice is not the geometry this warpcloth cuts from the run's scene",
     ),
     "a marker dropped from meta.json": (
         lambda out: _meta(out, lambda m: m["markers"].pop()),
@@ -220,7 +220,7 @@ DAMAGE = {
         lambda out: (out / "scene.toml").write_text(
             (out / "scene.toml").read_text().replace("free_length_mm = ", 'free_length_mm = "x" # ', 1)
         ),
-        "scene.toml: is the run's copy of its scene and no longer reads as one (sheet.free_length_mm",
+        "scene.toml: is the run's copy of its scene and this warpcloth refuses it (sheet.free_length_mm",
     ),
     "two sheets claimed": (
         lambda out: _meta(out, lambda m: m.__setitem__("n_sheets", 2)),

@@ -372,7 +372,15 @@ def test_a_hanging_chain_sags_as_the_catenary_says():
 def test_a_longer_strip_held_where_the_shorter_one_was_is_refused_not_folded():
     # issue 39: 150 mm held at the 100 mm strip's (50, -80) mm was released from a U and
     # printed a first period of 0.318 s without a word
-    with pytest.raises(wc.SceneError, match=r"release.hold_x_mm: .* sags 26.2 mm below the held end .*\(74.7, -120\)"):
+    with pytest.raises(
+        wc.SceneError, match=r"release.hold_x_mm: .* sags 26.2 mm below the held end .*\(74.73, -119.6\)"
+    ):
         wc.load_scene("damped_swing", ["strip.free_length_mm=150"])
-    # the position it suggests is taken
-    wc.load_scene("damped_swing", ["strip.free_length_mm=150", "release.hold_x_mm=74.7", "release.hold_y_mm=-120"])
+    # the position it suggests is taken, in any direction (level or above the clamp too,
+    # where 0.94 of the length would still sag: it goes as far out as it must)
+    wc.load_scene("damped_swing", ["strip.free_length_mm=150", "release.hold_x_mm=74.73", "release.hold_y_mm=-119.6"])
+    for hold in ((80.0, 0.0), (30.0, 40.0), (-60.0, -30.0)):
+        with pytest.raises(wc.SceneError) as refused:
+            wc.load_scene("damped_swing", [f"release.hold_x_mm={hold[0]}", f"release.hold_y_mm={hold[1]}"])
+        x, y = re.search(r"e\.g\. at \(([-\d.]+), ([-\d.]+)\) mm", str(refused.value)).groups()
+        wc.load_scene("damped_swing", [f"release.hold_x_mm={x}", f"release.hold_y_mm={y}"])

@@ -148,6 +148,8 @@ def material_command(args: argparse.Namespace) -> int:
             print(f"{name}: {read_material_file(name)['material']['source']}")
         return 0
     if args.material_command == "compare":
+        if args.shear_geometry != "fabric" and not args.shear:
+            raise OptionError("--shear-geometry", f"{args.shear_geometry}: there is no --shear loop to read that way")
         return _compare_shear(args) if args.shear else _compare(args)
     return _fit_kes(args)
 

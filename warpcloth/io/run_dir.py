@@ -477,8 +477,9 @@ def read_run_scenes(path: Path, n_variants: int, parse: Callable[[Path], Any], c
         except SceneError as exc:
             raise DataFileError(
                 file,
-                f"is the run's copy of its scene and no longer reads as one ({exc}): the run directory was "
-                "changed after the run",
+                f"is the run's copy of its scene and this warpcloth refuses it ({exc}): the run directory was "
+                "changed after the run, or a warpcloth with other rules wrote it (meta.json's provenance says "
+                "which); rerun the scene with this one to read it",
             ) from None
     return scenes
 

@@ -297,7 +297,9 @@ def _check_geometry(path: Path, meta: dict, scene: SheetScene, stored: dict[str,
                 how = f"[{', '.join(map(str, at))}] is {held[at]}, the scene's cut has {expected[at]}"
             raise DataFileError(
                 path / "geometry.npz",
-                f"{name} is not the geometry of the run's scene ({how}): the run directory was changed after the run",
+                f"{name} is not the geometry this warpcloth cuts from the run's scene ({how}): the run directory "
+                "was changed after the run, or a warpcloth that cut sheets otherwise wrote it (meta.json's "
+                "provenance says which)",
             )
     nodes = [m["node"] for m in meta["markers"]]
     expected_nodes = marker_nodes(scene, geometry)

@@ -315,8 +315,14 @@ def sheet_scene_from_dict(data: dict) -> SheetScene:
 
 def nodes_at_most(st: SheetSection) -> float:
     """The nodes of the sheet's cut at most, in floats, before the cut counts one (a length
-    of 1e308 mm is inf of them): its bounding rectangle's, which a bias cut does not exceed."""
-    return ((st.free_length_mm + st.clamp_length_mm) / st.spacing_warp_mm + 1) * (st.width_mm / st.spacing_weft_mm + 1)
+    of 1e308 mm is inf of them): a rectangle's lattice, or for a bias cut, whose cells
+    reach past its rectangle's edges, twice that rectangle's with a spacing's margin
+    all round (the bundled bias strip: 181 nodes, bounded by 450)."""
+    along = (st.free_length_mm + st.clamp_length_mm) / st.spacing_warp_mm + 1
+    across = st.width_mm / st.spacing_weft_mm + 1
+    if st.cut == "rectangle":
+        return along * across
+    return 2 * (along + 2) * (across + 2)
 
 
 def validate_sheet_scene(scene: SheetScene) -> None:

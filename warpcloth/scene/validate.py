@@ -21,8 +21,28 @@ MAX_HELD_SAG = 0.1
 """The most a held strip's slack may sag below its held end, as a part of its length (a
 hanging chain's, which a strip with bending rigidity sags less than): more is a fold."""
 TAUT_HOLD = 0.94
-"""The suggested held position's distance, as a part of the length: the bundled
-damped_swing's (94.3 mm of 100), whose slack sags nowhere below the held end."""
+"""The suggested held position's distance, as a part of the length, where it holds the
+strip taut enough: the bundled damped_swing's (94.3 mm of 100), whose slack sags nowhere
+below the held end (:func:`taut_distance` goes farther where this is not enough)."""
+
+
+def taut_distance(ux: float, uy: float, length_mm: float) -> float:
+    """How far from the clamp, along the unit direction (``ux``, ``uy``), to hold the free end
+    of a strip of ``length_mm`` so that it sags at most half of :data:`MAX_HELD_SAG` of its
+    length (a margin for the rounding of a suggested position): :data:`TAUT_HOLD` of the
+    length where that is enough, else the nearest such distance (at the full length the
+    chain is straight and sags nothing), found by bisection."""
+    limit = 0.5 * MAX_HELD_SAG * length_mm
+    near, far = TAUT_HOLD * length_mm, length_mm
+    if hanging_sag(ux * near, uy * near, length_mm) <= limit:
+        return near
+    for _ in range(60):
+        middle = 0.5 * (near + far)
+        if hanging_sag(ux * middle, uy * middle, length_mm) <= limit:
+            far = middle
+        else:
+            near = middle
+    return far
 
 
 def hanging_sag(x_mm: float, y_mm: float, length_mm: float) -> float:
@@ -110,14 +130,16 @@ def validate_scene(scene: Scene) -> None:
             )
         sag = hanging_sag(scene.release.hold_x_mm, scene.release.hold_y_mm, st.free_length_mm)
         if sag > MAX_HELD_SAG * st.free_length_mm and not scene.release.allow_fold:
-            x, y = (v * TAUT_HOLD * st.free_length_mm / r for v in (scene.release.hold_x_mm, scene.release.hold_y_mm))
+            reach = taut_distance(scene.release.hold_x_mm / r, scene.release.hold_y_mm / r, st.free_length_mm)
+            x, y = (v * reach / r for v in (scene.release.hold_x_mm, scene.release.hold_y_mm))
             raise SceneError(
                 "release.hold_x_mm",
                 f"the free end held at ({scene.release.hold_x_mm:g}, {scene.release.hold_y_mm:g}) mm, {r:.3g} mm "
                 f"from the clamp's lowest point, leaves {st.free_length_mm - r:.3g} mm of the {st.free_length_mm:g} "
                 f"mm strip slack: hanging, it sags {sag:.3g} mm below the held end (more than "
                 f"{MAX_HELD_SAG:.0%} of its length), so the swing would start from a fold, not an arc; hold it "
-                f"farther out, e.g. at ({x:.3g}, {y:.3g}) mm (the same direction, {TAUT_HOLD:g} of the length away), "
+                f"farther out, e.g. at ({x:.4g}, {y:.4g}) mm (the same direction, "
+                f"{reach / st.free_length_mm:.3g} of the length away), "
                 "or set release.allow_fold = true to start from the fold on purpose",
                 related=("release.hold_y_mm", "strip.free_length_mm", "release.allow_fold"),
             )
