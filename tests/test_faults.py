@@ -1019,13 +1019,18 @@ def test_a_density_out_of_range_in_a_scene_is_warned_about(tmp_path):
     )
 
 
-@pytest.mark.parametrize("scale", ["1e300", "-1e300"])
-def test_a_kes_fit_that_overflows_writes_no_material_file(tmp_path, scale):
+def scaled_copy(bundled, scale, path):
+    """A bundled two-column example written to ``path`` with its second column × ``scale``."""
     from warpcloth.io.measured import bundled_data
 
-    rows = bundled_data("kes_fb1_example").read_text().splitlines()
-    scaled = [f"{r.split(',')[0]},{float(r.split(',')[1]) * float(scale):.6g}" for r in rows[1:]]
-    (tmp_path / "fb1.csv").write_text("\n".join([rows[0], *scaled]) + "\n")
+    rows = bundled_data(bundled).read_text().splitlines()
+    scaled = [f"{r.split(',')[0]},{float(r.split(',')[1]) * scale:.6g}" for r in rows[1:]]
+    path.write_text("\n".join([rows[0], *scaled]) + "\n")
+
+
+@pytest.mark.parametrize("scale", ["1e300", "-1e300"])
+def test_a_kes_fit_that_overflows_writes_no_material_file(tmp_path, scale):
+    scaled_copy("kes_fb1_example", float(scale), tmp_path / "fb1.csv")
     done = cli(
         "material",
         "fit-kes",
@@ -1052,11 +1057,7 @@ def test_a_kes_fit_that_overflows_writes_no_material_file(tmp_path, scale):
 def test_a_kes_shear_fit_that_overflows_writes_no_material_file(tmp_path):
     # issue 39: a shear loop scaled by 1e300 was "failed", yet written with
     # hysteresis_d1_gf_per_cm ≈ 1e302; tensile and bending fits already refused this
-    from warpcloth.io.measured import bundled_data
-
-    rows = bundled_data("kes_fb1_shear_example").read_text().splitlines()
-    scaled = [f"{r.split(',')[0]},{float(r.split(',')[1]) * 1e300:.6g}" for r in rows[1:]]
-    (tmp_path / "fb1s.csv").write_text("\n".join([rows[0], *scaled]) + "\n")
+    scaled_copy("kes_fb1_shear_example", 1e300, tmp_path / "fb1s.csv")
     done = cli(
         "material",
         "fit-kes",

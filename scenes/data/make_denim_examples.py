@@ -41,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 from make_kes_examples import IWAN_ELEMENTS, iwan_moment
+from make_motion_examples import sheet_marker_rows, sheet_paths
 from scipy.optimize import least_squares
 
 from warpcloth.calibrate.kes import bending_loop, bending_summary, shear_loop, shear_summary, standard_cycle
@@ -196,32 +197,20 @@ def sheet_markers(rng: np.random.Generator) -> str:
     its four markers as a camera facing the sheet sees them (z and y) at 120 frames/s, run at
     2.5 mm spacing (a converged fine-resolution run, warpcloth's own: the sheet fit's
     continuum estimate is what it tests), noise σ = 0.02 mm."""
-    from warpcloth.runs import simulate
-    from warpcloth.scene.sheet_build import load_sheet_scene
-
-    def paths(h: float) -> tuple[np.ndarray, np.ndarray]:
-        fields = {
-            "material.from_file": "denim-D",
-            "run.duration_s": 0.3,
-            "sheet.spacing_warp_mm": h,
-            "sheet.spacing_weft_mm": h,
-        }
-        result = simulate(load_sheet_scene("shear_swing", fields))
-        return result.t[::5], result.markers[::5, 0, :, 1:] * 1e3
-
-    times, record = paths(SHEET_MARKERS_RECORD_MM)
-    moved = float(np.max(np.abs(paths(2 * SHEET_MARKERS_RECORD_MM)[1] - record)))
-    rows = []
-    for t, sample in zip(times, record, strict=True):
-        for marker, (y, z) in enumerate(sample):
-            z, y = np.array([z, y]) + rng.normal(0, SHEET_MARKERS_NOISE_MM, 2)
-            rows.append(f"{t:.6f},{marker},{z:.5f},{y:.5f}")
+    denim = {"material.from_file": "denim-D"}
+    times, record = sheet_paths(SHEET_MARKERS_RECORD_MM, denim)
+    moved = float(np.max(np.abs(sheet_paths(2 * SHEET_MARKERS_RECORD_MM, denim)[1] - record)))
     header = (
         f"# synthetic: the shear swing of denim D (scenes/materials/denim-D.toml) for 0.3 s, run at sheet spacing "
         f"{SHEET_MARKERS_RECORD_MM:g} mm (auto's step), from which {2 * SHEET_MARKERS_RECORD_MM:g} mm differs by at "
         f"most {moved:.2g} mm; noise {SHEET_MARKERS_NOISE_MM:g} mm (scenes/data/make_denim_examples.py)"
     )
-    return f"{header}\nt_s,marker,z_mm,y_mm\n" + "\n".join(rows) + "\n"
+    return f"{header}\n" + sheet_marker_rows(times, record, rng, SHEET_MARKERS_NOISE_MM)
+
+
+def write_record(name: str, rows: np.ndarray, fmt: tuple[str, str], header: str) -> None:
+    """One two-column record next to this script, as the bundled KES examples are written."""
+    np.savetxt(HERE / name, rows, fmt=fmt, delimiter=",", header=header, comments="")
 
 
 def main() -> None:
@@ -233,34 +222,23 @@ def main() -> None:
         shear = solve_shear(published)
         phi = standard_cycle(SHEAR_PHI0_DEG, SHEAR_STEP_DEG)
         force = shear_force(phi, *shear.values()) + rng.normal(0.0, SHEAR_NOISE_GF_PER_CM, len(phi))
-        np.savetxt(
-            HERE / f"denim_{fabric}_fb1_shear.csv",
+        write_record(
+            f"denim_{fabric}_fb1_shear.csv",
             np.column_stack([phi, force]),
-            fmt=("%.2f", "%.4f"),
-            delimiter=",",
-            header="shear_angle_deg,shear_force_gf_per_cm",
-            comments="",
+            ("%.2f", "%.4f"),
+            "shear_angle_deg,shear_force_gf_per_cm",
         )
         bending = solve_bending(published)
         k = standard_cycle(BENDING_K0_PER_CM, BENDING_STEP_PER_CM)
         moment = bending_moment(k, *bending.values()) + rng.normal(0.0, BENDING_NOISE_GF_CM_PER_CM, len(k))
-        np.savetxt(
-            HERE / f"denim_{fabric}_fb2.csv",
+        write_record(
+            f"denim_{fabric}_fb2.csv",
             np.column_stack([k, moment]),
-            fmt=("%.3f", "%.5f"),
-            delimiter=",",
-            header="curvature_per_cm,moment_gf_cm_per_cm",
-            comments="",
+            ("%.3f", "%.5f"),
+            "curvature_per_cm,moment_gf_cm_per_cm",
         )
         tensile, curve = tensile_record(published, rng)
-        np.savetxt(
-            HERE / f"denim_{fabric}_fb1.csv",
-            tensile,
-            fmt=("%.4f", "%.3f"),
-            delimiter=",",
-            header="strain_percent,force_gf_per_cm",
-            comments="",
-        )
+        write_record(f"denim_{fabric}_fb1.csv", tensile, ("%.4f", "%.3f"), "strain_percent,force_gf_per_cm")
         fabrics[fabric] = {
             "published": published,
             "tensile_model": curve,

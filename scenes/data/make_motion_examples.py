@@ -129,32 +129,43 @@ def encoder(rng: np.random.Generator) -> str:
     )
 
 
-def sheet_paths(h: float) -> tuple[np.ndarray, np.ndarray]:
+def sheet_paths(h: float, fields: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Times and the shear swing's markers' (y, z) at 120 frames/s ([sample, marker, yz],
-    mm), the sheet run at spacing ``h`` mm along warp and weft."""
+    mm), the sheet run for 0.3 s at spacing ``h`` mm along warp and weft with ``fields``
+    (default :data:`SHEET_TRUTH`)."""
     from warpcloth.runs import simulate
     from warpcloth.scene.sheet_build import load_sheet_scene
 
-    fields = SHEET_TRUTH | {"run.duration_s": 0.3, "sheet.spacing_warp_mm": h, "sheet.spacing_weft_mm": h}
+    fields = (SHEET_TRUTH if fields is None else fields) | {
+        "run.duration_s": 0.3,
+        "sheet.spacing_warp_mm": h,
+        "sheet.spacing_weft_mm": h,
+    }
     result = simulate(load_sheet_scene("shear_swing", fields))
     return result.t[::5], result.markers[::5, 0, :, 1:] * 1e3
+
+
+def sheet_marker_rows(times: np.ndarray, paths: np.ndarray, rng: np.random.Generator, sigma_mm: float) -> str:
+    """The rows ``t_s,marker,z_mm,y_mm`` (with their header line) of a sheet's markers as a
+    camera facing the sheet sees them, each coordinate with Gaussian noise ``sigma_mm``."""
+    rows = []
+    for t, sample in zip(times, paths, strict=True):
+        for marker, (y, z) in enumerate(sample):
+            z, y = np.array([z, y]) + rng.normal(0, sigma_mm, 2)
+            rows.append(f"{t:.6f},{marker},{z:.5f},{y:.5f}")
+    return "t_s,marker,z_mm,y_mm\n" + "\n".join(rows) + "\n"
 
 
 def sheet_markers(rng: np.random.Generator) -> str:
     """The shear swing's four markers, z and y, at 120 frames/s, σ = 0.02 mm."""
     times, paths = sheet_paths(SHEET_RECORD_MM)
     moved = float(np.max(np.abs(sheet_paths(2 * SHEET_RECORD_MM)[1] - paths)))
-    rows = []
-    for t, sample in zip(times, paths, strict=True):
-        for marker, (y, z) in enumerate(sample):
-            z, y = np.array([z, y]) + rng.normal(0, 0.02, 2)
-            rows.append(f"{t:.6f},{marker},{z:.5f},{y:.5f}")
     header = (
         f"# synthetic: the shear swing (masing) with {SHEET_TRUTH | {'run.duration_s': 0.3}}; run at sheet spacing "
         f"{SHEET_RECORD_MM:g} mm (auto's step), from which {2 * SHEET_RECORD_MM:g} mm differs by at most "
         f"{moved:.2g} mm ({moved / 0.02:.2g} of the noise); noise 0.02 mm (scenes/data/make_motion_examples.py)"
     )
-    return f"{header}\nt_s,marker,z_mm,y_mm\n" + "\n".join(rows) + "\n"
+    return f"{header}\n" + sheet_marker_rows(times, paths, rng, 0.02)
 
 
 def main() -> None:

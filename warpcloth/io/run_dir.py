@@ -487,9 +487,13 @@ def read_run_scenes(path: Path, n_variants: int, parse: Callable[[Path], Any], c
 def check_frame_times(file: Path, times: np.ndarray) -> None:
     """Refuse stored frame times that are not finite and strictly increasing (a changed
     frame_times.npy: every frame would be shown at another time)."""
+    finite = np.isfinite(times)
+    if not finite.all():
+        k = int(np.argmin(finite))
+        raise DataFileError(file, f"frame {k} has t = {times[k]}, not a time: the run directory is damaged")
     later = np.diff(times) > 0
-    if not np.all(np.isfinite(times)) or not np.all(later):
-        first = int(np.argmin(later)) if not np.all(later) else int(np.argmin(np.isfinite(times))) - 1
+    if not later.all():
+        first = int(np.argmin(later))
         raise DataFileError(
             file,
             f"frame {first + 1} at t = {times[first + 1]:.10g} s does not come after frame {first} at "
