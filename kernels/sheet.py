@@ -84,7 +84,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
     piecewise_polynomial = drives.build(scalar).piecewise_polynomial
     forces = sheet_forces.build(scalar, terms)
     accumulate_sheet_forces, shear_angle = forces.accumulate_sheet_forces, forces.shear_angle
-    hinge_geometry, hinge_curvature, cell_sides = forces.hinge_geometry, forces.hinge_curvature, forces.cell_sides
+    hinge_geometry, hinge_curvature = forces.hinge_geometry, forces.hinge_curvature
+    cell_corners, cell_twist = forces.cell_corners, forces.cell_twist
     tensile_energy = tensile.build(scalar).energy_per_width
     slot = SHEET_PROBE_INDEX
     probe_set = SHEET_PROBES.with_terms(terms)
@@ -281,7 +282,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
 
     @wp.kernel(module="unique", enable_backward=False)
     def initialise_memory(model: SheetModel, state: SheetState):
-        """Start every hinge and cell fresh at its current curvature and shear angle."""
+        """Start every hinge and cell fresh at its current curvature, shear angle and twist."""
         s = wp.tid()
         for h in range(model.hinge_nodes.shape[0]):
             _e1, _e2, _axis, _inverse_u, sine, _cosine, inverse_p1, inverse_p2, chord = hinge_geometry(
@@ -292,9 +293,10 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
                 curvature, model.bending[model.hinge_family[h], s], state.hinge_history, h, s
             )
         for c in range(model.cell_nodes.shape[0]):
-            w, f = cell_sides(model, state, c, s)
-            phi, _sn, _d_w, _d_f = shear_angle(w, f)
+            w, f, d = cell_corners(model, state, c, s)
+            phi, _sn, unit, _d_w, _d_f = shear_angle(w, f)
             state.cell[c, s] = law.fresh_memory(phi, model.shear[s], state.cell_history, c, s)
+            state.twist[c, s] = law.fresh_memory(cell_twist(model, d, unit), model.twist[s], state.twist_history, c, s)
 
     @wp.kernel(module="unique", enable_backward=False)
     def internal_forces(model: SheetModel, stepping: SheetStepping, state: SheetState):

@@ -26,7 +26,8 @@ class SheetForces:
     accumulate_sheet_forces: Any
     hinge_geometry: Any
     hinge_curvature: Any
-    cell_sides: Any
+    cell_corners: Any
+    cell_twist: Any
     shear_angle: Any
 
 
@@ -63,8 +64,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
 
     @wp.func
     def shear_angle(w: vec3, f: vec3):
-        # φ = π/2 − the angle between the cell's mean warp w and mean weft f, with its
-        # gradients with respect to w and f (docs/model.md §17.4).
+        # φ = π/2 − the angle between the cell's mean warp w and mean weft f, the cell's unit
+        # normal and φ's gradients with respect to w and f (docs/model.md §17.5)
         c = wp.dot(w, f)
         n = wp.cross(w, f)
         sn = wp.length(n)
@@ -73,7 +74,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         unit = n / sn
         d_w = (sn * f - c * wp.cross(f, unit)) * inverse
         d_f = (sn * w - c * wp.cross(unit, w)) * inverse
-        return phi, sn, d_w, d_f
+        return phi, sn, unit, d_w, d_f
 
     @wp.func
     def hinge_geometry(model: SheetModel, state: SheetState, h: int, s: int):
@@ -96,14 +97,20 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         return two * sine * inverse_p1 * inverse_p2 / chord * model.hinge_curvature_scale[h]
 
     @wp.func
-    def cell_sides(model: SheetModel, state: SheetState, c: int, s: int):
-        # cell c's mean warp and mean weft sides
+    def cell_corners(model: SheetModel, state: SheetState, c: int, s: int):
+        # cell c's mean warp and mean weft sides, and its twist vector x00 − x10 − x01 + x11
+        # (h_w h_f times the mixed second difference: zero when the cell is a parallelogram)
         q = model.cell_nodes[c]
         x00 = state.position[q[0], s]
         x10 = state.position[q[1], s]
         x01 = state.position[q[2], s]
         x11 = state.position[q[3], s]
-        return (x10 - x00 + x11 - x01) * half, (x01 - x00 + x11 - x10) * half
+        return (x10 - x00 + x11 - x01) * half, (x01 - x00 + x11 - x10) * half, x00 - x10 - x01 + x11
+
+    @wp.func
+    def cell_twist(model: SheetModel, d: vec3, unit: vec3):
+        # κ12, the twist: the twist vector's part along the cell's normal over the rest area
+        return wp.dot(d, unit) / (model.spacing[0] * model.spacing[1])
 
     @wp.func
     def segments(model: SheetModel, stepping: SheetStepping, state: SheetState, s: int):
@@ -122,52 +129,100 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         return STATUS_OK, 0, zero
 
     @wp.func
+    def bend(model: SheetModel, state: SheetState, h: int, s: int):
+        # hinge h's curvature and the gradients of its turning angle ψ (docs/model.md §17.4):
+        # of its line's end nodes and of its axis's upper node (the others follow by balance);
+        # healthy false when the line folded onto itself or a segment turned onto the axis
+        # (no plane to bend in), or is NaN, with the chord over h
+        family = model.hinge_family[h]
+        e1, e2, axis, inverse_u, sine, cosine, inverse_p1, inverse_p2, chord = hinge_geometry(model, state, h, s)
+        fold = scalar(1e-3) * model.spacing[family]
+        healthy = chord > fold and inverse_p1 * fold < one and inverse_p2 * fold < one
+        curvature = hinge_curvature(model, h, sine, inverse_p1, inverse_p2, chord)
+        grad_0 = wp.cross(axis, e1) * (inverse_p1 * inverse_p1)
+        grad_2 = wp.cross(axis, e2) * (inverse_p2 * inverse_p2)
+        e1a = wp.dot(e1, axis)
+        e2a = wp.dot(e2, axis)
+        d_axis = (cosine * wp.cross(e1, e2) + sine * (e2a * e1 + e1a * e2)) * (
+            inverse_p1 * inverse_p1 * inverse_p2 * inverse_p2
+        )
+        grad_u = (d_axis - wp.dot(d_axis, axis) * axis) * inverse_u
+        return healthy, chord / model.spacing[family], curvature, grad_0, grad_2, grad_u
+
+    @wp.func
+    def add_couple(
+        forces: wp.array2d(dtype=vec3),
+        model: SheetModel,
+        h: int,
+        s: int,
+        tau: scalar,
+        grad_0: vec3,
+        grad_2: vec3,
+        grad_u: vec3,
+    ):
+        # −τ ∂ψ/∂x on the hinge's line nodes and its axis's nodes
+        nodes = model.hinge_nodes[h]
+        across = model.hinge_axis_nodes[h]
+        add(forces, nodes[0], s, vec3() - tau * grad_0)
+        add(forces, nodes[2], s, vec3() - tau * grad_2)
+        add(forces, nodes[1], s, tau * (grad_0 + grad_2))
+        add(forces, across[1], s, vec3() - tau * grad_u)
+        add(forces, across[0], s, tau * grad_u)
+
+    @wp.func
+    def hinge_couple(
+        model: SheetModel,
+        state: SheetState,
+        h: int,
+        s: int,
+        curvature: scalar,
+        coupling: scalar,
+        grad_0: vec3,
+        grad_2: vec3,
+        grad_u: vec3,
+    ):
+        # the hinge's law followed to its curvature, its moment (plus the Poisson coupling
+        # D12 K of the other line through its node, elastic) times its width as a couple
+        p = model.bending[model.hinge_family[h], s]
+        memory = law.follow(curvature, state.hinge[h, s], p, state.hinge_history, h, s)
+        state.hinge[h, s] = memory
+        width = model.hinge_width[h]
+        tau_elastic = (law.elastic_moment(curvature, p) + coupling) * width
+        tau_hysteretic = law.hysteretic_moment(curvature, memory, p) * width
+        add_couple(state.force_elastic, model, h, s, tau_elastic, grad_0, grad_2, grad_u)
+        add_couple(state.force_hysteretic, model, h, s, tau_hysteretic, grad_0, grad_2, grad_u)
+
+    @wp.func
     def hinges(model: SheetModel, state: SheetState, s: int):
-        for h in range(model.hinge_nodes.shape[0]):
-            nodes = model.hinge_nodes[h]
-            across = model.hinge_axis_nodes[h]
-            family = model.hinge_family[h]
-            e1, e2, axis, inverse_u, sine, cosine, inverse_p1, inverse_p2, chord = hinge_geometry(model, state, h, s)
-            fold = scalar(1e-3) * model.spacing[family]
-            # folded onto itself, or a segment turned onto the axis (no plane to bend in);
-            # NaN fails every comparison and stops here too
-            if not (chord > fold and inverse_p1 * fold < one and inverse_p2 * fold < one):
-                return STATUS_FOLDED, h, chord / model.spacing[family]
-            curvature = hinge_curvature(model, h, sine, inverse_p1, inverse_p2, chord)
-            p = model.bending[family, s]
-            memory = law.follow(curvature, state.hinge[h, s], p, state.hinge_history, h, s)
-            state.hinge[h, s] = memory
-            width = model.hinge_width[h]
-            tau_elastic = law.elastic_moment(curvature, p) * width
-            tau_hysteretic = law.hysteretic_moment(curvature, memory, p) * width
-            # ∂ψ/∂x of the three line nodes, and of the axis's two nodes through a = u/|u|
-            grad_0 = wp.cross(axis, e1) * (inverse_p1 * inverse_p1)
-            grad_2 = wp.cross(axis, e2) * (inverse_p2 * inverse_p2)
-            e1a = wp.dot(e1, axis)
-            e2a = wp.dot(e2, axis)
-            d_axis = (cosine * wp.cross(e1, e2) + sine * (e2a * e1 + e1a * e2)) * (
-                inverse_p1 * inverse_p1 * inverse_p2 * inverse_p2
-            )
-            grad_u = (d_axis - wp.dot(d_axis, axis) * axis) * inverse_u
-            add(state.force_elastic, nodes[0], s, vec3() - tau_elastic * grad_0)
-            add(state.force_elastic, nodes[2], s, vec3() - tau_elastic * grad_2)
-            add(state.force_elastic, nodes[1], s, tau_elastic * (grad_0 + grad_2))
-            add(state.force_elastic, across[1], s, vec3() - tau_elastic * grad_u)
-            add(state.force_elastic, across[0], s, tau_elastic * grad_u)
-            add(state.force_hysteretic, nodes[0], s, vec3() - tau_hysteretic * grad_0)
-            add(state.force_hysteretic, nodes[2], s, vec3() - tau_hysteretic * grad_2)
-            add(state.force_hysteretic, nodes[1], s, tau_hysteretic * (grad_0 + grad_2))
-            add(state.force_hysteretic, across[1], s, vec3() - tau_hysteretic * grad_u)
-            add(state.force_hysteretic, across[0], s, tau_hysteretic * grad_u)
+        # the node pairs first: a warp and a weft hinge at one node, whose energy has the
+        # plate's Poisson term D12 K_warp K_weft besides each line's own (§17.4)
+        d12 = model.poisson[s]
+        for k in range(model.hinge_pairs):
+            warp = 2 * k
+            healthy, chord, curvature, grad_0, grad_2, grad_u = bend(model, state, warp, s)
+            if not healthy:
+                return STATUS_FOLDED, warp, chord
+            weft_healthy, weft_chord, weft_curvature, weft_0, weft_2, weft_u = bend(model, state, warp + 1, s)
+            if not weft_healthy:
+                return STATUS_FOLDED, warp + 1, weft_chord
+            hinge_couple(model, state, warp, s, curvature, d12 * weft_curvature, grad_0, grad_2, grad_u)
+            hinge_couple(model, state, warp + 1, s, weft_curvature, d12 * curvature, weft_0, weft_2, weft_u)
+        for h in range(2 * model.hinge_pairs, model.hinge_nodes.shape[0]):
+            healthy, chord, curvature, grad_0, grad_2, grad_u = bend(model, state, h, s)
+            if not healthy:
+                return STATUS_FOLDED, h, chord
+            hinge_couple(model, state, h, s, curvature, zero, grad_0, grad_2, grad_u)
         return STATUS_OK, 0, zero
 
     @wp.func
     def cells(model: SheetModel, stepping: SheetStepping, state: SheetState, s: int):
         p = model.shear[s]
+        p_twist = model.twist[s]
+        twist_area = model.spacing[0] * model.spacing[1]
         for c in range(model.cell_nodes.shape[0]):
             q = model.cell_nodes[c]
-            w, f = cell_sides(model, state, c, s)
-            phi, sn, d_w, d_f = shear_angle(w, f)
+            w, f, d = cell_corners(model, state, c, s)
+            phi, sn, unit, d_w, d_f = shear_angle(w, f)
             if not (wp.abs(phi) <= stepping.max_shear):  # also catches NaN
                 return STATUS_CELL_COLLAPSED, c, phi
             memory = law.follow(phi, state.cell[c, s], p, state.cell_history, c, s)
@@ -180,14 +235,30 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             g10 = (d_w - d_f) * half
             g01 = (d_f - d_w) * half
             g11 = (d_w + d_f) * half
-            add(state.force_elastic, q[0], s, vec3() - tau_elastic * g00)
-            add(state.force_elastic, q[1], s, vec3() - tau_elastic * g10)
-            add(state.force_elastic, q[2], s, vec3() - tau_elastic * g01)
-            add(state.force_elastic, q[3], s, vec3() - tau_elastic * g11)
-            add(state.force_hysteretic, q[0], s, vec3() - tau_hysteretic * g00)
-            add(state.force_hysteretic, q[1], s, vec3() - tau_hysteretic * g10)
-            add(state.force_hysteretic, q[2], s, vec3() - tau_hysteretic * g01)
-            add(state.force_hysteretic, q[3], s, vec3() - tau_hysteretic * g11)
+            # the twist κ12 = d·n / (h_w h_f) (§17.5): its energy A ∫ M12 dκ12 is the plate's
+            # 2 D66 κ12² per area for an elastic law. ∂(d·n)/∂x: the twist vector's ±1 at the
+            # corners along n, and the normal's turn, through w and f, against d's in-plane part
+            kappa = cell_twist(model, d, unit)
+            twist_memory = law.follow(kappa, state.twist[c, s], p_twist, state.twist_history, c, s)
+            state.twist[c, s] = twist_memory
+            scale = area / twist_area
+            twist_elastic = law.elastic_moment(kappa, p_twist) * scale
+            twist_hysteretic = law.hysteretic_moment(kappa, twist_memory, p_twist) * scale
+            in_plane = d - wp.dot(d, unit) * unit
+            t_w = wp.cross(f, in_plane) / sn
+            t_f = wp.cross(in_plane, w) / sn
+            t00 = unit - (t_w + t_f) * half
+            t10 = (t_w - t_f) * half - unit
+            t01 = (t_f - t_w) * half - unit
+            t11 = unit + (t_w + t_f) * half
+            add(state.force_elastic, q[0], s, vec3() - tau_elastic * g00 - twist_elastic * t00)
+            add(state.force_elastic, q[1], s, vec3() - tau_elastic * g10 - twist_elastic * t10)
+            add(state.force_elastic, q[2], s, vec3() - tau_elastic * g01 - twist_elastic * t01)
+            add(state.force_elastic, q[3], s, vec3() - tau_elastic * g11 - twist_elastic * t11)
+            add(state.force_hysteretic, q[0], s, vec3() - tau_hysteretic * g00 - twist_hysteretic * t00)
+            add(state.force_hysteretic, q[1], s, vec3() - tau_hysteretic * g10 - twist_hysteretic * t10)
+            add(state.force_hysteretic, q[2], s, vec3() - tau_hysteretic * g01 - twist_hysteretic * t01)
+            add(state.force_hysteretic, q[3], s, vec3() - tau_hysteretic * g11 - twist_hysteretic * t11)
         return STATUS_OK, 0, zero
 
     @wp.func
@@ -209,6 +280,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         accumulate_sheet_forces=accumulate_sheet_forces,
         hinge_geometry=hinge_geometry,
         hinge_curvature=hinge_curvature,
-        cell_sides=cell_sides,
+        cell_corners=cell_corners,
+        cell_twist=cell_twist,
         shear_angle=shear_angle,
     )

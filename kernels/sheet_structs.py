@@ -66,11 +66,14 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetTypes:
         hinge_family: wp.array(dtype=int)
         hinge_width: wp.array(dtype=scalar)  # m
         hinge_curvature_scale: wp.array(dtype=scalar)  # h / length the hinge bends (2 at a clamp edge, §5.3)
+        hinge_pairs: int  # hinges 2k (warp) and 2k + 1 (weft) share node k's curvatures: the Poisson pairs first
         cell_nodes: wp.array(dtype=wp.vec4i)  # [cell]: corners (i, j), (i+1, j), (i, j+1), (i+1, j+1)
         cell_area: wp.array(dtype=scalar)  # m²
         tensile: wp.array2d(dtype=vec4)  # [family, sheet]: a1..a4 of T(ε), N/m
         bending: wp.array2d(dtype=law.Parameters)  # [family, sheet]: the bending law of each direction
         shear: wp.array(dtype=law.Parameters)  # [sheet]: the shear law on the shear angle (G for D)
+        twist: wp.array(dtype=law.Parameters)  # [sheet]: the twist law on a cell's twist κ12 (4 D66 for D)
+        poisson: wp.array(dtype=scalar)  # [sheet]: D12, the bending Poisson coupling, N·m
 
     @wp.struct
     class SheetState:
@@ -82,9 +85,11 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetTypes:
         force_elastic: wp.array2d(dtype=vec3)  # bending and shear, the laws' D K and G φ
         force_hysteretic: wp.array2d(dtype=vec3)  # bending and shear, the laws' hysteretic part
         hinge: wp.array2d(dtype=law.Memory)  # [hinge, sheet]
-        cell: wp.array2d(dtype=law.Memory)  # [cell, sheet]
+        cell: wp.array2d(dtype=law.Memory)  # [cell, sheet]: the shear law's
+        twist: wp.array2d(dtype=law.Memory)  # [cell, sheet]: the twist law's
         hinge_history: law.History  # reversal points of hinges whose law has return-point memory
         cell_history: law.History
+        twist_history: law.History
         work: wp.array(dtype=tally)  # the work channels of kernels/sheet.py SHEET_PROBES (+ force terms'), J
         step: wp.array(dtype=int)
         status: wp.array(dtype=int)

@@ -207,13 +207,24 @@ def cell_shear_angle(x00, x10, x01, x11):
     return math.atan2(np.dot(w, f), np.linalg.norm(np.cross(w, f)))
 
 
+def cell_twist(x00, x10, x01, x11, area):
+    w, f = (x10 - x00 + x11 - x01) / 2, (x01 - x00 + x11 - x10) / 2
+    n = np.cross(w, f)
+    return np.dot(x00 - x10 - x01 + x11, n / np.linalg.norm(n)) / area
+
+
 def test_every_elements_forces_are_its_coordinates_gradient_and_balance():
-    # a 3 × 3-cell sheet bent, sheared and twisted at random in 3D: the kernel's bending and
-    # shear forces against −τ ∇ψ and −τ ∇φ by central differences of the coordinates
-    # computed here, with τ from the law at the coordinate's value
+    # a 3 × 3-cell sheet bent, sheared and twisted at random in 3D: the kernel's bending,
+    # Poisson, shear and twist forces against −τ ∇ψ, −τ ∇φ and −τ ∇κ12 by central
+    # differences of the coordinates computed here, with τ from the law at the value
     geometry = rectangle(0.02, 0.03, 0.01, (0.01, 0.01), edge_hinge="paper")
-    d, g = 2e-5, 3.0
-    model, _solver = sheet_batch(geometry, [SheetMaterialSI(fabric(500.0, d), fabric(300.0, d / 2), g, ELASTIC)])
+    d, g, nu = 2e-5, 3.0, 0.3
+    bias = fabric(500.0, 0.9 * (d + d / 2) / 2)
+    material = SheetMaterialSI(fabric(500.0, d), fabric(300.0, d / 2), g, ELASTIC, bias, nu)
+    d12 = nu * math.sqrt(d * d / 2)
+    twist_rigidity = 4 * bias.bending_rigidity - d - d / 2 - 2 * d12
+    assert material.twist_law()[0] == pytest.approx(twist_rigidity, rel=1e-14)
+    model, _solver = sheet_batch(geometry, [material])
     solver = SheetSolver(model, 1e-5, divergence_strain=1.0)
     state = model.state()
     rng = np.random.default_rng(7)
@@ -225,31 +236,42 @@ def test_every_elements_forces_are_its_coordinates_gradient_and_balance():
     assert solver.divergence_report(state, model.control(), 0) is None
     expected = np.zeros_like(position)
     step = 1e-7
+
+    def add_gradient(tau, coordinate, nodes):
+        for n in set(nodes):
+            for k in range(3):
+                shifted = [position.copy(), position.copy()]
+                shifted[0][n, k] += step
+                shifted[1][n, k] -= step
+                expected[n, k] -= tau * (coordinate(shifted[0]) - coordinate(shifted[1])) / (2 * step)
+
+    angles, curvatures = [], []
     for h, (nodes, across) in enumerate(zip(geometry.hinge_nodes, geometry.hinge_axis_nodes, strict=True)):
-        involved = [*nodes, *across]
 
         def angle(x, nodes=nodes, across=across):
             return projected_turning_angle(x[nodes[0]], x[nodes[1]], x[nodes[2]], x[across[0]], x[across[1]])
 
         psi, p1, p2 = angle(position)
-        curvature = 2 * math.sin(psi) / np.linalg.norm(p1 + p2) * geometry.hinge_curvature_scale[h]
+        angles.append(angle)
+        curvatures.append(2 * math.sin(psi) / np.linalg.norm(p1 + p2) * geometry.hinge_curvature_scale[h])
+    assert geometry.hinge_pairs == 2  # the two interior nodes of a 3 × 2-cell free part
+    for h, (nodes, across) in enumerate(zip(geometry.hinge_nodes, geometry.hinge_axis_nodes, strict=True)):
+        partner = h + 1 - 2 * (h % 2) if h < 2 * geometry.hinge_pairs else None
+        assert partner is None or geometry.hinge_nodes[partner][1] == nodes[1]
+        coupling = d12 * curvatures[partner] if partner is not None else 0.0
         rigidity = (d, d / 2)[geometry.hinge_family[h]]
-        tau = rigidity * curvature * geometry.hinge_width[h]
-        for n in set(involved):
-            for k in range(3):
-                shifted = [position.copy(), position.copy()]
-                shifted[0][n, k] += step
-                shifted[1][n, k] -= step
-                expected[n, k] -= tau * (angle(shifted[0])[0] - angle(shifted[1])[0]) / (2 * step)
+        tau = (rigidity * curvatures[h] + coupling) * geometry.hinge_width[h]
+        add_gradient(tau, lambda x, a=angles[h]: a(x)[0], [*nodes, *across])
     for c, q in enumerate(geometry.cell_nodes):
-        tau = g * cell_shear_angle(*position[q]) * geometry.cell_area[c]
-        for n in q:
-            for k in range(3):
-                shifted = [position.copy(), position.copy()]
-                shifted[0][n, k] += step
-                shifted[1][n, k] -= step
-                gradient = (cell_shear_angle(*shifted[0][q]) - cell_shear_angle(*shifted[1][q])) / (2 * step)
-                expected[n, k] -= tau * gradient
+        add_gradient(
+            g * cell_shear_angle(*position[q]) * geometry.cell_area[c], lambda x, q=q: cell_shear_angle(*x[q]), q
+        )
+        area = geometry.cell_area[c]
+
+        def twist(x, q=q, area=area):
+            return cell_twist(*x[q], area)
+
+        add_gradient(twist_rigidity * twist(position) * area, twist, q)
     elastic = forces["elastic"][:, 0]
     np.testing.assert_allclose(elastic, expected, rtol=0, atol=1e-7 * np.abs(expected).max())
     for kind in ("tensile", "elastic"):

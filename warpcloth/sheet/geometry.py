@@ -47,6 +47,7 @@ class SheetGeometry:
     hinge_family: np.ndarray  # [hinge]
     hinge_width: np.ndarray  # [hinge], m
     hinge_curvature_scale: np.ndarray  # [hinge]
+    hinge_pairs: int  # hinges 2k, 2k + 1 are the warp and weft hinge of one node (the plate's Poisson pair)
     cell_nodes: np.ndarray  # [cell, 4]: (i, j), (i+1, j), (i, j+1), (i+1, j+1)
     cell_area: np.ndarray  # [cell], m²
 
@@ -106,26 +107,30 @@ def grid_geometry(
     is_clamped: Callable[[np.ndarray], np.ndarray],
     edge_hinge: str = "second_order",
 ) -> SheetGeometry:
-    """The geometry of the cut ``kept_cells`` (bool ``[i, j]`` over the lattice's cells),
-    nodes at ``origin + i h_warp d_warp + j h_weft d_weft`` and clamped where
+    """The geometry of the cut ``kept_cells`` (``[i, j]`` over the lattice's cells: bool, or
+    the part of each cell's area the cut keeps, 0 to 1, which weighs everything the cell
+    carries), nodes at ``origin + i h_warp d_warp + j h_weft d_weft`` and clamped where
     ``is_clamped(rest_positions)`` is true. Elements wholly inside the clamp move rigidly
     and are left out; a hinge with two clamped nodes and one free bends over h/2 under
     ``edge_hinge = "second_order"`` (scale 2), over h under ``"paper"``."""
     if edge_hinge not in EDGE_HINGES:
         raise ArgumentError("edge_hinge", f"must be one of {', '.join(EDGE_HINGES)}, got {edge_hinge!r}")
-    kept = np.asarray(kept_cells, dtype=bool)
+    weight = np.asarray(kept_cells, dtype=float)
+    if not ((weight >= 0) & (weight <= 1)).all():
+        raise ArgumentError("kept_cells", "each cell's kept part must lie in [0, 1]")
+    kept = weight > 0
     if not kept.any():
         raise ArgumentError("kept_cells", "the cut keeps no cell")
     h_warp, h_weft = spacing
     n_i, n_j = kept.shape[0] + 1, kept.shape[1] + 1
-    padded = np.zeros((n_i + 1, n_j + 1), dtype=bool)  # padded[i + 1, j + 1] = cell (i, j)
-    padded[1:-1, 1:-1] = kept
+    padded = np.zeros((n_i + 1, n_j + 1))  # padded[i + 1, j + 1] = the kept part of cell (i, j)
+    padded[1:-1, 1:-1] = weight
 
     def cell_kept(i: np.ndarray | int, j: np.ndarray | int) -> np.ndarray:
         return padded[np.asarray(i) + 1, np.asarray(j) + 1]
 
     ii, jj = np.meshgrid(np.arange(n_i), np.arange(n_j), indexing="ij")
-    around = cell_kept(ii - 1, jj - 1) + 0 + cell_kept(ii - 1, jj) + cell_kept(ii, jj - 1) + cell_kept(ii, jj)
+    around = cell_kept(ii - 1, jj - 1) + cell_kept(ii - 1, jj) + cell_kept(ii, jj - 1) + cell_kept(ii, jj)
     active = around > 0
     index = np.full((n_i, n_j), -1)
     index[active] = np.arange(active.sum())
@@ -151,8 +156,8 @@ def grid_geometry(
                 continue
             # the cells on either side of the segment
             sides = (cell_kept(i, j - 1), cell_kept(i, j)) if family == WARP else (cell_kept(i - 1, j), cell_kept(i, j))
-            count = int(sides[0]) + int(sides[1])
-            if count:
+            count = sides[0] + sides[1]
+            if count > 0:
                 edges.append((index[i, j], index[k, m]))
                 families.append(family)
                 widths.append(count * cross / 2.0)
@@ -178,7 +183,7 @@ def grid_geometry(
             if lo < 0 and hi < 0:
                 continue
             axis = (lo if lo >= 0 else b, hi if hi >= 0 else b)
-            count = int(around[i, j])
+            count = around[i, j]
             hinges.append((a, b, c))
             axes.append(axis)
             h_families.append(family)
@@ -187,6 +192,7 @@ def grid_geometry(
             scales.append(2.0 if at_edge and edge_hinge == "second_order" else 1.0)
     hinges_a = np.array(hinges, dtype=np.int32).reshape(-1, 3)
     h_keep = free(hinges_a[:, 0], hinges_a[:, 1], hinges_a[:, 2]) if len(hinges_a) else np.zeros(0, dtype=bool)
+    order, pairs = _paired_first(hinges_a[:, 1], np.array(h_families, dtype=np.int32), h_keep)
 
     ci_, cj_ = np.nonzero(kept)
     cells = np.column_stack(
@@ -202,14 +208,26 @@ def grid_geometry(
         edge_nodes=edges_a[keep],
         edge_family=families_a[keep],
         edge_width=widths_a[keep],
-        hinge_nodes=hinges_a[h_keep],
-        hinge_axis_nodes=np.array(axes, dtype=np.int32).reshape(-1, 2)[h_keep],
-        hinge_family=np.array(h_families, dtype=np.int32)[h_keep],
-        hinge_width=np.array(h_widths)[h_keep],
-        hinge_curvature_scale=np.array(scales)[h_keep],
+        hinge_nodes=hinges_a[order],
+        hinge_axis_nodes=np.array(axes, dtype=np.int32).reshape(-1, 2)[order],
+        hinge_family=np.array(h_families, dtype=np.int32)[order],
+        hinge_width=np.array(h_widths)[order],
+        hinge_curvature_scale=np.array(scales)[order],
+        hinge_pairs=pairs,
         cell_nodes=cells[c_keep],
-        cell_area=np.full(int(c_keep.sum()), h_warp * h_weft),
+        cell_area=weight[ci_, cj_][c_keep] * (h_warp * h_weft),
     )
+
+
+def _paired_first(centres: np.ndarray, families: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, int]:
+    # the kept hinges' order: a warp and a weft hinge at one node as neighbours 2k, 2k + 1
+    # (the kernel pairs them for the Poisson term), then the unpaired in their own order
+    kept = np.flatnonzero(keep)
+    weft_at = {int(centres[h]): h for h in kept if families[h] == WEFT}
+    paired = [(h, weft_at[int(centres[h])]) for h in kept if families[h] == WARP and int(centres[h]) in weft_at]
+    first = [h for pair in paired for h in pair]
+    taken = set(first)
+    return np.array(first + [h for h in kept if h not in taken], dtype=np.int64), len(paired)
 
 
 def rectangle(

@@ -132,7 +132,7 @@ class SheetModel:
         uses_history = any(
             bending_law(law).uses_reversal_memory
             for m in materials
-            for law in (m.warp.bending_law, m.weft.bending_law, m.shear.law)
+            for law in (m.warp.bending_law, m.weft.bending_law, m.shear.law, m.twist_law()[1].law)
         )
         self.reversal_memory = builder.reversal_memory if uses_history else 0
         self.struct = self._build_struct(materials)
@@ -195,6 +195,7 @@ class SheetModel:
         m.hinge_family = self.array(g.hinge_family.astype(np.int32), int)
         m.hinge_width = self.array(g.hinge_width)
         m.hinge_curvature_scale = self.array(g.hinge_curvature_scale)
+        m.hinge_pairs = g.hinge_pairs
         m.cell_nodes = self.array(g.cell_nodes.astype(np.int32).reshape(-1, 4), wp.vec4i)
         m.cell_area = self.array(g.cell_area)
         m.tensile = self.array(
@@ -210,6 +211,8 @@ class SheetModel:
             law.Parameters,
         )
         m.shear = self.array(np.array([mat.shear_parameters() for mat in materials]), law.Parameters)
+        m.twist = self.array(np.array([mat.twist_parameters() for mat in materials]), law.Parameters)
+        m.poisson = self.array(np.array([mat.poisson_coupling for mat in materials]))
         return m
 
 
@@ -239,6 +242,10 @@ class SheetState:
             law.History, model.reversal_memory, max(1, n_hinges), b, t.vec2, model.device
         )
         s.cell_history = allocate_reversal_memory(
+            law.History, model.reversal_memory, max(1, n_cells), b, t.vec2, model.device
+        )
+        s.twist = wp.zeros((max(1, n_cells), b), dtype=law.Memory, device=model.device)
+        s.twist_history = allocate_reversal_memory(
             law.History, model.reversal_memory, max(1, n_cells), b, t.vec2, model.device
         )
         s.work = wp.zeros(b, dtype=model.kernels.structs.tally, device=model.device)
@@ -272,7 +279,7 @@ class SheetState:
 
     def reset_memory(self) -> None:
         """Make every hinge and cell fresh at its current curvature and shear angle."""
-        for history in (self.struct.hinge_history, self.struct.cell_history):
+        for history in (self.struct.hinge_history, self.struct.cell_history, self.struct.twist_history):
             history.overflows.zero_()
             history.deepest.zero_()
         wp.launch(
@@ -288,11 +295,11 @@ class SheetState:
         capacity = self.model.reversal_memory
         if not capacity:
             return {}
-        h, c = self.struct.hinge_history, self.struct.cell_history
+        histories = (self.struct.hinge_history, self.struct.cell_history, self.struct.twist_history)
         return {
             "capacity": capacity,
-            "deepest": np.maximum(h.deepest.numpy(), c.deepest.numpy()).tolist(),
-            "overflows": (h.overflows.numpy() + c.overflows.numpy()).tolist(),
+            "deepest": np.max([h.deepest.numpy() for h in histories], axis=0).tolist(),
+            "overflows": np.sum([h.overflows.numpy() for h in histories], axis=0).tolist(),
         }
 
 

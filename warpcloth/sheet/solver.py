@@ -99,17 +99,41 @@ class SheetSolver(FusedSolver):
     def stable_step(self) -> float:
         """A linearised estimate of the longest stable dt (s): symplectic Euler needs
         ω_max dt < 2, and ω_max² is at most the sum of the stiffest stretching mode's
-        4 (a1 + 2G)/(ρ_A h²) and the stiffest bending mode's 64 D s²/(ρ_A h⁴) (s the
-        largest hinge curvature scale) over the batch's materials and both directions."""
+        4 (a1 + 2G)/(ρ_A h²), the stiffest bending mode's 64 (D + |D12|) s²/(ρ_A h⁴) (s the
+        largest hinge curvature scale) and the twist's checkerboard 16 (4 D66)/(ρ_A h_w² h_f²)
+        over the batch's materials and both directions, each times how far the cut's
+        element widths exceed its nodes' areas (1 on a whole-cell cut; more where a cell
+        is cut and its corner nodes carry little fabric)."""
         g = self.model.geometry
         scale = float(g.hinge_curvature_scale.max()) if len(g.hinge_curvature_scale) else 1.0
+        h_w, h_f = g.spacing
+        area = g.node_area / (h_w * h_f)  # 1 at an interior node
+        stretch_factor = max(
+            (
+                w * g.spacing[f] / h_w / h_f / area[n].min()
+                for n, f, w in zip(g.edge_nodes, g.edge_family, g.edge_width, strict=True)
+            ),
+            default=1.0,
+        )
+        bend_factor = max(
+            (
+                w * g.spacing[f] / h_w / h_f / area[[*n, *a]].min()
+                for n, a, f, w in zip(g.hinge_nodes, g.hinge_axis_nodes, g.hinge_family, g.hinge_width, strict=True)
+            ),
+            default=1.0,
+        )
+        twist_factor = max(
+            (c / (h_w * h_f) / area[q].min() for q, c in zip(g.cell_nodes, g.cell_area, strict=True)), default=1.0
+        )
         worst = 0.0
         for spec in self.model.sheets:
             m = spec.material
-            for family, h in ((m.warp, g.spacing[0]), (m.weft, g.spacing[1])):
-                stretch = 4 * (family.tensile[0] + 2 * m.shear_rigidity) / (m.density * h * h)
-                bend = 64 * family.bending_rigidity * scale * scale / (m.density * h**4)
-                worst = max(worst, stretch + bend)
+            twist = 16 * m.twist_law()[0] / (m.density * h_w * h_w * h_f * h_f) * twist_factor
+            for family, h in ((m.warp, h_w), (m.weft, h_f)):
+                stretch = 4 * (family.tensile[0] + 2 * m.shear_rigidity) / (m.density * h * h) * stretch_factor
+                rigidity = family.bending_rigidity + abs(m.poisson_coupling)
+                bend = 64 * rigidity * scale * scale / (m.density * h**4) * bend_factor
+                worst = max(worst, stretch + bend + twist)
         return 2.0 / math.sqrt(worst) if worst > 0 else math.inf
 
     def stepping(self, control: SheetControl) -> object:
