@@ -295,8 +295,10 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         for c in range(model.cell_nodes.shape[0]):
             w, f, d = cell_corners(model, state, c, s)
             phi, _sn, unit, _d_w, _d_f = shear_angle(w, f)
-            state.cell[c, s] = law.fresh_memory(phi, model.shear[s], state.cell_history, c, s)
-            state.twist[c, s] = law.fresh_memory(cell_twist(model, d, unit), model.twist[s], state.twist_history, c, s)
+            scale = model.cell_scale[c]
+            state.cell[c, s] = law.fresh_memory(scale * phi, model.shear[s], state.cell_history, c, s)
+            kappa = scale * cell_twist(model, d, unit)
+            state.twist[c, s] = law.fresh_memory(kappa, model.twist[s], state.twist_history, c, s)
 
     @wp.kernel(module="unique", enable_backward=False)
     def internal_forces(model: SheetModel, stepping: SheetStepping, state: SheetState):

@@ -218,18 +218,20 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
     def cells(model: SheetModel, stepping: SheetStepping, state: SheetState, s: int):
         p = model.shear[s]
         p_twist = model.twist[s]
-        twist_area = model.spacing[0] * model.spacing[1]
         for c in range(model.cell_nodes.shape[0]):
             q = model.cell_nodes[c]
             w, f, d = cell_corners(model, state, c, s)
             phi, sn, unit, d_w, d_f = shear_angle(w, f)
             if not (wp.abs(phi) <= stepping.max_shear):  # also catches NaN
                 return STATUS_CELL_COLLAPSED, c, phi
-            memory = law.follow(phi, state.cell[c, s], p, state.cell_history, c, s)
+            # a cell astride a clamp edge shears and twists its free half by twice its mean
+            scale = model.cell_scale[c]
+            shear = scale * phi
+            memory = law.follow(shear, state.cell[c, s], p, state.cell_history, c, s)
             state.cell[c, s] = memory
-            area = model.cell_area[c]
-            tau_elastic = law.elastic_moment(phi, p) * area
-            tau_hysteretic = law.hysteretic_moment(phi, memory, p) * area
+            area = model.cell_area[c] * scale
+            tau_elastic = law.elastic_moment(shear, p) * area
+            tau_hysteretic = law.hysteretic_moment(shear, memory, p) * area
             # w and f are means of the cell's edges: each corner moves them by ±½
             g00 = (d_w + d_f) * (-half)
             g10 = (d_w - d_f) * half
@@ -238,12 +240,12 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             # the twist κ12 = d·n / (h_w h_f) (§17.5): its energy A ∫ M12 dκ12 is the plate's
             # 2 D66 κ12² per area for an elastic law. ∂(d·n)/∂x: the twist vector's ±1 at the
             # corners along n, and the normal's turn, through w and f, against d's in-plane part
-            kappa = cell_twist(model, d, unit)
+            kappa = scale * cell_twist(model, d, unit)
             twist_memory = law.follow(kappa, state.twist[c, s], p_twist, state.twist_history, c, s)
             state.twist[c, s] = twist_memory
-            scale = area / twist_area
-            twist_elastic = law.elastic_moment(kappa, p_twist) * scale
-            twist_hysteretic = law.hysteretic_moment(kappa, twist_memory, p_twist) * scale
+            per_twist = area / (model.spacing[0] * model.spacing[1])
+            twist_elastic = law.elastic_moment(kappa, p_twist) * per_twist
+            twist_hysteretic = law.hysteretic_moment(kappa, twist_memory, p_twist) * per_twist
             in_plane = d - wp.dot(d, unit) * unit
             t_w = wp.cross(f, in_plane) / sn
             t_f = wp.cross(in_plane, w) / sn

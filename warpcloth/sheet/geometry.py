@@ -49,7 +49,8 @@ class SheetGeometry:
     hinge_curvature_scale: np.ndarray  # [hinge]
     hinge_pairs: int  # hinges 2k, 2k + 1 are the warp and weft hinge of one node (the plate's Poisson pair)
     cell_nodes: np.ndarray  # [cell, 4]: (i, j), (i+1, j), (i, j+1), (i+1, j+1)
-    cell_area: np.ndarray  # [cell], m²
+    cell_area: np.ndarray  # [cell], m² of free fabric it stands for
+    cell_scale: np.ndarray  # [cell]: 2 for a cell astride the clamp edge with one corner free, else 1
 
     @property
     def n_nodes(self) -> int:
@@ -108,16 +109,17 @@ def grid_geometry(
     edge_hinge: str = "second_order",
 ) -> SheetGeometry:
     """The geometry of the cut ``kept_cells`` (``[i, j]`` over the lattice's cells: bool, or
-    the part of each cell's area the cut keeps, 0 to 1, which weighs everything the cell
-    carries), nodes at ``origin + i h_warp d_warp + j h_weft d_weft`` and clamped where
+    the part of each cell's area the cut keeps, which weighs everything the cell carries:
+    0 to 1, or to 2 where a cut lends a cell its neighbour's sliver), nodes at
+    ``origin + i h_warp d_warp + j h_weft d_weft`` and clamped where
     ``is_clamped(rest_positions)`` is true. Elements wholly inside the clamp move rigidly
     and are left out; a hinge with two clamped nodes and one free bends over h/2 under
     ``edge_hinge = "second_order"`` (scale 2), over h under ``"paper"``."""
     if edge_hinge not in EDGE_HINGES:
         raise ArgumentError("edge_hinge", f"must be one of {', '.join(EDGE_HINGES)}, got {edge_hinge!r}")
     weight = np.asarray(kept_cells, dtype=float)
-    if not ((weight >= 0) & (weight <= 1)).all():
-        raise ArgumentError("kept_cells", "each cell's kept part must lie in [0, 1]")
+    if not ((weight >= 0) & (weight <= 2)).all():
+        raise ArgumentError("kept_cells", "each cell's kept part must lie in [0, 2]")
     kept = weight > 0
     if not kept.any():
         raise ArgumentError("kept_cells", "the cut keeps no cell")
@@ -193,12 +195,20 @@ def grid_geometry(
     hinges_a = np.array(hinges, dtype=np.int32).reshape(-1, 3)
     h_keep = free(hinges_a[:, 0], hinges_a[:, 1], hinges_a[:, 2]) if len(hinges_a) else np.zeros(0, dtype=bool)
     order, pairs = _paired_first(hinges_a[:, 1], np.array(h_families, dtype=np.int32), h_keep)
+    h_widths = _line_ends_carried(
+        hinges_a, np.array(h_families), np.array(h_widths), h_keep, node_area, clamped, spacing
+    )
 
     ci_, cj_ = np.nonzero(kept)
     cells = np.column_stack(
         [index[ci_, cj_], index[ci_ + 1, cj_], index[ci_, cj_ + 1], index[ci_ + 1, cj_ + 1]]
     ).astype(np.int32)
     c_keep = free(cells[:, 0], cells[:, 1], cells[:, 2], cells[:, 3])
+    # A cell whose one free corner lies below a clamp edge through its other three (a
+    # diamond of a bias cut) is half held: its free half shears and twists over half the
+    # cell, as the clamp-edge hinge bends over h/2 (docs/model.md §17.5)
+    astride = (clamped[cells].sum(axis=1) == 3) & (edge_hinge == "second_order")
+    cell_weight = weight[ci_, cj_] * np.where(astride, 0.5, 1.0)
     return SheetGeometry(
         lattice=lattice,
         rest_positions=rest,
@@ -215,8 +225,33 @@ def grid_geometry(
         hinge_curvature_scale=np.array(scales)[order],
         hinge_pairs=pairs,
         cell_nodes=cells[c_keep],
-        cell_area=weight[ci_, cj_][c_keep] * (h_warp * h_weft),
+        cell_area=cell_weight[c_keep] * (h_warp * h_weft),
+        cell_scale=np.where(astride, 2.0, 1.0)[c_keep],
     )
+
+
+def _line_ends_carried(
+    hinges: np.ndarray,
+    families: np.ndarray,
+    widths: np.ndarray,
+    keep: np.ndarray,
+    node_area: np.ndarray,
+    clamped: np.ndarray,
+    spacing: tuple[float, float],
+) -> np.ndarray:
+    # A line's bending stands on its hinges, each over its node's area; a free node where a
+    # line ends (a free edge it meets at an angle, a bias cut's side) has none, and the
+    # fabric there bends as the line's last hinge does: that hinge carries the end node's
+    # area too, so a line bends over its whole length (docs/model.md §17.4). Where the
+    # line ends at a free end that carries no moment its curvature vanishes there anyway.
+    widths = widths.copy()
+    centred = {(int(f), int(b)) for (_a, b, _c), f, k in zip(hinges, families, keep, strict=True) if k}
+    for h in np.flatnonzero(keep):
+        family = int(families[h])
+        for end in (hinges[h, 0], hinges[h, 2]):
+            if not clamped[end] and (family, int(end)) not in centred:
+                widths[h] += node_area[end] / spacing[family]
+    return widths
 
 
 def _paired_first(centres: np.ndarray, families: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, int]:
@@ -263,41 +298,106 @@ def bias_strip(
     clamp_length: float,
     spacing: float,
     edge_hinge: str = "second_order",
+    angle: float = math.pi / 4,
+    is_clamped: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> SheetGeometry:
-    """A strip cut at 45° to warp and weft, hanging from its top edge: the lattice turned
-    45° in the sheet's plane, a row of nodes on the clamp edge y = 0, keeping every cell
-    whose centre lies within the strip's rectangle (``width`` across z, from
-    ``free_length`` below the clamp edge to ``clamp_length`` above it), so its sides are
-    staircases of cells of diagonal h√2 whose area is the rectangle's to O(h). Nodes at
-    or above the clamp edge are clamped."""
+    """A strip cut with its length at ``angle`` (rad) to the warp, hanging from its top
+    edge: the lattice turned by ``angle`` in the sheet's plane about the middle of the
+    clamp edge, a node there, and every cell the strip's rectangle (``width`` across z,
+    from ``free_length`` below the clamp edge to ``clamp_length`` above it) overlaps kept
+    with the part of its area inside, which weighs its mass, widths, shear and twist
+    (:func:`grid_geometry`). Its area is the rectangle's to round-off. On the 45° bias
+    with a width of whole cell diagonals h√2 the sides run through nodes and the cut
+    cells are halves; a row of nodes lies on the clamp edge whenever the angle is 0, 45°
+    or 90°. Nodes at or above the clamp edge are clamped, or where ``is_clamped(rest
+    positions)`` says (a free-free strip pinned at its mode's nodes, say)."""
     h = float(spacing)
-    r = np.sqrt(0.5)
-    warp_direction = np.array([0.0, -r, r])
-    weft_direction = np.array([0.0, -r, -r])
-    # node (i, j) at y = y0 − (i + j) h/√2, z = (i − j) h/√2: from a first node high enough
-    # above the clamp's top that the lattice spans its whole width there, on a whole row so
-    # that a row of nodes lies on the clamp edge y = 0
-    row = h * r
-    top = math.ceil((clamp_length + width / 2 + h) / row) * row
-    n = int(np.ceil((top + free_length + width / 2) / row)) + 2
-    origin = np.array([0.0, top, 0.0])
-    ii, jj = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
-    centres = origin + (ii[..., None] + 0.5) * h * warp_direction + (jj[..., None] + 0.5) * h * weft_direction
-    # a cell is kept where its centre lies within the rectangle: the staircase sides then
-    # keep the strip's area and width on average, where keeping only cells wholly inside
-    # would lose a cell's half-diagonal along each side
-    kept = (
-        (np.abs(centres[..., 2]) <= width / 2) & (centres[..., 1] <= clamp_length) & (centres[..., 1] >= -free_length)
-    )
+    c, s = math.cos(angle), math.sin(angle)
+    warp_direction = np.array([0.0, -c, s])
+    weft_direction = np.array([0.0, -s, -c])
+    # the lattice's index range over the rectangle's corners, a cell's margin round it
+    corners = np.array([[y, z] for y in (clamp_length, -free_length) for z in (-width / 2, width / 2)])
+    along = (corners @ warp_direction[1:]) / h
+    across = (corners @ weft_direction[1:]) / h
+    i0, j0 = math.floor(along.min()) - 1, math.floor(across.min()) - 1
+    n_i, n_j = math.ceil(along.max()) + 1 - i0, math.ceil(across.max()) + 1 - j0
+    origin = i0 * h * warp_direction + j0 * h * weft_direction
+    ii, jj = np.meshgrid(np.arange(n_i), np.arange(n_j), indexing="ij")
+    corner = origin[1:] + ii[..., None] * h * warp_direction[1:] + jj[..., None] * h * weft_direction[1:]
+    quads = np.stack(
+        [
+            corner,
+            corner + h * warp_direction[1:],
+            corner + h * (warp_direction + weft_direction)[1:],
+            corner + h * weft_direction[1:],
+        ],
+        axis=-2,
+    )  # [i, j, corner, (y, z)], counter-clockwise or clockwise alike
+    bounds = ((0, -1.0, -clamp_length), (0, 1.0, -free_length), (1, -1.0, -width / 2), (1, 1.0, -width / 2))
+    kept = np.array([[_inside_area(q, bounds) for q in row] for row in quads]) / (h * h)
     return grid_geometry(
-        kept,
+        _slivers_lent(kept),
         (h, h),
         origin=origin,
         warp_direction=warp_direction,
         weft_direction=weft_direction,
-        is_clamped=lambda x: x[:, 1] >= -1e-9 * h,
+        is_clamped=is_clamped or (lambda x: x[:, 1] >= -1e-9 * h),
         edge_hinge=edge_hinge,
     )
+
+
+SLIVER = 0.25
+"""A cut cell keeping less than this part of its area lends it to its fullest neighbour: a
+node carrying only a sliver would be light against the elements of its neighbours and
+shorten the stable step without bound (the cut's area is kept; where the fabric lies moves
+by less than a cell)."""
+
+
+def _slivers_lent(kept: np.ndarray) -> np.ndarray:
+    # the smallest sliver's area to its fullest neighbour, until none is left (a corner's
+    # slivers gather into one cell)
+    kept = kept.copy()
+    n_i, n_j = kept.shape
+    while True:
+        slivers = np.flatnonzero((kept > 0) & (kept < SLIVER))
+        if not len(slivers):
+            return kept
+        i, j = divmod(int(slivers[np.argmin(kept.flat[slivers])]), n_j)
+        around = [(a, b) for a, b in ((i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1)) if 0 <= a < n_i and 0 <= b < n_j]
+        a, b = max(around, key=lambda ab: kept[ab])
+        if kept[a, b] <= 0:
+            return kept  # a lone sliver: nothing beside it to lend to (no cut makes one)
+        kept[a, b] += kept[i, j]
+        kept[i, j] = 0.0
+
+
+def _inside_area(polygon: np.ndarray, bounds: tuple) -> float:
+    # the area of a convex polygon [(y, z)] within the half-planes sign·coordinate ≥ offset
+    # (Sutherland-Hodgman), a part smaller than 1e-9 of it taken as none
+    whole = _area(polygon)
+    points = list(polygon)
+    for axis, sign, offset in bounds:
+        inside = [sign * p[axis] >= offset for p in points]
+        if all(inside):
+            continue
+        if not any(inside):
+            return 0.0
+        clipped = []
+        for k, p in enumerate(points):
+            q = points[(k + 1) % len(points)]
+            if inside[k]:
+                clipped.append(p)
+            if inside[k] != inside[(k + 1) % len(points)]:
+                t = (offset - sign * p[axis]) / (sign * (q[axis] - p[axis]))
+                clipped.append(p + t * (q - p))
+        points = clipped
+    area = _area(np.array(points))
+    return 0.0 if area < 1e-9 * whole else (whole if area > (1 - 1e-12) * whole else area)
+
+
+def _area(polygon: np.ndarray) -> float:
+    y, z = polygon[:, 0], polygon[:, 1]
+    return 0.5 * abs(float(np.dot(y, np.roll(z, -1)) - np.dot(z, np.roll(y, -1))))
 
 
 def _cells(length: float, h: float, argument: str, of: str = "") -> int:

@@ -198,6 +198,7 @@ class SheetModel:
         m.hinge_pairs = g.hinge_pairs
         m.cell_nodes = self.array(g.cell_nodes.astype(np.int32).reshape(-1, 4), wp.vec4i)
         m.cell_area = self.array(g.cell_area)
+        m.cell_scale = self.array(g.cell_scale)
         m.tensile = self.array(
             np.array([[mat.warp.tensile for mat in materials], [mat.weft.tensile for mat in materials]]), t.vec4
         )

@@ -122,15 +122,21 @@ class SheetSolver(FusedSolver):
             ),
             default=1.0,
         )
-        twist_factor = max(
-            (c / (h_w * h_f) / area[q].min() for q, c in zip(g.cell_nodes, g.cell_area, strict=True)), default=1.0
+        cell_factor = max(
+            (
+                c * k * k / (h_w * h_f) / area[q].min()
+                for q, c, k in zip(g.cell_nodes, g.cell_area, g.cell_scale, strict=True)
+            ),
+            default=1.0,
         )
         worst = 0.0
         for spec in self.model.sheets:
             m = spec.material
-            twist = 16 * m.twist_law()[0] / (m.density * h_w * h_w * h_f * h_f) * twist_factor
+            twist = 16 * m.twist_law()[0] / (m.density * h_w * h_w * h_f * h_f) * cell_factor
             for family, h in ((m.warp, h_w), (m.weft, h_f)):
-                stretch = 4 * (family.tensile[0] + 2 * m.shear_rigidity) / (m.density * h * h) * stretch_factor
+                stretch = (
+                    4 * (family.tensile[0] * stretch_factor + 2 * m.shear_rigidity * cell_factor) / (m.density * h * h)
+                )
                 rigidity = family.bending_rigidity + abs(m.poisson_coupling)
                 bend = 64 * rigidity * scale * scale / (m.density * h**4) * bend_factor
                 worst = max(worst, stretch + bend + twist)
