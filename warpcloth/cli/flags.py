@@ -72,7 +72,9 @@ FLAGS = {
 LIBRARY_ONLY = frozenset(
     {
         "(i, j)",  # SheetGeometry.node/cell/hinge(i, j): a scene's output.markers_ij, checked as a scene field
+        "areal_density",  # calibrate.fabric_dataset.bending_length(...) and kin: no command calls them
         "bending_factor",  # Grip(...): a scene's clamp.grip_* fields, checked as fields
+        "bending_length",  # rigidity_from_bending_length(bending_length, ...): as areal_density
         "body",  # warpcloth.bodies.named(name): a scene or run names its body, read by the registry
         "blocks",  # identifiability(blocks): the benchmarks' comparison of experiments
         "clamp_length",  # rectangle(...): a scene's sheet.* lengths, checked as fields (sheet.cut for the rest)
@@ -97,12 +99,14 @@ LIBRARY_ONLY = frozenset(
         "on_divergence",  # simulate(on_divergence=): the command line records or raises as each command needs
         "n_clamped",  # StripBuilder(n_clamped): a scene's strip.clamp_length_mm and spacing_mm, checked as fields
         "name",  # RunResult.probe(name)
+        "overhang",  # bending_length_from_overhang(overhang): as areal_density
         "path",  # a measured-data reader called directly
         "precision",  # SheetBuilder.finalize(precision=): a scene's integrator.precision, checked as a field
         "release_time",  # SheetBuilder(release_time=): a scene's release.settle_time_s, checked as a field
         "rest_positions",  # StripBuilder(rest_positions): a scene's straight chain
         "result",  # a run without frames passed to the tracked-marker residual or figure: fit keeps them
         "reversal_memory",  # StripBuilder(reversal_memory=): a scene's integrator.reversal_memory, a field
+        "rigidity",  # bending_length(rigidity, ...): as areal_density
         "root_factor",  # two_section_beam_mode(): as lambda_max
         "root_length",
         "run",  # sheet_shapes_figure(run): plot_sheet_run draws it only when frames were kept
