@@ -25,6 +25,10 @@ MATERIAL_FILE_KEY = "material.from_file"
 WEFT_TABLE = "weft"
 """A material file's table of the weft direction's tensile and bending fields, where they
 differ from [material]'s (the warp's); the woven sheet reads it, a strip ignores it."""
+BIAS_TABLE = "bias"
+"""A material file's or sheet scene's table of bending on the bias, as KES-FB2 measures it
+(a sample cut at 45°: its B and the law's hysteresis), and the bending Poisson ratio; the
+woven sheet derives its twist from it (docs/model.md §17.4), a strip ignores it."""
 ONE_PER_FABRIC = ("name", "density_g_per_cm2", "from_file")
 """[material] fields that have no per-direction value: a woven fabric has one areal density."""
 
@@ -168,12 +172,12 @@ def read_material_file(ref: str | Path) -> dict:
         text = resource.read_text()
         where = f"bundled material {ref}"
     data = parse_toml(text, where, MATERIAL_FILE_KEY)
-    extra = sorted(set(data) - {"material", "fit", SHEAR_TABLE, WEFT_TABLE})
+    extra = sorted(set(data) - {"material", "fit", SHEAR_TABLE, WEFT_TABLE, BIAS_TABLE})
     if extra:
         raise SceneError(
             MATERIAL_FILE_KEY,
             f"{where}: unknown top-level entry {extra[0]!r}; a material file "
-            "has a [material] and optionally a [weft], a [shear] and a [fit] table",
+            "has a [material] and optionally a [weft], a [bias], a [shear] and a [fit] table",
         )
     material = data.get("material")
     if not isinstance(material, dict) or not isinstance(data.get("fit", {}), dict):
@@ -205,6 +209,8 @@ def read_material_file(ref: str | Path) -> dict:
             parse_shear(data[SHEAR_TABLE])
         if WEFT_TABLE in data:
             parse_weft(data[WEFT_TABLE])
+        if BIAS_TABLE in data:
+            parse_bias(data[BIAS_TABLE])
     except SceneError as exc:
         line = field_line(text, exc.field)
         raise SceneError(MATERIAL_FILE_KEY, f"{where}{f', line {line}' if line else ''}: {exc}") from None
@@ -224,6 +230,33 @@ def parse_weft(table: object, prefix: str = WEFT_TABLE) -> dict:
                 "has one value per fabric, in [material]; [weft] gives only the weft's tensile and bending fields",
             )
     parse_section(MaterialSection, table, prefix)
+    return table
+
+
+BIAS_ONLY = ("bending_poisson_ratio",)
+"""[bias] fields that are not [material] fields."""
+
+
+def parse_bias(table: object, prefix: str = BIAS_TABLE) -> dict:
+    """The ``[bias]`` table of a material file or sheet scene, checked: the bending fields
+    of [material] (not its tensile ones) and ``bending_poisson_ratio``; else a SceneError
+    of ``bias.<field>``. Returns the table."""
+    if not isinstance(table, dict):
+        raise SceneError(prefix, f"[{prefix}] must be a table, got {table!r}")
+    for key in table:
+        if key in ONE_PER_FABRIC or key == "tensile_gf_per_cm":
+            raise SceneError(
+                f"{prefix}.{key}",
+                "is not a bias field: [bias] gives bending on the bias (bending_rigidity_gf_cm2_per_cm and the "
+                "law's hysteresis, as KES-FB2 measures a sample cut at 45°) and bending_poisson_ratio",
+            )
+    ratio = table.get("bending_poisson_ratio", 0.0)
+    if isinstance(ratio, bool) or not isinstance(ratio, int | float) or not abs(ratio) < 1:
+        raise SceneError(
+            f"{prefix}.bending_poisson_ratio",
+            f"must be a number in (−1, 1) (D12 = ν √(D11 D22), D12² < D11 D22), got {ratio!r}",
+        )
+    parse_section(MaterialSection, {k: v for k, v in table.items() if k not in BIAS_ONLY}, prefix)
     return table
 
 

@@ -17,16 +17,19 @@ from dataclasses import MISSING, dataclass, field
 from pathlib import Path
 
 from warpcloth import units
-from warpcloth.errors import SceneError
-from warpcloth.kernels import bending_masing
+from warpcloth.errors import ArgumentError, SceneError
+from warpcloth.kernels import bending_law, bending_masing
+from warpcloth.kernels.law import BENDING_RIGIDITY
 from warpcloth.sheet.geometry import EDGE_HINGES
 
 from .files import _read_scene
 from .materials import (
+    BIAS_TABLE,
     MATERIAL_FILE_KEY,
     ONE_PER_FABRIC,
     WEFT_TABLE,
     material_fields,
+    parse_bias,
     parse_weft,
     read_material_file,
     validate_material,
@@ -63,8 +66,9 @@ class SheetSection:
 
     cut: str = _field(
         "rectangle",
-        "rectangle (warp down −y, weft across +z) | bias (the lattice turned 45° in the sheet's "
-        "plane, warp and weft at 45° to the vertical; the sides are staircases of cells)",
+        "rectangle (warp down −y, weft across +z) | bias (the lattice turned by bias_angle_deg in the "
+        "sheet's plane about the middle of the clamp edge; each cell the strip overlaps carries the part of "
+        "its area inside, docs/model.md §17.2)",
         choices=CUTS,
     )
     free_length_mm: float = _field(100.0, "length hanging below the clamp edge", gt=0)
@@ -83,6 +87,12 @@ class SheetSection:
         "second_order",
         "second_order (a hinge at the clamp edge bends over h/2) | paper (over h), as clamp.edge_hinge of a strip",
         choices=EDGE_HINGES,
+    )
+    bias_angle_deg: float = _field(
+        45.0,
+        "bias: the strip's length to the warp (0: along it, 90: along the weft); 45° with a width of whole "
+        "cell diagonals puts nodes on the sides",
+        ge=0,
     )
 
 
@@ -105,6 +115,55 @@ def _weft_section() -> type:
 
 
 WeftSection = _weft_section()
+
+
+def _bias_section() -> type:
+    # [bias]: every bending field of [material] (its law, B and the laws' parameters), the
+    # bending Poisson ratio
+    hints = field_types(MaterialSection)
+    fields = [
+        (
+            "bending_poisson_ratio",
+            float,
+            _field(0.0, "ν of the plate's bending, D12 = ν √(D11 D22), in (−1, 1) (a woven fabric's is small)", gt=-1),
+        )
+    ]
+    for f in dataclasses.fields(MaterialSection):
+        if f.name in (*ONE_PER_FABRIC, "tensile_gf_per_cm"):
+            continue
+        doc = f"bending on the bias (KES-FB2 on a sample cut at 45°): {f.metadata['doc']}; unset: from warp and weft"
+        fields.append((f.name, hints[f.name], field(default=f.default, metadata={**f.metadata, "doc": doc})))
+    section = dataclasses.make_dataclass("BiasSection", fields, frozen=True)
+    section.__module__ = __name__
+    section.__doc__ = (
+        "Bending on the bias as KES-FB2 measures it (a wide sample cut at 45°, held in cylindrical bending), "
+        "and the bending Poisson ratio: the sheet's twist follows (docs/model.md §17.4)."
+    )
+    return section
+
+
+BiasSection = _bias_section()
+
+
+def bias_from_yarns(warp: dict, weft: dict) -> dict:
+    """The [bias] fields a scene leaves unset, from its resolved warp and weft (KES units):
+    B and each moment of the law their mean (D12 + 2 D66 = (D11 + D22)/2, the twist carrying
+    no hysteresis of its own), the law and its other parameters the warp's."""
+    defaults = MaterialSection()
+    law = warp.get("bending_law", defaults.bending_law)
+
+    def value(table: dict, name: str) -> float:
+        return table.get(name, getattr(defaults, name))
+
+    mean = {BENDING_RIGIDITY.scene_field}
+    mean |= {p.scene_field for p in bending_law(law).parameters if p.kind == "moment"}
+    out = {"bending_law": law}
+    for p in bending_law(law).parameters:
+        out[p.scene_field] = value(warp, p.scene_field)
+    for name in mean:
+        same = weft.get("bending_law", law) == law
+        out[name] = (value(warp, name) + value(weft, name)) / 2 if same else value(warp, name)
+    return out
 
 
 @dataclass(frozen=True)
@@ -203,6 +262,7 @@ class SheetScene:
     sheet: SheetSection = field(default_factory=SheetSection)
     material: MaterialSection = field(default_factory=MaterialSection)
     weft: WeftSection = field(default_factory=WeftSection)  # type: ignore[valid-type]
+    bias: BiasSection = field(default_factory=BiasSection)  # type: ignore[valid-type]
     shear: ShearMaterial | None = None
     damping: DampingSection = field(default_factory=DampingSection)
     clamp: SheetClampSection = field(default_factory=SheetClampSection)
@@ -231,6 +291,19 @@ class SheetScene:
             **values,
         )
 
+    def bias_material(self) -> MaterialSection:
+        """Bending on the bias as a [material] section (the warp's tensile fields, unused)."""
+        values = {
+            k: getattr(self.bias, k) for k in material_fields() if k not in (*ONE_PER_FABRIC, "tensile_gf_per_cm")
+        }
+        return MaterialSection(
+            name=f"{self.material.name} (bias)",
+            density_g_per_cm2=self.material.density_g_per_cm2,
+            tensile_gf_per_cm=self.material.tensile_gf_per_cm,
+            bending_law=self.bias.bending_law,
+            **values,
+        )
+
     def to_dict(self) -> dict:
         """Plain nested dict (TOML-ready) of every field, defaults included."""
         out = {f.name: dataclasses.asdict(getattr(self, f.name)) for f in dataclasses.fields(self) if f.name != "shear"}
@@ -248,7 +321,7 @@ def sheet_sections(data: dict) -> list[str]:
     field by field)."""
     clamp = data.get("clamp")
     strip_clamp = {f.name for f in dataclasses.fields(ClampSection)}
-    own = [f"[{t}]" for t in (WEFT_TABLE, SHEAR_TABLE) if t in data]
+    own = [f"[{t}]" for t in (WEFT_TABLE, BIAS_TABLE, SHEAR_TABLE) if t in data]
     return own + [f"clamp.{k}" for k in (clamp if isinstance(clamp, dict) else {}) if k not in strip_clamp]
 
 
@@ -264,6 +337,7 @@ def _with_sheet_material(data: dict) -> dict:
     material = data.get("material")
     ref = material.get("from_file", "") if isinstance(material, dict) else ""
     weft = data.get(WEFT_TABLE, {})
+    bias = data.get(BIAS_TABLE, {})
     shear = data.get(SHEAR_TABLE)
     filled = with_material_file(data)
     full_weft = _complete(weft) if isinstance(weft, dict) else True
@@ -271,6 +345,8 @@ def _with_sheet_material(data: dict) -> dict:
         file = read_material_file(ref)
         if isinstance(weft, dict):
             weft = {**file.get(WEFT_TABLE, {}), **weft}
+        if isinstance(bias, dict):
+            bias = {**file.get(BIAS_TABLE, {}), **bias}
         if SHEAR_TABLE in file:
             given = file[SHEAR_TABLE]
             if isinstance(shear, dict) and shear.get("law", given["law"]) == given["law"]:
@@ -283,7 +359,10 @@ def _with_sheet_material(data: dict) -> dict:
         law = weft.get("bending_law", warp.get("bending_law", MaterialSection().bending_law))
         carried = {k: warp[k] for k in material_fields(law) if k in warp and k not in ONE_PER_FABRIC}
         weft = {**carried, "bending_law": law, **weft}
+        if isinstance(bias, dict):
+            bias = {**bias_from_yarns(warp, weft), **bias}
     data[WEFT_TABLE] = weft
+    data[BIAS_TABLE] = bias
     if shear is not None:
         data[SHEAR_TABLE] = shear
     return data
@@ -307,6 +386,7 @@ def sheet_scene_from_dict(data: dict) -> SheetScene:
             related=(MATERIAL_FILE_KEY,),
         )
     parse_weft(data[WEFT_TABLE])
+    parse_bias(data[BIAS_TABLE])
     scene = parse_section(SheetScene, data, "")
     scene = dataclasses.replace(scene, shear=parse_shear(shear))
     validate_sheet_scene(scene)
@@ -350,6 +430,8 @@ def validate_sheet_scene(scene: SheetScene) -> None:
                     "into whole cells",
                     related=(f"sheet.{name}",),
                 )
+    elif st.bias_angle_deg > 90:
+        raise SceneError("sheet.bias_angle_deg", f"{st.bias_angle_deg:g}° is beyond 90° (along the weft)")
     elif st.spacing_weft_mm != st.spacing_warp_mm:
         raise SceneError(
             "sheet.spacing_weft_mm",
@@ -360,6 +442,7 @@ def validate_sheet_scene(scene: SheetScene) -> None:
     limit = scene.integrator.divergence_strain
     validate_material(scene.material, limit, "material")
     validate_material(scene.weft_material(), limit, WEFT_TABLE)
+    _check_bias(scene)
     clamp = scene.clamp
     validate_segments(clamp.rotation_segments, "clamp.rotation_segments", "theta_coefficients_si", "θ", "rad")
     validate_segments(clamp.translation_segments, "clamp.translation_segments", "d_coefficients_mm", "d", "mm")
@@ -401,6 +484,32 @@ def validate_sheet_scene(scene: SheetScene) -> None:
             "(1 / (output.frame_rate_hz × output.probes_per_frame))",
             related=("output.frame_rate_hz", "output.probes_per_frame"),
         )
+
+
+def _check_bias(scene: SheetScene) -> None:
+    # the twist the bias implies must be a plate's (docs/model.md §17.4): refused by the
+    # [bias] field, with the value, before any kernel runs
+    from warpcloth.sheet.material import SheetMaterialSI
+
+    from .materials import to_si
+
+    b_warp = scene.material.bending_rigidity_gf_cm2_per_cm
+    b_weft = scene.weft.bending_rigidity_gf_cm2_per_cm
+    nu = scene.bias.bending_poisson_ratio
+    least = (b_warp + b_weft + 2 * nu * (b_warp * b_weft) ** 0.5) / 4
+    given = scene.bias.bending_rigidity_gf_cm2_per_cm
+    if given < least * (1 - 1e-12):
+        raise SceneError(
+            f"{BIAS_TABLE}.bending_rigidity_gf_cm2_per_cm",
+            f"{given:g} gf·cm²/cm is below (B_warp + B_weft + 2 D12)/4 = {least:.4g} gf·cm²/cm (B_warp {b_warp:g}, "
+            f"B_weft {b_weft:g}, ν {nu:g}), the least a plate with a twist rigidity D66 ≥ 0 bends on the bias; "
+            f"a softer bias needs a negative {BIAS_TABLE}.bending_poisson_ratio",
+        )
+    warp, weft, bias = (to_si(m) for m in (scene.material, scene.weft_material(), scene.bias_material()))
+    try:
+        SheetMaterialSI(warp, weft, 0.0, warp.bending, bias, nu)
+    except ArgumentError as exc:
+        raise SceneError(f"{BIAS_TABLE}.bending_law", f"{scene.bias.bending_law!r}: {exc.message}") from None
 
 
 def read_sheet_scene(path: str | Path) -> SheetScene:

@@ -72,14 +72,21 @@ def _cut(st: SheetSection) -> SheetGeometry:
     spacing = (st.spacing_warp_mm * mm, st.spacing_weft_mm * mm)
     if st.cut == "rectangle":
         return rectangle(*lengths, spacing, st.edge_hinge)
-    return bias_strip(*lengths, spacing[0], st.edge_hinge)
+    return bias_strip(*lengths, spacing[0], st.edge_hinge, math.radians(st.bias_angle_deg))
 
 
 def sheet_material(scene: SheetScene) -> SheetMaterialSI:
-    """The fabric in SI: warp and weft by :func:`~warpcloth.scene.to_si`, shear by
+    """The fabric in SI: warp, weft and bias by :func:`~warpcloth.scene.to_si`, shear by
     :meth:`~warpcloth.scene.ShearMaterial.si` (the one KES → SI conversion of each)."""
     rigidity, shear = scene.shear.si()
-    return SheetMaterialSI(to_si(scene.material), to_si(scene.weft_material()), rigidity, shear)
+    return SheetMaterialSI(
+        to_si(scene.material),
+        to_si(scene.weft_material()),
+        rigidity,
+        shear,
+        to_si(scene.bias_material()),
+        scene.bias.bending_poisson_ratio,
+    )
 
 
 def sheet_clamp(scene: SheetScene) -> SheetClampMotion:
