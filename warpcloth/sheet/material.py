@@ -111,7 +111,10 @@ class SheetMaterialSI:
         for p in law.parameters:
             scale = TWIST_SCALE[p.kind]
             if scale is None:
-                value = 2 * bias.bending[p.name] - self.warp.bending[p.name] - self.weft.bending[p.name]
+                terms = (2 * bias.bending[p.name], self.warp.bending[p.name], self.weft.bending[p.name])
+                value = terms[0] - terms[1] - terms[2]
+                if abs(value) <= 1e-12 * max(abs(t) for t in terms):
+                    value = 0.0  # the mean's own hysteresis: none of the twist's, not round-off
             else:
                 value = scale * bias.bending[p.name]
             if (p.ge is not None and value < p.ge) or (p.gt is not None and value <= p.gt):
