@@ -195,7 +195,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
     @wp.func
     def hinges(model: SheetModel, state: SheetState, s: int):
         # the node pairs first: a warp and a weft hinge at one node, whose energy has the
-        # plate's Poisson term D12 K_warp K_weft besides each line's own (§17.4)
+        # plate's Poisson term D12 κ11 κ22 besides each line's own (§17.4)
         d12 = model.poisson[s]
         for k in range(model.hinge_pairs):
             warp = 2 * k
@@ -205,8 +205,28 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             weft_healthy, weft_chord, weft_curvature, weft_0, weft_2, weft_u = bend(model, state, warp + 1, s)
             if not weft_healthy:
                 return STATUS_FOLDED, warp + 1, weft_chord
-            hinge_couple(model, state, warp, s, curvature, d12 * weft_curvature, grad_0, grad_2, grad_u)
-            hinge_couple(model, state, warp + 1, s, weft_curvature, d12 * curvature, weft_0, weft_2, weft_u)
+            # a bend towards one side of the sheet turns its warp and weft hinges with opposite
+            # signs (each measures ψ about its own axis, the other yarn): the energy is
+            # −D12 K_warp K_weft over the area either hinge carries (its node's, and a line
+            # end's beside it, where only one line goes on)
+            width, weft_width = model.hinge_width[warp], model.hinge_width[warp + 1]
+            h_w, h_f = model.spacing[0], model.spacing[1]
+            area = width * h_w + weft_width * h_f - model.node_area[model.hinge_nodes[warp][1]]
+            couple = -d12 * area
+            hinge_couple(
+                model, state, warp, s, curvature, couple * weft_curvature / (h_w * width), grad_0, grad_2, grad_u
+            )
+            hinge_couple(
+                model,
+                state,
+                warp + 1,
+                s,
+                weft_curvature,
+                couple * curvature / (h_f * weft_width),
+                weft_0,
+                weft_2,
+                weft_u,
+            )
         for h in range(2 * model.hinge_pairs, model.hinge_nodes.shape[0]):
             healthy, chord, curvature, grad_0, grad_2, grad_u = bend(model, state, h, s)
             if not healthy:

@@ -74,6 +74,17 @@ class SheetDivergence:
         )
 
 
+WHOLE_CELL_EXCESS = 2.0
+"""The most an element's width exceeds its lightest free node's area on a cut of whole
+cells (a side's segment at a corner node: ½ over ¼); the stability estimate's bounds hold
+there, so only what a cut cell adds beyond it shortens the step."""
+
+
+def _excess(ratios: object) -> float:
+    # how much further than on whole cells an element's stiffness outweighs its lightest free node
+    return max(1.0, max(ratios, default=0.0) / WHOLE_CELL_EXCESS)
+
+
 class SheetSolver(FusedSolver):
     """Symplectic Euler on every free node (velocities first, positions with the new
     velocity), the clamp's nodes on their prescribed motion, fixed ``dt``.
@@ -101,33 +112,26 @@ class SheetSolver(FusedSolver):
         ω_max dt < 2, and ω_max² is at most the sum of the stiffest stretching mode's
         4 (a1 + 2G)/(ρ_A h²), the stiffest bending mode's 64 (D + |D12|) s²/(ρ_A h⁴) (s the
         largest hinge curvature scale) and the twist's checkerboard 16 (4 D66)/(ρ_A h_w² h_f²)
-        over the batch's materials and both directions, each times how far the cut's
-        element widths exceed its nodes' areas (1 on a whole-cell cut; more where a cell
-        is cut and its corner nodes carry little fabric)."""
+        over the batch's materials and both directions, each times how much further than
+        on whole cells the cut's element widths outweigh their lightest free node
+        (:data:`WHOLE_CELL_EXCESS`: 1 on a whole-cell cut; more where a cut cell leaves a
+        corner node little fabric)."""
         g = self.model.geometry
         scale = float(g.hinge_curvature_scale.max()) if len(g.hinge_curvature_scale) else 1.0
         h_w, h_f = g.spacing
-        area = g.node_area / (h_w * h_f)  # 1 at an interior node
-        stretch_factor = max(
-            (
-                w * g.spacing[f] / h_w / h_f / area[n].min()
-                for n, f, w in zip(g.edge_nodes, g.edge_family, g.edge_width, strict=True)
-            ),
-            default=1.0,
+        # a free node's area in cells (1 inside, ½ on a side, ¼ at a corner); a held one never moves
+        area = np.where(g.clamped, np.inf, g.node_area / (h_w * h_f))
+        stretch_factor = _excess(
+            w * g.spacing[f] / h_w / h_f / area[n].min()
+            for n, f, w in zip(g.edge_nodes, g.edge_family, g.edge_width, strict=True)
         )
-        bend_factor = max(
-            (
-                w * g.spacing[f] / h_w / h_f / area[[*n, *a]].min()
-                for n, a, f, w in zip(g.hinge_nodes, g.hinge_axis_nodes, g.hinge_family, g.hinge_width, strict=True)
-            ),
-            default=1.0,
+        bend_factor = _excess(
+            w * g.spacing[f] / h_w / h_f / area[[*n, *a]].min()
+            for n, a, f, w in zip(g.hinge_nodes, g.hinge_axis_nodes, g.hinge_family, g.hinge_width, strict=True)
         )
-        cell_factor = max(
-            (
-                c * k * k / (h_w * h_f) / area[q].min()
-                for q, c, k in zip(g.cell_nodes, g.cell_area, g.cell_scale, strict=True)
-            ),
-            default=1.0,
+        cell_factor = _excess(
+            c * k * k / (h_w * h_f) / area[q].min()
+            for q, c, k in zip(g.cell_nodes, g.cell_area, g.cell_scale, strict=True)
         )
         worst = 0.0
         for spec in self.model.sheets:
