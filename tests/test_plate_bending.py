@@ -39,7 +39,9 @@ def d_theta(material, theta):
 
 
 def flat_square(h, side=0.05):
-    """A free square in the plane x = 0, warp along y and weft along z, one corner pinned."""
+    """A free square in the plane x = 0, warp along y and weft along z, one corner pinned;
+    every line's hinges carry its whole length (``oblique_ends``: an imposed field bends the
+    lines to the square's edges, where a free plate's own moments would vanish)."""
     n = round(side / h)
     return grid_geometry(
         np.ones((n, n), dtype=bool),
@@ -48,6 +50,7 @@ def flat_square(h, side=0.05):
         warp_direction=np.array([0.0, 1.0, 0.0]),
         weft_direction=np.array([0.0, 0.0, 1.0]),
         is_clamped=lambda x: (np.abs(x[:, 1]) < 1e-12) & (np.abs(x[:, 2]) < 1e-12),
+        oblique_ends=True,
     )
 
 

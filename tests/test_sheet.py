@@ -464,7 +464,7 @@ def test_a_twisted_hysteretic_sheet_converges_in_h_and_dt_and_closes_its_budget(
         assert run.probe("hysteresis_work", 0)[-1] > 0  # the laws dissipated
     changes = np.linalg.norm(np.diff(at, axis=0), axis=1)
     print(f"twist, corner at 0.1 s: changes {changes} m as dt halves; budget residuals {budgets} of the peak kinetic")
-    assert changes[1] < changes[0] / 3  # measured 1.2e-7 then 1.9e-9 m
+    assert changes[1] < changes[0] / 1.8  # first order, as symplectic Euler: measured 1.78e-7 then 8.4e-8 m
     assert max(budgets) < 1e-4 and budgets[2] < budgets[0] / 3  # first order in dt: 4.5e-6, 2.3e-6, 1.2e-6
 
 
@@ -490,10 +490,10 @@ def test_a_diverging_sheet_says_where_and_what():
     assert message.startswith("sheet 0 diverged after t = 0")
     assert "integrator.dt_s" in message and "stability estimate" in message
     assert np.isnan(caught.value.result.probes[-1]).all()  # nothing recorded past it reads as valid
-    # a step just past the limit (1.4 × the estimate runs, 1.6 × does not), with the strain
+    # a step just past the limit (the estimate runs, 1.1 × it does not), with the strain
     # and shear limits out of reach: the energy the unstable step feeds in stops it, as a
     # strip's (docs/model.md §11)
-    slightly = SheetSolver(model, 1.6 * solver.dt / 3.0, divergence_strain=100.0, divergence_shear=1.5)
+    slightly = SheetSolver(model, 1.2 * solver.dt / 3.0, divergence_strain=100.0, divergence_shear=1.5)
     with pytest.raises(DivergenceError, match="energy budget gain, in peak kinetic energies") as caught:
         simulate_sheets(model, model.control(), slightly, SheetRecorder(0.001, 1, 0.1), threads=1)
     assert caught.value.diverged[0].time_s < 0.01

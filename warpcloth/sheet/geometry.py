@@ -107,12 +107,15 @@ def grid_geometry(
     weft_direction: np.ndarray,
     is_clamped: Callable[[np.ndarray], np.ndarray],
     edge_hinge: str = "second_order",
+    oblique_ends: bool = False,
 ) -> SheetGeometry:
     """The geometry of the cut ``kept_cells`` (``[i, j]`` over the lattice's cells: bool, or
     the part of each cell's area the cut keeps, which weighs everything the cell carries:
     0 to 1, or to 2 where a cut lends a cell its neighbour's sliver), nodes at
     ``origin + i h_warp d_warp + j h_weft d_weft`` and clamped where
-    ``is_clamped(rest_positions)`` is true. Elements wholly inside the clamp move rigidly
+    ``is_clamped(rest_positions)`` is true. ``oblique_ends``: the cut's free edges cross
+    the lines at an angle, and a line's last hinge carries the area of the node where it
+    ends (on a cut along the lattice its moment vanishes there). Elements wholly inside the clamp move rigidly
     and are left out; a hinge with two clamped nodes and one free bends over h/2 under
     ``edge_hinge = "second_order"`` (scale 2), over h under ``"paper"``."""
     if edge_hinge not in EDGE_HINGES:
@@ -195,9 +198,10 @@ def grid_geometry(
     hinges_a = np.array(hinges, dtype=np.int32).reshape(-1, 3)
     h_keep = free(hinges_a[:, 0], hinges_a[:, 1], hinges_a[:, 2]) if len(hinges_a) else np.zeros(0, dtype=bool)
     order, pairs = _paired_first(hinges_a[:, 1], np.array(h_families, dtype=np.int32), h_keep)
-    h_widths = _line_ends_carried(
-        hinges_a, np.array(h_families), np.array(h_widths), h_keep, node_area, clamped, spacing
-    )
+    if oblique_ends:
+        h_widths = _line_ends_carried(
+            hinges_a, np.array(h_families), np.array(h_widths), h_keep, node_area, clamped, spacing
+        )
 
     ci_, cj_ = np.nonzero(kept)
     cells = np.column_stack(
@@ -240,10 +244,10 @@ def _line_ends_carried(
     spacing: tuple[float, float],
 ) -> np.ndarray:
     # A line's bending stands on its hinges, each over its node's area; a free node where a
-    # line ends (a free edge it meets at an angle, a bias cut's side) has none, and the
+    # line ends has none. Where the line meets a free edge square, its moment vanishes
+    # there and so may its hinge; where it meets one at an angle (a bias cut's side) the
     # fabric there bends as the line's last hinge does: that hinge carries the end node's
-    # area too, so a line bends over its whole length (docs/model.md §17.4). Where the
-    # line ends at a free end that carries no moment its curvature vanishes there anyway.
+    # area too, so the line bends over its whole length (docs/model.md §17.4).
     widths = widths.copy()
     centred = {(int(f), int(b)) for (_a, b, _c), f, k in zip(hinges, families, keep, strict=True) if k}
     for h in np.flatnonzero(keep):
@@ -343,6 +347,7 @@ def bias_strip(
         weft_direction=weft_direction,
         is_clamped=is_clamped or (lambda x: x[:, 1] >= -1e-9 * h),
         edge_hinge=edge_hinge,
+        oblique_ends=not (math.isclose(angle, 0.0, abs_tol=1e-12) or math.isclose(angle, math.pi / 2)),
     )
 
 

@@ -74,15 +74,16 @@ class SheetDivergence:
         )
 
 
-WHOLE_CELL_EXCESS = 2.0
-"""The most an element's width exceeds its lightest free node's area on a cut of whole
-cells (a side's segment at a corner node: ½ over ¼); the stability estimate's bounds hold
-there, so only what a cut cell adds beyond it shortens the step."""
+WHOLE_CELL_EXCESS = {"segment": 2.0, "hinge": 2.0, "cell": 4.0}
+"""The most an element's width (a cell's area) exceeds its lightest free node's area on a
+cut of whole cells, in cells: a side's segment or hinge at a corner node (½ over ¼), a
+corner cell (1 over ¼). The stability estimate's bounds hold there, so only what a cut
+cell adds beyond it shortens the step."""
 
 
-def _excess(ratios: object) -> float:
+def _excess(ratios: object, element: str) -> float:
     # how much further than on whole cells an element's stiffness outweighs its lightest free node
-    return max(1.0, max(ratios, default=0.0) / WHOLE_CELL_EXCESS)
+    return max(1.0, max(ratios, default=0.0) / WHOLE_CELL_EXCESS[element])
 
 
 class SheetSolver(FusedSolver):
@@ -122,16 +123,25 @@ class SheetSolver(FusedSolver):
         # a free node's area in cells (1 inside, ½ on a side, ¼ at a corner); a held one never moves
         area = np.where(g.clamped, np.inf, g.node_area / (h_w * h_f))
         stretch_factor = _excess(
-            w * g.spacing[f] / h_w / h_f / area[n].min()
-            for n, f, w in zip(g.edge_nodes, g.edge_family, g.edge_width, strict=True)
+            [
+                w * g.spacing[f] / h_w / h_f / area[n].min()
+                for n, f, w in zip(g.edge_nodes, g.edge_family, g.edge_width, strict=True)
+            ],
+            "segment",
         )
         bend_factor = _excess(
-            w * g.spacing[f] / h_w / h_f / area[[*n, *a]].min()
-            for n, a, f, w in zip(g.hinge_nodes, g.hinge_axis_nodes, g.hinge_family, g.hinge_width, strict=True)
+            [
+                w * g.spacing[f] / h_w / h_f / area[[*n, *a]].min()
+                for n, a, f, w in zip(g.hinge_nodes, g.hinge_axis_nodes, g.hinge_family, g.hinge_width, strict=True)
+            ],
+            "hinge",
         )
         cell_factor = _excess(
-            c * k * k / (h_w * h_f) / area[q].min()
-            for q, c, k in zip(g.cell_nodes, g.cell_area, g.cell_scale, strict=True)
+            [
+                c * k * k / (h_w * h_f) / area[q].min()
+                for q, c, k in zip(g.cell_nodes, g.cell_area, g.cell_scale, strict=True)
+            ],
+            "cell",
         )
         worst = 0.0
         for spec in self.model.sheets:
