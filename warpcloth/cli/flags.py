@@ -74,6 +74,8 @@ LIBRARY_ONLY = frozenset(
         "(i, j)",  # SheetGeometry.node/cell/hinge(i, j): a scene's output.markers_ij, checked as a scene field
         "areal_density",  # calibrate.fabric_dataset.bending_length(...) and kin: no command calls them
         "bending_factor",  # Grip(...): a scene's clamp.grip_* fields, checked as fields
+        "bending_poisson_ratio",  # SheetMaterialSI(...): a scene's bias.bending_poisson_ratio, checked as a field
+        "bias",  # SheetMaterialSI(bias=...): a scene's [bias], checked field by field
         "bending_length",  # rigidity_from_bending_length(bending_length, ...): as areal_density
         "body",  # warpcloth.bodies.named(name): a scene or run names its body, read by the registry
         "blocks",  # identifiability(blocks): the benchmarks' comparison of experiments

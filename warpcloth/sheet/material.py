@@ -38,13 +38,10 @@ class SheetMaterialSI:
     bending_poisson_ratio: float = 0.0
 
     def __post_init__(self) -> None:
-        for name, other in (("weft", self.weft), ("bias", self.bias)):
-            if other is not None and other.density != self.warp.density:
-                raise ArgumentError(
-                    name,
-                    f"a sheet has one areal density: the warp's is {self.warp.density:g} kg/m², the {name}'s "
-                    f"{other.density:g} kg/m²",
-                )
+        if self.weft.density != self.density:
+            raise ArgumentError("weft", self._density_message("weft", self.weft))
+        if self.bias is not None and self.bias.density != self.density:
+            raise ArgumentError("bias", self._density_message("bias", self.bias))
         if not self.shear_rigidity >= 0:
             raise ArgumentError(
                 "shear_rigidity", f"the shear rigidity G must be ≥ 0, got {self.shear_rigidity:g} N/(m·rad)"
@@ -56,6 +53,12 @@ class SheetMaterialSI:
                 f"{self.bending_poisson_ratio!r}",
             )
         self.twist_law()  # refuses a bias the warp and weft cannot make
+
+    def _density_message(self, name: str, other: MaterialSI) -> str:
+        return (
+            f"a sheet has one areal density: the warp's is {self.density:g} kg/m², the {name}'s "
+            f"{other.density:g} kg/m²"
+        )
 
     @property
     def density(self) -> float:
