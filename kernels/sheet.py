@@ -242,7 +242,10 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
             family = model.edge_family[e]
             l0 = model.spacing[family]
             strain = (wp.length(state.position[ends[1], s] - state.position[ends[0], s]) - l0) / l0
-            stretch = stretch + tensile_energy(strain, model.tensile[family, s]) * model.edge_width[e] * l0
+            energy = tensile_energy(strain, model.tensile[family, s]) * model.edge_width[e] * l0
+            if strain < zero:
+                energy = energy * model.compression
+            stretch = stretch + energy
         t = scalar(step - stepping.release_step) * stepping.dt
         theta, _rate, d, _d_rate = clamp_pose(control, s, t)
         probes[k, wp.static(slot["clamp_angle"]), s] = theta

@@ -124,6 +124,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             if not (wp.abs(strain) <= stepping.max_strain):  # also catches NaN
                 return STATUS_STRAIN, e, strain
             f = tension(strain, model.tensile[family, s]) * model.edge_width[e] / length * d
+            if strain < zero:
+                f = f * model.compression  # a yarn buckles under far less than it bears
             add(state.force_tensile, ends[0], s, f)
             add(state.force_tensile, ends[1], s, vec3() - f)
         return STATUS_OK, 0, zero

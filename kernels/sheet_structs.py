@@ -52,6 +52,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetTypes:
 
         n_nodes: int
         gravity: scalar  # along −y, m/s²
+        compression: scalar  # a yarn's stiffness in compression over its quartic's in tension (1: mirrored)
         rest_position: wp.array2d(dtype=vec3)  # [node, sheet]; clamped nodes move rigidly from these
         clamped: wp.array(dtype=int)  # [node]: 1 where the clamp holds the node
         node_area: wp.array(dtype=scalar)  # [node]: the fabric area the node carries, m²

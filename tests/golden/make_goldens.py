@@ -99,8 +99,9 @@ SHEET_CASES = {
     "sheet_twist": ("twist", ["run.duration_s=0.15", "release.settle_time_s=0.05"]),
 }
 """Sheets: a swing that shears the cells and a twist about the sheet's own axis (3D), with
-their markers. Written by commit 16f6c7c's code, before the strip and the sheet shared one
-core (issue 37), and reproduced bit for bit after it."""
+their markers. Rewritten by issue 36's code: the sheet bends as a plate (its twist and
+Poisson terms), the twist turns by 0.1 rad and the shear swing hangs 0.5 mm wavy, so both
+move differently on purpose; the strip's goldens are unchanged."""
 
 
 def scene_outputs(case: str) -> dict[str, np.ndarray]:

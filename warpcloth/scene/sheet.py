@@ -88,6 +88,19 @@ class SheetSection:
         "second_order (a hinge at the clamp edge bends over h/2) | paper (over h), as clamp.edge_hinge of a strip",
         choices=EDGE_HINGES,
     )
+    yarn_compression_fraction: float = _field(
+        1.0,
+        "a warp or weft segment in compression is this part as stiff as its tensile quartic mirrored "
+        "(1: as stiff; 0: no resistance, the yarns buckle freely); docs/model.md §17.3",
+        ge=0,
+    )
+    initial_waviness_mm: float = _field(
+        0.0,
+        "the hung sheet's out-of-plane deviation before it settles, x = A sin(π s / L) sin(π (z / W + ½)) (s the "
+        "depth below the clamp edge, L the free length, W the width): a physical imperfection (no fabric hangs "
+        "flat) that seeds motion out of the plane; 0: flat, and a sheet driven in its plane stays in it",
+        ge=0,
+    )
     bias_angle_deg: float = _field(
         45.0,
         "bias: the strip's length to the warp (0: along it, 90: along the weft); 45° with a width of whole "
@@ -416,6 +429,11 @@ def validate_sheet_scene(scene: SheetScene) -> None:
             f"sheet.width_mm = {st.width_mm:g} mm across, at spacings {st.spacing_warp_mm:g} and "
             f"{st.spacing_weft_mm:g} mm, are {nodes:.3g} nodes, more than {MAX_NODES}",
             related=("sheet.clamp_length_mm", "sheet.width_mm", "sheet.spacing_warp_mm", "sheet.spacing_weft_mm"),
+        )
+    if st.yarn_compression_fraction > 1:
+        raise SceneError(
+            "sheet.yarn_compression_fraction",
+            f"{st.yarn_compression_fraction:g} is above 1: a yarn is not stiffer in compression than in tension",
         )
     if st.cut == "rectangle":
         for name, spacing in (

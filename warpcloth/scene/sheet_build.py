@@ -71,8 +71,17 @@ def _cut(st: SheetSection) -> SheetGeometry:
     lengths = (st.free_length_mm * mm, st.width_mm * mm, st.clamp_length_mm * mm)
     spacing = (st.spacing_warp_mm * mm, st.spacing_weft_mm * mm)
     if st.cut == "rectangle":
-        return rectangle(*lengths, spacing, st.edge_hinge)
-    return bias_strip(*lengths, spacing[0], st.edge_hinge, math.radians(st.bias_angle_deg))
+        geometry = rectangle(*lengths, spacing, st.edge_hinge)
+    else:
+        geometry = bias_strip(*lengths, spacing[0], st.edge_hinge, math.radians(st.bias_angle_deg))
+    if not st.initial_waviness_mm:
+        return geometry
+    # a node's depth below the clamp edge and place across: the clamp's nodes (s = 0) stay put
+    rest = geometry.rest_positions.copy()
+    depth = np.clip(-rest[:, 1], 0.0, lengths[0]) / lengths[0]
+    across = np.clip(rest[:, 2] / lengths[1] + 0.5, 0.0, 1.0)
+    rest[:, 0] += st.initial_waviness_mm * mm * np.sin(math.pi * depth) * np.sin(math.pi * across)
+    return dataclasses.replace(geometry, rest_positions=rest)
 
 
 def sheet_material(scene: SheetScene) -> SheetMaterialSI:
@@ -151,6 +160,7 @@ def _builder(scenes: Sequence[SheetScene], geometry: SheetGeometry) -> SheetBuil
         first.run.gravity_m_per_s2,
         release_time=first.release.settle_time_s,
         reversal_memory=first.integrator.reversal_memory,
+        compression_fraction=first.sheet.yarn_compression_fraction,
     )
     for scene in scenes:
         builder.add_sheet(
@@ -163,8 +173,9 @@ def _builder(scenes: Sequence[SheetScene], geometry: SheetGeometry) -> SheetBuil
 
 
 def _nearest(points: np.ndarray, yz_mm: list[float]) -> tuple[int, float]:
-    target = np.array([0.0, *yz_mm]) * units.LENGTH_MM
-    distance = np.linalg.norm(points - target[None, :], axis=1)
+    # in the sheet's plane: a wavy sheet's nodes lie off it by its waviness, not elsewhere
+    target = np.array(yz_mm) * units.LENGTH_MM
+    distance = np.linalg.norm(points[:, 1:] - target[None, :], axis=1)
     k = int(np.argmin(distance))
     return k, float(distance[k])
 

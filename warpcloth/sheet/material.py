@@ -56,8 +56,7 @@ class SheetMaterialSI:
 
     def _density_message(self, name: str, other: MaterialSI) -> str:
         return (
-            f"a sheet has one areal density: the warp's is {self.density:g} kg/m², the {name}'s "
-            f"{other.density:g} kg/m²"
+            f"a sheet has one areal density: the warp's is {self.density:g} kg/m², the {name}'s {other.density:g} kg/m²"
         )
 
     @property

@@ -60,7 +60,8 @@ class SheetBuilder:
     the :class:`SheetModel`. ``release_time`` > 0 lets the sheets settle for that long
     under ``settle_damping`` before t = 0 (the clamp's motion starts at t = 0).
     ``reversal_memory``: open reversal points per hinge and cell of a law with return-point
-    memory (masing)."""
+    memory (masing). ``compression_fraction``: a segment in compression is that part as stiff
+    as its tensile quartic mirrored (1: as stiff; docs/model.md §17.3)."""
 
     def __init__(
         self,
@@ -68,9 +69,15 @@ class SheetBuilder:
         gravity: float = 9.80665,
         release_time: float = 0.0,
         reversal_memory: int = DEFAULT_CAPACITY,
+        compression_fraction: float = 1.0,
     ) -> None:
         if not release_time >= 0:
             raise ArgumentError("release_time", f"must be ≥ 0 s, got {release_time!r}")
+        if not 0 <= compression_fraction <= 1:
+            raise ArgumentError(
+                "compression_fraction", f"must lie in [0, 1] (of the tension's stiffness), got {compression_fraction!r}"
+            )
+        self.compression_fraction = float(compression_fraction)
         self.geometry = geometry
         self.gravity = float(gravity)
         self.release_time = float(release_time)
@@ -126,6 +133,7 @@ class SheetModel:
         self.n_sheets = len(self.sheets)
         self.n_nodes = self.geometry.n_nodes
         self.gravity = builder.gravity
+        self.compression_fraction = builder.compression_fraction
         self.release_time = builder.release_time
         materials = [s.material for s in self.sheets]
         self.density = np.array([m.density for m in materials])
@@ -181,6 +189,7 @@ class SheetModel:
         m = self.kernels.structs.SheetModel()
         m.n_nodes = self.n_nodes
         m.gravity = self.scalar(self.gravity)
+        m.compression = self.scalar(self.compression_fraction)
         m.rest_position = self.array(np.repeat(g.rest_positions[:, None, :], b, axis=1), t.vec3)
         m.clamped = self.array(g.clamped.astype(np.int32), int)
         m.node_area = self.array(g.node_area)

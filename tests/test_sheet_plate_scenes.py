@@ -1,0 +1,90 @@
+"""The stage-3 scenes mean something (docs/model.md §17.7): the twist is deterministic at
+its bundled amplitude and spacing, the bias strip converges as h shrinks, a soft yarn in
+compression is what it says, and a wavy sheet is seeded out of its plane by its waviness,
+not by round-off."""
+
+import numpy as np
+import pytest
+
+import warpcloth as wc
+from warpcloth.errors import SceneError
+from warpcloth.scene.sheet_build import build_sheet, sheet_geometry
+from warpcloth.sheet import SheetSolver
+
+
+def markers(name, overrides):
+    return wc.simulate(wc.load_scene(name, overrides)).markers[:, 0]
+
+
+def twist(amplitude, gamma_change=0.0):
+    return markers(
+        "twist",
+        {
+            "clamp.rotation_segments.0.theta_coefficients_si": [0.0, 0.0, 200.0 * amplitude],
+            "clamp.rotation_segments.1.theta_coefficients_si": [amplitude / 2, 20.0 * amplitude, -200.0 * amplitude],
+            "damping.gamma_per_s": 0.3 * (1 + gamma_change),
+            "run.duration_s": 0.5,
+        },
+    )
+
+
+def test_the_twist_is_deterministic_at_its_bundled_amplitude_and_not_at_five_times_it():
+    # a change of γ by 1e-12 of itself is round-off's size: at the bundled 0.1 rad the
+    # markers move by as little (measured 7e-14 m over 1 s); at 0.5 rad the centre warp line
+    # buckles under compression at a wavelength near 2 h and the change grows to millimetres
+    bundled = wc.load_scene("twist").clamp.rotation_segments[1].theta_coefficients_si
+    assert bundled[0] + bundled[1] * 0.05 + bundled[2] * 0.05**2 == pytest.approx(0.1)
+    calm = np.abs(twist(0.1) - twist(0.1, 1e-12)).max()
+    wild = np.abs(twist(0.5) - twist(0.5, 1e-12)).max()
+    print(f"twist: a 1e-12 change of γ moves the markers {calm:.3g} m at 0.1 rad, {wild:.3g} m at 0.5 rad")
+    assert calm < 1e-10
+    assert wild > 1e-5
+
+
+@pytest.mark.slow
+def test_the_bias_strip_converges_in_h():
+    # the impulsive rotation of a 30 mm bias strip, its markers on the centreline at 49.5 and
+    # 99 mm: what changes as h halves shrinks by more than 3 (measured over 0.5 s: 0.95, 0.20
+    # mm for the first marker, 1.80, 0.30 mm for the second)
+    runs = [markers("bias_strip", {"sheet.spacing_warp_mm": h, "sheet.spacing_weft_mm": h}) for h in (5.0, 2.5, 1.25)]
+    changes = [np.abs(runs[k] - runs[k + 1]).max(axis=(0, 2)) for k in (0, 1)]
+    print(f"bias strip: markers change {changes[0]} then {changes[1]} m as h halves")
+    assert (changes[1] < changes[0] / 3).all()
+    assert changes[1].max() < 5e-4
+
+
+def test_a_yarn_soft_in_compression_is_that_part_as_stiff():
+    # every segment of a sheet shrunk by 1 % in its plane: the tensile forces at a fraction
+    # are that fraction of the mirrored quartic's; stretched by 1 %, they are unchanged
+    forces = {}
+    for fraction in (1.0, 0.25):
+        for scale in (0.99, 1.01):
+            scene = wc.load_scene("twist", {"sheet.yarn_compression_fraction": fraction, "run.duration_s": 0.01})
+            batch = build_sheet(scene, device="cpu")
+            state = batch.model.state()
+            geometry = batch.model.geometry
+            rest = geometry.rest_positions
+            state.struct.position.assign(
+                batch.model.array((rest * [1.0, scale, scale])[:, None, :], batch.model.types.vec3)
+            )
+            got = SheetSolver(batch.model, 1e-6).internal_forces(state, batch.control)["tensile"][:, 0]
+            forces[fraction, scale] = got
+    assert np.abs(forces[1.0, 0.99]).max() > 0
+    np.testing.assert_allclose(forces[0.25, 0.99], 0.25 * forces[1.0, 0.99], rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(forces[0.25, 1.01], forces[1.0, 1.01])
+    with pytest.raises(SceneError, match="sheet.yarn_compression_fraction"):
+        wc.load_scene("twist", {"sheet.yarn_compression_fraction": 1.5})
+
+
+def test_a_wavy_sheet_leaves_its_plane_and_a_flat_one_does_not():
+    # the shear swing drives the sheet in its plane: flat, its markers never leave it (x = 0
+    # exactly); with a waviness of 0.1 mm their out-of-plane motion is of the waviness's size
+    # and follows it (measured 0.072 mm at 0.1 mm, 0.69 mm at 1 mm), the same on a rerun
+    flat = markers("shear_swing", {"sheet.initial_waviness_mm": 0.0, "run.duration_s": 0.3})
+    assert np.abs(flat[..., 0]).max() == 0.0
+    wavy = [markers("shear_swing", {"sheet.initial_waviness_mm": a, "run.duration_s": 0.3}) for a in (0.1, 0.2)]
+    out = [np.abs(w[..., 0]).max() for w in wavy]
+    assert 1e-5 < out[0] < 2e-4 and out[1] / out[0] == pytest.approx(2.0, rel=0.05)  # linear in the seed
+    geometry = sheet_geometry(wc.load_scene("shear_swing", {"sheet.initial_waviness_mm": 0.1}))
+    assert np.abs(geometry.rest_positions[geometry.clamped, 0]).max() == 0.0  # the clamp holds it flat
+    assert np.abs(geometry.rest_positions[:, 0]).max() == pytest.approx(1e-4, rel=0.02)
