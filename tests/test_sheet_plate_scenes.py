@@ -28,6 +28,7 @@ def twist(amplitude, gamma_change=0.0):
     )
 
 
+@pytest.mark.slow
 def test_the_twist_is_deterministic_at_its_bundled_amplitude_and_not_at_five_times_it():
     # a change of γ by 1e-12 of itself is round-off's size: at the bundled 0.1 rad the
     # markers move by as little (measured 7e-14 m over 1 s); at 0.5 rad the centre warp line
