@@ -133,7 +133,9 @@ def cantilever_mode(angle, h, length, width, material, rigidity):
     return frequency(run.t, run.markers[:, 0, 0, 0]) / symplectic_frequency(omega, solver.dt) - 1
 
 
-@pytest.mark.parametrize("angle", ANGLES)
+@pytest.mark.parametrize(
+    "angle", [a if a in (0.0, 45.0, 90.0) else pytest.param(a, marks=pytest.mark.slow) for a in ANGLES]
+)
 def test_a_cantilever_cut_at_any_angle_bends_with_d_theta(angle):
     # A plate bending alike in every direction (D11 = D22 = D12 + 2 D66, ν = 0: D(θ) = D at
     # every angle, half of it from the twist term on the bias): a strip cut at any angle
