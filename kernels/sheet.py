@@ -84,7 +84,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
     piecewise_polynomial = drives.build(scalar).piecewise_polynomial
     forces = sheet_forces.build(scalar, terms)
     accumulate_sheet_forces, shear_angle = forces.accumulate_sheet_forces, forces.shear_angle
-    hinge_geometry, hinge_curvature = forces.hinge_geometry, forces.hinge_curvature
+    hinge_geometry, hinge_curvature, turning_angle = forces.hinge_geometry, forces.hinge_curvature, forces.turning_angle
     cell_corners, cell_twist = forces.cell_corners, forces.cell_twist
     tensile_energy = tensile.build(scalar).energy_per_width
     slot = SHEET_PROBE_INDEX
@@ -288,9 +288,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         """Start every hinge and cell fresh at its current curvature, shear angle and twist."""
         s = wp.tid()
         for h in range(model.hinge_nodes.shape[0]):
-            _e1, _e2, _axis, _inverse_u, sine, _cosine, inverse_p1, inverse_p2, chord = hinge_geometry(
-                model, state, h, s
-            )
+            e1, e2, u = hinge_geometry(model, state, h, s)
+            sine, _cosine, inverse_p1, inverse_p2, chord = turning_angle(e1, e2, u / wp.length(u))
             curvature = hinge_curvature(model, h, sine, inverse_p1, inverse_p2, chord)
             state.hinge[h, s] = law.fresh_memory(
                 curvature, model.bending[model.hinge_family[h], s], state.hinge_history, h, s

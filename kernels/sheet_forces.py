@@ -26,6 +26,7 @@ class SheetForces:
     accumulate_sheet_forces: Any
     hinge_geometry: Any
     hinge_curvature: Any
+    turning_angle: Any
     cell_corners: Any
     cell_twist: Any
     shear_angle: Any
@@ -78,17 +79,13 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
 
     @wp.func
     def hinge_geometry(model: SheetModel, state: SheetState, h: int, s: int):
-        # hinge h's two segments, its bending axis (and 1/|u|), and its turning angle's pieces
+        # hinge h's two segments and the difference u of its axis's nodes
         nodes = model.hinge_nodes[h]
         across = model.hinge_axis_nodes[h]
         x1 = state.position[nodes[1], s]
         e1 = x1 - state.position[nodes[0], s]
         e2 = state.position[nodes[2], s] - x1
-        u = state.position[across[1], s] - state.position[across[0], s]
-        inverse_u = one / wp.length(u)
-        axis = u * inverse_u
-        sine, cosine, inverse_p1, inverse_p2, chord = turning_angle(e1, e2, axis)
-        return e1, e2, axis, inverse_u, sine, cosine, inverse_p1, inverse_p2, chord
+        return e1, e2, state.position[across[1], s] - state.position[across[0], s]
 
     @wp.func
     def hinge_curvature(model: SheetModel, h: int, sine: scalar, inverse_p1: scalar, inverse_p2: scalar, chord: scalar):
@@ -131,13 +128,16 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         return STATUS_OK, 0, zero
 
     @wp.func
-    def bend(model: SheetModel, state: SheetState, h: int, s: int):
-        # hinge h's curvature and the gradients of its turning angle ψ (docs/model.md §17.4):
-        # of its line's end nodes and of its axis's upper node (the others follow by balance);
-        # healthy false when the line folded onto itself or a segment turned onto the axis
-        # (no plane to bend in), or is NaN, with the chord over h
+    def bend(model: SheetModel, h: int, e1: vec3, e2: vec3, u: vec3):
+        # hinge h's curvature and the gradients of its turning angle ψ (docs/model.md §17.4)
+        # from its segments e1, e2 and axis vector u: of its line's end nodes and of its
+        # axis's upper node (the others follow by balance); healthy false when the line
+        # folded onto itself or a segment turned onto the axis (no plane to bend in), or is
+        # NaN, with the chord over h
         family = model.hinge_family[h]
-        e1, e2, axis, inverse_u, sine, cosine, inverse_p1, inverse_p2, chord = hinge_geometry(model, state, h, s)
+        inverse_u = one / wp.length(u)
+        axis = u * inverse_u
+        sine, cosine, inverse_p1, inverse_p2, chord = turning_angle(e1, e2, axis)
         fold = scalar(1e-3) * model.spacing[family]
         healthy = chord > fold and inverse_p1 * fold < one and inverse_p2 * fold < one
         curvature = hinge_curvature(model, h, sine, inverse_p1, inverse_p2, chord)
@@ -200,11 +200,22 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         # plate's Poisson term D12 κ11 κ22 besides each line's own (§17.4)
         d12 = model.poisson[s]
         for k in range(model.hinge_pairs):
+            # a pair's five nodes, read once: the warp line a, b, c is the weft hinge's axis
+            # and the weft line d, b, e the warp hinge's
             warp = 2 * k
-            healthy, chord, curvature, grad_0, grad_2, grad_u = bend(model, state, warp, s)
+            line = model.hinge_nodes[warp]
+            across = model.hinge_axis_nodes[warp]
+            xb = state.position[line[1], s]
+            warp_1 = xb - state.position[line[0], s]
+            warp_2 = state.position[line[2], s] - xb
+            weft_1 = xb - state.position[across[0], s]
+            weft_2 = state.position[across[1], s] - xb
+            healthy, chord, curvature, grad_0, grad_2, grad_u = bend(model, warp, warp_1, warp_2, weft_1 + weft_2)
             if not healthy:
                 return STATUS_FOLDED, warp, chord
-            weft_healthy, weft_chord, weft_curvature, weft_0, weft_2, weft_u = bend(model, state, warp + 1, s)
+            weft_healthy, weft_chord, weft_curvature, weft_0, weft_2, weft_u = bend(
+                model, warp + 1, weft_1, weft_2, warp_1 + warp_2
+            )
             if not weft_healthy:
                 return STATUS_FOLDED, warp + 1, weft_chord
             # a bend towards one side of the sheet turns its warp and weft hinges with opposite
@@ -230,7 +241,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
                 weft_u,
             )
         for h in range(2 * model.hinge_pairs, model.hinge_nodes.shape[0]):
-            healthy, chord, curvature, grad_0, grad_2, grad_u = bend(model, state, h, s)
+            e1, e2, u = hinge_geometry(model, state, h, s)
+            healthy, chord, curvature, grad_0, grad_2, grad_u = bend(model, h, e1, e2, u)
             if not healthy:
                 return STATUS_FOLDED, h, chord
             hinge_couple(model, state, h, s, curvature, zero, grad_0, grad_2, grad_u)
@@ -304,6 +316,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         accumulate_sheet_forces=accumulate_sheet_forces,
         hinge_geometry=hinge_geometry,
         hinge_curvature=hinge_curvature,
+        turning_angle=turning_angle,
         cell_corners=cell_corners,
         cell_twist=cell_twist,
         shear_angle=shear_angle,
