@@ -275,11 +275,13 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             # 2 D66 κ12² per area for an elastic law. ∂(d·n)/∂x: the twist vector's ±1 at the
             # corners along n, and the normal's turn, through w and f, against d's in-plane part
             kappa = scale * cell_twist(model, d, unit)
-            twist_memory = law.follow(kappa, state.twist[c, s], p_twist, state.twist_history, c, s)
-            state.twist[c, s] = twist_memory
             per_twist = area / (model.spacing[0] * model.spacing[1])
             twist_elastic = law.elastic_moment(kappa, p_twist) * per_twist
-            twist_hysteretic = law.hysteretic_moment(kappa, twist_memory, p_twist) * per_twist
+            twist_hysteretic = zero
+            if model.twist_elastic[s] == 0:  # a twist without hysteresis has no memory to follow
+                twist_memory = law.follow(kappa, state.twist[c, s], p_twist, state.twist_history, c, s)
+                state.twist[c, s] = twist_memory
+                twist_hysteretic = law.hysteretic_moment(kappa, twist_memory, p_twist) * per_twist
             in_plane = d - wp.dot(d, unit) * unit
             t_w = wp.cross(f, in_plane) / sn
             t_f = wp.cross(in_plane, w) / sn

@@ -75,6 +75,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetTypes:
         bending: wp.array2d(dtype=law.Parameters)  # [family, sheet]: the bending law of each direction
         shear: wp.array(dtype=law.Parameters)  # [sheet]: the shear law on the shear angle (G for D)
         twist: wp.array(dtype=law.Parameters)  # [sheet]: the twist law on a cell's twist κ12 (4 D66 for D)
+        twist_elastic: wp.array(dtype=int)  # [sheet]: 1 where the twist law has no hysteresis (M12 = 4 D66 κ12)
         poisson: wp.array(dtype=scalar)  # [sheet]: D12, the bending Poisson coupling, N·m
 
     @wp.struct

@@ -133,6 +133,12 @@ class SheetMaterialSI:
         """The packed per-sheet parameters of the shear law (G in D's slot)."""
         return packed_parameters(self.shear.law, {BENDING_RIGIDITY.name: self.shear_rigidity, **self.shear.as_dict()})
 
+    def twist_is_elastic(self) -> bool:
+        """Whether the twist law has no hysteresis (every amplitude parameter 0): the bias's
+        hysteresis is the yarns' mean, as when no [bias] is given."""
+        _rigidity, law = self.twist_law()
+        return all(law[p.name] == 0 for p in law.description.parameters if p.amplitude)
+
     def twist_parameters(self) -> tuple[float, ...]:
         """The packed per-sheet parameters of the twist law (4 D66 in D's slot)."""
         rigidity, law = self.twist_law()

@@ -222,6 +222,7 @@ class SheetModel:
         )
         m.shear = self.array(np.array([mat.shear_parameters() for mat in materials]), law.Parameters)
         m.twist = self.array(np.array([mat.twist_parameters() for mat in materials]), law.Parameters)
+        m.twist_elastic = self.array(np.array([mat.twist_is_elastic() for mat in materials], dtype=np.int32), int)
         m.poisson = self.array(np.array([mat.poisson_coupling for mat in materials]))
         return m
 

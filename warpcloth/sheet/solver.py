@@ -111,7 +111,7 @@ class SheetSolver(FusedSolver):
     def stable_step(self) -> float:
         """A linearised estimate of the longest stable dt (s): symplectic Euler needs
         ω_max dt < 2, and ω_max² is at most the sum of the stiffest stretching mode's
-        4 (a1 + 2G)/(ρ_A h²), the stiffest bending mode's 64 (D + |D12|) s²/(ρ_A h⁴) (s the
+        4 (a1 + 2G)/(ρ_A h²), the stiffest bending mode's 64 (D + abs(D12)) s²/(ρ_A h⁴) (s the
         largest hinge curvature scale) and the twist's checkerboard 16 (4 D66)/(ρ_A h_w² h_f²)
         over the batch's materials and both directions, each times how much further than
         on whole cells the cut's element widths outweigh their lightest free node
