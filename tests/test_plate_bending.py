@@ -182,6 +182,7 @@ def vlasov_first_mode(gj, warping, inertia, length):
     return scipy.optimize.brentq(determinant, grid[k], grid[k + 1], xtol=1e-12), saint_venant
 
 
+@pytest.mark.slow
 def test_a_clamped_strips_torsion_is_vlasovs():
     # A 20 mm × 100 mm strip along the warp, no gravity, twisted into its first torsional
     # mode: St Venant's GJ = 4 D66 b (the twist term of every cell across it) and the warp

@@ -77,6 +77,7 @@ def test_a_yarn_soft_in_compression_is_that_part_as_stiff():
         wc.load_scene("twist", {"sheet.yarn_compression_fraction": 1.5})
 
 
+@pytest.mark.slow
 def test_a_wavy_sheet_leaves_its_plane_and_a_flat_one_does_not():
     # the shear swing drives the sheet in its plane: flat, its markers never leave it (x = 0
     # exactly); with a waviness of 0.1 mm their out-of-plane motion is of the waviness's size
