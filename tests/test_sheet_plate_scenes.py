@@ -3,10 +3,13 @@ its bundled amplitude and spacing, the bias strip converges as h shrinks, a soft
 compression is what it says, and a wavy sheet is seeded out of its plane by its waviness,
 not by round-off."""
 
+import importlib.resources
+
 import numpy as np
 import pytest
 
 import warpcloth as wc
+from warpcloth import units
 from warpcloth.errors import SceneError
 from warpcloth.scene.sheet_build import build_sheet, sheet_geometry
 from warpcloth.sheet import SheetSolver
@@ -90,3 +93,39 @@ def test_a_wavy_sheet_leaves_its_plane_and_a_flat_one_does_not():
     geometry = sheet_geometry(wc.load_scene("shear_swing", {"sheet.initial_waviness_mm": 0.1}))
     assert np.abs(geometry.rest_positions[geometry.clamped, 0]).max() == 0.0  # the clamp holds it flat
     assert np.abs(geometry.rest_positions[:, 0]).max() == pytest.approx(1e-4, rel=0.02)
+
+
+@pytest.mark.parametrize(
+    ("override", "field", "words"),
+    [
+        ({"sheet.bias_angle_deg": 100}, "sheet.bias_angle_deg", "beyond 90°"),
+        ({"bias.bending_rigidity_gf_cm2_per_cm": 0.01}, "bias.bending_rigidity_gf_cm2_per_cm", "= 0.045 gf·cm²/cm"),
+        ({"bias.bending_poisson_ratio": 1.5}, "bias.bending_poisson_ratio", "(−1, 1)"),
+        ({"bias.tensile_gf_per_cm": [1, 2, 3, 4]}, "bias.tensile_gf_per_cm", "is not a bias field"),
+        ({"bias.bending_law": "dahl"}, "bias.bending_law", "need one law"),
+        ({"bias.hysteresis_d1_gf_cm_per_cm": 0.001}, "bias.hysteresis_d1_gf_cm_per_cm", "would be negative"),
+        ({"sheet.yarn_compression_fraction": 2}, "sheet.yarn_compression_fraction", "not stiffer in compression"),
+        ({"sheet.initial_waviness_mm": -1}, "sheet.initial_waviness_mm", "≥ 0"),
+    ],
+)
+def test_a_bias_or_cut_a_plate_cannot_have_is_refused_by_name(override, field, words):
+    with pytest.raises(SceneError) as caught:
+        wc.load_scene("bias_strip", override)
+    assert caught.value.field == field and words in str(caught.value), str(caught.value)
+
+
+def test_a_material_files_bias_is_read_and_a_bad_one_refused_by_file_and_line(tmp_path):
+    from warpcloth.scene.sheet_build import sheet_material
+
+    source = (importlib.resources.files("warpcloth.scenes") / "materials" / "wool90-nylon10.toml").read_text()
+    good = tmp_path / "good.toml"
+    good.write_text(source.replace("bending_rigidity_gf_cm2_per_cm = 0.080", "bending_rigidity_gf_cm2_per_cm = 0.12"))
+    scene = wc.load_scene("bias_strip", {"material.from_file": str(good)})
+    assert scene.bias.bending_rigidity_gf_cm2_per_cm == 0.12
+    rigidity, _law = sheet_material(scene).twist_law()
+    b = units.RIGIDITY_GF_CM2_PER_CM
+    assert rigidity == pytest.approx((4 * 0.12 - 0.1 - 0.08) * b, rel=1e-12)
+    bad = tmp_path / "bad.toml"
+    bad.write_text(source.replace("bending_poisson_ratio = 0.0", "bending_poisson_ratio = 2.0"))
+    with pytest.raises(SceneError, match=r"bad.toml, line \d+: bias.bending_poisson_ratio"):
+        wc.load_scene("bias_strip", {"material.from_file": str(bad)})

@@ -523,6 +523,18 @@ def _check_bias(scene: SheetScene) -> None:
             f"B_weft {b_weft:g}, ν {nu:g}), the least a plate with a twist rigidity D66 ≥ 0 bends on the bias; "
             f"a softer bias needs a negative {BIAS_TABLE}.bending_poisson_ratio",
         )
+    law = bending_law(scene.bias.bending_law)
+    if scene.bias.bending_law == scene.material.bending_law == scene.weft.bending_law:
+        for p in law.parameters:
+            if p.kind != "moment":
+                continue
+            ends = [getattr(t, p.scene_field) for t in (scene.bias, scene.material, scene.weft)]
+            if 2 * ends[0] < (ends[1] + ends[2]) * (1 - 1e-12):
+                raise SceneError(
+                    f"{BIAS_TABLE}.{p.scene_field}",
+                    f"{ends[0]:g} is below the mean of the warp's {ends[1]:g} and the weft's {ends[2]:g}: the "
+                    f"twist's own hysteresis, 2 × the bias's − the warp's − the weft's, would be negative",
+                )
     warp, weft, bias = (to_si(m) for m in (scene.material, scene.weft_material(), scene.bias_material()))
     try:
         SheetMaterialSI(warp, weft, 0.0, warp.bending, bias, nu)
