@@ -221,25 +221,12 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             # a bend towards one side of the sheet turns its warp and weft hinges with opposite
             # signs (each measures ψ about its own axis, the other yarn): the energy is
             # −D12 K_warp K_weft over the area either hinge carries (its node's, and a line
-            # end's beside it, where only one line goes on)
-            width, weft_width = model.hinge_width[warp], model.hinge_width[warp + 1]
-            h_w, h_f = model.spacing[0], model.spacing[1]
-            area = width * h_w + weft_width * h_f - model.node_area[model.hinge_nodes[warp][1]]
-            couple = -d12 * area
-            hinge_couple(
-                model, state, warp, s, curvature, couple * weft_curvature / (h_w * width), grad_0, grad_2, grad_u
-            )
-            hinge_couple(
-                model,
-                state,
-                warp + 1,
-                s,
-                weft_curvature,
-                couple * curvature / (h_f * weft_width),
-                weft_0,
-                weft_2,
-                weft_u,
-            )
+            # end's beside it, where only one line goes on: hinge_coupling is that area over
+            # each hinge's own)
+            couple = -d12 * model.hinge_coupling[warp] * weft_curvature
+            hinge_couple(model, state, warp, s, curvature, couple, grad_0, grad_2, grad_u)
+            couple = -d12 * model.hinge_coupling[warp + 1] * curvature
+            hinge_couple(model, state, warp + 1, s, weft_curvature, couple, weft_0, weft_2, weft_u)
         for h in range(2 * model.hinge_pairs, model.hinge_nodes.shape[0]):
             e1, e2, u = hinge_geometry(model, state, h, s)
             healthy, chord, curvature, grad_0, grad_2, grad_u = bend(model, h, e1, e2, u)

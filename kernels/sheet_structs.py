@@ -68,6 +68,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetTypes:
         hinge_width: wp.array(dtype=scalar)  # m
         hinge_curvature_scale: wp.array(dtype=scalar)  # h / length the hinge bends (2 at a clamp edge, §5.3)
         hinge_pairs: int  # hinges 2k (warp) and 2k + 1 (weft) share node k's curvatures: the Poisson pairs first
+        hinge_coupling: wp.array(dtype=scalar)  # [hinge]: the pair's Poisson area over the hinge's own
         cell_nodes: wp.array(dtype=wp.vec4i)  # [cell]: corners (i, j), (i+1, j), (i, j+1), (i+1, j+1)
         cell_area: wp.array(dtype=scalar)  # m² of free fabric the cell stands for
         cell_scale: wp.array(dtype=scalar)  # its shear and twist over the free part (2 astride a clamp edge)

@@ -48,6 +48,7 @@ class SheetGeometry:
     hinge_width: np.ndarray  # [hinge], m
     hinge_curvature_scale: np.ndarray  # [hinge]
     hinge_pairs: int  # hinges 2k, 2k + 1 are the warp and weft hinge of one node (the plate's Poisson pair)
+    hinge_coupling: np.ndarray  # [hinge]: a paired hinge's Poisson area over its own, A_pair / (h w_h); 0 unpaired
     cell_nodes: np.ndarray  # [cell, 4]: (i, j), (i+1, j), (i, j+1), (i+1, j+1)
     cell_area: np.ndarray  # [cell], m² of free fabric it stands for
     cell_scale: np.ndarray  # [cell]: 2 for a cell astride the clamp edge with one corner free, else 1
@@ -213,6 +214,8 @@ def grid_geometry(
     # cell, as the clamp-edge hinge bends over h/2 (docs/model.md §17.5)
     astride = (clamped[cells].sum(axis=1) == 3) & (edge_hinge == "second_order")
     cell_weight = weight[ci_, cj_] * np.where(astride, 0.5, 1.0)
+    widths = np.array(h_widths)[order]
+    lengths = np.array(spacing)[np.array(h_families, dtype=np.int64)[order]]
     return SheetGeometry(
         lattice=lattice,
         rest_positions=rest,
@@ -225,9 +228,10 @@ def grid_geometry(
         hinge_nodes=hinges_a[order],
         hinge_axis_nodes=np.array(axes, dtype=np.int32).reshape(-1, 2)[order],
         hinge_family=np.array(h_families, dtype=np.int32)[order],
-        hinge_width=np.array(h_widths)[order],
+        hinge_width=widths,
         hinge_curvature_scale=np.array(scales)[order],
         hinge_pairs=pairs,
+        hinge_coupling=_pair_coupling(widths * lengths, node_area[hinges_a[order][:, 1]], pairs),
         cell_nodes=cells[c_keep],
         cell_area=cell_weight[c_keep] * (h_warp * h_weft),
         cell_scale=np.where(astride, 2.0, 1.0)[c_keep],
@@ -256,6 +260,18 @@ def _line_ends_carried(
             if not clamped[end] and (family, int(end)) not in centred:
                 widths[h] += node_area[end] / spacing[family]
     return widths
+
+
+def _pair_coupling(carried: np.ndarray, centre_area: np.ndarray, pairs: int) -> np.ndarray:
+    # the Poisson term −D12 K_warp K_weft acts over the area either hinge of a pair carries
+    # (its node's, and a line end's beside it: A_pair = A_warp + A_weft − A_node); each
+    # hinge's couple is that over its own area (docs/model.md §17.4)
+    coupling = np.zeros(len(carried))
+    warp, weft = np.arange(0, 2 * pairs, 2), np.arange(1, 2 * pairs, 2)
+    shared = carried[warp] + carried[weft] - centre_area[warp]
+    coupling[warp] = shared / carried[warp]
+    coupling[weft] = shared / carried[weft]
+    return coupling
 
 
 def _paired_first(centres: np.ndarray, families: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, int]:

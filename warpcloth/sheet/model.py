@@ -205,6 +205,7 @@ class SheetModel:
         m.hinge_width = self.array(g.hinge_width)
         m.hinge_curvature_scale = self.array(g.hinge_curvature_scale)
         m.hinge_pairs = g.hinge_pairs
+        m.hinge_coupling = self.array(g.hinge_coupling)
         m.cell_nodes = self.array(g.cell_nodes.astype(np.int32).reshape(-1, 4), wp.vec4i)
         m.cell_area = self.array(g.cell_area)
         m.cell_scale = self.array(g.cell_scale)

@@ -81,9 +81,9 @@ corner cell (1 over ¼). The stability estimate's bounds hold there, so only wha
 cell adds beyond it shortens the step."""
 
 
-def _excess(ratios: object, element: str) -> float:
+def _excess(ratios: np.ndarray, element: str) -> float:
     # how much further than on whole cells an element's stiffness outweighs its lightest free node
-    return max(1.0, max(ratios, default=0.0) / WHOLE_CELL_EXCESS[element])
+    return max(1.0, float(ratios.max(initial=0.0)) / WHOLE_CELL_EXCESS[element])
 
 
 class SheetSolver(FusedSolver):
@@ -122,27 +122,13 @@ class SheetSolver(FusedSolver):
         h_w, h_f = g.spacing
         # a free node's area in cells (1 inside, ½ on a side, ¼ at a corner); a held one never moves
         area = np.where(g.clamped, np.inf, g.node_area / (h_w * h_f))
+        spacing = np.array(g.spacing)
         stretch_factor = _excess(
-            [
-                w * g.spacing[f] / h_w / h_f / area[n].min()
-                for n, f, w in zip(g.edge_nodes, g.edge_family, g.edge_width, strict=True)
-            ],
-            "segment",
+            g.edge_width * spacing[g.edge_family] / (h_w * h_f) / area[g.edge_nodes].min(axis=1), "segment"
         )
-        bend_factor = _excess(
-            [
-                w * g.spacing[f] / h_w / h_f / area[[*n, *a]].min()
-                for n, a, f, w in zip(g.hinge_nodes, g.hinge_axis_nodes, g.hinge_family, g.hinge_width, strict=True)
-            ],
-            "hinge",
-        )
-        cell_factor = _excess(
-            [
-                c * k * k / (h_w * h_f) / area[q].min()
-                for q, c, k in zip(g.cell_nodes, g.cell_area, g.cell_scale, strict=True)
-            ],
-            "cell",
-        )
+        five = np.concatenate([g.hinge_nodes, g.hinge_axis_nodes], axis=1)
+        bend_factor = _excess(g.hinge_width * spacing[g.hinge_family] / (h_w * h_f) / area[five].min(axis=1), "hinge")
+        cell_factor = _excess(g.cell_area * g.cell_scale**2 / (h_w * h_f) / area[g.cell_nodes].min(axis=1), "cell")
         worst = 0.0
         for spec in self.model.sheets:
             m = spec.material
