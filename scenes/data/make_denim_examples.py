@@ -37,6 +37,7 @@ Run ``python scenes/data/make_denim_examples.py`` to rewrite the files next to t
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -213,6 +214,21 @@ def write_record(name: str, rows: np.ndarray, fmt: tuple[str, str], header: str)
     np.savetxt(HERE / name, rows, fmt=fmt, delimiter=",", header=header, comments="")
 
 
+def loop_record(
+    name: str,
+    cycle: np.ndarray,
+    model: Callable[..., np.ndarray],
+    parameters: tuple[float, ...],
+    noise: float,
+    rng: np.random.Generator,
+    fmt: tuple[str, str],
+    header: str,
+) -> None:
+    """A KES loop record: ``model(cycle, *parameters)`` along the standard ``cycle``, plus the instrument's noise."""
+    loop = model(cycle, *parameters) + rng.normal(0.0, noise, len(cycle))
+    write_record(name, np.column_stack([cycle, loop]), fmt, header)
+
+
 def main() -> None:
     """Write the records and ``denims.json`` (published values, the models' parameters) next to this script."""
     record = {"source": SOURCE, "generator": __doc__.split("**What is ours.**")[1].split("Run ``")[0].strip()}
@@ -220,20 +236,24 @@ def main() -> None:
     for fabric, published in PUBLISHED.items():
         rng = np.random.default_rng(SEEDS[fabric])
         shear = solve_shear(published)
-        phi = standard_cycle(SHEAR_PHI0_DEG, SHEAR_STEP_DEG)
-        force = shear_force(phi, *shear.values()) + rng.normal(0.0, SHEAR_NOISE_GF_PER_CM, len(phi))
-        write_record(
+        loop_record(
             f"denim_{fabric}_fb1_shear.csv",
-            np.column_stack([phi, force]),
+            standard_cycle(SHEAR_PHI0_DEG, SHEAR_STEP_DEG),
+            shear_force,
+            tuple(shear.values()),
+            SHEAR_NOISE_GF_PER_CM,
+            rng,
             ("%.2f", "%.4f"),
             "shear_angle_deg,shear_force_gf_per_cm",
         )
         bending = solve_bending(published)
-        k = standard_cycle(BENDING_K0_PER_CM, BENDING_STEP_PER_CM)
-        moment = bending_moment(k, *bending.values()) + rng.normal(0.0, BENDING_NOISE_GF_CM_PER_CM, len(k))
-        write_record(
+        loop_record(
             f"denim_{fabric}_fb2.csv",
-            np.column_stack([k, moment]),
+            standard_cycle(BENDING_K0_PER_CM, BENDING_STEP_PER_CM),
+            bending_moment,
+            tuple(bending.values()),
+            BENDING_NOISE_GF_CM_PER_CM,
+            rng,
             ("%.3f", "%.5f"),
             "curvature_per_cm,moment_gf_cm_per_cm",
         )
