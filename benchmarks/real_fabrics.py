@@ -82,7 +82,7 @@ import warp as wp
 
 from warpcloth import units
 from warpcloth.calibrate.fabric_dataset import STANDARD_GRAVITY, FabricRecord, bending_length, read_feng2022
-from warpcloth.errors import ArgumentError
+from warpcloth.errors import ArgumentError, WarpclothError
 from warpcloth.sheet import SheetBuilder, SheetMaterialSI, SheetRecorder, SheetSolver, bias_strip, simulate_sheets
 from warpcloth.strip import LawParameters, MaterialSI
 from warpcloth.strip.model import init_warp_quietly
@@ -385,4 +385,8 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except WarpclothError as exc:  # a missing or damaged dataset: one line, as warpcloth's commands say it
+        print(f"real_fabrics.py: {exc}", file=sys.stderr)
+        sys.exit(2)
