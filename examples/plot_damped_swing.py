@@ -135,9 +135,9 @@ fig.tight_layout()
 # The run directory as an xarray Dataset
 # --------------------------------------
 # The run directory holds ``probes.csv``, ``frames.npy``, ``frame_times.npy``,
-# ``scene.toml`` and ``meta.json`` (:doc:`/file_formats`). ``to_xarray()`` (``pip install
-# 'warpcloth[xarray]'``) labels every probe over (t, variant), the frames over
-# (frame_time, variant, node, xy) and carries the per-strip parameters as coordinates.
+# ``scene.toml`` and ``meta.json`` (:doc:`/file_formats`). ``to_xarray()`` labels every probe over (t, variant), the
+# frames over (frame_time, variant, node, xy) and carries the per-strip parameters as
+# coordinates.
 print(sorted(p.name for p in (workdir / "damped_swing").iterdir()))
 dataset = wc.load_recording(workdir / "damped_swing").to_xarray()
 print(dataset["laser_x"].attrs["units"], dataset["frames"].dims)

@@ -1,7 +1,9 @@
 """The README and the user guide run as written: every command of their ``bash`` and
-``python`` blocks, the README's then the guide's, in order, in a scratch directory holding
-a copy of ``scenes/`` (the README's paragraph after the install block states the
-conventions this test applies; they are the constants below)."""
+``python`` blocks, the README's then the guide's, in order, in a scratch directory laid
+out as a clone's root: a copy of ``warpcloth/``, ``kernels/`` and ``scenes/``, so a Python
+block imports the clone's folder as it does in Jupyter opened there (the README's
+paragraph after the install block states the conventions this test applies; they are the
+constants below)."""
 
 import os
 import re
@@ -152,12 +154,31 @@ def test_readme_conventions_are_parsed():
     ]
 
 
+def clone_root(path):
+    """``path`` laid out as a clone's root: the package's source folders copied there."""
+    for folder in ("warpcloth", "kernels", "scenes"):
+        shutil.copytree(ROOT / folder, path / folder, ignore=shutil.ignore_patterns("__pycache__"))
+
+
+def test_the_package_imports_whole_in_a_clones_root(tmp_path):
+    # `import warpcloth` in a clone's root finds the folder there, not the installed
+    # package: its kernels and scenes are the ones beside that folder, whichever way (or
+    # whether) the package was installed
+    clone_root(tmp_path)
+    probe = "import warpcloth, warpcloth.kernels, warpcloth.scenes as s; print(warpcloth.kernels.__file__, s.__file__)"
+    done = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr[-TAIL_CHARS:]
+    kernels, scenes = (Path(p).resolve() for p in done.stdout.split())
+    assert kernels == (tmp_path / "kernels" / "__init__.py").resolve()
+    assert scenes == (tmp_path / "scenes" / "__init__.py").resolve()
+
+
 @pytest.mark.slow
 def test_readme_runs_as_written(tmp_path):
     text = README.read_text(encoding="utf-8") + "\n" + GUIDE.read_text(encoding="utf-8")
     steps = readme_steps(text)
     searches = []
-    shutil.copytree(ROOT / "scenes", tmp_path / "scenes", ignore=shutil.ignore_patterns("__pycache__"))
+    clone_root(tmp_path)
     env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
     for step in steps:
         done = in_process(step, tmp_path) or subprocess.run(

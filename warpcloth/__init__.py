@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+from pathlib import Path
 
 from .errors import (
     ArgumentError,
@@ -35,6 +36,18 @@ from .errors import (
     SceneError,
     WarpclothError,
 )
+
+
+def _beside_the_source() -> None:
+    # In a clone's root, where a researcher opens Jupyter, `import warpcloth` finds this
+    # folder rather than the installed package, and kernels/ and scenes/ (installed inside
+    # warpcloth, see pyproject.toml) sit beside it: the package's path reaches them there.
+    here = Path(__file__).resolve().parent
+    if not (here / "kernels").is_dir() and (here.parent / "kernels" / "__init__.py").is_file():
+        __path__.append(str(here.parent))
+
+
+_beside_the_source()
 
 _SUBMODULES = ("bodies", "calibrate", "core", "io", "scene", "sheet", "sim", "strip", "viz")
 _LAZY = {

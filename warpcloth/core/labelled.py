@@ -13,14 +13,6 @@ from warpcloth.kernels.probe_set import ProbeSet
 from warpcloth.kernels.probes import STRIP_PROBES
 
 
-def _xarray() -> object:
-    try:
-        import xarray as xr
-    except ImportError:
-        raise ImportError("to_xarray needs xarray: pip install 'warpcloth[xarray]' (or pip install xarray)") from None
-    return xr
-
-
 def probes_dataset(
     t: np.ndarray,
     probes: np.ndarray,
@@ -35,7 +27,8 @@ def probes_dataset(
     over (t, variant), ``frames[frame, variant, node, xy]`` (if any) over (frame_time,
     variant, node, xy), ``parameters`` (one value per variant, by dotted scene name) as
     coordinates along ``variant``, units in each variable's ``attrs``."""
-    xr = _xarray()
+    import xarray as xr  # on first use: pandas' import alone is heavy enough
+
     dataset = xr.Dataset(
         {
             name: (("t", "variant"), probes[:, k, :], {"units": probe_set.units[name]})

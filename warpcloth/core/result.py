@@ -110,7 +110,7 @@ class RunResult:
     def to_xarray(self) -> object:
         """An ``xarray.Dataset`` of the probes over (t, variant), the frames over
         (frame_time, variant, node, xy) and :attr:`parameters` as coordinates along
-        ``variant``, units in ``attrs`` (needs ``pip install 'warpcloth[xarray]'``)."""
+        ``variant``, units in ``attrs``."""
         from .labelled import probes_dataset
 
         return probes_dataset(

@@ -93,7 +93,7 @@ class Recording:
     def to_xarray(self) -> object:
         """An ``xarray.Dataset``: every probe as a variable over (t, variant), the frames
         over (frame_time, variant, node, xy), the per-variant parameters as coordinates
-        along ``variant``, units in ``attrs`` (needs ``pip install 'warpcloth[xarray]'``);
+        along ``variant``, units in ``attrs``;
         the layout of :meth:`warpcloth.strip.RunResult.to_xarray`."""
         from warpcloth.core.labelled import probes_dataset
         from warpcloth.kernels import PROBE_FIELDS
