@@ -34,6 +34,12 @@ def test_the_command_line_names_the_option_with_the_same_message(capsys):
     )
     assert main(["analyse", "no_such_laser"]) == 2
     assert "error in option: INPUT: cannot read the measured motion file no_such_laser" in capsys.readouterr().err
+    # a bundled name misspelt: the closest bundled one, and all of them; a path: neither
+    assert main(["analyse", "damped_swing_lazer"]) == 2
+    err = capsys.readouterr().err
+    assert "did you mean damped_swing_laser? (bundled: damped_swing_laser, " in err and err.count("\n") == 1
+    assert main(["analyse", "./damped_swing_lazer.csv"]) == 2
+    assert capsys.readouterr().err.endswith("damped_swing_lazer.csv: No such file or directory\n")
     converted = as_option(ArgumentError("t_from", "1 s is not before the window's end"))
     assert (type(converted), str(converted)) == (OptionError, "--from: 1 s is not before the window's end")
     own = OptionError("--csv", "exists")

@@ -162,6 +162,9 @@ def test_sweep_results_equal_single_runs(tmp_path):
         for name in ("tip_x", "laser_x", "hysteresis_work", "damping_work"):
             np.testing.assert_array_equal(mine[name], single.probe(name, 0))
         assert summary.loc[i, "damping_work_J"] == single.probe("damping_work", 0)[-1]
+        # the run alone measures itself as the sweep's summary does (wc.simulate's metrics)
+        for name in ("first_period_s", "mean_log_decrement", "peak_tip_speed_m_per_s", "hysteresis_work_J"):
+            np.testing.assert_equal(single.metrics.loc[0, name], summary.loc[i, name], err_msg=name)
     # stronger damping dissipates more and decays faster
     assert (
         summary[summary[GAMMA] == 2.0]["damping_work_J"].values

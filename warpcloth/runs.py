@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
 
@@ -17,11 +18,12 @@ from .errors import ArgumentError, ArgumentTypeError
 from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
 from .io.sheet_run_dir import SHEET_COORDINATES
-from .metrics import sheet_metrics
+from .metrics import sheet_metrics, swing_summary
 from .scene import COORDINATES, Scene, build_batch, load_scene
 from .scene.overrides import Overrides, override_pairs
 from .scene.sheet import SheetScene
 from .scene.step import shared_auto_step
+from .sheet.solver import QUANTITY
 from .strip.state import checked_nodes
 
 
@@ -104,7 +106,7 @@ def simulate_strip_scenes(
         frame_times = batch.recorder.schedule(batch.control, batch.solver).frame_times
         sink = RunWriter(out, scenes, batch.model.n_nodes, frame_times, overwrite=overwrite)
     parameters = {name: column.to_numpy() for name, column in per_strip_parameters(scenes).items()}
-    return simulate_batch(
+    result = simulate_batch(
         batch.model,
         batch.control,
         batch.solver,
@@ -119,6 +121,8 @@ def simulate_strip_scenes(
         attrs={"coordinates": f"{COORDINATES}; t = 0 at the release"},
         threads=threads,
     )
+    result.metrics = metrics_table(scenes, result)
+    return result
 
 
 def simulate_sheet_scenes(
@@ -151,7 +155,7 @@ def simulate_sheet_scenes(
     if out is not None:
         frame_times = batch.recorder.schedule(batch.control, batch.solver).frame_times
         sink = SheetRunWriter(out, scenes, batch.model.geometry, batch.recorder.markers, frame_times, overwrite)
-    return simulate_batch(
+    result = simulate_batch(
         batch.model,
         batch.control,
         batch.solver,
@@ -164,19 +168,74 @@ def simulate_sheet_scenes(
         attrs={"coordinates": f"{SHEET_COORDINATES}; t = 0 at the release"},
         threads=threads,
     )
+    result.metrics = metrics_table(scenes, result)
+    return result
 
 
-def sheet_result_metrics(scene: SheetScene, result: RunResult, sheet: int) -> dict[str, float]:
+def strip_result_metrics(scene: Scene, result: RunResult, strip: int) -> dict[str, object]:
+    """The swing metrics of strip ``strip`` of ``result``, a run of ``scene``, as ``run``
+    prints them and a sweep's summary holds them (:func:`~warpcloth.metrics.swing_summary`
+    of the laser and tip, its peak speed and the work hysteresis and damping took), measured
+    on what it recorded before any divergence, and that divergence (when, in which phase,
+    of what)."""
+    kept = np.isfinite(result.probe("tip_x", strip))
+    metrics = swing_summary(
+        result.t[kept],
+        result.probe("laser_x", strip)[kept],
+        result.probe("tip_x", strip)[kept],
+        starts_at_rest=scene.release.enabled,
+    )
+    metrics.pop("signal")
+    report = next((d for d in result.diverged if d.body == strip), None)
+    return metrics | {
+        "peak_tip_speed_m_per_s": _peak(result.probe("tip_speed", strip)[kept]),
+        "hysteresis_work_J": _last(result.probe("hysteresis_work", strip)[kept]),
+        "damping_work_J": _last(result.probe("damping_work", strip)[kept]),
+        "diverged": report is not None,
+        "diverged_time_s": report.time_s if report else float("nan"),
+        "diverged_phase": report.phase if report else "",
+        "diverged_quantity": report.quantity if report else "",
+    }
+
+
+def _last(series: np.ndarray) -> float:
+    # NaN for a strip with no recorded sample (it diverged during the hold, before t = 0)
+    return float(series[-1]) if len(series) else float("nan")
+
+
+def _peak(series: np.ndarray) -> float:
+    return float(np.max(series)) if len(series) else float("nan")
+
+
+def sheet_result_metrics(scene: SheetScene, result: RunResult, sheet: int) -> dict[str, object]:
     """:func:`~warpcloth.metrics.sheet_metrics` of sheet ``sheet`` of ``result``, a run of
-    ``scene`` (its clamp's translation direction)."""
+    ``scene`` (its clamp's translation direction; NaN for a diverged sheet: what it did
+    before it diverged is no measurement of it), and its divergence."""
     c = scene.clamp
-    return sheet_metrics(
+    report = next((d for d in result.diverged if d.body == sheet), None)
+    metrics = sheet_metrics(
         result.markers[:, sheet],
         result.probe("clamp_displacement", sheet),
         (c.direction_x, c.direction_y, c.direction_z),
         {name: result.probe(name, sheet) for name in SHEET_PROBE_FIELDS},
         result.energy_total()[:, sheet],
     )
+    if report is not None:
+        metrics = dict.fromkeys(metrics, float("nan"))
+    return metrics | {
+        "diverged": report is not None,
+        "diverged_time_s": report.time_s if report else float("nan"),
+        "diverged_phase": ("settle" if report.time_s < 0 else "record") if report else "",
+        "diverged_quantity": QUANTITY[report.code][0] if report else "",
+    }
+
+
+def metrics_table(scenes: Sequence[Scene] | Sequence[SheetScene], result: RunResult) -> pd.DataFrame:
+    """One row per variant of ``result`` (a run of ``scenes``): its body's metrics, as a
+    sweep's summary has them."""
+    measure = sheet_result_metrics if result.body == "sheet" else strip_result_metrics
+    rows = [measure(scene, result, j) for j, scene in enumerate(scenes)]
+    return pd.DataFrame(rows, index=pd.RangeIndex(len(rows), name="variant"))
 
 
 def run(scene: Any, overrides: Overrides = (), **kwargs: Any) -> RunResult:

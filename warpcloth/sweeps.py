@@ -31,14 +31,12 @@ from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.io.writing import claim_result
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
-from warpcloth.metrics import swing_summary
-from warpcloth.runs import sheet_result_metrics, simulate
+from warpcloth.runs import sheet_result_metrics, simulate, strip_result_metrics
 from warpcloth.scene import Scene, Sweep, scene_from_dict
 from warpcloth.scene.sheet import SheetScene, sheet_scene_from_dict
 from warpcloth.scene.sheet_build import build_sheets, sheet_geometry
 from warpcloth.sheet import simulate_sheets
-from warpcloth.sheet.solver import QUANTITY
-from warpcloth.strip.model import init_warp_quietly
+from warpcloth.strip.model import init_warp_quietly, machine_device
 
 WORKER_MEMORY_BYTES = 1 << 30  # per-batch result memory a worker may hold
 MAX_WORKERS_PER_CORE = 4
@@ -157,15 +155,6 @@ def check_sweep_fits(
     )
 
 
-def _last(series: np.ndarray) -> float:
-    # NaN for a strip with no recorded sample (it diverged during the hold, before t = 0)
-    return float(series[-1]) if len(series) else float("nan")
-
-
-def _peak(series: np.ndarray) -> float:
-    return float(np.max(series)) if len(series) else float("nan")
-
-
 @dataclass
 class SimulatedBatch:
     """One batch simulated, as its files need it: the probe store's columns ``names``,
@@ -187,29 +176,11 @@ def strip_sweep_batch(scene_dicts: list[dict], device: str | None, frames: bool)
     scenes = [scene_from_dict(d) for d in scene_dicts]
     # one thread per batch: the sweep already runs its batches on the cores
     result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
-    diverged = {d.body: d for d in result.diverged}
     ok = np.isfinite(result.probes[:, PROBE_FIELDS.index("tip_x")])
-    rows = []
-    for local, scene in enumerate(scenes):
-        kept = ok[:, local]
-        metrics = swing_summary(
-            result.t[kept],
-            result.probe("laser_x", local)[kept],
-            result.probe("tip_x", local)[kept],
-            starts_at_rest=scene.release.enabled,
-        )
-        metrics.pop("signal")
-        report = diverged.get(local)
-        row: dict[str, object] = metrics | {
-            "peak_tip_speed_m_per_s": _peak(result.probe("tip_speed", local)[kept]),
-            "hysteresis_work_J": _last(result.probe("hysteresis_work", local)[kept]),
-            "damping_work_J": _last(result.probe("damping_work", local)[kept]),
-            "diverged": report is not None,
-            "diverged_time_s": report.time_s if report else float("nan"),
-            "diverged_phase": report.phase if report else "",
-            "diverged_quantity": report.quantity if report else "",
-        }
-        rows.append(row | _overflows(result.reversal_memory, local))
+    rows = [
+        strip_result_metrics(scene, result, local) | _overflows(result.reversal_memory, local)
+        for local, scene in enumerate(scenes)
+    ]
     return SimulatedBatch(
         list(PROBE_FIELDS), result.t, result.probes, ok, rows, result.frames if frames else None, result.strip_steps
     )
@@ -235,22 +206,12 @@ def sheet_sweep_batch(scene_dicts: list[dict], device: str | None, frames: bool)
     result = simulate_sheets(
         built.model, built.control, built.solver, built.recorder, on_divergence="record", keep_frames=frames, threads=1
     )
-    diverged = {d.body: d for d in result.diverged}
     n_samples, b, n_markers = len(result.t), len(scenes), result.markers.shape[2]
     markers = np.transpose(result.markers.reshape(n_samples, b, 3 * n_markers), (0, 2, 1))
-    rows = []
-    for local, scene in enumerate(scenes):
-        report = diverged.get(local)
-        metrics = sheet_result_metrics(scene, result, local)
-        if report is not None:
-            metrics = dict.fromkeys(metrics, float("nan"))
-        row: dict[str, object] = metrics | {
-            "diverged": report is not None,
-            "diverged_time_s": report.time_s if report else float("nan"),
-            "diverged_phase": ("settle" if report.time_s < 0 else "record") if report else "",
-            "diverged_quantity": QUANTITY[report.code][0] if report else "",
-        }
-        rows.append(row | _overflows(result.reversal_memory, local))
+    rows = [
+        sheet_result_metrics(scene, result, local) | _overflows(result.reversal_memory, local)
+        for local, scene in enumerate(scenes)
+    ]
     return SimulatedBatch(
         [*SHEET_PROBE_FIELDS, *marker_columns(n_markers)],
         result.t,
@@ -405,7 +366,10 @@ def run_sweep(
 
     try:
         if pending:
-            body("warm", [sweep.scenes[batches[b][0]] for b in pending], device)
+            if scheduler is None or _here(device):
+                # kernels compiled once before the batches start (a cluster's workers on
+                # this machine share its cache; a GPU they have and it lacks, they compile for)
+                body("warm", [sweep.scenes[batches[b][0]] for b in pending], device)
             if scheduler is not None:
                 _run_on_dask(pending, task, finished, scheduler, sweep.fingerprint)
             elif n_workers == 0:
@@ -425,6 +389,15 @@ def run_sweep(
     finally:
         bar.close()
     return directory.finish(len(batches))
+
+
+def _here(device: str | None) -> bool:
+    # whether this machine has the device (a cluster's workers may have one it lacks)
+    try:
+        machine_device(device)
+    except ArgumentError:
+        return False
+    return True
 
 
 def _run_on_dask(

@@ -21,7 +21,7 @@ from warpcloth import bodies
 from warpcloth.errors import DataFileError
 from warpcloth.io.json_file import read_json
 from warpcloth.io.load import load_recording
-from warpcloth.io.measured import LaserTrace, bundled_data, read_measurement
+from warpcloth.io.measured import LaserTrace, read_measurement
 from warpcloth.io.sweep_dir import read_parquet, stored_sweep
 from warpcloth.metrics import TIME_TOLERANCE_S, comparison_window, swing_summary
 
@@ -101,7 +101,7 @@ def swing_records(source: str | Path, starts_at_rest: bool = True) -> list[Swing
                 )
             )
         return records
-    measured = read_measurement(bundled_data(source), argument="source")
+    measured = read_measurement(source, argument="source")
     if not isinstance(measured, LaserTrace):
         raise DataFileError(str(source), "holds tracked shapes; analyse needs a displacement trace (t_s, x_mm)")
     return [SwingRecord(str(source), None, measured.t, measured.x, None, starts_at_rest, True)]

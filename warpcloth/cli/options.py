@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -31,6 +32,17 @@ def device(value: str) -> str:
         machine_device(value)
     except ArgumentError as exc:
         raise argparse.ArgumentTypeError(exc.message) from None
+    return value
+
+
+DEVICE_NAME = re.compile(r"^(cpu|cuda(:\d+)?)$")
+
+
+def device_name(value: str) -> str:
+    """``--device`` of work that may run elsewhere (a sweep on a cluster's workers): a Warp
+    device's form, whether or not this machine has it (:func:`device` checks it here)."""
+    if not DEVICE_NAME.match(value):
+        raise argparse.ArgumentTypeError(f"{value!r} is not a device name (cpu, cuda or cuda:N)")
     return value
 
 
@@ -91,10 +103,15 @@ def add_overrides(parser: argparse.ArgumentParser, what: str) -> None:
     )
 
 
-def add_device(parser: argparse.ArgumentParser, where: str = "") -> None:
-    """``--device``: the Warp device to run on (``where`` says on what, e.g. every worker)."""
+def add_device(parser: argparse.ArgumentParser, where: str = "", elsewhere: bool = False) -> None:
+    """``--device``: the Warp device to run on (``where`` says on what, e.g. every worker);
+    checked against this machine when parsed, or only for its form where the work may run
+    ``elsewhere`` (the command checks it here when it runs here)."""
     parser.add_argument(
-        "--device", type=device, default=None, help=f"cpu or cuda{where} (default: Warp's preferred device)"
+        "--device",
+        type=device_name if elsewhere else device,
+        default=None,
+        help=f"cpu or cuda{where} (default: Warp's preferred device)",
     )
 
 

@@ -37,7 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=None,
         help="address of a running Dask scheduler to use instead (default: none, threads in this process)",
     )
-    add_device(sweep_p, ", on every worker")
+    add_device(sweep_p, ", on every worker (checked here unless --scheduler names a cluster)", elsewhere=True)
     sweep_p.add_argument("--frames", action="store_true", help="also store shape frames (large)")
     sweep_p.add_argument(
         "--max-variants",
@@ -82,9 +82,13 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     from warpcloth import bodies
     from warpcloth.io.writing import claim_result
     from warpcloth.scene.sweep import MAX_VARIANTS, load_sweep
+    from warpcloth.strip.model import machine_device
     from warpcloth.sweeps import run_sweep
 
     out = Path(args.out or Path("runs") / Path(args.scene).stem)
+    if args.scheduler is None:
+        # the batches run in this process: its machine must have the device
+        machine_device(args.device)
     sweep = load_sweep(
         args.scene, args.overrides, max_variants=args.max_variants or MAX_VARIANTS, progress=not args.no_progress
     )

@@ -73,6 +73,10 @@ class RunResult:
     n_nodes: int = 0
     geometry: Any = None
     """A sheet's :class:`~warpcloth.sheet.SheetGeometry` (None for strips)."""
+    metrics: pd.DataFrame | None = None
+    """One row per variant, when scenes were run (:func:`warpcloth.simulate`): what ``warpcloth
+    run`` prints and a sweep's summary holds (a strip's first period, amplitude and log
+    decrement, a sheet's marker amplitudes, the divergence), in the summary's columns."""
 
     @property
     def strip_steps(self) -> int:

@@ -25,6 +25,7 @@ writes it:
 
 from __future__ import annotations
 
+import difflib
 import importlib.resources
 import math
 from collections.abc import Sequence
@@ -64,6 +65,23 @@ def bundled_data(name: str | Path) -> Path:
         return path  # a path is a path (./laser.csv that is missing is an error, not the bundled one)
     resource = importlib.resources.files("warpcloth.scenes") / "data" / (path.stem + ".csv")
     return Path(str(resource)) if path.parent == Path(".") and resource.is_file() else path
+
+
+def bundled_data_names() -> list[str]:
+    """The names of the bundled example data files (scenes/data/*.csv, without .csv)."""
+    folder = importlib.resources.files("warpcloth.scenes") / "data"
+    return sorted(entry.name[:-4] for entry in folder.iterdir() if entry.name.endswith(".csv"))
+
+
+def _missing(name: str | Path) -> str:
+    # a bare name (no folder in it) that is neither a file here nor bundled was most likely
+    # a bundled one misspelt
+    if "/" in str(name) or "\\" in str(name) or Path(name).exists():
+        return ""
+    names = bundled_data_names()
+    close = difflib.get_close_matches(Path(name).stem, names, n=1)
+    hint = f"; did you mean {close[0]}?" if close else ""
+    return f"{hint} (bundled: {', '.join(names)}; a file of your own is a path)"
 
 
 def read_text(path: Path) -> str:
@@ -132,13 +150,14 @@ def read_csv(
     else a DataFileError; anything
     wrong inside the file is a DataFileError naming the file and the line.
     """
-    path = bundled_data(path)
+    named, path = path, bundled_data(path)
     try:
         lines = read_text(path).splitlines()
     except OSError as exc:
+        reason = f"{exc.strerror}{_missing(named)}"
         if argument is not None:
-            raise ArgumentError(argument, f"cannot read the {what} file {path}: {exc.strerror}") from None
-        raise DataFileError(path, f"cannot read the {what} file: {exc.strerror}") from None
+            raise ArgumentError(argument, f"cannot read the {what} file {path}: {reason}") from None
+        raise DataFileError(path, f"cannot read the {what} file: {reason}") from None
     content = _content(lines)
     header = header_line = header_text = None
     if content:

@@ -62,10 +62,15 @@ def machine_device(device: str | None) -> wp.context.Device:
     """The Warp device ``device`` names (None: the default), or an ArgumentError naming the
     devices this machine has (a GPU asked for on a machine without one)."""
     init_warp_quietly()  # scripts are as quiet as the CLI, unless Warp was started before
+    known = ", ".join(d.alias for d in wp.get_devices())
+    if device is not None and str(device).startswith("cuda") and not wp.is_cuda_available():
+        # asked before wp.get_device, whose native code would print Warp's own CUDA errors first
+        raise ArgumentError(
+            "device", f"{device!r} is not a device of this machine (it has no CUDA GPU); it has: {known}"
+        )
     try:
         return wp.get_device(device)
     except (RuntimeError, ValueError) as exc:
-        known = ", ".join(d.alias for d in wp.get_devices())
         raise ArgumentError("device", f"{device!r} is not a device of this machine ({exc}); it has: {known}") from None
 
 
