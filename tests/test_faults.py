@@ -793,6 +793,8 @@ def test_sweep_probes_out_of_time_order_are_refused(tmp_path):
         "--set",
         "run.duration_s=0.2",
         "--frames",
+        "--probes",
+        "all",
         "--no-progress",
         "--out",
         "s",

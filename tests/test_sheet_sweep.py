@@ -35,9 +35,10 @@ def sweep(scene, out, *extra):
 
 @pytest.fixture(scope="module")
 def swept(tmp_path_factory):
-    """The bundled sheet sweep, shortened, run once through the CLI in batches of 4 and 2."""
+    """The bundled sheet sweep, shortened, run once through the CLI in batches of 4 and 2,
+    keeping every probe."""
     out = tmp_path_factory.mktemp("sheet_sweep") / "s"
-    done = sweep("shear_swing_sweep", out, "--max-batch", "4")
+    done = sweep("shear_swing_sweep", out, "--max-batch", "4", "--probes", "all")
     assert done.returncode == 0, done.stderr
     return out, done
 
@@ -106,7 +107,7 @@ def test_a_resumed_sheet_sweep_runs_only_the_missing_batches_and_gives_the_same_
     for name in ("summary.parquet", "summary.csv"):
         (out / name).unlink()
     kept = (out / "summary" / "batch-0000.parquet").stat().st_mtime_ns
-    done = sweep("shear_swing_sweep", out, "--max-batch", "4")
+    done = sweep("shear_swing_sweep", out, "--max-batch", "4", "--probes", "all")
     assert done.returncode == 0, done.stderr
     assert (out / "summary" / "batch-0000.parquet").stat().st_mtime_ns == kept
     pd.testing.assert_frame_equal(

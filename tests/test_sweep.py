@@ -87,7 +87,7 @@ def test_a_format_1_latin_hypercube_sweep_is_read_by_its_stored_variants_and_not
     # its format and names another seed, so expanding it again gives other variants.
     raw = with_sweep(base(run__duration_s=0.05), seed=11, random={"samples": 3, "ranges": {D1: [0.0, 0.08]}})
     out = tmp_path / "old"
-    run_sweep(expand(raw), out, workers=0, frames=True)
+    run_sweep(expand(raw), out, workers=0, frames=True, probes="all")
     manifest = out / "sweep.json"
     info = json.loads(manifest.read_text())
     assert info["format"] == 2 and info["discrepancy"] == expand(raw).discrepancy
@@ -152,7 +152,7 @@ def small_sweep():
 
 def test_sweep_results_equal_single_runs(tmp_path):
     sweep = small_sweep()
-    summary = run_sweep(sweep, tmp_path / "s", max_batch=4, workers=0)
+    summary = run_sweep(sweep, tmp_path / "s", max_batch=4, workers=0, probes="all")
     assert len(summary) == 6 and summary["batch"].nunique() == 2
     probes = pd.read_parquet(tmp_path / "s" / "probes")
     for i, scene in enumerate(sweep.scenes):
@@ -165,6 +165,22 @@ def test_sweep_results_equal_single_runs(tmp_path):
         # the run alone measures itself as the sweep's summary does (wc.simulate's metrics)
         for name in ("first_period_s", "mean_log_decrement", "peak_tip_speed_m_per_s", "hysteresis_work_J"):
             np.testing.assert_equal(single.metrics.loc[0, name], summary.loc[i, name], err_msg=name)
+    # by default a sweep keeps the probes its summary is measured from, the same values
+    # losslessly, and the same summary; --probes none keeps the summary alone
+    for kept, columns in (("summary", ["variant", "t", "laser_x", "tip_x"]), ("none", None)):
+        smaller = run_sweep(sweep, tmp_path / kept, max_batch=4, workers=0, probes=kept)
+        pd.testing.assert_frame_equal(smaller, summary, check_exact=True)
+        if columns is None:
+            assert not any((tmp_path / kept / "probes").iterdir())
+            continue
+        stored = pd.read_parquet(tmp_path / kept / "probes")
+        assert list(stored.columns) == columns
+        pd.testing.assert_frame_equal(stored, probes[columns], check_exact=True)
+        assert json.loads((tmp_path / kept / "sweep.json").read_text())["probes"] == kept
+    with pytest.raises(wc.ArgumentError, match="keeps 'summary' probes, not 'all': resume it with --probes summary"):
+        run_sweep(sweep, tmp_path / "summary", workers=0, probes="all")
+    with pytest.raises(wc.ArgumentError, match="^probes: 'some' is not one of summary, all, none$"):
+        run_sweep(sweep, tmp_path / "x", workers=0, probes="some")
     # stronger damping dissipates more and decays faster
     assert (
         summary[summary[GAMMA] == 2.0]["damping_work_J"].values

@@ -27,6 +27,7 @@ from tqdm import tqdm
 from warpcloth import bodies
 from warpcloth.core.resources import check_disk, check_memory
 from warpcloth.errors import ArgumentError, checked_count, checked_instance, checked_path
+from warpcloth.io import PROBE_RECORDS
 from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.io.writing import claim_result
 from warpcloth.kernels import PROBE_FIELDS
@@ -75,11 +76,24 @@ def strip_memory_bytes(scene: Scene, frames: bool) -> int:
     )
 
 
-def strip_disk_bytes(scene: Scene, frames: bool) -> int:
-    """Bytes one strip's files take in the sweep directory: its probe rows (variant, t
-    and the probes, uncompressed) and, with ``frames``, its shape frames."""
+def strip_summary_probes(scene: Scene) -> list[str]:
+    """The probes a strip's summary is measured from (and `warpcloth analyse` of the sweep
+    measures again): the laser line's and the free end's x."""
+    return ["laser_x", "tip_x"]
+
+
+def strip_disk_bytes(scene: Scene, frames: bool, probes: str = "all") -> int:
+    """Bytes one strip's files take in the sweep directory at most: its probe rows
+    (variant, t and the ``probes`` kept, uncompressed) and, with ``frames``, its frames."""
     n_samples, n_frames = _recorded(scene)
-    return (4 + 8 + 8 * len(PROBE_FIELDS)) * n_samples + (16 * scene.n_nodes * n_frames if frames else 0)
+    row = _row_bytes(probes, len(PROBE_FIELDS), len(strip_summary_probes(scene)))
+    return row * n_samples + (16 * scene.n_nodes * n_frames if frames else 0)
+
+
+def _row_bytes(probes: str, every: int, summary: int) -> int:
+    # one sample's row in the probe store: variant (int32), t and the columns kept (float64)
+    kept = {"all": every, "summary": summary}.get(probes)
+    return 0 if kept is None else 4 + 8 + 8 * kept
 
 
 def _sheet_recorded(scene: SheetScene) -> tuple[int, int, int]:
@@ -101,13 +115,19 @@ def sheet_memory_bytes(scene: SheetScene, frames: bool) -> int:
     )
 
 
-def sheet_disk_bytes(scene: SheetScene, frames: bool) -> int:
-    """Bytes one sheet's files take in the sweep directory: its probe rows (variant, t,
-    the probes and the markers' x, y, z, uncompressed) and, with ``frames``, its frames."""
+def sheet_summary_probes(scene: SheetScene) -> list[str]:
+    """The probes a sheet's summary's marker metrics are measured from: the clamp's
+    displacement and the markers' positions (its energies are in the summary already)."""
+    return ["clamp_displacement", *marker_columns(_n_markers(scene))]
+
+
+def sheet_disk_bytes(scene: SheetScene, frames: bool, probes: str = "all") -> int:
+    """Bytes one sheet's files take in the sweep directory at most: its probe rows
+    (variant, t and the ``probes`` kept, the markers' x, y, z among them, uncompressed)
+    and, with ``frames``, its frames."""
     n_samples, n_frames, n_nodes = _sheet_recorded(scene)
-    return (4 + 8 + 8 * (len(SHEET_PROBE_FIELDS) + 3 * _n_markers(scene))) * n_samples + (
-        24 * n_nodes * n_frames if frames else 0
-    )
+    row = _row_bytes(probes, len(SHEET_PROBE_FIELDS) + 3 * _n_markers(scene), len(sheet_summary_probes(scene)))
+    return row * n_samples + (24 * n_nodes * n_frames if frames else 0)
 
 
 def memory_bytes(scene: Scene | SheetScene, frames: bool) -> int:
@@ -115,9 +135,9 @@ def memory_bytes(scene: Scene | SheetScene, frames: bool) -> int:
     return bodies.of_scene(scene)("memory_bytes", scene, frames)
 
 
-def disk_bytes(scene: Scene | SheetScene, frames: bool) -> int:
+def disk_bytes(scene: Scene | SheetScene, frames: bool, probes: str = "all") -> int:
     """Bytes one variant's files take in the sweep directory (its body's hook)."""
-    return bodies.of_scene(scene)("disk_bytes", scene, frames)
+    return bodies.of_scene(scene)("disk_bytes", scene, frames, probes)
 
 
 def default_max_batch(scene: Scene | SheetScene, n_variants: int, workers: int, frames: bool) -> int:
@@ -129,7 +149,13 @@ def default_max_batch(scene: Scene | SheetScene, n_variants: int, workers: int, 
 
 
 def check_sweep_fits(
-    sweep: Sweep, batches: list[list[int]], pending: list[int], workers: int | None, frames: bool, out: Path
+    sweep: Sweep,
+    batches: list[list[int]],
+    pending: list[int],
+    workers: int | None,
+    frames: bool,
+    out: Path,
+    probes: str = "all",
 ) -> None:
     """Refuse, before its first batch, a sweep whose batches running side by side would
     not fit in memory (``workers`` at once; None: on a Dask cluster, whose memory is its
@@ -148,7 +174,7 @@ def check_sweep_fits(
     variants = [v for b in pending for v in batches[b]]
     check_disk(
         out,
-        sum(disk_bytes(sweep.scenes[v], frames) for v in variants),
+        sum(disk_bytes(sweep.scenes[v], frames, probes) for v in variants),
         f"the {what} of the sweep's {len(variants)} remaining variants",
         "free space, choose another --out, or record less (output.probes_per_frame, output.frame_rate_hz, "
         "run.duration_s" + (", or leave out --frames)" if frames else ")"),
@@ -232,21 +258,28 @@ def run_batch(
     device: str | None,
     frames: bool,
     kind: str = "strip",
+    probes: str = "all",
 ) -> dict:
-    """Simulate one batch of body ``kind`` (:mod:`warpcloth.bodies`) and write its files
-    (runs in a Dask worker or in-process)."""
+    """Simulate one batch of body ``kind`` (:mod:`warpcloth.bodies`) and write its files,
+    keeping ``probes`` of its probe series (runs in a Dask worker or in-process)."""
     init_warp_quietly()  # a worker process starts Warp afresh: no banner or notices in the results
     started = time.perf_counter()
-    done = bodies.named(kind)("sweep_batch", scene_dicts, device, frames)
+    body = bodies.named(kind)
+    done = body("sweep_batch", scene_dicts, device, frames)
     wall = time.perf_counter() - started
-    columns: dict[str, list] = {"variant": [], "t": []} | {name: [] for name in done.names}
+    kept = {
+        "all": done.names,
+        "summary": body("summary_probes", body("scene_from_dict", scene_dicts[0])),
+        "none": [],
+    }[probes]
+    columns: dict[str, list] = {"variant": [], "t": []} | {name: [] for name in kept}
     rows = []
     for local, variant in enumerate(variants):
         ok = done.ok[:, local]
         columns["variant"].append(np.full(ok.sum(), variant, dtype=np.int32))
         columns["t"].append(done.t[ok])
-        for q, name in enumerate(done.names):
-            columns[name].append(done.values[ok, q, local])
+        for name in kept:
+            columns[name].append(done.values[ok, done.names.index(name), local])
         row: dict[str, object] = {"variant": variant, "batch": batch}
         row |= {key: (json.dumps(v) if isinstance(v, list) else v) for key, v in assignments[local].items()}
         rows.append(row | done.metrics[local])
@@ -290,9 +323,14 @@ def run_sweep(
     scheduler: str | None = None,
     device: str | None = None,
     frames: bool = False,
+    probes: str = "summary",
     progress: bool = False,
 ) -> pd.DataFrame:
     """Run (or resume) a sweep into ``out`` and return the merged per-variant summary.
+
+    ``probes`` says what each variant's probe series keep (:data:`~warpcloth.io.sweep_dir.PROBE_RECORDS`):
+    by default those its summary is measured from, ``"all"`` the full record (a
+    resumed sweep keeps what it began with), ``"none"`` only the summary.
 
     The batches run in this process on ``workers`` threads (default: one per core; 0:
     one after another), each batch one launch sequence of its own (Warp releases the GIL
@@ -316,6 +354,8 @@ def run_sweep(
         raise ArgumentError("scheduler", f"{scheduler!r} is not a scheduler address (host:port or tcp://host:port)")
     if max_batch is not None:
         checked_count("max_batch", max_batch, 1)
+    if probes not in PROBE_RECORDS:
+        raise ArgumentError("probes", f"{probes!r} is not one of {', '.join(PROBE_RECORDS)}")
     out = Path(checked_path("out", out))
     if out.is_dir() and any(out.iterdir()) and not (out / "sweep.json").is_file():
         # resuming is for the same sweep only; a run or other files are never mixed into
@@ -332,12 +372,12 @@ def run_sweep(
     def planned() -> list[list[int]]:
         # a new sweep is sized as a whole before its directory is laid out
         layout = sweep.batches(max_batch)
-        check_sweep_fits(sweep, layout, list(range(len(layout))), at_once, frames, out)
+        check_sweep_fits(sweep, layout, list(range(len(layout))), at_once, frames, out, probes)
         return layout
 
-    batches = directory.prepare(sweep, planned, body.hook("coordinates"))
+    batches = directory.prepare(sweep, planned, body.hook("coordinates"), probes)
     pending = [b for b in range(len(batches)) if not directory.is_done(b)]
-    check_sweep_fits(sweep, batches, pending, at_once, frames, out)  # a resumed one: what remains
+    check_sweep_fits(sweep, batches, pending, at_once, frames, out, probes)  # a resumed one: what remains
     done = len(sweep.scenes) - sum(len(batches[b]) for b in pending)
     bar = tqdm(
         total=len(sweep.scenes), initial=done, unit="variant", desc="sweep", disable=not progress, dynamic_ncols=True
@@ -362,6 +402,7 @@ def run_sweep(
             device,
             frames,
             sweep.kind,
+            probes,
         )
 
     try:

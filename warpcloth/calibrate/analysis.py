@@ -70,7 +70,14 @@ def swing_records(source: str | Path, starts_at_rest: bool = True) -> list[Swing
     if (path / "sweep.json").is_file() and not (path / "summary.parquet").is_file():
         raise DataFileError(path, "the sweep has not finished (no summary.parquet); rerun it to complete it")
     if (path / "sweep.json").is_file():  # its probe store: a sweep need not have kept shape frames
-        scenes = stored_sweep(path, read_json(path / "sweep.json")).scenes
+        info = read_json(path / "sweep.json")
+        if info.get("probes") == "none":
+            raise DataFileError(
+                path,
+                "kept no probe series (--probes none): its swing metrics are in its summary.csv, "
+                "measured as analyse measures them",
+            )
+        scenes = stored_sweep(path, info).scenes
         probes = read_parquet(path / "probes").sort_values(["variant", "t"], kind="stable")
         return [
             SwingRecord(

@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from warpcloth.scene import Sweep
 
+from warpcloth.io import PROBE_RECORDS
+
 from .options import add_device, add_no_progress, add_overrides, at_least, path_text
 
 
@@ -39,6 +41,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_device(sweep_p, ", on every worker (checked here unless --scheduler names a cluster)", elsewhere=True)
     sweep_p.add_argument("--frames", action="store_true", help="also store shape frames (large)")
+    sweep_p.add_argument(
+        "--probes",
+        choices=list(PROBE_RECORDS),
+        default="summary",
+        help="what to keep of each variant's probe series: "
+        + "; ".join(f"{name}: {what}" for name, what in PROBE_RECORDS.items())
+        + " (default: summary)",
+    )
     sweep_p.add_argument(
         "--max-variants",
         type=at_least(1),
@@ -105,6 +115,7 @@ def run_sweep_command(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         device=args.device,
         frames=args.frames,
+        probes=args.probes,
         progress=not args.no_progress,
     )
     n_div = int(summary["diverged"].sum())

@@ -5,8 +5,11 @@ Layout of a sweep directory::
     sweep.json              fingerprint of the expanded sweep, the batch layout, the spec
     variants.csv            variant, batch and the swept field values (written first)
     summary/batch-NNNN.parquet   per variant: parameters and summary metrics
-    probes/batch-NNNN.parquet    probe series, long format (variant, t, probe fields;
-                                 a sheet's: its markers' marker_K_x, _y, _z too)
+    probes/batch-NNNN.parquet    probe series, long format (variant, t and the probes the
+                                 sweep kept, :data:`PROBE_RECORDS`: by default those its
+                                 summary is measured from; a sheet's markers as
+                                 marker_K_x, _y, _z), zstd-compressed, the floats' bytes
+                                 split by significance (lossless)
     frames/batch-NNNN.npy        optional shape frames [frame, variant-in-batch, node, xy]
                                  (a sheet's: xyz)
     summary.parquet, summary.csv merged summaries, written when every batch is done
@@ -86,6 +89,8 @@ class SweepDirectory:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
+        self.probes = "all"
+        """What its batches keep of the probe series (:data:`PROBE_RECORDS`), as sweep.json says."""
 
     def summary_path(self, batch: int) -> Path:
         """The per-batch summary file, whose existence marks the batch done."""
@@ -99,17 +104,23 @@ class SweepDirectory:
         return (
             summary.exists()
             and _readable(summary)
-            and _readable(probes)
+            and (self.probes == "none" or _readable(probes))
             and (not frames.exists() or _readable(frames, frames=True))
         )
 
     def prepare(
-        self, sweep: Sweep, plan: Callable[[], list[list[int]]], coordinates: str = COORDINATES
+        self,
+        sweep: Sweep,
+        plan: Callable[[], list[list[int]]],
+        coordinates: str = COORDINATES,
+        probes: str = "all",
     ) -> list[list[int]]:
         """The batch layout: the stored one when this directory holds the same sweep
-        (resume), else ``plan()``'s, written with the manifest (stating ``coordinates``,
-        the frame of the positions stored) and variants.csv."""
+        keeping the same ``probes`` (resume), else ``plan()``'s, written with the manifest
+        (stating ``coordinates``, the frame of the positions stored, and ``probes``) and
+        variants.csv."""
         manifest = self.path / "sweep.json"
+        self.probes = probes
         if manifest.exists():
             stored = read_json(manifest)
             check_coordinates(manifest, stored, coordinates)
@@ -121,6 +132,13 @@ class SweepDirectory:
                     else "holds a different sweep (its scenes or sweep spec changed)"
                 )
                 raise ArgumentError("out", f"{self.path} {why}; choose a new --out directory to start this one")
+            kept = stored.get("probes", "all")  # before --probes, a sweep kept every probe
+            if kept != probes:
+                raise ArgumentError(
+                    "probes",
+                    f"{self.path} keeps {kept!r} probes, not {probes!r}: resume it with --probes {kept}, "
+                    "or choose a new --out directory",
+                )
             return stored["batches"]
         batches = plan()
         for sub in ("summary", "probes", "frames"):
@@ -143,6 +161,7 @@ class SweepDirectory:
             "complete": False,
             "coordinates": coordinates,
             "kind": sweep.kind,
+            "probes": probes,
             "format": FORMAT,
             "discrepancy": sweep.discrepancy,
             "provenance": provenance(),
@@ -153,9 +172,21 @@ class SweepDirectory:
     def write_batch(
         self, batch: int, probes: dict[str, np.ndarray], summary_rows: list[dict], frames: np.ndarray | None
     ) -> None:
-        """Store one batch: probe columns, optional frames, then (last) its summary rows."""
-        table = pa.table(probes)
-        write_atomically(self.path / "probes" / f"batch-{batch:04d}.parquet", lambda p: pq.write_table(table, p))
+        """Store one batch: probe columns (none but variant and t: no probe file), optional
+        frames, then (last) its summary rows."""
+        if set(probes) - {"variant", "t"}:
+            table = pa.table(probes)
+            floats = [name for name in table.column_names if name != "variant"]
+            write_atomically(
+                self.path / "probes" / f"batch-{batch:04d}.parquet",
+                lambda p: pq.write_table(
+                    table,
+                    p,
+                    compression="zstd",
+                    use_dictionary=["variant"],
+                    column_encoding=dict.fromkeys(floats, "BYTE_STREAM_SPLIT"),
+                ),
+            )
         if frames is not None:
             write_npy_atomically(self.path / "frames" / f"batch-{batch:04d}.npy", frames)
         summary = pa.Table.from_pylist(summary_rows)
@@ -237,6 +268,12 @@ def read_sweep(path: Path, variants: str | None, where: str | None) -> Recording
             "the views of a run's variants take a strip sweep",
         )
     check_coordinates(path / "sweep.json", info)
+    if info.get("probes", "all") != "all":
+        raise DataFileError(
+            path,
+            f"kept {info['probes']!r} of its probe series (--probes {info['probes']}); the views of a run's "
+            "variants need every probe: run the sweep with --probes all --frames into a new --out directory",
+        )
     sweep = stored_sweep(path, info)
     if sweep.fingerprint != info["fingerprint"]:
         raise DataFileError(
