@@ -45,9 +45,8 @@ def test_run_figures_are_written_and_show_the_swing(swing_run, tmp_path):
     series = read_laser_trace(measured)
     np.testing.assert_allclose(series.x, x[::5], atol=1e-3)
     paths = plot_run(recording, tmp_path / "fig", measured=measured, times=np.array([0.0, 0.25, 0.5]))
-    assert [p.name for p in paths] == [
+    assert [p.name for p in paths] == [  # no clamp angle: the swing's clamp is fixed (θ = 0 throughout)
         "amplitude.png",
-        "clamp_angle.png",
         "shapes.png",
         "bending_loop.png",
         "energy.png",
@@ -305,7 +304,7 @@ def test_cli_export_plot_and_render(swing_run, tmp_path):
     assert (tmp_path / "swing.usdc").is_file()
     done = cli("plot", str(swing_run), "--out", str(tmp_path / "fig"))
     assert done.returncode == 0, done.stderr
-    assert len(list((tmp_path / "fig").glob("*.png"))) == 5
+    assert len(list((tmp_path / "fig").glob("*.png"))) == 4  # no clamp angle: the swing's clamp is fixed
     done = cli("render", str(swing_run), "--out", str(tmp_path / "r"), "--times", "0.1", "--movie", "none")
     assert done.returncode == 0, done.stderr
     assert [p.name for p in (tmp_path / "r").iterdir()] == ["frame_00006.png"]
@@ -386,7 +385,7 @@ def test_measured_files_go_onto_the_figure_of_their_kind(swing_run, tmp_path, fi
         return [line.get_label() for ax in figures[name].axes for line in ax.get_lines()]
 
     plot_run(recording, tmp_path / "a", measured=laser)
-    assert "measured" in labels("amplitude.png") and "encoder (measured)" not in labels("clamp_angle.png")
+    assert "measured" in labels("amplitude.png") and "clamp_angle.png" not in figures  # a fixed clamp
     plot_run(recording, tmp_path / "b", measured=encoder)
     assert "encoder (measured)" in labels("clamp_angle.png") and "measured" not in labels("amplitude.png")
     drawn = figures["clamp_angle.png"].axes[0].get_lines()[-1]
@@ -505,14 +504,11 @@ def test_many_variants_are_coloured_by_a_parameter_not_listed_in_a_legend(tmp_pa
     ]
     wc.simulate(scenes, out=tmp_path / "run")
     plot_run(load_recording(tmp_path / "run"), tmp_path / "f")
-    for name in ("amplitude.png", "clamp_angle.png"):
-        ax, colourbar = figures[name].axes
-        assert ax.get_legend() is None and colourbar.get_ylabel() == "γ (s⁻¹)"
-        lines = ax.get_lines()[:12]
-        # the variant with the largest γ is drawn in viridis' last colour
-        assert np.allclose(lines[-1].get_color(), plt_viridis(1.0)) and np.allclose(
-            lines[0].get_color(), plt_viridis(0.0)
-        )
+    ax, colourbar = figures["amplitude.png"].axes  # (the swing's fixed clamp has no clamp-angle figure)
+    assert ax.get_legend() is None and colourbar.get_ylabel() == "γ (s⁻¹)"
+    lines = ax.get_lines()[:12]
+    # the variant with the largest γ is drawn in viridis' last colour
+    assert np.allclose(lines[-1].get_color(), plt_viridis(1.0)) and np.allclose(lines[0].get_color(), plt_viridis(0.0))
 
 
 def plt_viridis(x):
@@ -741,9 +737,9 @@ def test_the_marker_overlay_axes_read_as_the_shape_figures(swing_run, tmp_path, 
     fit = SimpleNamespace(
         shift_s=0.0, parameters={"damping.gamma_per_s": 0.3}, sigma={"damping.gamma_per_s": 0.01}, rms=1e-4
     )
-    plot_fit_overlay(
-        result, SimpleNamespace(scene=recording.scenes[0]), read_tracked_shapes(path), fit, tmp_path / "overlay.png"
-    )
+    shapes = read_tracked_shapes(path)
+    objective = SimpleNamespace(scene=recording.scenes[0], residuals=lambda *a, **k: np.zeros(2 * len(shapes.t)))
+    plot_fit_overlay(result, objective, shapes, fit, tmp_path / "overlay.png")
     plot_run(recording, tmp_path / "f", measured=path)
     overlay, shapes = figures["overlay.png"].axes[0], figures["shapes.png"].axes[0]
     assert (

@@ -33,6 +33,13 @@ whose RMS exceeds :data:`~warpcloth.calibrate.noise.POOR_FIT_FACTOR` × that noi
 every fit shares, :func:`~warpcloth.calibrate.noise.poor_fit_ratio`) is ``poor_fit``: its
 θ(t) does not describe the encoder and a scene driven by it would be wrong for the whole
 record.
+
+What the fit determines is θ(t) itself, within the noise. Its parameters may not be:
+a quartic start is flat at its onset, so an earlier onset with a small a1…a3 draws the
+same curve, and the coefficients of a polynomial over a short piece trade against each
+other. :func:`parameter_uncertainties` gives each parameter's 1σ from the fit's
+Jacobian and says which are not determined (:mod:`warpcloth.calibrate.uncertainty`), so
+none is printed as if measured.
 """
 
 from __future__ import annotations
@@ -40,13 +47,16 @@ from __future__ import annotations
 import copy
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from warpcloth.errors import ArgumentError
 
+from .motion_fit.lm import covariance
 from .noise import difference_noise, poor_fit_ratio
+from .uncertainty import FittedValue, from_sigma, judge
 
 FORMS = {
     "quartic, line, rest": (1, True, True),
@@ -377,3 +387,91 @@ def scene_with_clamp_motion(raw_scene: dict, fit: ClampMotionFit, until_s: float
     for key in ("table_t_s", "table_theta_rad"):
         clamp.pop(key, None)
     return data
+
+
+def _parameters(fit: ClampMotionFit) -> tuple[list[str], list[str], np.ndarray]:
+    # The fitted parameters as one vector: θ0, the searched breakpoints (a moving record's
+    # onset is its first sample, not fitted), a1…a4 and the later lines' speeds.
+    times = [*([] if fit.moving_at_start else ["onset"]), *[f"break {i + 1}" for i in range(len(fit.breaks_s))]]
+    times += [] if fit.stop_s is None else ["stop"]
+    names = [
+        "θ0",
+        *times,
+        "a1",
+        "a2",
+        "a3",
+        "a4",
+        *[f"ω{i + 2} (line {i + 2}'s speed)" for i in range(len(fit.speeds_rad_per_s) - 1)],
+    ]
+    units = ["rad", *["s"] * len(times), *[f"rad/s^{k}" if k > 1 else "rad/s" for k in range(1, 5)]]
+    units += ["rad/s"] * (len(fit.speeds_rad_per_s) - 1)
+    point = [fit.onset_s, *fit.breaks_s, *(() if fit.stop_s is None else (fit.stop_s,))]
+    values = [fit.rest_rad, *point[1 if fit.moving_at_start else 0 :], *fit.quartic_si, *fit.speeds_rad_per_s[1:]]
+    return names, units, np.array(values)
+
+
+def _model(fit: ClampMotionFit, p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    # θ(t) at the parameter vector p of :func:`_parameters`
+    n_times = len(fit.breakpoints_s) - (1 if fit.moving_at_start else 0)
+    times = p[1 : 1 + n_times]
+    point = (fit.onset_s, *times) if fit.moving_at_start else tuple(times)
+    lines = len(fit.breaks_s)
+    stop = point[1 + lines] if fit.stop_s is not None else None
+    return p[0] + _shape(t, point[0], tuple(point[1 : 1 + lines]), stop, p[1 + n_times :])
+
+
+def _first_speed(fit: ClampMotionFit, p: np.ndarray) -> float:
+    # ω1, the quartic's slope at its end (the first line continues it), at p
+    n_times = len(fit.breakpoints_s) - (1 if fit.moving_at_start else 0)
+    onset = fit.onset_s if fit.moving_at_start else p[1]
+    length = p[2 - (1 if fit.moving_at_start else 0)] - onset
+    a = p[1 + n_times : 5 + n_times]
+    return float(sum(k * a[k - 1] * length ** (k - 1) for k in range(1, 5)))
+
+
+def _central(f: Callable[[np.ndarray], np.ndarray], p: np.ndarray, steps: list[float]) -> np.ndarray:
+    # ∂f/∂p_i by central differences, one column (last axis) per parameter
+    columns = []
+    for i, step in enumerate(steps):
+        delta = np.zeros_like(p)
+        delta[i] = step
+        columns.append((f(p + delta) - f(p - delta)) / (2 * step))
+    return np.stack(columns, axis=-1)
+
+
+def parameter_uncertainties(fit: ClampMotionFit, t: np.ndarray, theta: np.ndarray) -> list[FittedValue]:
+    """Every value :func:`fit_clamp_motion` reports for encoder series ``t``, ``theta`` (s,
+    rad), with its 1σ and whether it is determined (see the module docstring).
+
+    The covariance is s² (JᵀJ)⁻¹ (:func:`~warpcloth.calibrate.motion_fit.lm.covariance`)
+    with J the model's Jacobian in every parameter, the breakpoints included (θ(t) is
+    continuous in them: central differences a thousandth of a sample apart), and s² the
+    residual variance; the first line's speed ω1, a function of the quartic, by
+    propagation. A singular Jacobian leaves every value not determined."""
+    t = np.asarray(t, dtype=float)
+    names, units, p = _parameters(fit)
+    # a thousandth of a sample for a time; the model is linear in the others
+    sample = float(np.median(np.diff(t)))
+    steps = [1e-3 * sample if unit == "s" else max(abs(v), 1.0) * 1e-6 for unit, v in zip(units, p, strict=True)]
+    jac = _central(lambda q: _model(fit, q, t), p, steps)
+    residual = _model(fit, p, t) - np.asarray(theta, dtype=float)
+    # unit columns: a4's column is 1e-6 of θ0's, and the normal matrix would lose it
+    norms = np.linalg.norm(jac, axis=0)
+    norms[norms == 0] = 1.0
+    cov = covariance(jac / norms, residual) / np.outer(norms, norms)
+    gradient = _central(lambda q: np.array(_first_speed(fit, q)), p, steps)  # ω1's, for its σ
+    # a time's 0 is the record's clock: its σ is judged against the pieces it bounds
+    pieces = np.diff([t[0], *fit.breakpoints_s, t[-1]])  # the rest (if any), quartic, lines, stop
+    scales = {}
+    for i, unit in enumerate(units):
+        if unit == "s":
+            k = fit.breakpoints_s.index(p[i])
+            shortest = float(min(pieces[k], pieces[k + 1]))
+            scales[i] = (shortest, f"more than a third of the shortest piece it bounds, {shortest:.2g} s")
+    omega = from_sigma(
+        "ω1 (line 1's speed, the quartic's at its end)",
+        fit.speeds_rad_per_s[0],
+        math.sqrt(max(float(gradient @ cov @ gradient), 0.0)),
+        "rad/s",
+    )
+    return [*judge(names, units, p, cov, scales), omega]

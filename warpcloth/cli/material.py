@@ -306,6 +306,7 @@ def _print_direction(
     """What a direction's fit prints: the tensile quartic and its KES values, the bending
     law and its (``label``: "" for the one direction or the warp, "weft")."""
     from warpcloth.calibrate import kes
+    from warpcloth.calibrate.uncertainty import DETERMINED_CORRELATION, DETERMINED_SIGMAS
 
     prefix = f"{label} " if label else ""
     print(f"{prefix}tensile file's first column read as {fit.tensile_loop.strain_unit}")
@@ -313,9 +314,12 @@ def _print_direction(
     rt = f", RT {tk.rt_percent:.1f} %" if tk.rt_percent is not None else " (no unloading branch: no RT)"
     print(
         f"{prefix}tensile ({tensile}, {fit.summary_table()['tensile_loading_points']} loading points): T(ε) = "
-        f"a1 ε + a2 ε² + a3 ε³ + a4 ε⁴, a = ({', '.join(f'{a:.6g}' for a in t.coefficients)}) gf/cm"
+        f"a1 ε + a2 ε² + a3 ε³ + a4 ε⁴; determined: T(ε) itself, within RMS {t.rms_gf_per_cm:.4g} gf/cm "
+        f"({t.rms_relative:.3%} of the force range); its coefficients (± 1σ; not determined: within "
+        f"{DETERMINED_SIGMAS:g}σ of 0, or a multiple correlation beyond {DETERMINED_CORRELATION:g}):"
     )
-    print(f"  RMS {t.rms_gf_per_cm:.4g} gf/cm ({t.rms_relative:.3%} of the force range)")
+    for value in t.values():
+        print(f"  {value.text()}")
     if t.note:
         print(f"  note: {t.note}")
     print(

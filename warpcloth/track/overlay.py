@@ -15,48 +15,80 @@ from warpcloth.errors import ArgumentError
 from .markers import Tracked
 from .video import Frames, FrameStream
 
-__all__ = ["FINEST_AVI_S", "avi_timing", "overlay_figure", "write_overlay", "write_overlay_video"]
+__all__ = ["FINEST_AVI_S", "FONT_SIZE", "avi_timing", "overlay_figure", "write_overlay", "write_overlay_video"]
+
+
+FONT_SIZE = 11
+"""The overlay's text size (pt) at its 12 × 5.6 in: readable at the page width it is
+printed or viewed at (matplotlib's 10 pt labels and 7 pt annotations were not)."""
 
 
 def overlay_figure(image: np.ndarray, tracked: Tracked, frame: int) -> object:
     """A matplotlib figure: ``image`` (the frame at position ``frame`` of ``tracked``)
     with each marker's pixel path over all frames and its position in this frame, and
-    every frame's shape in mm (the shown one in black)."""
+    every frame's shape in mm coloured by its time (a colourbar is the key; the shown
+    frame in black)."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5.6), width_ratios=(1.1, 1))
-    left.imshow(image, cmap="gray", vmin=0, vmax=255)
-    for m in range(len(tracked.s_mm)):
-        left.plot(tracked.px[:, m, 0], tracked.px[:, m, 1], "-", color="tab:orange", lw=0.7, alpha=0.8)
-    left.scatter(
-        tracked.px[frame, :, 0], tracked.px[frame, :, 1], s=60, facecolors="none", edgecolors="tab:red", linewidths=1.0
-    )
-    for m, s in enumerate(tracked.s_mm):
-        left.annotate(
-            f"{s:g}", tracked.px[frame, m], xytext=(6, -6), textcoords="offset points", color="tab:red", fontsize=7
+    with plt.rc_context({"font.size": FONT_SIZE, "axes.titlesize": FONT_SIZE, "legend.fontsize": FONT_SIZE - 1}):
+        fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5.6), width_ratios=(1.1, 1))
+        left.imshow(image, cmap="gray", vmin=0, vmax=255)
+        for m in range(len(tracked.s_mm)):
+            left.plot(tracked.px[:, m, 0], tracked.px[:, m, 1], "-", color="tab:orange", lw=0.8, alpha=0.8)
+        left.scatter(
+            tracked.px[frame, :, 0],
+            tracked.px[frame, :, 1],
+            s=60,
+            facecolors="none",
+            edgecolors="tab:red",
+            linewidths=1.2,
         )
-    left.set_title(f"frame {tracked.frame[frame]} at t = {tracked.t[frame]:.4f} s: markers (s in mm) and their paths")
-    left.set_axis_off()
-    for f in range(len(tracked.t)):
-        shown = f == frame
+        for m, s in enumerate(tracked.s_mm):
+            # left of the marker, boxed: the paths run off to the right, and red on the
+            # dark frame alone does not read
+            left.annotate(
+                f"{s:g}",
+                tracked.px[frame, m],
+                xytext=(-9, 0),
+                textcoords="offset points",
+                ha="right",
+                va="center",
+                color="tab:red",
+                bbox={"fc": "white", "alpha": 0.8, "lw": 0, "pad": 1},
+            )
+        left.set_title(
+            f"frame {tracked.frame[frame]}, t = {tracked.t[frame]:.4f} s: markers (red, s in mm)\n"
+            "and their paths over the video (orange)"
+        )
+        left.set_axis_off()
+        time = matplotlib.colors.Normalize(float(tracked.t[0]), float(tracked.t[-1]))
+        for f in range(len(tracked.t)):
+            if f != frame:
+                right.plot(
+                    tracked.mm[f, :, 0], tracked.mm[f, :, 1], "-", color=plt.cm.viridis(time(tracked.t[f])), lw=0.8
+                )
         right.plot(
-            tracked.mm[f, :, 0],
-            tracked.mm[f, :, 1],
-            "o-" if shown else "-",
+            tracked.mm[frame, :, 0],
+            tracked.mm[frame, :, 1],
+            "o-",
             ms=3,
-            color="black" if shown else plt.cm.viridis(f / max(len(tracked.t) - 1, 1)),
-            lw=1.4 if shown else 0.8,
+            color="black",
+            lw=1.4,
+            label=f"frame {tracked.frame[frame]} (left)",
         )
-    right.plot([0], [0], "s", color="tab:red", label="clamp's lowest point at rest")
-    right.set_aspect("equal")
-    right.set_xlabel("x (mm)")
-    right.set_ylabel("y (mm)")
-    right.set_title(f"tracked shapes, every frame (median uncertainty {np.median(tracked.u_mm) * 1e3:.2g} µm)")
-    right.legend(loc="lower left", fontsize=8)
-    fig.tight_layout()
+        right.plot([0], [0], "s", color="tab:red", label="clamp's lowest point at rest")
+        right.set_aspect("equal", adjustable="datalim")  # the axes keep their width; the data range grows
+        right.set_xlabel("x from the clamp edge (mm)")
+        right.set_ylabel("y from the clamp edge (mm)")
+        right.set_title(
+            f"tracked shapes, every frame\n(median uncertainty {np.median(tracked.u_mm) * 1e3:.2g} µm per coordinate)"
+        )
+        right.legend(loc="lower right")
+        fig.colorbar(matplotlib.cm.ScalarMappable(time, "viridis"), ax=right, label="t (s)", shrink=0.85)
+        fig.tight_layout()
     return fig
 
 

@@ -27,6 +27,7 @@ from warpcloth.scene import MaterialSection, to_si
 from warpcloth.strip import moment_along_path
 
 from ..noise import difference_noise, poor_fit_ratio
+from ..uncertainty import value_text
 from .readers import BendingLoop
 
 SIMPLEX_SIZE = 1e-10
@@ -205,14 +206,13 @@ class LawFitter:
 
     def describe(self, fit: BendingFit, digits: int = 6) -> str:
         """The fit's parameters as text with their units and standard uncertainties, e.g.
-        ``D 0.1 ± 0.0003 gf·cm²/cm, …`` (no ± for K0, which the data fix)."""
+        ``D 0.1 ± 0.0003 gf·cm²/cm, …`` (K0, which the data fix, is marked so:
+        :func:`~warpcloth.calibrate.uncertainty.value_text`)."""
 
-        def one(p: Parameter) -> str:
-            sigma = fit.sigma.get(p.field)
-            spread = f" ± {sigma:.2g}" if sigma is not None and math.isfinite(sigma) else ""
-            return f"{p.symbol} {fit.parameters[p.field]:.{digits}g}{spread}" + (f" {p.unit}" if p.unit else "")
-
-        return ", ".join(one(p) for p in self.parameters)
+        return ", ".join(
+            value_text(p.symbol, fit.parameters[p.field], fit.sigma.get(p.field), p.unit, digits)
+            for p in self.parameters
+        )
 
     def uncertainties(
         self, loop: BendingLoop, d: float, a: float, shape: np.ndarray, sse: float, device: str | None = "cpu"

@@ -24,7 +24,6 @@ twice the data's noise, is ``poor_fit``, however small its RMS.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from warpcloth import units
@@ -32,6 +31,7 @@ from warpcloth.scene import RIGIDITY_FIELD, ShearMaterial, shear_field, shear_pa
 from warpcloth.strip import shear_force_along_path
 
 from ..noise import difference_noise
+from ..uncertainty import value_text
 from .bending_fit import STATUS_ORDER, BendingFit, bending_problems
 from .kes_values import KES_SHEAR_STEP_DEG, ShearSummary, shear_summary, standard_cycle
 from .laws import DEFAULT_LAW, law_fitter
@@ -84,12 +84,9 @@ class ShearFit:
         units_of = {shear_field(p): shear_unit(p) for p in shear_parameters(self.shear.law)}
         values = {RIGIDITY_FIELD: self.shear.rigidity_gf_per_cm_deg, **self.shear.parameters}
 
-        def one(name: str) -> str:
-            sigma = self.sigma.get(name)
-            spread = f" ± {sigma:.2g}" if sigma is not None and math.isfinite(sigma) else ""
-            return f"{name} {values[name]:.{digits}g}{spread}" + (f" {units_of[name]}" if units_of[name] else "")
-
-        return ", ".join(one(name) for name in values)
+        return ", ".join(
+            value_text(name, values[name], self.sigma.get(name), units_of[name], digits) for name in values
+        )
 
     def kes_comparison(self) -> list[tuple[str, float | None, float | None]]:
         """(value, the data's, the fitted law's) for G, 2HG and 2HG5."""

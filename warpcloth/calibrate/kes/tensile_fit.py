@@ -16,6 +16,8 @@ import numpy as np
 from warpcloth.errors import DataFileError
 from warpcloth.scene import IntegratorSection, tensile_slope_minimum
 
+from ..motion_fit.lm import covariance
+from ..uncertainty import FittedValue, judge
 from .least_squares import least_squares_above
 from .readers import TensileLoop
 
@@ -35,6 +37,15 @@ class TensileFit:
     rms_relative: float  # RMS / range of the loading branch's force
     constrained: bool
     note: str  # why the fit was constrained; "" when it was not
+    covariance: tuple[tuple[float, ...], ...] = ()  # of a1..a4, (gf/cm)²: s² (XᵀX)⁻¹
+
+    def values(self) -> list[FittedValue]:
+        """a1…a4 with their 1σ, each marked where the data do not determine it
+        (:func:`~warpcloth.calibrate.uncertainty.judge`): over a loading branch a few %
+        long the quartic's coefficients trade against each other while T(ε) is fixed."""
+        return judge(
+            [f"a{k}" for k in range(1, 5)], ["gf/cm"] * 4, np.array(self.coefficients), np.array(self.covariance)
+        )
 
     def __call__(self, strain: np.ndarray) -> np.ndarray:
         """T(ε) in gf/cm."""
@@ -84,5 +95,16 @@ def fit_tensile(loop: TensileLoop, max_strain: float = DIVERGENCE_STRAIN) -> Ten
         slope, where = tensile_slope_minimum(list(coefficients), upper)
         if not slope > 0:  # pragma: no cover - the grid constraint holds between its points
             raise DataFileError(loop.source, f"no increasing quartic fits the loading branch ({note})")
-    rms = float(np.sqrt(np.mean((design @ (coefficients / unscale) - t) ** 2)))
-    return TensileFit([float(a) for a in coefficients], rms, rms / (float(np.ptp(t)) or 1.0), constrained, note)
+    residual = design @ (coefficients / unscale) - t
+    rms = float(np.sqrt(np.mean(residual**2)))
+    # the linear fit's covariance (at an active slope constraint the spread along it is
+    # smaller, so this is an upper bound there); in a's units through the column scaling
+    cov = covariance(design, residual) * np.outer(unscale, unscale)
+    return TensileFit(
+        [float(a) for a in coefficients],
+        rms,
+        rms / (float(np.ptp(t)) or 1.0),
+        constrained,
+        note,
+        tuple(tuple(float(c) for c in row) for row in cov),
+    )

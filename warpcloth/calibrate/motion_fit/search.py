@@ -109,7 +109,8 @@ def fit_motion(
 
 
 class _History:
-    # The search's history, one row per launch, shown on a progress bar.
+    # The search's history, one row per launch, shown on a progress bar whose total is the
+    # most launches it may take, set to those it took when it ends.
     def __init__(self, objective: FitObjective, total: int, progress: bool) -> None:
         self.objective = objective
         self.rows: list[dict] = []
@@ -119,10 +120,14 @@ class _History:
         self.rows.append(
             {"launch": self.objective.launches, "stage": stage, "rms": rms, "shift_s": shift} | self.objective.values(u)
         )
-        self.bar.set_postfix(rms=f"{rms:.4g}")
+        self.bar.set_postfix(rms=f"{rms * 1e3:.4g} mm")  # the unit the result is printed in
         self.bar.update(1)
 
     def close(self) -> None:
+        # The total was the most launches the search may take (--max-iterations); it
+        # usually converges in far fewer, and a bar left at 15-50 % reads as a fit cut short
+        self.bar.total = self.bar.n
+        self.bar.refresh()
         self.bar.close()
 
 

@@ -147,5 +147,6 @@ def inside(t: np.ndarray, window: tuple[float, float] | None) -> np.ndarray:
 
 
 def window_note(window: tuple[float, float] | None) -> str:
-    """What a title adds for a comparison window ("" without one)."""
-    return "" if window is None else f"; compared on t = {window[0]:g} … {window[1]:g} s"
+    """What a title adds for a comparison window ("" without one), on a line of its own so
+    the title stays within the figure's width."""
+    return "" if window is None else f"\ncompared on t = {window[0]:g} … {window[1]:g} s"

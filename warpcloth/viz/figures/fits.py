@@ -97,13 +97,26 @@ def plot_fit_overlay(
         bottom.axhline(0, color="0.6", lw=0.6)
         bottom.set(xlabel="measured time (s)", ylabel="residual (mm)")
         top.set_title(
-            f"RMS {fit.rms * MM:.3g} mm on t = {window[0]:g} … {window[1]:g} s (the measured record); {title}",
-            fontsize=8,
+            f"RMS {fit.rms * MM:.3g} mm on t = {window[0]:g} … {window[1]:g} s (the measured record)\n{title}",
+            fontsize=9,
         )
         return common.save(fig, path)
     if result.frames is None:
         raise ArgumentError("result", "tracked markers are drawn over the run's frames: run it with keep_frames=True")
-    fig, ax = plt.subplots(figsize=(6.5, 6))
+    return _tracked_shapes_overlay(result, objective, measurement, fit, title, path)
+
+
+def _tracked_shapes_overlay(
+    result: Any, objective: FitResiduals, measurement: TrackedShapes, fit: MotionFit, title: str, path: Path
+) -> Path:
+    # Left: the simulated strip at six measured frames with their markers over it (what
+    # was fitted, at the scale of the motion). Right: every marker's x and y residual
+    # against measured time, at the scale of the noise, which the left panel cannot show
+    # (a systematic misfit is a drift or a wave there, noise a band around 0).
+    shift = fit.shift_s
+    fig = plt.figure(figsize=(11, 6))
+    grid = fig.add_gridspec(2, 3, width_ratios=(0.85, 1, 0.04))  # the last: the residuals' colourbar
+    ax = fig.add_subplot(grid[:, 0])
     frames = np.unique(measurement.frame)
     chosen = frames[np.linspace(0, len(frames) - 1, min(6, len(frames))).round().astype(int)]
     for colour, f in zip(plt.cm.viridis(np.linspace(0, 1, len(chosen))), chosen, strict=True):
@@ -116,13 +129,24 @@ def plot_fit_overlay(
         ax.plot(xy[:nc, 0], xy[:nc, 1], color="0.25", lw=3)
         ax.plot(measurement.x[rows] * MM, measurement.y[rows] * MM, "o", color=colour, ms=3.5, mfc="none")
     ax.set_aspect("equal")
-    ax.set(xlabel=X_LABEL, ylabel=Y_LABEL)
-    ax.set_title(
-        f"markers (o) vs best fit (lines); RMS {fit.rms * MM:.3g} mm on t = {measurement.t.min():g} … "
-        f"{measurement.t.max():g} s (the measured record)\n{title}",
-        fontsize=8,
+    ax.set(xlabel=X_LABEL, ylabel=Y_LABEL, title="markers (o) over the best fit (lines)")
+    ax.legend(fontsize=7, loc="best", title="measured t", title_fontsize=7)
+    residual = objective.residuals(result, 0, shift, penalise=False).reshape(-1, 2) * MM
+    top = fig.add_subplot(grid[0, 1])
+    bottom = fig.add_subplot(grid[1, 1], sharex=top)
+    for panel, axis, column in ((top, "x", 0), (bottom, "y", 1)):
+        drawn = panel.scatter(
+            measurement.t, residual[:, column], c=measurement.s * MM, cmap="cividis", s=4, linewidths=0
+        )
+        panel.axhline(0, color="0.6", lw=0.6)
+        panel.set(ylabel=f"residual {axis} (mm)")
+    bottom.set(xlabel="measured time (s)")
+    fig.colorbar(drawn, cax=fig.add_subplot(grid[:, 2]), label="marker's arc length s (mm)")
+    fig.suptitle(
+        f"RMS {fit.rms * MM:.3g} mm on t = {measurement.t.min():g} … {measurement.t.max():g} s "
+        f"(the measured record)\n{title}",
+        fontsize=9,
     )
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1), title="measured t", title_fontsize=7)
     return common.save(fig, path)
 
 

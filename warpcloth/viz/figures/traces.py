@@ -54,12 +54,13 @@ def plot_amplitude(
         keep = inside(measured.t, window)
         ax.plot(measured.t[keep], measured.x[keep] * MM, "k.", ms=2.5, label="measured")
     ax.axhline(0, color="0.6", lw=0.6)
+    height = f"{laser_mm:g}".replace("-", "−")  # a minus sign, as the tick labels write it
     ax.set(
         xlabel=time_label(recording),
         ylabel="x (mm)",
-        title=f"Displacement at the laser line (y = {laser_mm:g} mm from the clamp edge){window_note(window)}",
+        title=f"Displacement at the laser line (y = {height} mm from the clamp edge){window_note(window)}",
     )
-    legend(ax, fontsize=7, loc="upper right")
+    legend(ax, fontsize=7, loc="best")
     return common.save(fig, path, dpi)
 
 
@@ -201,7 +202,10 @@ def plot_run(
     amplitude, a clamp encoder onto the clamp angle, tracked markers onto the shapes
     (:func:`warpcloth.io.measured.read_measurement`); a trace or encoder and the run are
     drawn on one window, their overlap unless ``t_from``/``t_to`` choose it
-    (:func:`warpcloth.metrics.comparison_window`), which the title states.
+    (:func:`warpcloth.metrics.comparison_window`), which the title states; the figures
+    that do not draw the measured record show the whole run, or ``t_from``/``t_to``.
+    The clamp angle is left out when every variant's clamp is fixed (θ = 0 throughout)
+    and no encoder is drawn.
     ``kes`` marks B and 2HB on the bending loop (:func:`plot_bending_loop`)."""
 
     if fmt not in FORMATS:
@@ -211,26 +215,30 @@ def plot_run(
     if times is not None:
         recording.nearest_frames(times)  # an out-of-range time is refused before any figure is written
     data = read_measurement(measured, argument="measured", encoder=True) if measured else None
-    window = None
-    if isinstance(data, (LaserTrace, ClampAngleTrace)) or t_from is not None or t_to is not None:
-        spans = {"the run": (float(recording.probes["t"].min()), float(recording.probes["t"].max()))}
-        if isinstance(data, (LaserTrace, ClampAngleTrace)):
-            spans[str(measured)] = (float(data.t[0]), float(data.t[-1]))
-        window = comparison_window(spans, t_from, t_to)  # refused before any figure is written
+    # Each time series is drawn on its own window: the overlap with the measured record
+    # only on the figure that draws that record (a short laser trace must not cut the
+    # clamp angle), else --from/--to on the run, else all of it. Both are checked before
+    # any figure is written.
+    run_span = {"the run": (float(recording.probes["t"].min()), float(recording.probes["t"].max()))}
+    overlap = None
+    if isinstance(data, (LaserTrace, ClampAngleTrace)):  # first: a window outside names the shorter record
+        overlap = comparison_window(run_span | {str(measured): (float(data.t[0]), float(data.t[-1]))}, t_from, t_to)
+    chosen = comparison_window(run_span, t_from, t_to) if t_from is not None or t_to is not None else None
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     shapes = data if isinstance(data, TrackedShapes) else None
+    laser = data if isinstance(data, LaserTrace) else None
+    encoder = data if isinstance(data, ClampAngleTrace) else None
+    paths = [plot_amplitude(recording, out / f"amplitude.{fmt}", laser, dpi=dpi, window=overlap if laser else chosen)]
+    # a fixed clamp's angle is 0 throughout: a figure of it would be an empty axis
+    if encoder is not None or any(scene.clamp.motion != "fixed" for scene in recording.scenes):
+        paths.append(
+            plot_clamp_angle(
+                recording, out / f"clamp_angle.{fmt}", encoder, dpi=dpi, window=overlap if encoder else chosen
+            )
+        )
     return [
-        plot_amplitude(
-            recording, out / f"amplitude.{fmt}", data if isinstance(data, LaserTrace) else None, dpi=dpi, window=window
-        ),
-        plot_clamp_angle(
-            recording,
-            out / f"clamp_angle.{fmt}",
-            data if isinstance(data, ClampAngleTrace) else None,
-            dpi=dpi,
-            window=window,
-        ),
+        *paths,
         plot_shapes(
             recording,
             out / f"shapes.{fmt}",
