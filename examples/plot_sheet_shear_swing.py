@@ -34,7 +34,7 @@ from warpcloth.kernels.sheet import SHEET_PROBE_INDEX
 import warpcloth as wc
 from warpcloth import units
 from warpcloth.io.sheet_run_dir import read_sheet_run
-from warpcloth.viz.figures.sheet import sheet_run_figure, sheet_shapes_figure
+from warpcloth.viz.figures.sheet import SheetSetting, sheet_run_figure, sheet_shapes_figure
 
 QUICK = os.environ.get("WARPCLOTH_EXAMPLES_QUICK") == "1"
 COARSE = [
@@ -48,6 +48,7 @@ scene = wc.load_scene("shear_swing", COARSE if QUICK else [])
 result = wc.simulate(scene, out=workdir / "shear_swing")
 run = read_sheet_run(workdir / "shear_swing")
 samples = run.samples()  # the arrays the figures read: probes, markers, frames
+setting = SheetSetting.of_scene(run.scene, "shear_swing", run.rest_positions)  # titles, the clamp's frame
 print(f"{run.meta['n_nodes']} nodes, {len(samples.t)} samples, {len(samples.frame_times)} frames")
 print(f"simulated {samples.t[-1]:.2f} s in {result.wall_time_s:.1f} s of wall time")
 
@@ -60,7 +61,7 @@ print(f"simulated {samples.t[-1]:.2f} s in {result.wall_time_s:.1f} s of wall ti
 # budget, which stays constant to O(dt): the simulation's own check that the numbers on
 # the other panels are not an integration artefact. ``warpcloth plot RUN_DIR`` writes this
 # figure and the next as ``sheet_run.png`` and ``sheet_shapes.png``.
-sheet_run_figure(samples)
+sheet_run_figure(samples, setting)
 plt.show()
 
 # %%
@@ -119,6 +120,6 @@ print(
 # side (x, out of the plane: the sheet barely leaves it) and from the front (z, y: the
 # sideways push and the shear). ``warpcloth render RUN_DIR`` draws the same frames in 3D,
 # and ``warpcloth export-usd RUN_DIR -o sheet.usda`` writes the mesh for a USD viewer.
-sheet_shapes_figure(samples)
+sheet_shapes_figure(samples, setting)
 shutil.rmtree(workdir)
 plt.show()

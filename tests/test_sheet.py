@@ -514,10 +514,14 @@ def test_bad_sheet_inputs_are_refused_by_name():
 
 
 def test_a_sheet_runs_figures_are_written(tmp_path):
-    from warpcloth.viz.figures.sheet import plot_sheet_run
+    from warpcloth.sheet.model import SheetClampMotion
+    from warpcloth.viz.figures.sheet import SheetSetting, plot_sheet_run
 
-    _geometry, run, _solver = twisted_sheet(0.005, 0.5)
-    paths = plot_sheet_run(run, tmp_path)
+    geometry, run, _solver = twisted_sheet(0.005, 0.5)
+    setting = SheetSetting(
+        "twisted sheet", "test fabric", SheetClampMotion(axis=(0.0, 1.0, 0.0)), geometry.rest_positions
+    )
+    paths = plot_sheet_run(run, setting, tmp_path)
     assert [p.name for p in paths] == ["sheet_run.png", "sheet_shapes.png"]
     assert all(p.stat().st_size > 10_000 for p in paths)
 

@@ -13,7 +13,7 @@ from PIL import Image
 from pxr import Usd, UsdGeom
 
 from warpcloth import bodies
-from warpcloth.errors import DataFileError
+from warpcloth.errors import ArgumentError, DataFileError
 from warpcloth.io.sheet_run_dir import read_sheet_run
 from warpcloth.runs import simulate
 from warpcloth.scene.sheet_build import load_sheet_scene
@@ -246,3 +246,128 @@ def test_a_damaged_sheet_run_is_refused_by_every_reader_naming_the_file(shear_sw
 def test_analyse_refuses_a_sheet_run_in_one_line(shear_swing):
     out, _ = shear_swing
     one_line_refusal(run_cli("analyse", out), "is a sheet run: analyse measures a strip's swing", "`plot` draws")
+
+
+# The figures themselves (issue 40): what each panel draws, in the units a lab reads
+
+
+def _figure_of(shear_swing):
+    from warpcloth.viz.figures.sheet import SheetSetting
+
+    out, _ = shear_swing
+    run = read_sheet_run(out)
+    return run, SheetSetting.of_scene(run.scene, "shear_swing", run.rest_positions)
+
+
+def test_the_run_figure_shows_the_markers_against_the_clamp_and_says_what_it_is(shear_swing):
+    from warpcloth.viz.figures.sheet import sheet_run_figure
+
+    run, setting = _figure_of(shear_swing)
+    samples = run.samples()
+    fig = sheet_run_figure(samples, setting)
+    markers, shear, bending, budget = fig.axes[:4]
+    assert fig._suptitle.get_text() == "shear_swing (wool90-nylon10): markers, shear, bending and energy"
+    # the clamp carries the markers 20 mm along z; against it they move a few tenths of a mm
+    drawn = np.concatenate([line.get_ydata() for line in markers.get_lines()])
+    assert np.ptp(samples.markers[:, 0, :, 2]) * 1e3 > 19 and 0.01 < np.abs(drawn).max() < 1.0
+    assert markers.get_ylabel() == "displacement against the clamp (mm)"
+    # a compact legend: one entry per marker and one per coordinate drawn, not 12
+    legends = [markers.get_legend(), *(a for a in markers.artists if isinstance(a, plt_legend()))]
+    entries = sum(len(leg.get_texts()) for leg in legends)
+    assert entries <= 4 + 3, entries
+    assert "(-100, -50)" in {t.get_text() for leg in legends for t in leg.get_texts()}
+    assert shear.get_xlabel() == "shear angle φ (°)" and "probed cell at (y, z)" in shear.get_title()
+    assert len(shear.get_lines()[0].get_xdata()) == len(samples.t)
+    assert bending.get_xlabel() == "curvature K (1/cm)" and "probed warp hinge" in bending.get_title()
+    assert budget.get_lines() and budget.get_xlabel() == "t (s)"
+
+
+def plt_legend():
+    import matplotlib.legend
+
+    return matplotlib.legend.Legend
+
+
+def test_a_probe_at_round_off_is_said_not_drawn(tmp_path):
+    from warpcloth.viz.figures.sheet import SheetSetting, sheet_run_figure
+
+    # a sheet driven in its plane with no waviness stays in it to round-off: its hinge never bends
+    out = tmp_path / "flat"
+    simulate(load_sheet_scene("shear_swing", [*COARSE, "sheet.initial_waviness_mm=0"]), out=out)
+    run = read_sheet_run(out)
+    fig = sheet_run_figure(run.samples(), SheetSetting.of_scene(run.scene, "flat", run.rest_positions))
+    bending = fig.axes[2]
+    assert not bending.get_lines()
+    said = " ".join(t.get_text() for t in bending.texts)
+    assert "stays at round-off" in said and "output.probe_hinge_mm" in said
+    assert fig.axes[1].get_lines()  # the cell at the clamp's corner still shears
+
+
+def test_the_shapes_figure_draws_a_panel_per_time_with_lines_of_the_mesh(shear_swing):
+    from warpcloth.viz.figures.sheet import sheet_shapes_figure
+
+    run, setting = _figure_of(shear_swing)
+    fig = sheet_shapes_figure(run.samples(), setting, count=3)
+    panels = [ax for ax in fig.axes if ax.get_title().startswith("t = ")]
+    assert len(panels) == 2 * 3  # from the side and from below, at each of three times
+    assert {ax.get_title() for ax in panels} == {f"t = {t:.3f} s" for t in run.frame_times[[0, 3, 6]]}
+    # 11 columns of nodes seen from the side, 12 rows (the clamped row included) from below
+    assert sorted({len(ax.get_lines()) for ax in panels}) == [11, 12]
+    assert "x out of the plane (mm)" in {ax.get_xlabel() for ax in panels}
+    assert "the sheet's shape seen from the clamp" in fig._suptitle.get_text()
+    with pytest.raises(ArgumentError, match="count"):
+        sheet_shapes_figure(run.samples(), setting, count=0)
+
+
+def test_the_sheet_sweep_plot_names_its_axes_and_does_not_join_three_points(tmp_path):
+    import pandas as pd
+
+    from warpcloth.viz.figures.sweeps import sweep_figure
+
+    g, gamma = "shear.rigidity_gf_per_cm_deg", "damping.gamma_per_s"
+    summary = pd.DataFrame({g: [0.5, 1.0, 2.0] * 2, gamma: [0.1] * 3 + [1.0] * 3, "peak_shear_angle_deg": range(6)})
+    ax = sweep_figure(summary, "peak_shear_angle_deg", g).axes[0]
+    assert ax.get_xlabel() == "G (gf/(cm·°))" and ax.get_ylabel() == "probed cell's peak shear angle (°)"
+    assert {t.get_text() for t in ax.get_legend().get_texts()} == {"γ = 0.1 s⁻¹", "γ = 1 s⁻¹"}
+    assert all(line.get_linestyle() == "None" for line in ax.get_lines())  # points, not a line
+    assert "points, not joined" in " ".join(t.get_text() for t in ax.texts)
+    dense = pd.DataFrame({g: np.linspace(0.25, 4, 9), "marker_0_peak_z_against_clamp_mm": np.ones(9)})
+    ax = sweep_figure(dense, "marker_0_peak_z_against_clamp_mm", g).axes[0]
+    assert ax.get_lines()[0].get_linestyle() == "-"
+    assert ax.get_ylabel() == "marker 0's peak sideways z against the clamp (mm)"
+
+
+def test_the_sheet_fit_overlay_draws_the_markers_against_the_clamp_and_the_residuals(tmp_path):
+    from types import SimpleNamespace
+
+    from warpcloth.calibrate.motion_fit.sheet import SheetObjective, sheet_free_parameters
+    from warpcloth.io.measured import read_sheet_markers
+    from warpcloth.scene import read_scene_file
+    from warpcloth.scene.overrides import apply_overrides
+    from warpcloth.viz.figures import fits
+
+    coarse = ["sheet.spacing_warp_mm=10", "sheet.spacing_weft_mm=10", "run.duration_s=0.3"]
+    measured = read_sheet_markers("shear_swing_markers")
+    base = apply_overrides(read_scene_file("shear_swing"), coarse)
+    objective = SheetObjective(base, measured, sheet_free_parameters("G", load_sheet_scene("shear_swing", coarse)))
+    result = objective.run(np.array([[0.5]]))
+    g = "shear.rigidity_gf_per_cm_deg"
+    fit = SimpleNamespace(parameters={g: 1.1}, sigma={g: 0.02}, rms=4e-5, shift_s=0.0)
+    drawn = {}
+    saved = fits.common.save
+    fits.common.save = lambda fig, path: drawn.setdefault("fig", fig) and saved(fig, path)
+    try:
+        path = fits.plot_fit_overlay(result, objective, measured, fit, tmp_path / "overlay.png")
+    finally:
+        fits.common.save = saved
+    assert pixels(path).std() > 5
+    fig = drawn["fig"]
+    assert "G = 1.1 ± 0.02 gf/(cm·°)" in fig._suptitle.get_text() and "wool90-nylon10" in fig._suptitle.get_text()
+    (y_track, y_residual), (z_track, z_residual) = np.array(fig.axes).reshape(2, 2)
+    assert z_track.get_ylabel() == "z against the clamp (mm)"
+    assert z_residual.get_ylabel() == "simulated − measured z (mm)"
+    # against the clamp the measured swing is a few tenths of a mm, not its 20 mm travel
+    measured_z = np.concatenate([line.get_ydata() for line in z_track.get_lines() if line.get_linestyle() == "None"])
+    assert 0.05 < np.abs(measured_z).max() < 1.0
+    residual = np.concatenate([line.get_ydata() for line in z_residual.get_lines() if line.get_linestyle() == "None"])
+    assert len(residual) == (measured.marker >= 0).sum() and np.abs(residual).max() < 0.5

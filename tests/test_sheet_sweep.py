@@ -20,7 +20,7 @@ SHORT = ("--set", "run.duration_s=0.1", "--set", "release.settle_time_s=0.05")
 
 
 def sweep_file(tmp_path, name="sheet_sweep.toml", **changes):
-    """The bundled shear_swing_sweep (10 mm, 3 G × 2 γ) written to a file, with changes."""
+    """The bundled shear_swing_sweep (10 mm, 17 G × 2 γ) written to a file, with changes."""
     raw = read_scene_file("shear_swing_sweep")
     for section, values in changes.items():
         raw[section] = raw.get(section, {}) | values
@@ -35,8 +35,8 @@ def sweep(scene, out, *extra):
 
 @pytest.fixture(scope="module")
 def swept(tmp_path_factory):
-    """The bundled sheet sweep, shortened, run once through the CLI in batches of 4 and 2,
-    keeping every probe."""
+    """The bundled sheet sweep, shortened, run once through the CLI in batches of 4 (the
+    last of 2), keeping every probe."""
     out = tmp_path_factory.mktemp("sheet_sweep") / "s"
     done = sweep("shear_swing_sweep", out, "--max-batch", "4", "--probes", "all")
     assert done.returncode == 0, done.stderr
@@ -45,12 +45,13 @@ def swept(tmp_path_factory):
 
 def test_a_sheet_sweep_runs_through_the_cli_into_a_sweep_directory(swept):
     out, done = swept
-    assert "6 variants" in done.stdout and "0 diverged" in done.stdout
-    assert "integrator.dt_s = auto, for 6 of the 6 variants" in done.stdout
+    assert "34 variants" in done.stdout and "0 diverged" in done.stdout
+    assert "integrator.dt_s = auto, for 34 of the 34 variants" in done.stdout
     summary = pd.read_csv(out / "summary.csv")
-    assert summary["variant"].tolist() == list(range(6)) and summary["batch"].tolist() == [0, 0, 0, 0, 1, 1]
-    assert sorted(set(zip(summary[G], summary[GAMMA], strict=True))) == sorted(
-        (g, c) for g in (0.5, 1.0, 2.0) for c in (0.1, 1.0)
+    assert summary["variant"].tolist() == list(range(34)) and summary["batch"].tolist() == [v // 4 for v in range(34)]
+    grid = read_scene_file("shear_swing_sweep")["sweep"]["grid"][G]
+    assert len(grid) == 17 and sorted(set(zip(summary[G], summary[GAMMA], strict=True))) == sorted(
+        (g, c) for g in grid for c in (0.1, 1.0)
     )
     assert not summary["diverged"].any()
     # the air's work grows with γ, the shear loop's with its hysteresis alone: neither is NaN
@@ -79,7 +80,7 @@ def test_each_variant_equals_the_same_sheet_run_alone_bit_for_bit(swept):
     expanded = load_sweep("shear_swing_sweep", SHORT[1::2])
     dt = expanded.scenes[0].integrator.dt_s
     assert {s.integrator.dt_s for s in expanded.scenes} == {dt}  # one step, chosen by auto for all
-    for i in (0, 5):  # the first of a batch of four and the last of a batch of two
+    for i in (0, 33):  # the first of a batch of four and the last of the last batch, of two
         row = variants.loc[i]
         scene = load_sheet_scene(
             "shear_swing_sweep",

@@ -60,11 +60,13 @@ def sheet_usd_command(args: argparse.Namespace) -> int:
 def sheet_plot_command(args: argparse.Namespace) -> int:
     """``plot`` of a sheet run: its markers, shear and energy figures."""
     from warpcloth.io.sheet_run_dir import read_sheet_run
-    from warpcloth.viz.figures.sheet import plot_sheet_run
+    from warpcloth.viz.figures.sheet import SheetSetting, plot_sheet_run
 
     refuse_strip_options(args, ("variants", "where", "measured", "t_from", "t_to", "times", "metric", "x", "y"))
     out = new_result(args.out or Path(args.run_dir) / "figures", args.overwrite, "--out")
-    for path in plot_sheet_run(read_sheet_run(args.run_dir).samples(), out, fmt=args.format, dpi=args.dpi):
+    run = read_sheet_run(args.run_dir)
+    setting = SheetSetting.of_scene(run.scene, run.path.resolve().name, run.rest_positions)
+    for path in plot_sheet_run(run.samples(), setting, out, fmt=args.format, dpi=args.dpi):
         print(f"wrote {path}")
     return 0
 

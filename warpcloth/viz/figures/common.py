@@ -108,6 +108,10 @@ FIELD_LABELS = {
     "release.hold_x_mm": ("hold x", "mm"),
     "release.hold_y_mm": ("hold y", "mm"),
     "time_shift_s": ("clock offset δ", "s"),
+    "shear.rigidity_gf_per_cm_deg": ("G", "gf/(cm·°)"),
+    "peak_shear_angle_deg": ("probed cell's peak shear angle", "°"),
+    "energy_drift_relative": ("energy budget's drift per the clamp's work", ""),
+    "drive_work_J": ("work of the clamp", "J"),
     "first_period_s": ("first period", "s"),
     "first_amplitude_m": ("first amplitude", "m"),
     "mean_log_decrement": ("mean log decrement per half-cycle", ""),
@@ -119,14 +123,33 @@ FIELD_LABELS = {
 """Symbols and units for the fields figures name; anything else shows its own name."""
 
 
+MARKER_METRICS = {
+    "peak_displacement_mm": "peak displacement",
+    "peak_z_mm": "peak sideways z",
+    "peak_x_mm": "peak out-of-plane x",
+    "peak_z_against_clamp_mm": "peak sideways z against the clamp",
+}
+"""A sheet sweep's per-marker summary columns, ``marker_<k>_<metric>`` (mm)."""
+
+
+def _symbol_and_unit(name: str) -> tuple[str, str]:
+    # a known field's, a sheet marker's metric's (marker_<k>_<metric>), else the name itself
+    if name in FIELD_LABELS:
+        return FIELD_LABELS[name]
+    marker, _, metric = name.removeprefix("marker_").partition("_")
+    if name.startswith("marker_") and marker.isdigit() and metric in MARKER_METRICS:
+        return f"marker {marker}'s {MARKER_METRICS[metric]}", "mm"
+    return name, ""
+
+
 def field_unit(name: str) -> str:
     """The unit a figure writes for ``name`` ("" if none is known)."""
-    return FIELD_LABELS.get(name, (name, ""))[1]
+    return _symbol_and_unit(name)[1]
 
 
 def field_label(name: str, units: bool = True) -> str:
     """An axis label: the field's symbol and unit (``γ (s⁻¹)``), else its dotted name."""
-    symbol, unit = FIELD_LABELS.get(name, (name, ""))
+    symbol, unit = _symbol_and_unit(name)
     return f"{symbol} ({unit})" if units and unit else symbol
 
 

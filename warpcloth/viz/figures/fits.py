@@ -160,28 +160,44 @@ def _sheet_markers_overlay(
     path: Path,
 ) -> Path:
     # a row per measured coordinate: every marker's measured points over its simulated
-    # track, and beside it their residuals (the tracks span the clamp's travel; the
-    # residuals show what the fit resolves)
+    # track, both less where the clamp alone carries the marker (the clamp's 20 mm would
+    # hide the swing of a few tenths of a mm that sets G), and beside it their residuals,
+    # simulated − measured: what the fit minimises
+    from warpcloth.scene.sheet_build import sheet_clamp
+
+    from .sheet import carried_by_clamp
+
     rows = len(measurement.axes)
-    fig, axes = plt.subplots(rows, 2, figsize=(11, 2.6 * rows), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(rows, 2, figsize=(11, 2.6 * rows + 0.6), sharex=True, squeeze=False)
     window = (float(measurement.t[0]), float(measurement.t[-1]))
     keep = inside(result.t - shift, window)
     residual = objective.residuals(result, 0, shift, penalise=False).reshape(-1, rows)
+    clamp = sheet_clamp(objective.scene)
+    angle, travel = result.probe("clamp_angle", 0), result.probe("clamp_displacement", 0)
+    carried = carried_by_clamp(result.markers[0, 0], angle, travel, clamp)  # [sample, marker, xyz]
     for a, axis in enumerate(measurement.axes):
         track, misfit = axes[a]
+        c = "xyz".index(axis)
         for colour, marker in zip(plt.get_cmap("tab10")(np.arange(10)), np.unique(measurement.marker), strict=False):
             mine = measurement.marker == marker
-            simulated = result.markers[:, 0, marker, "xyz".index(axis)]
-            track.plot((result.t - shift)[keep], simulated[keep] * MM, color=colour, lw=1.2, label=f"marker {marker}")
-            track.plot(measurement.t[mine], measurement.position[mine, a] * MM, ".", color=colour, ms=2.5)
+            against = result.markers[:, 0, marker, c] - carried[:, marker, c]
+            measured = measurement.position[mine, a] - np.interp(
+                measurement.t[mine] + shift, result.t, carried[:, marker, c]
+            )
+            track.plot((result.t - shift)[keep], against[keep] * MM, color=colour, lw=1.2, label=f"marker {marker}")
+            track.plot(measurement.t[mine], measured * MM, ".", color=colour, ms=2.5)
             misfit.plot(measurement.t[mine], residual[mine, a] * MM, ".", color=colour, ms=2.5)
-        track.set(ylabel=f"{axis} (mm)")
+        track.axhline(0, color="0.6", lw=0.6)
+        track.set(ylabel=f"{axis} against the clamp (mm)")
         misfit.axhline(0, color="0.6", lw=0.6)
         misfit.set(ylabel=f"simulated − measured {axis} (mm)")
-    axes[0, 0].legend(fontsize=7, ncol=4)
+    axes[0, 0].legend(fontsize=7, ncol=4, loc="lower right")
+    axes[0, 0].set_title("measured (dots) and best fit (lines), less the clamp's own motion", fontsize=8)
+    axes[0, 1].set_title(f"residuals: RMS {fit.rms * MM:.3g} mm", fontsize=8)
     for ax in axes[-1]:
         ax.set(xlabel="measured time (s)")
-    fig.suptitle(f"measured (dots) vs best fit (lines); RMS {fit.rms * MM:.3g} mm; {title}", fontsize=8)
+    material = objective.scene.material.name.split(" (")[0]
+    fig.suptitle(f"sheet markers fit ({material}): {title}", fontsize=9)
     return common.save(fig, path)
 
 

@@ -11,7 +11,11 @@ import pandas as pd
 from warpcloth.errors import ArgumentError, DataFileError
 
 from . import common
-from .common import DPI, LEGEND_VARIANTS, field_label, plt
+from .common import DPI, LEGEND_VARIANTS, field_label, field_unit, plt
+
+JOINED_VALUES = 8
+"""A curve over fewer swept values is drawn as points: a line through three points says
+the response between them is straight, which a finer grid often shows it is not."""
 
 
 def read_sweep_summary(sweep_dir: str | Path) -> pd.DataFrame:
@@ -100,9 +104,10 @@ def _against_one(fig: plt.Figure, ax: plt.Axes, data: pd.DataFrame, metric: str,
     grouped = data.groupby(x)[metric]
     # swept fields are dotted scene names; others that vary make this a sample, not a curve
     others = [c for c in data.columns if "." in c and c != x and data[c].nunique() > 1]
+    style = "o-" if data[x].nunique() >= JOINED_VALUES else "o"
     if grouped.size().max() == 1 and not others:
         ordered = data.sort_values(x)
-        ax.plot(ordered[x], ordered[metric], "o-", ms=3)
+        ax.plot(ordered[x], ordered[metric], style, ms=3)
     elif grouped.size().max() == 1:
         # a sampled sweep (Latin hypercube): points coloured by another swept field,
         # never joined in x order (that draws a zigzag through unrelated variants)
@@ -118,14 +123,17 @@ def _against_one(fig: plt.Figure, ax: plt.Axes, data: pd.DataFrame, metric: str,
         # one other gridded field with few values (e.g. the bending law): a line each
         for value, part in data.groupby(others[0], sort=False):
             ordered = part.sort_values(x)
-            shown = f"{value:g}" if isinstance(value, float) else str(value)
+            shown = f"{value:g} {field_unit(others[0])}".rstrip() if isinstance(value, float) else str(value)
             label = f"{field_label(others[0], units=False)} = {shown}"
-            ax.plot(ordered[x], ordered[metric], "o-", ms=3, label=label)
+            ax.plot(ordered[x], ordered[metric], style, ms=3, label=label)
         ax.legend(fontsize=7)
     else:
         ax.plot(data[x], data[metric], ".", ms=3, alpha=0.6, label="variants (other parameters vary)")
-        ax.plot(grouped.mean().index, grouped.mean().to_numpy(), "k-", lw=1, label="mean")
+        ax.plot(grouped.mean().index, grouped.mean().to_numpy(), "k" + style[-1], lw=1, ms=4, label="mean")
         ax.legend(fontsize=7)
+    if style == "o":
+        note = f"{data[x].nunique()} values of {field_label(x, units=False)}: points, not joined"
+        ax.text(0.99, 0.01, note, ha="right", va="bottom", fontsize=7, color="0.4", transform=ax.transAxes)
     ax.set(xlabel=field_label(x), ylabel=field_label(metric))
 
 
