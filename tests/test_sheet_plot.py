@@ -124,7 +124,19 @@ def test_export_usd_writes_the_mesh_the_run_recorded(shear_swing, tmp_path):
     one_line_refusal(run_cli("export-usd", out, "-o", tmp_path / "sheet.usda"), "-o", "--overwrite")
 
 
-def test_render_draws_the_sheet_where_it_is(shear_swing, tmp_path):
+def sheet_pixels(image):
+    """The sheet's pixels: light (its quads, grey to coloured by their shear), left of the colour bar."""
+    mask = (image.max(axis=2) < 245) & (image.min(axis=2) > 120)
+    mask[:, int(0.8 * image.shape[1]) :] = False
+    return mask
+
+
+def clamp_pixels(image):
+    """The clamp's pixels: dark and a little blue (CLAMP_COLOUR shaded), unlike the black text and grey edges."""
+    return (image.max(axis=2) < 110) & (image[..., 2] - image[..., 0] >= 3)
+
+
+def test_render_draws_the_sheet_and_its_clamp_where_they_are(shear_swing, tmp_path):
     out, result = shear_swing
     last = len(result.frame_times) - 1
     done = run_cli("render", out, "--out", tmp_path / "r", "--times", "0", str(result.frame_times[last]))
@@ -132,21 +144,75 @@ def test_render_draws_the_sheet_where_it_is(shear_swing, tmp_path):
     names = sorted(p.name for p in (tmp_path / "r").iterdir())
     assert names == ["frame_00000.png", f"frame_{last:05d}.png", "motion.gif"]
 
-    def sheet_columns(path):
+    def where(path):
         image = pixels(path)
-        cloth = (image[..., 0] - image[..., 2] > 15) & (image.max(axis=2) < 250)  # brown, not white or grey
-        return np.nonzero(cloth)[1].mean(), cloth.sum()
+        sheet, clamp = sheet_pixels(image), clamp_pixels(image)
+        rows, columns = np.nonzero(sheet)
+        clamp_rows, clamp_columns = np.nonzero(clamp)
+        return columns.mean(), sheet.sum(), np.median(rows), clamp_columns.mean(), clamp.sum(), clamp_rows.mean()
 
     # the clamp carries the sheet 20 mm along +z, which the camera (in front, +x) sees as leftward
     shift = result.markers[-1, 0, :, 2] - result.markers[0, 0, :, 2]  # the last sample is the last frame
     assert shift.min() > 0.019
-    start, start_count = sheet_columns(tmp_path / "r" / "frame_00000.png")
-    end, end_count = sheet_columns(tmp_path / "r" / f"frame_{last:05d}.png")
+    start, start_count, start_row, clamp_start, clamp_count, clamp_row = where(tmp_path / "r" / "frame_00000.png")
+    end, end_count, _, clamp_end, _, _ = where(tmp_path / "r" / f"frame_{last:05d}.png")
     assert start_count > 10_000 and end_count > 10_000
     assert end < start - 40
+    # the clamp is a solid bar above the sheet, and moves with it
+    assert clamp_count > 3_000 and clamp_row < start_row - 100
+    assert clamp_end < clamp_start - 40 and abs((clamp_start - clamp_end) - (start - end)) < 15
     gif = Image.open(tmp_path / "r" / "motion.gif")
     assert gif.n_frames == len(range(0, last + 1, 3))  # 60 frames/s: every third frame plays in real time
     one_line_refusal(run_cli("render", out, "--out", tmp_path / "r2", "--times", "9"), "--times", "9 s is outside")
+
+
+def test_render_colours_each_quad_by_its_shear(tmp_path):
+    from warpcloth.viz.render import render_sheet_run
+
+    # the twist shears the sheet's two halves opposite ways: both ends of the diverging map show
+    scene = load_sheet_scene("twist", [*COARSE, "run.duration_s=0.3"])
+    simulate(scene, out=tmp_path / "twist")
+    run = read_sheet_run(tmp_path / "twist")
+    paths = render_sheet_run(run, tmp_path / "r", times=np.array([0.0, 0.3]), movie=None)
+    for path, sheared in zip(paths, (False, True), strict=True):
+        image = pixels(path)
+        sheet = sheet_pixels(image)
+        red = sheet & (image[..., 0] - image[..., 2] > 50)
+        blue = sheet & (image[..., 2] - image[..., 0] > 50)
+        assert (min(red.sum(), blue.sum()) > 5_000) == sheared, (path, red.sum(), blue.sum())
+        # the colour bar, right of the sheet, spans both ends whatever the frame
+        bar = image[:, int(0.8 * image.shape[1]) :]
+        assert ((bar[..., 0] - bar[..., 2] > 100).sum() > 100) and ((bar[..., 2] - bar[..., 0] > 100).sum() > 100)
+        assert clamp_pixels(image).sum() > 3_000
+
+
+def test_the_shear_angle_of_a_quad_is_the_kernels():
+    from test_sheet import cell_shear_angle
+
+    from warpcloth.sheet.geometry import quad_shear_angles
+
+    # a rhombus whose warp side (down, −y) leans toward its weft side (+z) by 3° shears by +3°,
+    # wherever it lies
+    phi = np.radians(3.0)
+    x00, x10, x01 = np.zeros(3), np.array([0.0, -np.cos(phi), np.sin(phi)]) * 5e-3, np.array([0.0, 0.0, 1.0]) * 5e-3
+    rng = np.random.default_rng(1)
+    turn, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    corners = np.array([x00, x10, x10 + x01, x01]) @ turn.T + rng.normal(size=3)
+    quads = np.array([[0, 1, 2, 3]])
+    assert quad_shear_angles(corners, quads)[0] == pytest.approx(cell_shear_angle(*corners[[0, 1, 3, 2]]), abs=1e-15)
+    frames = rng.normal(size=(2, 4, 3))  # any quad, any frame: the tests' reference to round-off
+    expected = [cell_shear_angle(*f[[0, 1, 3, 2]]) for f in frames]
+    np.testing.assert_allclose(quad_shear_angles(frames, quads)[:, 0], expected, rtol=0, atol=1e-14)
+    assert quad_shear_angles(corners, quads)[0] == pytest.approx(phi, abs=1e-12)
+
+
+def test_the_colour_limit_is_a_round_number_at_or_above_the_peak():
+    from warpcloth.viz.render import colour_limit
+
+    assert [colour_limit(p) for p in (0.037, 0.12, 1.12, 3.0, 7.0, 9.5)] == pytest.approx(
+        [0.04, 0.15, 1.5, 3.0, 8.0, 10.0]
+    )
+    assert colour_limit(0.0) == 1e-6  # a sheet that never shears: a range VTK can draw
 
 
 def _rewrite_csv(file, change):

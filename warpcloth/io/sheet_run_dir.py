@@ -203,6 +203,7 @@ class SheetRun:
     lattice: np.ndarray
     rest_positions: np.ndarray
     faces: np.ndarray
+    clamped: np.ndarray  # [node], bool: the nodes the clamp carries rigidly
     complete: bool
 
     @property
@@ -402,5 +403,6 @@ def read_sheet_run(path: str | Path) -> SheetRun:
         geometry["lattice"],
         geometry["rest_positions"],
         geometry["faces"],
+        geometry["clamped"],
         complete,
     )

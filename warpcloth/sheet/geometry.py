@@ -428,3 +428,14 @@ def _cells(length: float, h: float, argument: str, of: str = "") -> int:
     if count < 1 or abs(count * h - length) > 1e-9 * length:
         raise ArgumentError(argument, f"{of}{length:g} m is not a whole number of cells of {h:g} m")
     return int(count)
+
+
+def quad_shear_angles(positions: np.ndarray, quads: np.ndarray) -> np.ndarray:
+    """The shear angle φ (rad) of each of ``quads`` ``[quad, 4]`` (corners (i, j), (i+1, j),
+    (i+1, j+1), (i, j+1), as a run's mesh faces) with its nodes at ``positions``
+    ``[..., node, xyz]``: ``[..., quad]``. φ = π/2 − the angle between the quad's mean warp
+    and weft sides, zero at rest, positive as the warp leans toward the weft: the kernels'
+    ``shear_angle`` of a cell (docs/model.md §17.5), in NumPy for what reads a run back."""
+    x00, x10, x11, x01 = (positions[..., quads[:, k], :] for k in range(4))
+    warp, weft = (x10 - x00 + x11 - x01) / 2, (x01 - x00 + x11 - x10) / 2
+    return np.arctan2((warp * weft).sum(axis=-1), np.linalg.norm(np.cross(warp, weft), axis=-1))

@@ -11,6 +11,8 @@ from warpcloth.io.recording import Recording
 CLAMP_JAW_M = 3.0e-3  # drawn thickness of each clamp jaw
 BOX_QUADS = [0, 1, 3, 2, 4, 6, 7, 5, 0, 4, 5, 1, 2, 3, 7, 6, 0, 2, 6, 4, 1, 5, 7, 3]
 """Quads of the clamp box, 4 corner indices each, outward-facing."""
+BOX_FACES = np.hstack([[4, *BOX_QUADS[4 * k : 4 * k + 4]] for k in range(6)])
+"""The clamp box's quads as a VTK face array (each quad's corner count, then its corners)."""
 
 
 def variant_colours(values: np.ndarray) -> np.ndarray:
@@ -65,5 +67,18 @@ def clamp_box(recording: Recording, j: int) -> np.ndarray:
     scene = recording.scenes[j]
     length = scene.strip.clamp_length_mm * 1e-3
     half_w = scene.strip.width_mm * 1e-3 / 2
-    x = (-CLAMP_JAW_M, CLAMP_JAW_M)
-    return np.array([[xx, yy, zz] for xx in x for yy in (0.0, length) for zz in (-half_w, half_w)], dtype=float)
+    return box_corners(np.array([-CLAMP_JAW_M, 0.0, -half_w]), np.array([CLAMP_JAW_M, length, half_w]))
+
+
+def box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The 8 corners of the axis-aligned box from ``lo`` to ``hi`` (xyz), in BOX_QUADS' order."""
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])], dtype=float)
+
+
+def sheet_clamp_box(rest_positions: np.ndarray, clamped: np.ndarray) -> np.ndarray:
+    """The 8 corners of a sheet's clamp jaws at rest: around every node it holds (``clamped``
+    of ``rest_positions`` ``[node, xyz]``), CLAMP_JAW_M either side of the sheet's plane and
+    reaching as far past its held nodes, so the jaws show beyond the fabric they grip."""
+    held = rest_positions[clamped]
+    pad = np.array([CLAMP_JAW_M, 0.0, CLAMP_JAW_M])
+    return box_corners(held.min(axis=0) - pad, held.max(axis=0) + pad)

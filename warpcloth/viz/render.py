@@ -5,8 +5,9 @@ Each strip is drawn as a ribbon of its real width (z), the clamp as a grey box m
 rigidly with the clamp nodes, the time (from the release, or the start of the clamp
 motion) stamped in a corner. The camera looks along −z at the x–y plane of the motion
 with a parallel projection, framed once for the whole run so frames compare directly.
-A woven sheet (:func:`render_sheet_run`) is drawn as its mesh of quads, seen from the
-front (+x), turned a little toward +z.
+A woven sheet (:func:`render_sheet_run`) is drawn as its mesh of quads coloured by each
+quad's shear angle, its clamp a grey box moving rigidly with it and a ruler in mm beside
+it, seen from the front (+x), turned a little toward +z.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from warpcloth.errors import ArgumentError
 from warpcloth.io.atomic import write_atomically
 from warpcloth.io.recording import Recording, nearest_frames
 from warpcloth.io.sheet_run_dir import SheetRun
+from warpcloth.sheet.geometry import quad_shear_angles
 
 if not os.environ.get("DISPLAY"):
     # Headless: go straight to EGL instead of trying an X server first.
@@ -30,11 +32,12 @@ if not os.environ.get("DISPLAY"):
 import pyvista as pv  # noqa: E402
 
 from warpcloth.viz.geometry import (  # noqa: E402
-    BOX_QUADS,
+    BOX_FACES,
     clamp_box,
     colour_values,
     ribbon_quads,
     ribbon_vertices,
+    sheet_clamp_box,
     variant_colours,
 )
 
@@ -42,7 +45,10 @@ WINDOW = (960, 720)
 CAMERA_AZIMUTH_DEG = 25.0  # about the vertical, from the +z side
 CAMERA_ELEVATION_DEG = 15.0
 BACKGROUND = "white"
-SHEET_COLOUR = (0.55, 0.45, 0.35)  # as the USD export's displayColor
+CLAMP_COLOUR = (0.35, 0.35, 0.38)
+SHEAR_TITLE = "shear angle (°)"  # the render fonts lack φ
+SHEAR_CMAP = "coolwarm"  # diverging, its middle a light grey that shows on the white background
+RULER_GAP_M = 0.01  # between the sheet's furthest reach toward +z and the ruler
 
 
 class Renderer:
@@ -132,8 +138,8 @@ class StripRenderer(Renderer):
             self.plotter.add_mesh(ribbon, color=colours[j], smooth_shading=True)
             self.ribbons.append(ribbon)
             box = clamp_box(recording, j)
-            clamp = pv.PolyData(box.copy(), np.hstack([[4, *BOX_QUADS[4 * k : 4 * k + 4]] for k in range(6)]))
-            self.plotter.add_mesh(clamp, color=(0.35, 0.35, 0.38))
+            clamp = pv.PolyData(box.copy(), BOX_FACES)
+            self.plotter.add_mesh(clamp, color=CLAMP_COLOUR)
             self.clamps.append((clamp, box))
         self.angle_and_shift = [recording.clamp_pose(j) for j in range(len(recording.variants))]
         self._stamp()
@@ -167,27 +173,104 @@ class StripRenderer(Renderer):
 
 
 class SheetRenderer(Renderer):
-    """A sheet run's mesh (the quads of its geometry's faces, edges drawn, so the weave's
-    shear shows as the cells' slant), seen from the front (+x, where a lab's camera films)
-    turned toward +z, so both the swing out of the plane and the shear in it show. A
-    sheet's frames after its divergence keep its last shape."""
+    """A sheet run's mesh (the quads of its geometry's faces, edges drawn), each quad coloured
+    by its shear angle on a diverging map whose limits hold over the whole run, so frames
+    compare; the clamp's jaws a grey box moving rigidly with the clamp; a ruler in mm beside
+    the sheet. Seen from the front (+x, where a lab's camera films) turned toward +z, so
+    both the swing out of the plane and the shear in it show. A sheet's frames after its
+    divergence keep its last shape."""
 
     def __init__(self, run: SheetRun, sheet: int = 0, window_size: tuple[int, int] = WINDOW) -> None:
         super().__init__(run.frame_times, window_size)
         self.shapes = drawable_sheet_frames(run.frames[:, sheet], run.rest_positions)
+        self.shear_deg = np.degrees(quad_shear_angles(self.shapes, run.faces))
+        limit = colour_limit(float(np.abs(self.shear_deg).max()))
         faces = np.hstack([np.full((len(run.faces), 1), 4), run.faces]).ravel()
         self.mesh = pv.PolyData(self.shapes[0].copy(), faces)
+        self.mesh.cell_data[SHEAR_TITLE] = self.shear_deg[0]
         self.plotter.add_mesh(
-            self.mesh, color=SHEET_COLOUR, smooth_shading=True, show_edges=True, edge_color="grey", ambient=0.4
+            self.mesh,
+            scalars=SHEAR_TITLE,
+            cmap=SHEAR_CMAP,
+            clim=(-limit, limit),
+            show_edges=True,
+            edge_color=(0.3, 0.3, 0.3),
+            # lit mostly by ambient light, so a quad's colour reads off the colour bar,
+            # with enough diffuse light that the sheet's curvature still shows
+            ambient=0.6,
+            diffuse=0.4,
+            scalar_bar_args={
+                "title": SHEAR_TITLE,
+                "vertical": True,
+                "position_x": 0.86,
+                "position_y": 0.2,
+                "height": 0.6,
+                "width": 0.06,
+                "n_labels": 5,
+                "fmt": "%.3g",
+                "color": "black",
+                "title_font_size": 16,
+                "label_font_size": 14,
+            },
         )
+        box = sheet_clamp_box(run.rest_positions, run.clamped)
+        self.clamp_boxes = clamp_positions(run, box, sheet)
+        self.clamp = pv.PolyData(self.clamp_boxes[0].copy(), BOX_FACES)
+        self.plotter.add_mesh(self.clamp, color=CLAMP_COLOUR)
         self._stamp()
-        points = self.shapes.reshape(-1, 3)
+        points = np.concatenate([self.shapes.reshape(-1, 3), self.clamp_boxes.reshape(-1, 3)])
         lo, hi = points.min(axis=0), points.max(axis=0)
+        self._ruler(run.rest_positions, hi[2])
         self._look_at((lo + hi) / 2, view_direction(90.0 - CAMERA_AZIMUTH_DEG), max(hi - lo) * 1.2 + 0.01)
 
+    def _ruler(self, rest: np.ndarray, z: float) -> None:
+        # Upright, from the clamp edge (0) down the sheet's rest length in whole centimetres
+        # (labelled every 10, 20, 25 or 50 mm, so the labels are round), beside the sheet on
+        # its +z side (left on screen) where no frame reaches: vertical lengths are seen at
+        # cos(elevation) = 0.97 of true, so the ruler reads the sheet's size directly.
+        length_mm = max(10, int(-rest[:, 1].min() * 1e3 + 1e-6) // 10 * 10)
+        step = next(s for s in (10, 20, 25, 50, 100, 200, 500, length_mm) if length_mm % s == 0 and length_mm / s <= 6)
+        self.plotter.add_ruler(
+            (0.0, 0.0, z + RULER_GAP_M),
+            (0.0, -length_mm * 1e-3, z + RULER_GAP_M),
+            number_labels=length_mm // step + 1,
+            title="",  # the unit is on every label: a title would sit among them
+            label_format="%.0f mm",
+            label_color="black",
+            tick_color="black",
+            font_size_factor=0.8,
+            scale=1e3,
+        )
+
     def move_to(self, frame: int) -> None:
-        """Move the mesh to ``frame``."""
+        """Move the mesh and the clamp to ``frame`` and colour the mesh by its shear there."""
         self.mesh.points = self.shapes[frame]
+        self.mesh.cell_data[SHEAR_TITLE] = self.shear_deg[frame]
+        self.clamp.points = self.clamp_boxes[frame]
+
+
+def clamp_positions(run: SheetRun, box: np.ndarray, sheet: int = 0) -> np.ndarray:
+    """Where the clamp's rigid motion carries the points ``box`` ``[point, xyz]`` (at rest) at
+    each of the run's frames: ``[frame, point, xyz]``, the clamp's angle and travel
+    interpolated from the probes (a diverged sheet's clamp stops where its probes stop)."""
+    from warpcloth.scene.sheet_build import sheet_clamp
+    from warpcloth.viz.figures.sheet import carried_by_clamp
+
+    probes = run.probes[run.probes["sheet"] == sheet]
+    t = probes["t"].to_numpy()
+    angle = np.interp(run.frame_times, t, probes["clamp_angle"].to_numpy())
+    travel = np.interp(run.frame_times, t, probes["clamp_displacement"].to_numpy())
+    return carried_by_clamp(box, angle, travel, sheet_clamp(run.scene))
+
+
+def colour_limit(peak: float) -> float:
+    """The colour bar's half range for values up to ``peak`` in magnitude: the next of
+    1, 1.5, 2, 3, 4, 5, 6, 8 times a power of ten at or above it, so its labels are round
+    numbers (1e-6 for a sheet that never shears, whose quads then show the map's middle)."""
+    if not peak > 1e-6:
+        return 1e-6
+    power = 10.0 ** np.floor(np.log10(peak))
+    return float(next(m * power for m in (1, 1.5, 2, 3, 4, 5, 6, 8, 10) if m * power >= peak * (1 - 1e-9)))
 
 
 def view_direction(azimuth_deg: float) -> np.ndarray:
@@ -250,7 +333,8 @@ def render_sheet_run(
     stride: int = 1,
 ) -> list[Path]:
     """A sheet run (:func:`warpcloth.io.sheet_run_dir.read_sheet_run`) as :func:`render_run`
-    renders a strip's: PNGs of the frames at ``times``, an animation unless ``movie`` is None."""
+    renders a strip's: PNGs of the frames at ``times``, an animation unless ``movie`` is None;
+    each coloured by the quads' shear angle, with the clamp and a ruler (:class:`SheetRenderer`)."""
     return render_frames(lambda: SheetRenderer(run), run.frame_times, run.frame_rate, out_dir, times, movie, stride)
 
 
