@@ -486,8 +486,8 @@ def test_formats_and_dpi(swing_run, tmp_path):
     large = plot_run(recording, tmp_path / "large", dpi=120)
     for a, b in zip(small, large, strict=True):
         assert Image.open(b).size[0] == pytest.approx(2 * Image.open(a).size[0], abs=2)
-    svg = plot_run(recording, tmp_path / "svg", fmt="svg")
-    assert [p.suffix for p in svg] == [".svg"] * 5 and svg[0].read_text().lstrip().startswith("<?xml")
+    svg = plot_run(recording, tmp_path / "svg", fmt="svg")  # a fixed clamp: no clamp-angle figure
+    assert [p.suffix for p in svg] == [".svg"] * 4 and svg[0].read_text().lstrip().startswith("<?xml")
     pdf = plot_run(recording, tmp_path / "pdf", fmt="pdf")
     assert all(p.read_bytes().startswith(b"%PDF") for p in pdf)
     with pytest.raises(wc.ArgumentError, match="fmt: must be one of png, pdf, svg, got 'jpg'"):

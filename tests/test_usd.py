@@ -143,7 +143,7 @@ def test_sweep_variants_are_selected_by_range_and_by_parameter(tmp_path):
             "sweep": {"grid": {"damping.gamma_per_s": [0.1, 0.2, 0.4, 0.8]}},
         }
     )
-    wc.run_sweep(sweep, tmp_path / "sweep", workers=0, frames=True, progress=False)
+    wc.run_sweep(sweep, tmp_path / "sweep", workers=0, frames=True, probes="all", progress=False)
     picked = load_recording(tmp_path / "sweep", variants="1:4", where="damping.gamma_per_s<0.5")
     assert list(picked.variants) == [1, 2]
     single = wc.simulate(sweep.scenes[2])
@@ -265,7 +265,7 @@ def test_a_sweep_whose_material_file_changed_is_refused(tmp_path):
             "sweep": {"grid": {"damping.gamma_per_s": [0.1]}},
         }
     )
-    wc.run_sweep(sweep, tmp_path / "sweep", workers=0, frames=True, progress=False)
+    wc.run_sweep(sweep, tmp_path / "sweep", workers=0, frames=True, probes="all", progress=False)
     assert load_recording(tmp_path / "sweep").scenes[0].material.density_g_per_cm2 == 0.0203
     material.write_text(material.read_text().replace("density_g_per_cm2 = 2.03e-2", "density_g_per_cm2 = 4e-2"))
     with pytest.raises(wc.DataFileError, match="no longer resolve"):

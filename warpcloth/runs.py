@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -230,10 +230,12 @@ def sheet_result_metrics(scene: SheetScene, result: RunResult, sheet: int) -> di
     }
 
 
-def metrics_table(scenes: Sequence[Scene] | Sequence[SheetScene], result: RunResult) -> pd.DataFrame:
-    """One row per variant of ``result`` (a run of ``scenes``): its body's metrics, as a
-    sweep's summary has them."""
-    measure = sheet_result_metrics if result.body == "sheet" else strip_result_metrics
+def metrics_table(scenes: Sequence[Any], result: RunResult) -> pd.DataFrame:
+    """One row per variant of ``result`` (a run of ``scenes``, strips or sheets): its
+    body's metrics, as a sweep's summary has them."""
+    measure: Callable[[Any, RunResult, int], dict[str, object]] = (
+        sheet_result_metrics if result.body == "sheet" else strip_result_metrics
+    )
     rows = [measure(scene, result, j) for j, scene in enumerate(scenes)]
     return pd.DataFrame(rows, index=pd.RangeIndex(len(rows), name="variant"))
 

@@ -10,13 +10,16 @@ either importing the other.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import numpy as np
 
 from warpcloth.errors import ArgumentError
 from warpcloth.io.measured import LaserTrace, SheetMarkers, TrackedShapes
 from warpcloth.scene import Scene
+
+if TYPE_CHECKING:
+    from warpcloth.scene.sheet import SheetScene
 
 from . import common
 from .common import MM, X_LABEL, Y_LABEL, field_label, field_unit, inside, plt
@@ -172,7 +175,7 @@ def _sheet_markers_overlay(
     window = (float(measurement.t[0]), float(measurement.t[-1]))
     keep = inside(result.t - shift, window)
     residual = objective.residuals(result, 0, shift, penalise=False).reshape(-1, rows)
-    clamp = sheet_clamp(objective.scene)
+    clamp = sheet_clamp(cast("SheetScene", objective.scene))  # a sheet fit's objective holds a sheet scene
     angle, travel = result.probe("clamp_angle", 0), result.probe("clamp_displacement", 0)
     carried = carried_by_clamp(result.markers[0, 0], angle, travel, clamp)  # [sample, marker, xyz]
     for a, axis in enumerate(measurement.axes):
