@@ -255,7 +255,7 @@ def test_a_sweep_over_the_law_keeps_the_law_in_every_result(tmp_path):
     base = read_scene_file("damped_swing")
     base["run"]["duration_s"] = 0.1
     sweep = wc.expand(base | {"sweep": {"grid": {"material.bending_law": ["tagawa2003", "dahl", "frictional_couple"]}}})
-    wc.run_sweep(sweep, tmp_path / "s", workers=0, frames=True, progress=False)
+    wc.run_sweep(sweep, tmp_path / "s", workers=0, frames=True, probes="all", progress=False)
     recording = wc.load_recording(tmp_path / "s")
     assert list(recording.to_xarray()["material.bending_law"].values) == ["tagawa2003", "dahl", "frictional_couple"]
     assert set(recording.to_dataframe()["material.bending_law"]) == {"tagawa2003", "dahl", "frictional_couple"}

@@ -425,7 +425,7 @@ def test_scene_list_and_show_give_templates_that_run(tmp_path):
 
 def test_results_as_xarray_and_dataframe(tmp_path):
     sweep = wc.expand({"run": {"duration_s": 0.05}, "sweep": {"grid": {"damping.gamma_per_s": [0.1, 0.3]}}})
-    wc.run_sweep(sweep, tmp_path / "s", workers=0, frames=True, progress=False)
+    wc.run_sweep(sweep, tmp_path / "s", workers=0, frames=True, probes="all", progress=False)
     recording = wc.load_recording(tmp_path / "s")
     ds = recording.to_xarray()
     assert list(ds["damping.gamma_per_s"].values) == [0.1, 0.3] and ds["tip_x"].attrs["units"] == "m"

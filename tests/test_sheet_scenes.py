@@ -200,7 +200,7 @@ def test_a_marker_off_the_sheet_is_refused(tmp_path):
     one_line_refusal(
         run_cli("run", "twist", "--set", "output.probe_hinge_mm=[500.0, 500.0]", "--out", tmp_path / "r"),
         "output.probe_hinge_mm",
-        "from the nearest free weft hinge",
+        "from the nearest free warp hinge",
     )
     one_line_refusal(
         run_cli("run", "twist", "--set", "output.markers_ij=[[99, 0]]", "--out", tmp_path / "r"),

@@ -68,7 +68,7 @@ def bundled_data(name: str | Path) -> Path:
 
 
 def bundled_data_names() -> list[str]:
-    """The names of the bundled example data files (scenes/data/*.csv, without .csv)."""
+    """The names of the bundled example data files (``scenes/data/*.csv``, without ``.csv``)."""
     folder = importlib.resources.files("warpcloth.scenes") / "data"
     return sorted(entry.name[:-4] for entry in folder.iterdir() if entry.name.endswith(".csv"))
 
