@@ -49,6 +49,7 @@ def limited_cli(*args, cwd, max_file_bytes):
     )
 
 
+@pytest.mark.slow
 def test_a_disk_that_fills_during_a_run_is_exit_5_and_leaves_the_committed_part(tmp_path):
     # 30 s of the swing: 0.7 MB of frames (reserved at the start) and ~7 MB of probe rows
     # in chunks of growing size; a 3 MB limit stops it while it streams probes.
@@ -280,6 +281,7 @@ def test_two_runs_started_into_one_directory_never_interleave(tmp_path):
     np.testing.assert_array_equal(recording.probes["tip_x"].to_numpy(), alone.probe("tip_x", 0))
 
 
+@pytest.mark.slow
 def test_an_overwrite_never_pulls_a_directory_from_under_a_running_writer(tmp_path):
     out = tmp_path / "r"
     proc = subprocess.Popen(
@@ -1056,6 +1058,7 @@ def test_a_kes_fit_that_overflows_writes_no_material_file(tmp_path, scale):
     assert not (tmp_path / "m.toml").exists()
 
 
+@pytest.mark.slow
 def test_a_kes_shear_fit_that_overflows_writes_no_material_file(tmp_path):
     # issue 39: a shear loop scaled by 1e300 was "failed", yet written with
     # hysteresis_d1_gf_per_cm ≈ 1e302; tensile and bending fits already refused this

@@ -70,6 +70,7 @@ def fitted_back_with_set_and_grip(base, measured, truth, noise):
     return fit
 
 
+@pytest.mark.slow
 def test_the_swing_alone_does_not_separate_the_set_from_d_a_horizontal_still_does():
     # Jacobians at the truth (a set 0.1 1/cm, a 10 mm grip at 3×), no fit: from a short
     # swing alone (D, D1, γ, K_rest, grip factor, ℓ_g) are not all determined: K_rest

@@ -179,6 +179,7 @@ def test_the_kes_values_each_fit_reproduces():
 SEEDS = range(10)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("material", [DAHL_SOFT, DAHL_SLOW], ids=["n=0.4", "n=2.5"])
 def test_a_dahl_loop_is_recognised_by_aic(material):
     # n clearly away from 1: over seeds 0–19 dahl ranks first on every seed, ΔAIC to the
@@ -192,6 +193,7 @@ def test_a_dahl_loop_is_recognised_by_aic(material):
         assert comparison.same_as_tagawa2003() is None
 
 
+@pytest.mark.slow
 def test_a_frictional_couple_loop_is_recognised_by_aic():
     # Dahl's n → 0 is the frictional couple, but its n stops at 0.1, 1 parameter more:
     # measured over seeds 0–19, AIC ranks frictional_couple first on 19 (dahl once, by
@@ -206,6 +208,7 @@ def test_a_frictional_couple_loop_is_recognised_by_aic():
     assert aic_first >= 9
 
 
+@pytest.mark.slow
 def test_a_papers_loop_is_recognised_by_its_fewer_parameters():
     # dahl contains tagawa2003 (n = 1), so it can only tie on the paper's loop: its SSE is
     # never above tagawa2003's (the 2-D search finds at least the nested optimum), and the

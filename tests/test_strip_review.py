@@ -171,6 +171,7 @@ def test_the_tracked_overlay_keys_time_and_reads_at_page_size():
     plt.close(fig)
 
 
+@pytest.mark.slow
 def test_the_clamp_fit_prints_what_it_determines_and_marks_what_it_does_not(tmp_path):
     t, theta = read_encoder("impulsive_rotation_encoder", None)
     values = {v.name.split(" ")[0]: v for v in parameter_uncertainties(fit_clamp_motion(t, theta), t, theta)}
