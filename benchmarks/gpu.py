@@ -14,10 +14,15 @@
    5 mm (benchmarks/sheet_throughput.py), masing bending and shear, float64 and float32,
    against the CPU's B = 32 on all its cores measured in the same run (one GPU thread
    advances one sheet, as a CPU task does).
+5. The bundled sweep (issue 41): `damped_swing_sweep` (paper law, dt "auto", 1.3 s hold
+   and 3 s swing) at 10 000 variants through ``run_sweep`` as `warpcloth sweep` runs it,
+   its summary's probes kept (the default), against 200 of its variants on every CPU core
+   in the same run: wall, variants/s, node-steps/s, the bytes written, the ratio.
 
 Kernels are compiled (and cached) before timing. Without a CUDA device it says so and
-exits 2 (nothing to measure); ``--device cpu --sheet-only`` runs section 4's CPU rows
-alone (a smoke run of the script on any machine).
+exits 2 (nothing to measure); ``--device cpu --sheet-only`` and ``--device cpu
+--sweep-only`` run section 4's or 5's CPU rows alone (smoke runs of the script on any
+machine).
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ import argparse
 import platform
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -122,11 +128,47 @@ def sheets(device: str, sizes: list[int], duration: float) -> None:
             print(f"   {precision:9s} {b:>9} {rate:13.3e} {rate / cpu:12.2f}x")
 
 
+ISSUE_41_SWEEP = ("material.bending_law=tagawa2003", "integrator.dt_s=auto", "run.duration_s=3.0")
+"""The bundled sweep as issue 41 times it: the paper's law, the step dt "auto" chooses
+(semi-implicit, within 0.2 % of dt = 1e-7 s), its 1.3 s hold and a 3 s swing."""
+
+
+def sweep_rate(device: str, samples: int) -> tuple[float, int]:
+    """Variants/s and bytes written of ``samples`` variants of the bundled sweep run as
+    `warpcloth sweep` runs them (a fresh directory, kernels warmed by it): on the CPU in its
+    default batches on every core, on a GPU as one batch (a GPU needs thousands of strips
+    at once; the batch's step is then its stiffest variant's)."""
+    sweep = wc.load_sweep("damped_swing_sweep", [*ISSUE_41_SWEEP, f"sweep.random.samples={samples}"])
+    on_gpu = device != "cpu"
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "sweep"
+        started = time.perf_counter()
+        wc.run_sweep(sweep, out, device=device, workers=1 if on_gpu else None, max_batch=samples if on_gpu else None)
+        wall = time.perf_counter() - started
+        written = sum(f.stat().st_size for f in out.rglob("*") if f.is_file())
+    return samples / wall, written
+
+
+def sweeps(device: str, samples: int) -> None:
+    """Section 5: the bundled sweep's variants/s on ``device`` against 200 of its variants on
+    every CPU core (only the CPU row when ``device`` is the CPU)."""
+    print("\n5. the bundled sweep (damped_swing_sweep, paper law, dt auto, 3 s swing), summary probes kept")
+    print("   {:>14} {:>9} {:>11} {:>9} {:>12}".format("device", "variants", "variants/s", "vs CPU", "kB/variant"))
+    cpu, cpu_bytes = sweep_rate("cpu", 200)
+    print(f"   {'cpu (all)':>14} {200:>9} {cpu:11.1f} {1.0:8.2f}x {cpu_bytes / 200 / 1e3:12.0f}")
+    if device != "cpu":
+        gpu, gpu_bytes = sweep_rate(device, samples)
+        print(f"   {device:>14} {samples:>9} {gpu:11.1f} {gpu / cpu:8.2f}x {gpu_bytes / samples / 1e3:12.0f}")
+    best = cpu if device == "cpu" else max(cpu, gpu)
+    print(f"   10 000 variants: {1e4 / best:.0f} s at the best rate here (the paper: 210 s for one)")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--device", default="cuda:0")
     parser.add_argument("--quick", action="store_true", help="B up to 1e4 and shorter records")
     parser.add_argument("--sheet-only", action="store_true", help="section 4 alone (with --device cpu: its CPU rows)")
+    parser.add_argument("--sweep-only", action="store_true", help="section 5 alone (with --device cpu: its CPU row)")
     args = parser.parse_args()
     init_warp_quietly()
     sheet_sizes = [1000] if args.quick else [1000, 10000]
@@ -136,14 +178,21 @@ def main() -> int:
     if args.sheet_only:
         sheets(args.device, sheet_sizes, 0.005)
         return 0
+    if args.sweep_only:
+        sweeps(args.device, 2000 if args.quick else 10000)
+        return 0
     if args.device == "cpu":
-        print("sections 1-3 compare a GPU with the CPU: give --device cuda:N, or --sheet-only", file=sys.stderr)
+        print(
+            "sections 1-3 compare a GPU with the CPU: give --device cuda:N, --sheet-only or --sweep-only",
+            file=sys.stderr,
+        )
         return 2
     print(f"{platform.node()}: {wp.get_device(args.device).name}, Warp {wp.__version__}")
     agreement(args.device)
     throughput(args.device, [1000, 10000] if args.quick else [1000, 10000, 100000], 0.02 if args.quick else 0.05)
     paper_faithful(args.device, 10000 if args.quick else 100000)
     sheets(args.device, sheet_sizes, 0.005)
+    sweeps(args.device, 2000 if args.quick else 10000)
     return 0
 
 
