@@ -77,8 +77,8 @@ LIBRARY_ONLY = frozenset(
         "bending_factor",  # Grip(...): a scene's clamp.grip_* fields, checked as fields
         "bending_poisson_ratio",  # SheetMaterialSI(...): a scene's bias.bending_poisson_ratio, checked as a field
         "bias",  # SheetMaterialSI(bias=...): a scene's [bias], checked field by field
-        "compression_fraction",
-        "count",  # sheet_shapes_figure(count=): plot draws six frames  # SheetBuilder(...): a scene's sheet.yarn_compression_fraction, checked as a field
+        "compression_fraction",  # SheetBuilder(...): a scene's sheet.yarn_compression_fraction, checked as a field
+        "count",  # sheet_shapes_figure(count=): plot draws six frames
         "bending_length",  # rigidity_from_bending_length(bending_length, ...): as areal_density
         "body",  # warpcloth.bodies.named(name): a scene or run names its body, read by the registry
         "blocks",  # identifiability(blocks): the benchmarks' comparison of experiments
