@@ -194,7 +194,7 @@ def test_a_cantilever_cut_at_any_angle_bends_with_d_theta(angle):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("angle", ANGLES)
+@pytest.mark.parametrize("angle", (0.0, 22.5, 45.0))  # 90° and 67.5° mirror 0° and 22.5° here (D11 = D22): equal
 def test_a_free_strip_cut_at_any_angle_rings_with_d_theta(angle):
     # The same plate without a clamp to cross the cells: only free cuts, whose areas are
     # clipped exactly, so what is left is D(θ) and the lattice's own error. 28 × 4 cell
@@ -209,7 +209,7 @@ def test_a_free_strip_cut_at_any_angle_rings_with_d_theta(angle):
     # −0.920 %, −0.266 % (1.79) on the bias; −1.022 %, −0.328 % (1.64) at 22.5° and 67.5°,
     # where 1.25 mm gives −0.122 % (order 1.43: a first-order part of about 0.06 %/mm·h
     # remains beside the second-order one; along the yarns 1.25 mm gives −0.008 %)
-    oblique = angle in (22.5, 67.5)
+    oblique = angle == 22.5
     assert -(0.011 if oblique else 0.01) < errors[0] < 0 and -0.0035 < errors[1] < 0
     assert order > (1.55 if oblique else 1.7)
 
