@@ -32,7 +32,7 @@ from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.io.writing import claim_result
 from warpcloth.kernels import PROBE_FIELDS
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
-from warpcloth.runs import sheet_result_metrics, simulate, strip_result_metrics
+from warpcloth.runs import sheet_result_metrics, simulate
 from warpcloth.scene import Scene, Sweep, scene_from_dict
 from warpcloth.scene.sheet import SheetScene, sheet_scene_from_dict
 from warpcloth.scene.sheet_build import build_sheets, sheet_geometry
@@ -203,10 +203,9 @@ def strip_sweep_batch(scene_dicts: list[dict], device: str | None, frames: bool)
     # one thread per batch: the sweep already runs its batches on the cores
     result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
     ok = np.isfinite(result.probes[:, PROBE_FIELDS.index("tip_x")])
-    rows = [
-        strip_result_metrics(scene, result, local) | _overflows(result.reversal_memory, local)
-        for local, scene in enumerate(scenes)
-    ]
+    # simulate measured each strip already (result.metrics: strip_result_metrics per strip)
+    measured = result.metrics.to_dict("records")
+    rows = [row | _overflows(result.reversal_memory, local) for local, row in enumerate(measured)]
     return SimulatedBatch(
         list(PROBE_FIELDS), result.t, result.probes, ok, rows, result.frames if frames else None, result.strip_steps
     )
