@@ -126,10 +126,10 @@ def run_sweep_command(args: argparse.Namespace) -> int:
         if sweep.discrepancy is None
         else f"; its random sample's centred L2 discrepancy is {sweep.discrepancy:.3g} (lower is more even)"
     )
-    print(
-        f"wrote {out}/ ({len(summary)} variants: summary.csv, summary.parquet, probes/, variants.csv); "
-        f"{n_div} diverged{evenness}"
-    )
+    stored = ["summary.csv", "summary.parquet"]
+    stored += [] if args.probes == "none" else [f"probes/ ({args.probes})"]
+    stored += ["frames/"] if args.frames else []
+    print(f"wrote {out}/ ({len(summary)} variants: {', '.join([*stored, 'variants.csv'])}); {n_div} diverged{evenness}")
     if "reversal_overflows" in summary and summary["reversal_overflows"].fillna(0).any():
         full = summary.loc[summary["reversal_overflows"].fillna(0) > 0, "variant"].tolist()
         print(
