@@ -26,7 +26,7 @@ from tqdm import tqdm
 
 from warpcloth import bodies
 from warpcloth.core.resources import check_disk, check_memory
-from warpcloth.errors import ArgumentError, checked_count, checked_instance, checked_path
+from warpcloth.errors import ArgumentError, InternalError, checked_count, checked_instance, checked_path
 from warpcloth.io import PROBE_RECORDS
 from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.io.writing import claim_result
@@ -204,6 +204,8 @@ def strip_sweep_batch(scene_dicts: list[dict], device: str | None, frames: bool)
     result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
     ok = np.isfinite(result.probes[:, PROBE_FIELDS.index("tip_x")])
     # simulate measured each strip already (result.metrics: strip_result_metrics per strip)
+    if result.metrics is None:  # simulate measures every strip it runs
+        raise InternalError("a strip batch came back without its metrics")
     measured = result.metrics.to_dict("records")
     rows = [row | _overflows(result.reversal_memory, local) for local, row in enumerate(measured)]
     return SimulatedBatch(
