@@ -106,6 +106,17 @@ def register(sub: argparse._SubParsersAction) -> None:
         "frames, a fixed-camera background model)",
     )
     vid.add_argument(
+        "--mask",
+        metavar="IMAGE",
+        help="an image the size of the frames, white (non-zero) where nothing is to be tracked: the "
+        "clamp's sweep, a screw, a reflection; everywhere else black",
+    )
+    vid.add_argument(
+        "--roi",
+        metavar="X0,Y0,X1,Y1",
+        help="track only inside this rectangle of the frame, px (columns X0 to X1, rows Y0 to Y1)",
+    )
+    vid.add_argument(
         "--threshold-dn",
         type=positive,
         default=None,
@@ -184,6 +195,39 @@ def _what_to_track(args: argparse.Namespace) -> np.ndarray:
             "--centreline-s", f"{arcs[-1]:g} mm lies beyond the free end (--free-length-mm {args.free_length_mm:g})"
         )
     return arcs
+
+
+def ignored_pixels(mask: str | None, roi: str | None, size: tuple[int, int]) -> np.ndarray | None:
+    """The pixels ``--mask`` (non-zero) and ``--roi X0,Y0,X1,Y1`` (outside it) leave out of
+    the tracking, as a bool array of the frames' shape; None when neither is given."""
+    from warpcloth.track.calibration import read_image
+
+    width, height = size
+    ignore = None
+    if mask:
+        image = read_image(mask, "--mask")
+        if image.shape != (height, width):
+            raise OptionError(
+                "--mask",
+                f"{mask} is {image.shape[1]} × {image.shape[0]} px, the video's frames are {width} × {height} px",
+            )
+        ignore = image > 0
+    if roi:
+        try:
+            x0, y0, x1, y1 = (int(v) for v in roi.split(","))
+        except ValueError:
+            raise OptionError("--roi", f"expected X0,Y0,X1,Y1 (whole px), got {roi!r}") from None
+        if not (0 <= x0 < x1 <= width and 0 <= y0 < y1 <= height):
+            raise OptionError(
+                "--roi",
+                f"{roi}: needs 0 ≤ X0 < X1 ≤ {width} and 0 ≤ Y0 < Y1 ≤ {height} (the frame, px)",
+            )
+        outside = np.ones((height, width), bool)
+        outside[y0:y1, x0:x1] = False
+        ignore = outside if ignore is None else ignore | outside
+    if ignore is not None and ignore.all():
+        raise OptionError("--mask" if mask else "--roi", "leaves no pixel of the frame to track")
+    return ignore
 
 
 def calibrate_command(args: argparse.Namespace) -> int:
@@ -274,6 +318,7 @@ def video_command(args: argparse.Namespace) -> int:
             f"{args.plane} was calibrated for {mapping.image_size[0]} × "
             f"{mapping.image_size[1]} px images, the video's frames are {size[0]} × {size[1]} px",
         )
+    ignore = ignored_pixels(args.mask, args.roi, size)
     if background is None:
         background = median_background(frames)
         source = "the median of the frames"
@@ -295,6 +340,7 @@ def video_command(args: argparse.Namespace) -> int:
             args.video,
             threshold_dn=args.threshold_dn,
             progress=not args.no_progress,
+            ignore=ignore,
         )
     else:
         tracked = track_centreline(

@@ -10,7 +10,7 @@ laser / tip trace  ``t, x``                    s, mm (displacement at the laser 
 tracked shapes     ``frame, t, s, x, y``       -, s, mm (arc length of the marker from the
                                                clamp's lowest point), mm, mm (from the clamp's
                                                lowest point at rest, y up); ``warpcloth
-                                               track`` adds ``u_px, u_mm`` (read, ignored)
+                                               track`` adds ``u_px, u_mm`` (u_mm judges a fit)
 clamp encoder      ``t, theta``                s, rad (``angle_unit`` overrides the header)
 sheet markers      ``t, marker, x, y, z``      s, -, mm (the index of the marker in the sheet
                    (a header names them; any   scene's ``output.markers``; positions from the
@@ -64,7 +64,8 @@ _SHAPES = ("frame", "t_s", "s_mm", "x_mm", "y_mm")
 _ENCODER = ("t_s", "theta")
 UNCERTAINTY_COLUMNS = ("u_px", "u_mm")
 """The columns ``warpcloth track`` adds after a tracked shape's five: each coordinate's
-standard uncertainty (px, mm). Read and ignored: a fit judges its RMS by the noise."""
+standard uncertainty (px, mm). A fit judges its RMS against u_mm (its RMS over the points):
+what the tracker says it measured to, not the data's own scatter."""
 
 
 def read_table(
@@ -207,6 +208,7 @@ class TrackedShapes:
     s: np.ndarray  # m
     x: np.ndarray  # m
     y: np.ndarray  # m
+    u: np.ndarray | None = None  # m: each coordinate's standard uncertainty, as the tracker stated it
 
 
 def read_laser_trace(path: str | Path, argument: str = "path") -> LaserTrace:
@@ -254,7 +256,15 @@ def _tracked_shapes(table: Table) -> TrackedShapes:
             f"arc length s must be ≥ 0 (from the clamp's lowest point), got {table.values[i, 2]:g}",
             int(lines[i]),
         )
-    return TrackedShapes(frame.astype(int), t, data[:, 2], data[:, 3], data[:, 4])
+    u = None
+    if table.values.shape[1] >= 7 and table.header is not None and tuple(table.header[5:7]) == UNCERTAINTY_COLUMNS:
+        u = table.values[:, 6] * units.LENGTH_MM
+        if not np.all(np.isfinite(u) & (u > 0)):
+            i = int(np.argmax(~(np.isfinite(u) & (u > 0))))
+            raise DataFileError(
+                table.path, f"u_mm must be a positive uncertainty, got {table.values[i, 6]:g}", int(lines[i])
+            )
+    return TrackedShapes(frame.astype(int), t, data[:, 2], data[:, 3], data[:, 4], u)
 
 
 @dataclass(frozen=True)

@@ -29,11 +29,12 @@ import numpy as np
 from warpcloth.errors import ArgumentError, DataFileError
 
 from .calibration import PlaneMapping
+from .edges import rising_edges, sample
 from .video import Frames, FrameStream
 
 __all__ = ["Tracked", "noise_sigma", "track_markers"]
 
-GROW_PX = 2
+RAYS = 64
 AREA_RANGE = (0.3, 4.0)
 STRETCH = 1.05  # a chord may exceed its arc by this factor (strain, detection) plus SLACK_MM
 SLACK_MM = 1.0
@@ -80,31 +81,94 @@ def noise_sigma(darkening: np.ndarray) -> float:
 
 
 def _blobs(
-    darkening: np.ndarray, threshold: float, areas: tuple[float, float], noise: float
+    darkening: np.ndarray, threshold: float, areas: tuple[float, float]
 ) -> tuple[np.ndarray, np.ndarray, list[int]]:
-    # the marker-sized dark blobs' centres and uncertainties, and the areas of the others (px²)
+    # the marker-sized dark blobs' rough centres and pixel covariances, and the areas of the others (px²)
     import cv2
 
     mask = (darkening > threshold).astype(np.uint8)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-    kernel = np.ones((2 * GROW_PX + 1, 2 * GROW_PX + 1), np.uint8)
-    centres, sigmas, others = [], [], []
+    centres, shapes, others = [], [], []
     for label in range(1, n):
         x0, y0, w, h, area = stats[label]
         if not areas[0] <= area <= areas[1]:
             others.append(int(area))
             continue
-        r0, c0 = max(y0 - GROW_PX, 0), max(x0 - GROW_PX, 0)
-        r1, c1 = min(y0 + h + GROW_PX, mask.shape[0]), min(x0 + w + GROW_PX, mask.shape[1])
-        region = cv2.dilate((labels[r0:r1, c0:c1] == label).astype(np.uint8), kernel).astype(bool)
-        weight = np.where(region, np.clip(darkening[r0:r1, c0:c1], 0, None), 0.0)
-        rows, cols = np.mgrid[r0:r1, c0:c1]
-        total = weight.sum()
-        cx, cy = (weight * cols).sum() / total, (weight * rows).sum() / total
-        spread = np.array([((cols - cx) ** 2)[region].sum(), ((rows - cy) ** 2)[region].sum()])
-        centres.append((cx, cy))
-        sigmas.append(noise * np.sqrt(spread) / total)
-    return np.array(centres).reshape(-1, 2), np.array(sigmas).reshape(-1, 2), others
+        rows, cols = np.nonzero(labels[y0 : y0 + h, x0 : x0 + w] == label)
+        points = np.column_stack([cols + x0, rows + y0]).astype(float)
+        centres.append(points.mean(axis=0))
+        # a pixel is a unit square: its own spread (1/12) adds to the region's
+        shapes.append(np.cov(points.T, bias=True) + np.eye(2) / 12.0)
+    return np.array(centres).reshape(-1, 2), np.array(shapes).reshape(-1, 2, 2), others
+
+
+def _outline(
+    grey: np.ndarray, centre: np.ndarray, shape: np.ndarray, noise: float
+) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """The centre of a dark dot's outline (px), its standard uncertainty per axis (px) and
+    the outline's RMS misfit to an ellipse (px), or None when no dot's outline is there.
+
+    The outline is found on RAYS rays from the rough centre, each where the image rises
+    most steeply from the dark dot to whatever surrounds it (:func:`.edges.rising_edges`:
+    unbiased whatever the brightness on either side), out to 1.8 times the
+    radius the blob's shape gives (room for motion blur) plus 3 px; an ellipse is fitted to
+    the edge points (``cv2.fitEllipseDirect``), points off it by more than 4 × the median
+    misfit dropped, and the rays cast again from its centre. The centre's uncertainty is
+    the least-squares one for the points' misfit, counting at most one point per pixel of
+    the outline's length (adjacent rays share pixels)."""
+    angles = np.linspace(0.0, 2 * np.pi, RAYS, endpoint=False)
+    directions = np.column_stack([np.cos(angles), np.sin(angles)])
+    inverse = np.linalg.inv(4.0 * shape)  # a uniform ellipse's covariance is its semi-axes² / 4
+    for least in (0.4, 0.6):  # the second pass, centred on the first's dot, must find most rays
+        radius = 1.0 / np.sqrt(np.einsum("ri,ij,rj->r", directions, inverse, directions))
+        steps = np.arange(0.0, 1.0 + 1e-9, 1.0 / 48)
+        reach = (1.8 * radius[:, None] + 3.0) * steps[None, :]
+        along = reach[:, 1] - reach[:, 0]
+        profiles = sample(grey, centre + reach[..., None] * directions[:, None, :])
+        # each ray's own sample spacing: position in samples × its spacing
+        at, _ = rising_edges(profiles, 1.0, 6.0 * noise)
+        found = np.isfinite(at)
+        if found.sum() < least * RAYS:
+            return None
+        points = centre + (reach[found, 0] + at[found] * along[found])[:, None] * directions[found]
+        fitted = _ellipse(points)
+        if fitted is None:
+            return None
+        centre, semi, axes, local, misfit = fitted
+        shape = axes.T @ np.diag(semi**2 / 4.0) @ axes
+        inverse = np.linalg.inv(4.0 * shape)
+    # outward normals of the ellipse at the points: a centre shift δ moves each residual by −n·δ
+    normal = (local / semi) @ axes
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    rms = float(np.sqrt(np.mean(misfit**2)))
+    perimeter = np.pi * (3 * semi.sum() - np.sqrt((3 * semi[0] + semi[1]) * (semi[0] + 3 * semi[1])))
+    independent = min(len(normal), perimeter)
+    covariance = np.linalg.inv(normal.T @ normal) * rms**2 * len(normal) / independent
+    return centre, np.sqrt(np.diag(covariance)), rms
+
+
+def _ellipse(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    # the ellipse through the edge points, outliers (beyond 4 × the median misfit) dropped
+    # and refitted until none is: centre, semi-axes, rotation (rows: the axes), each kept
+    # point in axis units and its misfit (px); None if too few points stay on one ellipse
+    import cv2
+
+    while True:
+        (cx, cy), (width, height), angle = cv2.fitEllipseDirect(points.astype(np.float32))
+        if not (np.isfinite([cx, cy, width, height]).all() and min(width, height) > 0):
+            return None
+        centre, semi = np.array([cx, cy]), 0.5 * np.array([width, height])
+        rot = np.radians(angle)
+        axes = np.array([[np.cos(rot), np.sin(rot)], [-np.sin(rot), np.cos(rot)]])
+        local = (points - centre) @ axes.T / semi
+        rho = np.linalg.norm(local, axis=1)
+        misfit = (rho - 1.0) * np.linalg.norm(points - centre, axis=1) / np.maximum(rho, 1e-12)
+        keep = np.abs(misfit) <= 4.0 * max(float(np.median(np.abs(misfit))), 0.02)
+        if keep.all():
+            return centre, semi, axes, local, misfit
+        if keep.sum() < 0.4 * RAYS:
+            return None
+        points = points[keep]
 
 
 def _marker_areas(mapping: PlaneMapping, diameter_mm: float) -> tuple[float, float, float]:
@@ -185,6 +249,51 @@ def _chain(plane: np.ndarray, start: np.ndarray, reach: float, s_mm: np.ndarray,
     return np.array(order)
 
 
+def _check_chain(plane: np.ndarray, order: np.ndarray, s_mm: np.ndarray, where: str, path: Path) -> None:
+    # markers followed one by one must still lie along the strip: each within its arc of the
+    # one before (a swap or a stray dot taken for a marker breaks this)
+    for i in range(1, len(s_mm)):
+        arc = s_mm[i] - s_mm[i - 1]
+        chord = float(np.linalg.norm(plane[order[i]] - plane[order[i - 1]]))
+        if not SHORTEST * arc <= chord <= STRETCH * arc + SLACK_MM:
+            raise DataFileError(
+                path,
+                f"{where}: marker s = {s_mm[i]:g} mm lost: the dot nearest where it was heading is {chord:.3g} mm "
+                f"from the marker at s = {s_mm[i - 1]:g} mm, which the strip between them ({arc:g} mm) cannot "
+                "span: a stray dark spot was taken for it (give --mask over moving parts such as the clamp)",
+            )
+
+
+def _follow(
+    plane: np.ndarray, heading: np.ndarray, reach: float, s_mm: np.ndarray, where: str, path: Path
+) -> np.ndarray:
+    # indices into `plane` of the markers, each the dot nearest where its own motion was
+    # heading, every dot taken once (the assignment of least total distance), then checked
+    # along the strip
+    from scipy.optimize import linear_sum_assignment
+
+    far = 1e6
+    distance = np.linalg.norm(heading[:, None, :] - plane[None, :, :], axis=2).reshape(len(s_mm), len(plane))
+    cost = np.where(distance <= reach, distance, far)
+    if cost.shape[1] < len(s_mm):
+        cost = np.hstack([cost, np.full((len(s_mm), len(s_mm) - cost.shape[1]), far)])
+    rows, cols = linear_sum_assignment(cost)
+    for m, j in zip(rows, cols, strict=True):
+        if cost[m, j] >= far:
+            nearest = f"{distance[m].min():.3g} mm away" if distance.shape[1] else "none in this frame"
+            raise DataFileError(
+                path,
+                f"{where}: marker s = {s_mm[m]:g} mm lost: no dot within {reach:.3g} mm of where its motion was "
+                f"heading (x = {heading[m, 0]:.2f}, y = {heading[m, 1]:.2f} mm; the nearest dot is {nearest}): it "
+                "is hidden, blurred beyond a dot's shape, or merged with another; or moving parts darken the "
+                "frame against the background (give --background, a frame without the strip, or --mask over "
+                "them)",
+            )
+    order = cols[np.argsort(rows)]
+    _check_chain(plane, order, s_mm, where, path)
+    return order
+
+
 def track_markers(
     frames: Frames | FrameStream,
     background: np.ndarray,
@@ -194,45 +303,69 @@ def track_markers(
     path: str | Path,
     threshold_dn: float | None = None,
     progress: bool = False,
+    ignore: np.ndarray | None = None,
 ) -> Tracked:
     """Every marker in every frame (see the module docstring); ``frames`` gives
-    ``(index, t, image)`` per frame, in memory or streamed."""
+    ``(index, t, image)`` per frame, in memory or streamed; ``ignore`` (bool, the frames'
+    shape) marks pixels where no marker is looked for (moving parts of the rig)."""
     from tqdm import tqdm
 
     path = Path(path)
     expected_area, *areas = _marker_areas(mapping, diameter_mm)
-    index, t, px, sig, noise = [], [], [], [], []
-    previous = np.zeros(2)  # the clamp's lowest point at rest
-    bg = background.astype(np.float64)
+    index, t, px, sig, noise, misfit = [], [], [], [], [], []
+    plane_track: list[np.ndarray] = []
+    bg = _grey(background)
+    reach = 0.5 * float(np.min(np.diff(s_mm)))
     for i, time, image in tqdm(frames, total=frames.total, desc="tracking", unit=" frames", disable=not progress):
-        darkening = bg - image
+        grey = _grey(image)
+        darkening = bg - grey
+        if ignore is not None:
+            darkening[ignore] = 0.0
         noise.append(noise_sigma(darkening))
         threshold = threshold_dn if threshold_dn is not None else max(10.0 * noise[-1], 5.0)
-        centres, sigmas, others = _blobs(darkening, threshold, tuple(areas), noise[-1])
+        rough, shapes, others = _blobs(darkening, threshold, tuple(areas))
         where = f"frame {i} (t = {time:.6g} s)"
-        if not index and len(centres) < len(s_mm) / 2 and others:  # most missing: not one hidden marker
+        if not index and len(rough) < len(s_mm) / 2 and others:  # most missing: not one hidden marker
             raise ArgumentError(
                 "diameter_mm",
-                f"{diameter_mm:g} mm: {where} holds {len(centres)} blobs of a marker's area ({expected_area:.3g} px², "
+                f"{diameter_mm:g} mm: {where} holds {len(rough)} blobs of a marker's area ({expected_area:.3g} px², "
                 f"taken from {areas[0]:.3g} to {areas[1]:.3g}) for {len(s_mm)} markers, and {len(others)} dark blobs "
                 f"of other areas (median {np.median(others):.3g} px², a disc of "
                 f"{diameter_mm * np.sqrt(np.median(others) / expected_area):.3g} mm): give the markers' diameter",
             )
+        dots = [_outline(grey, c, shape, noise[-1]) for c, shape in zip(rough, shapes, strict=True)]
+        dots = [d for d in dots if d is not None]  # a dark blob with no dot's outline is not a marker
+        centres = np.array([d[0] for d in dots]).reshape(-1, 2)
         plane = mapping.to_plane(centres) if len(centres) else centres
-        # the first marker: near the clamp's lowest point at rest in the first frame, then
-        # within half the spacing of where it was (it moves least: it is nearest the clamp)
-        reach = 0.5 * (s_mm[1] - s_mm[0]) + (s_mm[0] if not index else 0.0)
-        order = _chain(plane, previous, reach, s_mm, where, path)
         if not index:
+            # the first frame: the strip hangs at rest from the clamp; the chain starts near
+            # the clamp's lowest point, within the first marker's arc and one spacing (a
+            # first arc off by a spacing is then named by _check_first_marker)
+            order = _chain(plane, np.zeros(2), s_mm[0] + (s_mm[1] - s_mm[0]), s_mm, where, path)
             _check_first_marker(plane[order], s_mm, where)
+        else:
+            heading = plane_track[-1]
+            if len(plane_track) > 1:  # at the speed it had, over this frame's interval
+                heading = heading + (plane_track[-1] - plane_track[-2]) * (time - t[-1]) / (t[-1] - t[-2])
+            order = _follow(plane, heading, reach, s_mm, where, path)
         index.append(i)
         t.append(time)
         px.append(centres[order])
-        sig.append(sigmas[order])
-        previous = plane[order[0]]
+        sig.append(np.array([dots[k][1] for k in order]))
+        misfit.append(np.array([dots[k][2] for k in order]))
+        plane_track.append(plane[order])
     px, sig = np.array(px), np.array(sig)
     n, m = px.shape[:2]
     mm = mapping.to_plane(px.reshape(-1, 2)).reshape(n, m, 2)
     u_px = np.sqrt(0.5 * np.sum(sig**2, axis=2))
     u_mm = u_px * mapping.mm_per_px(px.reshape(-1, 2)).reshape(n, m)
     return Tracked(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u_px, u_mm, np.array(noise))
+
+
+def _grey(image: np.ndarray) -> np.ndarray:
+    # a frame's brightness (float): grey as it is, colour as OpenCV weighs it (RGB order)
+    import cv2
+
+    if image.ndim == 3:
+        image = cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2GRAY)
+    return image.astype(np.float64)
