@@ -97,14 +97,14 @@ def test_fit_of_the_tracked_shapes_recovers_the_rotation_centre(tracked):
         "--out",
         str(tracked / "fit"),
     )
-    # judged against the tracker's stated uncertainty (u_mm, 0.003 mm), the model on the
+    # judged against the tracker's stated uncertainty (u_mm, 0.004 mm), the model on the
     # finest level's mesh (h = 1.25 mm) misses the data by 0.019 mm: the fit says so and
     # exits non-zero, where the data's own 4th differences (0.09 mm: fast motion sampled at
     # 60 frames/s) would have passed it as converged
     assert done.returncode == 6, done.stdout + done.stderr
     assert "poor_fit" in done.stderr and "the tracker's stated uncertainty u_mm" in done.stderr, done.stderr
     fit = json.loads((tracked / "fit" / "fit.json").read_text())
-    assert fit["status"] == "poor_fit" and fit["noise_mm"] < 0.005, fit["noise_mm"]
+    assert fit["status"] == "poor_fit" and fit["noise_mm"] < 0.01, fit["noise_mm"]
     dy = fit["parameters"]["clamp.rotation_centre_dy_mm"]["value"]
     assert abs(dy - TRUTH_DY_MM) <= 0.05, dy
 

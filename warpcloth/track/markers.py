@@ -103,7 +103,7 @@ def _blobs(
 
 
 def _outline(
-    grey: np.ndarray, centre: np.ndarray, shape: np.ndarray, noise: float
+    grey: np.ndarray, centre: np.ndarray, shape: np.ndarray, noise: float, diameter_px: float
 ) -> tuple[np.ndarray, np.ndarray, float] | None:
     """The centre of a dark dot's outline (px), its standard uncertainty per axis (px) and
     the outline's RMS misfit to an ellipse (px), or None when no dot's outline is there.
@@ -115,7 +115,12 @@ def _outline(
     the edge points (``cv2.fitEllipseDirect``), points off it by more than 4 × the median
     misfit dropped, and the rays cast again from its centre. The centre's uncertainty is
     the least-squares one for the points' misfit, counting at most one point per pixel of
-    the outline's length (adjacent rays share pixels)."""
+    the outline's length (adjacent rays share pixels), and the outline's lopsidedness added
+    in quadrature (:func:`_lopsidedness`: a dot smeared by motion into an edge of the
+    fabric is off by about as much as its outline is lopsided; measured in
+    tests/test_track_markers.py). An ellipse whose short axis is not the dot's diameter
+    ``diameter_px`` (within 0.6 to 1.5 of it; motion only lengthens the long axis) is not a
+    dot: a sliver of a moving clamp, two dots merged."""
     angles = np.linspace(0.0, 2 * np.pi, RAYS, endpoint=False)
     directions = np.column_stack([np.cos(angles), np.sin(angles)])
     inverse = np.linalg.inv(4.0 * shape)  # a uniform ellipse's covariance is its semi-axes² / 4
@@ -140,11 +145,24 @@ def _outline(
     # outward normals of the ellipse at the points: a centre shift δ moves each residual by −n·δ
     normal = (local / semi) @ axes
     normal /= np.linalg.norm(normal, axis=1)[:, None]
+    if not 0.6 * diameter_px <= 2.0 * semi.min() <= 1.5 * diameter_px:
+        return None
     rms = float(np.sqrt(np.mean(misfit**2)))
     perimeter = np.pi * (3 * semi.sum() - np.sqrt((3 * semi[0] + semi[1]) * (semi[0] + 3 * semi[1])))
     independent = min(len(normal), perimeter)
     covariance = np.linalg.inv(normal.T @ normal) * rms**2 * len(normal) / independent
-    return centre, np.sqrt(np.diag(covariance)), rms
+    return centre, np.sqrt(np.diag(covariance) + _lopsidedness(local, misfit) ** 2 / 2.0), rms
+
+
+def _lopsidedness(local: np.ndarray, misfit: np.ndarray) -> float:
+    # the amplitude of the misfit's 3rd and 5th harmonics around the outline (px): a blurred
+    # or half-covered dot is lopsided where something differs on one side, and a centre is
+    # off by about what makes it so; a symmetric departure (even harmonics: motion blur's
+    # stadium, a square dot) moves no centre, and the 1st is the centre itself
+    angle = np.arctan2(local[:, 1], local[:, 0])
+    basis = np.column_stack([np.ones_like(angle)] + [f(k * angle) for k in (2, 3, 4, 5) for f in (np.cos, np.sin)])
+    coefficient, *_ = np.linalg.lstsq(basis, misfit, rcond=None)
+    return float(np.hypot.reduce(coefficient[[3, 4, 7, 8]]))
 
 
 def _ellipse(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
@@ -333,7 +351,8 @@ def track_markers(
                 f"of other areas (median {np.median(others):.3g} px², a disc of "
                 f"{diameter_mm * np.sqrt(np.median(others) / expected_area):.3g} mm): give the markers' diameter",
             )
-        dots = [_outline(grey, c, shape, noise[-1]) for c, shape in zip(rough, shapes, strict=True)]
+        across = diameter_mm / mapping.mm_per_px(rough) if len(rough) else []
+        dots = [_outline(grey, c, shape, noise[-1], d) for c, shape, d in zip(rough, shapes, across, strict=True)]
         dots = [d for d in dots if d is not None]  # a dark blob with no dot's outline is not a marker
         centres = np.array([d[0] for d in dots]).reshape(-1, 2)
         plane = mapping.to_plane(centres) if len(centres) else centres
