@@ -97,7 +97,27 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="instead of markers: the strip's centreline at these arc lengths from the clamp's lowest "
         "point, mm, measured from the free end (needs --free-length-mm)",
     )
-    vid.add_argument("--free-length-mm", type=positive, help="the strip's free length, mm (with --centreline-s)")
+    vid.add_argument(
+        "--edge-s",
+        metavar="S,S,...|FIRST:LAST:STEP",
+        help="instead of markers: the strip's dyed near edge (the seed paper's setup; a colour video) at these "
+        "arc lengths from the clamp's lowest point, mm, measured from the free end (needs --free-length-mm "
+        "and --edge-colour)",
+    )
+    vid.add_argument(
+        "--edge-colour",
+        metavar="R,G,B|auto",
+        help="the dye's colour, 0-255 each, or auto: learned from the first frame (with --edge-s)",
+    )
+    vid.add_argument(
+        "--thickness-mm",
+        type=positive,
+        help="the fabric's thickness: the edge's points are moved half of it into the fabric, onto the midline "
+        "the model's chain represents (with --edge-s; without it they are the edge's outer surface)",
+    )
+    vid.add_argument(
+        "--free-length-mm", type=positive, help="the strip's free length, mm (with --centreline-s or --edge-s)"
+    )
     vid.add_argument("-o", "--output", type=path_text, required=True, help="the tracked shapes to write (.csv)")
     vid.add_argument(
         "--background",
@@ -176,25 +196,50 @@ def marker_arcs(text: str, option: str = "--marker-s") -> np.ndarray:
 
 
 def _what_to_track(args: argparse.Namespace) -> np.ndarray:
-    # markers (--marker-s with their diameter) or the centreline (--centreline-s with the free length)
-    if bool(args.marker_s) == bool(args.centreline_s):
+    # markers (--marker-s with their diameter), the centreline (--centreline-s) or the dyed
+    # edge (--edge-s with its colour), each of the last two with the free length
+    given = [option for option in ("marker_s", "centreline_s", "edge_s") if getattr(args, option)]
+    if len(given) != 1:
         raise OptionError(
-            "--marker-s", "give --marker-s (markers) or --centreline-s (the centreline without markers), one of them"
+            "--marker-s",
+            "give --marker-s (markers), --centreline-s (the centreline without markers) or --edge-s (the dyed "
+            "edge), one of them",
         )
+    if args.edge_colour and not args.edge_s:
+        raise OptionError("--edge-colour", "goes with --edge-s (the dyed edge's colour)")
+    if args.thickness_mm is not None and not args.edge_s:
+        raise OptionError("--thickness-mm", "goes with --edge-s (the midline lies half of it inside the edge)")
     if args.marker_s:
         if args.marker_diameter_mm is None:
             raise OptionError("--marker-diameter-mm", "is needed with --marker-s (the markers' diameter, mm)")
         return marker_arcs(args.marker_s)
+    option = "--edge-s" if args.edge_s else "--centreline-s"
     if args.free_length_mm is None:
-        raise OptionError(
-            "--free-length-mm", "is needed with --centreline-s (arc lengths are measured from the free end)"
-        )
-    arcs = marker_arcs(args.centreline_s, "--centreline-s")
+        raise OptionError("--free-length-mm", f"is needed with {option} (arc lengths are measured from the free end)")
+    if args.edge_s and not args.edge_colour:
+        raise OptionError("--edge-colour", "is needed with --edge-s: the dye's colour as R,G,B (0-255), or auto")
+    arcs = marker_arcs(args.edge_s or args.centreline_s, option)
     if arcs[-1] > args.free_length_mm:
         raise OptionError(
-            "--centreline-s", f"{arcs[-1]:g} mm lies beyond the free end (--free-length-mm {args.free_length_mm:g})"
+            option, f"{arcs[-1]:g} mm lies beyond the free end (--free-length-mm {args.free_length_mm:g})"
         )
     return arcs
+
+
+def edge_colour(text: str) -> np.ndarray | None:
+    """``--edge-colour``: ``R,G,B`` (0-255 each, not grey) or ``auto`` (None: learned)."""
+    from warpcloth.track.coloured_edge import chroma_direction
+
+    if text.strip().lower() == "auto":
+        return None
+    try:
+        colour = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        colour = np.zeros(0)
+    if colour.shape != (3,) or not np.all((colour >= 0) & (colour <= 255)):
+        raise OptionError("--edge-colour", f"expected R,G,B (three numbers from 0 to 255) or auto, got {text!r}")
+    chroma_direction(colour)
+    return colour
 
 
 def ignored_pixels(mask: str | None, roi: str | None, size: tuple[int, int]) -> np.ndarray | None:
@@ -295,16 +340,20 @@ def video_command(args: argparse.Namespace) -> int:
     from warpcloth.io.provenance import file_checksum
     from warpcloth.track.calibration import read_image, read_plane
     from warpcloth.track.centreline import track_centreline
+    from warpcloth.track.coloured_edge import track_coloured_edge
     from warpcloth.track.markers import track_markers
     from warpcloth.track.overlay import avi_timing, write_overlay, write_overlay_video
     from warpcloth.track.video import FrameStream, median_background
 
     arcs = _what_to_track(args)
-    what = "markers" if args.marker_s else "centreline points"
+    what = "markers" if args.marker_s else "centreline points" if args.centreline_s else "points of the dyed edge"
+    colour = edge_colour(args.edge_colour) if args.edge_s else None
     mapping = read_plane(args.plane, "--plane")
     out, overlay, movie = _outputs(args)
-    background = read_image(args.background, "--background") if args.background else None
-    frames = FrameStream(args.video, "VIDEO")  # decoded as it is tracked: a long recording is never held whole
+    in_colour = bool(args.edge_s)  # only the dyed edge needs the frames' colour
+    background = read_image(args.background, "--background", in_colour) if args.background else None
+    # decoded as it is tracked: a long recording is never held whole
+    frames = FrameStream(args.video, "VIDEO", in_colour)
     if args.overlay_frame is not None and args.overlay_frame >= frames.total:
         raise OptionError(
             "--overlay-frame",
@@ -322,7 +371,7 @@ def video_command(args: argparse.Namespace) -> int:
     if background is None:
         background = median_background(frames)
         source = "the median of the frames"
-    elif background.shape != (size[1], size[0]):
+    elif background.shape[:2] != (size[1], size[0]):
         raise OptionError(
             "--background",
             f"{args.background} is {background.shape[1]} × {background.shape[0]} px, "
@@ -342,6 +391,19 @@ def video_command(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
             ignore=ignore,
         )
+    elif args.edge_s:
+        tracked = track_coloured_edge(
+            frames,
+            background,
+            mapping,
+            arcs,
+            args.free_length_mm,
+            colour,
+            args.video,
+            thickness_mm=args.thickness_mm,
+            ignore=ignore,
+            progress=not args.no_progress,
+        )
     else:
         tracked = track_centreline(
             frames,
@@ -352,6 +414,7 @@ def video_command(args: argparse.Namespace) -> int:
             args.video,
             threshold_dn=args.threshold_dn,
             progress=not args.no_progress,
+            ignore=ignore,
         )
     dropped, duplicated = frames.dropped, frames.duplicated
     times = [frames.times[i] for i in tracked.frame]  # exact, before the overlay's pass decodes them again

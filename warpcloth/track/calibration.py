@@ -37,8 +37,9 @@ MIN_EDGE_PX = 10
 turns the x axis by at most atan(0.5 / 10) ≈ 3°."""
 
 
-def read_image(path: str | Path, argument: str = "path") -> np.ndarray:
-    """A grey image (uint8), or an error naming ``argument`` (missing) or the file (unreadable)."""
+def read_image(path: str | Path, argument: str = "path", colour: bool = False) -> np.ndarray:
+    """A grey image (uint8), or with ``colour`` an RGB one ``[row, column, 3]``, or an error
+    naming ``argument`` (missing) or the file (unreadable)."""
     import cv2
 
     path = Path(path)
@@ -53,10 +54,10 @@ def read_image(path: str | Path, argument: str = "path") -> np.ndarray:
             whole.load()
     except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as exc:
         raise DataFileError(path, f"cannot be read as an image (PNG, JPEG, TIFF, BMP): {exc}") from None
-    image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+    image = cv2.imread(str(path), cv2.IMREAD_COLOR if colour else cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise DataFileError(path, "cannot be read as an image (PNG, JPEG, TIFF, BMP)")
-    return image
+    return cv2.cvtColor(image, cv2.COLOR_BGR2RGB) if colour else image
 
 
 @dataclass(frozen=True)

@@ -200,9 +200,11 @@ def track_centreline(
     path: str | Path,
     threshold_dn: float | None = None,
     progress: bool = False,
+    ignore: np.ndarray | None = None,
 ) -> Tracked:
     """The centreline at arc lengths ``s_mm`` from the clamp's lowest point in every frame
-    (see the module docstring); ``frames`` gives ``(index, t, image)`` per frame."""
+    (see the module docstring); ``frames`` gives ``(index, t, image)`` per frame; nothing
+    is looked for where ``ignore`` is set."""
     from tqdm import tqdm
 
     path = Path(path)
@@ -212,6 +214,8 @@ def track_centreline(
     for i, time, image in tqdm(
         frames, total=frames.total, desc="tracking the centreline", unit=" frames", disable=not progress
     ):
+        if ignore is not None:  # a masked pixel differs from nothing
+            image = np.where(ignore, bg, image)
         points, sigma, frame_noise = _one_frame(
             image, bg, mapping, seed, s_mm, free_length_mm, threshold_dn, f"frame {i} (t = {time:.6g} s)", path
         )

@@ -28,7 +28,7 @@ DROP_FACTOR = 1.5
 
 @dataclass
 class Frames:
-    """Decoded grey frames ``[frame, row, column]`` (uint8) with their times (s), the
+    """Decoded frames ``[frame, row, column]`` (grey) or ``[frame, row, column, rgb]`` (uint8) with their times (s), the
     index of each in the file's decode order, and what was found wrong with the timing.
     Iterating gives ``(index, t, image)`` per frame, as :class:`FrameStream` does."""
 
@@ -54,10 +54,11 @@ class FrameStream:
     out. After an iteration, :attr:`dropped`, :attr:`duplicated` and
     :attr:`nominal_interval_s` describe its timing; each iteration decodes the file again."""
 
-    def __init__(self, path: str | Path, argument: str = "path") -> None:
+    def __init__(self, path: str | Path, argument: str = "path", colour: bool = False) -> None:
         import av
 
         self.path = Path(path)
+        self.colour = colour  # frames as RGB [row, column, 3] rather than grey
         if not self.path.is_file():
             raise ArgumentError(
                 argument, f"{self.path} does not exist" if not self.path.exists() else f"{self.path} is not a file"
@@ -118,7 +119,7 @@ class FrameStream:
                             f"{i - 1}'s {float(self.times[-1]):.6g} s: the timestamps do not increase",
                         )
                     self.times.append(t)
-                    image = frame.to_ndarray(format="gray")
+                    image = frame.to_ndarray(format="rgb24" if self.colour else "gray")
                     if previous is not None and np.array_equal(image, previous[1]):
                         self.duplicated.append(
                             f"frame {i} (t = {float(t):.6g} s) repeats frame {previous[0]} exactly; left out"
@@ -150,10 +151,10 @@ class FrameStream:
         ]
 
 
-def read_frames(path: str | Path, argument: str = "path") -> Frames:
+def read_frames(path: str | Path, argument: str = "path", colour: bool = False) -> Frames:
     """Every frame of the first video stream of ``path`` in memory (a short clip; tracking
-    streams a :class:`FrameStream`)."""
-    stream = FrameStream(path, argument)
+    streams a :class:`FrameStream`), grey or, with ``colour``, RGB."""
+    stream = FrameStream(path, argument, colour)
     index, t, images = zip(*stream, strict=True)
     return Frames(
         np.stack(images), np.array(t), np.array(index), stream.nominal_interval_s, stream.dropped, stream.duplicated

@@ -1,0 +1,242 @@
+"""The strip's near edge, coloured as the seed paper colours it, found by its colour.
+
+The paper dyes the fabric's near edge and films the strip from the side: a camera a few
+degrees off square sees the edge (its cut face, the fabric's thickness wide) and a band of
+the face behind it, and only the colour tells that band from a backdrop of the same
+brightness. Each pixel's *colour signal* is its projection on the stated colour's chroma
+(the colour less its grey, normalised): neutral surfaces (a grey backdrop, white fabric, a
+black clamp) give 0 whatever their brightness, the dyed band its saturation, and a pixel
+that mixes the two gives the mixture's share, so the signal is linear in coverage, as the
+edge locator needs (:mod:`.edges`).
+
+The dyed band is the region of strong signal that reaches the clamp's lowest point at rest
+(paths as in :mod:`.centreline`); across it, two passes find the band's centre (the
+signal's centroid across), then its **silhouette**: the band's side on the backdrop (the
+side where the frame matches the background; the other side is the undyed face), located
+where the signal rises fastest from the backdrop into the band. That line is the edge's
+outer surface, in the calibrated plane. With the fabric's thickness it is moved half of it
+into the band, onto the midline the model's chain represents. Arc length is measured along
+the line from the free end, as the centreline's is (s is the rest arc length only as far as
+the strip does not stretch).
+
+The uncertainty of each point is the scatter of the silhouette across the strip about its
+own smooth course (noise, compression, texture), reduced by the points averaged, and the
+free end's own (its position moves every arc along the strip): measured, not assumed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from warpcloth.errors import ArgumentError, DataFileError
+
+from .calibration import PlaneMapping
+from .centreline import LINE_SMOOTH, _free_end, _region_path, _resample
+from .edges import rising_edges, sample
+from .markers import Tracked, noise_sigma
+from .video import Frames, FrameStream
+
+__all__ = ["chroma_direction", "colour_signal", "learn_edge_colour", "track_coloured_edge"]
+
+SMOOTH_PX = 7  # the path's smoothing before normals are taken
+ACROSS_HALF_WIDTHS = 3.0  # how far across the band each profile reaches, in half-widths, plus 3 px
+END_INSET_HALF_WIDTHS = 3.0  # a profile across needs a whole band: the line starts this far inside the free end
+LEAST_SATURATION = 0.08  # of the colour's brightness: a stated colour greyer than this has no chroma to track
+
+
+def chroma_direction(colour: np.ndarray, option: str = "--edge-colour") -> np.ndarray:
+    """The unit vector in RGB of ``colour`` less its grey, or an error naming ``option``
+    when the colour is (nearly) grey: its projection would not tell it from the backdrop."""
+    colour = np.asarray(colour, dtype=float)
+    chroma = colour - colour.mean()
+    if np.linalg.norm(chroma) < LEAST_SATURATION * max(float(np.linalg.norm(colour)), 1e-9):
+        raise ArgumentError(
+            option,
+            f"{','.join(f'{v:g}' for v in colour)} is grey (its colour less its grey is "
+            f"{np.linalg.norm(chroma):.3g} of {np.linalg.norm(colour):.3g}): a grey edge cannot be told from the "
+            "backdrop by its colour; give the dye's colour as R,G,B",
+        )
+    return chroma / np.linalg.norm(chroma)
+
+
+def colour_signal(image: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """Each pixel's projection on the chroma ``direction`` (an RGB image → a float image)."""
+    return np.asarray(image, dtype=np.float64) @ direction
+
+
+def learn_edge_colour(first: np.ndarray, background: np.ndarray, ignore: np.ndarray | None) -> np.ndarray:
+    """The dye's colour from the first frame: the median colour of the most saturated tenth
+    of the pixels that differ from the background (the strip, the clamp), an error when
+    they hold no colour."""
+    frame, bg = first.astype(np.float64), background.astype(np.float64)
+    difference = np.abs(frame - bg).sum(axis=2)
+    if ignore is not None:
+        difference[ignore] = 0.0
+    changed = difference > max(10.0 * noise_sigma(difference), 15.0)
+    pixels = frame[changed]
+    if len(pixels) < 20:
+        raise ArgumentError(
+            "--edge-colour", "auto: the first frame hardly differs from the background: no edge to learn"
+        )
+    saturation = np.linalg.norm(pixels - pixels.mean(axis=1, keepdims=True), axis=1)
+    colour = np.median(pixels[saturation >= np.quantile(saturation, 0.9)], axis=0)
+    chroma_direction(colour, "--edge-colour")  # refuses a grey one
+    return colour
+
+
+def _profile_across(
+    signal: np.ndarray, line: np.ndarray, normal: np.ndarray, reach: float, samples: int
+) -> tuple[np.ndarray, np.ndarray]:
+    offsets = np.linspace(-reach, reach, samples)
+    points = line[:, None, :] + offsets[None, :, None] * normal[:, None, :]
+    return sample(signal, points), offsets
+
+
+def _smooth(points: np.ndarray, width: int) -> np.ndarray:
+    kernel = np.ones(width) / width
+    return np.column_stack(
+        [np.convolve(np.pad(points[:, k], width // 2, mode="edge"), kernel, "valid") for k in range(2)]
+    )
+
+
+def _normals(line: np.ndarray) -> np.ndarray:
+    tangent = np.gradient(line, axis=0)
+    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+    return np.column_stack([-tangent[:, 1], tangent[:, 0]])
+
+
+def _one_frame(
+    signal: np.ndarray,
+    luma_difference: np.ndarray,
+    mapping: PlaneMapping,
+    seed: np.ndarray,
+    s_mm: np.ndarray,
+    free_length_mm: float,
+    thickness_mm: float | None,
+    where: str,
+    path: Path,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    # the edge's points (px) at s_mm, their σ (px) and the signal's noise
+    import cv2
+
+    noise = noise_sigma(signal)
+    strong = signal > max(10.0 * noise, 5.0)
+    if strong.sum() < 20:
+        raise DataFileError(path, f"{where}: no pixel holds the edge's colour (--edge-colour)")
+    level = float(np.median(signal[strong]))
+    mask = signal > 0.4 * level
+    route = _region_path(mask, seed, where, path)
+    inside = cv2.dilate(cv2.distanceTransform(mask.astype(np.uint8), cv2.DIST_L2, 5), np.ones((9, 9), np.uint8))
+    half_width = max(float(np.median(inside[route[:, 1].astype(int), route[:, 0].astype(int)])), 1.0)
+    line = _smooth(_resample(route, 1.0), SMOOTH_PX)
+    reach = ACROSS_HALF_WIDTHS * half_width + 3.0
+    for _ in range(2):  # the band's centre: the signal's centroid across it, twice
+        normal = _normals(line)
+        profile, offsets = _profile_across(signal, line, normal, reach, 97)
+        weight = np.clip(profile - 0.5 * level, 0.0, None)
+        shift = (weight * offsets).sum(axis=1) / np.maximum(weight.sum(axis=1), 1e-300)
+        line = _smooth(line + shift[:, None] * normal, SMOOTH_PX)
+    normal = _normals(line)
+    inner = int(np.ceil(END_INSET_HALF_WIDTHS * half_width))
+    if len(line) <= inner + LINE_SMOOTH:
+        raise DataFileError(path, f"{where}: the coloured edge found is {len(line)} px long: too short to follow")
+    # the backdrop's side: where, beyond the band, the frame is the background
+    beyond = half_width + 3.0
+    sides = [np.median(sample(luma_difference, line + sign * beyond * normal)) for sign in (1.0, -1.0)]
+    side = 1.0 if sides[0] <= sides[1] else -1.0
+    # from the backdrop into the band's centre: the rise is the silhouette
+    steps = np.linspace(reach, 0.0, 97)
+    rising = sample(signal, line[:, None, :] + side * steps[None, :, None] * normal[:, None, :])
+    at, _ = rising_edges(rising, 1.0, 0.3 * level)
+    found = np.isfinite(at)
+    if found.mean() < 0.8:
+        raise DataFileError(
+            path,
+            f"{where}: the coloured edge's silhouette is found at {found.mean():.0%} of its points: the backdrop "
+            "beside it is not neutral, or the edge is hidden (give --mask over what hides it)",
+        )
+    offset = np.interp(at, np.arange(len(steps)), steps)
+    offset = np.where(found, offset, np.interp(np.arange(len(at)), np.flatnonzero(found), offset[found]))
+    if thickness_mm is not None:  # onto the midline, half the thickness inside the band
+        offset = offset - 0.5 * thickness_mm / mapping.mm_per_px(line)
+    edge = line + side * offset[:, None] * normal
+    # the scatter of the silhouette across the strip about its own smooth course
+    course = np.convolve(np.pad(offset, 5, mode="edge"), np.ones(11) / 11, "valid")
+    scatter_px = float(np.sqrt(np.mean((offset - course) ** 2)))
+    edge = edge[inner:]
+    tip = _free_end(signal, line[inner:], half_width)
+    tip = tip + side * offset[inner] * normal[inner]
+    edge = _smooth(edge, LINE_SMOOTH)[::5]
+    line_px = np.vstack([tip, edge])
+    line_mm = mapping.to_plane(line_px)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(line_mm, axis=0), axis=1))])
+    wanted = free_length_mm - np.asarray(s_mm)
+    if wanted.max() > arc[-1]:
+        raise DataFileError(
+            path,
+            f"{where}: the coloured edge found is {arc[-1]:.3g} mm long from the free end, shorter than the "
+            f"{wanted.max():g} mm to s = {np.min(s_mm):g} mm (--edge-s, --free-length-mm)",
+        )
+    points = np.column_stack([np.interp(wanted, arc, line_px[:, 0]), np.interp(wanted, arc, line_px[:, 1])])
+    # the free end's position along the strip: the half-level crossing's scatter, one
+    # sample of the profile along it (0.1 px), and the band's own noise
+    sigma = np.full(len(points), np.hypot(scatter_px / np.sqrt(LINE_SMOOTH), 0.1))
+    return points, sigma, noise
+
+
+def track_coloured_edge(
+    frames: Frames | FrameStream,
+    background: np.ndarray,
+    mapping: PlaneMapping,
+    s_mm: np.ndarray,
+    free_length_mm: float,
+    colour: np.ndarray | None,
+    path: str | Path,
+    thickness_mm: float | None = None,
+    ignore: np.ndarray | None = None,
+    progress: bool = False,
+) -> Tracked:
+    """The coloured near edge at arc lengths ``s_mm`` from the clamp's lowest point in every
+    frame of an RGB video (see the module docstring); ``colour`` (RGB, 0–255) the dye's, or
+    None to learn it from the first frame."""
+    from tqdm import tqdm
+
+    path = Path(path)
+    seed = mapping.to_pixels(np.zeros((1, 2)))[0]
+    bg = np.asarray(background, dtype=np.float64)
+    bg_luma = bg @ [0.299, 0.587, 0.114]
+    direction = None if colour is None else chroma_direction(colour)
+    index, t, px, u, noise = [], [], [], [], []
+    for i, time, image in tqdm(
+        frames, total=frames.total, desc="tracking the coloured edge", unit=" frames", disable=not progress
+    ):
+        if direction is None:
+            colour = learn_edge_colour(image, background, ignore)
+            direction = chroma_direction(colour)
+        signal = colour_signal(image, direction)
+        if ignore is not None:
+            signal[ignore] = 0.0
+        luma_difference = np.abs(np.asarray(image, dtype=np.float64) @ [0.299, 0.587, 0.114] - bg_luma)
+        points, sigma, frame_noise = _one_frame(
+            signal,
+            luma_difference,
+            mapping,
+            seed,
+            s_mm,
+            free_length_mm,
+            thickness_mm,
+            f"frame {i} (t = {time:.6g} s)",
+            path,
+        )
+        index.append(i)
+        t.append(time)
+        px.append(points)
+        u.append(sigma)
+        noise.append(frame_noise)
+    px, u = np.array(px), np.array(u)
+    n, m = u.shape
+    mm = mapping.to_plane(px.reshape(-1, 2)).reshape(n, m, 2)
+    u_mm = u * mapping.mm_per_px(px.reshape(-1, 2)).reshape(n, m)
+    return Tracked(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u, u_mm, np.array(noise))
