@@ -576,3 +576,33 @@ def test_markers_named_wrongly_are_refused_naming_the_option(tracked, first_fram
     clip = short_clip(first_frames, tracked, tmp_path)
     one_line_error(track_with(clip, tmp_path, *options), *words)
     assert not (tmp_path / "out.csv").exists()
+
+
+M = ("--marker-s", "5:95:10", "--marker-diameter-mm", "2.4")
+
+
+@pytest.mark.parametrize(
+    "options, words",
+    [
+        ((*M, "--roi", "0,0,900,10"), ("--roi", "0 ≤ X0 < X1 ≤ 768")),
+        ((*M, "--roi", "1,2,3"), ("--roi", "X0,Y0,X1,Y1")),
+        ((*M, "--mask", "MISSING.png"), ("--mask", "does not exist")),
+        ((*M, "--mask", "SMALL"), ("--mask", "is 64 × 48 px")),
+        ((*M, "--mask", "WHITE"), ("--mask", "leaves no pixel")),
+        (("--edge-s", "5:95:10", "--free-length-mm", "100"), ("--edge-colour", "is needed with --edge-s")),
+        (("--edge-s", "5:95:10", "--free-length-mm", "100", "--edge-colour", "120,120,120"), ("--edge-colour", "grey")),
+        (("--edge-s", "5:95:10", "--free-length-mm", "100", "--edge-colour", "red"), ("--edge-colour", "R,G,B")),
+        ((*M, "--edge-colour", "200,20,20"), ("--edge-colour", "goes with --edge-s")),
+        ((*M, "--thickness-mm", "0.5"), ("--thickness-mm", "goes with")),
+        ((*M, "--edge-s", "5:95:10"), ("--marker-s", "one of them")),
+    ],
+)  # fmt: skip
+def test_rig_options_given_wrongly_are_refused_before_tracking(tracked, tmp_path, not_tracked, options, words):
+    (tmp_path / "plane.json").write_bytes((tracked / "plane.json").read_bytes())
+    cv2.imwrite(str(tmp_path / "small.png"), np.zeros((48, 64), np.uint8))
+    cv2.imwrite(str(tmp_path / "white.png"), np.full((720, 768), 255, np.uint8))
+    named = {"MISSING.png": str(tmp_path / "missing.png"), "SMALL": str(tmp_path / "small.png")}
+    named["WHITE"] = str(tmp_path / "white.png")
+    done = track_with(DATA / "rotation.avi", tmp_path, *(named.get(option, option) for option in options))
+    one_line_error(done, *words)
+    assert not (tmp_path / "out.csv").exists()

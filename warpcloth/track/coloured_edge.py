@@ -34,13 +34,21 @@ from warpcloth.errors import ArgumentError, DataFileError
 
 from .calibration import PlaneMapping
 from .centreline import LINE_SMOOTH, _free_end, _region_path, _resample
-from .edges import rising_edges, sample
+from .edges import band_edges, rising_edges, sample
 from .markers import Tracked, noise_sigma
 from .video import Frames, FrameStream
 
 __all__ = ["chroma_direction", "colour_signal", "learn_edge_colour", "track_coloured_edge"]
 
 SMOOTH_PX = 7  # the path's smoothing before normals are taken
+PHASE_BLUR_PX = 1.0  # σ of the Gaussian the colour signal is smoothed with
+ARC_WINDOW = 31  # px: the edge's smoothing before its arc is measured
+VALIDATED_PX = 0.06
+"""What the validation measures beyond each point's noise (px, per coordinate; added to its
+uncertainty in quadrature): the free end placed 0.05 px beyond the cut and the silhouette's
+0.05 px dependence on its pixel phase on the analytic frames (tests/test_track_edge.py),
+and the largest bias per coordinate on the independent rig video (benchmarks/track_accuracy.py,
+benchmarks/RESULTS.md)."""
 ACROSS_HALF_WIDTHS = 3.0  # how far across the band each profile reaches, in half-widths, plus 3 px
 END_INSET_HALF_WIDTHS = 3.0  # a profile across needs a whole band: the line starts this far inside the free end
 LEAST_SATURATION = 0.08  # of the colour's brightness: a stated colour greyer than this has no chroma to track
@@ -159,6 +167,12 @@ def _one_frame(
         )
     offset = np.interp(at, np.arange(len(steps)), steps)
     offset = np.where(found, offset, np.interp(np.arange(len(at)), np.flatnonzero(found), offset[found]))
+    # then the band fitted across, both its sides at once (:func:`.edges.band_edges`): o runs
+    # from the backdrop into the band, the silhouette at o = −offset
+    o = np.linspace(-reach, reach, 97)
+    across = sample(signal, line[:, None, :] - side * o[None, :, None] * normal[:, None, :])
+    silhouette, _, _ = band_edges(across, o, -offset, -offset + 2.0 * half_width)
+    offset = np.where(np.abs(silhouette + offset) < half_width, -silhouette, offset)
     if thickness_mm is not None:  # onto the midline, half the thickness inside the band
         offset = offset - 0.5 * thickness_mm / mapping.mm_per_px(line)
     edge = line + side * offset[:, None] * normal
@@ -167,8 +181,17 @@ def _one_frame(
     scatter_px = float(np.sqrt(np.mean((offset - course) ** 2)))
     edge = edge[inner:]
     tip = _free_end(signal, line[inner:], half_width)
+    # the tip's uncertainty along the strip: the noise over the signal's slope where it crosses
+    direction = (tip - line[inner]) / max(float(np.linalg.norm(tip - line[inner])), 1e-9)
+    slope = (sample(signal, tip + 0.5 * direction) - sample(signal, tip - 0.5 * direction)).item()
+    tip_px = noise / max(abs(slope), 1e-9)
     tip = tip + side * offset[inner] * normal[inner]
-    edge = _smooth(edge, LINE_SMOOTH)[::5]
+    # a quadratic smoothing over ARC_WINDOW px: jitter across a line lengthens its arc (0.1 px
+    # of it added 0.03 mm over 100 mm), a curve's bend is kept
+    from scipy.signal import savgol_filter
+
+    window = min(ARC_WINDOW, len(edge) - (1 - len(edge) % 2))
+    edge = savgol_filter(edge, window, 2, axis=0)[::5]
     line_px = np.vstack([tip, edge])
     line_mm = mapping.to_plane(line_px)
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(line_mm, axis=0), axis=1))])
@@ -180,9 +203,10 @@ def _one_frame(
             f"{wanted.max():g} mm to s = {np.min(s_mm):g} mm (--edge-s, --free-length-mm)",
         )
     points = np.column_stack([np.interp(wanted, arc, line_px[:, 0]), np.interp(wanted, arc, line_px[:, 1])])
-    # the free end's position along the strip: the half-level crossing's scatter, one
-    # sample of the profile along it (0.1 px), and the band's own noise
-    sigma = np.full(len(points), np.hypot(scatter_px / np.sqrt(LINE_SMOOTH), 0.1))
+    # across: the silhouette's scatter about its course, averaged over LINE_SMOOTH px at
+    # least; along: the free end's, which every arc measured from it carries; and what the
+    # validation measures beyond both
+    sigma = np.full(len(points), np.sqrt((scatter_px**2 / LINE_SMOOTH) + tip_px**2 + VALIDATED_PX**2))
     return points, sigma, noise
 
 
@@ -201,6 +225,7 @@ def track_coloured_edge(
     """The coloured near edge at arc lengths ``s_mm`` from the clamp's lowest point in every
     frame of an RGB video (see the module docstring); ``colour`` (RGB, 0–255) the dye's, or
     None to learn it from the first frame."""
+    import cv2
     from tqdm import tqdm
 
     path = Path(path)
@@ -215,7 +240,9 @@ def track_coloured_edge(
         if direction is None:
             colour = learn_edge_colour(image, background, ignore)
             direction = chroma_direction(colour)
-        signal = colour_signal(image, direction)
+        # blurred by a pixel: chroma stored at half resolution (4:2:0) and interpolated back
+        # is piecewise linear, whose edge shape would move with the edge's pixel phase
+        signal = cv2.GaussianBlur(colour_signal(image, direction), (0, 0), PHASE_BLUR_PX)
         if ignore is not None:
             signal[ignore] = 0.0
         luma_difference = np.abs(np.asarray(image, dtype=np.float64) @ [0.299, 0.587, 0.114] - bg_luma)

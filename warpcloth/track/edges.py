@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LOBE_FLOOR", "rising_edges", "sample"]
+__all__ = ["LOBE_FLOOR", "band_edges", "rising_edges", "sample"]
 
 LOBE_FLOOR = 0.25
 """The lobe is the run of samples around the gradient's peak above this fraction of it;
@@ -63,3 +63,50 @@ def rising_edges(profiles: np.ndarray, step: float, least_rise: float) -> tuple[
     rise = np.where(lobe, gradient, 0.0).sum(axis=1) * step
     at_end = (below_left < 0) | (below_right >= m)  # the lobe runs off the profile: not a whole edge
     return np.where((rise >= least_rise) & ~at_end & (top > 0), position, np.nan), rise
+
+
+def band_edges(
+    profiles: np.ndarray, positions: np.ndarray, first: np.ndarray, second: np.ndarray, iterations: int = 12
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The two edges of a bright band in each profile ``[ray, sample]`` (samples at
+    ``positions``), fitted as a blurred band: b + A (Φ((x − e1)/σ) − Φ((x − e2)/σ)), from
+    the guesses ``first`` < ``second``; returns e1, e2 and each fit's RMS misfit. A band a
+    few blur widths across has its two edges' lobes overlapping, which pulls a lobe's
+    centroid outwards (0.08 px on a 6 px band blurred by 1.4 px); the fitted band does
+    not. Gauss–Newton with Levenberg–Marquardt damping, every profile at once."""
+    from scipy.special import ndtr
+
+    n = len(profiles)
+    x = positions[None, :]
+    level = np.maximum(np.max(profiles, axis=1) - np.min(profiles, axis=1), 1e-12)
+    p = np.column_stack([np.min(profiles, axis=1), level, first, second, np.full(n, 1.0)])
+    damping = np.full(n, 1e-3)
+
+    def residual(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        b, a, e1, e2, s = (q[:, k : k + 1] for k in range(5))
+        z1, z2 = (x - e1) / s, (x - e2) / s
+        g1, g2 = np.exp(-0.5 * z1**2) / np.sqrt(2 * np.pi), np.exp(-0.5 * z2**2) / np.sqrt(2 * np.pi)
+        model = b + a * (ndtr(z1) - ndtr(z2))
+        jac = np.stack(
+            [np.ones_like(model), ndtr(z1) - ndtr(z2), -a * g1 / s, a * g2 / s, -a * (g1 * z1 - g2 * z2) / s], axis=2
+        )
+        return model - profiles, jac
+
+    r, jac = residual(p)
+    cost = np.sum(r**2, axis=1)
+    for _ in range(iterations):
+        jtj = np.einsum("nsi,nsj->nij", jac, jac)
+        jtr = np.einsum("nsi,ns->ni", jac, r)
+        diagonal = np.einsum("nii->ni", jtj)
+        step = -np.linalg.solve(jtj + damping[:, None, None] * np.eye(5) * diagonal[:, :, None], jtr[..., None])[..., 0]
+        trial = p + step
+        trial[:, 4] = np.maximum(trial[:, 4], 0.05)
+        r_trial, jac_trial = residual(trial)
+        cost_trial = np.sum(r_trial**2, axis=1)
+        better = cost_trial < cost
+        p = np.where(better[:, None], trial, p)
+        r = np.where(better[:, None], r_trial, r)
+        jac = np.where(better[:, None, None], jac_trial, jac)
+        cost = np.where(better, cost_trial, cost)
+        damping = np.where(better, damping * 0.3, damping * 10.0)
+    return p[:, 2], p[:, 3], np.sqrt(cost / profiles.shape[1])

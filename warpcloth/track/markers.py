@@ -75,7 +75,7 @@ def noise_sigma(darkening: np.ndarray) -> float:
     centre = float(np.median(darkening))
     sigma = max(1.4826 * float(np.median(np.abs(darkening - centre))), 0.5)
     for _ in range(3):
-        inside = darkening[np.abs(darkening - centre) < 4 * sigma]
+        inside = darkening[np.abs(darkening - centre) <= 4 * sigma]  # ≤: a noiseless frame keeps its pixels
         centre, sigma = float(inside.mean()), float(inside.std())
     return sigma
 

@@ -1,0 +1,99 @@
+"""The dyed near edge, as the seed paper films it, on frames drawn analytically here: a
+strip hanging 3° from the vertical, its near edge (0.5 mm thick) and the first 0.65 mm of its
+visible face dyed red, the rest of the face white, a grey textured backdrop of the same
+brightness as the dye on the other side, a dark clamp above. Lens blur, colour subsampled
+4:2:0 as H.264 stores it, sensor noise. The truth is the geometry itself."""
+
+import numpy as np
+import pytest
+
+from warpcloth.errors import ArgumentError
+from warpcloth.track.calibration import PlaneMapping
+from warpcloth.track.coloured_edge import learn_edge_colour, track_coloured_edge
+from warpcloth.track.video import Frames
+
+MM_PER_PX = 0.2
+SIZE = (300, 640)  # width, height, px
+ROOT_PX = (150.0, 40.0)  # the clamp's lowest point
+TILT = np.radians(3.0)
+ALONG = np.array([np.sin(TILT), -np.cos(TILT)])  # down the strip, plane mm (y up)
+ACROSS = np.array([np.cos(TILT), np.sin(TILT)])  # towards the visible face
+LENGTH_MM, THICKNESS_MM, DYED_FACE_MM, FACE_MM = 100.0, 0.5, 0.65, 8.0
+RED, WHITE, CLAMP = np.array([190.0, 22.0, 20.0]), np.array([205.0, 205.0, 205.0]), np.array([22.0, 24.0, 30.0])
+SUB = 6
+
+
+def mapping() -> PlaneMapping:
+    f = 1000.0
+    k = np.array([[f, 0.0, ROOT_PX[0]], [0.0, f, ROOT_PX[1]], [0.0, 0.0, 1.0]])
+    to_plane = np.diag([f * MM_PER_PX, -f * MM_PER_PX, 1.0])  # normalised → mm, y up
+    return PlaneMapping(k, np.zeros(5), to_plane, SIZE)
+
+
+def frame(rng: np.random.Generator) -> np.ndarray:
+    import cv2
+
+    w, h = SIZE
+    v, u = (np.mgrid[0 : h * SUB, 0 : w * SUB] + 0.5) / SUB - 0.5
+    x, y = (u - ROOT_PX[0]) * MM_PER_PX, -(v - ROOT_PX[1]) * MM_PER_PX
+    s = x * ALONG[0] + y * ALONG[1]
+    n = x * ACROSS[0] + y * ACROSS[1]
+    texture = cv2.resize(rng.uniform(0.75, 1.25, (12, 8)), (w * SUB, h * SUB), interpolation=cv2.INTER_CUBIC)
+    image = np.repeat((95.0 * texture)[..., None], 3, axis=2)  # grey, as bright as the dye
+    on_strip = (s >= 0) & (s <= LENGTH_MM)
+    image[on_strip & (n >= -THICKNESS_MM / 2) & (n < THICKNESS_MM / 2 + FACE_MM)] = WHITE
+    image[on_strip & (n >= -THICKNESS_MM / 2) & (n < THICKNESS_MM / 2 + DYED_FACE_MM)] = RED
+    image[y > 0] = CLAMP
+    image = image.reshape(h, SUB, w, SUB, 3).mean(axis=(1, 3))
+    image = cv2.GaussianBlur(image, (0, 0), 0.6)
+    # 4:2:0: the chroma kept at half resolution each way, as an H.264 file holds it
+    ycc = cv2.cvtColor(image.astype(np.float32) / 255.0, cv2.COLOR_RGB2YCrCb)
+    for c in (1, 2):
+        half = cv2.resize(ycc[..., c], (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+        ycc[..., c] = cv2.resize(half, (w, h), interpolation=cv2.INTER_LINEAR)
+    image = cv2.cvtColor(ycc, cv2.COLOR_YCrCb2RGB) * 255.0 + rng.normal(0.0, 1.5, (h, w, 3))
+    return np.clip(np.rint(image), 0, 255).astype(np.uint8)
+
+
+@pytest.fixture(scope="module")
+def frames():
+    rng = np.random.default_rng(11)
+    images = np.stack([frame(rng) for _ in range(3)])
+    return Frames(images, np.arange(3) / 60.0, np.arange(3), 1 / 60.0)
+
+
+@pytest.fixture(scope="module")
+def background(frames):
+    import cv2
+
+    rng = np.random.default_rng(11)
+    w, h = SIZE
+    texture = cv2.resize(rng.uniform(0.75, 1.25, (12, 8)), (w, h), interpolation=cv2.INTER_CUBIC)
+    image = np.repeat((95.0 * texture)[..., None], 3, axis=2)
+    image[: int(ROOT_PX[1]) + 1] = CLAMP
+    return image
+
+
+S_MM = np.arange(10.0, 91.0, 10.0)
+
+
+@pytest.mark.parametrize("thickness", [None, THICKNESS_MM])
+@pytest.mark.parametrize("colour", [RED, None])
+def test_the_dyed_edge_is_found_at_its_silhouette_within_a_fiftieth_of_a_mm(frames, background, thickness, colour):
+    tracked = track_coloured_edge(
+        frames, background, mapping(), S_MM, LENGTH_MM, colour, "synthetic", thickness_mm=thickness
+    )
+    # the midline at s, or the silhouette half the thickness beyond it on the backdrop's side
+    truth = S_MM[:, None] * ALONG - (0.0 if thickness else THICKNESS_MM / 2) * ACROSS
+    error = tracked.mm - truth[None]
+    bias, rms = error.reshape(-1, 2).mean(axis=0), np.sqrt(np.mean(error.reshape(-1, 2) ** 2, axis=0))
+    assert np.all(np.abs(bias) <= 0.02) and np.all(rms <= 0.05), (bias, rms)
+    # the stated uncertainty covers each point's error (per coordinate, 2σ)
+    assert np.mean(np.abs(error) <= 2.0 * tracked.u_mm[..., None]) >= 0.9, (error, tracked.u_mm)
+
+
+def test_a_grey_first_frame_teaches_no_colour(background):
+    grey = np.repeat(background.mean(axis=2, keepdims=True), 3, axis=2)
+    grey[300:310, 140:160] = 250.0  # a white patch: it differs, but holds no colour
+    with pytest.raises(ArgumentError, match="--edge-colour"):
+        learn_edge_colour(grey, np.repeat(background.mean(axis=2, keepdims=True), 3, axis=2), None)
