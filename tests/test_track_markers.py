@@ -43,7 +43,7 @@ def test_a_dot_between_fabric_and_backdrop_is_centred_within_a_fiftieth_of_a_pix
         centre = 40.0 + rng.uniform(-0.5, 0.5, 2)
         image = dot_on_an_edge(centre, blur_px, rng)
         darkening = BACKDROP - image  # the background: the rig without the strip
-        rough, shapes, _ = _blobs(darkening, 10.0, (20.0, 900.0))
+        rough, shapes, _, _ = _blobs(darkening, 10.0, (20.0, 900.0))
         assert len(rough) == 1
         found = _outline(image, rough[0], shapes[0], noise_sigma(darkening), 2 * RADIUS_PX)
         assert found is not None
@@ -67,7 +67,7 @@ def test_a_slab_of_the_clamp_is_not_a_dot():
     image[30:32, 10:65] = DOT
     image = cv2.GaussianBlur(image, (0, 0), 0.7) + rng.normal(0.0, 1.0, image.shape)
     darkening = BACKDROP - image
-    rough, shapes, _ = _blobs(darkening, 10.0, (20.0, 900.0))
+    rough, shapes, _, _ = _blobs(darkening, 10.0, (20.0, 900.0))
     assert len(rough) == 1
     assert _outline(image, rough[0], shapes[0], noise_sigma(darkening), 2 * RADIUS_PX) is None
 

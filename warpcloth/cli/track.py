@@ -6,6 +6,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,6 +14,9 @@ from warpcloth.errors import OptionError
 from warpcloth.io.json_file import json_text
 
 from .options import add_no_progress, add_overwrite, at_least, figure_path, new_file, path_text, positive
+
+if TYPE_CHECKING:
+    from warpcloth.track.markers import Tracked
 
 SUBCOMMANDS = ("calibrate", "video")
 
@@ -154,6 +158,28 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_no_progress(vid)
     add_overwrite(vid, "output file -o (and --overlay, --overlay-video)")
+
+
+UNCERTAINTY_SAYS = {
+    "markers": "from the sensor noise through each dot's outline and the outline's lopsidedness",
+    "centreline": "from the sensor noise alone (the line's own systematic error, ~0.015 mm on the bundled "
+    "example, is not in it)",
+    "edge": "from the silhouette's scatter, the free end's noise and the validated floor",
+}
+"""What each mode's ``u_px, u_mm`` hold, as the shapes file's header says."""
+
+
+def hidden_notes(tracked: Tracked) -> list[str]:
+    """One line per marker hidden under the mask in some frames: which, in how many, from when to when."""
+    notes = []
+    for m, s in enumerate(tracked.s_mm):
+        gone = ~np.isfinite(tracked.mm[:, m, 0])
+        if gone.any():
+            notes.append(
+                f"marker s = {s:g} mm hidden (behind the clamp or under --mask) in {gone.sum()} of {len(gone)} frames "
+                f"(t = {tracked.t[gone][0]:.6g} to {tracked.t[gone][-1]:.6g} s): no rows for it there"
+            )
+    return notes
 
 
 def _pair(text: str, option: str, sep: str) -> tuple[int, int]:
@@ -346,7 +372,8 @@ def video_command(args: argparse.Namespace) -> int:
     from warpcloth.track.video import FrameStream, median_background
 
     arcs = _what_to_track(args)
-    what = "markers" if args.marker_s else "centreline points" if args.centreline_s else "points of the dyed edge"
+    mode = "markers" if args.marker_s else "centreline" if args.centreline_s else "edge"
+    what = {"markers": "markers", "centreline": "centreline points", "edge": "points of the dyed edge"}[mode]
     colour = edge_colour(args.edge_colour) if args.edge_s else None
     mapping = read_plane(args.plane, "--plane")
     out, overlay, movie = _outputs(args)
@@ -426,12 +453,16 @@ def video_command(args: argparse.Namespace) -> int:
         raise OptionError(
             "--overlay-frame", f"{args.overlay_frame} is not one of the {kept} frames kept (0 to {kept - 1})"
         )
+    hidden = hidden_notes(tracked)
+    for note in hidden:
+        print(f"warpcloth track: note: {args.video}: {note}", file=sys.stderr)
     video = file_checksum(args.video)
     header = [
         f"# warpcloth track {args.video} (sha256 {video['sha256']}), plane {args.plane}, background {source}",
         f"# {len(arcs)} {what}, {kept} frames; sensor noise {np.median(tracked.noise_dn):.3g} grey "
-        "levels; u_px, u_mm: standard uncertainty of each coordinate from the sensor noise alone (the "
-        "calibration's is in the plane file)",
+        f"levels; u_px, u_mm: standard uncertainty of each coordinate, {UNCERTAINTY_SAYS[mode]} (the "
+        "calibration's is in the plane file); fit judges its RMS against u_mm",
+        *(f"# hidden: {note}" for note in hidden),
         *(f"# dropped: {note}" for note in dropped),
         *(f"# duplicated: {note}" for note in duplicated),
         "frame,t_s,s_mm,x_mm,y_mm,u_px,u_mm",
@@ -451,7 +482,7 @@ def video_command(args: argparse.Namespace) -> int:
             )
     print(
         f"tracked {len(arcs)} {what} in {kept} frames (t = {tracked.t[0]:.6g} to {tracked.t[-1]:.6g} s): "
-        f"median uncertainty {np.median(tracked.u_mm):.2g} mm ({np.median(tracked.u_px):.2g} px), sensor noise "
+        f"median uncertainty {np.nanmedian(tracked.u_mm):.2g} mm ({np.nanmedian(tracked.u_px):.2g} px), sensor noise "
         f"{np.median(tracked.noise_dn):.3g} grey levels; {len(dropped)} gaps of dropped frames, "
         f"{len(duplicated)} duplicated frames left out"
     )

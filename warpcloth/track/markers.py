@@ -56,11 +56,13 @@ class Tracked:
     noise_dn: np.ndarray  # the sensor noise estimated in each frame
 
     def csv_rows(self) -> list[str]:
-        """``frame, t_s, s_mm, x_mm, y_mm, u_px, u_mm`` rows."""
+        """``frame, t_s, s_mm, x_mm, y_mm, u_px, u_mm`` rows, none for a marker hidden in a frame."""
         rows = []
         for f, frame in enumerate(self.frame):
             for m, s in enumerate(self.s_mm):
                 x, y = self.mm[f, m]
+                if not np.isfinite(x):  # hidden in this frame: no row
+                    continue
                 rows.append(
                     f"{frame},{self.t[f]:.9f},{s:g},{x:.5f},{y:.5f},{self.u_px[f, m]:.4f},{self.u_mm[f, m]:.5f}"
                 )
@@ -82,13 +84,16 @@ def noise_sigma(darkening: np.ndarray) -> float:
 
 def _blobs(
     darkening: np.ndarray, threshold: float, areas: tuple[float, float]
-) -> tuple[np.ndarray, np.ndarray, list[int]]:
-    # the marker-sized dark blobs' rough centres and pixel covariances, and the areas of the others (px²)
+) -> tuple[np.ndarray, np.ndarray, list[int], np.ndarray]:
+    # the marker-sized dark blobs' rough centres and pixel covariances, the areas of the
+    # others (px²), and where the dark regions larger than a marker are (the clamp, a hand)
     import cv2
 
     mask = (darkening > threshold).astype(np.uint8)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     centres, shapes, others = [], [], []
+    large = stats[:, cv2.CC_STAT_AREA] > areas[1]
+    large[0] = False
     for label in range(1, n):
         x0, y0, w, h, area = stats[label]
         if not areas[0] <= area <= areas[1]:
@@ -99,7 +104,7 @@ def _blobs(
         centres.append(points.mean(axis=0))
         # a pixel is a unit square: its own spread (1/12) adds to the region's
         shapes.append(np.cov(points.T, bias=True) + np.eye(2) / 12.0)
-    return np.array(centres).reshape(-1, 2), np.array(shapes).reshape(-1, 2, 2), others
+    return np.array(centres).reshape(-1, 2), np.array(shapes).reshape(-1, 2, 2), others, large[labels]
 
 
 def _outline(
@@ -283,11 +288,20 @@ def _check_chain(plane: np.ndarray, order: np.ndarray, s_mm: np.ndarray, where: 
 
 
 def _follow(
-    plane: np.ndarray, heading: np.ndarray, reach: float, s_mm: np.ndarray, where: str, path: Path
+    plane: np.ndarray,
+    heading: np.ndarray,
+    reach: float,
+    s_mm: np.ndarray,
+    where: str,
+    path: Path,
+    may_hide: np.ndarray,
 ) -> np.ndarray:
-    # indices into `plane` of the markers, each the dot nearest where its own motion was
-    # heading, every dot taken once (the assignment of least total distance), then checked
-    # along the strip
+    # indices into `plane` of the markers (−1: hidden), each the dot nearest where its own
+    # motion was heading, every dot taken once (the assignment of least total distance); a
+    # marker with no dot within reach is hidden if `may_hide` allows it, else lost (an
+    # error); a hidden marker is taken back only by a dot no other marker took that its
+    # seen neighbours along the strip allow, when there is exactly one; then the markers
+    # seen are checked along the strip
     from scipy.optimize import linear_sum_assignment
 
     far = 1e6
@@ -296,20 +310,63 @@ def _follow(
     if cost.shape[1] < len(s_mm):
         cost = np.hstack([cost, np.full((len(s_mm), len(s_mm) - cost.shape[1]), far)])
     rows, cols = linear_sum_assignment(cost)
+    order = np.full(len(s_mm), -1)
     for m, j in zip(rows, cols, strict=True):
-        if cost[m, j] >= far:
+        if cost[m, j] < far:
+            order[m] = j
+        elif not may_hide[m]:
             nearest = f"{distance[m].min():.3g} mm away" if distance.shape[1] else "none in this frame"
             raise DataFileError(
                 path,
                 f"{where}: marker s = {s_mm[m]:g} mm lost: no dot within {reach:.3g} mm of where its motion was "
-                f"heading (x = {heading[m, 0]:.2f}, y = {heading[m, 1]:.2f} mm; the nearest dot is {nearest}): it "
-                "is hidden, blurred beyond a dot's shape, or merged with another; or moving parts darken the "
-                "frame against the background (give --background, a frame without the strip, or --mask over "
-                "them)",
+                f"heading (x = {heading[m, 0]:.2f}, y = {heading[m, 1]:.2f} mm; the nearest dot is {nearest}) and "
+                "nothing that could hide it near: it is blurred beyond a dot's shape or merged with another; or "
+                "moving parts darken the frame against the background (give --background, a frame without the "
+                "strip, or --mask over them)",
             )
-    order = cols[np.argsort(rows)]
-    _check_chain(plane, order, s_mm, where, path)
+    left = sorted(set(range(len(plane))) - set(order[order >= 0].tolist()))
+    for m in np.flatnonzero(order < 0):
+        allowed = [j for j in left if _between_neighbours(plane, order, j, m, s_mm)]
+        if len(allowed) == 1:
+            order[m] = allowed[0]
+            left.remove(allowed[0])
+    seen = order >= 0
+    _check_chain(plane, order[seen], s_mm[seen], where, path)
     return order
+
+
+def _between_neighbours(plane: np.ndarray, order: np.ndarray, j: int, m: int, s_mm: np.ndarray) -> bool:
+    # whether dot j could be marker m: within the strip's reach of m's nearest seen
+    # neighbours on either side (at least one seen)
+    checked = 0
+    for step in (-1, 1):
+        k = m + step
+        while 0 <= k < len(s_mm) and order[k] < 0:
+            k += step
+        if not 0 <= k < len(s_mm):
+            continue
+        arc = abs(s_mm[k] - s_mm[m])
+        chord = float(np.linalg.norm(plane[j] - plane[order[k]]))
+        if not SHORTEST * arc <= chord <= STRETCH * arc + SLACK_MM:
+            return False
+        checked += 1
+    return checked > 0
+
+
+def _carried(estimate: np.ndarray, seen: np.ndarray, previous: np.ndarray, s_mm: np.ndarray) -> np.ndarray:
+    # hidden markers placed along the strip through the two nearest seen markers (the strip
+    # between markers is nearly straight), or moved as the one seen marker moved
+    out = estimate.copy()
+    visible = np.flatnonzero(seen)
+    for m in np.flatnonzero(~seen):
+        if len(visible) >= 2:
+            k1, k2 = visible[np.argsort(np.abs(s_mm[visible] - s_mm[m]))[:2]]
+            out[m] = estimate[k1] + (estimate[k1] - estimate[k2]) * (s_mm[m] - s_mm[k1]) / (s_mm[k1] - s_mm[k2])
+        elif len(visible):
+            out[m] = previous[m] + estimate[visible[0]] - previous[visible[0]]
+        else:
+            out[m] = previous[m]
+    return out
 
 
 def track_markers(
@@ -325,15 +382,25 @@ def track_markers(
 ) -> Tracked:
     """Every marker in every frame (see the module docstring); ``frames`` gives
     ``(index, t, image)`` per frame, in memory or streamed; ``ignore`` (bool, the frames'
-    shape) marks pixels where no marker is looked for (moving parts of the rig)."""
+    shape) marks pixels where no marker is looked for (moving parts of the rig): a dot
+    touching it is not measured (part of it may be hidden), and a marker heading under it
+    is hidden in that frame (NaN in the result), not lost."""
+    import cv2
     from tqdm import tqdm
 
     path = Path(path)
     expected_area, *areas = _marker_areas(mapping, diameter_mm)
-    index, t, px, sig, noise, misfit = [], [], [], [], [], []
-    plane_track: list[np.ndarray] = []
+    index, t, px, sig, noise = [], [], [], [], []
+    estimates: list[np.ndarray] = []  # each frame's marker positions (mm), hidden ones carried
+    seen = np.ones(len(s_mm), bool)  # which markers the last frame saw
     bg = _grey(background)
     reach = 0.5 * float(np.min(np.diff(s_mm)))
+    touching = shade = None
+    diameter_px = 2.0 * np.sqrt(expected_area / np.pi)
+    grow = np.ones((2 * int(np.ceil(0.5 * diameter_px)) + 5,) * 2, np.uint8)
+    if ignore is not None:
+        touching = cv2.dilate(ignore.astype(np.uint8), grow).astype(bool)
+        shade = cv2.dilate(touching.astype(np.uint8), grow).astype(bool)
     for i, time, image in tqdm(frames, total=frames.total, desc="tracking", unit=" frames", disable=not progress):
         grey = _grey(image)
         darkening = bg - grey
@@ -341,7 +408,15 @@ def track_markers(
             darkening[ignore] = 0.0
         noise.append(noise_sigma(darkening))
         threshold = threshold_dn if threshold_dn is not None else max(10.0 * noise[-1], 5.0)
-        rough, shapes, others = _blobs(darkening, threshold, tuple(areas))
+        rough, shapes, others, occluding = _blobs(darkening, threshold, tuple(areas))
+        if touching is not None and len(rough):
+            clear = ~_at_pixels(touching, rough)
+            rough, shapes = rough[clear], shapes[clear]
+        # a dot that reaches into a dark region larger than a marker merges with it: a marker
+        # heading there is hidden (behind the clamp as it turns), as under the mask
+        shadow = cv2.dilate(occluding.astype(np.uint8), grow).astype(bool)
+        if shade is not None:
+            shadow |= shade
         where = f"frame {i} (t = {time:.6g} s)"
         if not index and len(rough) < len(s_mm) / 2 and others:  # most missing: not one hidden marker
             raise ArgumentError(
@@ -357,28 +432,68 @@ def track_markers(
         centres = np.array([d[0] for d in dots]).reshape(-1, 2)
         plane = mapping.to_plane(centres) if len(centres) else centres
         if not index:
-            # the first frame: the strip hangs at rest from the clamp; the chain starts near
-            # the clamp's lowest point, within the first marker's arc and one spacing (a
-            # first arc off by a spacing is then named by _check_first_marker)
-            order = _chain(plane, np.zeros(2), s_mm[0] + (s_mm[1] - s_mm[0]), s_mm, where, path)
-            _check_first_marker(plane[order], s_mm, where)
+            # the first frame: the strip hangs at rest from the clamp, straight down; markers
+            # that would lie under the mask there are hidden, the others in view; the chain
+            # starts near the clamp's lowest point, within the first marker's arc and one
+            # spacing (a first arc off by a spacing is then named by _check_first_marker)
+            at_rest = np.column_stack([np.zeros(len(s_mm)), -s_mm])
+            order = np.full(len(s_mm), -1)
+            view = np.ones(len(s_mm), bool) if shade is None else ~_at_pixels(touching, mapping.to_pixels(at_rest))
+            if view.sum() < 2:
+                raise ArgumentError("--mask", "covers all but one of the markers where the strip hangs at rest")
+            first, second = s_mm[view][:2]
+            order[view] = _chain(plane, at_rest[view][0] + [0.0, first], second, s_mm[view], where, path)
+            _check_first_marker(plane[order[view]], s_mm[view], where)
         else:
-            heading = plane_track[-1]
-            if len(plane_track) > 1:  # at the speed it had, over this frame's interval
-                heading = heading + (plane_track[-1] - plane_track[-2]) * (time - t[-1]) / (t[-1] - t[-2])
-            order = _follow(plane, heading, reach, s_mm, where, path)
+            heading = estimates[-1]
+            if len(estimates) > 1:  # at the speed it had, over this frame's interval
+                heading = heading + (estimates[-1] - estimates[-2]) * (time - t[-1]) / (t[-1] - t[-2])
+            # within reach of the shadow: where the marker is, within its heading's reach, may be in it
+            heading_px = mapping.to_pixels(heading)
+            to_shadow = cv2.distanceTransform((~shadow).astype(np.uint8), cv2.DIST_L2, 5)
+            reach_px = reach / mapping.mm_per_px(heading_px)
+            # and a marker hidden in the last frame stays hidden until it is seen again
+            may_hide = (_values_at(to_shadow, heading_px, np.inf) <= reach_px) | ~seen
+            order = _follow(plane, heading, reach, s_mm, where, path, may_hide)
+        seen = order >= 0
+        found = np.full((len(s_mm), 2), np.nan)
+        found[seen] = centres[order[seen]]
+        sigma = np.full((len(s_mm), 2), np.nan)
+        sigma[seen] = [dots[k][1] for k in order[seen]]
+        estimate = np.full((len(s_mm), 2), np.nan)
+        estimate[seen] = plane[order[seen]]
+        # hidden markers: where they hang at rest in the first frame, then carried along
+        if estimates:
+            estimates.append(_carried(estimate, seen, estimates[-1], s_mm))
+        else:
+            estimates.append(np.where(seen[:, None], estimate, at_rest))
         index.append(i)
         t.append(time)
-        px.append(centres[order])
-        sig.append(np.array([dots[k][1] for k in order]))
-        misfit.append(np.array([dots[k][2] for k in order]))
-        plane_track.append(plane[order])
+        px.append(found)
+        sig.append(sigma)
     px, sig = np.array(px), np.array(sig)
     n, m = px.shape[:2]
-    mm = mapping.to_plane(px.reshape(-1, 2)).reshape(n, m, 2)
+    mm = np.full((n, m, 2), np.nan)
     u_px = np.sqrt(0.5 * np.sum(sig**2, axis=2))
-    u_mm = u_px * mapping.mm_per_px(px.reshape(-1, 2)).reshape(n, m)
+    u_mm = np.full((n, m), np.nan)
+    seen = np.isfinite(px[..., 0])
+    mm[seen] = mapping.to_plane(px[seen])
+    u_mm[seen] = u_px[seen] * mapping.mm_per_px(px[seen])
     return Tracked(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u_px, u_mm, np.array(noise))
+
+
+def _values_at(image: np.ndarray, pixels: np.ndarray, outside: object) -> np.ndarray:
+    # the image's value at each pixel position (x, y), `outside` beyond the frame
+    col, row = np.rint(pixels[:, 0]).astype(int), np.rint(pixels[:, 1]).astype(int)
+    inside = (row >= 0) & (row < image.shape[0]) & (col >= 0) & (col < image.shape[1])
+    out = np.full(len(pixels), outside, dtype=image.dtype if image.dtype != bool else bool)
+    out[inside] = image[row[inside], col[inside]]
+    return out
+
+
+def _at_pixels(mask: np.ndarray, pixels: np.ndarray) -> np.ndarray:
+    # mask's value at each pixel position (x, y), False outside the frame
+    return _values_at(mask, pixels, False)
 
 
 def _grey(image: np.ndarray) -> np.ndarray:

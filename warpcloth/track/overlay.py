@@ -147,6 +147,8 @@ def write_overlay_video(
         for f, (_, _, image) in enumerate(frames):
             image = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) if image.ndim == 3 else image.copy()
             for m, s in enumerate(tracked.s_mm):
+                if not np.all(np.isfinite(tracked.px[f, m])):  # hidden in this frame
+                    continue
                 centre = tuple(int(round(v * 16)) for v in tracked.px[f, m])
                 cv2.circle(image, centre, 8 * 16, 255, 1, cv2.LINE_AA, 4)
                 cv2.putText(
