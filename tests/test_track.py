@@ -97,14 +97,12 @@ def test_fit_of_the_tracked_shapes_recovers_the_rotation_centre(tracked):
         "--out",
         str(tracked / "fit"),
     )
-    # judged against the tracker's stated uncertainty (u_mm, 0.004 mm), the model on the
-    # finest level's mesh (h = 1.25 mm) misses the data by 0.019 mm: the fit says so and
-    # exits non-zero, where the data's own 4th differences (0.09 mm: fast motion sampled at
-    # 60 frames/s) would have passed it as converged
-    assert done.returncode == 6, done.stdout + done.stderr
-    assert "poor_fit" in done.stderr and "the tracker's stated uncertainty u_mm" in done.stderr, done.stderr
+    # judged against the tracker's stated uncertainty (u_mm) and the finest mesh's share of
+    # the misfit, not the data's own 4th differences (0.09 mm: fast motion at 60 frames/s)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "the tracker's stated uncertainty u_mm" in done.stdout, done.stdout
     fit = json.loads((tracked / "fit" / "fit.json").read_text())
-    assert fit["status"] == "poor_fit" and fit["noise_mm"] < 0.01, fit["noise_mm"]
+    assert fit["noise_mm"] < 0.02 and fit["rms_mesh_mm"] > 0, fit
     dy = fit["parameters"]["clamp.rotation_centre_dy_mm"]["value"]
     assert abs(dy - TRUTH_DY_MM) <= 0.05, dy
 
@@ -150,10 +148,9 @@ def test_the_centreline_without_markers_recovers_the_simulated_strip(centreline)
         "--out",
         str(centreline.parent / "fit-centreline"),
     )
-    # the centreline states the sensor noise's share alone (0.0016 mm) while it is off by
-    # 0.017 mm (the free end's position moves every arc): the fit refuses, naming why
-    assert done.returncode == 6, done.stdout + done.stderr
-    assert "poor_fit" in done.stderr and "the tracker's stated uncertainty u_mm" in done.stderr, done.stderr
+    # the centreline states the sensor noise's share alone (0.0016 mm; it is off by 0.017 mm):
+    # the finest mesh's share of the misfit (0.020 mm) is what the RMS 0.025 mm is judged by
+    assert done.returncode == 0, done.stdout + done.stderr
     fit = json.loads((centreline.parent / "fit-centreline" / "fit.json").read_text())
     assert abs(fit["parameters"]["clamp.rotation_centre_dy_mm"]["value"] - TRUTH_DY_MM) <= 0.05
 

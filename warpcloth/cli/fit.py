@@ -174,9 +174,10 @@ def fit_command(args: argparse.Namespace) -> int:
         if fit.sigma_mesh
         else ""
     )
+    mesh_share = f"; the mesh's share of the RMS {fit.rms_mesh * 1e3:.3g} mm" if fit.rms_mesh else ""
     print(
         f"RMS {fit.rms * 1e3:.4g} mm{at_h} over {fit.n_residuals} residuals (noise {fit.noise * 1e3:.3g} mm, "
-        f"{fit.noise_source}); {fit.launches} launches, {fit.variants} variants, {fit.wall_time_s:.1f} s"
+        f"{fit.noise_source}{mesh_share}); {fit.launches} launches, {fit.variants} variants, {fit.wall_time_s:.1f} s"
     )
     print(continuum_line(fit))
     for name, value in fit.parameters.items():

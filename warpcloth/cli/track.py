@@ -96,6 +96,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     vid.add_argument("--marker-diameter-mm", type=positive, help="the markers' diameter, mm (with --marker-s)")
     vid.add_argument(
+        "--marker-height-mm",
+        type=float,
+        default=0.0,
+        help="how far the markers' centres stand in front of the calibrated plane, towards the camera (a "
+        "sticker's thickness), mm: measured on that plane, free of the oblique view's parallax (default 0)",
+    )
+    vid.add_argument(
         "--centreline-s",
         metavar="S,S,...|FIRST:LAST:STEP",
         help="instead of markers: the strip's centreline at these arc lengths from the clamp's lowest "
@@ -410,7 +417,7 @@ def video_command(args: argparse.Namespace) -> int:
         tracked = track_markers(
             frames,
             background,
-            mapping,
+            mapping.raised(args.marker_height_mm) if args.marker_height_mm else mapping,
             arcs,
             args.marker_diameter_mm,
             args.video,

@@ -87,6 +87,21 @@ class PlaneMapping:
         w = ideal @ h[2, :2] + h[2, 2]
         return np.column_stack([ideal @ h[0, :2] + h[0, 2], ideal @ h[1, :2] + h[1, 2]]) / w[:, None]
 
+    def raised(self, height_mm: float) -> PlaneMapping:
+        """The same camera's mapping onto the plane ``height_mm`` in front of this one (towards
+        the camera), in the same in-plane coordinates: what a marker standing off the
+        calibrated plane (a sticker's thickness) is measured on, free of the parallax an
+        oblique view gives it (height × the tangent of the view's angle to square)."""
+        g = np.linalg.inv(self.normalized_to_plane)  # plane (X, Y, 1) → λ (X r1 + Y r2 + t)
+        scale = np.sqrt(np.linalg.norm(g[:, 0]) * np.linalg.norm(g[:, 1]))
+        r1, r2, t = g[:, 0] / scale, g[:, 1] / scale, g[:, 2] / scale
+        normal = np.cross(r1, r2)
+        normal /= np.linalg.norm(normal)
+        if normal @ t > 0:  # towards the camera, at the origin
+            normal = -normal
+        lifted = np.column_stack([r1, r2, t + height_mm * normal])
+        return PlaneMapping(self.camera_matrix, self.distortion, np.linalg.inv(lifted), self.image_size)
+
     def to_pixels(self, plane_mm: np.ndarray) -> np.ndarray:
         """Plane ``[n, 2]`` mm → pixels ``[n, 2]``."""
         import cv2

@@ -66,29 +66,34 @@ def rising_edges(profiles: np.ndarray, step: float, least_rise: float) -> tuple[
 
 
 def band_edges(
-    profiles: np.ndarray, positions: np.ndarray, first: np.ndarray, second: np.ndarray, iterations: int = 12
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The two edges of a bright band in each profile ``[ray, sample]`` (samples at
-    ``positions``), fitted as a blurred band: b + A (Φ((x − e1)/σ) − Φ((x − e2)/σ)), from
-    the guesses ``first`` < ``second``; returns e1, e2 and each fit's RMS misfit. A band a
-    few blur widths across has its two edges' lobes overlapping, which pulls a lobe's
-    centroid outwards (0.08 px on a 6 px band blurred by 1.4 px); the fitted band does
-    not. Gauss–Newton with Levenberg–Marquardt damping, every profile at once."""
+    profiles: np.ndarray, positions: np.ndarray, first: np.ndarray, second: np.ndarray, iterations: int = 15
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The two edges of a band in each profile ``[ray, sample]`` (samples at ``positions``),
+    fitted as two blurred steps: b + a1 Φ((x − e1)/σ) + a2 Φ((x − e2)/σ), from the guesses
+    ``first`` < ``second``; returns e1, e2, the first step's height a1 and each fit's RMS
+    misfit. The steps' heights are free, so the band may differ from each side by its own
+    amount (a dark dye between a grey backdrop and white fabric) or by the same (its
+    colour against neutral). A band a few blur widths across has its two edges' lobes
+    overlapping, which pulls a lobe's centroid outwards (0.08 px on a 6 px band blurred by
+    1.4 px); the fitted steps do not. Gauss–Newton with Levenberg–Marquardt damping, every
+    profile at once."""
     from scipy.special import ndtr
 
     n = len(profiles)
     x = positions[None, :]
-    level = np.maximum(np.max(profiles, axis=1) - np.min(profiles, axis=1), 1e-12)
-    p = np.column_stack([np.min(profiles, axis=1), level, first, second, np.full(n, 1.0)])
+    low, high = profiles[:, :3].mean(axis=1), profiles[:, -3:].mean(axis=1)
+    middle = profiles[np.arange(n), np.clip(np.searchsorted(positions, 0.5 * (first + second)), 0, len(positions) - 1)]
+    p = np.column_stack([low, middle - low, high - middle, first, second, np.full(n, 1.0)])
     damping = np.full(n, 1e-3)
 
     def residual(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        b, a, e1, e2, s = (q[:, k : k + 1] for k in range(5))
+        b, a1, a2, e1, e2, s = (q[:, k : k + 1] for k in range(6))
         z1, z2 = (x - e1) / s, (x - e2) / s
         g1, g2 = np.exp(-0.5 * z1**2) / np.sqrt(2 * np.pi), np.exp(-0.5 * z2**2) / np.sqrt(2 * np.pi)
-        model = b + a * (ndtr(z1) - ndtr(z2))
+        model = b + a1 * ndtr(z1) + a2 * ndtr(z2)
         jac = np.stack(
-            [np.ones_like(model), ndtr(z1) - ndtr(z2), -a * g1 / s, a * g2 / s, -a * (g1 * z1 - g2 * z2) / s], axis=2
+            [np.ones_like(model), ndtr(z1), ndtr(z2), -a1 * g1 / s, -a2 * g2 / s, -(a1 * g1 * z1 + a2 * g2 * z2) / s],
+            axis=2,
         )
         return model - profiles, jac
 
@@ -97,10 +102,10 @@ def band_edges(
     for _ in range(iterations):
         jtj = np.einsum("nsi,nsj->nij", jac, jac)
         jtr = np.einsum("nsi,ns->ni", jac, r)
-        diagonal = np.einsum("nii->ni", jtj)
-        step = -np.linalg.solve(jtj + damping[:, None, None] * np.eye(5) * diagonal[:, :, None], jtr[..., None])[..., 0]
+        diagonal = np.einsum("nii->ni", jtj) + 1e-12
+        step = -np.linalg.solve(jtj + damping[:, None, None] * np.eye(6) * diagonal[:, :, None], jtr[..., None])[..., 0]
         trial = p + step
-        trial[:, 4] = np.maximum(trial[:, 4], 0.05)
+        trial[:, 5] = np.maximum(trial[:, 5], 0.05)
         r_trial, jac_trial = residual(trial)
         cost_trial = np.sum(r_trial**2, axis=1)
         better = cost_trial < cost
@@ -109,4 +114,4 @@ def band_edges(
         jac = np.where(better[:, None, None], jac_trial, jac)
         cost = np.where(better, cost_trial, cost)
         damping = np.where(better, damping * 0.3, damping * 10.0)
-    return p[:, 2], p[:, 3], np.sqrt(cost / profiles.shape[1])
+    return p[:, 3], p[:, 4], p[:, 1], np.sqrt(cost / profiles.shape[1])

@@ -51,6 +51,7 @@ class FitResult:
     sigma_noise: dict[str, float] = field(default_factory=dict)  # the measurement noise's share of σ
     sigma_mesh: dict[str, float] = field(default_factory=dict)  # the discretisation's share of σ
     rms_at_spacing: float = float("nan")  # the RMS at the scene's spacing
+    rms_mesh: float = 0.0  # the finest level's misfit that refining the mesh removes (m)
     spacing: dict[str, float] = field(default_factory=dict)  # the mesh best.toml reruns the values on (mm)
     dt_s: float = float("nan")  # the step best.toml reruns the values with (each level's: ``continuum``)
 
@@ -79,6 +80,8 @@ class FitResult:
         # judged on the finest level's run at these values (a run that happened), the
         # extrapolated residual's RMS beside it
         self.rms = float(np.sqrt(np.mean(estimate.residual_finest**2)))
+        # the part of that run's misfit the mesh makes: the verdict counts it beside the noise
+        self.rms_mesh = float(np.sqrt(np.mean((estimate.residual_finest - estimate.residual) ** 2)))
         self.continuum["rms_extrapolated_mm"] = float(np.sqrt(np.mean(estimate.residual**2))) * 1e3
         self.at_bound = ended_at_bound(objective.free, q[:d])
         self.spacing = {name: estimate.finest.spacing_of(name) for name in objective.spacing_fields}
@@ -94,6 +97,7 @@ class FitResult:
             "continuum": self.continuum,
             "rms_mm": self.rms * 1e3,
             "rms_at_spacing_mm": self.rms_at_spacing * 1e3,
+            "rms_mesh_mm": self.rms_mesh * 1e3,
             "noise_mm": self.noise * 1e3,
             "noise_source": self.noise_source,
             "parameters": {
