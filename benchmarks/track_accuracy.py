@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from warpcloth.io.measured import read_tracked_shapes
+from warpcloth.io.measured import read_measurement, read_tracked_shapes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -35,17 +35,18 @@ def cli(*args: str) -> subprocess.CompletedProcess:
     return done
 
 
-def compare(name: str, tracked: Path, truth_xy_mm: np.ndarray) -> None:
-    shapes = read_tracked_shapes(tracked)
-    found = np.column_stack([shapes.x, shapes.y]) * 1e3
-    error = found - truth_xy_mm
+def compare(name: str, tracked: Path, truth_xy_mm: np.ndarray, truth_keys: np.ndarray) -> None:
+    shapes = read_measurement(tracked)
+    keys = shapes.frame * 100_000 + np.rint(shapes.s * 1e6).astype(int)
+    where = {k: i for i, k in enumerate(truth_keys)}
+    error = np.column_stack([shapes.x, shapes.y]) * 1e3 - truth_xy_mm[[where[k] for k in keys]]
     u = shapes.u[:, None] * 1e3
     bias, rms = error.mean(axis=0), np.sqrt(np.mean(error**2, axis=0))
     print(
         f"{name}: bias x {bias[0]:+.4f}, y {bias[1]:+.4f} mm; RMS x {rms[0]:.4f}, y {rms[1]:.4f} mm; largest "
         f"|error| {np.max(np.linalg.norm(error, axis=1)):.4f} mm; stated u median {np.median(u):.4f} mm, covers "
         f"{np.mean(np.abs(error) <= u):.0%} within 1σ and {np.mean(np.abs(error) <= 2 * u):.0%} within 2σ "
-        f"({len(shapes.t) // len(np.unique(shapes.s))} frames)"
+        f"({len(error)} points in {len(np.unique(shapes.frame))} frames)"
     )
 
 
@@ -62,34 +63,49 @@ def main() -> None:
                    "-o", str(out / "plane.json"))  # fmt: skip
         print(done.stdout.strip().splitlines()[0])
         video = data / ("rotation.avi" if args.own else "rotation.mp4")
-        rig = [] if args.own else ["--mask", str(data / "clamp_mask.png")]
+        rig = [] if args.own else ["--marker-height-mm", str(described["markers"]["z_mm"])]
         cli("track", str(video), "--plane", str(out / "plane.json"), "--background", str(data / "background.png"),
             "--marker-s", "5:95:10", "--marker-diameter-mm", "2.4", "--no-progress", "-o", str(out / "markers.csv"),
             *rig)  # fmt: skip
         truth = read_tracked_shapes(data / "truth.csv")
-        compare("markers", out / "markers.csv", np.column_stack([truth.x, truth.y]) * 1e3)
-        fit = cli("fit", "impulsive_rotation", "--measured", str(out / "markers.csv"), "--free",
+        keys = truth.frame * 100_000 + np.rint(truth.s * 1e6).astype(int)
+        compare("markers", out / "markers.csv", np.column_stack([truth.x, truth.y]) * 1e3, keys)
+        cli("fit", "impulsive_rotation", "--measured", str(out / "markers.csv"), "--free",
                   "gamma,rotation_centre_dy_mm", "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out",
                   str(out / "fit"))  # fmt: skip
         result = json.loads((out / "fit" / "fit.json").read_text())
-        dy = result["parameters"]["clamp.rotation_centre_dy_mm"]
-        true_dy = described["truth"]["clamp.rotation_centre_dy_mm"] if args.own else described["truth"][
-            "rotation_centre_dy_mm"]  # fmt: skip
+        dy, gamma = result["parameters"]["clamp.rotation_centre_dy_mm"], result["parameters"]["damping.gamma_per_s"]
+        truths = described["truth"] if "truth" in described else described["example"]["truth"]
+        true_dy, true_gamma = truths["clamp.rotation_centre_dy_mm"], truths["damping.gamma_per_s"]
         print(
             f"fit of the markers: {result['status']}, dy = {dy['value']:.4f} ± {dy['sigma']:.4f} mm (truth "
-            f"{true_dy}: {(dy['value'] - true_dy) / dy['sigma']:+.1f}σ), RMS {result['rms_mm']:.4f} mm against the "
-            f"noise {result['noise_mm']:.4f} mm ({result['noise_source']})"
+            f"{true_dy}: {(dy['value'] - true_dy) / dy['sigma']:+.1f}σ), γ = {gamma['value']:.4f} ± "
+            f"{gamma['sigma']:.4f} /s (truth {true_gamma}: {(gamma['value'] - true_gamma) / gamma['sigma']:+.1f}σ), "
+            "RMS "
+            f"{result['rms_mm']:.4f} mm against the noise {result['noise_mm']:.4f} mm and the mesh's share "
+            f"{result['rms_mesh_mm']:.4f} mm"
         )
         if args.own:
             return
-        edge_truth = np.loadtxt(data / "edge_truth.csv", delimiter=",", comments="#", skiprows=1)
-        common = ["--edge-s", "5:95:10", "--free-length-mm", str(described["free_length_mm"]), "--edge-colour",
-                  "auto", "--no-progress", "--background", str(data / "background.png"), *rig]  # fmt: skip
+        edge_truth = np.loadtxt(data / "edge_truth.csv", delimiter=",", comments=("#", "frame"))
+        common = ["--edge-s", "5:95:10", "--free-length-mm", "100", "--edge-colour", "auto", "--no-progress",
+                  "--background", str(data / "background.png")]  # fmt: skip
         cli("track", str(data / "edge.mp4"), "--plane", str(out / "plane.json"), *common, "-o", str(out / "edge.csv"))
-        compare("dyed edge, silhouette", out / "edge.csv", edge_truth[:, 5:7])
+        keys = edge_truth[:, 0].astype(int) * 100_000 + np.rint(edge_truth[:, 2] * 1e3).astype(int)
+        compare("dyed edge, silhouette", out / "edge.csv", edge_truth[:, 5:7], keys)
         cli("track", str(data / "edge.mp4"), "--plane", str(out / "plane.json"), *common, "--thickness-mm",
-            str(described["thickness_mm"]), "-o", str(out / "midline.csv"))  # fmt: skip
-        compare("dyed edge, midline (--thickness-mm)", out / "midline.csv", edge_truth[:, 3:5])
+            str(described["strip"]["thickness_mm"]), "-o", str(out / "midline.csv"))  # fmt: skip
+        compare("dyed edge, midline (--thickness-mm)", out / "midline.csv", edge_truth[:, 3:5], keys)
+        cli("fit", "impulsive_rotation", "--measured", str(out / "midline.csv"), "--free",
+                  "gamma,rotation_centre_dy_mm", "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out",
+                  str(out / "fit-edge"))  # fmt: skip
+        result = json.loads((out / "fit-edge" / "fit.json").read_text())
+        for name, true in (("clamp.rotation_centre_dy_mm", true_dy), ("damping.gamma_per_s", true_gamma)):
+            value = result["parameters"][name]
+            print(
+                f"fit of the edge's midline: {result['status']}, {name} = {value['value']:.4f} ± {value['sigma']:.4f} "
+                f"(truth {true}: {(value['value'] - true) / value['sigma']:+.1f}σ)"
+            )
 
 
 if __name__ == "__main__":
