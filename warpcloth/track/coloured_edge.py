@@ -57,14 +57,15 @@ END_INSET_HALF_WIDTHS = 3.0  # a profile across needs a whole band: the line sta
 LEAST_SATURATION = 0.08  # of the colour's brightness: a stated colour greyer than this has no chroma to track
 
 
-def chroma_direction(colour: np.ndarray, option: str = "--edge-colour") -> np.ndarray:
-    """The unit vector in RGB of ``colour`` less its grey, or an error naming ``option``
-    when the colour is (nearly) grey: its projection would not tell it from the backdrop."""
+def chroma_direction(colour: np.ndarray) -> np.ndarray:
+    """The unit vector in RGB of ``colour`` less its grey, or an error naming
+    ``--edge-colour`` when the colour is (nearly) grey: its projection would not tell it
+    from the backdrop."""
     colour = np.asarray(colour, dtype=float)
     chroma = colour - colour.mean()
     if np.linalg.norm(chroma) < LEAST_SATURATION * max(float(np.linalg.norm(colour)), 1e-9):
         raise ArgumentError(
-            option,
+            "--edge-colour",
             f"{','.join(f'{v:g}' for v in colour)} is grey (its colour less its grey is "
             f"{np.linalg.norm(chroma):.3g} of {np.linalg.norm(colour):.3g}): a grey edge cannot be told from the "
             "backdrop by its colour; give the dye's colour as R,G,B",
@@ -93,7 +94,7 @@ def learn_edge_colour(first: np.ndarray, background: np.ndarray, ignore: np.ndar
         )
     saturation = np.linalg.norm(pixels - pixels.mean(axis=1, keepdims=True), axis=1)
     colour = np.median(pixels[saturation >= np.quantile(saturation, 0.9)], axis=0)
-    chroma_direction(colour, "--edge-colour")  # refuses a grey one
+    chroma_direction(colour)  # refuses a grey one
     return colour
 
 
