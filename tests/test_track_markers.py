@@ -78,10 +78,14 @@ def test_markers_follow_their_own_motion_not_the_nearest_dot(tmp_path):
     # a stray dark spot 9.7 mm from the first marker, nearer it than the second marker is
     stray = np.array([[3.2, -0.3]])
     dots = np.vstack([stray, heading + 0.2])
-    order = _follow(dots, heading, 5.0, s_mm, "frame 4", tmp_path / "v.mp4")
+    nothing_hides = np.zeros(3, bool)
+    order = _follow(dots, heading, 5.0, s_mm, "frame 4", tmp_path / "v.mp4", nothing_hides)
     assert order.tolist() == [1, 2, 3]
     with pytest.raises(Exception, match=r"frame 4 .*marker s = 30 mm lost: no dot within 5 mm"):
-        _follow(dots[:3], heading, 5.0, s_mm, "frame 4 (t = 0.06 s)", tmp_path / "v.mp4")
+        _follow(dots[:3], heading, 5.0, s_mm, "frame 4 (t = 0.06 s)", tmp_path / "v.mp4", nothing_hides)
+    # behind the clamp: hidden; the stray dot is no dot its neighbour along the strip allows
+    order = _follow(dots[:3], heading, 5.0, s_mm, "frame 4", tmp_path / "v.mp4", np.array([False, False, True]))
+    assert order.tolist() == [1, 2, -1]
 
 
 def test_a_fit_of_tracked_shapes_is_judged_against_the_uncertainty_the_tracker_stated():

@@ -62,6 +62,7 @@ from pathlib import Path
 
 import numpy as np
 
+from warpcloth.errors import InternalError
 from warpcloth.io.atomic import write_atomically, write_text_atomically
 
 __all__ = [
@@ -948,7 +949,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"y {free[..., 1].min():.1f}..{free[..., 1].max():.1f} mm"
     )
     if MARKER_S_MM.max() + MARKER_DIAMETER_MM / 2 > motion.free_length_mm:
-        raise ValueError("a marker lies beyond the strip's free end")
+        raise InternalError(
+            f"the rig's last marker (s = {MARKER_S_MM.max():g} mm) lies beyond the simulated strip's free end "
+            f"({motion.free_length_mm:g} mm): the rig and the scene disagree, a bug in warpcloth"
+        )
     camera = rig_camera()
     rig = Rig(camera)
     print(f"rig set up in {time.perf_counter() - started:.1f} s; camera centre {np.round(camera.centre, 2).tolist()}")
