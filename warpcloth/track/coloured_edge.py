@@ -190,8 +190,8 @@ def _one_frame(
     slope = (sample(signal, tip + 0.5 * direction) - sample(signal, tip - 0.5 * direction)).item()
     tip_px = noise / max(abs(slope), 1e-9)
     tip = tip + side * offset[inner] * normal[inner]
-    # a quadratic smoothing over ARC_WINDOW px: jitter across a line lengthens its arc (0.1 px
-    # of it added 0.03 mm over 100 mm), a curve's bend is kept
+    # a quadratic smoothing over ARC_WINDOW px: jitter across a line would lengthen its arc
+    # (0.1 px every 5 px: 0.002 px per chord), a quadratic keeps the curve's bend
     from scipy.signal import savgol_filter
 
     window = min(ARC_WINDOW, len(edge) - (1 - len(edge) % 2))
