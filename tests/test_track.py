@@ -574,6 +574,8 @@ M = ("--marker-s", "5:95:10", "--marker-diameter-mm", "2.4")
         (("--edge-s", "5:95:10", "--free-length-mm", "100", "--edge-colour", "red"), ("--edge-colour", "R,G,B")),
         ((*M, "--edge-colour", "200,20,20"), ("--edge-colour", "goes with --edge-s")),
         ((*M, "--thickness-mm", "0.5"), ("--thickness-mm", "goes with")),
+        (("--edge-s", "5:95:10", "--free-length-mm", "100", "--edge-colour", "200,20,20", "--marker-height-mm", "1"),
+         ("--marker-height-mm", "goes with --marker-s")),
         ((*M, "--edge-s", "5:95:10"), ("--marker-s", "one of them")),
     ],
 )  # fmt: skip

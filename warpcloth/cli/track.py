@@ -240,6 +240,8 @@ def _what_to_track(args: argparse.Namespace) -> np.ndarray:
         )
     if args.edge_colour and not args.edge_s:
         raise OptionError("--edge-colour", "goes with --edge-s (the dyed edge's colour)")
+    if args.marker_height_mm and not args.marker_s:
+        raise OptionError("--marker-height-mm", "goes with --marker-s (how far the markers stand off the plane)")
     if args.thickness_mm is not None and not args.edge_s:
         raise OptionError("--thickness-mm", "goes with --edge-s (the midline lies half of it inside the edge)")
     if args.marker_s:

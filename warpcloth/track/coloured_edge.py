@@ -204,7 +204,9 @@ def _one_frame(
         raise DataFileError(
             path,
             f"{where}: the coloured edge found is {arc[-1]:.3g} mm long from the free end, shorter than the "
-            f"{wanted.max():g} mm to s = {np.min(s_mm):g} mm (--edge-s, --free-length-mm)",
+            f"{wanted.max():g} mm to s = {np.min(s_mm):g} mm (--edge-s, --free-length-mm; or the clamp hides its "
+            "root: start --edge-s further down, or give --background, a frame without the strip, if the median "
+            "of the frames holds the clamp turned)",
         )
     points = np.column_stack([np.interp(wanted, arc, line_px[:, 0]), np.interp(wanted, arc, line_px[:, 1])])
     # across: the silhouette's scatter about its course, averaged over LINE_SMOOTH px at

@@ -245,7 +245,8 @@ def _chain(plane: np.ndarray, start: np.ndarray, reach: float, s_mm: np.ndarray,
             path,
             f"{where}: marker s = {s_mm[0]:g} mm lost: no dark blob within {reach:.3g} mm of "
             f"where it was (x = {start[0]:.2f}, y = {start[1]:.2f} mm); the nearest is "
-            f"{np.linalg.norm(plane[first] - start):.3g} mm away",
+            f"{np.linalg.norm(plane[first] - start):.3g} mm away (a background model that holds the clamp "
+            "turned hides what is beside it: give --background, a frame without the strip)",
         )
     order = [first]
     left = set(range(len(plane))) - set(order)
