@@ -169,8 +169,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 UNCERTAINTY_SAYS = {
     "markers": "from the sensor noise through each dot's outline and the outline's lopsidedness",
-    "centreline": "from the sensor noise alone (the line's own systematic error, ~0.015 mm on the bundled "
-    "example, is not in it)",
+    "centreline": "from the sensor noise and the floor validation measured (0.08 px)",
     "edge": "from the silhouette's scatter, the free end's noise and the validated floor",
 }
 """What each mode's ``u_px, u_mm`` hold, as the shapes file's header says."""
