@@ -25,6 +25,7 @@ import numpy as np
 from warpcloth.errors import DataFileError
 
 from .calibration import PlaneMapping
+from .edges import sample
 from .markers import Tracked, noise_sigma
 from .video import Frames, FrameStream
 
@@ -97,31 +98,26 @@ def _resample(points: np.ndarray, step: float) -> np.ndarray:
     return np.column_stack([np.interp(at, arc, points[:, 0]), np.interp(at, arc, points[:, 1])])
 
 
-def _sample(image: np.ndarray, points: np.ndarray) -> np.ndarray:
-    import cv2
-
-    width = 1024  # remap's maps are images: at most 32767 rows
-    n = len(points)
-    maps = np.zeros((-(-n // width) * width, 2), np.float32)
-    maps[:n] = points
-    maps = maps.reshape(-1, width, 2)
-    return cv2.remap(image, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()[:n]
+def smooth_line(points: np.ndarray, width: int) -> np.ndarray:
+    """Each point ``[n, 2]`` averaged with its neighbours over ``width`` points, the ends
+    repeated beyond the line."""
+    kernel = np.ones(width) / width
+    return np.column_stack(
+        [np.convolve(np.pad(points[:, k], width // 2, mode="edge"), kernel, "valid") for k in range(2)]
+    )
 
 
 def _refine(
     difference: np.ndarray, path: np.ndarray, half_width: float, noise: float, threshold: float
 ) -> tuple[np.ndarray, np.ndarray]:
     # each point moved to the centre of the profile across the strip; its σ from the noise
-    kernel = np.ones(SMOOTH) / SMOOTH
-    smooth = np.column_stack(
-        [np.convolve(np.pad(path[:, k], SMOOTH // 2, mode="edge"), kernel, "valid") for k in range(2)]
-    )
+    smooth = smooth_line(path, SMOOTH)
     tangent = np.gradient(smooth, axis=0)
     tangent /= np.linalg.norm(tangent, axis=1)[:, None]
     normal = np.column_stack([-tangent[:, 1], tangent[:, 0]])
     offsets = np.arange(-PROFILE_HALF_WIDTHS * half_width, PROFILE_HALF_WIDTHS * half_width + 0.25, 0.25)
     across = smooth[:, None, :] + offsets[None, :, None] * normal[:, None, :]
-    weight = np.clip(_sample(difference, across.reshape(-1, 2)).reshape(len(smooth), -1) - 0.5 * threshold, 0, None)
+    weight = np.clip(sample(difference, across.reshape(-1, 2)).reshape(len(smooth), -1) - 0.5 * threshold, 0, None)
     total = weight.sum(axis=1)
     shift = (weight * offsets).sum(axis=1) / total
     # samples 0.25 px apart are correlated over a pixel: count each pixel once
@@ -135,8 +131,8 @@ def _free_end(difference: np.ndarray, centre: np.ndarray, half_width: float) -> 
     direction = centre[0] - centre[10]
     direction /= np.linalg.norm(direction)
     along = np.arange(0.0, 8 * half_width + 0.1, 0.1)
-    profile = _sample(difference, centre[0] + along[:, None] * direction)
-    level = float(np.median(_sample(difference, centre[:40])))
+    profile = sample(difference, centre[0] + along[:, None] * direction)
+    level = float(np.median(sample(difference, centre[:40])))
     below = np.nonzero(profile < 0.5 * level)[0]
     if not len(below) or below[0] == 0:
         return centre[0]
@@ -179,10 +175,7 @@ def _one_frame(
     # the refined points scatter across by ~0.1 px (the profile's sampling phase): summed
     # over 1 px steps that would lengthen the arc by ~1 %, so the line is averaged over
     # 11 px and its arc summed over 5 px chords (a curvature radius of 20 mm: −0.01 %)
-    kernel = np.ones(LINE_SMOOTH) / LINE_SMOOTH
-    centre = np.column_stack(
-        [np.convolve(np.pad(centre[:, k], LINE_SMOOTH // 2, mode="edge"), kernel, "valid") for k in range(2)]
-    )[::ARC_STRIDE]
+    centre = smooth_line(centre, LINE_SMOOTH)[::ARC_STRIDE]
     sigma = sigma[::ARC_STRIDE] / np.sqrt(LINE_SMOOTH)
     line_px = np.vstack([tip, centre])
     line_mm = mapping.to_plane(line_px)
@@ -233,8 +226,4 @@ def track_centreline(
         px.append(points)
         u.append(sigma)
         noise.append(frame_noise)
-    px, u = np.array(px), np.array(u)
-    n, m = u.shape
-    mm = mapping.to_plane(px.reshape(-1, 2)).reshape(n, m, 2)
-    u_mm = u * mapping.mm_per_px(px.reshape(-1, 2)).reshape(n, m)
-    return Tracked(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u, u_mm, np.array(noise))
+    return Tracked.in_plane(mapping, index, t, s_mm, np.array(px), np.array(u), noise)

@@ -34,7 +34,7 @@ import numpy as np
 from warpcloth.errors import ArgumentError, DataFileError
 
 from .calibration import PlaneMapping
-from .centreline import LINE_SMOOTH, _free_end, _region_path, _resample
+from .centreline import LINE_SMOOTH, _free_end, _region_path, _resample, smooth_line
 from .edges import band_edges, rising_edges, sample
 from .markers import Tracked, noise_sigma
 from .video import Frames, FrameStream
@@ -106,13 +106,6 @@ def _profile_across(
     return sample(signal, points), offsets
 
 
-def _smooth(points: np.ndarray, width: int) -> np.ndarray:
-    kernel = np.ones(width) / width
-    return np.column_stack(
-        [np.convolve(np.pad(points[:, k], width // 2, mode="edge"), kernel, "valid") for k in range(2)]
-    )
-
-
 def _normals(line: np.ndarray) -> np.ndarray:
     tangent = np.gradient(line, axis=0)
     tangent /= np.linalg.norm(tangent, axis=1)[:, None]
@@ -142,14 +135,14 @@ def _one_frame(
     route = _region_path(mask, seed, where, path)
     inside = cv2.dilate(cv2.distanceTransform(mask.astype(np.uint8), cv2.DIST_L2, 5), np.ones((9, 9), np.uint8))
     half_width = max(float(np.median(inside[route[:, 1].astype(int), route[:, 0].astype(int)])), 1.0)
-    line = _smooth(_resample(route, 1.0), SMOOTH_PX)
+    line = smooth_line(_resample(route, 1.0), SMOOTH_PX)
     reach = ACROSS_HALF_WIDTHS * half_width + 3.0
     for _ in range(2):  # the band's centre: the signal's centroid across it, twice
         normal = _normals(line)
         profile, offsets = _profile_across(signal, line, normal, reach, 97)
         weight = np.clip(profile - 0.5 * level, 0.0, None)
         shift = (weight * offsets).sum(axis=1) / np.maximum(weight.sum(axis=1), 1e-300)
-        line = _smooth(line + shift[:, None] * normal, SMOOTH_PX)
+        line = smooth_line(line + shift[:, None] * normal, SMOOTH_PX)
     normal = _normals(line)
     inner = int(np.ceil(END_INSET_HALF_WIDTHS * half_width))
     if len(line) <= inner + LINE_SMOOTH:
@@ -269,8 +262,4 @@ def track_coloured_edge(
         px.append(points)
         u.append(sigma)
         noise.append(frame_noise)
-    px, u = np.array(px), np.array(u)
-    n, m = u.shape
-    mm = mapping.to_plane(px.reshape(-1, 2)).reshape(n, m, 2)
-    u_mm = u * mapping.mm_per_px(px.reshape(-1, 2)).reshape(n, m)
-    return Tracked(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u, u_mm, np.array(noise))
+    return Tracked.in_plane(mapping, index, t, s_mm, np.array(px), np.array(u), noise)

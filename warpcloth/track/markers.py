@@ -61,6 +61,26 @@ class Tracked:
     u_mm: np.ndarray
     noise_dn: np.ndarray  # the sensor noise estimated in each frame
 
+    @classmethod
+    def in_plane(
+        cls,
+        mapping: PlaneMapping,
+        index: list[int],
+        t: list[float],
+        s_mm: np.ndarray,
+        px: np.ndarray,
+        u_px: np.ndarray,
+        noise_dn: list[float],
+    ) -> Tracked:
+        """The points ``px [frame, point, 2]`` with their σ ``u_px`` mapped to the plane (mm);
+        a point hidden in a frame (NaN) stays NaN."""
+        n, m = u_px.shape
+        mm, u_mm = np.full((n, m, 2), np.nan), np.full((n, m), np.nan)
+        seen = np.isfinite(px[..., 0])
+        mm[seen] = mapping.to_plane(px[seen])
+        u_mm[seen] = u_px[seen] * mapping.mm_per_px(px[seen])
+        return cls(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u_px, u_mm, np.array(noise_dn))
+
     def csv_rows(self) -> list[str]:
         """``frame, t_s, s_mm, x_mm, y_mm, u_px, u_mm`` rows, none for a marker hidden in a frame."""
         rows = []
@@ -478,15 +498,8 @@ def track_markers(
         t.append(time)
         px.append(found)
         sig.append(sigma)
-    px, sig = np.array(px), np.array(sig)
-    n, m = px.shape[:2]
-    mm = np.full((n, m, 2), np.nan)
-    u_px = np.sqrt(0.5 * np.sum(sig**2, axis=2))
-    u_mm = np.full((n, m), np.nan)
-    seen = np.isfinite(px[..., 0])
-    mm[seen] = mapping.to_plane(px[seen])
-    u_mm[seen] = u_px[seen] * mapping.mm_per_px(px[seen])
-    return Tracked(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u_px, u_mm, np.array(noise))
+    u_px = np.sqrt(0.5 * np.sum(np.array(sig) ** 2, axis=2))  # per coordinate, from the two axes
+    return Tracked.in_plane(mapping, index, t, s_mm, np.array(px), u_px, noise)
 
 
 def _values_at(image: np.ndarray, pixels: np.ndarray, outside: object) -> np.ndarray:
