@@ -310,7 +310,9 @@ def test_a_fit_at_5_mm_of_a_converged_fine_measurement_finds_the_continuum():
     at_h = fit_motion(base, measured, free, progress=False, noise=1e-4, continuum=False)
     error = {name: value - SPACING_TRUTH[name] for name, value in at_h.parameters.items()}
     dy, d1 = "clamp.rotation_centre_dy_mm", "material.hysteresis_d1_gf_cm_per_cm"
-    assert error[dy] > 10 * at_h.sigma[dy] and error[d1] > 3 * at_h.sigma[d1], at_h.parameters
+    # D1's 5 % is 2.8 σ once σ holds the frames' shared misfit (the mesh's, here): the
+    # frame-clustered σ (warpcloth.calibrate.motion_fit.lm.clustered_covariance)
+    assert error[dy] > 10 * at_h.sigma[dy] and error[d1] > 0.04 * SPACING_TRUTH[d1], at_h.parameters
     fit = fit_motion(base, measured, free, progress=False, noise=1e-4)
     assert fit.status == "converged", fit.problems
     for name, value in SPACING_TRUTH.items():
@@ -351,6 +353,42 @@ def test_the_block_bootstrap_covers_the_truth_where_gauss_newton_does_not(phi):
         assert np.all((rate["bootstrap"] > 0.9) & (rate["bootstrap"] < 0.99))
     else:
         assert np.all(rate["bootstrap"] > 0.72) and np.all(rate["gauss_newton"] < 0.5)
+
+
+@pytest.mark.parametrize("shared", [0.0, 0.5])
+def test_the_frame_clustered_sigma_covers_the_truth_when_a_frames_points_share_an_error(shared):
+    # Tracked shapes: 25 frames of 10 points, each point's error a share of its frame's
+    # (a curve's arc from one free end) plus its own, on a linear model shaped like a
+    # swing. The share of trials whose 95 % interval holds the truth. Measured (200
+    # trials): independent errors, clustered 0.95/0.955, Gauss–Newton 0.93/0.95; a frame
+    # error 3× a point's in half the variance, clustered 0.92/0.925, Gauss–Newton 0.50/0.63.
+    from warpcloth.calibrate.motion_fit.lm import clustered_covariance
+
+    rng = np.random.default_rng(7)
+    frames, points = 25, 10
+    t = np.repeat(np.linspace(0.0, 0.4, frames), points)
+    s = np.tile(np.linspace(0.1, 1.0, points), frames)
+    jac = np.column_stack([s * np.sin(15 * t) * np.exp(-0.4 * t), s**2 * np.cos(15 * t)])
+    truth = np.array([1.0, 0.5])
+    groups = np.repeat(np.arange(frames), points)
+    covered = {"clustered": np.zeros(2), "gauss_newton": np.zeros(2)}
+    trials = 200
+    for _ in range(trials):
+        own, of_frame = rng.normal(size=len(t)), 3.0 * rng.normal(size=frames)[groups]
+        e = 0.01 * (np.sqrt(1 - shared) * own + np.sqrt(shared) * of_frame)
+        y = jac @ truth + e
+        p, *_ = np.linalg.lstsq(jac, y, rcond=None)
+        r = y - jac @ p
+        gn = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)) * (r @ r) / (len(r) - 2))
+        cov, _ = clustered_covariance(jac, r, groups)
+        clustered = np.maximum(gn, np.sqrt(np.diag(cov)))  # as the fit reports it (report.summarise)
+        covered["clustered"] += np.abs(p - truth) < 1.96 * clustered
+        covered["gauss_newton"] += np.abs(p - truth) < 1.96 * gn
+    rate = {k: v / trials for k, v in covered.items()}
+    print(f"shared {shared}: coverage of 95 % intervals", rate)
+    assert np.all(rate["clustered"] > 0.87) and np.all(rate["clustered"] < 0.995)
+    if shared:
+        assert np.all(rate["gauss_newton"] < 0.7)
 
 
 class WellObjective:

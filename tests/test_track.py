@@ -135,8 +135,10 @@ def test_the_centreline_without_markers_recovers_the_simulated_strip(centreline)
     error_mm = np.column_stack([shapes.x - truth.x, shapes.y - truth.y]) * 1e3
     assert np.all(np.abs(error_mm.mean(axis=0)) <= 0.02), error_mm.mean(axis=0)
     assert np.all(np.sqrt(np.mean(error_mm**2, axis=0)) <= 0.1)
-    # its stated u (the noise's share and the floor this video measured) covers its error
+    # its stated u (the noise's share and the floors validation measured) covers its error;
+    # it is a curve's (u_along_mm), which u_mm is across and u_along_mm along
     table = read_measurement(centreline)
+    assert table.u_along is not None and np.all(table.u_along > table.u)
     assert np.mean(np.abs(error_mm) <= 2.0 * table.u[:, None] * 1e3) >= 0.9
 
 
@@ -155,6 +157,20 @@ def test_shapes_with_uncertainty_columns_read_as_shapes(tracked, tmp_path):
     other.write_text("frame,t_s,s_mm,x_mm,y_mm,a,b\n0,0,0,0,0,1,1\n1,0.1,0,0,0,1,1\n")
     with pytest.raises(ValueError, match="has 7 columns"):
         read_measurement(other)
+    # a curve's: u_mm across the strip, u_along_mm along it; a zero one names its column and line
+    curve = tmp_path / "curve.csv"
+    curve.write_text(
+        "frame,t_s,s_mm,x_mm,y_mm,u_px,u_mm,u_along_mm\n0,0,5,0,-5,0.3,0.06,0.2\n1,0.1,5,0,-5,0.3,0.06,0\n"
+    )
+    with pytest.raises(ValueError, match=r"curve.csv, line 3: u_along_mm must be a positive uncertainty, got 0"):
+        read_measurement(curve)
+    curve.write_text(curve.read_text().replace(",0\n", ",0.2\n"))
+    shapes = read_measurement(curve)
+    assert shapes.u_along == pytest.approx([2e-4, 2e-4]) and shapes.u == pytest.approx([6e-5, 6e-5])
+    eight = tmp_path / "eight.csv"
+    eight.write_text("frame,t_s,s_mm,x_mm,y_mm,u_px,u_mm,c\n0,0,0,0,0,1,1,1\n1,0.1,0,0,0,1,1,1\n")
+    with pytest.raises(ValueError, match="has 8 columns"):
+        read_measurement(eight)
 
 
 def test_the_camera_model_is_opencvs():

@@ -114,20 +114,52 @@ def test_a_biased_track_cannot_end_converged(markers, rig):
     assert done.returncode == 6 and "poor_fit" in done.stderr, done.stdout + done.stderr
 
 
-@pytest.mark.slow
-def test_the_dyed_edge_on_the_rig_is_tracked_in_every_frame_with_an_uncertainty_that_covers(rig):
-    # the goal is 0.02 mm; on this video the edge is off by 0.05 (x) and 0.085 (y)
-    # mm RMS (docs/calibration.md), which its stated u (the validated floor) covers
+@pytest.fixture(scope="module")
+def edge(rig):
     done = track(rig, "edge.mp4", "edge.csv", "--edge-s", "5:95:10", "--free-length-mm", "100", "--edge-colour",
                  "auto", "--thickness-mm", str(TRUTH["strip"]["thickness_mm"]))  # fmt: skip
     assert done.returncode == 0, done.stderr
+    return rig / "edge.csv"
+
+
+@pytest.mark.slow
+def test_the_dyed_edge_on_the_rig_is_tracked_in_every_frame_with_an_uncertainty_that_covers(edge):
+    # a curve is found where it lies (across the strip); which point is where along it
+    # comes from the arc from the free end, whose error a frame's points share (its dyed
+    # side face, motion blur, 4:2:0 chroma at the end): u_mm is across, u_along_mm along.
+    # Measured: across bias -0.021, RMS 0.050 mm (the goal 0.02/0.05: at it, not
+    # within); along bias -0.066, RMS 0.085 mm; u covers 72 % / 97 % across, 100 % along
     table = np.loadtxt(RIG / "edge_truth.csv", delimiter=",", comments=("#", "frame"))
     keys = table[:, 0].astype(int) * 100_000 + np.rint(table[:, 2] * 1e3).astype(int)
-    error, u = errors(rig / "edge.csv", table[:, 3:5], keys)
-    assert len(error) == len(table)
-    rms = np.sqrt(np.mean(error**2, axis=0))
-    assert np.all(rms <= 0.1), rms
-    assert np.mean(np.abs(error) <= 2.0 * u[:, None]) >= 0.9
+    error, u = errors(edge, table[:, 3:5], keys)
+    shapes = read_measurement(edge)
+    assert len(error) == len(table) and shapes.u_along is not None
+    # the truth's tangent at each point: its neighbours along s in its frame
+    tangent = np.concatenate([np.gradient(table[table[:, 0] == f, 3:5], axis=0) for f in np.unique(table[:, 0])])
+    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+    across = error[:, 0] * -tangent[:, 1] + error[:, 1] * tangent[:, 0]
+    along = (error * tangent).sum(axis=1)
+    assert abs(across.mean()) <= 0.025 and np.sqrt(np.mean(across**2)) <= 0.055, (across.mean(), across.std())
+    assert np.sqrt(np.mean(along**2)) <= 0.1, along
+    assert np.mean(np.abs(across) <= 2.0 * u) >= 0.9
+    assert np.mean(np.abs(along) <= 2.0 * shapes.u_along * 1e3) >= 0.9
+
+
+@pytest.mark.slow
+def test_a_fit_of_the_rigs_dyed_edge_finds_the_rotation_centre_within_two_sigma(edge, rig):
+    # across the strip at full weight, along it at u_mm / u_along_mm (about a quarter); at
+    # full weight along, as before, γ came out 0.465 ± 0.015: 4.4 σ from the truth
+    done = run_cli(
+        "fit", "impulsive_rotation", "--measured", str(edge), "--free", "gamma,rotation_centre_dy_mm",
+        "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out", str(rig / "fit-edge"),
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    fit = json.loads((rig / "fit-edge" / "fit.json").read_text())
+    for name, truth in (("clamp.rotation_centre_dy_mm", 2.8), ("damping.gamma_per_s", 0.4)):
+        value = fit["parameters"][name]
+        assert abs(value["value"] - truth) <= 2.0 * value["sigma"], (name, value)
+    residuals = (rig / "fit-edge" / "residuals.csv").read_text().splitlines()[0]
+    assert residuals == "frame,t_s,s_mm,residual_across_mm,weighed_residual_along_mm"
 
 
 def test_a_raised_plane_undoes_the_parallax_of_a_marker_standing_off_it():

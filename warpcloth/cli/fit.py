@@ -186,6 +186,11 @@ def fit_command(args: argparse.Namespace) -> int:
             if fit.sigma_bootstrap
             else ""
         )
+        if fit.sigma_frames and fit.sigma_frames[name] > fit.sigma_gauss_newton[name]:
+            boot += (
+                f" (its noise share robust to the errors a frame's points share: Gauss–Newton's alone "
+                f"± {fit.sigma_gauss_newton[name]:.2g})"
+            )
         shares = (
             f" (noise {fit.sigma_noise[name]:.2g}, mesh {fit.sigma_mesh[name]:.2g}; at the scene's spacing "
             f"{fit.at_spacing[name]:.6g})"

@@ -473,7 +473,7 @@ def video_command(args: argparse.Namespace) -> int:
         *(f"# hidden: {note}" for note in hidden),
         *(f"# dropped: {note}" for note in dropped),
         *(f"# duplicated: {note}" for note in duplicated),
-        "frame,t_s,s_mm,x_mm,y_mm,u_px,u_mm",
+        tracked.columns,
     ]
     write_text_atomically(out, "\n".join(header + tracked.csv_rows()) + "\n")
     if overlay is not None:

@@ -66,6 +66,12 @@ UNCERTAINTY_COLUMNS = ("u_px", "u_mm")
 """The columns ``warpcloth track`` adds after a tracked shape's five: each coordinate's
 standard uncertainty (px, mm). A fit judges its RMS against u_mm (its RMS over the points):
 what the tracker says it measured to, not the data's own scatter."""
+ALONG_COLUMN = "u_along_mm"
+"""The column a curve's tracker (the dyed edge, the centreline) adds after u_mm: each
+point's standard uncertainty along the strip (mm). A curve is found where it lies; which
+material point is where along it comes from an arc measured from the free end, whose
+error every point of a frame shares, so there u_mm is the uncertainty across the strip
+and the fit weighs the along-strip residual by u_mm / u_along_mm."""
 
 
 def read_table(
@@ -209,6 +215,7 @@ class TrackedShapes:
     x: np.ndarray  # m
     y: np.ndarray  # m
     u: np.ndarray | None = None  # m: each coordinate's standard uncertainty, as the tracker stated it
+    u_along: np.ndarray | None = None  # m: a curve's point's along the strip (then u is across it)
 
 
 def read_laser_trace(path: str | Path, argument: str = "path") -> LaserTrace:
@@ -256,15 +263,23 @@ def _tracked_shapes(table: Table) -> TrackedShapes:
             f"arc length s must be ≥ 0 (from the clamp's lowest point), got {table.values[i, 2]:g}",
             int(lines[i]),
         )
-    u = None
+    u, u_along = None, None
     if table.values.shape[1] >= 7 and table.header is not None and tuple(table.header[5:7]) == UNCERTAINTY_COLUMNS:
-        u = table.values[:, 6] * units.LENGTH_MM
-        if not np.all(np.isfinite(u) & (u > 0)):
-            i = int(np.argmax(~(np.isfinite(u) & (u > 0))))
-            raise DataFileError(
-                table.path, f"u_mm must be a positive uncertainty, got {table.values[i, 6]:g}", int(lines[i])
-            )
-    return TrackedShapes(frame.astype(int), t, data[:, 2], data[:, 3], data[:, 4], u)
+        u = _positive_uncertainty(table, 6, "u_mm")
+        if table.values.shape[1] >= 8 and table.header[7] == ALONG_COLUMN:
+            u_along = _positive_uncertainty(table, 7, ALONG_COLUMN)
+    return TrackedShapes(frame.astype(int), t, data[:, 2], data[:, 3], data[:, 4], u, u_along)
+
+
+def _positive_uncertainty(table: Table, column: int, name: str) -> np.ndarray:
+    values = table.values[:, column] * units.LENGTH_MM
+    bad = ~(np.isfinite(values) & (values > 0))
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise DataFileError(
+            table.path, f"{name} must be a positive uncertainty, got {table.values[i, column]:g}", int(table.lines[i])
+        )
+    return values
 
 
 @dataclass(frozen=True)
@@ -341,12 +356,17 @@ def read_measurement(
         )
     if n == 2:
         return _laser_trace(table)
-    if n == 5 or (n == 7 and table.header is not None and tuple(table.header[5:7]) == UNCERTAINTY_COLUMNS):
+    if n == 5 or (
+        n in (7, 8)
+        and table.header is not None
+        and tuple(table.header[5:7]) == UNCERTAINTY_COLUMNS
+        and (n == 7 or table.header[7] == ALONG_COLUMN)
+    ):
         return _tracked_shapes(table)
     raise DataFileError(
         table.path,
         f"has {n} columns: a laser trace has 2 (t_s, x_mm), tracked shapes 5 "
-        "(frame, t_s, s_mm, x_mm, y_mm), or 7 as warpcloth track writes them (… u_px, u_mm)",
+        "(frame, t_s, s_mm, x_mm, y_mm), or 7 or 8 as warpcloth track writes them (… u_px, u_mm[, u_along_mm])",
         int(table.lines[0]),
     )
 

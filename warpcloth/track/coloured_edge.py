@@ -34,7 +34,7 @@ import numpy as np
 from warpcloth.errors import ArgumentError, DataFileError
 
 from .calibration import PlaneMapping
-from .centreline import LINE_SMOOTH, _free_end, _region_path, _resample, smooth_line
+from .centreline import ARC_VALIDATED_PX, LINE_SMOOTH, _free_end, _region_path, _resample, smooth_line
 from .edges import band_edges, rising_edges, sample
 from .markers import Tracked, noise_sigma
 from .video import Frames, FrameStream
@@ -44,7 +44,7 @@ __all__ = ["chroma_direction", "colour_signal", "learn_edge_colour", "track_colo
 SMOOTH_PX = 7  # the path's smoothing before normals are taken
 PHASE_BLUR_PX = 1.0  # σ of the Gaussian the colour signal is smoothed with
 ARC_WINDOW = 31  # px: the edge's smoothing before its arc is measured
-VALIDATED_PX = 0.4
+VALIDATED_PX = 0.25
 """What the validation on video warpcloth did not render measures beyond each point's
 noise (px, per coordinate; added to its uncertainty in quadrature): on the independent rig
 (scenes/data/rig/edge.mp4: H.264 4:2:0, a dye band 0.5 + 0.65 mm wide whose cut face and
@@ -122,8 +122,8 @@ def _one_frame(
     thickness_mm: float | None,
     where: str,
     path: Path,
-) -> tuple[np.ndarray, np.ndarray, float]:
-    # the edge's points (px) at s_mm, their σ (px) and the signal's noise
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    # the edge's points (px) at s_mm, their σ across and along the strip (px) and the signal's noise
     import cv2
 
     noise = noise_sigma(signal)
@@ -203,10 +203,10 @@ def _one_frame(
         )
     points = np.column_stack([np.interp(wanted, arc, line_px[:, 0]), np.interp(wanted, arc, line_px[:, 1])])
     # across: the silhouette's scatter about its course, averaged over LINE_SMOOTH px at
-    # least; along: the free end's, which every arc measured from it carries; and what the
-    # validation measures beyond both
-    sigma = np.full(len(points), np.sqrt((scatter_px**2 / LINE_SMOOTH) + tip_px**2 + VALIDATED_PX**2))
-    return points, sigma, noise
+    # least; along: the free end's, which every arc measured from it carries; each with
+    # what the validation measures beyond it
+    across = np.full(len(points), np.hypot(scatter_px / np.sqrt(LINE_SMOOTH), VALIDATED_PX))
+    return points, across, np.full(len(points), np.hypot(tip_px, ARC_VALIDATED_PX)), noise
 
 
 def track_coloured_edge(
@@ -232,7 +232,7 @@ def track_coloured_edge(
     bg = np.asarray(background, dtype=np.float64)
     bg_luma = bg @ [0.299, 0.587, 0.114]
     direction = None if colour is None else chroma_direction(colour)
-    index, t, px, u, noise = [], [], [], [], []
+    index, t, px, u, u_along, noise = [], [], [], [], [], []
     for i, time, image in tqdm(
         frames, total=frames.total, desc="tracking the coloured edge", unit=" frames", disable=not progress
     ):
@@ -246,7 +246,7 @@ def track_coloured_edge(
         if ignore is not None:
             signal[ignore] = 0.0
         luma = np.asarray(image, dtype=np.float64) @ [0.299, 0.587, 0.114]
-        points, sigma, frame_noise = _one_frame(
+        points, sigma, sigma_along, frame_noise = _one_frame(
             signal,
             np.abs(luma - bg_luma),
             mapping,
@@ -261,5 +261,6 @@ def track_coloured_edge(
         t.append(time)
         px.append(points)
         u.append(sigma)
+        u_along.append(sigma_along)
         noise.append(frame_noise)
-    return Tracked.in_plane(mapping, index, t, s_mm, np.array(px), np.array(u), noise)
+    return Tracked.in_plane(mapping, index, t, s_mm, np.array(px), np.array(u), noise, np.array(u_along))

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from warpcloth.errors import ArgumentError, DataFileError
+from warpcloth.io.measured import ALONG_COLUMN
 
 from .calibration import PlaneMapping
 from .edges import rising_edges, sample
@@ -50,7 +51,9 @@ SHORTEST = 0.3
 @dataclass
 class Tracked:
     """Markers per frame: pixels and plane positions ``[frame, marker, 2]`` (px, mm), and
-    the standard uncertainty of each position (px, mm, per coordinate)."""
+    the standard uncertainty of each position (px, mm, per coordinate). A curve's points
+    (the dyed edge, the centreline) also carry ``u_along_mm``, their uncertainty along the
+    strip, and then ``u_px, u_mm`` are across it (:data:`warpcloth.io.measured.ALONG_COLUMN`)."""
 
     frame: np.ndarray
     t: np.ndarray
@@ -60,6 +63,7 @@ class Tracked:
     u_px: np.ndarray
     u_mm: np.ndarray
     noise_dn: np.ndarray  # the sensor noise estimated in each frame
+    u_along_mm: np.ndarray | None = None
 
     @classmethod
     def in_plane(
@@ -71,26 +75,39 @@ class Tracked:
         px: np.ndarray,
         u_px: np.ndarray,
         noise_dn: list[float],
+        u_along_px: np.ndarray | None = None,
     ) -> Tracked:
-        """The points ``px [frame, point, 2]`` with their σ ``u_px`` mapped to the plane (mm);
-        a point hidden in a frame (NaN) stays NaN."""
+        """The points ``px [frame, point, 2]`` with their σ ``u_px`` (and a curve's along the
+        strip, ``u_along_px``) mapped to the plane (mm); a point hidden in a frame (NaN) stays NaN."""
         n, m = u_px.shape
         mm, u_mm = np.full((n, m, 2), np.nan), np.full((n, m), np.nan)
         seen = np.isfinite(px[..., 0])
         mm[seen] = mapping.to_plane(px[seen])
-        u_mm[seen] = u_px[seen] * mapping.mm_per_px(px[seen])
-        return cls(np.array(index), np.array(t), np.asarray(s_mm, dtype=float), px, mm, u_px, u_mm, np.array(noise_dn))
+        scale = mapping.mm_per_px(px[seen])
+        u_mm[seen] = u_px[seen] * scale
+        u_along_mm = None
+        if u_along_px is not None:
+            u_along_mm = np.full((n, m), np.nan)
+            u_along_mm[seen] = u_along_px[seen] * scale
+        s_mm = np.asarray(s_mm, dtype=float)
+        return cls(np.array(index), np.array(t), s_mm, px, mm, u_px, u_mm, np.array(noise_dn), u_along_mm)
+
+    @property
+    def columns(self) -> str:
+        """The header of :meth:`csv_rows`."""
+        return "frame,t_s,s_mm,x_mm,y_mm,u_px,u_mm" + ("" if self.u_along_mm is None else f",{ALONG_COLUMN}")
 
     def csv_rows(self) -> list[str]:
-        """``frame, t_s, s_mm, x_mm, y_mm, u_px, u_mm`` rows, none for a marker hidden in a frame."""
+        """:attr:`columns` rows, none for a marker hidden in a frame."""
         rows = []
         for f, frame in enumerate(self.frame):
             for m, s in enumerate(self.s_mm):
                 x, y = self.mm[f, m]
                 if not np.isfinite(x):  # hidden in this frame: no row
                     continue
+                along = "" if self.u_along_mm is None else f",{self.u_along_mm[f, m]:.5f}"
                 rows.append(
-                    f"{frame},{self.t[f]:.9f},{s:g},{x:.5f},{y:.5f},{self.u_px[f, m]:.4f},{self.u_mm[f, m]:.5f}"
+                    f"{frame},{self.t[f]:.9f},{s:g},{x:.5f},{y:.5f},{self.u_px[f, m]:.4f},{self.u_mm[f, m]:.5f}{along}"
                 )
         return rows
 

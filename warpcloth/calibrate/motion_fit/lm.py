@@ -125,6 +125,32 @@ def covariance(jac: np.ndarray, residual: np.ndarray | None = None) -> np.ndarra
     return float(residual @ residual) / max(len(residual) - p, 1) * inverse
 
 
+def clustered_covariance(jac: np.ndarray, residual: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, int]:
+    """The covariance of the least-squares parameters robust to errors correlated within
+    each group (the residuals of one tracked frame share its free end's error; Liang and
+    Zeger's sandwich, with the small-sample factor G/(G−1)·(n−1)/(n−p)): (JᵀJ)⁻¹ (Σ_g
+    J_gᵀ r_g r_gᵀ J_g) (JᵀJ)⁻¹. Consecutive groups whose scores J_gᵀ r_g stay correlated
+    (a slow error: the tip's along a swing) are merged into blocks of the scores'
+    correlation length, as the block bootstrap does (:func:`~warpcloth.calibrate.bootstrap.correlation_length`).
+    Returns it and the groups per block; NaN throughout for a singular JᵀJ."""
+    from warpcloth.calibrate.bootstrap import correlation_length
+
+    n, p = jac.shape
+    try:
+        bread = np.linalg.inv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        return np.full((p, p), np.nan), 1
+    labels, index = np.unique(groups, return_inverse=True)
+    scores = np.zeros((len(labels), p))
+    np.add.at(scores, index, jac * residual[:, None])
+    block = max(correlation_length(scores[:, k]) for k in range(p)) if len(labels) > 2 else 1
+    block = min(block, max(1, len(labels) // 4))  # at least four blocks: a sandwich of fewer says nothing
+    blocks = np.add.reduceat(scores, np.arange(0, len(labels), block), axis=0)
+    g = len(blocks)
+    meat = blocks.T @ blocks * (g / max(g - 1, 1)) * ((n - 1) / max(n - p, 1))
+    return bread @ meat @ bread, block
+
+
 def sigma_and_correlation(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The standard deviations and the correlation matrix of a covariance matrix."""
     sigma = np.sqrt(np.clip(np.diag(cov), 0, None))

@@ -166,6 +166,11 @@ class FitObjective:
         """Simulated minus measured, SI, for variant j of a result at clock offset δ."""
         raise NotImplementedError
 
+    def residual_groups(self) -> np.ndarray | None:
+        """Each residual's group of possibly shared errors (its tracked frame), or None
+        where the errors are independent (:func:`~.report.summarise`)."""
+        return None
+
     def best_shift(self, result: Any, j: int) -> float:
         """The clock offset minimising the RMS for variant j (a scan; 0 when not aligning)."""
         if not self.align:
@@ -277,6 +282,13 @@ class Objective(FitObjective):
             scenes, device=self.device, on_divergence="record", keep_frames=isinstance(self.measurement, TrackedShapes)
         )
 
+    def residual_groups(self) -> np.ndarray | None:
+        """A tracked shape's residuals (x and y of each point, or a curve's across and along
+        it, row by row) grouped by frame:
+        its points share the frame's errors; a laser's samples are independent (None)."""
+        m = self.measurement
+        return np.repeat(m.frame, 2) if isinstance(m, TrackedShapes) else None
+
     def residuals(self, result: RunResult, j: int, shift: float, penalise: bool = True) -> np.ndarray:
         """Simulated minus measured, SI, for variant j of a result at clock offset δ.
 
@@ -308,6 +320,13 @@ class Objective(FitObjective):
 
         sim = at(frames[k]) * (1 - w_time) + at(frames[k + 1]) * w_time
         diff = sim - np.column_stack([m.x, m.y])
+        if m.u_along is not None:  # a curve's point: across the strip, and along it weighed by its own u
+            rows = np.arange(len(node))
+            tangent = frames[k][rows, node + 1] - frames[k][rows, node]
+            tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+            across = diff[:, 0] * -tangent[:, 1] + diff[:, 1] * tangent[:, 0]
+            along = (diff * tangent).sum(axis=1) * (m.u / m.u_along)
+            diff = np.column_stack([across, along])
         missing = 0.1 if penalise else np.nan  # a diverged strip: 10 cm per coordinate
         return np.where(np.isfinite(diff), diff, missing).ravel()
 

@@ -41,6 +41,9 @@ class FitResult:
     sigma_bootstrap: dict[str, float] = field(default_factory=dict)  # block bootstrap (``bootstrap`` > 0)
     other_minima: list[dict] = field(default_factory=list)  # separate basins of the space-filling stage, not refined
     bootstrap_block: int = 0  # residuals per bootstrap block
+    sigma_frames: dict[str, float] = field(default_factory=dict)  # robust to errors shared by a frame's points
+    sigma_gauss_newton: dict[str, float] = field(default_factory=dict)  # for independent errors, when σ is robust
+    frames_per_block: int = 0  # tracked frames per block of the robust σ
     noise: float = float("nan")  # measurement noise σ the RMS is judged against, SI
     noise_source: str = ""
     status: str = "failed"
@@ -111,9 +114,15 @@ class FitResult:
                     "bounds": list(self.bounds.get(name, ())),
                 }
                 | ({"sigma_bootstrap": self.sigma_bootstrap[name]} if self.sigma_bootstrap else {})
+                | (
+                    {"sigma_frames": self.sigma_frames[name], "sigma_gauss_newton": self.sigma_gauss_newton[name]}
+                    if self.sigma_frames
+                    else {}
+                )
                 for name, value in self.parameters.items()
             },
             "bootstrap_block": self.bootstrap_block,
+            "frames_per_block": self.frames_per_block,
             "other_minima": self.other_minima,
             "correlation": {"names": list(self.parameters), "matrix": self.correlation},
             "n_residuals": self.n_residuals,
@@ -143,10 +152,24 @@ def summarise(
     wall: float,
 ) -> FitResult:
     """The fit at point ``u`` (clock offset ``shift``) with its Jacobian and residuals
-    there: the values, their Gauss–Newton σ and correlation, the RMS, how the search went."""
-    sigma, correlation = lm.sigma_and_correlation(lm.covariance(jac / objective.ranges, residual))
+    there: the values, their σ and correlation, the RMS, how the search went.
+
+    σ is Gauss–Newton's, which holds for independent errors. A tracked shape's points
+    share their frame's errors (the edge modes measure every arc from one free end), so
+    for them σ is the larger of it and the frame-clustered sandwich
+    (:func:`~.lm.clustered_covariance`): on the rig's dyed edge Gauss–Newton's σ of γ is
+    a third of the error it made (benchmarks/track_accuracy.py)."""
+    scaled = jac / objective.ranges
+    cov = lm.covariance(scaled, residual)
+    sigma, correlation = lm.sigma_and_correlation(cov)
+    groups = objective.residual_groups()
+    robust, per_block = (None, 0) if groups is None else lm.clustered_covariance(scaled, residual, groups)
+    if robust is not None:
+        sigma_frames = np.sqrt(np.clip(np.diag(robust), 0, None))
+        gauss_newton = sigma
+        sigma = np.maximum(sigma, sigma_frames)
     values = objective.values(u) | ({SHIFT: shift} if objective.align else {})
-    return FitResult(
+    fit = FitResult(
         values,
         dict(zip(objective.names, sigma.tolist(), strict=True)),
         correlation.tolist(),
@@ -159,6 +182,11 @@ def summarise(
         history,
         converged,
     )
+    if robust is not None:
+        fit.sigma_frames = dict(zip(objective.names, sigma_frames.tolist(), strict=True))
+        fit.sigma_gauss_newton = dict(zip(objective.names, gauss_newton.tolist(), strict=True))
+        fit.frames_per_block = per_block
+    return fit
 
 
 def write_fit(
@@ -216,13 +244,16 @@ def write_fit(
         )
     else:
         r = residual.reshape(-1, 2)
+        # a curve's residuals are across the strip and along it (weighed: ALONG_COLUMN)
+        curve = measurement.u_along is not None
+        names = ("residual_across_mm", "weighed_residual_along_mm") if curve else ("residual_x_mm", "residual_y_mm")
         table = pd.DataFrame(
             {
                 "frame": measurement.frame,
                 "t_s": measurement.t,
                 "s_mm": measurement.s * 1e3,
-                "residual_x_mm": r[:, 0] * 1e3,
-                "residual_y_mm": r[:, 1] * 1e3,
+                names[0]: r[:, 0] * 1e3,
+                names[1]: r[:, 1] * 1e3,
             }
         )
     return write_files_atomically(
