@@ -151,6 +151,23 @@ def test_a_centreline_shorter_than_asked_is_an_error(tracked, first_frames, tmp_
     assert not (tmp_path / "out.csv").exists()
 
 
+def test_a_centreline_seen_wider_than_the_fabric_is_refused(tracked, first_frames, tmp_path):
+    # the bundled strip, 1.6 mm thick and seen edge-on, is seen 1.83-1.86 mm wide: said with
+    # --thickness-mm 1.6 (a note) and without it (a warning: thickness and an oblique view
+    # cannot be told apart); refused for a fabric of 0.5 mm, whose centre it cannot be
+    clip = short_clip(first_frames, tracked, tmp_path)
+    options = ("--centreline-s", "5:95:10", "--free-length-mm", "100")
+    done = track_with(clip, tmp_path, *options, "--thickness-mm", "0.5")
+    one_line_error(done, "frame 0", "the strip is seen 1.8", "wider than the 0.5 mm --thickness-mm allows", "--edge-s")
+    assert not (tmp_path / "out.csv").exists()
+    done = track_with(clip, tmp_path, *options, "--thickness-mm", "1.6")
+    assert done.returncode == 0 and "as the 1.6 mm --thickness-mm allows" in done.stderr, done.stderr
+    assert "# seen: the strip is seen 1.8" in (tmp_path / "out.csv").read_text()
+    (tmp_path / "out.csv").unlink()
+    done = track_with(clip, tmp_path, *options)
+    assert done.returncode == 0 and "warning:" in done.stderr and "give the fabric's thickness" in done.stderr
+
+
 def test_shapes_with_uncertainty_columns_read_as_shapes(tracked, tmp_path):
     assert type(read_measurement(tracked / "shapes.csv")).__name__ == "TrackedShapes"
     other = tmp_path / "seven.csv"

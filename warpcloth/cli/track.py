@@ -123,8 +123,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     vid.add_argument(
         "--thickness-mm",
         type=positive,
-        help="the fabric's thickness: the edge's points are moved half of it into the fabric, onto the midline "
-        "the model's chain represents (with --edge-s; without it they are the edge's outer surface)",
+        help="the fabric's thickness: with --edge-s the edge's points are moved half of it into the fabric, onto "
+        "the midline the model's chain represents (without it they are the edge's outer surface); with "
+        "--centreline-s the strip seen edge-on is this wide, and a strip seen wider is refused (default: "
+        "at most 2.5 mm)",
     )
     vid.add_argument(
         "--free-length-mm", type=positive, help="the strip's free length, mm (with --centreline-s or --edge-s)"
@@ -241,8 +243,10 @@ def _what_to_track(args: argparse.Namespace) -> np.ndarray:
         raise OptionError("--edge-colour", "goes with --edge-s (the dyed edge's colour)")
     if args.marker_height_mm and not args.marker_s:
         raise OptionError("--marker-height-mm", "goes with --marker-s (how far the markers stand off the plane)")
-    if args.thickness_mm is not None and not args.edge_s:
-        raise OptionError("--thickness-mm", "goes with --edge-s (the midline lies half of it inside the edge)")
+    if args.thickness_mm is not None and not (args.edge_s or args.centreline_s):
+        raise OptionError(
+            "--thickness-mm", "goes with --edge-s (the midline lies half of it inside the edge) or --centreline-s"
+        )
     if args.marker_s:
         if args.marker_diameter_mm is None:
             raise OptionError("--marker-diameter-mm", "is needed with --marker-s (the markers' diameter, mm)")
@@ -450,6 +454,7 @@ def video_command(args: argparse.Namespace) -> int:
             threshold_dn=args.threshold_dn,
             progress=not args.no_progress,
             ignore=ignore,
+            thickness_mm=args.thickness_mm,
         )
     dropped, duplicated = frames.dropped, frames.duplicated
     times = [frames.times[i] for i in tracked.frame]  # exact, before the overlay's pass decodes them again
@@ -464,6 +469,21 @@ def video_command(args: argparse.Namespace) -> int:
     hidden = hidden_notes(tracked)
     for note in hidden:
         print(f"warpcloth track: note: {args.video}: {note}", file=sys.stderr)
+    seen = []
+    if tracked.seen_width_mm is not None:
+        w = tracked.seen_width_mm
+        seen = [
+            f"the strip is seen {np.min(w):.3g} to {np.max(w):.3g} mm wide across (median {np.median(w):.3g} mm)"
+            + (
+                f", as the {args.thickness_mm:g} mm --thickness-mm allows"
+                if args.thickness_mm is not None
+                else "; without --thickness-mm that cannot be told from a view a little off the strip's edge, which "
+                "moves the centreline by half the face it shows: give the fabric's thickness"
+            )
+        ]
+        for note in seen:
+            kind = "note" if args.thickness_mm is not None else "warning"
+            print(f"warpcloth track: {kind}: {args.video}: {note}", file=sys.stderr)
     video = file_checksum(args.video)
     header = [
         f"# warpcloth track {args.video} (sha256 {video['sha256']}), plane {args.plane}, background {source}",
@@ -471,6 +491,7 @@ def video_command(args: argparse.Namespace) -> int:
         f"levels; u_px, u_mm: standard uncertainty of each coordinate, {UNCERTAINTY_SAYS[mode]} (the "
         "calibration's is in the plane file); fit judges its RMS against u_mm",
         *(f"# hidden: {note}" for note in hidden),
+        *(f"# seen: {note}" for note in seen),
         *(f"# dropped: {note}" for note in dropped),
         *(f"# duplicated: {note}" for note in duplicated),
         tracked.columns,

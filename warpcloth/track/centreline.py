@@ -37,6 +37,16 @@ LINE_SMOOTH = 11  # points (px) averaged along the refined line before its arc i
 ARC_STRIDE = 5  # the arc is summed over chords this many points long
 PROFILE_HALF_WIDTHS = 2.5
 SEED_REACH_PX = 50
+WIDTH_REACH_PX = 200.0  # how far either side of the centreline the strip's width is looked for
+EDGE_ON_MM = 2.5
+"""Without ``--thickness-mm``, the widest strip taken as seen edge-on (mm, and the blur):
+thicker than most fabrics. A strip seen wider shows one of its faces, and the centre of
+what the camera sees is not the midline: on the rig (a strip 25 mm wide seen 19° from
+square, scenes/data/rig/edge.mp4) the strip is seen 7.4–8.8 mm wide and the centreline
+was off by 2.1 mm (bias), its u 0.017 mm."""
+BLUR_ALLOWANCE_PX = 3.0
+"""What the blur and the threshold add to the width the strip is seen (px): the bundled
+video's strip, 1.6 mm thick and seen edge-on, is seen 1.83–1.86 mm wide (1.1–1.2 px more)."""
 VALIDATED_PX = 0.08
 """What validation measures beyond each point's noise (px, per coordinate; added to its
 uncertainty in quadrature): the free end's position, which moves every arc measured from it,
@@ -150,6 +160,22 @@ def _free_end(difference: np.ndarray, centre: np.ndarray, half_width: float) -> 
     return centre[0] + cross * direction
 
 
+def seen_width_px(mask: np.ndarray, line: np.ndarray) -> float:
+    """How wide the region ``mask`` is across ``line`` (px): the median over the line's
+    middle half of the run of region pixels along each point's normal through it (the
+    clamp and the free end left out)."""
+    part = line[len(line) // 4 : 3 * len(line) // 4 + 1]
+    tangent = np.gradient(smooth_line(part, SMOOTH), axis=0)
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1), 1e-12)[:, None]
+    normal = np.column_stack([-tangent[:, 1], tangent[:, 0]])
+    reach = np.arange(0.0, WIDTH_REACH_PX, 0.5)
+    region, runs = mask.astype(np.float32), []
+    for sign in (1.0, -1.0):
+        inside = sample(region, part[:, None, :] + sign * reach[None, :, None] * normal[:, None, :]) > 0.5
+        runs.append(np.argmin(np.column_stack([inside, np.zeros(len(part), bool)]), axis=1) * 0.5)
+    return float(np.median(runs[0] + runs[1]))
+
+
 def _one_frame(
     image: np.ndarray,
     bg: np.ndarray,
@@ -158,10 +184,12 @@ def _one_frame(
     s_mm: np.ndarray,
     free_length_mm: float,
     threshold_dn: float | None,
+    thickness_mm: float | None,
     where: str,
     path: Path,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    # the centreline points (px), their σ across and along the strip (px) and the frame's noise
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
+    # the centreline points (px), their σ across and along the strip (px), the frame's
+    # noise and how wide the strip is seen (mm)
     import cv2
 
     difference = np.abs(bg - image.astype(np.float32))
@@ -185,6 +213,22 @@ def _one_frame(
     # 11 px and its arc summed over 5 px chords (a curvature radius of 20 mm: −0.01 %)
     centre = smooth_line(centre, LINE_SMOOTH)[::ARC_STRIDE]
     sigma = sigma[::ARC_STRIDE] / np.sqrt(LINE_SMOOTH)
+    scale = float(np.median(mapping.mm_per_px(centre)))
+    width_mm = seen_width_px(mask, centre) * scale
+    widest = (EDGE_ON_MM if thickness_mm is None else 1.25 * thickness_mm) + BLUR_ALLOWANCE_PX * scale
+    if width_mm > widest:
+        stated = (
+            f"wider than the {thickness_mm:g} mm --thickness-mm allows ({widest:.2g} mm with the blur)"
+            if thickness_mm is not None
+            else f"wider than a fabric seen edge-on ({EDGE_ON_MM:g} mm and the blur; give --thickness-mm if it is "
+            "that thick)"
+        )
+        raise DataFileError(
+            path,
+            f"{where}: the strip is seen {width_mm:.3g} mm wide across, {stated}: the camera sees one of its faces, "
+            "and the centre of what it sees is not the strip's midline (a strip 25 mm wide 1° off square shows "
+            "0.44 mm of its face): film the strip edge-on, or dye its near edge and track that (--edge-s)",
+        )
     line_px = np.vstack([tip, centre])
     line_mm = mapping.to_plane(line_px)
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(line_mm, axis=0), axis=1))])
@@ -198,7 +242,7 @@ def _one_frame(
         )
     points = np.column_stack([np.interp(wanted, arc, line_px[:, 0]), np.interp(wanted, arc, line_px[:, 1])])
     noise_share = np.interp(wanted, arc, np.concatenate([[sigma[0]], sigma]))
-    return points, np.hypot(noise_share, VALIDATED_PX), np.hypot(noise_share, ARC_VALIDATED_PX), noise
+    return points, np.hypot(noise_share, VALIDATED_PX), np.hypot(noise_share, ARC_VALIDATED_PX), noise, width_mm
 
 
 def track_centreline(
@@ -211,23 +255,35 @@ def track_centreline(
     threshold_dn: float | None = None,
     progress: bool = False,
     ignore: np.ndarray | None = None,
+    thickness_mm: float | None = None,
 ) -> Tracked:
     """The centreline at arc lengths ``s_mm`` from the clamp's lowest point in every frame
     (see the module docstring); ``frames`` gives ``(index, t, image)`` per frame; nothing
-    is looked for where ``ignore`` is set."""
+    is looked for where ``ignore`` is set. A frame whose strip is seen wider than
+    ``thickness_mm`` (else :data:`EDGE_ON_MM`) and the blur allow is an error: the camera
+    sees a face, not the edge."""
     from tqdm import tqdm
 
     path = Path(path)
     seed = mapping.to_pixels(np.zeros((1, 2)))[0]
     bg = background.astype(np.float32)
-    index, t, px, u, u_along, noise = [], [], [], [], [], []
+    index, t, px, u, u_along, noise, widths = [], [], [], [], [], [], []
     for i, time, image in tqdm(
         frames, total=frames.total, desc="tracking the centreline", unit=" frames", disable=not progress
     ):
         if ignore is not None:  # a masked pixel differs from nothing
             image = np.where(ignore, bg, image)
-        points, sigma, sigma_along, frame_noise = _one_frame(
-            image, bg, mapping, seed, s_mm, free_length_mm, threshold_dn, f"frame {i} (t = {time:.6g} s)", path
+        points, sigma, sigma_along, frame_noise, width = _one_frame(
+            image,
+            bg,
+            mapping,
+            seed,
+            s_mm,
+            free_length_mm,
+            threshold_dn,
+            thickness_mm,
+            f"frame {i} (t = {time:.6g} s)",
+            path,
         )
         index.append(i)
         t.append(time)
@@ -235,4 +291,7 @@ def track_centreline(
         u.append(sigma)
         u_along.append(sigma_along)
         noise.append(frame_noise)
-    return Tracked.in_plane(mapping, index, t, s_mm, np.array(px), np.array(u), noise, np.array(u_along))
+        widths.append(width)
+    tracked = Tracked.in_plane(mapping, index, t, s_mm, np.array(px), np.array(u), noise, np.array(u_along))
+    tracked.seen_width_mm = np.array(widths)
+    return tracked

@@ -64,6 +64,7 @@ class Tracked:
     u_mm: np.ndarray
     noise_dn: np.ndarray  # the sensor noise estimated in each frame
     u_along_mm: np.ndarray | None = None
+    seen_width_mm: np.ndarray | None = None  # a centreline's strip, how wide it is seen in each frame
 
     @classmethod
     def in_plane(
