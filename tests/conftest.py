@@ -48,6 +48,30 @@ def pytest_configure(config) -> None:
         wp.load_module(kernel.module, device="cpu")
 
 
+LONGEST_FIRST = (
+    "test_sheet_fit.py",
+    "test_readme.py",
+    "test_docs_site.py",
+    "test_sheet_plate_scenes.py",
+    "test_faults.py",
+    "test_fit_set_and_grip.py",
+    "test_calibration_path.py",
+    "test_fit.py",
+    "test_track_rig.py",
+    "test_plate_bending.py",
+)
+"""The modules that take longest on the 2-core sandbox (`pytest --durations`), most first."""
+
+
+def pytest_collection_modifyitems(session, config, items) -> None:
+    """Start the longest modules first. pytest-xdist's ``--dist loadscope`` hands whole
+    modules to the workers in collection order, so a long module collected last (they
+    are alphabetical) ran alone at the end while the other core idled: longest first
+    lets the short ones fill in behind them."""
+    rank = {name: k for k, name in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))  # stable: the rest keep their order
+
+
 def overrides(**fields):
     """``section__field=value`` keyword arguments as ``--set`` strings."""
     out = []
