@@ -128,7 +128,7 @@ def test_the_dyed_edge_on_the_rig_is_tracked_in_every_frame_with_an_uncertainty_
     # comes from the arc from the free end, whose error a frame's points share (its dyed
     # side face, motion blur, 4:2:0 chroma at the end): u_mm is across, u_along_mm along.
     # Measured: across bias -0.021, RMS 0.050 mm (the goal 0.02/0.05: at it, not
-    # within); along bias -0.066, RMS 0.085 mm; u covers 72 % / 97 % across, 100 % along
+    # within); along bias -0.040, RMS 0.063 mm; u covers 72 % / 97 % across, 70 % / 94 % along
     table = np.loadtxt(RIG / "edge_truth.csv", delimiter=",", comments=("#", "frame"))
     keys = table[:, 0].astype(int) * 100_000 + np.rint(table[:, 2] * 1e3).astype(int)
     error, u = errors(edge, table[:, 3:5], keys)
@@ -140,15 +140,16 @@ def test_the_dyed_edge_on_the_rig_is_tracked_in_every_frame_with_an_uncertainty_
     across = error[:, 0] * -tangent[:, 1] + error[:, 1] * tangent[:, 0]
     along = (error * tangent).sum(axis=1)
     assert abs(across.mean()) <= 0.025 and np.sqrt(np.mean(across**2)) <= 0.055, (across.mean(), across.std())
-    assert np.sqrt(np.mean(along**2)) <= 0.1, along
+    assert np.sqrt(np.mean(along**2)) <= 0.07, along
     assert np.mean(np.abs(across) <= 2.0 * u) >= 0.9
     assert np.mean(np.abs(along) <= 2.0 * shapes.u_along * 1e3) >= 0.9
 
 
 @pytest.mark.slow
 def test_a_fit_of_the_rigs_dyed_edge_finds_the_rotation_centre_within_two_sigma(edge, rig):
-    # across the strip at full weight, along it at u_mm / u_along_mm (about a quarter); at
-    # full weight along, as before, γ came out 0.465 ± 0.015: 4.4 σ from the truth
+    # across the strip at full weight, along it at u_mm / u_along_mm, σ frame-clustered:
+    # measured dy 2.818 ± 0.027 (+0.7σ), γ 0.428 ± 0.018 (+1.5σ); in x and y at full
+    # weight with Gauss–Newton's σ, as before, γ came out 0.465 ± 0.015: 4.4σ off
     done = run_cli(
         "fit", "impulsive_rotation", "--measured", str(edge), "--free", "gamma,rotation_centre_dy_mm",
         "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out", str(rig / "fit-edge"),

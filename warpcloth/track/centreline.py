@@ -55,14 +55,15 @@ and the profile's sampling phase. On the bundled example (warpcloth's own render
 RMS per coordinate, ~0.07 px, where the noise's share is 0.008 px. Not yet measured on video
 warpcloth did not render: on the rig's dyed-edge video (grey) the centreline is lost at frame
 12, where the strip passes in front of the turned clamp."""
-ARC_VALIDATED_PX = 1.0
+ARC_VALIDATED_PX = 0.3
 """What validation measures along the strip beyond each point's noise (px): every point is
 placed by its arc from the free end, whose error the frame's points share. On the rig's
-dyed edge (scenes/data/rig/edge.mp4, benchmarks/track_accuracy.py) the free end is found
-0.05–0.22 mm short (its dyed side face, motion blur and 4:2:0 chroma at the end; the strip's
-0.04 % stretch adds up to 0.04 mm), 0.085 mm RMS along the strip against 0.050 mm across:
-about 0.4 px RMS and 1 px at most. The centreline measures its arc the same way and takes
-the same floor (its own is not measured on independent video)."""
+dyed edge (scenes/data/rig/edge.mp4, benchmarks/track_accuracy.py) the midline is off
+along the strip by −0.040 mm (bias) and 0.063 mm RMS, up to 0.24 mm in a frame (the free end
+found short: its dyed side face, motion blur and 4:2:0 chroma at the end; the strip's 0.04 %
+stretch), against 0.050 mm across: 0.3 px is where u covers 70 % of those errors within 1σ,
+94 % within 2σ. The centreline measures its arc the same way and takes the same floor (its
+own is not measured on independent video)."""
 
 
 def _region_path(mask: np.ndarray, seed: tuple[float, float], where: str, path: Path) -> np.ndarray:
@@ -150,13 +151,23 @@ def _free_end(difference: np.ndarray, centre: np.ndarray, half_width: float) -> 
     direction /= np.linalg.norm(direction)
     along = np.arange(0.0, 8 * half_width + 0.1, 0.1)
     profile = sample(difference, centre[0] + along[:, None] * direction)
-    level = float(np.median(sample(difference, centre[:40])))
-    below = np.nonzero(profile < 0.5 * level)[0]
-    if not len(below) or below[0] == 0:
+
+    def crossing(level: float) -> float | None:
+        below = np.nonzero(profile < 0.5 * level)[0]
+        if not len(below) or below[0] == 0:
+            return None
+        k = int(below[0])
+        a, b = profile[k - 1], profile[k]
+        return along[k - 1] + (a - 0.5 * level) / (a - b) * (along[k] - along[k - 1])
+
+    cross = crossing(float(np.median(sample(difference, centre[:40]))))
+    if cross is None:
         return centre[0]
-    k = int(below[0])
-    a, b = profile[k - 1], profile[k]
-    cross = along[k - 1] + (a - 0.5 * level) / (a - b) * (along[k] - along[k - 1])
+    # then half the level just inside the end: motion blurs the free end most, which lowers
+    # the band's level towards it, and half the level 8 mm up is crossed before the end
+    inside = profile[along <= cross - 1.5 * half_width]
+    if len(inside) >= 5:
+        cross = crossing(float(np.median(inside))) or cross
     return centre[0] + cross * direction
 
 

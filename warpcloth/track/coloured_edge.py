@@ -20,9 +20,10 @@ into the band, onto the midline the model's chain represents. Arc length is meas
 the line from the free end, as the centreline's is (s is the rest arc length only as far as
 the strip does not stretch).
 
-The uncertainty of each point is the scatter of the silhouette across the strip about its
-own smooth course (noise, compression, texture), reduced by the points averaged, and the
-free end's own (its position moves every arc along the strip): measured, not assumed.
+Each point's uncertainty is given across the strip (the scatter of the silhouette about its
+own smooth course: noise, compression, texture, reduced by the points averaged) and along
+it (the free end's noise: its position moves every arc of the frame alike), each with the
+floor validation measures: a curve's points (``u_along_mm``, :mod:`warpcloth.io.measured`).
 """
 
 from __future__ import annotations
@@ -45,13 +46,13 @@ SMOOTH_PX = 7  # the path's smoothing before normals are taken
 PHASE_BLUR_PX = 1.0  # σ of the Gaussian the colour signal is smoothed with
 ARC_WINDOW = 31  # px: the edge's smoothing before its arc is measured
 VALIDATED_PX = 0.25
-"""What the validation on video warpcloth did not render measures beyond each point's
-noise (px, per coordinate; added to its uncertainty in quadrature): on the independent rig
-(scenes/data/rig/edge.mp4: H.264 4:2:0, a dye band 0.5 + 0.65 mm wide whose cut face and
-side face differ in shade, benchmarks/track_accuracy.py) the midline is off by 0.050 mm
-(x) and 0.085 mm (y) RMS, bias −0.025 and +0.065 mm, about 0.35 px at 0.21 mm/px; on
-the analytic frames of tests/test_track_edge.py by 0.01 mm. It is the edge mode's
-accuracy on such video, not yet the markers' (docs/calibration.md)."""
+"""What the validation on video warpcloth did not render measures across the strip beyond
+each point's noise (px; added to its uncertainty across in quadrature; along it
+:data:`.centreline.ARC_VALIDATED_PX`): on the independent rig (scenes/data/rig/edge.mp4:
+H.264 4:2:0, a dye band 0.5 + 0.65 mm wide whose cut face and side face differ in shade,
+benchmarks/track_accuracy.py) the midline is off across by −0.021 mm (bias) and 0.050 mm
+RMS, 0.24 px at 0.21 mm/px, where u covers 72 % within 1σ, 97 % within 2σ; on the
+analytic frames of tests/test_track_edge.py by 0.01 mm (docs/calibration.md)."""
 ACROSS_HALF_WIDTHS = 3.0  # how far across the band each profile reaches, in half-widths, plus 3 px
 END_INSET_HALF_WIDTHS = 3.0  # a profile across needs a whole band: the line starts this far inside the free end
 LEAST_SATURATION = 0.08  # of the colour's brightness: a stated colour greyer than this has no chroma to track
