@@ -84,7 +84,8 @@ def overlay_figure(image: np.ndarray, tracked: Tracked, frame: int) -> object:
         right.set_xlabel("x from the clamp edge (mm)")
         right.set_ylabel("y from the clamp edge (mm)")
         right.set_title(
-            f"tracked shapes, every frame\n(median uncertainty {np.median(tracked.u_mm) * 1e3:.2g} µm per coordinate)"
+            f"tracked shapes, every frame\n(median uncertainty {np.nanmedian(tracked.u_mm) * 1e3:.2g} µm "
+            + ("across the strip)" if tracked.u_along_mm is not None else "per coordinate)")
         )
         right.legend(loc="lower right")
         fig.colorbar(matplotlib.cm.ScalarMappable(time, "viridis"), ax=right, label="t (s)", shrink=0.85)

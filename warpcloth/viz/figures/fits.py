@@ -137,7 +137,9 @@ def _tracked_shapes_overlay(
     residual = objective.residuals(result, 0, shift, penalise=False).reshape(-1, 2) * MM
     top = fig.add_subplot(grid[0, 1])
     bottom = fig.add_subplot(grid[1, 1], sharex=top)
-    for panel, axis, column in ((top, "x", 0), (bottom, "y", 1)):
+    # a curve's points are compared across the strip and, weighed, along it (io.measured.ALONG_COLUMN)
+    axes = ("x", "y") if getattr(measurement, "u_along", None) is None else ("across", "along (weighed)")
+    for panel, axis, column in ((top, axes[0], 0), (bottom, axes[1], 1)):
         drawn = panel.scatter(
             measurement.t, residual[:, column], c=measurement.s * MM, cmap="cividis", s=4, linewidths=0
         )
