@@ -70,8 +70,8 @@ ALONG_COLUMN = "u_along_mm"
 """The column a curve's tracker (the dyed edge, the centreline) adds after u_mm: each
 point's standard uncertainty along the strip (mm). A curve is found where it lies; which
 material point is where along it comes from an arc measured from the free end, whose
-error every point of a frame shares, so there u_mm is the uncertainty across the strip
-and the fit weighs the along-strip residual by u_mm / u_along_mm."""
+error every point of a frame shares, so there u_mm is the uncertainty across the strip;
+the fit compares the along-strip residual less its frame's mean, weighed by u_mm / u_along_mm."""
 
 
 def read_table(

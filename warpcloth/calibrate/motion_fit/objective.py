@@ -320,12 +320,18 @@ class Objective(FitObjective):
 
         sim = at(frames[k]) * (1 - w_time) + at(frames[k + 1]) * w_time
         diff = sim - np.column_stack([m.x, m.y])
-        if m.u_along is not None:  # a curve's point: across the strip, and along it weighed by its own u
+        if m.u_along is not None:
+            # a curve's point: across the strip; along it less its frame's mean (the free end's
+            # error, which every arc of the frame carries: one unknown per frame, profiled out),
+            # weighed by its own u
             rows = np.arange(len(node))
             tangent = frames[k][rows, node + 1] - frames[k][rows, node]
             tangent /= np.linalg.norm(tangent, axis=1)[:, None]
             across = diff[:, 0] * -tangent[:, 1] + diff[:, 1] * tangent[:, 0]
-            along = (diff * tangent).sum(axis=1) * (m.u / m.u_along)
+            along = (diff * tangent).sum(axis=1)
+            labels, index = np.unique(m.frame, return_inverse=True)
+            shared = np.bincount(index, along) / np.bincount(index)
+            along = (along - shared[index]) * (m.u / m.u_along)
             diff = np.column_stack([across, along])
         missing = 0.1 if penalise else np.nan  # a diverged strip: 10 cm per coordinate
         return np.where(np.isfinite(diff), diff, missing).ravel()
