@@ -187,9 +187,10 @@ def test_a_fit_of_the_rigs_dyed_edge_finds_the_rotation_centre_within_two_sigma(
 def test_the_centreline_of_a_strip_seen_obliquely_is_refused_not_measured(rig):
     # the rig sees the strip 19° from square: its face 8 mm wide, whose centre was taken
     # for the midline (2.1 mm off, its u 0.017 mm, exit 0) until the width was checked
-    done = track(rig, "edge.mp4", "centreline.csv", "--centreline-s", "25:95:10", "--free-length-mm", "100")
+    done = track(rig, "edge.mp4", "centreline.csv", "--centreline-s", "25:95:10", "--free-length-mm", "100",
+                 "--thickness-mm", str(TRUTH["strip"]["thickness_mm"]))  # fmt: skip
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
-    assert "frame 0" in done.stderr and "wider than a fabric seen edge-on" in done.stderr
+    assert "frame 0" in done.stderr and "wider than the 0.5 mm --thickness-mm allows" in done.stderr
     assert not (rig / "centreline.csv").exists()
 
 

@@ -125,8 +125,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=positive,
         help="the fabric's thickness: with --edge-s the edge's points are moved half of it into the fabric, onto "
         "the midline the model's chain represents (without it they are the edge's outer surface); with "
-        "--centreline-s the strip seen edge-on is this wide, and a strip seen wider is refused (default: "
-        "at most 2.5 mm)",
+        "--centreline-s (where it is needed) the strip seen edge-on is this wide, and a strip seen wider is "
+        "refused",
     )
     vid.add_argument(
         "--free-length-mm", type=positive, help="the strip's free length, mm (with --centreline-s or --edge-s)"
@@ -256,6 +256,14 @@ def _what_to_track(args: argparse.Namespace) -> np.ndarray:
         raise OptionError("--free-length-mm", f"is needed with {option} (arc lengths are measured from the free end)")
     if args.edge_s and not args.edge_colour:
         raise OptionError("--edge-colour", "is needed with --edge-s: the dye's colour as R,G,B (0-255), or auto")
+    if args.centreline_s and args.thickness_mm is None:
+        raise OptionError(
+            "--thickness-mm",
+            "is needed with --centreline-s: the centre of what the camera sees is the midline only where it sees "
+            "the strip edge-on, its thickness wide, and a camera off the strip's edge (or off its axis: a strip "
+            "25 mm wide, 30 mm off the axis of a camera 450 mm away, shows 1.7 mm of its face) sees a face too; "
+            "the fabric's thickness tells the two apart",
+        )
     arcs = marker_arcs(args.edge_s or args.centreline_s, option)
     if arcs[-1] > args.free_length_mm:
         raise OptionError(
@@ -473,17 +481,11 @@ def video_command(args: argparse.Namespace) -> int:
     if tracked.seen_width_mm is not None:
         w = tracked.seen_width_mm
         seen = [
-            f"the strip is seen {np.min(w):.3g} to {np.max(w):.3g} mm wide across (median {np.median(w):.3g} mm)"
-            + (
-                f", as the {args.thickness_mm:g} mm --thickness-mm allows"
-                if args.thickness_mm is not None
-                else "; without --thickness-mm that cannot be told from a view a little off the strip's edge, which "
-                "moves the centreline by half the face it shows: give the fabric's thickness"
-            )
+            f"the strip is seen {np.min(w):.3g} to {np.max(w):.3g} mm wide across (median {np.median(w):.3g} mm), "
+            f"as the {args.thickness_mm:g} mm --thickness-mm allows"
         ]
         for note in seen:
-            kind = "note" if args.thickness_mm is not None else "warning"
-            print(f"warpcloth track: {kind}: {args.video}: {note}", file=sys.stderr)
+            print(f"warpcloth track: note: {args.video}: {note}", file=sys.stderr)
     video = file_checksum(args.video)
     header = [
         f"# warpcloth track {args.video} (sha256 {video['sha256']}), plane {args.plane}, background {source}",

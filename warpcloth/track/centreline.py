@@ -38,15 +38,15 @@ ARC_STRIDE = 5  # the arc is summed over chords this many points long
 PROFILE_HALF_WIDTHS = 2.5
 SEED_REACH_PX = 50
 WIDTH_REACH_PX = 200.0  # how far either side of the centreline the strip's width is looked for
-EDGE_ON_MM = 2.5
-"""Without ``--thickness-mm``, the widest strip taken as seen edge-on (mm, and the blur):
-thicker than most fabrics. A strip seen wider shows one of its faces, and the centre of
-what the camera sees is not the midline: on the rig (a strip 25 mm wide seen 19° from
-square, scenes/data/rig/edge.mp4) the strip is seen 7.4–8.8 mm wide and the centreline
-was off by 2.1 mm (bias), its u 0.017 mm."""
+WIDTH_ALLOWANCE = 1.25
 BLUR_ALLOWANCE_PX = 3.0
-"""What the blur and the threshold add to the width the strip is seen (px): the bundled
-video's strip, 1.6 mm thick and seen edge-on, is seen 1.83–1.86 mm wide (1.1–1.2 px more)."""
+"""A strip seen wider than ``WIDTH_ALLOWANCE`` × its thickness and this (px: the blur and the
+threshold) shows one of its faces, and the centre of what the camera sees is not the
+midline. The bundled video's strip, 1.6 mm thick and seen edge-on, is seen 1.83–1.86 mm
+wide (1.1–1.2 px more). On the rig (a strip 25 mm wide and 0.5 mm thick, 450 mm from a
+camera 19° from square, scenes/data/rig/edge.mp4) it is seen 7.4–8.8 mm wide, and the
+centreline was 2.1 mm off with u 0.017 mm and exit 0; a camera square to it and level
+still sees 2.2–2.4 mm at rest, the face its perspective shows 30 mm off its axis."""
 VALIDATED_PX = 0.08
 """What validation measures beyond each point's noise (px, per coordinate; added to its
 uncertainty in quadrature): the free end's position, which moves every arc measured from it,
@@ -195,7 +195,7 @@ def _one_frame(
     s_mm: np.ndarray,
     free_length_mm: float,
     threshold_dn: float | None,
-    thickness_mm: float | None,
+    thickness_mm: float,
     where: str,
     path: Path,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
@@ -226,19 +226,14 @@ def _one_frame(
     sigma = sigma[::ARC_STRIDE] / np.sqrt(LINE_SMOOTH)
     scale = float(np.median(mapping.mm_per_px(centre)))
     width_mm = seen_width_px(mask, centre) * scale
-    widest = (EDGE_ON_MM if thickness_mm is None else 1.25 * thickness_mm) + BLUR_ALLOWANCE_PX * scale
+    widest = WIDTH_ALLOWANCE * thickness_mm + BLUR_ALLOWANCE_PX * scale
     if width_mm > widest:
-        stated = (
-            f"wider than the {thickness_mm:g} mm --thickness-mm allows ({widest:.2g} mm with the blur)"
-            if thickness_mm is not None
-            else f"wider than a fabric seen edge-on ({EDGE_ON_MM:g} mm and the blur; give --thickness-mm if it is "
-            "that thick)"
-        )
         raise DataFileError(
             path,
-            f"{where}: the strip is seen {width_mm:.3g} mm wide across, {stated}: the camera sees one of its faces, "
-            "and the centre of what it sees is not the strip's midline (a strip 25 mm wide 1° off square shows "
-            "0.44 mm of its face): film the strip edge-on, or dye its near edge and track that (--edge-s)",
+            f"{where}: the strip is seen {width_mm:.3g} mm wide across, wider than the {thickness_mm:g} mm "
+            f"--thickness-mm allows ({widest:.2g} mm with the blur): the camera sees one of its faces, and the "
+            "centre of what it sees is not the strip's midline (a strip 25 mm wide shows 0.44 mm of its face "
+            "1° off square): film the strip edge-on from farther away, or dye its near edge and track that (--edge-s)",
         )
     line_px = np.vstack([tip, centre])
     line_mm = mapping.to_plane(line_px)
@@ -263,16 +258,16 @@ def track_centreline(
     s_mm: np.ndarray,
     free_length_mm: float,
     path: str | Path,
+    thickness_mm: float,
     threshold_dn: float | None = None,
     progress: bool = False,
     ignore: np.ndarray | None = None,
-    thickness_mm: float | None = None,
 ) -> Tracked:
     """The centreline at arc lengths ``s_mm`` from the clamp's lowest point in every frame
     (see the module docstring); ``frames`` gives ``(index, t, image)`` per frame; nothing
-    is looked for where ``ignore`` is set. A frame whose strip is seen wider than
-    ``thickness_mm`` (else :data:`EDGE_ON_MM`) and the blur allow is an error: the camera
-    sees a face, not the edge."""
+    is looked for where ``ignore`` is set. A frame whose strip is seen wider than the
+    fabric's ``thickness_mm`` and the blur allow is an error: the camera sees a face, not
+    only the edge (:data:`WIDTH_ALLOWANCE`)."""
     from tqdm import tqdm
 
     path = Path(path)
