@@ -312,7 +312,7 @@ def test_a_fit_at_5_mm_of_a_converged_fine_measurement_finds_the_continuum():
     dy, d1 = "clamp.rotation_centre_dy_mm", "material.hysteresis_d1_gf_cm_per_cm"
     # D1's 5 % is 2.8 σ once σ holds the frames' shared misfit (the mesh's, here): the
     # frame-clustered σ (warpcloth.calibrate.motion_fit.lm.clustered_covariance)
-    assert error[dy] > 10 * at_h.sigma[dy] and error[d1] > 0.04 * SPACING_TRUTH[d1], at_h.parameters
+    assert error[dy] > 10 * at_h.sigma[dy] and error[d1] > 2.5 * at_h.sigma[d1], at_h.parameters
     fit = fit_motion(base, measured, free, progress=False, noise=1e-4)
     assert fit.status == "converged", fit.problems
     for name, value in SPACING_TRUTH.items():

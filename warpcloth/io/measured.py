@@ -71,7 +71,8 @@ ALONG_COLUMN = "u_along_mm"
 point's standard uncertainty along the strip (mm). A curve is found where it lies; which
 material point is where along it comes from an arc measured from the free end, whose
 error every point of a frame shares, so there u_mm is the uncertainty across the strip;
-the fit compares the along-strip residual less its frame's mean, weighed by u_mm / u_along_mm."""
+the fit takes each frame's mean out of the along-strip residuals (one unknown per frame)
+and compares the rest, the points' own error, as it compares across."""
 
 
 def read_table(

@@ -48,13 +48,12 @@ camera 19° from square, scenes/data/rig/edge.mp4) it is seen 7.4–8.8 mm wide,
 centreline was 2.1 mm off with u 0.017 mm and exit 0; a camera square to it and level
 still sees 2.2–2.4 mm at rest, the face its perspective shows 30 mm off its axis."""
 VALIDATED_PX = 0.08
-"""What validation measures beyond each point's noise (px, per coordinate; added to its
-uncertainty in quadrature): the free end's position, which moves every arc measured from it,
-and the profile's sampling phase. On the bundled example (warpcloth's own renderer, lossless:
-``python benchmarks/track_accuracy.py --own``) the centreline is off by 0.013 and 0.016 mm
-RMS per coordinate, ~0.07 px, where the noise's share is 0.008 px. Not yet measured on video
-warpcloth did not render: on the rig's dyed-edge video (grey) the centreline is lost at frame
-12, where the strip passes in front of the turned clamp."""
+"""What validation measures across the strip beyond each point's noise (px; added to its
+uncertainty across in quadrature; along it :data:`ARC_VALIDATED_PX`): the profile's
+sampling phase. On the bundled example (warpcloth's own renderer, lossless, the strip seen
+edge-on, tests/test_track.py) the centreline is off by 0.013 and 0.011 mm RMS in x and y,
+~0.06 px, where the noise's share is 0.008 px. Not measured on video warpcloth did not
+render of a strip seen edge-on: the rig sees a face (:data:`BLUR_ALLOWANCE_PX`)."""
 ARC_VALIDATED_PX = 0.3
 """What validation measures along the strip beyond each point's noise (px): every point is
 placed by its arc from the free end, whose error the frame's points share. On the rig's
@@ -167,7 +166,8 @@ def _free_end(difference: np.ndarray, centre: np.ndarray, half_width: float) -> 
     # the band's level towards it, and half the level 8 mm up is crossed before the end
     inside = profile[along <= cross - 1.5 * half_width]
     if len(inside) >= 5:
-        cross = crossing(float(np.median(inside))) or cross
+        local = crossing(float(np.median(inside)))
+        cross = cross if local is None else local
     return centre[0] + cross * direction
 
 

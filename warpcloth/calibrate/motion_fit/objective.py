@@ -321,20 +321,33 @@ class Objective(FitObjective):
         sim = at(frames[k]) * (1 - w_time) + at(frames[k + 1]) * w_time
         diff = sim - np.column_stack([m.x, m.y])
         if m.u_along is not None:
-            # a curve's point: across the strip; along it less its frame's mean (the free end's
-            # error, which every arc of the frame carries: one unknown per frame, profiled out),
-            # weighed by its own u
-            rows = np.arange(len(node))
-            tangent = frames[k][rows, node + 1] - frames[k][rows, node]
+            # a curve's point: across the strip, and along it less its frame's mean: the free
+            # end's error, which every arc of the frame carries (u_along_mm), is one unknown per
+            # frame; what is left is the points' own, as across (0.002-0.03 mm on the rig)
+            w = w_time[:, 0]
+
+            def position(n: np.ndarray) -> np.ndarray:  # a node at the measured time, as sim is
+                return frames[k, n] * (1 - w)[:, None] + frames[k + 1, n] * w[:, None]
+
+            tangent = position(node + 1) - position(node)
             tangent /= np.linalg.norm(tangent, axis=1)[:, None]
             across = diff[:, 0] * -tangent[:, 1] + diff[:, 1] * tangent[:, 0]
-            along = (diff * tangent).sum(axis=1)
-            labels, index = np.unique(m.frame, return_inverse=True)
-            shared = np.bincount(index, along) / np.bincount(index)
-            along = (along - shared[index]) * (m.u / m.u_along)
+            along = less_group_mean((diff * tangent).sum(axis=1), m.frame)
             diff = np.column_stack([across, along])
         missing = 0.1 if penalise else np.nan  # a diverged strip: 10 cm per coordinate
         return np.where(np.isfinite(diff), diff, missing).ravel()
+
+
+def less_group_mean(values: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """``values`` less the mean of their group (over its finite values), scaled by
+    √(m/(m − 1)) for a group of m so that independent errors keep their spread; a value
+    alone in its group is 0 (nothing is left of it once its mean is taken out)."""
+    _, index = np.unique(groups, return_inverse=True)
+    finite = np.isfinite(values)
+    count = np.bincount(index, finite)
+    mean = np.bincount(index, np.where(finite, values, 0.0)) / np.maximum(count, 1)
+    scale = np.sqrt(count / np.maximum(count - 1, 1))
+    return np.where(count[index] > 1, (values - mean[index]) * scale[index], 0.0)
 
 
 def mesh_note(base: dict) -> str:

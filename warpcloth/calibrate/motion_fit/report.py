@@ -157,15 +157,17 @@ def summarise(
     σ is Gauss–Newton's, which holds for independent errors. A tracked shape's points
     share their frame's errors (the edge modes measure every arc from one free end), so
     for them σ is the larger of it and the frame-clustered sandwich
-    (:func:`~.lm.clustered_covariance`): on the rig's dyed edge Gauss–Newton's σ of γ is
-    a third of the error it made (benchmarks/track_accuracy.py)."""
+    (:func:`~.lm.clustered_covariance`; the correlation is then the sandwich's): compared
+    in x and y, the rig's dyed edge had Gauss–Newton's σ of γ a quarter of the error it made
+    (benchmarks/RESULTS.md). The sandwich's residuals hold the mesh's misfit at the fit's
+    spacing too, which the continuum's σ_mesh also counts: conservative there."""
     scaled = jac / objective.ranges
     cov = lm.covariance(scaled, residual)
     sigma, correlation = lm.sigma_and_correlation(cov)
     groups = objective.residual_groups()
     robust, per_block = (None, 0) if groups is None else lm.clustered_covariance(scaled, residual, groups)
     if robust is not None:
-        sigma_frames = np.sqrt(np.clip(np.diag(robust), 0, None))
+        sigma_frames, correlation = lm.sigma_and_correlation(robust)
         gauss_newton = sigma
         sigma = np.maximum(sigma, sigma_frames)
     values = objective.values(u) | ({SHIFT: shift} if objective.align else {})
@@ -244,9 +246,10 @@ def write_fit(
         )
     else:
         r = residual.reshape(-1, 2)
-        # a curve's residuals are across the strip and along it (weighed: ALONG_COLUMN)
-        curve = measurement.u_along is not None
-        names = ("residual_across_mm", "weighed_residual_along_mm") if curve else ("residual_x_mm", "residual_y_mm")
+        # a curve's residuals are across the strip and along it less the frame's mean (ALONG_COLUMN)
+        names = ("residual_x_mm", "residual_y_mm")
+        if measurement.u_along is not None:
+            names = ("residual_across_mm", "residual_along_less_frame_mean_mm")
         table = pd.DataFrame(
             {
                 "frame": measurement.frame,

@@ -138,7 +138,7 @@ def _tracked_shapes_overlay(
     top = fig.add_subplot(grid[0, 1])
     bottom = fig.add_subplot(grid[1, 1], sharex=top)
     # a curve's points are compared across the strip and, weighed, along it (io.measured.ALONG_COLUMN)
-    axes = ("x", "y") if getattr(measurement, "u_along", None) is None else ("across", "along (weighed)")
+    axes = ("x", "y") if getattr(measurement, "u_along", None) is None else ("across", "along, less the frame's mean")
     for panel, axis, column in ((top, axes[0], 0), (bottom, axes[1], 1)):
         drawn = panel.scatter(
             measurement.t, residual[:, column], c=measurement.s * MM, cmap="cividis", s=4, linewidths=0
