@@ -263,3 +263,22 @@ def test_a_fit_option_that_would_mean_something_else_is_refused(option, value, s
     )
     assert done.returncode == 2 and says in done.stderr and "Traceback" not in done.stderr, done.stderr
     assert not (tmp_path / "f").exists() or not any((tmp_path / "f").iterdir())
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["track", "v.mp4", "--plane", "p.json", "--thickness-mm", "-0.5"], "'-0.5' must be positive"),
+        (["run"], "the following arguments are required: scene"),
+        (["bogus"], "invalid choice: 'bogus'"),
+        (["clamp", "fit-angle"], "the following arguments are required: ENCODER"),
+    ],
+    ids=["a-bad-value", "a-missing-argument", "no-such-command", "a-nested-command"],
+)
+def test_an_option_the_parser_refuses_is_one_line_naming_it(argv, says, capsys):
+    # argparse printed its whole usage first (17 lines for `warpcloth track`)
+    with pytest.raises(SystemExit) as raised:
+        main(argv)
+    assert raised.value.code == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and says in lines[0] and lines[0].endswith("--help lists the options)"), lines

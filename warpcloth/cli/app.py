@@ -15,6 +15,7 @@ import errno
 import sys
 import warnings
 from collections.abc import Sequence
+from typing import NoReturn
 
 from warpcloth.errors import (
     ArgumentError,
@@ -59,9 +60,19 @@ def _version() -> str:
         return "(not installed)"
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose refusal is one line, as every other error of warpcloth's
+    is (argparse prints its whole usage first: 17 lines for ``warpcloth track``); its
+    subcommands' parsers are of the same class."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print ``PROG: error: MESSAGE (PROG --help lists the options)`` and exit 2."""
+        self.exit(2, f"{self.prog}: error: {message} ({self.prog} --help lists the options)\n")
+
+
 def parser() -> argparse.ArgumentParser:
     """The argument parser of every command."""
-    top = argparse.ArgumentParser(
+    top = OneLineParser(
         prog="warpcloth",
         description="Batched Warp simulation of hanging fabric strips: "
         "run | sweep | export-usd | plot | render | fit | clamp | material | analyse | scene | track (--help on each).",

@@ -170,9 +170,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 UNCERTAINTY_SAYS = {
-    "markers": "from the sensor noise through each dot's outline and the outline's lopsidedness",
-    "centreline": "from the sensor noise and the floor validation measured (0.08 px)",
-    "edge": "from the silhouette's scatter, the free end's noise and the validated floor",
+    "markers": "u_px, u_mm: standard uncertainty of each coordinate, from the sensor noise through each dot's "
+    "outline and the outline's lopsidedness",
+    "centreline": "u_px, u_mm: standard uncertainty across the strip, from the sensor noise and the floor "
+    "validation measured; u_along_mm: along it, the floor the arc from the free end was validated to, a "
+    "frame's points sharing its error",
+    "edge": "u_px, u_mm: standard uncertainty across the strip, from the silhouette's scatter and the validated "
+    "floor; u_along_mm: along it, from the free end's noise and the validated floor, a frame's points sharing "
+    "its error",
 }
 """What each mode's ``u_px, u_mm`` hold, as the shapes file's header says."""
 
@@ -490,8 +495,8 @@ def video_command(args: argparse.Namespace) -> int:
     header = [
         f"# warpcloth track {args.video} (sha256 {video['sha256']}), plane {args.plane}, background {source}",
         f"# {len(arcs)} {what}, {kept} frames; sensor noise {np.median(tracked.noise_dn):.3g} grey "
-        f"levels; u_px, u_mm: standard uncertainty of each coordinate, {UNCERTAINTY_SAYS[mode]} (the "
-        "calibration's is in the plane file); fit judges its RMS against u_mm",
+        f"levels; {UNCERTAINTY_SAYS[mode]} (the calibration's is in the plane file); fit judges its RMS "
+        "against u_mm",
         *(f"# hidden: {note}" for note in hidden),
         *(f"# seen: {note}" for note in seen),
         *(f"# dropped: {note}" for note in dropped),
