@@ -168,7 +168,7 @@ class FitObjective:
 
     def residual_groups(self) -> np.ndarray | None:
         """Each residual's group of possibly shared errors (its tracked frame), or None
-        where the errors are independent (:func:`~.report.summarise`)."""
+        where the errors are independent, as a laser's samples are (:func:`~.report.summarise`)."""
         return None
 
     def best_shift(self, result: Any, j: int) -> float:

@@ -154,9 +154,9 @@ def summarise(
     """The fit at point ``u`` (clock offset ``shift``) with its Jacobian and residuals
     there: the values, their σ and correlation, the RMS, how the search went.
 
-    σ is Gauss–Newton's, which holds for independent errors. A tracked shape's points
-    share their frame's errors (the edge modes measure every arc from one free end), so
-    for them σ is the larger of it and the frame-clustered sandwich
+    σ is Gauss–Newton's, which holds for independent errors. Tracked points share their
+    frame's errors (the camera's; the edge modes measure every arc from one free end), so
+    for a strip's shapes and a sheet's markers σ is the larger of it and the frame-clustered sandwich
     (:func:`~.lm.clustered_covariance`; the correlation is then the sandwich's): compared
     in x and y, the rig's dyed edge had Gauss–Newton's σ of γ a quarter of the error it made
     (benchmarks/RESULTS.md). The sandwich's residuals hold the mesh's misfit at the fit's

@@ -215,6 +215,12 @@ class SheetObjective(FitObjective):
             batch.model, batch.control, batch.solver, batch.recorder, on_divergence="record", keep_frames=False
         )
 
+    def residual_groups(self) -> np.ndarray:
+        """The markers' residuals (each row's coordinates) grouped by their time: a frame's
+        markers share its errors (the camera's, the tracker's) as a strip's do."""
+        m = self.measurement
+        return np.repeat(m.t, len(m.axes))
+
     def residuals(self, result: SheetResult, j: int, shift: float, penalise: bool = True) -> np.ndarray:
         """Simulated minus measured marker coordinates (m), row by row, for sheet j at clock
         offset δ; where the sheet diverged, 10 cm per coordinate (NaN with ``penalise=False``)."""
