@@ -132,13 +132,15 @@ def _tracked_shapes_overlay(
         ax.plot(xy[:nc, 0], xy[:nc, 1], color="0.25", lw=3)
         ax.plot(measurement.x[rows] * MM, measurement.y[rows] * MM, "o", color=colour, ms=3.5, mfc="none")
     ax.set_aspect("equal")
-    ax.set(xlabel=X_LABEL, ylabel=Y_LABEL, title="markers (o) over the best fit (lines)")
+    curve = getattr(measurement, "u_along", None) is not None  # a curve's points (io.measured.ALONG_COLUMN)
+    what = "curve points" if curve else "markers"
+    ax.set(xlabel=X_LABEL, ylabel=Y_LABEL, title=f"{what} (o) over the best fit (lines)")
     ax.legend(fontsize=7, loc="best", title="measured t", title_fontsize=7)
     residual = objective.residuals(result, 0, shift, penalise=False).reshape(-1, 2) * MM
     top = fig.add_subplot(grid[0, 1])
     bottom = fig.add_subplot(grid[1, 1], sharex=top)
-    # a curve's points are compared across the strip and, weighed, along it (io.measured.ALONG_COLUMN)
-    axes = ("x", "y") if getattr(measurement, "u_along", None) is None else ("across", "along, less the frame's mean")
+    # a curve's points are compared across the strip and along it less the frame's mean
+    axes = ("across", "along, less the frame's mean") if curve else ("x", "y")
     for panel, axis, column in ((top, axes[0], 0), (bottom, axes[1], 1)):
         drawn = panel.scatter(
             measurement.t, residual[:, column], c=measurement.s * MM, cmap="cividis", s=4, linewidths=0
@@ -146,7 +148,7 @@ def _tracked_shapes_overlay(
         panel.axhline(0, color="0.6", lw=0.6)
         panel.set(ylabel=f"residual {axis} (mm)")
     bottom.set(xlabel="measured time (s)")
-    fig.colorbar(drawn, cax=fig.add_subplot(grid[:, 2]), label="marker's arc length s (mm)")
+    fig.colorbar(drawn, cax=fig.add_subplot(grid[:, 2]), label=f"{what[:-1]}'s arc length s (mm)")
     fig.suptitle(
         f"RMS {fit.rms * MM:.3g} mm on t = {measurement.t.min():g} … {measurement.t.max():g} s "
         f"(the measured record)\n{title}",
