@@ -125,14 +125,20 @@ def smooth_line(points: np.ndarray, width: int) -> np.ndarray:
     )
 
 
+def normals(line: np.ndarray) -> np.ndarray:
+    """The unit normal ``[n, 2]`` at each point of ``line [n, 2]`` (its tangent turned a
+    quarter anticlockwise; the tangent by central differences)."""
+    tangent = np.gradient(line, axis=0)
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1), 1e-12)[:, None]
+    return np.column_stack([-tangent[:, 1], tangent[:, 0]])
+
+
 def _refine(
     difference: np.ndarray, path: np.ndarray, half_width: float, noise: float, threshold: float
 ) -> tuple[np.ndarray, np.ndarray]:
     # each point moved to the centre of the profile across the strip; its σ from the noise
     smooth = smooth_line(path, SMOOTH)
-    tangent = np.gradient(smooth, axis=0)
-    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
-    normal = np.column_stack([-tangent[:, 1], tangent[:, 0]])
+    normal = normals(smooth)
     offsets = np.arange(-PROFILE_HALF_WIDTHS * half_width, PROFILE_HALF_WIDTHS * half_width + 0.25, 0.25)
     across = smooth[:, None, :] + offsets[None, :, None] * normal[:, None, :]
     weight = np.clip(sample(difference, across.reshape(-1, 2)).reshape(len(smooth), -1) - 0.5 * threshold, 0, None)
@@ -176,9 +182,7 @@ def seen_width_px(mask: np.ndarray, line: np.ndarray) -> float:
     middle half of the run of region pixels along each point's normal through it (the
     clamp and the free end left out)."""
     part = line[len(line) // 4 : 3 * len(line) // 4 + 1]
-    tangent = np.gradient(smooth_line(part, SMOOTH), axis=0)
-    tangent /= np.maximum(np.linalg.norm(tangent, axis=1), 1e-12)[:, None]
-    normal = np.column_stack([-tangent[:, 1], tangent[:, 0]])
+    normal = normals(smooth_line(part, SMOOTH))
     reach = np.arange(0.0, WIDTH_REACH_PX, 0.5)
     region, runs = mask.astype(np.float32), []
     for sign in (1.0, -1.0):

@@ -35,7 +35,7 @@ import numpy as np
 from warpcloth.errors import ArgumentError, DataFileError
 
 from .calibration import PlaneMapping
-from .centreline import ARC_VALIDATED_PX, LINE_SMOOTH, _free_end, _region_path, _resample, smooth_line
+from .centreline import ARC_VALIDATED_PX, LINE_SMOOTH, _free_end, _region_path, _resample, normals, smooth_line
 from .edges import band_edges, rising_edges, sample
 from .markers import Tracked, noise_sigma
 from .video import Frames, FrameStream
@@ -107,12 +107,6 @@ def _profile_across(
     return sample(signal, points), offsets
 
 
-def _normals(line: np.ndarray) -> np.ndarray:
-    tangent = np.gradient(line, axis=0)
-    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
-    return np.column_stack([-tangent[:, 1], tangent[:, 0]])
-
-
 def _one_frame(
     signal: np.ndarray,
     luma_difference: np.ndarray,
@@ -139,12 +133,12 @@ def _one_frame(
     line = smooth_line(_resample(route, 1.0), SMOOTH_PX)
     reach = ACROSS_HALF_WIDTHS * half_width + 3.0
     for _ in range(2):  # the band's centre: the signal's centroid across it, twice
-        normal = _normals(line)
+        normal = normals(line)
         profile, offsets = _profile_across(signal, line, normal, reach, 97)
         weight = np.clip(profile - 0.5 * level, 0.0, None)
         shift = (weight * offsets).sum(axis=1) / np.maximum(weight.sum(axis=1), 1e-300)
         line = smooth_line(line + shift[:, None] * normal, SMOOTH_PX)
-    normal = _normals(line)
+    normal = normals(line)
     inner = int(np.ceil(END_INSET_HALF_WIDTHS * half_width))
     if len(line) <= inner + LINE_SMOOTH:
         raise DataFileError(path, f"{where}: the coloured edge found is {len(line)} px long: too short to follow")

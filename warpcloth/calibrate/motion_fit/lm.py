@@ -136,10 +136,9 @@ def clustered_covariance(jac: np.ndarray, residual: np.ndarray, groups: np.ndarr
     from warpcloth.calibrate.bootstrap import correlation_length
 
     n, p = jac.shape
-    try:
-        bread = np.linalg.inv(jac.T @ jac)
-    except np.linalg.LinAlgError:
-        return np.full((p, p), np.nan), 1
+    bread = covariance(jac)
+    if np.isnan(bread).any():
+        return bread, 1
     labels, index = np.unique(groups, return_inverse=True)
     scores = np.zeros((len(labels), p))
     np.add.at(scores, index, jac * residual[:, None])

@@ -284,8 +284,8 @@ class Objective(FitObjective):
 
     def residual_groups(self) -> np.ndarray | None:
         """A tracked shape's residuals (x and y of each point, or a curve's across and along
-        it, row by row) grouped by frame:
-        its points share the frame's errors; a laser's samples are independent (None)."""
+        it, row by row) grouped by frame, whose errors its points share; a laser's samples
+        are independent (None)."""
         m = self.measurement
         return np.repeat(m.frame, 2) if isinstance(m, TrackedShapes) else None
 
