@@ -188,8 +188,16 @@ def test_cli_fits_the_bundled_examples(tmp_path):
 def test_markers_beyond_the_free_end_are_refused():
     base = raw("impulsive_rotation", run__duration_s=0.1)
     markers = TrackedShapes(np.array([0, 1]), np.array([0.0, 0.05]), np.array([0.05, 0.12]), np.zeros(2), np.zeros(2))
-    with pytest.raises(wc.ArgumentError, match="measurement: a marker at s = 120 mm lies beyond the free end"):
-        fit_motion(base, markers, free_parameters("gamma", wc.scene_from_dict(copy.deepcopy(base))), progress=False)
+    free = free_parameters("gamma", wc.scene_from_dict(copy.deepcopy(base)))
+    beyond = "measurement: a marker at s = 120 mm lies beyond the free end"
+    with pytest.raises(wc.ArgumentError, match=beyond) as raised:
+        fit_motion(base, markers, free, progress=False)
+    assert "header in metres" not in str(raised.value)
+    # millimetres under a header in metres: a thousand strips long, which names the unit
+    in_metres = TrackedShapes(np.array([0, 1]), np.array([0.0, 0.05]), np.array([5.0, 95.0]), np.zeros(2), np.zeros(2))
+    unit = r"s = 5000 mm .* millimetres under a header in metres\? head the column s_mm"
+    with pytest.raises(wc.ArgumentError, match=unit):
+        fit_motion(base, in_metres, free, progress=False)
 
 
 @pytest.mark.slow

@@ -242,10 +242,16 @@ class Objective(FitObjective):
             free_length = self.scene.strip.free_length_mm * 1e-3
             beyond = measurement.s > free_length * (1 + 1e-9)
             if beyond.any():
+                # a whole strip's length times a hundred is a unit, not a clamp, mistaken
+                unit = (
+                    " (a hundred times the strip or more: millimetres under a header in metres? head the column s_mm)"
+                    if measurement.s.max() >= 100 * free_length
+                    else ""
+                )
                 raise ArgumentError(
                     "measurement",
                     f"a marker at s = {measurement.s[beyond][0] * 1e3:g} mm lies beyond "
-                    f"the free end ({free_length * 1e3:g} mm below the clamp's lowest point); s is the "
+                    f"the free end ({free_length * 1e3:g} mm below the clamp's lowest point){unit}; s is the "
                     "arc length from the clamp's lowest point, not from the clamp's top",
                 )
         self.shift_step = 0.5 * self.scene.output_interval
