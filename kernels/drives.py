@@ -117,8 +117,21 @@ def build(scalar: Any) -> SimpleNamespace:
         velocity = dp * ((r1 - r0) * radial + r * turn * perp(radial))
         return position, velocity
 
+    @wp.func
+    def kick_mass(control: StripControl, s: int, i: int, last: int, step: int, release_step: int, m: scalar):
+        # Symplectic Euler carries velocities at half steps, v_{n+1/2} = v_{n-1/2} + dt a_n.
+        # A node that starts moving at t_n from a velocity known at t_n (every free node at
+        # the run's first step, the held free end at its release) takes half that kick,
+        # v_{n+1/2} = v_n + (dt/2) a_n: a full one offsets its whole later motion by
+        # (dt/2) a_n, a first-order error (docs/model.md §9.1). Returned as the mass the
+        # kick divides by.
+        if step == 0 or (i == last and step == release_step and control.hold_free_end[s] != 0):
+            return scalar(2.0) * m
+        return m
+
     return SimpleNamespace(
         StripControl=StripControl,
+        kick_mass=kick_mass,
         piecewise_polynomial=piecewise_polynomial,
         clamp_angle=clamp_angle,
         held_free_end=held_free_end,

@@ -40,25 +40,33 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
     vec2, mat22 = types.vec2, types.mat22
     zero = scalar(0.0)
     one = scalar(1.0)
-    two = scalar(2.0)
     strip = structs.build(scalar, terms)
     StripModel, StripState = strip.StripModel, strip.StripState
     drive = drives.build(scalar)
     StripControl, clamp_angle, held_free_end = drive.StripControl, drive.clamp_angle, drive.held_free_end
+    kick_mass = drive.kick_mass
     Stepping = integrators.build(scalar).Stepping
     stiffness = tensile.build(scalar).stiffness_per_width
     internal_force = fused.internal_forces(StripState)
     applied = force_terms.build(terms, scalar, vec2, strip.tally, structs.STRIP_CHANNELS)
 
     @wp.func
-    def inverse_mass(model: StripModel, i: int, s: int, held: bool):
-        # 0 for a node whose motion is prescribed: the clamp-edge node and the held free end
+    def node_mass(model: StripModel, i: int, s: int):
+        m = model.node_mass[s]
+        if i == model.n_nodes - 1:
+            m = m * scalar(0.5)  # the free end carries half a segment
+        return m
+
+    @wp.func
+    def inverse_mass(
+        model: StripModel, control: StripControl, stepping: Stepping, s: int, i: int, step: int, held: bool
+    ):
+        # 1 / the mass the step's kick divides by; 0 for a node whose motion is prescribed:
+        # the clamp-edge node and the held free end
         n = model.n_nodes
         if i < model.n_clamped or (held and i == n - 1):
             return zero
-        if i == n - 1:
-            return two / model.node_mass[s]  # the free end carries half a segment
-        return one / model.node_mass[s]
+        return one / kick_mass(control, s, i, n - 1, step, stepping.release_step, node_mass(model, i, s))
 
     @wp.func
     def end_velocity(
@@ -98,14 +106,12 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
                 dt,
             )
             return (x_new - x) / dt
-        m = model.node_mass[s]
-        if i == n - 1:
-            m = m * scalar(0.5)
+        m = node_mass(model, i, s)
         v = state.velocity[i, s]
         f = internal_force(state, i, s) - gamma * m * v + m * vec2(zero, -model.gravity)
         if wp.static(applied.present):
             f = f + applied.force(x, v, m)
-        return v + f * (dt / m)
+        return v + f * (dt / kick_mass(control, s, i, n - 1, step, stepping.release_step, m))
 
     @wp.func
     def segment(state: StripState, i: int, s: int):
@@ -136,13 +142,13 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
         # Forward elimination, segment by segment down the chain; row i couples ΔT_{i-1}, ΔT_i, ΔT_{i+1}.
         u, length = segment(state, first, s)
         w_start = end_velocity(model, control, stepping, state, s, first, step, held, gamma, t_next)
-        inv_start = inverse_mass(model, first, s, held)
+        inv_start = inverse_mass(model, control, stepping, s, first, step, held)
         previous_c = zero  # c'_{i-1}
         previous_d = zero  # d'_{i-1}
         lower = zero  # coefficient of ΔT_{i-1} in row i
         for i in range(first, n - 1):
             w_end = end_velocity(model, control, stepping, state, s, i + 1, step, held, gamma, t_next)
-            inv_end = inverse_mass(model, i + 1, s, held)
+            inv_end = inverse_mass(model, control, stepping, s, i + 1, step, held)
             k = axial * stiffness((length - l0) / l0, a)
             upper = zero
             u_next = u

@@ -59,6 +59,7 @@ def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels
     StripModel, StripState, law, tally = strip.StripModel, strip.StripState, strip.law, strip.tally
     drive = drives.build(scalar)
     StripControl, clamp_angle, held_free_end = drive.StripControl, drive.clamp_angle, drive.held_free_end
+    kick_mass = drive.kick_mass
     stepping_types = integrators.build(scalar)
     Stepping = stepping_types.Stepping
     update_node = stepping_types.schemes[scheme]
@@ -106,7 +107,15 @@ def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels
 
     @wp.func
     def advance_free_nodes(
-        model: StripModel, stepping: Stepping, state: StripState, s: int, last: int, gamma: scalar, work: tally
+        model: StripModel,
+        control: StripControl,
+        stepping: Stepping,
+        state: StripState,
+        s: int,
+        step: int,
+        last: int,
+        gamma: scalar,
+        work: tally,
     ):
         # Nodes below the clamp, up to ``last``, by the scheme's node update under their
         # internal forces, damping, gravity and the model's force terms; the free end
@@ -127,7 +136,7 @@ def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels
                 f = f + applied.force(x, v, m)
             if wp.static(implicit):
                 f = f + state.correction[i, s]
-            x_new, v_new = update_node(x, v, f, m, dt)
+            x_new, v_new = update_node(x, v, f, kick_mass(control, s, i, n - 1, step, stepping.release_step, m), dt)
             sweep = (v + v_new) * (half * dt)
             work = work + work_on(state, i, s, sweep) + damping_work(-wp.dot(f_damp, sweep))
             if wp.static(applied.present):
@@ -197,10 +206,10 @@ def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels
             stretching_corrections(model, control, stepping, state, s, step, holding, gamma, t_next)
         work = state.work[s]
         if holding:
-            work = advance_free_nodes(model, stepping, state, s, n - 2, gamma, work)
+            work = advance_free_nodes(model, control, stepping, state, s, step, n - 2, gamma, work)
             work = carry_held_end(model, control, stepping, state, s, step, work)
         else:
-            work = advance_free_nodes(model, stepping, state, s, n - 1, gamma, work)
+            work = advance_free_nodes(model, control, stepping, state, s, step, n - 1, gamma, work)
         work = move_clamp(model, control, stepping, state, s, t_next, work)
         if step + 1 == stepping.release_step:
             work = tally()  # the energy budget is reported from the release on
