@@ -118,20 +118,15 @@ def build(scalar: Any) -> SimpleNamespace:
         return position, velocity
 
     @wp.func
-    def kick_mass(control: StripControl, s: int, i: int, last: int, step: int, release_step: int, m: scalar):
-        # Symplectic Euler carries velocities at half steps, v_{n+1/2} = v_{n-1/2} + dt a_n.
-        # A node that starts moving at t_n from a velocity known at t_n (every free node at
-        # the run's first step, the held free end at its release) takes half that kick,
-        # v_{n+1/2} = v_n + (dt/2) a_n: a full one offsets its whole later motion by
-        # (dt/2) a_n, a first-order error (docs/model.md §9.1). Returned as the mass the
-        # kick divides by.
-        if step == 0 or (i == last and step == release_step and control.hold_free_end[s] != 0):
-            return scalar(2.0) * m
-        return m
+    def starts_moving(control: StripControl, s: int, i: int, last: int, step: int, release_step: int):
+        # Whether node i's velocity at this step is known at the step itself, not half a step
+        # before it (kernels/integrators.py kick_mass): every node at the run's first step,
+        # and the held free end (node ``last``) at its release.
+        return step == 0 or (i == last and step == release_step and control.hold_free_end[s] != 0)
 
     return SimpleNamespace(
         StripControl=StripControl,
-        kick_mass=kick_mass,
+        starts_moving=starts_moving,
         piecewise_polynomial=piecewise_polynomial,
         clamp_angle=clamp_angle,
         held_free_end=held_free_end,

@@ -44,8 +44,9 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
     StripModel, StripState = strip.StripModel, strip.StripState
     drive = drives.build(scalar)
     StripControl, clamp_angle, held_free_end = drive.StripControl, drive.clamp_angle, drive.held_free_end
-    kick_mass = drive.kick_mass
-    Stepping = integrators.build(scalar).Stepping
+    starts_moving = drive.starts_moving
+    stepping_types = integrators.build(scalar)
+    Stepping, kick_mass = stepping_types.Stepping, stepping_types.kick_mass
     stiffness = tensile.build(scalar).stiffness_per_width
     internal_force = fused.internal_forces(StripState)
     applied = force_terms.build(terms, scalar, vec2, strip.tally, structs.STRIP_CHANNELS)
@@ -66,7 +67,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
         n = model.n_nodes
         if i < model.n_clamped or (held and i == n - 1):
             return zero
-        return one / kick_mass(control, s, i, n - 1, step, stepping.release_step, node_mass(model, i, s))
+        return one / kick_mass(node_mass(model, i, s), starts_moving(control, s, i, n - 1, step, stepping.release_step))
 
     @wp.func
     def end_velocity(
@@ -111,7 +112,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
         f = internal_force(state, i, s) - gamma * m * v + m * vec2(zero, -model.gravity)
         if wp.static(applied.present):
             f = f + applied.force(x, v, m)
-        return v + f * (dt / kick_mass(control, s, i, n - 1, step, stepping.release_step, m))
+        return v + f * (dt / kick_mass(m, starts_moving(control, s, i, n - 1, step, stepping.release_step)))
 
     @wp.func
     def segment(state: StripState, i: int, s: int):

@@ -38,6 +38,17 @@ def build(scalar: Any, dim: int = 2) -> SimpleNamespace:
         move_steps: int  # steps spent carrying the free end to the hold target
 
     @wp.func
+    def kick_mass(m: scalar, starts: bool):
+        # The mass a node's velocity kick divides by. Symplectic Euler carries velocities at
+        # half steps, v_{n+1/2} = v_{n-1/2} + dt a_n. A node whose velocity is known at the
+        # step itself (``starts``: at the run's first step, or freed from a constraint there)
+        # takes half that kick, v_{n+1/2} = v_n + (dt/2) a_n; a full one offsets its whole
+        # later motion by (dt/2) a_n, a first-order error (docs/model.md §9.1).
+        if starts:
+            return scalar(2.0) * m
+        return m
+
+    @wp.func
     def semi_implicit_euler(x: vec, v: vec, f: vec, m: scalar, dt: scalar):
         # Symplectic: the position moves with the updated velocity.
         v_new = v + f * (dt / m)
@@ -51,5 +62,6 @@ def build(scalar: Any, dim: int = 2) -> SimpleNamespace:
 
     return SimpleNamespace(
         Stepping=Stepping,
+        kick_mass=kick_mass,
         schemes={"semi_implicit": semi_implicit_euler, "forward": forward_euler, "imex": semi_implicit_euler},
     )

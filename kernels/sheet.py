@@ -97,7 +97,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
     drive_work = fused.channel(scalar, tally, SHEET_PROBES.channel("drive_work"))
     internal_force = fused.internal_forces(SheetState)
     applied = force_terms.build(terms, scalar, vec3, tally, sheet_structs.SHEET_CHANNELS)
-    update_node = integrators.build(scalar, 3).schemes[scheme]
+    stepping_types = integrators.build(scalar, 3)
+    update_node, kick_mass = stepping_types.schemes[scheme], stepping_types.kick_mass
 
     @wp.struct
     class SheetProbeSettings:
@@ -145,7 +146,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
 
     @wp.func
     def advance_free_nodes(
-        model: SheetModel, stepping: SheetStepping, state: SheetState, s: int, gamma: scalar, work: tally
+        model: SheetModel, stepping: SheetStepping, state: SheetState, s: int, step: int, gamma: scalar, work: tally
     ):
         # every free node under its internal forces, damping, gravity and the model's force terms
         dt = stepping.dt
@@ -161,7 +162,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
             f = internal_force(state, i, s) + f_damp + m * g
             if wp.static(applied.present):
                 f = f + applied.force(x, v, m)
-            x_new, v_new = update_node(x, v, f, m, dt)
+            x_new, v_new = update_node(x, v, f, kick_mass(m, step == 0), dt)  # every node starts at step 0
             sweep = (v + v_new) * (half * dt)
             work = work + work_on(state, i, s, sweep) + damping_work(-wp.dot(f_damp, sweep))
             if wp.static(applied.present):
@@ -207,7 +208,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         gamma = model.damping[s]
         if step < stepping.release_step:
             gamma = control.settle_damping[s]
-        work = advance_free_nodes(model, stepping, state, s, gamma, state.work[s])
+        work = advance_free_nodes(model, stepping, state, s, step, gamma, state.work[s])
         work = move_clamp(model, control, stepping, state, s, t_next, work)
         if step + 1 == stepping.release_step:
             work = tally()  # the energy budget is reported from the release on

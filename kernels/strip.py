@@ -59,10 +59,10 @@ def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels
     StripModel, StripState, law, tally = strip.StripModel, strip.StripState, strip.law, strip.tally
     drive = drives.build(scalar)
     StripControl, clamp_angle, held_free_end = drive.StripControl, drive.clamp_angle, drive.held_free_end
-    kick_mass = drive.kick_mass
+    starts_moving = drive.starts_moving
     stepping_types = integrators.build(scalar)
     Stepping = stepping_types.Stepping
-    update_node = stepping_types.schemes[scheme]
+    update_node, kick_mass = stepping_types.schemes[scheme], stepping_types.kick_mass
     accumulate_internal_forces = forces.build(scalar, terms).accumulate_internal_forces
     recorder = probes.build(scalar, terms)
     ProbeSettings, record_probes = recorder.ProbeSettings, recorder.record_probes
@@ -136,7 +136,9 @@ def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels
                 f = f + applied.force(x, v, m)
             if wp.static(implicit):
                 f = f + state.correction[i, s]
-            x_new, v_new = update_node(x, v, f, kick_mass(control, s, i, n - 1, step, stepping.release_step, m), dt)
+            x_new, v_new = update_node(
+                x, v, f, kick_mass(m, starts_moving(control, s, i, n - 1, step, stepping.release_step)), dt
+            )
             sweep = (v + v_new) * (half * dt)
             work = work + work_on(state, i, s, sweep) + damping_work(-wp.dot(f_damp, sweep))
             if wp.static(applied.present):
