@@ -1,4 +1,5 @@
-"""Stretching taken implicitly, for the ``imex`` scheme (docs/model.md §9.5).
+"""Stretching taken implicitly, for the ``imex`` and ``imex_trapezoidal`` schemes
+(docs/model.md §9.5, §9.5.1).
 
 The stiffest motion of a strip is the stretching of its segments (ω ≈ 4e4 1/s at
 h = 5 mm), which bounds an explicit step at ~5e-5 s while no 60 fps measurement resolves
@@ -21,6 +22,12 @@ segment):
 w_j = 1/m_j (0 for the clamp-edge node and for the held free end), solved in the strip's
 own thread by the Thomas algorithm (no pivoting needed). The corrections are stored per
 node and added to the explicit forces of the node update.
+
+``imex_trapezoidal`` takes the same stiffness by the trapezoidal rule (Newmark's average
+acceleration, β = 1/4): the correction is −¼ K (x^{n+1} − 2x^n + x^{n−1}) =
+−¼ K dt (v^{n+1} − v^n), v^n = (x^n − x^{n−1}) / dt, so the system above holds with k_i → k_i/4
+and v* → v* − v^n. It is second order and dissipates no stretching energy, where backward
+Euler damps the stretching modes within milliseconds.
 """
 
 import functools
@@ -34,12 +41,15 @@ from .types import precision
 
 
 @functools.cache
-def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
-    """``stretching_corrections`` for ``scalar`` and the model's force ``terms``."""
+def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -> SimpleNamespace:
+    """``stretching_corrections`` for ``scalar`` and the model's force ``terms``: linearised
+    backward Euler (``imex``), or with ``trapezoidal`` the trapezoidal rule
+    (``imex_trapezoidal``)."""
     types = precision(scalar)
     vec2, mat22 = types.vec2, types.mat22
     zero = scalar(0.0)
     one = scalar(1.0)
+    quarter = scalar(0.25)
     strip = structs.build(scalar, terms)
     StripModel, StripState = strip.StripModel, strip.StripState
     drive = drives.build(scalar)
@@ -115,6 +125,44 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
         return v + f * (dt / kick_mass(m, starts_moving(control, s, i, n - 1, step, stepping.release_step)))
 
     @wp.func
+    def start_velocity(
+        model: StripModel,
+        control: StripControl,
+        stepping: Stepping,
+        state: StripState,
+        s: int,
+        i: int,
+        step: int,
+        held: bool,
+        t_next: scalar,
+    ):
+        # v_{n-1/2} = (x_n - x_{n-1}) / dt: a free node's stored velocity, a prescribed node's
+        # displacement over the step before (at the first step, the held end's stored one).
+        dt = stepping.dt
+        n = model.n_nodes
+        x = state.position[i, s]
+        if i < model.n_clamped:
+            theta, rate = clamp_angle(control, s, t_next - scalar(2.0) * dt)
+            if theta == zero:
+                return (x - model.rest_position[i, s]) / dt
+            centre = control.rotation_centre[s]
+            c = wp.cos(theta)
+            sn = wp.sin(theta)
+            return (x - (centre + mat22(c, -sn, sn, c) * (model.rest_position[i, s] - centre))) / dt
+        if held and i == n - 1 and step > 0:
+            x_before, v_before = held_free_end(
+                control,
+                model.rest_position[model.n_clamped - 1, s],
+                model.rest_position[i, s],
+                s,
+                step - 1,
+                stepping.move_steps,
+                dt,
+            )
+            return (x - x_before) / dt
+        return state.velocity[i, s]
+
+    @wp.func
     def segment(state: StripState, i: int, s: int):
         # segment i's unit direction and length
         e = state.position[i + 1, s] - state.position[i, s]
@@ -143,14 +191,20 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
         # Forward elimination, segment by segment down the chain; row i couples ΔT_{i-1}, ΔT_i, ΔT_{i+1}.
         u, length = segment(state, first, s)
         w_start = end_velocity(model, control, stepping, state, s, first, step, held, gamma, t_next)
+        if wp.static(trapezoidal):
+            w_start = w_start - start_velocity(model, control, stepping, state, s, first, step, held, t_next)
         inv_start = inverse_mass(model, control, stepping, s, first, step, held)
         previous_c = zero  # c'_{i-1}
         previous_d = zero  # d'_{i-1}
         lower = zero  # coefficient of ΔT_{i-1} in row i
         for i in range(first, n - 1):
             w_end = end_velocity(model, control, stepping, state, s, i + 1, step, held, gamma, t_next)
+            if wp.static(trapezoidal):
+                w_end = w_end - start_velocity(model, control, stepping, state, s, i + 1, step, held, t_next)
             inv_end = inverse_mass(model, control, stepping, s, i + 1, step, held)
             k = axial * stiffness((length - l0) / l0, a)
+            if wp.static(trapezoidal):
+                k = k * quarter  # Newmark's average acceleration, β = 1/4
             upper = zero
             u_next = u
             length_next = length

@@ -16,7 +16,7 @@ import warp as wp
 
 from .types import precision
 
-IMPLICIT_STRETCHING = ("imex",)
+IMPLICIT_STRETCHING = ("imex", "imex_trapezoidal")
 """Schemes whose substep takes the segments' stretching implicitly (kernels/implicit_stretching.py)."""
 
 
@@ -63,5 +63,10 @@ def build(scalar: Any, dim: int = 2) -> SimpleNamespace:
     return SimpleNamespace(
         Stepping=Stepping,
         kick_mass=kick_mass,
-        schemes={"semi_implicit": semi_implicit_euler, "forward": forward_euler, "imex": semi_implicit_euler},
+        schemes={
+            "semi_implicit": semi_implicit_euler,
+            "forward": forward_euler,
+            "imex": semi_implicit_euler,
+            "imex_trapezoidal": semi_implicit_euler,
+        },
     )

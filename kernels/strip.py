@@ -68,7 +68,9 @@ def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels
     ProbeSettings, record_probes = recorder.ProbeSettings, recorder.record_probes
     perp = geometry.build(scalar).perp
     implicit = scheme in integrators.IMPLICIT_STRETCHING  # resolved when the kernel is generated (wp.static)
-    stretching_corrections = implicit_stretching.build(scalar, terms).stretching_corrections
+    stretching_corrections = implicit_stretching.build(
+        scalar, terms, trapezoidal=scheme == "imex_trapezoidal"
+    ).stretching_corrections
     channel = probes.STRIP_PROBES.channel
     work_on = fused.law_work(StripState, vec2, tally, channel("bending_elastic_work"), channel("hysteresis_work"))
     damping_work = fused.channel(scalar, tally, channel("damping_work"))

@@ -78,18 +78,22 @@ def test_imex_follows_the_driven_clamp():
     assert np.abs(total - total[0]).max() < 1e-2 * result.probe("kinetic", 0).max()
 
 
-def test_imex_reports_divergence_with_its_own_advice():
+@pytest.mark.parametrize("scheme", ["imex", "imex_trapezoidal"])
+def test_imex_reports_divergence_with_its_own_advice(scheme):
     # with stretching implicit, explicit bending limits dt (∝ h²): 2.5 mm at 1e-3 s
-    with pytest.raises(DivergenceError, match=r"try a smaller integrator.dt_s .*with imex, explicit bending limits"):
-        run("damped_swing", "imex", 1e-3, strip__spacing_mm=2.5, run__duration_s=0.3)
+    with pytest.raises(
+        DivergenceError, match=rf"try a smaller integrator.dt_s .*with {scheme}, explicit bending limits"
+    ):
+        run("damped_swing", scheme, 1e-3, strip__spacing_mm=2.5, run__duration_s=0.3)
 
 
-def test_imex_batches_are_independent_bitwise():
+@pytest.mark.parametrize("scheme", ["imex", "imex_trapezoidal"])
+def test_imex_batches_are_independent_bitwise(scheme):
     scenes = [
         wc.load_scene(
             "damped_swing",
             overrides(
-                integrator__scheme="imex",
+                integrator__scheme=scheme,
                 integrator__dt_s=1e-4,
                 run__duration_s=0.4,
                 damping__gamma_per_s=g,

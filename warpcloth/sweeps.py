@@ -19,6 +19,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -197,9 +198,16 @@ class SimulatedBatch:
     steps: int
 
 
-def strip_sweep_batch(scene_dicts: list[dict], device: str | None, frames: bool) -> SimulatedBatch:
-    """A batch of strips, one launch sequence; each strip's swing metrics."""
-    scenes = [scene_from_dict(d) for d in scene_dicts]
+def _as_scenes(items: list, from_dict: Callable[[dict], Any]) -> list:
+    # A batch run in this process is handed its scenes; one run on a Dask worker, their
+    # dicts (a scene's round trip through a dict costs as much Python as its summary).
+    return [item if isinstance(item, (Scene, SheetScene)) else from_dict(item) for item in items]
+
+
+def strip_sweep_batch(scene_dicts: list, device: str | None, frames: bool) -> SimulatedBatch:
+    """A batch of strips (scenes, or their dicts), one launch sequence; each strip's swing
+    metrics."""
+    scenes = _as_scenes(scene_dicts, scene_from_dict)
     # one thread per batch: the sweep already runs its batches on the cores
     result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
     ok = np.isfinite(result.probes[:, PROBE_FIELDS.index("tip_x")])
@@ -225,10 +233,11 @@ def marker_columns(n_markers: int) -> list[str]:
     return [f"marker_{k}_{axis}" for k in range(n_markers) for axis in "xyz"]
 
 
-def sheet_sweep_batch(scene_dicts: list[dict], device: str | None, frames: bool) -> SimulatedBatch:
-    """A batch of sheets in the same launches; each sheet's :func:`~warpcloth.metrics.sheet_metrics`
-    (NaN for a diverged one: what a sheet did before it diverged is no measurement of it)."""
-    scenes = [sheet_scene_from_dict(d) for d in scene_dicts]  # resolved: checked as the sweep was expanded
+def sheet_sweep_batch(scene_dicts: list, device: str | None, frames: bool) -> SimulatedBatch:
+    """A batch of sheets (scenes, or their dicts) in the same launches; each sheet's
+    :func:`~warpcloth.metrics.sheet_metrics` (NaN for a diverged one: what a sheet did
+    before it diverged is no measurement of it)."""
+    scenes = _as_scenes(scene_dicts, sheet_scene_from_dict)  # resolved: checked as the sweep was expanded
     built = build_sheets(scenes, device)
     result = simulate_sheets(
         built.model, built.control, built.solver, built.recorder, on_divergence="record", keep_frames=frames, threads=1
@@ -254,7 +263,7 @@ def run_batch(
     out_dir: str,
     batch: int,
     variants: list[int],
-    scene_dicts: list[dict],
+    scene_dicts: list,
     assignments: list[dict],
     device: str | None,
     frames: bool,
@@ -262,7 +271,8 @@ def run_batch(
     probes: str = "all",
 ) -> dict:
     """Simulate one batch of body ``kind`` (:mod:`warpcloth.bodies`) and write its files,
-    keeping ``probes`` of its probe series (runs in a Dask worker or in-process)."""
+    keeping ``probes`` of its probe series (runs in a Dask worker, given the scenes' dicts,
+    or in-process, given the scenes)."""
     init_warp_quietly()  # a worker process starts Warp afresh: no banner or notices in the results
     started = time.perf_counter()
     body = bodies.named(kind)
@@ -270,7 +280,7 @@ def run_batch(
     wall = time.perf_counter() - started
     kept = {
         "all": done.names,
-        "summary": body("summary_probes", body("scene_from_dict", scene_dicts[0])),
+        "summary": body("summary_probes", _as_scenes(scene_dicts[:1], body.hook("scene_from_dict"))[0]),
         "none": [],
     }[probes]
     columns: dict[str, list] = {"variant": [], "t": []} | {name: [] for name in kept}
@@ -392,13 +402,13 @@ def run_sweep(
         bar.update(info["n_variants"])
         bar.set_postfix_str(f"{steps / (time.perf_counter() - started):.3g} {body.steps}/s")
 
-    def task(b: int) -> tuple:
+    def task(b: int, portable: bool = False) -> tuple:
         ids = batches[b]
         return (
             str(out),
             b,
             ids,
-            [sweep.scenes[i].to_dict() for i in ids],
+            [sweep.scenes[i].to_dict() if portable else sweep.scenes[i] for i in ids],
             [sweep.assignments[i] for i in ids],
             device,
             frames,
@@ -443,14 +453,20 @@ def _here(device: str | None) -> bool:
 
 
 def _run_on_dask(
-    pending: list[int], task: Callable[[int], tuple], finished: Callable[[dict], None], scheduler: str, fingerprint: str
+    pending: list[int], task: Callable[..., tuple], finished: Callable[[dict], None], scheduler: str, fingerprint: str
 ) -> None:
     from dask.distributed import Client, as_completed
 
     client = Client(scheduler)
     try:
         futures = [
-            client.submit(run_batch, *task(b), key=f"warpcloth-{fingerprint[:12]}-batch-{b:04d}", pure=False, retries=2)
+            client.submit(
+                run_batch,
+                *task(b, portable=True),
+                key=f"warpcloth-{fingerprint[:12]}-batch-{b:04d}",
+                pure=False,
+                retries=2,
+            )
             for b in pending
         ]
         for future in as_completed(futures):

@@ -36,13 +36,26 @@ lower the stretching limit a little, §9.3), 0.8 of the linearised bending estim
 deflected strip is not straight; measured 12 % conservative on a hysteretic rotation and
 within 3 % on elastic ones, §9.6)."""
 
-ACCURATE_STEP_S = {"semi_implicit": None, "imex": 2e-4}
+ACCURATE_STEP_S = {"semi_implicit": None, "imex": 2e-4, "imex_trapezoidal": 5e-4}
 """The longest step each scheme is measured accurate at, where stability does not already
-bound it. imex: within 0.2 % of the tip's excursion of the dt = 1e-7 s solution at 2e-4 s
-on both bundled experiments with masing (0.106 % on the swing at h = 5 mm, 0.129 % on the
-rotation at 2.5 mm) and on the elastic swing (0.15 %); its error grows as dt
-(benchmarks/imex_defaults.py, benchmarks/RESULTS.md). semi_implicit: within 0.03 % at its
-stretching limit on both (stability binds first)."""
+bound it (the tip's largest error over its excursion against the dt = 1e-7 s solution;
+benchmarks/imex_defaults.py, benchmarks/RESULTS.md). imex: within 0.2 % at 2e-4 s on both
+bundled experiments with masing (0.106 % on the swing at h = 5 mm, 0.129 % on the rotation
+at 2.5 mm) and on the elastic swing (0.15 %); its error grows as dt. imex_trapezoidal:
+within 0.2 % at 5.56e-4 s on the elastic swing (0.185 %; masing 0.070 %), and on the
+rotation stability binds first; on the bundled sweep's corners with masing 0.038 % at
+4.17e-4 s. semi_implicit: within 0.01 % at its stretching
+limit on both (stability binds first)."""
+
+WITHOUT_RETURN_POINT_MEMORY = {
+    "imex_trapezoidal": (2.1e-4, "0.2 % on the damped swing and its sweep and 0.3 % on the rotation")
+}
+"""Where an implicit scheme that auto accepts for a hysteretic law without return-point
+memory (tagawa2003, dahl) is measured accurate with it, and how far from the converged
+solution it stays there (docs/model.md §9.5.1): imex_trapezoidal, on the bundled sweep's
+softest, most hysteretic variant, 0.17 % at 2.08e-4 s and 0.31 % at 4.17e-4 s; on the
+impulsive rotation 0.19–0.31 % at every step up to 2.08e-4 s. imex, whose floor is
+0.4–2 %, is refused."""
 
 
 @dataclass(frozen=True)
@@ -55,6 +68,7 @@ class StepChoice:
     accurate_s: float | None
     interval_s: float
     scheme: str
+    floor: str | None = None  # what a law without return-point memory keeps under this scheme
 
     def describe(self) -> str:
         """One line for the run's output."""
@@ -63,10 +77,12 @@ class StepChoice:
             f"{self.bound.seconds:.3e} s"
         )
         if self.accurate_s is not None:
-            held += f" and the {self.accurate_s:g} s up to which {self.scheme} is measured within 0.2 %"
+            held += f" and the {self.accurate_s:g} s up to which {self.scheme} is measured accurate"
+            held += "" if self.floor else " within 0.2 %"
+        floor = f"; {self.floor}" if self.floor else ""
         return (
             f"integrator.dt_s = auto: {self.dt_s:.4e} s = 1/{round(self.interval_s / self.dt_s)} of the probe "
-            f"interval, within {held} (docs/model.md §9.6)"
+            f"interval, within {held} (docs/model.md §9.6){floor}"
         )
 
 
@@ -81,16 +97,20 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
     scheme, interval = first.integrator.scheme, first.output_interval
     materials = [to_si(scene.material) for scene in scenes]
     response = cycle_response(materials)
+    floors = set()
     for scene, material, (_, loop) in zip(scenes, materials, response, strict=True):
         law = bending_law(material.bending_law)
+        if loop > 0 and not law.mesh_independent and scheme in WITHOUT_RETURN_POINT_MEMORY:
+            floors.add(law.name)
         if scheme == "imex" and loop > 0 and not law.mesh_independent:
             raise SceneError(
                 "integrator.dt_s",
                 f"auto has no accurate imex step for the {law.name} law of "
                 f"material {scene.material.name!r}: without return-point memory its loop keeps a "
                 "0.1–2 % floor against the converged solution that no dt removes (docs/model.md "
-                '§9.5); use bending_law = "masing", or scheme = "semi_implicit" with dt_s = '
-                '"auto"',
+                '§9.5); use scheme = "imex_trapezoidal" (within '
+                f"{WITHOUT_RETURN_POINT_MEMORY['imex_trapezoidal'][1]}, §9.5.1), "
+                'bending_law = "masing", or scheme = "semi_implicit" with dt_s = "auto"',
                 related=("integrator.scheme", "material.bending_law"),
             )
     bounds = []
@@ -107,7 +127,7 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
         bounds.append(bound)
     bound = min(bounds, key=lambda b: b.seconds * STABILITY_MARGIN[b.exact])
     margin = STABILITY_MARGIN[bound.exact]
-    accurate = ACCURATE_STEP_S.get(scheme)
+    accurate = WITHOUT_RETURN_POINT_MEMORY[scheme][0] if floors else ACCURATE_STEP_S.get(scheme)
     longest = min(bound.seconds * margin, accurate or math.inf, interval)
     dt = interval / math.ceil(interval / longest * (1 - 1e-12))
     return StepChoice(
@@ -117,6 +137,12 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
         accurate if accurate is not None and accurate < bound.seconds * margin else None,
         interval,
         scheme,
+        (
+            f"with the {', '.join(sorted(floors))} law (no return-point memory) {scheme} is measured within "
+            f"{WITHOUT_RETURN_POINT_MEMORY[scheme][1]} of the converged solution (docs/model.md §9.5.1)"
+        )
+        if floors
+        else None,
     )
 
 

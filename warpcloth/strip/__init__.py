@@ -29,6 +29,7 @@ from .solvers import (
     FusedStripSolver,
     ImexSolver,
     SemiImplicitEulerSolver,
+    TrapezoidalImexSolver,
 )
 from .state import StripState
 
@@ -49,6 +50,7 @@ __all__ = [
     "ForwardEulerSolver",
     "Grip",
     "ImexSolver",
+    "TrapezoidalImexSolver",
     "LawParameters",
     "MaterialSI",
     "Model",

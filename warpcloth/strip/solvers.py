@@ -201,9 +201,21 @@ class ImexSolver(FusedStripSolver):
         )
 
 
+class TrapezoidalImexSolver(ImexSolver):
+    """imex with the stretching by the trapezoidal rule (Newmark's average acceleration,
+    β = 1/4; kernels/implicit_stretching.py): second order and without the backward
+    Euler's damping of the stretching modes, so a hysteretic law without return-point
+    memory keeps far less of imex's floor (docs/model.md §9.5.1)."""
+
+    scheme = "imex_trapezoidal"
+    label = "stretching implicit by the trapezoidal rule, the rest symplectic Euler"
+    advice = " (with imex_trapezoidal, explicit bending limits dt: ∝ h², docs/model.md §9.5)"
+
+
 SOLVERS: dict[str, type[FusedStripSolver]] = {
     SemiImplicitEulerSolver.scheme: SemiImplicitEulerSolver,
     ForwardEulerSolver.scheme: ForwardEulerSolver,
     ImexSolver.scheme: ImexSolver,
+    TrapezoidalImexSolver.scheme: TrapezoidalImexSolver,
 }
 """Solver class of each ``integrator.scheme``."""
