@@ -56,7 +56,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
     StripControl, clamp_angle, held_free_end = drive.StripControl, drive.clamp_angle, drive.held_free_end
     starts_moving = drive.starts_moving
     stepping_types = integrators.build(scalar)
-    Stepping, kick_mass = stepping_types.Stepping, stepping_types.kick_mass
+    Stepping, kick_mass = stepping_types.Stepping, stepping_types.kick_mass["imex"]
     stiffness = tensile.build(scalar).stiffness_per_width
     internal_force = fused.internal_forces(StripState)
     applied = force_terms.build(terms, scalar, vec2, strip.tally, structs.STRIP_CHANNELS)

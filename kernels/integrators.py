@@ -49,6 +49,11 @@ def build(scalar: Any, dim: int = 2) -> SimpleNamespace:
         return m
 
     @wp.func
+    def whole_kick_mass(m: scalar, starts: bool):
+        # Forward Euler's velocities live at the steps themselves: every kick is whole.
+        return m
+
+    @wp.func
     def semi_implicit_euler(x: vec, v: vec, f: vec, m: scalar, dt: scalar):
         # Symplectic: the position moves with the updated velocity.
         v_new = v + f * (dt / m)
@@ -62,7 +67,12 @@ def build(scalar: Any, dim: int = 2) -> SimpleNamespace:
 
     return SimpleNamespace(
         Stepping=Stepping,
-        kick_mass=kick_mass,
+        kick_mass={
+            "semi_implicit": kick_mass,
+            "forward": whole_kick_mass,
+            "imex": kick_mass,
+            "imex_trapezoidal": kick_mass,
+        },
         schemes={
             "semi_implicit": semi_implicit_euler,
             "forward": forward_euler,

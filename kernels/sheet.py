@@ -98,7 +98,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
     internal_force = fused.internal_forces(SheetState)
     applied = force_terms.build(terms, scalar, vec3, tally, sheet_structs.SHEET_CHANNELS)
     stepping_types = integrators.build(scalar, 3)
-    update_node, kick_mass = stepping_types.schemes[scheme], stepping_types.kick_mass
+    update_node, kick_mass = stepping_types.schemes[scheme], stepping_types.kick_mass[scheme]
 
     @wp.struct
     class SheetProbeSettings:
