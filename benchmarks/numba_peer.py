@@ -871,7 +871,7 @@ def warpcloth_tips(scenes: list[wc.Scene]) -> tuple[np.ndarray, str]:
     and what its reversal memory held."""
     result = wc.simulate(scenes, keep_frames=False, on_divergence="record", threads=2)
     tips = result.probe("tip_x").copy()
-    tips[:, [d["strip"] for d in result.diverged]] = math.inf
+    tips[:, [d.strip for d in result.diverged]] = math.inf
     memory = result.reversal_memory
     held = (
         (f"; deepest {np.max(memory['deepest'])} of {memory['capacity']}, {np.sum(memory['overflows'])} overflows")
@@ -1099,7 +1099,7 @@ def main() -> None:
         "up first)"
     )
     with tempfile.TemporaryDirectory() as tmp:
-        for scheme in ("semi_implicit", "imex"):
+        for scheme in ("semi_implicit", "imex", "imex_trapezoidal"):
             wc.run_sweep(
                 sweep_scenes(4, 0.01, [*law, *stepping(scheme, 1e-5)])[0], Path(tmp) / scheme, workers=min(2, cores)
             )
@@ -1109,7 +1109,7 @@ def main() -> None:
     if "agreement" in args.parts:
         with tempfile.TemporaryDirectory() as tmp:
             start = time.perf_counter()
-            wc.run_sweep(sweep, Path(tmp) / "sweep", workers=min(2, cores))
+            wc.run_sweep(sweep, Path(tmp) / "sweep", workers=min(2, cores), probes="all")  # tip_y compared too
             warp_sweep = time.perf_counter() - start
             numba.set_num_threads(min(2, cores))
             start = time.perf_counter()
