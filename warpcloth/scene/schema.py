@@ -10,6 +10,7 @@ bundled material file ``wool90-nylon10``: its numbers live there only.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import importlib.resources
 import tomllib
 import typing
@@ -391,4 +392,11 @@ def choice_fields() -> list[str]:
 
 def field_types(cls: type) -> dict[str, Any]:
     """The resolved type of every field of the dataclass ``cls``."""
+    return dict(_resolved_hints(cls))
+
+
+@functools.cache
+def _resolved_hints(cls: type) -> dict[str, Any]:
+    # resolving a class's string annotations compiles each one: once per class, not per
+    # scene parsed (a 10 000-variant sweep parses 10 000 scenes)
     return typing.get_type_hints(cls)
