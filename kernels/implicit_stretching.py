@@ -142,7 +142,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
         n = model.n_nodes
         x = state.position[i, s]
         if i < model.n_clamped:
-            theta, rate = clamp_angle(control, s, t_next - scalar(2.0) * dt)
+            theta, _rate = clamp_angle(control, s, t_next - scalar(2.0) * dt)
             if theta == zero:
                 return (x - model.rest_position[i, s]) / dt
             centre = control.rotation_centre[s]
@@ -150,7 +150,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
             sn = wp.sin(theta)
             return (x - (centre + mat22(c, -sn, sn, c) * (model.rest_position[i, s] - centre))) / dt
         if held and i == n - 1 and step > 0:
-            x_before, v_before = held_free_end(
+            x_before, _v_before = held_free_end(
                 control,
                 model.rest_position[model.n_clamped - 1, s],
                 model.rest_position[i, s],
