@@ -50,6 +50,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
     zero = scalar(0.0)
     one = scalar(1.0)
     quarter = scalar(0.25)
+    half = scalar(0.5)
     strip = structs.build(scalar, terms)
     StripModel, StripState = strip.StripModel, strip.StripState
     drive = drives.build(scalar)
@@ -191,7 +192,12 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
         # Forward elimination, segment by segment down the chain; row i couples ΔT_{i-1}, ΔT_i, ΔT_{i+1}.
         u, length = segment(state, first, s)
         w_start = end_velocity(model, control, stepping, state, s, first, step, held, gamma, t_next)
-        if wp.static(trapezoidal):
+        # Newmark's start (step 0, every node's velocity known at t_0): its correction is
+        # −½ K (x¹ − x⁰), which is this system with k/2 and v* itself; −¼ K (x¹ − x⁰) would
+        # start a strip that is not in equilibrium with its stretching modes up to 3.7× too
+        # large, and nothing here damps them.
+        starting = step == 0
+        if wp.static(trapezoidal) and not starting:
             w_start = w_start - start_velocity(model, control, stepping, state, s, first, step, held, t_next)
         inv_start = inverse_mass(model, control, stepping, s, first, step, held)
         previous_c = zero  # c'_{i-1}
@@ -199,12 +205,12 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
         lower = zero  # coefficient of ΔT_{i-1} in row i
         for i in range(first, n - 1):
             w_end = end_velocity(model, control, stepping, state, s, i + 1, step, held, gamma, t_next)
-            if wp.static(trapezoidal):
+            if wp.static(trapezoidal) and not starting:
                 w_end = w_end - start_velocity(model, control, stepping, state, s, i + 1, step, held, t_next)
             inv_end = inverse_mass(model, control, stepping, s, i + 1, step, held)
             k = axial * stiffness((length - l0) / l0, a)
             if wp.static(trapezoidal):
-                k = k * quarter  # Newmark's average acceleration, β = 1/4
+                k = k * wp.where(starting, half, quarter)  # Newmark's average acceleration, β = 1/4
             upper = zero
             u_next = u
             length_next = length
