@@ -46,7 +46,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
     backward Euler (``imex``), or with ``trapezoidal`` the trapezoidal rule
     (``imex_trapezoidal``)."""
     types = precision(scalar)
-    vec2, mat22 = types.vec2, types.mat22
+    vec2, vec4, mat22 = types.vec2, types.vec4, types.mat22
     zero = scalar(0.0)
     one = scalar(1.0)
     quarter = scalar(0.25)
@@ -222,7 +222,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
             pivot = diagonal - lower * previous_c
             previous_c = upper / pivot
             previous_d = (rhs - lower * previous_d) / pivot
-            state.elimination[i, s] = vec2(previous_c, previous_d)
+            state.elimination[i, s] = vec4(previous_c, previous_d, u[0], u[1])  # u: the back pass's too
             lower = upper  # the matrix is symmetric: row i+1's lower is row i's upper
             u = u_next
             length = length_next
@@ -235,7 +235,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
             i = n - 2 - step_up
             row = state.elimination[i, s]
             tension = row[1] - row[0] * tension_below
-            u, _length = segment(state, i, s)
+            u = vec2(row[2], row[3])
             state.correction[i + 1, s] = tension_below * u_below - tension * u
             tension_below = tension
             u_below = u

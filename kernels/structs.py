@@ -55,7 +55,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SimpleNamespace:
         force_elastic: wp.array2d(dtype=vec2)
         force_hysteretic: wp.array2d(dtype=vec2)
         correction: wp.array2d(dtype=vec2)  # scratch, imex: the implicit tension's force on each node
-        elimination: wp.array2d(dtype=vec2)  # scratch, imex: [segment, strip] (c', d') of the tridiagonal solve
+        elimination: wp.array2d(dtype=vec4)  # scratch, imex: [segment, strip] c', d' and the segment's direction
         hinge: wp.array2d(dtype=law.Memory)  # [hinge, strip], the bending law's memory
         history: law.History  # the open reversal points of a law with return-point memory
         work: wp.array(dtype=tally)  # the work channels of kernels/probes.py STRIP_PROBES (+ force terms'), J

@@ -71,12 +71,12 @@ def builder_for(scenes: Sequence[Scene]) -> StripBuilder:
     check_batch(scenes)
     first = scenes[0]
     # the model's per-node arrays (positions, velocities, three force parts, imex's two
-    # scratch arrays, rest positions, hinge memory, rest curvature and grip factors: ~27
+    # scratch arrays, rest positions, hinge memory, rest curvature and grip factors: ~29
     # numbers of 8 B per node and strip), before any exists
     remembers = any(bending_law(scene.material.bending_law).uses_reversal_memory for scene in scenes)
     history = 16 * (first.integrator.reversal_memory + 1) * first.n_nodes if remembers else 0
     check_memory(
-        (216 * first.n_nodes + history) * len(scenes),
+        (232 * first.n_nodes + history) * len(scenes),
         f"the state of {len(scenes)} strip(s) of {first.n_nodes} nodes",
         "use a coarser strip.spacing_mm, fewer strips per batch"
         + (" or a smaller integrator.reversal_memory" if remembers else ""),

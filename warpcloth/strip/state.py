@@ -91,7 +91,7 @@ class StripState:
         s.force_elastic = nodes()
         s.force_hysteretic = nodes()
         s.correction = nodes()
-        s.elimination = nodes()
+        s.elimination = wp.zeros((n, b), dtype=t.vec4, device=model.device)
         s.hinge = wp.zeros((n_hinges, b), dtype=model.structs.law.Memory, device=model.device)
         s.history = allocate_reversal_memory(
             model.structs.law.History, model.reversal_memory, n_hinges, b, t.vec2, model.device
