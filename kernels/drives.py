@@ -24,7 +24,7 @@ MAX_DEGREE = 4
 def build(scalar: Any) -> SimpleNamespace:
     """The ``StripControl`` struct and the drive functions for ``scalar``."""
     types = precision(scalar)
-    vec2, vec5 = types.vec2, types.vec5
+    vec2, vec5, mat22 = types.vec2, types.vec5, types.mat22
     zero = scalar(0.0)
     one = scalar(1.0)
     # π in the kernel's precision, formed here: 2.0 * wp.pi inside a Warp function is a
@@ -87,6 +87,19 @@ def build(scalar: Any) -> SimpleNamespace:
         )
 
     @wp.func
+    def clamped_position(control: StripControl, rest: vec2, s: int, t: scalar):
+        # Where a clamp node resting at ``rest`` is at time t: the rigid rotation about the
+        # rotation centre, and exactly its rest position while θ = 0 (centre + (X − centre)
+        # would move it by rounding).
+        theta, _rate = clamp_angle(control, s, t)
+        if theta == zero:
+            return rest
+        centre = control.rotation_centre[s]
+        c = wp.cos(theta)
+        sn = wp.sin(theta)
+        return centre + mat22(c, -sn, sn, c) * (rest - centre)
+
+    @wp.func
     def held_free_end(
         control: StripControl, root: vec2, rest_tip: vec2, s: int, step: int, move_steps: int, dt: scalar
     ):
@@ -129,5 +142,6 @@ def build(scalar: Any) -> SimpleNamespace:
         starts_moving=starts_moving,
         piecewise_polynomial=piecewise_polynomial,
         clamp_angle=clamp_angle,
+        clamped_position=clamped_position,
         held_free_end=held_free_end,
     )

@@ -46,7 +46,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
     backward Euler (``imex``), or with ``trapezoidal`` the trapezoidal rule
     (``imex_trapezoidal``)."""
     types = precision(scalar)
-    vec2, vec4, mat22 = types.vec2, types.vec4, types.mat22
+    vec2, vec4 = types.vec2, types.vec4
     zero = scalar(0.0)
     one = scalar(1.0)
     quarter = scalar(0.25)
@@ -54,7 +54,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
     strip = structs.build(scalar, terms)
     StripModel, StripState = strip.StripModel, strip.StripState
     drive = drives.build(scalar)
-    StripControl, clamp_angle, held_free_end = drive.StripControl, drive.clamp_angle, drive.held_free_end
+    StripControl, clamped_position, held_free_end = drive.StripControl, drive.clamped_position, drive.held_free_end
     starts_moving = drive.starts_moving
     stepping_types = integrators.build(scalar)
     Stepping, kick_mass = stepping_types.Stepping, stepping_types.kick_mass["imex"]
@@ -81,6 +81,20 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
         return one / kick_mass(node_mass(model, i, s), starts_moving(control, s, i, n - 1, step, stepping.release_step))
 
     @wp.func
+    def held_end(model: StripModel, control: StripControl, stepping: Stepping, s: int, level: int):
+        # the held free end's position at step ``level`` of its carried path
+        x, _v = held_free_end(
+            control,
+            model.rest_position[model.n_clamped - 1, s],
+            model.rest_position[model.n_nodes - 1, s],
+            s,
+            level,
+            stepping.move_steps,
+            stepping.dt,
+        )
+        return x
+
+    @wp.func
     def end_velocity(
         model: StripModel,
         control: StripControl,
@@ -100,24 +114,9 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
         n = model.n_nodes
         x = state.position[i, s]
         if i < model.n_clamped:
-            theta, rate = clamp_angle(control, s, t_next)
-            if theta == zero:
-                return (model.rest_position[i, s] - x) / dt
-            centre = control.rotation_centre[s]
-            c = wp.cos(theta)
-            sn = wp.sin(theta)
-            return (centre + mat22(c, -sn, sn, c) * (model.rest_position[i, s] - centre) - x) / dt
+            return (clamped_position(control, model.rest_position[i, s], s, t_next) - x) / dt
         if held and i == n - 1:
-            x_new, v_new = held_free_end(
-                control,
-                model.rest_position[model.n_clamped - 1, s],
-                model.rest_position[i, s],
-                s,
-                step + 1,
-                stepping.move_steps,
-                dt,
-            )
-            return (x_new - x) / dt
+            return (held_end(model, control, stepping, s, step + 1) - x) / dt
         m = node_mass(model, i, s)
         v = state.velocity[i, s]
         f = internal_force(state, i, s) - gamma * m * v + m * vec2(zero, -model.gravity)
@@ -140,27 +139,11 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), trapezoidal: bool = False) -
         # v_{n-1/2} = (x_n - x_{n-1}) / dt: a free node's stored velocity, a prescribed node's
         # displacement over the step before (at the first step, the held end's stored one).
         dt = stepping.dt
-        n = model.n_nodes
         x = state.position[i, s]
         if i < model.n_clamped:
-            theta, _rate = clamp_angle(control, s, t_next - scalar(2.0) * dt)
-            if theta == zero:
-                return (x - model.rest_position[i, s]) / dt
-            centre = control.rotation_centre[s]
-            c = wp.cos(theta)
-            sn = wp.sin(theta)
-            return (x - (centre + mat22(c, -sn, sn, c) * (model.rest_position[i, s] - centre))) / dt
-        if held and i == n - 1 and step > 0:
-            x_before, _v_before = held_free_end(
-                control,
-                model.rest_position[model.n_clamped - 1, s],
-                model.rest_position[i, s],
-                s,
-                step - 1,
-                stepping.move_steps,
-                dt,
-            )
-            return (x - x_before) / dt
+            return (x - clamped_position(control, model.rest_position[i, s], s, t_next - scalar(2.0) * dt)) / dt
+        if held and i == model.n_nodes - 1 and step > 0:
+            return (x - held_end(model, control, stepping, s, step - 1)) / dt
         return state.velocity[i, s]
 
     @wp.func

@@ -156,7 +156,7 @@ def test_the_papers_law_runs_imex_trapezoidal_at_auto_at_a_shorter_step():
         "which has no return-point memory (docs/model.md §9.5.1, §9.6)" in choice.describe()
     )
     masing = choose_step([wc.load_scene("damped_swing", overrides(integrator__scheme="imex_trapezoidal"))])
-    assert masing.floor is None and math.isclose(masing.dt_s, masing.interval_s / 4)
+    assert masing.memoryless_laws is None and math.isclose(masing.dt_s, masing.interval_s / 4)
     assert "the 0.0005 s up to which imex_trapezoidal is measured within 0.2 % (docs" in masing.describe()
     with pytest.raises(SceneError, match=r'use scheme = "imex_trapezoidal"'):
         wc.load_scene("damped_swing_paper", overrides(integrator__dt_s="auto", integrator__scheme="imex"))

@@ -67,7 +67,7 @@ class StepChoice:
     accurate_s: float | None
     interval_s: float
     scheme: str
-    floor: str | None = None  # the laws without return-point memory that set a shorter accurate step
+    memoryless_laws: str | None = None  # laws without return-point memory that set a shorter accurate step
 
     def describe(self) -> str:
         """One line for the run's output."""
@@ -77,9 +77,9 @@ class StepChoice:
         )
         if self.accurate_s is not None:
             held += f" and the {self.accurate_s:g} s up to which {self.scheme} is measured within 0.2 %"
-            if self.floor:
-                held += f" with the {self.floor} law, which has no return-point memory"
-        sections = "§9.5.1, §9.6" if self.floor else "§9.6"
+            if self.memoryless_laws:
+                held += f" with the {self.memoryless_laws} law, which has no return-point memory"
+        sections = "§9.5.1, §9.6" if self.memoryless_laws else "§9.6"
         return (
             f"integrator.dt_s = auto: {self.dt_s:.4e} s = 1/{round(self.interval_s / self.dt_s)} of the probe "
             f"interval, within {held} (docs/model.md {sections})"
@@ -97,11 +97,11 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
     scheme, interval = first.integrator.scheme, first.output_interval
     materials = [to_si(scene.material) for scene in scenes]
     response = cycle_response(materials)
-    floors = set()  # the laws without return-point memory among the scenes'
+    memoryless = set()  # the scenes' hysteretic laws without return-point memory
     for scene, material, (_, loop) in zip(scenes, materials, response, strict=True):
         law = bending_law(material.bending_law)
         if loop > 0 and not law.mesh_independent and scheme in WITHOUT_RETURN_POINT_MEMORY:
-            floors.add(law.name)
+            memoryless.add(law.name)
         if scheme == "imex" and loop > 0 and not law.mesh_independent:
             raise SceneError(
                 "integrator.dt_s",
@@ -126,7 +126,7 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
         bounds.append(bound)
     bound = min(bounds, key=lambda b: b.seconds * STABILITY_MARGIN[b.exact])
     margin = STABILITY_MARGIN[bound.exact]
-    accurate = WITHOUT_RETURN_POINT_MEMORY[scheme] if floors else ACCURATE_STEP_S.get(scheme)
+    accurate = WITHOUT_RETURN_POINT_MEMORY[scheme] if memoryless else ACCURATE_STEP_S.get(scheme)
     longest = min(bound.seconds * margin, accurate or math.inf, interval)
     dt = interval / math.ceil(interval / longest * (1 - 1e-12))
     return StepChoice(
@@ -136,7 +136,7 @@ def choose_step(scenes: Sequence[Scene]) -> StepChoice:
         accurate if accurate is not None and accurate < bound.seconds * margin else None,
         interval,
         scheme,
-        ", ".join(sorted(floors)) or None,
+        ", ".join(sorted(memoryless)) or None,
     )
 
 
