@@ -29,7 +29,7 @@ HOOKS = {
     "batch_key": "a scene → what variants sharing one launch sequence must agree on",
     "build": "(scenes, device=None, terms=()) → the batch's model, control, solver and recorder",
     "simulate": "(scenes, **options) → RunResult: the batch run, streamed to out= when given",
-    "sweep_batch": "(scene dicts, device, frames) → a sweep batch's probe store rows and summary",
+    "sweep_batch": "(scenes or their dicts, device, frames) → a sweep batch's probe store rows and summary",
     "warm": "(scenes, device) → compile the kernels a sweep's workers will load",
     "sweep_steps": "a sweep → the lines `warpcloth sweep` prints of the steps auto chose",
     "sweep_warnings": "a sweep's summary → the warnings `warpcloth sweep` prints of it",

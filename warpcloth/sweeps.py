@@ -204,10 +204,10 @@ def _as_scenes(items: list, from_dict: Callable[[dict], Any]) -> list:
     return [item if isinstance(item, (Scene, SheetScene)) else from_dict(item) for item in items]
 
 
-def strip_sweep_batch(scene_dicts: list, device: str | None, frames: bool) -> SimulatedBatch:
+def strip_sweep_batch(items: list, device: str | None, frames: bool) -> SimulatedBatch:
     """A batch of strips (scenes, or their dicts), one launch sequence; each strip's swing
     metrics."""
-    scenes = _as_scenes(scene_dicts, scene_from_dict)
+    scenes = _as_scenes(items, scene_from_dict)
     # one thread per batch: the sweep already runs its batches on the cores
     result = simulate(scenes, device=device, on_divergence="record", keep_frames=frames, threads=1)
     ok = np.isfinite(result.probes[:, PROBE_FIELDS.index("tip_x")])
@@ -233,11 +233,11 @@ def marker_columns(n_markers: int) -> list[str]:
     return [f"marker_{k}_{axis}" for k in range(n_markers) for axis in "xyz"]
 
 
-def sheet_sweep_batch(scene_dicts: list, device: str | None, frames: bool) -> SimulatedBatch:
+def sheet_sweep_batch(items: list, device: str | None, frames: bool) -> SimulatedBatch:
     """A batch of sheets (scenes, or their dicts) in the same launches; each sheet's
     :func:`~warpcloth.metrics.sheet_metrics` (NaN for a diverged one: what a sheet did
     before it diverged is no measurement of it)."""
-    scenes = _as_scenes(scene_dicts, sheet_scene_from_dict)  # resolved: checked as the sweep was expanded
+    scenes = _as_scenes(items, sheet_scene_from_dict)  # resolved: checked as the sweep was expanded
     built = build_sheets(scenes, device)
     result = simulate_sheets(
         built.model, built.control, built.solver, built.recorder, on_divergence="record", keep_frames=frames, threads=1
@@ -263,7 +263,7 @@ def run_batch(
     out_dir: str,
     batch: int,
     variants: list[int],
-    scene_dicts: list,
+    scenes: list,
     assignments: list[dict],
     device: str | None,
     frames: bool,
@@ -276,11 +276,11 @@ def run_batch(
     init_warp_quietly()  # a worker process starts Warp afresh: no banner or notices in the results
     started = time.perf_counter()
     body = bodies.named(kind)
-    done = body("sweep_batch", scene_dicts, device, frames)
+    done = body("sweep_batch", scenes, device, frames)
     wall = time.perf_counter() - started
     kept = {
         "all": done.names,
-        "summary": body("summary_probes", _as_scenes(scene_dicts[:1], body.hook("scene_from_dict"))[0]),
+        "summary": body("summary_probes", _as_scenes(scenes[:1], body.hook("scene_from_dict"))[0]),
         "none": [],
     }[probes]
     columns: dict[str, list] = {"variant": [], "t": []} | {name: [] for name in kept}
