@@ -374,6 +374,23 @@ def test_material_file_round_trip_and_scene_by_relative_path(tmp_path, monkeypat
         wc.load_scene(scene_dir / "scene.toml")
 
 
+def test_a_material_file_parsed_once_is_still_read_as_it_stands(tmp_path):
+    # a sweep reads its material file once per variant and parses it once: the parse is
+    # keyed by the file's text, so an edit between two reads is seen, and a caller that
+    # changes what it got changes no later read
+    _fit, path = fitted_material_file(tmp_path / "wool.toml")
+    first = read_material_file(path)
+    first["material"]["name"] = "changed by a caller"
+    assert read_material_file(path)["material"]["name"] == "wool-fitted"
+    write(path, path.read_text().replace('name = "wool-fitted"', 'name = "wool-edited"'))
+    assert read_material_file(path)["material"]["name"] == "wool-edited"
+    write(path, path.read_text().replace('name = "wool-edited"', "name = 3"))
+    with pytest.raises(SceneError, match="material.name"):
+        read_material_file(path)  # a refusal is not remembered as a parse
+    with pytest.raises(SceneError, match="material.name"):
+        read_material_file(path)
+
+
 def test_scene_by_bundled_name_set_override_and_sweep():
     assert {"wool90-nylon10", "cotton-broadcloth", "polyester-taffeta"} <= set(bundled_materials())
     for name in bundled_materials():
