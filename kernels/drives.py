@@ -43,6 +43,10 @@ def build(scalar: Any) -> SimpleNamespace:
         n_segments: wp.array(dtype=int)
         rotation_centre: wp.array(dtype=vec2)  # m, absolute
         hold_target: wp.array(dtype=vec2)  # free-end held position, m, absolute
+        # where the carried path ends and its velocity there (``reach_hold``): the held end
+        # after the carry, evaluated once, as the path's own arithmetic gives it
+        held_position: wp.array(dtype=vec2)
+        held_velocity: wp.array(dtype=vec2)
         settle_damping: wp.array(dtype=scalar)  # γ while held, 1/s
         hold_free_end: wp.array(dtype=int)  # 1: the free end is carried and held; 0: it settles freely
 
@@ -100,24 +104,16 @@ def build(scalar: Any) -> SimpleNamespace:
         return centre + mat22(c, -sn, sn, c) * (rest - centre)
 
     @wp.func
-    def held_free_end(
-        control: StripControl, root: vec2, rest_tip: vec2, s: int, step: int, move_steps: int, dt: scalar
-    ):
+    def carried_free_end(control: StripControl, root: vec2, rest_tip: vec2, s: int, p: scalar, dp: scalar):
         # The free end is carried from its hanging position to the hold target along a
         # polar path about the clamp's lowest point (radius and angle blended by a C²
-        # smootherstep), so no segment is stretched on the way; then it stays there.
+        # smootherstep p, its rate dp), so no segment is stretched on the way.
         start = rest_tip - root
         target = control.hold_target[s] - root
         r0 = wp.length(start)
         r1 = wp.length(target)
         a0 = wp.atan2(start[1], start[0])
         a1 = wp.atan2(target[1], target[0])
-        p = one
-        dp = zero
-        if step < move_steps:
-            x = scalar(step) / scalar(move_steps)
-            p = x * x * x * (x * (x * scalar(6.0) - scalar(15.0)) + scalar(10.0))
-            dp = scalar(30.0) * x * x * (x - one) * (x - one) / (scalar(move_steps) * dt)
         turn = a1 - a0
         if turn > pi:  # the short way round, never through the clamp
             turn = turn - two_pi
@@ -129,6 +125,30 @@ def build(scalar: Any) -> SimpleNamespace:
         position = root + r * radial
         velocity = dp * ((r1 - r0) * radial + r * turn * perp(radial))
         return position, velocity
+
+    @wp.func
+    def held_free_end(
+        control: StripControl, root: vec2, rest_tip: vec2, s: int, step: int, move_steps: int, dt: scalar
+    ):
+        # The free end at ``step`` of its carry, then held where the path ends: that point
+        # is the path's at p = 1, stored once (two square roots, two arctangents, a cosine
+        # and a sine at every step of the hold otherwise, three times a step under imex).
+        if step < move_steps:
+            x = scalar(step) / scalar(move_steps)
+            p = x * x * x * (x * (x * scalar(6.0) - scalar(15.0)) + scalar(10.0))
+            dp = scalar(30.0) * x * x * (x - one) * (x - one) / (scalar(move_steps) * dt)
+            return carried_free_end(control, root, rest_tip, s, p, dp)
+        return control.held_position[s], control.held_velocity[s]
+
+    @wp.kernel(module="unique", enable_backward=False)
+    def reach_hold(rest_position: wp.array2d(dtype=vec2), n_clamped: int, control: StripControl):
+        """Store where each strip's carried path ends, and the velocity there (0, its
+        zeros signed as the path's arithmetic signs them)."""
+        s = wp.tid()
+        n = rest_position.shape[0]
+        x, v = carried_free_end(control, rest_position[n_clamped - 1, s], rest_position[n - 1, s], s, one, zero)
+        control.held_position[s] = x
+        control.held_velocity[s] = v
 
     @wp.func
     def starts_moving(control: StripControl, s: int, i: int, last: int, step: int, release_step: int):
@@ -144,4 +164,5 @@ def build(scalar: Any) -> SimpleNamespace:
         clamp_angle=clamp_angle,
         clamped_position=clamped_position,
         held_free_end=held_free_end,
+        reach_hold=reach_hold,
     )

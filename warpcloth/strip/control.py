@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
+import warp as wp
 
 from warpcloth.kernels import MAX_DEGREE, drives
 
@@ -44,4 +45,12 @@ class StripControl:
         c.hold_target = model.array(self.hold_target, t.vec2)
         c.settle_damping = model.array(np.array([s.settle_damping for s in strips]))
         c.hold_free_end = model.array(np.array([s.hold_free_end for s in strips], dtype=np.int32), int)
+        c.held_position = model.array(np.zeros((b, 2)), t.vec2)
+        c.held_velocity = model.array(np.zeros((b, 2)), t.vec2)
+        wp.launch(
+            drives.build(model.scalar).reach_hold,
+            dim=b,
+            inputs=[model.struct.rest_position, model.n_clamped, c],
+            device=model.device,
+        )
         self.struct = c
