@@ -11,12 +11,19 @@ vectorise ([node, strip] arrays hold a group's strips side by side). Both end bi
 same (checked). Each way runs with the hysteretic law and without it (elastic bending
 only), which tells what a lane rewrite of the fused kernel could gain and what stands in
 its way. One CPU thread; results in benchmarks/RESULTS.md.
+
+Then ``exp`` itself: Warp's CPU compiler leaves it a scalar library call, but a kernel can
+call glibc's vector exp (libmvec: 8 float64 a call with AVX-512, 4 with AVX2) through
+``wp.func_native`` and a function pointer. The second table times one exp each way and
+gives their largest relative difference (libmvec promises 4 ulp).
 """
 
 import argparse
+import ctypes
 import logging
 import platform
 import time
+from pathlib import Path
 
 import numpy as np
 import warp as wp
@@ -134,6 +141,72 @@ def kernels(lanes: int, with_law: bool) -> tuple:
     return per_strip, in_lanes
 
 
+def vector_exp(width: int) -> tuple:
+    """A Warp function calling libmvec's ``width``-wide exp (its address passed in), and the address."""
+    library = ctypes.CDLL("libmvec.so.1", mode=ctypes.RTLD_GLOBAL)
+    symbol = {8: "_ZGVeN8v_exp", 4: "_ZGVdN4v_exp"}[width]
+    address = ctypes.cast(getattr(library, symbol), ctypes.c_void_p).value
+    lanes = wp.types.vector(width, f64)
+    snippet = f"""
+    typedef double lanes_t __attribute__((vector_size({8 * width})));
+    lanes_t a;
+    for (int k = 0; k < {width}; ++k) a[k] = x.c[k];
+    lanes_t r = ((lanes_t(*)(lanes_t))function)(a);
+    wp::vec_t<{width}, double> out;
+    for (int k = 0; k < {width}; ++k) out.c[k] = r[k];
+    return out;
+    """
+
+    @wp.func_native(snippet)
+    def exp_lanes(x: lanes, function: wp.uint64) -> lanes: ...
+
+    return exp_lanes, lanes, address
+
+
+def exp_timing(width: int, reps: int = 20000, groups: int = 256) -> None:
+    """ns per exp of ``wp.exp`` and of libmvec's ``width``-wide exp, and their largest relative difference."""
+    exp_lanes, lanes, address = vector_exp(width)
+
+    @wp.kernel(module="unique", enable_backward=False)
+    def scalar_exp(x: wp.array2d(dtype=f64), out: wp.array2d(dtype=f64), reps: int, function: wp.uint64):
+        g = wp.tid()
+        for j in range(wp.static(width)):
+            a = x[g, j]
+            total = zero
+            for _r in range(reps):
+                total = total + wp.exp(a)
+                a = a + f64(1e-9)
+            out[g, j] = total
+
+    @wp.kernel(module="unique", enable_backward=False)
+    def lanes_exp(x: wp.array2d(dtype=f64), out: wp.array2d(dtype=f64), reps: int, function: wp.uint64):
+        g = wp.tid()
+        a = lanes()
+        for j in range(wp.static(width)):
+            a[j] = x[g, j]
+        total = lanes()
+        for _r in range(reps):
+            total = total + exp_lanes(a, function)
+            a = a + lanes(f64(1e-9))
+        for j in range(wp.static(width)):
+            out[g, j] = total[j]
+
+    x = wp.array(np.random.default_rng(0).random((groups, width)) * 4.0 - 2.0, dtype=f64, device="cpu")
+    results = []
+    for kernel in (scalar_exp, lanes_exp):
+        out = wp.zeros((groups, width), dtype=f64, device="cpu")
+        wp.launch(kernel, groups, inputs=[x, out, 1, address], device="cpu")
+        start = time.perf_counter()
+        wp.launch(kernel, groups, inputs=[x, out, reps, address], device="cpu")
+        wp.synchronize()
+        results.append(((time.perf_counter() - start) / (groups * width * reps) * 1e9, out.numpy()))
+    (scalar_ns, scalar_sum), (lanes_ns, lanes_sum) = results
+    print(
+        f"exp: wp.exp {scalar_ns:.2f} ns, libmvec {width}-wide {lanes_ns:.2f} ns ({scalar_ns / lanes_ns:.1f}x); "
+        f"largest relative difference of {reps}-term sums {np.abs(lanes_sum / scalar_sum - 1).max():.1e}"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--strips", type=int, default=1024)
@@ -168,6 +241,12 @@ def main() -> None:
             same = np.array_equal(states[0].struct.position.numpy(), states[1].struct.position.numpy())
             name = "law" if with_law else "elastic"
             print(f"{name:>9} {lanes:>5} {rates[0]:>25.3e} {rates[1]:>12.3e} {rates[1] / rates[0]:>5.2f}x  {same}")
+    cpuinfo = Path("/proc/cpuinfo")
+    flags = cpuinfo.read_text() if cpuinfo.is_file() else ""
+    if " avx512f" in flags or " avx2" in flags:
+        exp_timing(8 if " avx512f" in flags else 4)
+    else:
+        print("exp: no AVX2 or AVX-512 here (or not Linux): libmvec's vector exp not timed")
 
 
 if __name__ == "__main__":
