@@ -7,10 +7,12 @@ kernel gives each thread one strip. This measures, on the strip's real force pas
 tension, hinge geometry and bending law, kernels/forces.py) and a node update, the same
 hinge function called two ways in one process: one strip per thread walking its nodes,
 and one group of L strips per thread with the lanes innermost, the layout a compiler can
-vectorise ([node, strip] arrays hold a group's strips side by side). Both end bitwise the
-same (checked). Each way runs with the hysteretic law and without it (elastic bending
-only), which tells what a lane rewrite of the fused kernel could gain and what stands in
-its way. One CPU thread; results in benchmarks/RESULTS.md.
+vectorise ([node, strip] arrays hold a group's strips side by side). The strips are the
+variants of the bundled sweep (each its own D, D1, α), started turned by angles of their
+own and swinging under gravity from a fixed clamp; both ways end bitwise the same
+(positions, velocities and every hinge's memory, checked). Each way runs with the
+hysteretic law and without it (elastic bending only), which tells what a lane rewrite of
+the fused kernel could gain and what stands in its way. One CPU thread; results in benchmarks/RESULTS.md.
 
 Then ``exp`` itself: Warp's CPU compiler leaves it a scalar library call, but a kernel can
 call glibc's vector exp (libmvec: 8 float64 a call with AVX-512, 4 with AVX2) through
@@ -100,8 +102,11 @@ def kernels(lanes: int, with_law: bool) -> tuple:
 
     @wp.func
     def update(model: StripModel, state: StripState, s: int, i: int, dt: f64):
-        # semi-implicit Euler under the internal forces and gravity (no drive: a timing probe)
+        # semi-implicit Euler under the internal forces and gravity (no drive: a timing probe);
+        # the free end carries half a segment
         m = model.node_mass[s]
+        if i == model.n_nodes - 1:
+            m = m * f64(0.5)
         f = state.force_tensile[i, s] + state.force_elastic[i, s] + state.force_hysteretic[i, s]
         v = state.velocity[i, s] + (f + m * vec2(zero, -model.gravity)) * (dt / m)
         state.velocity[i, s] = v
@@ -117,7 +122,7 @@ def kernels(lanes: int, with_law: bool) -> tuple:
             for i in range(first + 1, model.n_nodes - 1):
                 if hinge(model, stepping, state, s, i) != STATUS_OK:
                     return
-            for i in range(model.n_clamped, model.n_nodes - 1):
+            for i in range(model.n_clamped, model.n_nodes):
                 update(model, state, s, i, stepping.dt)
 
     @wp.kernel(module="unique", enable_backward=False)
@@ -134,7 +139,7 @@ def kernels(lanes: int, with_law: bool) -> tuple:
                     bad = bad | hinge(model, stepping, state, g * wp.static(lanes) + j, i)
             if bad != 0:
                 return
-            for i in range(model.n_clamped, model.n_nodes - 1):
+            for i in range(model.n_clamped, model.n_nodes):
                 for j in range(wp.static(lanes)):
                     update(model, state, g * wp.static(lanes) + j, i, stepping.dt)
 
@@ -163,8 +168,9 @@ def vector_exp(width: int) -> tuple:
     return exp_lanes, lanes, address
 
 
-def exp_timing(width: int, reps: int = 20000, groups: int = 256) -> None:
-    """ns per exp of ``wp.exp`` and of libmvec's ``width``-wide exp, and their largest relative difference."""
+def exp_timing(width: int, reps: int = 20000, groups: int = 256, repeats: int = 3) -> None:
+    """ns per exp of ``wp.exp`` and of libmvec's ``width``-wide exp (best of ``repeats``), and
+    their largest difference on one call each, in units in the last place."""
     exp_lanes, lanes, address = vector_exp(width)
 
     @wp.kernel(module="unique", enable_backward=False)
@@ -177,6 +183,19 @@ def exp_timing(width: int, reps: int = 20000, groups: int = 256) -> None:
                 total = total + wp.exp(a)
                 a = a + f64(1e-9)
             out[g, j] = total
+
+    @wp.kernel(module="unique", enable_backward=False)
+    def one_call(
+        x: wp.array2d(dtype=f64), scalar: wp.array2d(dtype=f64), vector: wp.array2d(dtype=f64), function: wp.uint64
+    ):
+        g = wp.tid()
+        a = lanes()
+        for j in range(wp.static(width)):
+            a[j] = x[g, j]
+            scalar[g, j] = wp.exp(x[g, j])
+        r = exp_lanes(a, function)
+        for j in range(wp.static(width)):
+            vector[g, j] = r[j]
 
     @wp.kernel(module="unique", enable_backward=False)
     def lanes_exp(x: wp.array2d(dtype=f64), out: wp.array2d(dtype=f64), reps: int, function: wp.uint64):
@@ -192,18 +211,29 @@ def exp_timing(width: int, reps: int = 20000, groups: int = 256) -> None:
             out[g, j] = total[j]
 
     x = wp.array(np.random.default_rng(0).random((groups, width)) * 4.0 - 2.0, dtype=f64, device="cpu")
-    results = []
+    ns = []
     for kernel in (scalar_exp, lanes_exp):
         out = wp.zeros((groups, width), dtype=f64, device="cpu")
         wp.launch(kernel, groups, inputs=[x, out, 1, address], device="cpu")
-        start = time.perf_counter()
-        wp.launch(kernel, groups, inputs=[x, out, reps, address], device="cpu")
-        wp.synchronize()
-        results.append(((time.perf_counter() - start) / (groups * width * reps) * 1e9, out.numpy()))
-    (scalar_ns, scalar_sum), (lanes_ns, lanes_sum) = results
+        walls = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            wp.launch(kernel, groups, inputs=[x, out, reps, address], device="cpu")
+            wp.synchronize()
+            walls.append(time.perf_counter() - start)
+        ns.append(min(walls) / (groups * width * reps) * 1e9)
+    # one call each on 2^16 arguments across exp's useful range
+    points = 8192
+    wide = wp.array(np.linspace(-700.0, 700.0, points * width).reshape(points, width), dtype=f64, device="cpu")
+    scalar = wp.zeros((points, width), dtype=f64, device="cpu")
+    vector = wp.zeros((points, width), dtype=f64, device="cpu")
+    wp.launch(one_call, points, inputs=[wide, scalar, vector, address], device="cpu")
+    a, b = scalar.numpy(), vector.numpy()
+    ulps = np.abs(a - b) / np.spacing(a)
     print(
-        f"exp: wp.exp {scalar_ns:.2f} ns, libmvec {width}-wide {lanes_ns:.2f} ns ({scalar_ns / lanes_ns:.1f}x); "
-        f"largest relative difference of {reps}-term sums {np.abs(lanes_sum / scalar_sum - 1).max():.1e}"
+        f"exp: wp.exp {ns[0]:.2f} ns, libmvec {width}-wide {ns[1]:.2f} ns ({ns[0] / ns[1]:.1f}x), best of {repeats}; "
+        f"on {a.size} arguments in [-700, 700] the two differ by at most {ulps.max():.0f} ulp "
+        f"({np.mean(ulps > 0):.1%} of them differ at all)"
     )
 
 
@@ -219,15 +249,33 @@ def main() -> None:
     wp.config.quiet = True
     wp.init()
     print(f"machine: {platform.processor() or platform.machine()}, {platform.system()}, warp {wp.__version__}, "
-          f"one CPU thread, {args.strips} damped-swing strips ({args.law}), {args.steps} steps of 2e-5 s")  # fmt: skip
-    scene = wc.load_scene("damped_swing", [f"material.bending_law={args.law}", "integrator.dt_s=2e-5"])
-    batch = build_batch([scene] * args.strips, device="cpu")
+          f"one CPU thread, {args.strips} variants of the damped-swing sweep ({args.law}), bent and swinging, "
+          f"{args.steps} steps of 2e-5 s")  # fmt: skip
+    if any(args.strips % lanes for lanes in args.lanes):
+        raise SystemExit(f"--strips {args.strips} must be a multiple of every --lanes {args.lanes}")
+    sweep = wc.load_sweep(
+        "damped_swing_sweep",
+        [f"material.bending_law={args.law}", "integrator.dt_s=2e-5", f"sweep.random.samples={args.strips}"],
+    )
+    batch = build_batch(sweep.scenes, device="cpu")
     stepping = batch.solver.stepping(batch.control)
+    # each strip turned about its clamp edge by an angle of its own, so that it swings from
+    # the start (segments keep their length; the clamp-edge hinge takes the kink)
+    rest = batch.model.struct.rest_position.numpy()
+    edge = batch.model.n_clamped - 1
+    angle = np.random.default_rng(1).uniform(0.05, 0.5, args.strips)
+    c, s_ = np.cos(angle), np.sin(angle)
+    arm = rest[edge + 1 :] - rest[edge][None]
+    bent = rest.copy()
+    bent[edge + 1 :, :, 0] = rest[edge][None, :, 0] + c * arm[..., 0] - s_ * arm[..., 1]
+    bent[edge + 1 :, :, 1] = rest[edge][None, :, 1] + s_ * arm[..., 0] + c * arm[..., 1]
     print(f"{'bending':>9} {'lanes':>5} {'per strip, strip-steps/s':>25} {'in lanes':>12} {'ratio':>6}  bitwise")
     for with_law in (True, False):
         for lanes in args.lanes:
             per_strip, in_lanes = kernels(lanes, with_law)
             states = [batch.model.state(), batch.model.state()]
+            for state in states:
+                state.set_positions(bent)
             runs = ((per_strip, args.strips), (in_lanes, args.strips // lanes))
             walls = [0.0, 0.0]
             for repeat in range(args.repeats + 1):  # the first compiles
@@ -238,7 +286,10 @@ def main() -> None:
                     wp.synchronize()
                     walls[k] += (time.perf_counter() - start) if repeat else 0.0
             rates = [args.strips * args.steps * args.repeats / w for w in walls]
-            same = np.array_equal(states[0].struct.position.numpy(), states[1].struct.position.numpy())
+            same = all(
+                np.array_equal(getattr(states[0].struct, field).numpy(), getattr(states[1].struct, field).numpy())
+                for field in ("position", "velocity", "hinge")
+            )
             name = "law" if with_law else "elastic"
             print(f"{name:>9} {lanes:>5} {rates[0]:>25.3e} {rates[1]:>12.3e} {rates[1] / rates[0]:>5.2f}x  {same}")
     cpuinfo = Path("/proc/cpuinfo")

@@ -390,8 +390,9 @@ def advance_block(
             edge_scale[s],
         )
         W[P, MASS, lane], W[P, GAMMA, lane], W[P, SETTLE, lane] = node_mass[s], gamma[s], settle_gamma[s]
-        # The held end's polar path (§8) is fixed per strip: its ends once, as warpcloth's
-        # held_free_end computes them every substep (same operations, same values).
+        # The held end's polar path (§8) is fixed per strip: its ends once, with the
+        # operations warpcloth's carried_free_end takes at every step of the carry (and once,
+        # for the end it holds, in reach_hold): the same values.
         sx, sy = hold[2, s] - hold[0, s], hold[3, s] - hold[1, s]
         gx, gy = hold[4, s] - hold[0, s], hold[5, s] - hold[1, s]
         W[T, R0, lane], W[T, R1, lane] = norm(sx, sy), norm(gx, gy)

@@ -4,6 +4,7 @@ hand-computable loops, every bad-data error, material files and scenes that use 
 and the ``warpcloth material`` commands end to end."""
 
 import copy
+import re
 from pathlib import Path
 
 import numpy as np
@@ -374,21 +375,30 @@ def test_material_file_round_trip_and_scene_by_relative_path(tmp_path, monkeypat
         wc.load_scene(scene_dir / "scene.toml")
 
 
-def test_a_material_file_parsed_once_is_still_read_as_it_stands(tmp_path):
+def test_a_material_file_parsed_once_is_still_read_as_it_stands(tmp_path, monkeypatch):
     # a sweep reads its material file once per variant and parses it once: the parse is
     # keyed by the file's text, so an edit between two reads is seen, and a caller that
     # changes what it got changes no later read
+    import warpcloth.scene.materials as materials
+    from warpcloth.scene.parse import parse_toml
+
     _fit, path = fitted_material_file(tmp_path / "wool.toml")
+    parses = []
+    monkeypatch.setattr(materials, "parse_toml", lambda *a: parses.append(a) or parse_toml(*a))
     first = read_material_file(path)
     first["material"]["name"] = "changed by a caller"
     assert read_material_file(path)["material"]["name"] == "wool-fitted"
+    assert len(parses) == 1  # the second read of the same text parsed nothing
     write(path, path.read_text().replace('name = "wool-fitted"', 'name = "wool-edited"'))
     assert read_material_file(path)["material"]["name"] == "wool-edited"
-    write(path, path.read_text().replace('name = "wool-edited"', "name = 3"))
-    with pytest.raises(SceneError, match="material.name"):
-        read_material_file(path)  # a refusal is not remembered as a parse
-    with pytest.raises(SceneError, match="material.name"):
+    assert len(parses) == 2
+    good = path.read_text()
+    write(path, good.replace('name = "wool-edited"', "name = 3"))
+    line = 1 + good.splitlines().index('name = "wool-edited"')
+    with pytest.raises(SceneError, match=rf"{re.escape(str(path))}, line {line}: .*material.name"):
         read_material_file(path)
+    write(path, good)  # mended, it reads again
+    assert read_material_file(path)["material"]["name"] == "wool-edited"
 
 
 def test_scene_by_bundled_name_set_override_and_sweep():

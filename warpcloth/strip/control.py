@@ -45,6 +45,8 @@ class StripControl:
         c.hold_target = model.array(self.hold_target, t.vec2)
         c.settle_damping = model.array(np.array([s.settle_damping for s in strips]))
         c.hold_free_end = model.array(np.array([s.hold_free_end for s in strips], dtype=np.int32), int)
+        # where each held end stays once carried, from hold_target and the rest positions:
+        # whatever changes those after this must launch reach_hold again
         c.held_position = model.array(np.zeros((b, 2)), t.vec2)
         c.held_velocity = model.array(np.zeros((b, 2)), t.vec2)
         wp.launch(
