@@ -249,7 +249,7 @@ def main() -> None:
     wp.config.quiet = True
     wp.init()
     print(f"machine: {platform.processor() or platform.machine()}, {platform.system()}, warp {wp.__version__}, "
-          f"one CPU thread, {args.strips} variants of the damped-swing sweep ({args.law}), bent and swinging, "
+          f"one CPU thread, {args.strips} variants of the damped-swing sweep ({args.law}), turned and swinging, "
           f"{args.steps} steps of 2e-5 s")  # fmt: skip
     if any(args.strips % lanes for lanes in args.lanes):
         raise SystemExit(f"--strips {args.strips} must be a multiple of every --lanes {args.lanes}")
