@@ -10,9 +10,9 @@ wp.config.log_level = logging.WARNING
 
 def kernel_variants() -> dict:
     """Every kernel the project can load, by ``[sheet.]name-precision[-scheme]``: each
-    (precision, scheme) of the strip's fused kernel, the hinge and law-path kernels, the
-    sheet's three (tests/test_cuda_build.py compiles them for CUDA)."""
-    from warpcloth.kernels import build_strip, hinge_kernels, laws, sheet
+    (precision, scheme) of the strip's fused kernel, the hinge, held-end and law-path kernels,
+    the sheet's three (tests/test_cuda_build.py compiles them for CUDA)."""
+    from warpcloth.kernels import build_strip, drives, hinge_kernels, laws, sheet
 
     from warpcloth.strip import PRECISIONS, SOLVERS
 
@@ -26,6 +26,7 @@ def kernel_variants() -> dict:
                 out[f"{name}-{precision}-{scheme}"] = kernel
         for prefix, namespace in (
             ("", hinge_kernels(scalar)),
+            ("", drives.build(scalar)),
             ("", laws.build(scalar)),
             ("sheet.", sheet.build(scalar)),
         ):
