@@ -3,16 +3,17 @@
     python benchmarks/cpu_lanes.py [--strips 1024] [--steps 1000] [--lanes 4 8] [--law tagawa2003]
 
 The Numba port (benchmarks/numba_peer.py) runs strips as SIMD lanes; warpcloth's CPU
-kernel gives each thread one strip. This measures, on the strip's real force pass (its
-tension, hinge geometry and bending law, kernels/forces.py) and a node update, the same
-hinge function called two ways in one process: one strip per thread walking its nodes,
-and one group of L strips per thread with the lanes innermost, the layout a compiler can
-vectorise ([node, strip] arrays hold a group's strips side by side). The strips are the
-variants of the bundled sweep (each its own D, D1, α), started turned by angles of their
-own and swinging under gravity from a fixed clamp; both ways end bitwise the same
-(positions, velocities and every hinge's memory, checked). Each way runs with the
-hysteretic law and without it (elastic bending only), which tells what a lane rewrite of
-the fused kernel could gain and what stands in its way. One CPU thread; results in benchmarks/RESULTS.md.
+kernel gives each thread one strip. This measures the strip's own force pass
+(kernels/forces.py: tension, hinge geometry and bending law) with a node update, one strip
+per thread, against a kernel that calls the same ``segment_and_hinge`` for one group of L
+strips per thread, lanes innermost at each node (the layout a compiler can vectorise:
+[node, strip] arrays hold a group's strips side by side), each lane carrying its segment
+down the chain as the pass does. The strips are the variants of the bundled sweep (each
+its own D, D1, α), started turned by angles of their own and swinging under gravity from
+a fixed clamp; both ways end bitwise the same (positions, velocities and every hinge's
+memory, checked). Each runs with the sweep's hysteresis and without it (D1 = 0, the law's
+elastic limit), which tells what a lane rewrite of the fused kernel could gain and what
+stands in its way. One CPU thread; results in benchmarks/RESULTS.md.
 
 Then ``exp`` itself: Warp's CPU compiler leaves it a scalar library call, but a kernel can
 call glibc's vector exp (libmvec: 8 float64 a call with AVX-512, 4 with AVX2) through
@@ -29,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 import warp as wp
-from warpcloth.kernels import geometry, integrators, structs, tensile
-from warpcloth.kernels.status import STATUS_FOLDED, STATUS_OK, STATUS_STRAIN
+from warpcloth.kernels import forces, integrators, structs
+from warpcloth.kernels.status import STATUS_OK
 
 import warpcloth as wc
 from warpcloth.scene.build import build_batch
@@ -40,59 +41,16 @@ vec2 = wp.types.vector(2, f64)
 zero, one = f64(0.0), f64(1.0)
 
 
-def kernels(lanes: int, with_law: bool) -> tuple:
-    """The per-strip and the lane kernel of one hinge function (``with_law``: the strip's
-    law followed; else elastic bending alone)."""
+def kernels(lanes: int) -> tuple:
+    """The per-strip kernel (the strip's own force pass, kernels/forces.py) and the lane
+    kernel calling the same segment-and-hinge function for ``lanes`` strips at each node."""
     strip = structs.build(f64, ())
-    StripModel, StripState, law = strip.StripModel, strip.StripState, strip.law
+    StripModel, StripState = strip.StripModel, strip.StripState
     Stepping = integrators.build(f64).Stepping
-    tension = tensile.build(f64).force_per_width
-    geo = geometry.build(f64)
-    perp, signed_curvature = geo.perp, geo.signed_curvature
-
-    @wp.func
-    def hinge(model: StripModel, stepping: Stepping, state: StripState, s: int, i: int):
-        # the body of forces.accumulate_internal_forces at node i, its first segment measured again
-        first = model.n_clamped - 2
-        l0 = model.rest_length
-        node = state.position[i, s]
-        e1 = node - state.position[i - 1, s]
-        inverse_l1 = one / wp.length(e1)
-        e2 = state.position[i + 1, s] - node
-        l2 = wp.length(e2)
-        inverse_l2 = one / l2
-        strain = (l2 - l0) * (one / l0)
-        code = STATUS_OK
-        if not (wp.abs(strain) <= stepping.max_strain):
-            code = STATUS_STRAIN
-        f = tension(strain, model.tensile[s]) * model.width[s] * inverse_l2 * e2
-        state.force_tensile[i, s] = state.force_tensile[i, s] + f
-        state.force_tensile[i + 1, s] = vec2() - f
-        h = i - first - 1
-        curvature, chord = signed_curvature(e1, e2, inverse_l1, inverse_l2)
-        if not (chord > f64(1e-3) * l0):
-            code = STATUS_FOLDED
-        if h == 0:
-            curvature = curvature * model.edge_curvature_scale[s]
-        curvature = curvature - model.rest_curvature[h, s]
-        grip = model.grip[h, s]
-        p = model.bending[s]
-        width = model.width[s]
-        tau_hysteretic = zero
-        if wp.static(with_law):
-            memory = law.follow(curvature, state.hinge[h, s], p, state.history, h, s)
-            state.hinge[h, s] = memory
-            tau_hysteretic = law.hysteretic_moment(curvature, memory, p) * grip[1] * width
-        tau_elastic = law.elastic_moment(curvature, p) * grip[0] * width
-        grad_i = perp(e1) * (inverse_l1 * inverse_l1)
-        grad_k = perp(e2) * (inverse_l2 * inverse_l2)
-        state.force_elastic[i - 1, s] = state.force_elastic[i - 1, s] - tau_elastic * grad_i
-        state.force_elastic[i + 1, s] = vec2() - tau_elastic * grad_k
-        state.force_elastic[i, s] = state.force_elastic[i, s] + tau_elastic * (grad_i + grad_k)
-        state.force_hysteretic[i - 1, s] = state.force_hysteretic[i - 1, s] - tau_hysteretic * grad_i
-        state.force_hysteretic[i + 1, s] = vec2() - tau_hysteretic * grad_k
-        state.force_hysteretic[i, s] = state.force_hysteretic[i, s] + tau_hysteretic * (grad_i + grad_k)
-        return code
+    pass_ = forces.build(f64)
+    accumulate_internal_forces, segment_and_hinge = pass_.accumulate_internal_forces, pass_.segment_and_hinge
+    lane_vectors = wp.types.matrix(shape=(lanes, 2), dtype=f64)  # a vec2 per lane, carried down the chain
+    lane_scalars = wp.types.vector(lanes, f64)
 
     @wp.func
     def clear(state: StripState, s: int, i: int):
@@ -115,13 +73,10 @@ def kernels(lanes: int, with_law: bool) -> tuple:
     @wp.kernel(module="unique", enable_backward=False)
     def per_strip(model: StripModel, stepping: Stepping, state: StripState, steps: int):
         s = wp.tid()
-        first = model.n_clamped - 2
         for _k in range(steps):
-            clear(state, s, first)
-            clear(state, s, first + 1)
-            for i in range(first + 1, model.n_nodes - 1):
-                if hinge(model, stepping, state, s, i) != STATUS_OK:
-                    return
+            code, _index, _value = accumulate_internal_forces(model, stepping, state, s)
+            if code != STATUS_OK:
+                return
             for i in range(model.n_clamped, model.n_nodes):
                 update(model, state, s, i, stepping.dt)
 
@@ -129,14 +84,43 @@ def kernels(lanes: int, with_law: bool) -> tuple:
     def in_lanes(model: StripModel, stepping: Stepping, state: StripState, steps: int):
         g = wp.tid()
         first = model.n_clamped - 2
+        inverse_l0 = one / model.rest_length
         for _k in range(steps):
+            nodes = lane_vectors()
+            above = lane_vectors()
+            inverse = lane_scalars()
             for j in range(wp.static(lanes)):
-                clear(state, g * wp.static(lanes) + j, first)
-                clear(state, g * wp.static(lanes) + j, first + 1)
+                s = g * wp.static(lanes) + j
+                clear(state, s, first)
+                clear(state, s, first + 1)
+                node = state.position[first + 1, s]
+                e1 = node - state.position[first, s]
+                nodes[j] = node
+                above[j] = e1
+                inverse[j] = one / wp.length(e1)
             bad = int(0)  # noqa: UP018 (Warp: a variable the loop below reassigns)
             for i in range(first + 1, model.n_nodes - 1):
                 for j in range(wp.static(lanes)):
-                    bad = bad | hinge(model, stepping, state, g * wp.static(lanes) + j, i)
+                    s = g * wp.static(lanes) + j
+                    code, _value, node, e1, inverse_l1 = segment_and_hinge(
+                        model,
+                        stepping,
+                        state,
+                        s,
+                        i,
+                        nodes[j],
+                        above[j],
+                        inverse[j],
+                        model.width[s],
+                        model.tensile[s],
+                        model.bending[s],
+                        model.edge_curvature_scale[s],
+                        inverse_l0,
+                    )
+                    bad = bad | code
+                    nodes[j] = node
+                    above[j] = e1
+                    inverse[j] = inverse_l1
             if bad != 0:
                 return
             for i in range(model.n_clamped, model.n_nodes):
@@ -253,12 +237,17 @@ def main() -> None:
           f"{args.steps} steps of 2e-5 s")  # fmt: skip
     if any(args.strips % lanes for lanes in args.lanes):
         raise SystemExit(f"--strips {args.strips} must be a multiple of every --lanes {args.lanes}")
-    sweep = wc.load_sweep(
-        "damped_swing_sweep",
-        [f"material.bending_law={args.law}", "integrator.dt_s=2e-5", f"sweep.random.samples={args.strips}"],
-    )
-    batch = build_batch(sweep.scenes, device="cpu")
-    stepping = batch.solver.stepping(batch.control)
+    overrides = [f"material.bending_law={args.law}", "integrator.dt_s=2e-5", f"sweep.random.samples={args.strips}"]
+    scenes = wc.load_sweep("damped_swing_sweep", overrides).scenes
+    # the sweep's variants, and the same without hysteresis (D1 = 0, the law's elastic limit)
+    elastic = [s.to_dict() for s in scenes]
+    for data in elastic:
+        data["material"]["hysteresis_d1_gf_cm_per_cm"] = 0.0
+    batches = {
+        "law": build_batch(scenes, device="cpu"),
+        "elastic": build_batch([wc.scene_from_dict(data) for data in elastic], device="cpu"),
+    }
+    batch = batches["law"]
     # each strip turned about its clamp edge by an angle of its own, so that it swings from
     # the start (segments keep their length; the clamp-edge hinge takes the kink)
     rest = batch.model.struct.rest_position.numpy()
@@ -270,9 +259,10 @@ def main() -> None:
     bent[edge + 1 :, :, 0] = rest[edge][None, :, 0] + c * arm[..., 0] - s_ * arm[..., 1]
     bent[edge + 1 :, :, 1] = rest[edge][None, :, 1] + s_ * arm[..., 0] + c * arm[..., 1]
     print(f"{'bending':>9} {'lanes':>5} {'per strip, strip-steps/s':>25} {'in lanes':>12} {'ratio':>6}  bitwise")
-    for with_law in (True, False):
+    for name, batch in batches.items():
+        stepping = batch.solver.stepping(batch.control)
         for lanes in args.lanes:
-            per_strip, in_lanes = kernels(lanes, with_law)
+            per_strip, in_lanes = kernels(lanes)
             states = [batch.model.state(), batch.model.state()]
             for state in states:
                 state.set_positions(bent)
@@ -290,7 +280,6 @@ def main() -> None:
                 np.array_equal(getattr(states[0].struct, field).numpy(), getattr(states[1].struct, field).numpy())
                 for field in ("position", "velocity", "hinge")
             )
-            name = "law" if with_law else "elastic"
             print(f"{name:>9} {lanes:>5} {rates[0]:>25.3e} {rates[1]:>12.3e} {rates[1] / rates[0]:>5.2f}x  {same}")
     cpuinfo = Path("/proc/cpuinfo")
     flags = cpuinfo.read_text() if cpuinfo.is_file() else ""
