@@ -447,6 +447,17 @@ COTTON = read_material_file("cotton-broadcloth")["material"]
             "material.source must say where the numbers come from",
         ),
         (tomli_w.dumps({"material": {**COTTON, "from_file": "wool90-nylon10"}}), "cannot refer to another"),
+        (  # a field in another unit is named beside the one missing
+            tomli_w.dumps(
+                {
+                    "material": {
+                        **{k: v for k, v in COTTON.items() if k != "bending_rigidity_gf_cm2_per_cm"},
+                        "bending_rigidity_N_m": 7e-7,
+                    }
+                }
+            ),
+            "lacks bending_rigidity_gf_cm2_per_cm (it has bending_rigidity_N_m, which no field is called",
+        ),
         ("[material]\n[extra]\n", "unknown top-level entry 'extra'"),
         ("[material\n", "is not valid TOML"),
     ],

@@ -200,9 +200,13 @@ def _checked_material(text: str, where: str) -> dict:
         )
     missing = [k for k in [*material_fields(law), "source"] if k not in material]
     if missing:
+        # a field under another name is most often another unit (bending_rigidity_N_m):
+        # name it beside what is missing
+        unknown = sorted(set(material) - {*material_fields(), "source", "bending_law", "from_file"})
+        instead = f" (it has {', '.join(unknown)}, which no field is called: a field's unit is part of its name)"
         raise SceneError(
             MATERIAL_FILE_KEY,
-            f"{where}: [material] lacks {', '.join(missing)}; a material file "
+            f"{where}: [material] lacks {', '.join(missing)}{instead if unknown else ''}; a material file "
             f"gives every field its bending law ({law}) reads, so that nothing silently comes from "
             "the default material",
         )
