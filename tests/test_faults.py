@@ -577,6 +577,33 @@ def test_ctrl_c_while_starting_is_exit_130_and_one_line(tmp_path, command, delay
     assert len(stderr.strip().splitlines()) == 1, stderr
 
 
+def test_ctrl_c_inside_a_class_being_defined_at_start_is_exit_130(monkeypatch, capsys):
+    # Python 3.11 wraps a KeyboardInterrupt raised in a dataclass field's __set_name__ (while
+    # a module's class body runs) in a RuntimeError; CI's start-up test landed there once
+    import types
+
+    from warpcloth import cli
+
+    class Starting(types.ModuleType):
+        def __getattr__(self, name):
+            try:
+                raise KeyboardInterrupt
+            except KeyboardInterrupt as exc:
+                raise RuntimeError("Error calling __set_name__ on 'Field' instance") from exc
+
+    monkeypatch.setitem(sys.modules, "warpcloth.cli.app", Starting("warpcloth.cli.app"))
+    assert cli.main(["run", "damped_swing"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+
+    class Broken(types.ModuleType):
+        def __getattr__(self, name):
+            raise RuntimeError("a real bug")
+
+    monkeypatch.setitem(sys.modules, "warpcloth.cli.app", Broken("warpcloth.cli.app"))
+    with pytest.raises(RuntimeError, match="a real bug"):  # anything else is not an interrupt
+        cli.main(["run", "damped_swing"])
+
+
 def holding(marker):
     """A child process that holds ``marker`` as a writer does (until killed)."""
     proc = subprocess.Popen(

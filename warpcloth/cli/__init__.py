@@ -21,7 +21,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         from .app import main as run_command
     except KeyboardInterrupt:
         return interrupted_at_start()
-    except ImportError as exc:
+    except Exception as exc:
+        if _interrupted(exc):
+            return interrupted_at_start()
         from warpcloth.kernels.law import LawRegistryError
 
         if not isinstance(exc, LawRegistryError):
@@ -29,6 +31,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"warpcloth: {exc}", file=sys.stderr)  # a broken law of an installed package
         return EXIT_UNUSABLE_INPUT
     return run_command(argv)
+
+
+def _interrupted(exc: BaseException) -> bool:
+    # A Ctrl-C that lands in a class body's ``__set_name__`` (a dataclass field, while a
+    # module is imported) reaches here as the RuntimeError Python 3.11 wraps it in
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 def program() -> None:
