@@ -84,6 +84,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
     piecewise_polynomial = drives.build(scalar).piecewise_polynomial
     forces = sheet_forces.build(scalar, terms)
     accumulate_sheet_forces, shear_angle = forces.accumulate_sheet_forces, forces.shear_angle
+    ghosts_seen = forces.ghosts_seen
     hinge_geometry, hinge_curvature, turning_angle = forces.hinge_geometry, forces.hinge_curvature, forces.turning_angle
     cell_corners, cell_twist = forces.cell_corners, forces.cell_twist
     tensile_energy = tensile.build(scalar).energy_per_width
@@ -145,6 +146,60 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         return centre + arm + d * control.direction[s]
 
     @wp.func
+    def turned_normal(model: SheetModel, control: SheetControl, s: int, theta: scalar):
+        # the sheet's rest normal as the clamp at angle θ has turned it
+        if theta == zero:
+            return model.rest_normal
+        return rotated(model.rest_normal, control.axis[s], wp.cos(theta), wp.sin(theta))
+
+    @wp.func
+    def rigid_velocity(control: SheetControl, s: int, x: vec3, d: scalar, rate: scalar, d_rate: scalar):
+        # the velocity of a point x moving with the clamp
+        return (
+            rate * wp.cross(control.axis[s], x - control.centre[s] - d * control.direction[s])
+            + d_rate * (control.direction[s])
+        )
+
+    @wp.func
+    def place_ghosts(model: SheetModel, control: SheetControl, state: SheetState, s: int, theta: scalar, d: scalar):
+        # each held ghost's offset out of the plane for the force pass (kernels/sheet_forces.py
+        # ghosts_seen): its weight times its master's, from the clamp's place at the pose
+        # (θ, d), along the rest normal as the clamp has turned it (docs/model.md §17.2)
+        normal = turned_normal(model, control, s, theta)
+        state.clamp_normal[s] = normal
+        for k in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
+            m = model.ghost_masters[k]
+            away = state.position[m, s] - clamped_position(model, control, s, m, theta, d)
+            state.ghost_offset[k, s] = (model.ghost_weights[k] * wp.dot(normal, away)) * normal
+
+    @wp.func
+    def follow_masters(
+        model: SheetModel,
+        control: SheetControl,
+        state: SheetState,
+        s: int,
+        theta: scalar,
+        d: scalar,
+        rate: scalar,
+        d_rate: scalar,
+    ):
+        # each slaved node, held in the plane by the clamp at the pose (θ, d), out of it its
+        # master's displacement from the clamp's place times its weight, and moving so
+        normal = turned_normal(model, control, s, theta)
+        for k in range(model.slaved_ghosts):
+            g = model.ghost_nodes[k]
+            m = model.ghost_masters[k]
+            w = model.ghost_weights[k]
+            held = clamped_position(model, control, s, g, theta, d)
+            master_held = clamped_position(model, control, s, m, theta, d)
+            away = state.position[m, s] - master_held
+            moving = state.velocity[m, s] - rigid_velocity(control, s, master_held, d, rate, d_rate)
+            state.position[g, s] = held + (w * wp.dot(normal, away)) * normal
+            state.velocity[g, s] = (
+                rigid_velocity(control, s, held, d, rate, d_rate) + (w * wp.dot(normal, moving)) * normal
+            )
+
+    @wp.func
     def advance_free_nodes(
         model: SheetModel, stepping: SheetStepping, state: SheetState, s: int, step: int, gamma: scalar, work: tally
     ):
@@ -172,6 +227,38 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         return work
 
     @wp.func
+    def ghosts_driven(
+        model: SheetModel,
+        control: SheetControl,
+        state: SheetState,
+        s: int,
+        theta: scalar,
+        d: scalar,
+        theta_before: scalar,
+        d_before: scalar,
+        work: tally,
+    ):
+        # a ghost moves with the clamp, less its weight times its master's clamp place along
+        # the normal: the rest of its motion is its master's, whose forces hold its own
+        # (kernels/sheet_forces.py ghosts_held); what the clamp moves is the drive's work
+        # (the master's clamp place moving, and the normal turning)
+        normal = state.clamp_normal[s]
+        turn = (turned_normal(model, control, s, theta) - turned_normal(model, control, s, theta_before)) * half
+        for k in range(model.ghost_nodes.shape[0]):
+            g = model.ghost_nodes[k]
+            m = model.ghost_masters[k]
+            w = model.ghost_weights[k]
+            master_held = clamped_position(model, control, s, m, theta, d)
+            away = state.position[m, s] - master_held
+            held_sweep = (master_held - clamped_position(model, control, s, m, theta_before, d_before)) * half
+            clamp_moved = w * (turn * wp.dot(normal, away) + normal * (wp.dot(turn, away) - wp.dot(normal, held_sweep)))
+            moved = state.force_elastic[g, s] + state.force_hysteretic[g, s]
+            if k < model.slaved_ghosts:
+                moved = moved + state.force_tensile[g, s]
+            work = work + work_on(state, g, s, clamp_moved) + drive_work(-wp.dot(moved, clamp_moved))
+        return work
+
+    @wp.func
     def move_clamp(
         model: SheetModel,
         control: SheetControl,
@@ -183,8 +270,6 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
     ):
         theta, rate, d, d_rate = clamp_pose(control, s, t_next)
         theta_before, _rate, d_before, _d_rate = clamp_pose(control, s, t_next - two * stepping.dt)
-        axis = control.axis[s]
-        direction = control.direction[s]
         for i in range(model.n_nodes):
             if model.clamped[i] == 0:
                 continue
@@ -192,15 +277,20 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
             sweep = (x_new - clamped_position(model, control, s, i, theta_before, d_before)) * half
             f_int = internal_force(state, i, s)
             work = work + work_on(state, i, s, sweep) + drive_work(-wp.dot(f_int, sweep))
-            arm = x_new - control.centre[s] - d * direction
             state.position[i, s] = x_new
-            state.velocity[i, s] = rate * wp.cross(axis, arm) + d_rate * direction
+            state.velocity[i, s] = rigid_velocity(control, s, x_new, d, rate, d_rate)
+        if model.ghost_nodes.shape[0] > 0:
+            work = ghosts_driven(model, control, state, s, theta, d, theta_before, d_before, work)
+            follow_masters(model, control, state, s, theta, d, rate, d_rate)
         return work
 
     @wp.func
     def substep(
         model: SheetModel, control: SheetControl, stepping: SheetStepping, state: SheetState, s: int, step: int
     ):
+        if model.ghost_nodes.shape[0] > 0:
+            theta, _rate, d, _d_rate = clamp_pose(control, s, scalar(step - stepping.release_step) * stepping.dt)
+            place_ghosts(model, control, state, s, theta, d)
         code, index, value = accumulate_sheet_forces(model, stepping, state, s)
         if code != STATUS_OK:
             return code, index, value
@@ -285,9 +375,13 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
     )
 
     @wp.kernel(module="unique", enable_backward=False)
-    def initialise_memory(model: SheetModel, state: SheetState):
-        """Start every hinge and cell fresh at its current curvature, shear angle and twist."""
+    def initialise_memory(model: SheetModel, control: SheetControl, state: SheetState):
+        """Start every hinge and cell fresh at its current curvature, shear angle and twist
+        (ghosts at the clamp's rest pose, where a run starts)."""
         s = wp.tid()
+        follow_masters(model, control, state, s, zero, zero, zero, zero)
+        place_ghosts(model, control, state, s, zero, zero)
+        ghosts_seen(model, state, s)
         for h in range(model.hinge_nodes.shape[0]):
             e1, e2, u = hinge_geometry(model, state, h, s)
             sine, _cosine, inverse_p1, inverse_p2, chord = turning_angle(e1, e2, u / wp.length(u))
@@ -298,16 +392,19 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         for c in range(model.cell_nodes.shape[0]):
             w, f, d = cell_corners(model, state, c, s)
             phi, _sn, unit, _d_w, _d_f = shear_angle(w, f)
-            scale = model.cell_scale[c]
-            state.cell[c, s] = law.fresh_memory(scale * phi, model.shear[s], state.cell_history, c, s)
-            kappa = scale * cell_twist(model, d, unit)
+            state.cell[c, s] = law.fresh_memory(model.cell_scale[c] * phi, model.shear[s], state.cell_history, c, s)
+            kappa = model.twist_scale[c] * cell_twist(model, d, unit)
             state.twist[c, s] = law.fresh_memory(kappa, model.twist[s], state.twist_history, c, s)
+        for k in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
+            state.position[model.ghost_nodes[k], s] = state.ghost_held[k, s]
 
     @wp.kernel(module="unique", enable_backward=False)
-    def internal_forces(model: SheetModel, stepping: SheetStepping, state: SheetState):
+    def internal_forces(model: SheetModel, control: SheetControl, stepping: SheetStepping, state: SheetState):
         """The internal forces at the current positions (the laws follow to them), without a
         step: what a static check or a test reads from ``force_*``."""
         s = wp.tid()
+        theta, _rate, d, _d_rate = clamp_pose(control, s, scalar(state.step[s] - stepping.release_step) * stepping.dt)
+        place_ghosts(model, control, state, s, theta, d)
         code, index, value = accumulate_sheet_forces(model, stepping, state, s)
         if code != STATUS_OK:
             stop(state, s, code, state.step[s], index, value)

@@ -30,6 +30,7 @@ class SheetForces:
     cell_corners: Any
     cell_twist: Any
     shear_angle: Any
+    ghosts_seen: Any
 
 
 @functools.cache
@@ -245,7 +246,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             phi, sn, unit, d_w, d_f = shear_angle(w, f)
             if not (wp.abs(phi) <= stepping.max_shear):  # also catches NaN
                 return STATUS_CELL_COLLAPSED, c, phi
-            # a cell astride a clamp edge shears and twists its free half by twice its mean
+            # a cell astride a clamp edge shears its free half by twice its mean
             scale = model.cell_scale[c]
             shear = scale * phi
             memory = law.follow(shear, state.cell[c, s], p, state.cell_history, c, s)
@@ -261,8 +262,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             # the twist κ12 = d·n / (h_w h_f) (§17.5): its energy A ∫ M12 dκ12 is the plate's
             # 2 D66 κ12² per area for an elastic law. ∂(d·n)/∂x: the twist vector's ±1 at the
             # corners along n, and the normal's turn, through w and f, against d's in-plane part
-            kappa = scale * cell_twist(model, d, unit)
-            per_twist = area / (model.spacing[0] * model.spacing[1])
+            kappa = model.twist_scale[c] * cell_twist(model, d, unit)
+            per_twist = model.twist_area[c] / (model.spacing[0] * model.spacing[1])
             twist_elastic = law.elastic_moment(kappa, p_twist) * per_twist
             twist_hysteretic = zero
             if model.twist_elastic[s] == 0:  # a twist without hysteresis has no memory to follow
@@ -287,6 +288,34 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         return STATUS_OK, 0, zero
 
     @wp.func
+    def ghosts_seen(model: SheetModel, state: SheetState, s: int):
+        # the bending and the twist see each held ghost at its clamped quadratic's place
+        # (state.ghost_offset, docs/model.md §17.2); the membrane saw the clamp's. A slaved
+        # ghost is already where its master puts it (kernels/sheet.py follow_masters).
+        for k in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
+            g = model.ghost_nodes[k]
+            held = state.position[g, s]
+            state.ghost_held[k, s] = held
+            state.position[g, s] = held + state.ghost_offset[k, s]
+
+    @wp.func
+    def ghosts_held(model: SheetModel, state: SheetState, s: int):
+        # each held ghost back in the clamp; every ghost's forces along the normal on its
+        # master, whose motion moves the ghost by the weight times its own along the normal
+        # (a slaved ghost's in every element, a held one's in the bending and the twist)
+        normal = state.clamp_normal[s]
+        for k in range(model.ghost_nodes.shape[0]):
+            g = model.ghost_nodes[k]
+            m = model.ghost_masters[k]
+            w = model.ghost_weights[k]
+            if k < model.slaved_ghosts:
+                add(state.force_tensile, m, s, (w * wp.dot(normal, state.force_tensile[g, s])) * normal)
+            else:
+                state.position[g, s] = state.ghost_held[k, s]
+            add(state.force_elastic, m, s, (w * wp.dot(normal, state.force_elastic[g, s])) * normal)
+            add(state.force_hysteretic, m, s, (w * wp.dot(normal, state.force_hysteretic[g, s])) * normal)
+
+    @wp.func
     def accumulate_sheet_forces(model: SheetModel, stepping: SheetStepping, state: SheetState, s: int):
         # Returns 0 when healthy, or a status code with the offending element and value.
         for i in range(model.n_nodes):
@@ -296,10 +325,15 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         code, index, value = segments(model, stepping, state, s)
         if code != STATUS_OK:
             return code, index, value
+        ghosts = model.ghost_nodes.shape[0] > 0
+        if ghosts:
+            ghosts_seen(model, state, s)
         code, index, value = hinges(model, state, s)
-        if code != STATUS_OK:
-            return code, index, value
-        return cells(model, stepping, state, s)
+        if code == STATUS_OK:
+            code, index, value = cells(model, stepping, state, s)
+        if ghosts:
+            ghosts_held(model, state, s)
+        return code, index, value
 
     return SheetForces(
         accumulate_sheet_forces=accumulate_sheet_forces,
@@ -309,4 +343,5 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         cell_corners=cell_corners,
         cell_twist=cell_twist,
         shear_angle=shear_angle,
+        ghosts_seen=ghosts_seen,
     )

@@ -71,7 +71,14 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetTypes:
         hinge_coupling: wp.array(dtype=scalar)  # [hinge]: the pair's Poisson area over the hinge's own
         cell_nodes: wp.array(dtype=wp.vec4i)  # [cell]: corners (i, j), (i+1, j), (i, j+1), (i+1, j+1)
         cell_area: wp.array(dtype=scalar)  # m² of free fabric the cell stands for
-        cell_scale: wp.array(dtype=scalar)  # its shear and twist over the free part (2 astride a clamp edge)
+        cell_scale: wp.array(dtype=scalar)  # its shear over the free part (2 astride a clamp edge)
+        twist_area: wp.array(dtype=scalar)  # m² of free fabric the cell's twist stands for
+        twist_scale: wp.array(dtype=scalar)  # its twist over the free part (cell_scale; 1 with ghosts)
+        rest_normal: vec3  # the sheet's rest plane's unit normal
+        ghost_nodes: wp.array(dtype=int)  # [ghost]: held nodes the bending sees at the clamped quadratic's place
+        ghost_masters: wp.array(dtype=int)  # [ghost]: the free node each ghost follows
+        ghost_weights: wp.array(dtype=scalar)  # [ghost]: (ξ_ghost / ξ_master)²
+        slaved_ghosts: int  # the first ghosts are free fabric below the edge, slaved where they are drawn too
         tensile: wp.array2d(dtype=vec4)  # [family, sheet]: a1..a4 of T(ε), N/m
         bending: wp.array2d(dtype=law.Parameters)  # [family, sheet]: the bending law of each direction
         shear: wp.array(dtype=law.Parameters)  # [sheet]: the shear law on the shear angle (G for D)
@@ -94,6 +101,9 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetTypes:
         hinge_history: law.History  # reversal points of hinges whose law has return-point memory
         cell_history: law.History
         twist_history: law.History
+        ghost_offset: wp.array2d(dtype=vec3)  # [ghost, sheet]: out of the plane, from the clamp's place, m
+        ghost_held: wp.array2d(dtype=vec3)  # [ghost, sheet]: scratch, the held place while the bending sees the ghost
+        clamp_normal: wp.array(dtype=vec3)  # [sheet]: the rest normal as the clamp has turned it
         work: wp.array(dtype=tally)  # the work channels of kernels/sheet.py SHEET_PROBES (+ force terms'), J
         step: wp.array(dtype=int)
         status: wp.array(dtype=int)

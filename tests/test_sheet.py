@@ -536,3 +536,90 @@ def test_a_bias_strip_hangs_from_the_clamp_edge_with_its_area(spacing, width):
     assert rest[~clamped, 1].max() == pytest.approx(-spacing * math.sqrt(0.5))
     area = geometry.node_area[~clamped].sum() / (0.1 * width)
     assert abs(area - 1) < 0.06  # staircase sides: O(h); measured 1.052, 0.991, 1.051
+
+
+@pytest.mark.parametrize("angle", [10.0, 22.5, 67.5, -30.0])
+def test_a_clamp_edge_between_the_nodes_closes_through_ghosts(angle):
+    # docs/model.md §17.2: the bending carries only the fabric below the clamp edge, free
+    # nodes within a spacing of it are slaved, and every held node an element reaches is a
+    # ghost following a free master at least as far below the edge as it is above it
+    from warpcloth.sheet import bias_strip
+    from warpcloth.sheet.geometry import SLAVED_DEPTH
+
+    h, length, width = 0.005, 0.05, 0.02
+    geometry = bias_strip(length, width, h, h, angle=math.radians(angle))
+    below = -geometry.rest_positions[:, 1]
+    slaved = below < SLAVED_DEPTH * h - 1e-12
+    assert geometry.clamped[slaved].all() and not geometry.clamped[below > SLAVED_DEPTH * h].any()
+    ghosts, masters = geometry.ghost_nodes, geometry.ghost_masters
+    assert len(ghosts) > 0 and geometry.clamped[ghosts].all() and not geometry.clamped[masters].any()
+    assert (below[masters] >= np.abs(below[ghosts]) - 1e-12).all()
+    np.testing.assert_allclose(geometry.ghost_weights, (below[ghosts] / below[masters]) ** 2, rtol=1e-12)
+    elements = (geometry.hinge_nodes, geometry.hinge_axis_nodes, geometry.cell_nodes)
+    reached = np.unique(np.concatenate([nodes.ravel() for nodes in elements]))
+    held = reached[geometry.clamped[reached] & (np.abs(below[reached]) > 1e-12)]
+    assert set(held.tolist()) == set(ghosts.tolist())  # every held node the bending sees, and only those
+    # the twist stands on the fabric below the edge: the rectangle's free area, exactly but
+    # where a sliver at the edge's ends was lent across it (§17.2): measured +0.17 % at 10°,
+    # 1e-16 at 22.5° and 67.5°, −0.03 % at −30°
+    assert geometry.twist_area.sum() == pytest.approx(length * width, rel=2e-3)
+    assert (geometry.hinge_curvature_scale == 1.0).all() and (geometry.twist_scale == 1.0).all()
+    for on_nodes in (0.0, 45.0, 90.0):  # an edge through a row of nodes keeps the clamp-edge hinge
+        assert len(bias_strip(length, width, h, h, angle=math.radians(on_nodes)).ghost_nodes) == 0
+
+
+def test_a_ghosts_bending_work_is_its_masters_and_the_clamps():
+    # A 22.5° strip whose clamp moves 10 mm along the sheet's normal and back, damped to
+    # rest: an elastic sheet's work against its bending then returns to 0, and the budget
+    # closes. The ghosts carry the root's bending; their forces along the normal act on
+    # their masters, and the part of their motion the clamp prescribes through the
+    # masters' places is the drive's (kernels/sheet.py ghosts_driven). Measured: −1.0e-9 J
+    # of a 2.5e-5 J peak (without that share the elastic work ends at 1.3e-5 J).
+    from warpcloth.sheet import bias_strip
+
+    geometry = bias_strip(0.04, 0.02, 0.005, 0.005, angle=math.radians(22.5))
+    material = SheetMaterialSI(fabric(2000.0, 9.8e-5), fabric(1500.0, 5e-5), 20.0, ELASTIC, fabric(0.0, 6e-5), 0.1)
+    a, ramp = 0.01, 0.02
+    out_and_back = ClampMotion(
+        np.array([0.0, ramp]),
+        np.array([ramp, 2 * ramp]),
+        np.array(
+            [[0.0, 0.0, 3 * a / ramp**2, -2 * a / ramp**3, 0.0], [a, 0.0, -3 * a / ramp**2, 2 * a / ramp**3, 0.0]]
+        ),
+    )
+    model, solver = sheet_batch(
+        geometry, [material], 0.0, 30.0, SheetClampMotion(translation=out_and_back, direction=(1.0, 0.0, 0.0)), 0.4
+    )
+    run = simulate_sheets(model, model.control(), solver, SheetRecorder(0.01, 4, 0.6), threads=1)
+    elastic = run.probe("elastic_work", 0)
+    budget = run.energy_total()[:, 0]
+    print(f"elastic work: peak {np.nanmax(elastic):.3e} J, at rest {elastic[-1]:.3e} J")
+    assert run.probe("kinetic", 0)[-1] < 1e-7 * np.nanmax(run.probe("kinetic", 0))  # at rest: measured 8.5e-9
+    assert abs(elastic[-1]) < 1e-3 * np.nanmax(elastic)
+    assert np.abs(budget - budget[0]).max() < 1e-3 * np.nanmax(run.probe("drive_work", 0))
+
+
+def test_a_ghost_closed_strip_on_a_turning_clamp_closes_its_budget():
+    # The same 22.5° strip on a clamp turned 0.5 rad about the vertical through 2.8 mm above
+    # its edge, under gravity: the sheet's normal turns with the clamp, and that turn moves
+    # the ghosts and the slaved nodes (their offset lies along it) as the drive's work. The
+    # budget closes at first order in dt: measured 2.34e-4, 1.16e-4 of the peak kinetic
+    # energy (without the turn's share the budget gains 0.12 of it by 0.04 s: diverged).
+    from warpcloth.sheet import bias_strip
+
+    geometry = bias_strip(0.04, 0.02, 0.005, 0.005, angle=math.radians(22.5))
+    material = SheetMaterialSI(
+        fabric(2000.0, 9.8e-6, BENDING), fabric(1500.0, 5e-6, BENDING), 20.0, ELASTIC, fabric(0.0, 6e-6, BENDING), 0.1
+    )
+    turn = ClampMotion(
+        np.array([0.0]), np.array([0.05]), np.array([[0.0, 0.0, 3 * 0.5 / 0.05**2, -2 * 0.5 / 0.05**3, 0.0]])
+    )
+    clamp = SheetClampMotion(rotation=turn, axis=(0.0, 0.0, 1.0), centre=(0.0, 0.0028, 0.0))
+    residuals = []
+    for fraction in (0.4, 0.2):
+        model, solver = sheet_batch(geometry, [material], 9.80665, 0.0, clamp, fraction)
+        run = simulate_sheets(model, model.control(), solver, SheetRecorder(0.005, 4, 0.1), threads=1)
+        budget = run.energy_total()[:, 0]
+        residuals.append(np.abs(budget - budget[0]).max() / np.nanmax(run.probe("kinetic", 0)))
+    print(f"budget residuals {residuals} of the peak kinetic energy")
+    assert residuals[0] < 5e-4 and residuals[1] == pytest.approx(residuals[0] / 2, rel=0.1)

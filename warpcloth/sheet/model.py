@@ -209,6 +209,13 @@ class SheetModel:
         m.cell_nodes = self.array(g.cell_nodes.astype(np.int32).reshape(-1, 4), wp.vec4i)
         m.cell_area = self.array(g.cell_area)
         m.cell_scale = self.array(g.cell_scale)
+        m.twist_area = self.array(g.twist_area)
+        m.twist_scale = self.array(g.twist_scale)
+        m.rest_normal = t.vec3(*g.rest_normal)
+        m.ghost_nodes = self.array(g.ghost_nodes.astype(np.int32), int)
+        m.ghost_masters = self.array(g.ghost_masters.astype(np.int32), int)
+        m.ghost_weights = self.array(g.ghost_weights)
+        m.slaved_ghosts = g.slaved_ghosts
         m.tensile = self.array(
             np.array([[mat.warp.tensile for mat in materials], [mat.weft.tensile for mat in materials]]), t.vec4
         )
@@ -260,6 +267,10 @@ class SheetState:
         s.twist_history = allocate_reversal_memory(
             law.History, model.reversal_memory, max(1, n_cells), b, t.vec2, model.device
         )
+        n_ghosts = max(1, len(g.ghost_nodes))
+        s.ghost_offset = wp.zeros((n_ghosts, b), dtype=t.vec3, device=model.device)
+        s.ghost_held = wp.zeros((n_ghosts, b), dtype=t.vec3, device=model.device)
+        s.clamp_normal = wp.array(np.repeat(g.rest_normal[None, :], b, axis=0), dtype=t.vec3, device=model.device)
         s.work = wp.zeros(b, dtype=model.kernels.structs.tally, device=model.device)
         s.step = wp.zeros(b, dtype=int, device=model.device)
         s.status = wp.zeros(b, dtype=int, device=model.device)
@@ -297,7 +308,7 @@ class SheetState:
         wp.launch(
             self.model.kernels.initialise_memory,
             dim=self.model.n_sheets,
-            inputs=[self.model.struct, self.struct],
+            inputs=[self.model.struct, self.model.control().struct, self.struct],
             device=self.model.device,
         )
 

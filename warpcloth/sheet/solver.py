@@ -175,7 +175,7 @@ class SheetSolver(FusedSolver):
         wp.launch(
             model.kernels.internal_forces,
             dim=model.n_sheets,
-            inputs=[model.struct, self.stepping(control), state.struct],
+            inputs=[model.struct, control.struct, self.stepping(control), state.struct],
             device=model.device,
         )
         s = state.struct
