@@ -82,6 +82,7 @@ LIBRARY_ONLY = frozenset(
         "bending_length",  # rigidity_from_bending_length(bending_length, ...): as areal_density
         "body",  # warpcloth.bodies.named(name): a scene or run names its body, read by the registry
         "blocks",  # identifiability(blocks): the benchmarks' comparison of experiments
+        "clamp_edge",  # grid_geometry(clamp_edge=): bias_strip passes it at a scene's oblique sheet.bias_angle_deg
         "clamp_length",  # rectangle(...): a scene's sheet.* lengths, checked as fields (sheet.cut for the rest)
         "dotted",  # sheet_value(scene, dotted): fit --free names it as "names"
         "edge_hinge",  # rectangle/bias_strip(edge_hinge=): a scene's sheet.edge_hinge, a choice field
