@@ -153,14 +153,6 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         return rotated(model.rest_normal, control.axis[s], wp.cos(theta), wp.sin(theta))
 
     @wp.func
-    def rigid_velocity(control: SheetControl, s: int, x: vec3, d: scalar, rate: scalar, d_rate: scalar):
-        # the velocity of a point x moving with the clamp
-        return (
-            rate * wp.cross(control.axis[s], x - control.centre[s] - d * control.direction[s])
-            + d_rate * (control.direction[s])
-        )
-
-    @wp.func
     def place_ghosts(model: SheetModel, control: SheetControl, state: SheetState, s: int, theta: scalar, d: scalar):
         # each held ghost's offset out of the plane for the force pass (kernels/sheet_forces.py
         # ghosts_seen): its weight times its master's, from the clamp's place at the pose
@@ -170,43 +162,40 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         for k in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
             m = model.ghost_masters[k]
             away = state.position[m, s] - clamped_position(model, control, s, m, theta, d)
-            state.ghost_offset[k, s] = (model.ghost_weights[k] * wp.dot(normal, away)) * normal
+            r = model.ghost_ratios[k]
+            state.ghost_offset[k, s] = (r * r * wp.dot(normal, away)) * normal
 
     @wp.func
-    def follow_masters(
-        model: SheetModel,
-        control: SheetControl,
-        state: SheetState,
-        s: int,
-        theta: scalar,
-        d: scalar,
-        rate: scalar,
-        d_rate: scalar,
-    ):
-        # each slaved node, held in the plane by the clamp at the pose (θ, d), out of it its
-        # master's displacement from the clamp's place times its weight, and moving so
+    def follow_masters(model: SheetModel, control: SheetControl, state: SheetState, s: int, theta: scalar, d: scalar):
+        # each slaved node's coordinate along the normal: its clamp place's (the pose θ, d)
+        # plus r² times its master's displacement from the master's clamp place, as near a
+        # clamp the fabric leaves its plane as ξ² (docs/model.md §17.2). In the plane it moves
+        # as its own forces take it; along the normal it has no inertia, and its velocity
+        # keeps only its part in the plane (so that the normal's turn feeds it nothing).
         normal = turned_normal(model, control, s, theta)
         for k in range(model.slaved_ghosts):
             g = model.ghost_nodes[k]
             m = model.ghost_masters[k]
-            w = model.ghost_weights[k]
+            weight = model.ghost_ratios[k] * model.ghost_ratios[k]
+            away = state.position[m, s] - clamped_position(model, control, s, m, theta, d)
             held = clamped_position(model, control, s, g, theta, d)
-            master_held = clamped_position(model, control, s, m, theta, d)
-            away = state.position[m, s] - master_held
-            moving = state.velocity[m, s] - rigid_velocity(control, s, master_held, d, rate, d_rate)
-            state.position[g, s] = held + (w * wp.dot(normal, away)) * normal
-            state.velocity[g, s] = (
-                rigid_velocity(control, s, held, d, rate, d_rate) + (w * wp.dot(normal, moving)) * normal
-            )
+            out = wp.dot(normal, held - state.position[g, s]) + weight * wp.dot(normal, away)
+            state.position[g, s] = state.position[g, s] + out * normal
+            v = state.velocity[g, s]
+            state.velocity[g, s] = v - wp.dot(normal, v) * normal
 
     @wp.func
     def advance_free_nodes(
         model: SheetModel, stepping: SheetStepping, state: SheetState, s: int, step: int, gamma: scalar, work: tally
     ):
         # every free node under its internal forces, damping, gravity and the model's force terms
+        # (a slaved node in the plane only: its master moves it along the normal, §17.2)
         dt = stepping.dt
         g = vec3(zero, -model.gravity, zero)
         rho = model.density[s]
+        normal = vec3()
+        if model.slaved_ghosts > 0:
+            normal = state.clamp_normal[s]
         for i in range(model.n_nodes):
             if model.clamped[i] != 0:
                 continue
@@ -214,11 +203,18 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
             x = state.position[i, s]
             v = state.velocity[i, s]
             f_damp = -gamma * m * v
+            slaved = False
+            if model.slaved_ghosts > 0:
+                slaved = model.slaved[i] != 0
+            if slaved:
+                f_damp = f_damp - wp.dot(normal, f_damp) * normal
             f = internal_force(state, i, s) + f_damp + m * g
             if wp.static(applied.present):
                 f = f + applied.force(x, v, m)
             x_new, v_new = update_node(x, v, f, kick_mass(m, step == 0), dt)  # every node starts at step 0
             sweep = (v + v_new) * (half * dt)
+            if slaved:
+                sweep = sweep - wp.dot(normal, sweep) * normal
             work = work + work_on(state, i, s, sweep) + damping_work(-wp.dot(f_damp, sweep))
             if wp.static(applied.present):
                 work = work + applied.work(x, v, m, sweep)
@@ -238,23 +234,32 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         d_before: scalar,
         work: tally,
     ):
-        # a ghost moves with the clamp, less its weight times its master's clamp place along
-        # the normal: the rest of its motion is its master's, whose forces hold its own
-        # (kernels/sheet_forces.py ghosts_held); what the clamp moves is the drive's work
-        # (the master's clamp place moving, and the normal turning)
+        # A ghost's coordinate along the normal is its clamp place's plus r² times its
+        # master's displacement from the master's clamp place, a: its master's motion moves
+        # it there, whose forces hold its own (kernels/sheet_forces.py ghosts_held), and the
+        # clamp moves it, through the clamp places and the normal's turn: that part of its
+        # forces' work is the drive's (a held ghost's own clamp place's sweep is move_clamp's;
+        # a slaved one moves in the plane as its own forces take it)
         normal = state.clamp_normal[s]
         turn = (turned_normal(model, control, s, theta) - turned_normal(model, control, s, theta_before)) * half
         for k in range(model.ghost_nodes.shape[0]):
             g = model.ghost_nodes[k]
             m = model.ghost_masters[k]
-            w = model.ghost_weights[k]
+            r = model.ghost_ratios[k]
             master_held = clamped_position(model, control, s, m, theta, d)
             away = state.position[m, s] - master_held
             held_sweep = (master_held - clamped_position(model, control, s, m, theta_before, d_before)) * half
-            clamp_moved = w * (turn * wp.dot(normal, away) + normal * (wp.dot(turn, away) - wp.dot(normal, held_sweep)))
             moved = state.force_elastic[g, s] + state.force_hysteretic[g, s]
-            if k < model.slaved_ghosts:
-                moved = moved + state.force_tensile[g, s]
+            master_part = wp.dot(turn, away) - wp.dot(normal, held_sweep)
+            if k < model.slaved_ghosts:  # along the normal only: in the plane it moves as its forces take it
+                held = clamped_position(model, control, s, g, theta, d)
+                own_sweep = (held - clamped_position(model, control, s, g, theta_before, d_before)) * half
+                out = wp.dot(normal, own_sweep) - wp.dot(turn, state.position[g, s] - held) + r * r * master_part
+                clamp_moved = out * normal
+                weighed = vec3(zero, -model.gravity, zero) * (model.density[s] * model.node_area[g])
+                moved = moved + state.force_tensile[g, s] + weighed
+            else:
+                clamp_moved = (r * r) * (turn * wp.dot(normal, away) + normal * master_part)
             work = work + work_on(state, g, s, clamp_moved) + drive_work(-wp.dot(moved, clamp_moved))
         return work
 
@@ -270,6 +275,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
     ):
         theta, rate, d, d_rate = clamp_pose(control, s, t_next)
         theta_before, _rate, d_before, _d_rate = clamp_pose(control, s, t_next - two * stepping.dt)
+        axis = control.axis[s]
+        direction = control.direction[s]
         for i in range(model.n_nodes):
             if model.clamped[i] == 0:
                 continue
@@ -278,10 +285,11 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
             f_int = internal_force(state, i, s)
             work = work + work_on(state, i, s, sweep) + drive_work(-wp.dot(f_int, sweep))
             state.position[i, s] = x_new
-            state.velocity[i, s] = rigid_velocity(control, s, x_new, d, rate, d_rate)
+            arm = x_new - control.centre[s] - d * direction
+            state.velocity[i, s] = rate * wp.cross(axis, arm) + d_rate * direction
         if model.ghost_nodes.shape[0] > 0:
             work = ghosts_driven(model, control, state, s, theta, d, theta_before, d_before, work)
-            follow_masters(model, control, state, s, theta, d, rate, d_rate)
+            follow_masters(model, control, state, s, theta, d)
         return work
 
     @wp.func
@@ -325,6 +333,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
             if model.clamped[i] == 0:
                 m = rho * model.node_area[i]
                 v = state.velocity[i, s]
+                if model.slaved_ghosts > 0 and model.slaved[i] != 0:  # along the normal its master moves it
+                    v = v - wp.dot(state.clamp_normal[s], v) * state.clamp_normal[s]
                 kinetic = kinetic + half * m * wp.dot(v, v)
                 gravitational = gravitational + m * model.gravity * state.position[i, s][1]
         stretch = zero
@@ -379,7 +389,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         """Start every hinge and cell fresh at its current curvature, shear angle and twist
         (ghosts at the clamp's rest pose, where a run starts)."""
         s = wp.tid()
-        follow_masters(model, control, state, s, zero, zero, zero, zero)
+        follow_masters(model, control, state, s, zero, zero)
         place_ghosts(model, control, state, s, zero, zero)
         ghosts_seen(model, state, s)
         for h in range(model.hinge_nodes.shape[0]):
@@ -393,7 +403,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
             w, f, d = cell_corners(model, state, c, s)
             phi, _sn, unit, _d_w, _d_f = shear_angle(w, f)
             state.cell[c, s] = law.fresh_memory(model.cell_scale[c] * phi, model.shear[s], state.cell_history, c, s)
-            kappa = model.twist_scale[c] * cell_twist(model, d, unit)
+            kappa = model.cell_scale[c] * cell_twist(model, d, unit)
             state.twist[c, s] = law.fresh_memory(kappa, model.twist[s], state.twist_history, c, s)
         for k in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
             state.position[model.ghost_nodes[k], s] = state.ghost_held[k, s]

@@ -262,7 +262,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             # the twist κ12 = d·n / (h_w h_f) (§17.5): its energy A ∫ M12 dκ12 is the plate's
             # 2 D66 κ12² per area for an elastic law. ∂(d·n)/∂x: the twist vector's ±1 at the
             # corners along n, and the normal's turn, through w and f, against d's in-plane part
-            kappa = model.twist_scale[c] * cell_twist(model, d, unit)
+            kappa = scale * cell_twist(model, d, unit)
             per_twist = model.twist_area[c] / (model.spacing[0] * model.spacing[1])
             twist_elastic = law.elastic_moment(kappa, p_twist) * per_twist
             twist_hysteretic = zero
@@ -289,9 +289,9 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
 
     @wp.func
     def ghosts_seen(model: SheetModel, state: SheetState, s: int):
-        # the bending and the twist see each held ghost at its clamped quadratic's place
-        # (state.ghost_offset, docs/model.md §17.2); the membrane saw the clamp's. A slaved
-        # ghost is already where its master puts it (kernels/sheet.py follow_masters).
+        # the bending, the twist and the shear of cells see each held ghost at its clamped
+        # quadratic's place (state.ghost_offset, docs/model.md §17.2); the segments saw the
+        # clamp's. A slaved ghost is already where its master puts it (kernels/sheet.py).
         for k in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
             g = model.ghost_nodes[k]
             held = state.position[g, s]
@@ -299,21 +299,30 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             state.position[g, s] = held + state.ghost_offset[k, s]
 
     @wp.func
+    def on_master(forces: wp.array2d(dtype=vec3), m: int, s: int, f: vec3, weight: scalar, normal: vec3):
+        # a ghost's force f along the normal on its master, which moves the ghost along the
+        # normal by the weight r² times its own displacement there
+        add(forces, m, s, (weight * wp.dot(normal, f)) * normal)
+
+    @wp.func
     def ghosts_held(model: SheetModel, state: SheetState, s: int):
         # each held ghost back in the clamp; every ghost's forces along the normal on its
-        # master, whose motion moves the ghost by the weight times its own along the normal
-        # (a slaved ghost's in every element, a held one's in the bending and the twist)
+        # master: a slaved one's in every element, and its weight's (its normal coordinate
+        # is its master's, its place in the plane its own), a held one's in the cells and
+        # hinges that saw it moved
         normal = state.clamp_normal[s]
         for k in range(model.ghost_nodes.shape[0]):
             g = model.ghost_nodes[k]
             m = model.ghost_masters[k]
-            w = model.ghost_weights[k]
+            r = model.ghost_ratios[k]
+            weight = r * r
             if k < model.slaved_ghosts:
-                add(state.force_tensile, m, s, (w * wp.dot(normal, state.force_tensile[g, s])) * normal)
+                weighed = vec3(zero, -model.gravity, zero) * (model.density[s] * model.node_area[g])
+                on_master(state.force_tensile, m, s, state.force_tensile[g, s] + weighed, weight, normal)
             else:
                 state.position[g, s] = state.ghost_held[k, s]
-            add(state.force_elastic, m, s, (w * wp.dot(normal, state.force_elastic[g, s])) * normal)
-            add(state.force_hysteretic, m, s, (w * wp.dot(normal, state.force_hysteretic[g, s])) * normal)
+            on_master(state.force_elastic, m, s, state.force_elastic[g, s], weight, normal)
+            on_master(state.force_hysteretic, m, s, state.force_hysteretic[g, s], weight, normal)
 
     @wp.func
     def accumulate_sheet_forces(model: SheetModel, stepping: SheetStepping, state: SheetState, s: int):

@@ -55,6 +55,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetTypes:
         compression: scalar  # a yarn's stiffness in compression over its quartic's in tension (1: mirrored)
         rest_position: wp.array2d(dtype=vec3)  # [node, sheet]; clamped nodes move rigidly from these
         clamped: wp.array(dtype=int)  # [node]: 1 where the clamp holds the node
+        slaved: wp.array(dtype=int)  # [node]: 1 where its master moves it out of the plane (§17.2)
         node_area: wp.array(dtype=scalar)  # [node]: the fabric area the node carries, m²
         density: wp.array(dtype=scalar)  # [sheet]: ρ_A, kg/m²
         damping: wp.array(dtype=scalar)  # [sheet]: γ after release, 1/s
@@ -73,12 +74,11 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetTypes:
         cell_area: wp.array(dtype=scalar)  # m² of free fabric the cell stands for
         cell_scale: wp.array(dtype=scalar)  # its shear over the free part (2 astride a clamp edge)
         twist_area: wp.array(dtype=scalar)  # m² of free fabric the cell's twist stands for
-        twist_scale: wp.array(dtype=scalar)  # its twist over the free part (cell_scale; 1 with ghosts)
         rest_normal: vec3  # the sheet's rest plane's unit normal
-        ghost_nodes: wp.array(dtype=int)  # [ghost]: held nodes the bending sees at the clamped quadratic's place
+        ghost_nodes: wp.array(dtype=int)  # [ghost]: slaved nodes, then held ones the bending sees moved
         ghost_masters: wp.array(dtype=int)  # [ghost]: the free node each ghost follows
-        ghost_weights: wp.array(dtype=scalar)  # [ghost]: (ξ_ghost / ξ_master)²
-        slaved_ghosts: int  # the first ghosts are free fabric below the edge, slaved where they are drawn too
+        ghost_ratios: wp.array(dtype=scalar)  # [ghost]: |ξ_ghost| / ξ_master
+        slaved_ghosts: int  # how many of the ghosts, first, are slaved nodes (docs/model.md §17.2)
         tensile: wp.array2d(dtype=vec4)  # [family, sheet]: a1..a4 of T(ε), N/m
         bending: wp.array2d(dtype=law.Parameters)  # [family, sheet]: the bending law of each direction
         shear: wp.array(dtype=law.Parameters)  # [sheet]: the shear law on the shear angle (G for D)

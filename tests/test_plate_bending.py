@@ -202,8 +202,8 @@ def test_a_cantilever_cut_at_any_angle_bends_with_d_theta(angle):
         assert -0.01 < errors[0] < 0 and order == pytest.approx(2.0, abs=0.1)  # measured −0.837 %, 1.99
     elif angle == 45.0:
         assert -0.016 < errors[0] < 0 and -0.005 < errors[1] < 0 and order > 1.6  # measured −1.40 %, −0.41 %, 1.77
-    else:  # measured −1.727 %, −0.435 %, order 1.99
-        assert -0.02 < errors[0] < 0 and order == pytest.approx(2.0, abs=0.15)
+    else:  # measured −1.416 %, −0.393 %, order 1.85 (and so at −22.5°, the mirror image)
+        assert -0.016 < errors[0] < 0 and -0.0045 < errors[1] < 0 and order > 1.8
 
 
 @pytest.mark.parametrize(  # 90° repeats 0° with this plate (D11 = D22): in the slow set
@@ -222,9 +222,9 @@ def test_a_strip_cut_at_any_angle_hangs_under_its_weight_as_the_heavy_beam_of_d_
         assert -0.01 < errors[0] < 0 and order == pytest.approx(2.0, abs=0.15)
     elif angle == 45.0:  # measured −1.081 %, −0.290 %, order 1.90
         assert -0.013 < errors[0] < 0 and -0.004 < errors[1] < 0 and order > 1.7
-    else:  # the ghost closure, as the cantilever's: measured −1.245 %, −0.339 %, order 1.88 (−4.32 %,
+    else:  # the ghost closure, as the cantilever's: measured −1.078 %, −0.296 %, order 1.87 (−4.32 %,
         # −2.21 %, order 0.96 through a staircase of held nodes)
-        assert -0.015 < errors[0] < 0 and -0.004 < errors[1] < 0 and order > 1.75
+        assert -0.012 < errors[0] < 0 and -0.0035 < errors[1] < 0 and order > 1.8
 
 
 @pytest.mark.slow

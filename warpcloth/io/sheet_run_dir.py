@@ -10,7 +10,7 @@ Layout of a sheet run directory::
     frame_times.npy     (frame,) times of the frames, s
     geometry.npz        lattice [node, (i, j)], rest_positions [node, xyz] (m), clamped
                         [node], faces [face, 4] (the mesh's quads, corners in loop order),
-                        cells [cell, 4] (the free cells the kernels shear, in their order)
+                        cells [cell, 4] (the cells the kernels shear and twist, in their order)
     meta.json           kind "sheet", sizes, units, coordinates, the markers' nodes,
                         health, completeness and what is committed
 
@@ -143,7 +143,7 @@ class SheetRunWriter(StreamedRun):
                     "rest_positions": "[node, xyz], m",
                     "clamped": "[node], bool",
                     "faces": "[face, 4]: quads, corners in loop order",
-                    "cells": "[cell, 4]: the free cells the kernels shear (probe index), corners (i,j), (i+1,j), "
+                    "cells": "[cell, 4]: the cells the kernels shear and twist (probe index), corners (i,j), (i+1,j), "
                     "(i,j+1), (i+1,j+1)",
                 },
             },

@@ -36,7 +36,7 @@ class SheetGeometry:
 
     lattice: np.ndarray  # [node, (i, j)]
     rest_positions: np.ndarray  # [node, xyz], m
-    clamped: np.ndarray  # [node], bool
+    clamped: np.ndarray  # [node], bool: held by the clamp
     node_area: np.ndarray  # [node], m²
     spacing: tuple[float, float]  # (h_warp, h_weft), m
     edge_nodes: np.ndarray  # [segment, 2]
@@ -53,12 +53,14 @@ class SheetGeometry:
     cell_area: np.ndarray  # [cell], m² of free fabric it stands for
     cell_scale: np.ndarray  # [cell]: 2 for a cell astride the clamp edge with one corner free, else 1
     twist_area: np.ndarray  # [cell], m² of free fabric the cell's twist stands for
-    twist_scale: np.ndarray  # [cell]: the cell's twist over its free part (cell_scale, or 1 with ghosts)
     rest_normal: np.ndarray  # [xyz]: the unit normal of the sheet's rest plane
-    ghost_nodes: np.ndarray  # [ghost]: held nodes the bending sees extrapolated (a clamp edge between nodes)
-    ghost_masters: np.ndarray  # [ghost]: the free node each ghost's offset follows
-    ghost_weights: np.ndarray  # [ghost]: (ξ_ghost / ξ_master)², the clamped quadratic's ratio
-    slaved_ghosts: int  # the first ghosts lie below the edge: fabric slaved to its master, where it is drawn too
+    slaved: (
+        np.ndarray
+    )  # [node], bool: free fabric near a clamp edge between nodes, out of its plane moved by its master
+    ghost_nodes: np.ndarray  # [ghost]: slaved nodes, then held ones the bending sees extrapolated
+    ghost_masters: np.ndarray  # [ghost]: the free node each ghost follows
+    ghost_ratios: np.ndarray  # [ghost]: |ξ_ghost| / ξ_master
+    slaved_ghosts: int  # how many of the ghosts, first, are slaved nodes
 
     @property
     def n_nodes(self) -> int:
@@ -102,7 +104,7 @@ class SheetGeometry:
             raise ArgumentError(
                 "(i, j)",
                 f"the sheet has no free {('warp', 'weft')[family]} hinge at lattice ({i}, {j}) (a hinge needs "
-                f"three nodes along its line, not all clamped); {self._reach()}",
+                f"three nodes along its line and fabric of its own that bends); {self._reach()}",
             )
         return int(hits[0])
 
@@ -129,9 +131,10 @@ def grid_geometry(
     ``edge_hinge = "second_order"`` (scale 2), over h under ``"paper"``. ``clamp_edge``
     (a point on the clamp's edge and the unit vector in the sheet's plane from it into the
     free fabric) closes a clamp edge that crosses the lattice's lines between nodes through
-    ghost nodes instead (docs/model.md §17.7): every hinge and cell carries only its
-    fabric below the edge, and each held node an element reaches is seen by the bending at
-    its clamped quadratic's place, extrapolated from a free master (:func:`_ghosts`)."""
+    ghost nodes instead (docs/model.md §17.2): every hinge and twist carries only its
+    fabric below the edge, free nodes within a spacing of it are slaved along the normal,
+    and each held or slaved node an element reaches follows a free master there
+    (:func:`_ghosts`)."""
     if edge_hinge not in EDGE_HINGES:
         raise ArgumentError("edge_hinge", f"must be one of {', '.join(EDGE_HINGES)}, got {edge_hinge!r}")
     weight = np.asarray(kept_cells, dtype=float)
@@ -170,7 +173,8 @@ def grid_geometry(
         tolerance = 1e-9 * max(h_warp, h_weft)
         if (below[clamped] > tolerance).any() or (below[~clamped] <= tolerance).any():
             raise ArgumentError("clamp_edge", "the held nodes must be those at or above the clamp edge it gives")
-        clamped = clamped | (below < SLAVED_DEPTH * max(h_warp, h_weft))
+        # the slaved (a node within round-off of a spacing is not, nor its mirror image)
+        slaved = ~clamped & (below < SLAVED_DEPTH * max(h_warp, h_weft) - tolerance)
         below_grid = np.zeros((n_i, n_j))
         below_grid[active] = below
         quarters = _free_quarters(below_grid, weight)
@@ -247,15 +251,13 @@ def grid_geometry(
     astride = (clamped[cells].sum(axis=1) == 3) & (edge_hinge == "second_order") & (clamp_edge is None)
     cell_weight = weight[ci_, cj_] * np.where(astride, 0.5, 1.0)
     cell_scale = np.where(astride, 2.0, 1.0)
-    if clamp_edge is None:
-        twist_area, twist_scale = cell_weight * cell_scale, cell_scale
-    else:  # the twist of the quadratic the ghosts extrapolate, over the cell's part below the edge
-        twist_area, twist_scale = cell_below, np.ones(len(cells))
+    # with ghosts, the twist of the quadratic they extrapolate over the cell's part below the edge
+    twist_area = cell_weight * cell_scale if clamp_edge is None else cell_below
     widths = np.array(h_widths)[order]
     lengths = np.array(spacing)[np.array(h_families, dtype=np.int64)[order]]
     normal = np.cross(warp_direction, weft_direction)
     normal = normal / np.linalg.norm(normal)
-    ghost_nodes, ghost_masters, ghost_weights = (np.zeros(0, dtype=np.int32),) * 2 + (np.zeros(0),)
+    ghost_nodes, ghost_masters, ghost_ratios = np.zeros(0, dtype=np.int32), np.zeros(0, dtype=np.int32), np.zeros(0)
     if clamp_edge is not None:
         reached = np.unique(
             np.concatenate(
@@ -263,8 +265,8 @@ def grid_geometry(
                 + [cells[c_keep].ravel()]
             )
         )
-        ghost_nodes, ghost_masters, ghost_weights = _ghosts(
-            reached[clamped[reached]], below, (rest - point) @ np.cross(normal, inward), clamped, tolerance
+        ghost_nodes, ghost_masters, ghost_ratios = _ghosts(
+            reached, below, (rest - point) @ np.cross(normal, inward), clamped, slaved, tolerance
         )
     return SheetGeometry(
         lattice=lattice,
@@ -286,12 +288,12 @@ def grid_geometry(
         cell_area=cell_weight[c_keep] * (h_warp * h_weft),
         cell_scale=cell_scale[c_keep],
         twist_area=twist_area[c_keep] * (h_warp * h_weft),
-        twist_scale=twist_scale[c_keep],
         rest_normal=normal,
         ghost_nodes=ghost_nodes,
         ghost_masters=ghost_masters,
-        ghost_weights=ghost_weights,
-        slaved_ghosts=int((below[ghost_nodes] > 0).sum()) if clamp_edge is not None else 0,
+        slaved=slaved if clamp_edge is not None else np.zeros(len(rest), dtype=bool),
+        ghost_ratios=ghost_ratios,
+        slaved_ghosts=int((~clamped[ghost_nodes]).sum()),
     )
 
 
@@ -308,11 +310,11 @@ def _free_quarters(below: np.ndarray, weight: np.ndarray) -> np.ndarray:
             u = np.array([a, 0.5, 0.5, a])
             v = np.array([b, b, 0.5, 0.5])
             xi = corner[0, 0] + u * (corner[1, 0] - corner[0, 0]) + v * (corner[0, 1] - corner[0, 0])
-            out[ci + a, cj + b, k] = weight[ci, cj] * _part_at_or_above_zero(xi)
+            out[ci + a, cj + b, k] = weight[ci, cj] * _part_where_nonnegative(xi)
     return out
 
 
-def _part_at_or_above_zero(values: np.ndarray) -> float:
+def _part_where_nonnegative(values: np.ndarray) -> float:
     # the part of a parallelogram where an affine function, ``values`` at its four corners in
     # order round it, is ≥ 0 (clipped in its unit square's coordinates)
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
@@ -329,31 +331,33 @@ def _part_at_or_above_zero(values: np.ndarray) -> float:
 
 
 def _ghosts(
-    held: np.ndarray, below: np.ndarray, along: np.ndarray, clamped: np.ndarray, tolerance: float
+    reached: np.ndarray, below: np.ndarray, along: np.ndarray, held: np.ndarray, slaved: np.ndarray, tolerance: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     # A clamp holds the fabric at ξ = 0 with its slope: near it the displacement out of the
-    # plane is w ≈ A(η) ξ², so a held node at ξ_g < 0 that a free element reaches is seen at
-    # w_g = (ξ_g / ξ_m)² w_m of a free master at ξ_m ≥ |ξ_g| (the ratio at most 1, so no
-    # master is made stiffer than its own hinges) and as near along the edge (η) as may be
-    free = np.flatnonzero(~clamped)
-    nodes, masters, weights = [], [], []
-    for g in held:
+    # plane is w ≈ A(η) ξ². Each held or slaved node an element reaches (ξ_g ≠ 0) follows,
+    # out of the plane, a master (free, not slaved) at ξ_m ≥ |ξ_g|, the ratio |ξ_g| / ξ_m at
+    # most 1, the nearest by (η_m − η_g)² + (ξ_m − |ξ_g|)², ties (a cut and its mirror image)
+    # to the master nearer the strip's middle: the slaved first
+    free = np.flatnonzero(~held & ~slaved)
+    if not len(free):
+        raise ArgumentError("kept_cells", "no node hangs more than a spacing below the clamp edge")
+    nodes, masters, ratios = [], [], []
+    scale = tolerance * 1e9  # the spacing
+    for g in reached[held[reached] | slaved[reached]]:
         depth = abs(below[g])
         if depth <= tolerance:
             continue  # on the edge: its place is the clamp's
-        candidates = free[below[free] >= depth]
-        if not len(candidates):
-            raise ArgumentError("clamp_edge", "no free node lies as far below the clamp edge as a held one above it")
-        m = candidates[np.argmin((along[candidates] - along[g]) ** 2 + (below[candidates] - depth) ** 2)]
+        candidates = free[below[free] >= depth - tolerance]
+        if not len(candidates):  # a strip shorter than its ghosts reach: the deepest free node
+            candidates = free[below[free] == below[free].max()]
+        cost = ((along[candidates] - along[g]) ** 2 + (below[candidates] - depth) ** 2) / scale**2
+        order = np.lexsort((candidates, np.round(np.abs(along[candidates]) / scale, 9), np.round(cost, 9)))
+        m = candidates[order[0]]
         nodes.append(g)
         masters.append(m)
-        weights.append((depth / below[m]) ** 2)
+        ratios.append(depth / below[m])
     first = np.argsort(below[nodes] < 0, kind="stable")  # the slaved (below the edge) first
-    return (
-        np.array(nodes, dtype=np.int32)[first],
-        np.array(masters, dtype=np.int32)[first],
-        np.array(weights)[first],
-    )
+    return np.array(nodes, dtype=np.int32)[first], np.array(masters, dtype=np.int32)[first], np.array(ratios)[first]
 
 
 def _line_ends_carried(
@@ -447,8 +451,10 @@ def bias_strip(
     (:func:`grid_geometry`). Its area is the rectangle's to round-off. On the 45° bias
     with a width of whole cell diagonals h√2 the sides run through nodes and the cut
     cells are halves; a row of nodes lies on the clamp edge whenever the angle is 0, 45°
-    or 90°. Nodes at or above the clamp edge are clamped, or where ``is_clamped(rest
-    positions)`` says (a free-free strip pinned at its mode's nodes, say)."""
+    or 90°; at any other angle the clamp closes through ghost nodes (:func:`grid_geometry`'s
+    ``clamp_edge``), unless ``edge_hinge`` is ``"paper"`` or ``is_clamped`` is given. Nodes at
+    or above the clamp edge are clamped, or where ``is_clamped(rest positions)`` says (a
+    free-free strip pinned at its mode's nodes, say)."""
     h = float(spacing)
     c, s = math.cos(angle), math.sin(angle)
     warp_direction = np.array([0.0, -c, s])
@@ -492,10 +498,11 @@ def bias_strip(
 
 SLAVED_DEPTH = 1.0
 """How far below a clamp edge between the nodes (in spacings) a free node is slaved to the
-clamped quadratic: held in the plane and, out of it, its master's displacement times
-(ξ / ξ_m)². A node much nearer the edge than a spacing has hinges that barely hold it, and
-it would ring alone against the clamp; slaved within h/2, the 22.5° cantilever's first mode
-converges at order 1.3, within h at order 2.0 (−1.73 %, −0.44 % at 5 and 2.5 mm)."""
+clamped quadratic along the normal: there its master's displacement times (ξ / ξ_m)², in the
+plane its own (docs/model.md §17.2). A node much nearer the edge than a spacing has hinges
+that barely hold it out of the plane, and it would ring alone against the clamp; slaved
+within h/2, the 22.5° cantilever's first mode converges at order 1.3, within h at 1.85
+(−1.42 %, −0.39 % at 5 and 2.5 mm)."""
 
 SLIVER = 0.25
 """A cut cell keeping less than this part of its area lends it to its fullest neighbour: a

@@ -3,6 +3,7 @@ what drives it (:class:`SheetControl`), built by :class:`SheetBuilder` (SI array
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -183,6 +184,12 @@ class SheetModel:
         """The drives the sheets were built with."""
         return SheetControl(self)
 
+    @functools.cached_property
+    def rest_control(self) -> SheetControl:
+        """The drives, read at the clamp's rest pose where a state is set (slaved nodes
+        follow their masters from there, docs/model.md §17.2)."""
+        return SheetControl(self)
+
     def _build_struct(self, materials: list[SheetMaterialSI]) -> object:
         g, t, law = self.geometry, self.types, self.kernels.structs.law
         b = self.n_sheets
@@ -192,6 +199,7 @@ class SheetModel:
         m.compression = self.scalar(self.compression_fraction)
         m.rest_position = self.array(np.repeat(g.rest_positions[:, None, :], b, axis=1), t.vec3)
         m.clamped = self.array(g.clamped.astype(np.int32), int)
+        m.slaved = self.array(g.slaved.astype(np.int32), int)
         m.node_area = self.array(g.node_area)
         m.density = self.array(self.density)
         m.damping = self.array(np.array([s.damping for s in self.sheets]))
@@ -210,11 +218,10 @@ class SheetModel:
         m.cell_area = self.array(g.cell_area)
         m.cell_scale = self.array(g.cell_scale)
         m.twist_area = self.array(g.twist_area)
-        m.twist_scale = self.array(g.twist_scale)
         m.rest_normal = t.vec3(*g.rest_normal)
         m.ghost_nodes = self.array(g.ghost_nodes.astype(np.int32), int)
         m.ghost_masters = self.array(g.ghost_masters.astype(np.int32), int)
-        m.ghost_weights = self.array(g.ghost_weights)
+        m.ghost_ratios = self.array(g.ghost_ratios)
         m.slaved_ghosts = g.slaved_ghosts
         m.tensile = self.array(
             np.array([[mat.warp.tensile for mat in materials], [mat.weft.tensile for mat in materials]]), t.vec4
@@ -286,7 +293,8 @@ class SheetState:
 
     def set_positions(self, positions: np.ndarray, velocities: np.ndarray | None = None) -> None:
         """Replace node positions ``[node, sheet, 3]`` (and velocities), m and m/s, and
-        start every hinge and cell fresh there."""
+        start every hinge and cell fresh there. A slaved node (docs/model.md §17.2) takes
+        its coordinate along the normal from its master, at the clamp's rest pose."""
         expected = (self.model.n_nodes, self.model.n_sheets, 3)
         for name, value in (("positions", positions), ("velocities", velocities)):
             if value is None:
@@ -308,7 +316,7 @@ class SheetState:
         wp.launch(
             self.model.kernels.initialise_memory,
             dim=self.model.n_sheets,
-            inputs=[self.model.struct, self.model.control().struct, self.struct],
+            inputs=[self.model.struct, self.model.rest_control.struct, self.struct],
             device=self.model.device,
         )
 
