@@ -437,3 +437,24 @@ def test_the_sheet_fit_overlay_draws_the_markers_against_the_clamp_and_the_resid
     assert 0.05 < np.abs(measured_z).max() < 1.0
     residual = np.concatenate([line.get_ydata() for line in z_residual.get_lines() if line.get_linestyle() == "None"])
     assert len(residual) == (measured.marker >= 0).sum() and np.abs(residual).max() < 0.5
+
+
+@pytest.mark.parametrize("angle", [30.0, 45.0])
+def test_the_shapes_figure_has_lines_at_any_cut(angle):
+    # a cut at 30° has no two nodes at one y or z: its lines are bands a spacing wide (it
+    # drew empty panels); on the bias the rows group exactly, as before
+    import math
+
+    from warpcloth.sheet import bias_strip
+    from warpcloth.viz.figures.sheet import _lines
+
+    rest = bias_strip(0.1, 0.03, 0.01, 0.005, angle=math.radians(angle)).rest_positions
+    for along, across in ((1, 2), (2, 1)):
+        lines = _lines(rest, along, across)
+        drawn = np.concatenate(lines)
+        assert len(np.unique(drawn)) == len(drawn) > 0.9 * len(rest)  # each node on one line, nearly all drawn
+        assert all((np.diff(rest[line, along]) >= 0).all() for line in lines)
+        if angle == 45.0:  # a row or a column of nodes at one rest coordinate
+            assert all(np.ptp(rest[line, across]) < 1e-9 for line in lines)
+        else:  # a band a spacing wide
+            assert max(np.ptp(rest[line, across]) for line in lines) <= 0.005 + 1e-12

@@ -235,8 +235,15 @@ def sheet_run_figure(run: SheetRun, setting: SheetSetting, sheet: int = 0) -> pl
 def _lines(rest: np.ndarray, along: int, across: int) -> list[np.ndarray]:
     # the nodes of each line of the sheet, one line per rest value of coordinate `across`
     # (a row: equal y; a column: equal z), ordered along coordinate `along`; at 1 µm, so a
-    # bias cut's rows, whose y are sums of h/√2, group exactly
+    # bias cut's rows, whose y are sums of h/√2, group exactly. A cut at another angle has
+    # no two nodes at one y or z: there a line is a band of `across` as wide as the lattice
+    # spacing (the nearest neighbours' median distance), its nodes ordered along
     keys = np.round(rest[:, across] * 1e6).astype(np.int64)
+    if len(np.unique(keys)) > len(keys) / 2:
+        from scipy.spatial import cKDTree
+
+        spacing = float(np.median(cKDTree(rest).query(rest, k=2)[0][:, 1]))
+        keys = np.floor((rest[:, across] - rest[:, across].min()) / spacing + 0.5).astype(np.int64)
     return [
         np.flatnonzero(keys == k)[np.argsort(rest[keys == k, along])] for k in np.unique(keys) if (keys == k).sum() > 1
     ]
