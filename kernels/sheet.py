@@ -84,7 +84,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
     piecewise_polynomial = drives.build(scalar).piecewise_polynomial
     forces = sheet_forces.build(scalar, terms)
     accumulate_sheet_forces, shear_angle = forces.accumulate_sheet_forces, forces.shear_angle
-    ghosts_seen = forces.ghosts_seen
+    ghosts_seen, weight_of = forces.ghosts_seen, forces.weight_of
     hinge_geometry, hinge_curvature, turning_angle = forces.hinge_geometry, forces.hinge_curvature, forces.turning_angle
     cell_corners, cell_twist = forces.cell_corners, forces.cell_twist
     tensile_energy = tensile.build(scalar).energy_per_width
@@ -256,8 +256,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
                 own_sweep = (held - clamped_position(model, control, s, g, theta_before, d_before)) * half
                 out = wp.dot(normal, own_sweep) - wp.dot(turn, state.position[g, s] - held) + r * r * master_part
                 clamp_moved = out * normal
-                weighed = vec3(zero, -model.gravity, zero) * (model.density[s] * model.node_area[g])
-                moved = moved + state.force_tensile[g, s] + weighed
+                moved = moved + state.force_tensile[g, s] + weight_of(model, s, g)
             else:
                 clamp_moved = (r * r) * (turn * wp.dot(normal, away) + normal * master_part)
             work = work + work_on(state, g, s, clamp_moved) + drive_work(-wp.dot(moved, clamp_moved))
@@ -284,8 +283,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
             sweep = (x_new - clamped_position(model, control, s, i, theta_before, d_before)) * half
             f_int = internal_force(state, i, s)
             work = work + work_on(state, i, s, sweep) + drive_work(-wp.dot(f_int, sweep))
-            state.position[i, s] = x_new
             arm = x_new - control.centre[s] - d * direction
+            state.position[i, s] = x_new
             state.velocity[i, s] = rate * wp.cross(axis, arm) + d_rate * direction
         if model.ghost_nodes.shape[0] > 0:
             work = ghosts_driven(model, control, state, s, theta, d, theta_before, d_before, work)
@@ -402,8 +401,9 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         for c in range(model.cell_nodes.shape[0]):
             w, f, d = cell_corners(model, state, c, s)
             phi, _sn, unit, _d_w, _d_f = shear_angle(w, f)
-            state.cell[c, s] = law.fresh_memory(model.cell_scale[c] * phi, model.shear[s], state.cell_history, c, s)
-            kappa = model.cell_scale[c] * cell_twist(model, d, unit)
+            scale = model.cell_scale[c]
+            state.cell[c, s] = law.fresh_memory(scale * phi, model.shear[s], state.cell_history, c, s)
+            kappa = scale * cell_twist(model, d, unit)
             state.twist[c, s] = law.fresh_memory(kappa, model.twist[s], state.twist_history, c, s)
         for k in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
             state.position[model.ghost_nodes[k], s] = state.ghost_held[k, s]

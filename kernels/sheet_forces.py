@@ -31,6 +31,7 @@ class SheetForces:
     cell_twist: Any
     shear_angle: Any
     ghosts_seen: Any
+    weight_of: Any
 
 
 @functools.cache
@@ -299,6 +300,11 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             state.position[g, s] = held + state.ghost_offset[k, s]
 
     @wp.func
+    def weight_of(model: SheetModel, s: int, i: int):
+        # node i's weight, N
+        return vec3(zero, -model.gravity, zero) * (model.density[s] * model.node_area[i])
+
+    @wp.func
     def on_master(forces: wp.array2d(dtype=vec3), m: int, s: int, f: vec3, weight: scalar, normal: vec3):
         # a ghost's force f along the normal on its master, which moves the ghost along the
         # normal by the weight r² times its own displacement there
@@ -317,8 +323,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             r = model.ghost_ratios[k]
             weight = r * r
             if k < model.slaved_ghosts:
-                weighed = vec3(zero, -model.gravity, zero) * (model.density[s] * model.node_area[g])
-                on_master(state.force_tensile, m, s, state.force_tensile[g, s] + weighed, weight, normal)
+                on_master(state.force_tensile, m, s, state.force_tensile[g, s] + weight_of(model, s, g), weight, normal)
             else:
                 state.position[g, s] = state.ghost_held[k, s]
             on_master(state.force_elastic, m, s, state.force_elastic[g, s], weight, normal)
@@ -353,4 +358,5 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         cell_twist=cell_twist,
         shear_angle=shear_angle,
         ghosts_seen=ghosts_seen,
+        weight_of=weight_of,
     )

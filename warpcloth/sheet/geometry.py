@@ -54,9 +54,7 @@ class SheetGeometry:
     cell_scale: np.ndarray  # [cell]: 2 for a cell astride the clamp edge with one corner free, else 1
     twist_area: np.ndarray  # [cell], m² of free fabric the cell's twist stands for
     rest_normal: np.ndarray  # [xyz]: the unit normal of the sheet's rest plane
-    slaved: (
-        np.ndarray
-    )  # [node], bool: free fabric near a clamp edge between nodes, out of its plane moved by its master
+    slaved: np.ndarray  # [node], bool: free near a clamp edge between nodes; its master moves it off the plane
     ghost_nodes: np.ndarray  # [ghost]: slaved nodes, then held ones the bending sees extrapolated
     ghost_masters: np.ndarray  # [ghost]: the free node each ghost follows
     ghost_ratios: np.ndarray  # [ghost]: |ξ_ghost| / ξ_master
@@ -167,6 +165,7 @@ def grid_geometry(
         raise ArgumentError("is_clamped", "the clamp must hold some of the sheet's nodes and leave some free")
     node_area = around[active] * (h_warp * h_weft / 4.0)
     carried = around  # the cells' parts around each node its elements' bending stands on
+    slaved = np.zeros(len(rest), dtype=bool)
     if clamp_edge is not None:
         point, inward = (np.asarray(v, dtype=float) for v in clamp_edge)
         below = (rest - point) @ inward  # ξ: how far below the clamp edge each node is at rest
@@ -266,7 +265,7 @@ def grid_geometry(
             )
         )
         ghost_nodes, ghost_masters, ghost_ratios = _ghosts(
-            reached, below, (rest - point) @ np.cross(normal, inward), clamped, slaved, tolerance
+            reached, below, (rest - point) @ np.cross(normal, inward), clamped, slaved, max(h_warp, h_weft)
         )
     return SheetGeometry(
         lattice=lattice,
@@ -291,7 +290,7 @@ def grid_geometry(
         rest_normal=normal,
         ghost_nodes=ghost_nodes,
         ghost_masters=ghost_masters,
-        slaved=slaved if clamp_edge is not None else np.zeros(len(rest), dtype=bool),
+        slaved=slaved,
         ghost_ratios=ghost_ratios,
         slaved_ghosts=int((~clamped[ghost_nodes]).sum()),
     )
@@ -331,7 +330,7 @@ def _part_where_nonnegative(values: np.ndarray) -> float:
 
 
 def _ghosts(
-    reached: np.ndarray, below: np.ndarray, along: np.ndarray, held: np.ndarray, slaved: np.ndarray, tolerance: float
+    reached: np.ndarray, below: np.ndarray, along: np.ndarray, held: np.ndarray, slaved: np.ndarray, spacing: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     # A clamp holds the fabric at ξ = 0 with its slope: near it the displacement out of the
     # plane is w ≈ A(η) ξ². Each held or slaved node an element reaches (ξ_g ≠ 0) follows,
@@ -342,7 +341,7 @@ def _ghosts(
     if not len(free):
         raise ArgumentError("kept_cells", "no node hangs more than a spacing below the clamp edge")
     nodes, masters, ratios = [], [], []
-    scale = tolerance * 1e9  # the spacing
+    tolerance = 1e-9 * spacing
     for g in reached[held[reached] | slaved[reached]]:
         depth = abs(below[g])
         if depth <= tolerance:
@@ -350,8 +349,8 @@ def _ghosts(
         candidates = free[below[free] >= depth - tolerance]
         if not len(candidates):  # a strip shorter than its ghosts reach: the deepest free node
             candidates = free[below[free] == below[free].max()]
-        cost = ((along[candidates] - along[g]) ** 2 + (below[candidates] - depth) ** 2) / scale**2
-        order = np.lexsort((candidates, np.round(np.abs(along[candidates]) / scale, 9), np.round(cost, 9)))
+        cost = ((along[candidates] - along[g]) ** 2 + (below[candidates] - depth) ** 2) / spacing**2
+        order = np.lexsort((candidates, np.round(np.abs(along[candidates]) / spacing, 9), np.round(cost, 9)))
         m = candidates[order[0]]
         nodes.append(g)
         masters.append(m)
