@@ -2,6 +2,7 @@
 
     python benchmarks/track_accuracy.py            # the independent rig (scenes/data/rig/)
     python benchmarks/track_accuracy.py --own      # warpcloth's own renderer (scenes/data/track/)
+    python benchmarks/track_accuracy.py --lossless # and the rig's dyed edge with every pixel's colour (+1 min)
 
 The rig's video (``python -m warpcloth.track.rig``) is warpcloth's simulation of the
 impulsive rotation filmed by a renderer that shares nothing with the tracker: its own lens
@@ -11,7 +12,9 @@ textured backdrop, 4 ms of motion blur, H.264 in MP4 and JPEG boards. For the ma
 for the dyed edge (its silhouette, and the midline with the fabric's thickness) it prints
 the bias and RMS per coordinate against the truth, how often the stated uncertainty covers
 the error (within 1σ and 2σ per coordinate), the worst error, and the fit of the tracked
-markers. Results in benchmarks/RESULTS.md.
+markers. With ``--lossless`` the dyed edge's frames are rendered again and written with
+every pixel's colour (FFV1 RGB; H.264 4:2:0 keeps one colour sample per 2 × 2 pixels) and
+tracked and fitted the same way. Results in benchmarks/RESULTS.md.
 """
 
 import argparse
@@ -76,6 +79,7 @@ def compare(name: str, tracked: Path, truth_xy_mm: np.ndarray, truth_keys: np.nd
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--own", action="store_true", help="warpcloth's own renderer's example instead of the rig")
+    parser.add_argument("--lossless", action="store_true", help="also the rig's dyed edge recorded losslessly")
     args = parser.parse_args()
     data = ROOT / "scenes" / "data" / ("track" if args.own else "rig")
     described = json.loads((data / "truth.json").read_text())
@@ -116,19 +120,27 @@ def main() -> None:
         cli("track", str(data / "edge.mp4"), "--plane", str(out / "plane.json"), *common, "-o", str(out / "edge.csv"))
         keys = edge_truth[:, 0].astype(int) * 100_000 + np.rint(edge_truth[:, 2] * 1e3).astype(int)
         compare("dyed edge, silhouette", out / "edge.csv", edge_truth[:, 5:7], keys)
-        cli("track", str(data / "edge.mp4"), "--plane", str(out / "plane.json"), *common, "--thickness-mm",
-            str(described["strip"]["thickness_mm"]), "-o", str(out / "midline.csv"))  # fmt: skip
-        compare("dyed edge, midline (--thickness-mm)", out / "midline.csv", edge_truth[:, 3:5], keys)
-        cli("fit", "impulsive_rotation", "--measured", str(out / "midline.csv"), "--free",
-                  "gamma,rotation_centre_dy_mm", "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out",
-                  str(out / "fit-edge"))  # fmt: skip
-        result = json.loads((out / "fit-edge" / "fit.json").read_text())
-        for name, true in (("clamp.rotation_centre_dy_mm", true_dy), ("damping.gamma_per_s", true_gamma)):
-            value = result["parameters"][name]
-            print(
-                f"fit of the edge's midline: {result['status']}, {name} = {value['value']:.4f} ± {value['sigma']:.4f} "
-                f"(truth {true}: {(value['value'] - true) / value['sigma']:+.1f}σ)"
-            )
+        videos = {"H.264 4:2:0": data / "edge.mp4"}
+        if args.lossless:
+            from warpcloth.track.rig import write_lossless_edge
+
+            write_lossless_edge(out / "edge.avi", range(len(np.unique(edge_truth[:, 0]))))
+            videos["lossless RGB"] = out / "edge.avi"
+        for k, (label, video) in enumerate(videos.items()):
+            midline = out / f"midline-{k}.csv"
+            cli("track", str(video), "--plane", str(out / "plane.json"), *common, "--thickness-mm",
+                str(described["strip"]["thickness_mm"]), "-o", str(midline))  # fmt: skip
+            compare(f"dyed edge, midline (--thickness-mm), {label}", midline, edge_truth[:, 3:5], keys)
+            cli("fit", "impulsive_rotation", "--measured", str(midline), "--free",
+                      "gamma,rotation_centre_dy_mm", "--bounds", "rotation_centre_dy_mm=0:8", "--no-progress", "--out",
+                      str(out / f"fit-{k}"))  # fmt: skip
+            result = json.loads((out / f"fit-{k}" / "fit.json").read_text())
+            for name, true in (("clamp.rotation_centre_dy_mm", true_dy), ("damping.gamma_per_s", true_gamma)):
+                value = result["parameters"][name]
+                print(
+                    f"fit of the edge's midline, {label}: {result['status']}, {name} = {value['value']:.4f} ± "
+                    f"{value['sigma']:.4f} (truth {true}: {(value['value'] - true) / value['sigma']:+.1f}σ)"
+                )
 
 
 if __name__ == "__main__":

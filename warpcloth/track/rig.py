@@ -863,6 +863,25 @@ def _write_mp4(path: Path, frames: list[np.ndarray]) -> None:
     write_atomically(path, write)
 
 
+def write_lossless_edge(path: Path, frames: Sequence[int]) -> None:
+    """The edge video's frames ``frames`` (indices at :data:`FPS`) rendered again, exposed with
+    the same noise, and written losslessly with every pixel's colour (FFV1 RGB in AVI, each
+    at its own time): what edge.mp4 holds before H.264 stores its colour at 2 × 2 pixels. Too
+    large to bundle (0.6 MB a frame); the tests and benchmarks/track_accuracy.py make it."""
+    from warpcloth.track.video import write_video
+
+    motion = simulate_motion(DURATION_S)
+    camera = rig_camera()
+    rig = Rig(camera)
+
+    def rendered():
+        for k in frames:
+            radiance = rig.render_frame(motion, k / FPS)[1]
+            yield expose(radiance, camera.lens, np.random.default_rng([SEED, 3, k]))
+
+    write_atomically(path, lambda tmp: write_video(tmp, rendered(), list(frames), Fraction(1, FPS)))
+
+
 def _write_image(path: Path, image: np.ndarray, params: list[int] | None = None) -> None:
     import cv2
 

@@ -29,7 +29,8 @@ DROP_FACTOR = 1.5
 @dataclass
 class Frames:
     """Decoded frames ``[frame, row, column]`` (grey) or ``[frame, row, column, rgb]`` (uint8) with their times (s), the
-    index of each in the file's decode order, and what was found wrong with the timing.
+    index of each in the file's decode order, what was found wrong with the timing, and how
+    many pixels shared one colour sample in the file (across, down).
     Iterating gives ``(index, t, image)`` per frame, as :class:`FrameStream` does."""
 
     images: np.ndarray
@@ -38,6 +39,7 @@ class Frames:
     nominal_interval_s: float
     dropped: list[str] = field(default_factory=list)
     duplicated: list[str] = field(default_factory=list)
+    chroma_subsampling: tuple[int, int] = (1, 1)
 
     @property
     def total(self) -> int:
@@ -52,7 +54,8 @@ class FrameStream:
     """The frames of a video's first stream, decoded one at a time as it is iterated (a long
     recording is never held whole): ``(index, t, image)`` per frame kept, duplicates left
     out. After an iteration, :attr:`dropped`, :attr:`duplicated` and
-    :attr:`nominal_interval_s` describe its timing; each iteration decodes the file again."""
+    :attr:`nominal_interval_s` describe its timing; each iteration decodes the file again.
+    :attr:`chroma_subsampling` is how many pixels share one colour sample (across, down)."""
 
     def __init__(self, path: str | Path, argument: str = "path", colour: bool = False) -> None:
         import av
@@ -69,6 +72,14 @@ class FrameStream:
                     raise DataFileError(self.path, "holds no video stream")
                 stream = container.streams.video[0]
                 self.width, self.height = stream.codec_context.width, stream.codec_context.height
+                stored = stream.codec_context.format
+                # how many pixels share one colour sample across and down (1, 1 unless the
+                # codec stores colour at lower resolution: 2, 2 for 4:2:0, H.264's usual)
+                self.chroma_subsampling = (
+                    (1, 1)
+                    if stored is None or not stored.chroma_width()
+                    else (round(self.width / stored.chroma_width()), round(self.height / stored.chroma_height()))
+                )
                 # the container's count, else its packets counted (read, not decoded)
                 self.total = stream.frames or sum(1 for packet in container.demux(stream) if packet.size)
         except (av.error.FFmpegError, UnicodeDecodeError) as exc:
@@ -157,7 +168,13 @@ def read_frames(path: str | Path, argument: str = "path", colour: bool = False) 
     stream = FrameStream(path, argument, colour)
     index, t, images = zip(*stream, strict=True)
     return Frames(
-        np.stack(images), np.array(t), np.array(index), stream.nominal_interval_s, stream.dropped, stream.duplicated
+        np.stack(images),
+        np.array(t),
+        np.array(index),
+        stream.nominal_interval_s,
+        stream.dropped,
+        stream.duplicated,
+        stream.chroma_subsampling,
     )
 
 
@@ -174,7 +191,7 @@ def median_background(frames: Iterable[tuple[int, float, np.ndarray]], most: int
 
 
 def write_video(path: str | Path, images: Iterable[np.ndarray], pts: Sequence[int], time_base: Fraction) -> None:
-    """Grey uint8 frames to ``path`` (FFV1, lossless, in AVI: its time base is exact at any
+    """Grey (or RGB) uint8 frames to ``path`` (FFV1, lossless, in AVI: its time base is exact at any
     frame rate up to 1000 frames/s, unlike Matroska's millisecond clock; FFmpeg replaces a
     finer one by 1/600 s), frame i at ``pts[i] · time_base`` s, each encoded as it comes
     (``images`` may be a generator: none is held)."""
@@ -184,12 +201,13 @@ def write_video(path: str | Path, images: Iterable[np.ndarray], pts: Sequence[in
         # FFV1 version 3 with slice CRCs, every frame a key frame: damage is caught where it is
         stream = container.add_stream("ffv1", rate=Fraction(1) / time_base)
         stream.codec_context.options = {"level": "3", "slicecrc": "1", "context": "1", "g": "1"}
-        stream.pix_fmt = "gray"
         stream.time_base = time_base
         stream.codec_context.time_base = time_base
         for i, (image, stamp) in enumerate(zip(images, pts, strict=True)):
+            colour = image.ndim == 3  # RGB: stored as planes, every pixel's colour kept
             if i == 0:
-                stream.height, stream.width = image.shape
+                stream.height, stream.width = image.shape[:2]
+                stream.pix_fmt = "bgr0" if colour else "gray"
                 if stamp > 0:
                     # AVI has no start time: a frame's time is its slot, so the first is
                     # moved to its own by an empty slot at 0 (the muxer fills the rest)
@@ -197,7 +215,11 @@ def write_video(path: str | Path, images: Iterable[np.ndarray], pts: Sequence[in
                     lead.pts = lead.dts = 0
                     lead.time_base, lead.stream = time_base, stream
                     container.mux(lead)
-            frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(image, dtype=np.uint8), format="gray")
+            frame = av.VideoFrame.from_ndarray(
+                np.ascontiguousarray(image, dtype=np.uint8), format="rgb24" if colour else "gray"
+            )
+            if colour:
+                frame = frame.reformat(format="bgr0")
             frame.pts, frame.time_base = int(stamp), time_base
             for packet in stream.encode(frame):
                 container.mux(packet)
