@@ -538,6 +538,35 @@ def test_a_bias_strip_hangs_from_the_clamp_edge_with_its_area(spacing, width):
     assert abs(area - 1) < 0.06  # staircase sides: O(h); measured 1.052, 0.991, 1.051
 
 
+def test_a_clipped_cells_bending_lies_on_its_corners_by_their_shape_functions():
+    # docs/model.md §17.2: a cell's kept part is shared among its corners as the integrals
+    # of their bilinear shape functions over it; half a cell cut along its diagonal (a 45°
+    # bias's side) gives 5, 3, 3, 1 of 24 (∫(1-u)(1-v), ∫u(1-v), ∫(1-u)v, ∫uv over u + v ≤ 1)
+    from warpcloth.sheet.geometry import _corner_shares
+
+    h, warp, weft = 0.005, np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    square = h * np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])  # corners 00, 10, 11, 01
+    part, shares = _corner_shares(square, ((0, -1.0, -h), (1, -1.0, -h), (0, 1.0, 0.0)), h, warp, weft)
+    assert part == 1.0 and (shares == 0.25).all()  # a whole cell: a quarter each, exactly
+    # the square turned 45° (warp, weft turned with it) and kept where y + z ≤ h before the turn
+    turn = np.array([[1.0, 1.0], [-1.0, 1.0]]) / np.sqrt(2)
+    part, shares = _corner_shares(square @ turn.T, ((0, -1.0, -h / np.sqrt(2)),), h, turn @ warp, turn @ weft)
+    np.testing.assert_allclose(part, 0.5, rtol=1e-12)
+    np.testing.assert_allclose(shares, np.array([5.0, 3.0, 3.0, 1.0]) / 24, rtol=1e-12)
+    # any clip keeps its part's area and centroid: against a fine grid of the square
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        cut_y, cut_z = rng.uniform(0.2, 0.9, 2) * h
+        bounds = ((0, -1.0, -cut_y), (1, -1.0, -cut_z))
+        part, shares = _corner_shares(square, bounds, h, warp, weft)
+        u, v = (np.arange(400) + 0.5) / 400, (np.arange(400) + 0.5) / 400
+        uu, vv = np.meshgrid(u, v, indexing="ij")
+        inside = (uu * h <= cut_y) & (vv * h <= cut_z)
+        np.testing.assert_allclose(part, inside.mean(), atol=2.5e-3)  # the grid places a cut within 1/800
+        corners = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+        np.testing.assert_allclose(shares @ corners / part, [uu[inside].mean(), vv[inside].mean()], atol=2e-3)
+
+
 @pytest.mark.parametrize("angle", [10.0, 22.5, 67.5, -30.0])
 def test_a_clamp_edge_between_the_nodes_closes_through_ghosts(angle):
     # docs/model.md §17.2: the bending carries only the fabric below the clamp edge, free

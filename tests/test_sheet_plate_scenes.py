@@ -49,8 +49,8 @@ def test_the_twist_is_deterministic_at_its_bundled_amplitude_and_not_at_five_tim
 def test_the_bias_strip_converges_in_h():
     # the impulsive rotation of a 30 mm bias strip, its markers on the centreline at 49.5 and
     # 99 mm: what changes as h halves shrinks by more than 3 (measured over the first 0.25 s:
-    # 0.82, 0.12 mm for the first marker, 0.88, 0.27 mm for the second; over the scene's
-    # 0.5 s, docs/model.md §17.8: 0.95, 0.20 and 1.80, 0.30 mm)
+    # 0.83, 0.12 mm for the first marker, 0.85, 0.27 mm for the second; over the scene's
+    # 0.5 s, docs/model.md §17.7: 0.93, 0.20 and 1.79, 0.29 mm)
     runs = [
         markers("bias_strip", {"sheet.spacing_warp_mm": h, "sheet.spacing_weft_mm": h, "run.duration_s": 0.25})
         for h in (5.0, 2.5, 1.25)
