@@ -491,17 +491,26 @@ def video_command(args: argparse.Namespace) -> int:
         ]
         for note in seen:
             print(f"warpcloth track: note: {args.video}: {note}", file=sys.stderr)
-    colour = []
+    colour_notes = []
     if mode == "edge" and frames.chroma_subsampling != (1, 1):
-        across, down = frames.chroma_subsampling
-        colour = [
-            f"the video stores one colour sample per {across} × {down} pixels: the dyed edge's cut face is not "
-            "resolved, and its points are as good as the rig's H.264 4:2:0 (docs/calibration.md: 0.05 mm across, "
-            "0.06 mm along RMS, in u_mm and u_along_mm); a recording that keeps every pixel's colour (FFV1, raw, "
-            "4:4:4) and --thickness-mm give 0.02 mm"
+        stored = (
+            "one colour sample per {} × {} pixels".format(*frames.chroma_subsampling)
+            if frames.chroma_subsampling
+            else "its colour in a format that does not say at what resolution"
+        )
+        colour_notes = [
+            f"the video stores {stored}: the dyed edge's cut face is not resolved, and its points are as good as "
+            "on the rig's H.264 4:2:0 (docs/calibration.md: the midline 0.05 mm across and 0.06 mm along RMS, "
+            "the silhouette 0.06 and 0.10 mm, in u_mm and u_along_mm); a lossless recording (FFV1, raw RGB) and "
+            "--thickness-mm give 0.02 mm"
         ]
-        for note in colour:
-            print(f"warpcloth track: note: {args.video}: {note}", file=sys.stderr)
+    elif mode == "edge" and args.thickness_mm is None:
+        colour_notes = [
+            "without --thickness-mm the dyed edge's cut face is not fitted apart from the dye behind it: lit "
+            "unlike it, it moves the silhouette by up to a quarter pixel (docs/calibration.md)"
+        ]
+    for note in colour_notes:
+        print(f"warpcloth track: note: {args.video}: {note}", file=sys.stderr)
     video = file_checksum(args.video)
     header = [
         f"# warpcloth track {args.video} (sha256 {video['sha256']}), plane {args.plane}, background {source}",
@@ -510,7 +519,7 @@ def video_command(args: argparse.Namespace) -> int:
         "against u_mm",
         *(f"# hidden: {note}" for note in hidden),
         *(f"# seen: {note}" for note in seen),
-        *(f"# colour: {note}" for note in colour),
+        *(f"# colour: {note}" for note in colour_notes),
         *(f"# dropped: {note}" for note in dropped),
         *(f"# duplicated: {note}" for note in duplicated),
         tracked.columns,

@@ -135,7 +135,10 @@ def grid_geometry(
     ghost nodes instead (docs/model.md §17.2): every hinge and twist carries only its
     fabric below the edge, free nodes within a spacing of it are slaved along the normal,
     and each held or slaved node an element reaches follows a free master there
-    (:func:`_ghosts`)."""
+    (:func:`_ghosts`). ``corner_shares`` (``[i, j, 4]``, corners 00, 10, 01, 11, summing to
+    each cell's kept part) is how much of each cell the hinges at its corners bend: a
+    quarter each by default; :func:`bias_strip` gives a clipped cell's shape-function
+    integrals over its part."""
     if edge_hinge not in EDGE_HINGES:
         raise ArgumentError("edge_hinge", f"must be one of {', '.join(EDGE_HINGES)}, got {edge_hinge!r}")
     weight = np.asarray(kept_cells, dtype=float)
@@ -185,8 +188,10 @@ def grid_geometry(
         slaved = ~clamped & (below < SLAVED_DEPTH * max(h_warp, h_weft) - tolerance)
         below_grid = np.zeros((n_i, n_j))
         below_grid[active] = below
-        quarters = _free_quarters(below_grid, shares[1:-1, 1:-1])
-        carried = quarters.sum(axis=-1)  # [i, j]: as around, each cell by the part of its quarter below the edge
+        # a hinge by its node's share of each cell (shape functions), a cell's twist by the
+        # quarters of it below the edge
+        quarters = _free_quarters(below_grid, np.repeat(weight[..., None] / 4.0, 4, axis=-1))
+        carried = _free_quarters(below_grid, shares[1:-1, 1:-1]).sum(axis=-1)
     carried_area = carried[active] * (h_warp * h_weft / 4.0)
 
     def free(*nodes: np.ndarray) -> np.ndarray:
@@ -529,7 +534,9 @@ by less than a cell)."""
 
 def _slivers_lent(kept: np.ndarray, shares: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # the smallest sliver's area to its fullest neighbour, until none is left (a corner's
-    # slivers gather into one cell), lumped a quarter on each of its corners
+    # slivers gather into one cell), a quarter of it on each of the neighbour's corners (its
+    # centroid then moves by up to half a cell: on a 20 mm strip at 22.5° the bending's
+    # centroid by 0.02 mm, against 1e-14 mm without lending)
     kept, shares = kept.copy(), shares.copy()
     n_i, n_j = kept.shape
     while True:
@@ -562,9 +569,9 @@ def _corner_shares(
     shares = np.zeros(4)
     for k in range(1, len(uv) - 1):  # a fan of triangles, each by its edges' midpoints (exact for uv)
         a, b, c = uv[0], uv[k], uv[k + 1]
-        area = 0.5 * abs((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))
+        triangle = 0.5 * abs((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))
         for u, v in ((a + b) / 2, (b + c) / 2, (c + a) / 2):
-            shares += area / 3.0 * np.array([(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v])
+            shares += triangle / 3.0 * np.array([(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v])
     return part, shares * (part / shares.sum())
 
 

@@ -863,11 +863,14 @@ def _write_mp4(path: Path, frames: list[np.ndarray]) -> None:
     write_atomically(path, write)
 
 
-def write_lossless_edge(path: Path, frames: Sequence[int]) -> None:
+def write_lossless_edge(path: Path, frames: Sequence[int]) -> np.ndarray:
     """The edge video's frames ``frames`` (indices at :data:`FPS`) rendered again, exposed with
     the same noise, and written losslessly with every pixel's colour (FFV1 RGB in AVI, each
     at its own time): what edge.mp4 holds before H.264 stores its colour at 2 × 2 pixels. Too
-    large to bundle (0.6 MB a frame); the tests and benchmarks/track_accuracy.py make it."""
+    large to bundle (0.6 MB a frame); the tests and benchmarks/track_accuracy.py make it.
+    Returns the midline these frames show, ``[frame, s, x, y]`` (mm) at the rig's arcs, from
+    the motion simulated again, to hold against edge_truth.csv (a change in the simulation
+    since would show there)."""
     from warpcloth.track.video import write_video
 
     motion = simulate_motion(DURATION_S)
@@ -880,6 +883,14 @@ def write_lossless_edge(path: Path, frames: Sequence[int]) -> None:
             yield expose(radiance, camera.lens, np.random.default_rng([SEED, 3, k]))
 
     write_atomically(path, lambda tmp: write_video(tmp, rendered(), list(frames), Fraction(1, FPS)))
+    midline = [motion.midline(motion.nodes_at(k / FPS), MARKER_S_MM) for k in frames]
+    return np.array(
+        [
+            [k, s, *point]
+            for k, points in zip(frames, midline, strict=True)
+            for s, point in zip(MARKER_S_MM, points, strict=True)
+        ]
+    )
 
 
 def _write_image(path: Path, image: np.ndarray, params: list[int] | None = None) -> None:

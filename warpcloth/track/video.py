@@ -30,7 +30,7 @@ DROP_FACTOR = 1.5
 class Frames:
     """Decoded frames ``[frame, row, column]`` (grey) or ``[frame, row, column, rgb]`` (uint8) with their times (s), the
     index of each in the file's decode order, what was found wrong with the timing, and how
-    many pixels shared one colour sample in the file (across, down).
+    many pixels shared one colour sample in the file (across, down; None: not known).
     Iterating gives ``(index, t, image)`` per frame, as :class:`FrameStream` does."""
 
     images: np.ndarray
@@ -39,7 +39,7 @@ class Frames:
     nominal_interval_s: float
     dropped: list[str] = field(default_factory=list)
     duplicated: list[str] = field(default_factory=list)
-    chroma_subsampling: tuple[int, int] = (1, 1)
+    chroma_subsampling: tuple[int, int] | None = None
 
     @property
     def total(self) -> int:
@@ -55,7 +55,8 @@ class FrameStream:
     recording is never held whole): ``(index, t, image)`` per frame kept, duplicates left
     out. After an iteration, :attr:`dropped`, :attr:`duplicated` and
     :attr:`nominal_interval_s` describe its timing; each iteration decodes the file again.
-    :attr:`chroma_subsampling` is how many pixels share one colour sample (across, down)."""
+    :attr:`chroma_subsampling` is how many pixels share one colour sample (across, down;
+    None where the format does not say)."""
 
     def __init__(self, path: str | Path, argument: str = "path", colour: bool = False) -> None:
         import av
@@ -73,13 +74,17 @@ class FrameStream:
                 stream = container.streams.video[0]
                 self.width, self.height = stream.codec_context.width, stream.codec_context.height
                 stored = stream.codec_context.format
-                # how many pixels share one colour sample across and down (1, 1 unless the
-                # codec stores colour at lower resolution: 2, 2 for 4:2:0, H.264's usual)
-                self.chroma_subsampling = (
-                    (1, 1)
-                    if stored is None or not stored.chroma_width()
-                    else (round(self.width / stored.chroma_width()), round(self.height / stored.chroma_height()))
-                )
+                # how many pixels share one colour sample across and down: 1, 1 where every
+                # pixel's colour is stored, 2, 2 for 4:2:0 (H.264's usual) and for a Bayer
+                # mosaic (one colour per pixel, the others interpolated); None if unknown
+                self.chroma_subsampling: tuple[int, int] | None = None
+                if stored is not None and stored.is_bayer:
+                    self.chroma_subsampling = (2, 2)
+                elif stored is not None and stored.chroma_width():
+                    self.chroma_subsampling = (
+                        round(self.width / stored.chroma_width()),
+                        round(self.height / stored.chroma_height()),
+                    )
                 # the container's count, else its packets counted (read, not decoded)
                 self.total = stream.frames or sum(1 for packet in container.demux(stream) if packet.size)
         except (av.error.FFmpegError, UnicodeDecodeError) as exc:
