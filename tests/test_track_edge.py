@@ -6,6 +6,8 @@ brightness as the dye on the other side, a dark clamp above. Lens blur, colour s
 recording), with the cut face lit a brighter red than the dyed side face beside it. The truth
 is the geometry itself."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -130,3 +132,21 @@ def test_a_band_with_a_brighter_face_is_fitted_at_its_edge_only_with_the_face_st
     assert np.all(misfit < 1e-3)
     # without it the brighter face's peak pulls the edge outwards by a fifth of a pixel
     assert np.all(two - edge < -0.1), two - edge
+
+
+@pytest.mark.parametrize(
+    ("stored", "shared"),
+    [("yuv420p", (2, 2)), ("nv12", (2, 2)), ("yuv422p", (2, 1)), ("yuv444p", (1, 1)), ("rgb24", (1, 1)),
+     ("bgr0", (1, 1)), ("bayer_rggb8", (2, 2))],
+)  # fmt: skip
+def test_a_videos_colour_resolution_is_read_from_its_format(stored, shared):
+    # only where every pixel's colour is stored is the cut face fitted apart (a Bayer
+    # mosaic interpolates two of three colours at every pixel: as coarse as 4:2:0)
+    import av
+
+    from warpcloth.track.video import FrameStream, colour_sampling
+
+    assert colour_sampling(av.VideoFormat(stored, 768, 720)) == shared
+    assert colour_sampling(None) is None
+    rig = Path(__file__).resolve().parents[1] / "scenes" / "data" / "rig" / "edge.mp4"
+    assert FrameStream(rig, colour=True).chroma_subsampling == (2, 2)

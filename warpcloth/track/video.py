@@ -73,18 +73,7 @@ class FrameStream:
                     raise DataFileError(self.path, "holds no video stream")
                 stream = container.streams.video[0]
                 self.width, self.height = stream.codec_context.width, stream.codec_context.height
-                stored = stream.codec_context.format
-                # how many pixels share one colour sample across and down: 1, 1 where every
-                # pixel's colour is stored, 2, 2 for 4:2:0 (H.264's usual) and for a Bayer
-                # mosaic (one colour per pixel, the others interpolated); None if unknown
-                self.chroma_subsampling: tuple[int, int] | None = None
-                if stored is not None and stored.is_bayer:
-                    self.chroma_subsampling = (2, 2)
-                elif stored is not None and stored.chroma_width():
-                    self.chroma_subsampling = (
-                        round(self.width / stored.chroma_width()),
-                        round(self.height / stored.chroma_height()),
-                    )
+                self.chroma_subsampling = colour_sampling(stream.codec_context.format)
                 # the container's count, else its packets counted (read, not decoded)
                 self.total = stream.frames or sum(1 for packet in container.demux(stream) if packet.size)
         except (av.error.FFmpegError, UnicodeDecodeError) as exc:
@@ -165,6 +154,20 @@ class FrameStream:
             for i, step in enumerate(steps)
             if step > DROP_FACTOR * nominal
         ]
+
+
+def colour_sampling(stored: object) -> tuple[int, int] | None:
+    """How many pixels of a frame stored as ``stored`` (an ``av.VideoFormat``, or None) share
+    one colour sample, across and down: 1, 1 where every pixel's colour is kept (RGB,
+    4:4:4), 2, 2 for 4:2:0 (H.264's usual) and for a Bayer mosaic (one colour per pixel, the
+    others interpolated), 2, 1 for 4:2:2; None where the format does not say."""
+    if stored is None:
+        return None
+    if stored.is_bayer:
+        return (2, 2)
+    if not stored.chroma_width() or not stored.width:
+        return None
+    return (round(stored.width / stored.chroma_width()), round(stored.height / stored.chroma_height()))
 
 
 def read_frames(path: str | Path, argument: str = "path", colour: bool = False) -> Frames:
