@@ -158,12 +158,11 @@ def grid_geometry(
     ii, jj = np.meshgrid(np.arange(n_i), np.arange(n_j), indexing="ij")
     around = cell_kept(ii - 1, jj - 1) + cell_kept(ii - 1, jj) + cell_kept(ii, jj - 1) + cell_kept(ii, jj)
     active = around > 0
-    # each node's share of the cells around it (four times, so a whole cell counts 1): a
+    # each node's share of each cell around it (four times, so a whole cell counts 1): a
     # quarter of each, or where the cut clips a cell its part's integral of the corner's
     # bilinear shape function
-    shares = np.zeros((n_i + 1, n_j + 1, 4))
-    shares[1:-1, 1:-1] = weight[..., None] / 4.0 if corner_shares is None else corner_shares
-    lumped = 4.0 * (shares[ii, jj, 3] + shares[ii, jj + 1, 1] + shares[ii + 1, jj, 2] + shares[ii + 1, jj + 1, 0])
+    quarter = np.repeat(weight[..., None] / 4.0, 4, axis=-1)
+    shares = _at_nodes(4.0 * (quarter if corner_shares is None else corner_shares))
     index = np.full((n_i, n_j), -1)
     index[active] = np.arange(active.sum())
     lattice = np.column_stack([ii[active], jj[active]])
@@ -176,7 +175,7 @@ def grid_geometry(
     if clamped.all() or not clamped.any():
         raise ArgumentError("is_clamped", "the clamp must hold some of the sheet's nodes and leave some free")
     node_area = around[active] * (h_warp * h_weft / 4.0)
-    carried = lumped  # the cells' parts around each node its elements' bending stands on
+    carried = shares.sum(axis=-1)  # the cells' parts around each node its elements' bending stands on
     slaved = np.zeros(len(rest), dtype=bool)
     if clamp_edge is not None:
         point, inward = (np.asarray(v, dtype=float) for v in clamp_edge)
@@ -190,8 +189,9 @@ def grid_geometry(
         below_grid[active] = below
         # a hinge by its node's share of each cell (shape functions), a cell's twist by the
         # quarters of it below the edge
-        quarters = _free_quarters(below_grid, np.repeat(weight[..., None] / 4.0, 4, axis=-1))
-        carried = _free_quarters(below_grid, shares[1:-1, 1:-1]).sum(axis=-1)
+        parts = _quarters_below(below_grid, weight > 0)
+        quarters = parts * _at_nodes(4.0 * quarter)
+        carried = (parts * shares).sum(axis=-1)
     carried_area = carried[active] * (h_warp * h_weft / 4.0)
 
     def free(*nodes: np.ndarray) -> np.ndarray:
@@ -310,21 +310,31 @@ def grid_geometry(
     )
 
 
-def _free_quarters(below: np.ndarray, shares: np.ndarray) -> np.ndarray:
-    # [i, j, 4]: for each node, the part of the quarter of each cell around it (the cells
-    # (i−1, j−1), (i−1, j), (i, j−1), (i, j)) that lies below the clamp edge, times four
-    # times the node's share of the cell (its kept part for a whole cell): ξ is affine over
-    # a cell, so the part is a clipped square's area
+def _at_nodes(per_corner: np.ndarray) -> np.ndarray:
+    # [i, j, 4] over the nodes from [i, j, 4] over the cells (their corners 00, 10, 01, 11):
+    # for each node, its value in the cells (i−1, j−1), (i−1, j), (i, j−1), (i, j) around it,
+    # where it is their corner 11, 10, 01, 00 (0 beyond the lattice)
+    n_i, n_j = per_corner.shape[0] + 1, per_corner.shape[1] + 1
+    out = np.zeros((n_i, n_j, 4))
+    for k, (a, b) in enumerate(((1, 1), (1, 0), (0, 1), (0, 0))):
+        out[a : a + n_i - 1, b : b + n_j - 1, k] = per_corner[..., a + 2 * b]
+    return out
+
+
+def _quarters_below(below: np.ndarray, kept: np.ndarray) -> np.ndarray:
+    # [i, j, 4] as :func:`_at_nodes`: the part of the quarter of each kept cell at each node
+    # that lies below the clamp edge (ξ ≥ 0): ξ is affine over a cell, so the part is a
+    # clipped square's area
     n_i, n_j = below.shape
     out = np.zeros((n_i, n_j, 4))
-    for ci, cj in zip(*np.nonzero(shares.sum(axis=-1) > 0), strict=True):
+    for ci, cj in zip(*np.nonzero(kept), strict=True):
         corner = below[ci : ci + 2, cj : cj + 2]  # ξ at (ci + a, cj + b)
         for k, (a, b) in enumerate(((1, 1), (1, 0), (0, 1), (0, 0))):
             # the quarter at corner (a, b) spans u, v from the corner to the cell's middle
             u = np.array([a, 0.5, 0.5, a])
             v = np.array([b, b, 0.5, 0.5])
             xi = corner[0, 0] + u * (corner[1, 0] - corner[0, 0]) + v * (corner[0, 1] - corner[0, 0])
-            out[ci + a, cj + b, k] = 4.0 * shares[ci, cj, a + 2 * b] * _part_where_nonnegative(xi)
+            out[ci + a, cj + b, k] = _part_where_nonnegative(xi)
     return out
 
 

@@ -176,15 +176,13 @@ def _one_frame(
     # the cut face, the thickness wide and lit unlike the dyed side face beside it, is a step
     # of its own where the colour is stored at every pixel; a 4:2:0 video's colour, a sample
     # per 2 × 2 pixels, cannot resolve it (the fit then scatters more than the step moves)
-    face = None
-    if thickness_mm is not None and full_chroma:
-        face = thickness_mm / mapping.mm_per_px(line)
-        if np.median(face) < FACE_RESOLVED_PX:
-            face = None
+    thickness_px = None if thickness_mm is None else thickness_mm / mapping.mm_per_px(line)
+    resolved = thickness_px is not None and full_chroma and np.median(thickness_px) >= FACE_RESOLVED_PX
+    face = thickness_px if resolved else None
     silhouette, _, _, _ = band_edges(sample(signal, points), o, -offset, -offset + 2.0 * half_width, face=face)
     offset = np.where(np.abs(silhouette + offset) < half_width, -silhouette, offset)
-    if thickness_mm is not None:  # onto the midline, half the thickness inside the band
-        offset = offset - 0.5 * thickness_mm / mapping.mm_per_px(line)
+    if thickness_px is not None:  # onto the midline, half the thickness inside the band
+        offset = offset - 0.5 * thickness_px
     edge = line + side * offset[:, None] * normal
     # the scatter of the silhouette across the strip about its own smooth course
     course = np.convolve(np.pad(offset, 5, mode="edge"), np.ones(11) / 11, "valid")
