@@ -7,12 +7,15 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
+import scipy.sparse
+import scipy.sparse.linalg
 import warp as wp
 
 from warpcloth.core.divergence import sample_lost
 from warpcloth.core.solver import FusedSolver
 from warpcloth.kernels import STATUS_BUDGET, STATUS_FOLDED, STATUS_NONFINITE_ENERGY, STATUS_STRAIN
 from warpcloth.kernels import sheet as sheet_kernels
+from warpcloth.kernels.sheet_structs import WARP, WEFT
 from warpcloth.kernels.status import STATUS_CELL_COLLAPSED
 
 from .model import SheetControl, SheetModel, SheetState
@@ -74,16 +77,55 @@ class SheetDivergence:
         )
 
 
-WHOLE_CELL_EXCESS = {"segment": 2.0, "hinge": 2.0, "cell": 4.0}
-"""The most an element's width (a cell's area) exceeds its lightest free node's area on a
-cut of whole cells, in cells: a side's segment or hinge at a corner node (½ over ¼), a
-corner cell (1 over ¼). The stability estimate's bounds hold there, so only what a cut
-cell adds beyond it shortens the step."""
+INSIDE_WHOLE_CELLS = {"segment": 4.0, "hinge": 16.0, "cell": 16.0}
+"""The largest eigenvalue of each kind of element's operator (:func:`_largest_mode`, in
+cells) deep inside whole cells, where the stability estimate's constants are the exact
+stiffest modes: a line's stretching 4 and bending 16 (the zigzag), the cells' 16 (the
+checkerboard). A whole-cell cut's edges and corners never exceed them, so the estimate
+changes only where a cut cell makes a node light against its elements."""
+
+LARGEST_MODE_DENSE = 400
+"""Up to this many nodes the operator's spectrum is solved whole (LAPACK), beyond it by
+Lanczos (ARPACK)."""
 
 
-def _excess(ratios: np.ndarray, element: str) -> float:
-    # how much further than on whole cells an element's stiffness outweighs its lightest free node
-    return max(1.0, float(ratios.max(initial=0.0)) / WHOLE_CELL_EXCESS[element])
+def _largest_mode(nodes: np.ndarray, weights: np.ndarray, pattern: tuple, area: np.ndarray) -> float:
+    # the largest eigenvalue of M^-½ K M^-½ for K = Σ w p pᵀ over each element's nodes (p
+    # its linearised strain on them, the same for every element of a kind), M the nodes'
+    # areas (a held node's infinite): each element kind's stiffest mode, exactly, as a
+    # light node beside heavy ones really rings (a bound per element by its lightest node
+    # would take a clipped cell's corner outside the cut, which weighs its little shape
+    # function, for the whole element's)
+    if not len(nodes):
+        return 0.0
+    scale = np.where(np.isfinite(area), 1.0 / np.sqrt(area), 0.0)
+    p = np.asarray(pattern, dtype=float)
+    n = nodes.shape[1]
+    rows = np.repeat(nodes, n, axis=1).ravel()
+    cols = np.tile(nodes, (1, n)).ravel()
+    values = (weights[:, None] * np.outer(p, p).ravel()[None, :]).ravel() * scale[rows] * scale[cols]
+    operator = scipy.sparse.csr_matrix((values, (rows, cols)), shape=(len(area),) * 2)
+    moving = np.flatnonzero(scale > 0)
+    operator = operator[moving][:, moving]
+    if len(moving) <= LARGEST_MODE_DENSE:
+        return float(np.linalg.eigvalsh(operator.toarray())[-1])
+    return float(scipy.sparse.linalg.eigsh(operator, k=1, which="LA", return_eigenvectors=False, tol=1e-10)[0])
+
+
+def _excess(
+    nodes: np.ndarray,
+    weights: np.ndarray,
+    pattern: tuple,
+    area: np.ndarray,
+    element: str,
+    families: np.ndarray | None = None,
+) -> float:
+    # how much stiffer than deep inside whole cells a kind of element's stiffest mode is,
+    # each family's alone as the estimate's terms are (at rest the segments of the two
+    # move the nodes along different lines; the bending term's 64 covers both zigzags)
+    groups = [np.ones(len(nodes), dtype=bool)] if families is None else [families == f for f in (WARP, WEFT)]
+    excess = max(_largest_mode(nodes[g], weights[g], pattern, area) for g in groups) / INSIDE_WHOLE_CELLS[element]
+    return 1.0 if excess < 1.0 + 1e-9 else excess  # a free end's zigzag is the inside's, but for round-off
 
 
 class SheetSolver(FusedSolver):
@@ -114,8 +156,8 @@ class SheetSolver(FusedSolver):
         4 (a1 + 2G)/(ρ_A h²), the stiffest bending mode's 64 (D + abs(D12)) s²/(ρ_A h⁴) (s the
         largest hinge curvature scale) and the twist's checkerboard 16 (4 D66)/(ρ_A h_w² h_f²)
         over the batch's materials and both directions, each times how much further than
-        on whole cells the cut's element widths outweigh their lightest free node
-        (:data:`WHOLE_CELL_EXCESS`: 1 on a whole-cell cut; more where a cut cell leaves a
+        deep inside whole cells each kind of element's stiffest mode is on the cut
+        (:data:`INSIDE_WHOLE_CELLS`: 1 on a whole-cell cut; more where a cut cell leaves a
         corner node little fabric)."""
         g = self.model.geometry
         scale = float(g.hinge_curvature_scale.max()) if len(g.hinge_curvature_scale) else 1.0
@@ -124,11 +166,17 @@ class SheetSolver(FusedSolver):
         area = np.where(g.clamped, np.inf, g.node_area / (h_w * h_f))
         spacing = np.array(g.spacing)
         stretch_factor = _excess(
-            g.edge_width * spacing[g.edge_family] / (h_w * h_f) / area[g.edge_nodes].min(axis=1), "segment"
+            g.edge_nodes, g.edge_width * spacing[g.edge_family] / (h_w * h_f), (1, -1), area, "segment", g.edge_family
         )
-        five = np.concatenate([g.hinge_nodes, g.hinge_axis_nodes], axis=1)
-        bend_factor = _excess(g.hinge_width * spacing[g.hinge_family] / (h_w * h_f) / area[five].min(axis=1), "hinge")
-        cell_factor = _excess(g.cell_area * g.cell_scale**2 / (h_w * h_f) / area[g.cell_nodes].min(axis=1), "cell")
+        bend_factor = _excess(
+            g.hinge_nodes,
+            g.hinge_width * spacing[g.hinge_family] / (h_w * h_f),
+            (1, -2, 1),
+            area,
+            "hinge",
+            g.hinge_family,
+        )
+        cell_factor = _excess(g.cell_nodes, g.cell_area * g.cell_scale**2 / (h_w * h_f), (1, -1, -1, 1), area, "cell")
         worst = 0.0
         for spec in self.model.sheets:
             m = spec.material
