@@ -306,8 +306,9 @@ def test_the_stability_estimate_holds_on_a_cut_at_any_angle(angle):
     # really rings faster: the linearised stable step of this 49.5 × 28.3 mm strip falls to
     # 0.69× its whole cells' at 22.5° (0.86× at 45°, 0.67× at 10°). SheetSolver.stable_step()
     # follows each kind of element's own stiffest mode there and stays below it, within
-    # 0.85-0.93 of it (before, a bound by each element's lightest node took 0.74-0.85 of
-    # a step that lumped the mass by quarters; 0° here clips the strip's end and sides too).
+    # 0.85-0.93 of it (a bound by each element's lightest node took 0.74-0.85 of the step
+    # of the mass by quarters, and 0.56-0.76 of this one's; 0° here clips the strip's end
+    # and sides too).
     diagonal = 0.005 * math.sqrt(2)
     geometry = bias_strip(7 * diagonal, 4 * diagonal, 0.005, 0.005, angle=math.radians(angle))
     material = isotropic_in_bending(2.5e-4)

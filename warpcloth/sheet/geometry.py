@@ -138,7 +138,8 @@ def grid_geometry(
     fabric below the edge, free nodes within a spacing of it are slaved along the normal,
     and each held or slaved node an element reaches follows a free master there
     (:func:`_ghosts`). ``corner_shares`` (``[i, j, 4]``, corners 00, 10, 01, 11, summing to
-    each cell's kept part) is how much of each cell the hinges at its corners bend: a
+    each cell's kept part) is how much of each cell its corners carry: their mass, their
+    hinges' bending and their segments' widths (a segment, its two ends' shares); a
     quarter each by default; :func:`bias_strip` gives a clipped cell's shape-function
     integrals over its part."""
     if edge_hinge not in EDGE_HINGES:

@@ -79,10 +79,13 @@ class SheetDivergence:
 
 INSIDE_WHOLE_CELLS = {"segment": 4.0, "hinge": 16.0, "cell": 16.0}
 """The largest eigenvalue of each kind of element's operator (:func:`_largest_mode`, in
-cells) deep inside whole cells, where the stability estimate's constants are the exact
-stiffest modes: a line's stretching 4 and bending 16 (the zigzag), the cells' 16 (the
-checkerboard). A whole-cell cut's edges and corners never exceed them, so the estimate
-changes only where a cut cell makes a node light against its elements."""
+cells) deep inside whole cells, where the stability estimate's terms are the stiffest
+modes (stretching exactly; bending and the cells' shear and twist with room to spare): a
+line's stretching 4 and bending 16 (the zigzag), the cells' 16 (the twist's checkerboard,
+which also scales their shear). A rectangle's edges and corners never exceed them, so the
+estimate changes only where a cut cell makes a node light against its elements (and by up
+to 3 % where whole cells' lines end at an angle, ``oblique_ends``, their last hinge
+carrying the end node)."""
 
 LARGEST_MODE_DENSE = 400
 """Up to this many nodes the operator's spectrum is solved whole (LAPACK), beyond it by
@@ -157,7 +160,7 @@ class SheetSolver(FusedSolver):
         largest hinge curvature scale) and the twist's checkerboard 16 (4 D66)/(ρ_A h_w² h_f²)
         over the batch's materials and both directions, each times how much further than
         deep inside whole cells each kind of element's stiffest mode is on the cut
-        (:data:`INSIDE_WHOLE_CELLS`: 1 on a whole-cell cut; more where a cut cell leaves a
+        (:data:`INSIDE_WHOLE_CELLS`: 1 on a rectangle; more where a cut cell leaves a
         corner node little fabric)."""
         g = self.model.geometry
         scale = float(g.hinge_curvature_scale.max()) if len(g.hinge_curvature_scale) else 1.0
