@@ -154,16 +154,19 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
 
     @wp.func
     def place_ghosts(model: SheetModel, control: SheetControl, state: SheetState, s: int, theta: scalar, d: scalar):
-        # each held ghost's offset out of the plane for the force pass (kernels/sheet_forces.py
-        # ghosts_seen): its weight times its master's, from the clamp's place at the pose
-        # (θ, d), along the rest normal as the clamp has turned it (docs/model.md §17.2)
+        # each held ghost's offset from its clamp place for the force pass (kernels/sheet_forces.py
+        # ghosts_seen), from its master's displacement from the master's clamp place at the
+        # pose (θ, d): along the rest normal as the clamp has turned it r² times the master's
+        # (the bending's ξ²), in the plane −r times it (the membrane's ξ, which changes sign
+        # at the edge; docs/model.md §17.2)
         normal = turned_normal(model, control, s, theta)
         state.clamp_normal[s] = normal
         for k in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
             m = model.ghost_masters[k]
             away = state.position[m, s] - clamped_position(model, control, s, m, theta, d)
             r = model.ghost_ratios[k]
-            state.ghost_offset[k, s] = (r * r * wp.dot(normal, away)) * normal
+            out = wp.dot(normal, away)
+            state.ghost_offset[k, s] = (r * r * out) * normal - r * (away - out * normal)
 
     @wp.func
     def follow_masters(model: SheetModel, control: SheetControl, state: SheetState, s: int, theta: scalar, d: scalar):
@@ -257,8 +260,10 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
                 out = wp.dot(normal, own_sweep) - wp.dot(turn, state.position[g, s] - held) + r * r * master_part
                 clamp_moved = out * normal
                 moved = moved + state.force_tensile[g, s] + weight_of(model, s, g)
-            else:
-                clamp_moved = (r * r) * (turn * wp.dot(normal, away) + normal * master_part)
+            else:  # out of the plane r² times the master's, in it −r times: both as the clamp moves them
+                swept = turn * wp.dot(normal, away) + normal * master_part
+                clamp_moved = (r * r) * swept + r * (held_sweep + swept)
+                moved = moved + state.force_tensile[g, s]
             work = work + work_on(state, g, s, clamp_moved) + drive_work(-wp.dot(moved, clamp_moved))
         return work
 
@@ -336,6 +341,12 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
                     v = v - wp.dot(state.clamp_normal[s], v) * state.clamp_normal[s]
                 kinetic = kinetic + half * m * wp.dot(v, v)
                 gravitational = gravitational + m * model.gravity * state.position[i, s][1]
+        t = scalar(step - stepping.release_step) * stepping.dt
+        theta, _rate, d, _d_rate = clamp_pose(control, s, t)
+        ghosts = model.ghost_nodes.shape[0] > 0
+        if ghosts:  # the segments' energy with each held ghost where their forces saw it
+            place_ghosts(model, control, state, s, theta, d)
+            ghosts_seen(model, state, s)
         stretch = zero
         for e in range(model.edge_nodes.shape[0]):
             ends = model.edge_nodes[e]
@@ -346,8 +357,9 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
             if strain < zero:
                 energy = energy * model.compression
             stretch = stretch + energy
-        t = scalar(step - stepping.release_step) * stepping.dt
-        theta, _rate, d, _d_rate = clamp_pose(control, s, t)
+        if ghosts:
+            for held in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
+                state.position[model.ghost_nodes[held], s] = state.ghost_held[held, s]
         probes[k, wp.static(slot["clamp_angle"]), s] = theta
         probes[k, wp.static(slot["clamp_displacement"]), s] = d
         probes[k, wp.static(slot["kinetic"]), s] = kinetic

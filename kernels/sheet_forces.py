@@ -290,9 +290,10 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
 
     @wp.func
     def ghosts_seen(model: SheetModel, state: SheetState, s: int):
-        # the bending, the twist and the shear of cells see each held ghost at its clamped
-        # quadratic's place (state.ghost_offset, docs/model.md §17.2); the segments saw the
-        # clamp's. A slaved ghost is already where its master puts it (kernels/sheet.py).
+        # every element sees each held ghost where its master's field puts it
+        # (state.ghost_offset, docs/model.md §17.2). A slaved ghost is already where its
+        # master puts it along the normal, and in the plane where its own forces take it
+        # (kernels/sheet.py).
         for k in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
             g = model.ghost_nodes[k]
             held = state.position[g, s]
@@ -305,29 +306,34 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         return vec3(zero, -model.gravity, zero) * (model.density[s] * model.node_area[i])
 
     @wp.func
-    def on_master(forces: wp.array2d(dtype=vec3), m: int, s: int, f: vec3, weight: scalar, normal: vec3):
-        # a ghost's force f along the normal on its master, which moves the ghost along the
-        # normal by the weight r² times its own displacement there
-        add(forces, m, s, (weight * wp.dot(normal, f)) * normal)
+    def on_master(forces: wp.array2d(dtype=vec3), m: int, s: int, f: vec3, weight: scalar, normal: vec3, r: scalar):
+        # a ghost's force f on its master, which moves the ghost along the normal by the
+        # weight r² times its own displacement there and, a held ghost, in the plane by −r
+        # times it (a slaved one: r = 0, its place in the plane its own)
+        out = wp.dot(normal, f)
+        add(forces, m, s, (weight * out) * normal - r * (f - out * normal))
 
     @wp.func
     def ghosts_held(model: SheetModel, state: SheetState, s: int):
-        # each held ghost back in the clamp; every ghost's forces along the normal on its
-        # master: a slaved one's in every element, and its weight's (its normal coordinate
-        # is its master's, its place in the plane its own), a held one's in the cells and
-        # hinges that saw it moved
+        # each held ghost back in the clamp; every ghost's forces in the elements on its
+        # master, and a slaved one's weight (its normal coordinate is its master's, its
+        # place in the plane its own: along the normal only)
         normal = state.clamp_normal[s]
         for k in range(model.ghost_nodes.shape[0]):
             g = model.ghost_nodes[k]
             m = model.ghost_masters[k]
             r = model.ghost_ratios[k]
             weight = r * r
+            tensile = state.force_tensile[g, s]
+            in_plane = zero
             if k < model.slaved_ghosts:
-                on_master(state.force_tensile, m, s, state.force_tensile[g, s] + weight_of(model, s, g), weight, normal)
+                tensile = tensile + weight_of(model, s, g)
             else:
                 state.position[g, s] = state.ghost_held[k, s]
-            on_master(state.force_elastic, m, s, state.force_elastic[g, s], weight, normal)
-            on_master(state.force_hysteretic, m, s, state.force_hysteretic[g, s], weight, normal)
+                in_plane = r
+            on_master(state.force_tensile, m, s, tensile, weight, normal, in_plane)
+            on_master(state.force_elastic, m, s, state.force_elastic[g, s], weight, normal, in_plane)
+            on_master(state.force_hysteretic, m, s, state.force_hysteretic[g, s], weight, normal, in_plane)
 
     @wp.func
     def accumulate_sheet_forces(model: SheetModel, stepping: SheetStepping, state: SheetState, s: int):
@@ -336,12 +342,12 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             state.force_tensile[i, s] = vec3()
             state.force_elastic[i, s] = vec3()
             state.force_hysteretic[i, s] = vec3()
-        code, index, value = segments(model, stepping, state, s)
-        if code != STATUS_OK:
-            return code, index, value
         ghosts = model.ghost_nodes.shape[0] > 0
         if ghosts:
             ghosts_seen(model, state, s)
+        code, index, value = segments(model, stepping, state, s)
+        if code != STATUS_OK:
+            return code, index, value
         code, index, value = hinges(model, state, s)
         if code == STATUS_OK:
             code, index, value = cells(model, stepping, state, s)

@@ -222,6 +222,10 @@ def grid_geometry(
     widths_a = np.array(widths)
     segment = {(int(a), int(b)) for a, b in edges_a}
     keep = free(edges_a[:, 0], edges_a[:, 1])
+    if clamp_edge is not None:  # a segment across the edge stretches only below it, as its ghost end sees
+        depth = below[edges_a]
+        across = (depth.min(axis=1) < 0) & (depth.max(axis=1) > 0)
+        widths_a[across] *= depth[across].max(axis=1) / np.ptp(depth[across], axis=1)
 
     hinges, axes, h_families, h_widths, scales = [], [], [], [], []
     for family, (di, dj), cross in ((WARP, (1, 0), h_weft), (WEFT, (0, 1), h_warp)):
@@ -305,7 +309,7 @@ def grid_geometry(
         hinge_pairs=pairs,
         hinge_coupling=_pair_coupling(widths * lengths, carried_area[hinges_a[order][:, 1]], pairs),
         cell_nodes=cells[c_keep],
-        cell_area=cell_weight[c_keep] * (h_warp * h_weft),
+        cell_area=(cell_weight if clamp_edge is None else cell_below)[c_keep] * (h_warp * h_weft),
         cell_scale=cell_scale[c_keep],
         twist_area=twist_area[c_keep] * (h_warp * h_weft),
         rest_normal=normal,

@@ -18,6 +18,7 @@ from warpcloth.kernels import sheet as sheet_kernels
 from warpcloth.kernels.sheet_structs import WARP, WEFT
 from warpcloth.kernels.status import STATUS_CELL_COLLAPSED
 
+from .geometry import SheetGeometry
 from .model import SheetControl, SheetModel, SheetState
 
 SHEETS_PER_THREAD = 4
@@ -92,21 +93,20 @@ LARGEST_MODE_DENSE = 400
 Lanczos (ARPACK)."""
 
 
-def _largest_mode(nodes: np.ndarray, weights: np.ndarray, pattern: tuple, area: np.ndarray) -> float:
+def _largest_mode(nodes: np.ndarray, weights: np.ndarray, pattern: np.ndarray, area: np.ndarray) -> float:
     # the largest eigenvalue of M^-½ K M^-½ for K = Σ w p pᵀ over each element's nodes (p
-    # its linearised strain on them, the same for every element of a kind), M the nodes'
-    # areas (a held node's infinite): each element kind's stiffest mode, exactly, as a
-    # light node beside heavy ones really rings (a bound per element by its lightest node
-    # would take a clipped cell's corner outside the cut, which weighs its little shape
-    # function, for the whole element's)
+    # its linearised strain on them, ``pattern[element, k]``), M the nodes' areas (a held
+    # node's infinite): each element kind's stiffest mode, exactly, as a light node beside
+    # heavy ones really rings (a bound per element by its lightest node would take a
+    # clipped cell's corner outside the cut, which weighs its little shape function, for
+    # the whole element's)
     if not len(nodes):
         return 0.0
     scale = np.where(np.isfinite(area), 1.0 / np.sqrt(area), 0.0)
-    p = np.asarray(pattern, dtype=float)
     n = nodes.shape[1]
     rows = np.repeat(nodes, n, axis=1).ravel()
     cols = np.tile(nodes, (1, n)).ravel()
-    values = (weights[:, None] * np.outer(p, p).ravel()[None, :]).ravel() * scale[rows] * scale[cols]
+    values = (weights[:, None, None] * pattern[:, :, None] * pattern[:, None, :]).ravel() * scale[rows] * scale[cols]
     operator = scipy.sparse.csr_matrix((values, (rows, cols)), shape=(len(area),) * 2)
     moving = np.flatnonzero(scale > 0)
     operator = operator[moving][:, moving]
@@ -116,18 +116,34 @@ def _largest_mode(nodes: np.ndarray, weights: np.ndarray, pattern: tuple, area: 
 
 
 def _excess(
+    geometry: SheetGeometry,
     nodes: np.ndarray,
     weights: np.ndarray,
     pattern: tuple,
     area: np.ndarray,
     element: str,
     families: np.ndarray | None = None,
+    moves: str = "normal",
 ) -> float:
     # how much stiffer than deep inside whole cells a kind of element's stiffest mode is,
     # each family's alone as the estimate's terms are (at rest the segments of the two
-    # move the nodes along different lines; the bending term's 64 covers both zigzags)
+    # move the nodes along different lines; the bending term's 64 covers both zigzags).
+    # An element reaching a ghost moves its master (docs/model.md §17.2): along the normal
+    # a held or slaved ghost by r² times the master's displacement, in the plane a held one
+    # by −r times it (a slaved one moves in the plane as its own forces take it)
+    coefficients = np.broadcast_to(np.asarray(pattern, dtype=float), nodes.shape).copy()
+    ghosts = np.arange(geometry.slaved_ghosts if moves == "in_plane" else 0, len(geometry.ghost_nodes))
+    if len(ghosts):
+        master, ratio = np.arange(len(area)), np.ones(len(area))
+        r = geometry.ghost_ratios[ghosts]
+        master[geometry.ghost_nodes[ghosts]] = geometry.ghost_masters[ghosts]
+        ratio[geometry.ghost_nodes[ghosts]] = -r if moves == "in_plane" else r * r
+        coefficients *= ratio[nodes]
+        nodes = master[nodes]
     groups = [np.ones(len(nodes), dtype=bool)] if families is None else [families == f for f in (WARP, WEFT)]
-    excess = max(_largest_mode(nodes[g], weights[g], pattern, area) for g in groups) / INSIDE_WHOLE_CELLS[element]
+    excess = (
+        max(_largest_mode(nodes[g], weights[g], coefficients[g], area) for g in groups) / INSIDE_WHOLE_CELLS[element]
+    )
     return 1.0 if excess < 1.0 + 1e-9 else excess  # a free end's zigzag is the inside's, but for round-off
 
 
@@ -169,9 +185,17 @@ class SheetSolver(FusedSolver):
         area = np.where(g.clamped, np.inf, g.node_area / (h_w * h_f))
         spacing = np.array(g.spacing)
         stretch_factor = _excess(
-            g.edge_nodes, g.edge_width * spacing[g.edge_family] / (h_w * h_f), (1, -1), area, "segment", g.edge_family
+            g,
+            g.edge_nodes,
+            g.edge_width * spacing[g.edge_family] / (h_w * h_f),
+            (1, -1),
+            area,
+            "segment",
+            g.edge_family,
+            "in_plane",
         )
         bend_factor = _excess(
+            g,
             g.hinge_nodes,
             g.hinge_width * spacing[g.hinge_family] / (h_w * h_f),
             (1, -2, 1),
@@ -179,7 +203,8 @@ class SheetSolver(FusedSolver):
             "hinge",
             g.hinge_family,
         )
-        cell_factor = _excess(g.cell_nodes, g.cell_area * g.cell_scale**2 / (h_w * h_f), (1, -1, -1, 1), area, "cell")
+        cells = (g, g.cell_nodes, g.cell_area * g.cell_scale**2 / (h_w * h_f), (1, -1, -1, 1), area, "cell")
+        cell_factor = max(_excess(*cells), _excess(*cells, moves="in_plane"))  # the twist's, the shear's
         worst = 0.0
         for spec in self.model.sheets:
             m = spec.material
