@@ -84,7 +84,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
     piecewise_polynomial = drives.build(scalar).piecewise_polynomial
     forces = sheet_forces.build(scalar, terms)
     accumulate_sheet_forces, shear_angle = forces.accumulate_sheet_forces, forces.shear_angle
-    ghosts_seen, weight_of = forces.ghosts_seen, forces.weight_of
+    ghosts_seen, ghosts_back, weight_of = forces.ghosts_seen, forces.ghosts_back, forces.weight_of
     hinge_geometry, hinge_curvature, turning_angle = forces.hinge_geometry, forces.hinge_curvature, forces.turning_angle
     cell_corners, cell_twist = forces.cell_corners, forces.cell_twist
     tensile_energy = tensile.build(scalar).energy_per_width
@@ -330,6 +330,11 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
         k: int,
     ):
         # Writes sample k of sheet s; returns the energy budget's state-and-work sum.
+        t = scalar(step - stepping.release_step) * stepping.dt
+        theta, _rate, d, _d_rate = clamp_pose(control, s, t)
+        ghosts = model.ghost_nodes.shape[0] > 0
+        if ghosts:  # the normal at this pose, as the next step's follow_masters takes it
+            place_ghosts(model, control, state, s, theta, d)
         rho = model.density[s]
         kinetic = zero
         gravitational = zero
@@ -341,11 +346,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
                     v = v - wp.dot(state.clamp_normal[s], v) * state.clamp_normal[s]
                 kinetic = kinetic + half * m * wp.dot(v, v)
                 gravitational = gravitational + m * model.gravity * state.position[i, s][1]
-        t = scalar(step - stepping.release_step) * stepping.dt
-        theta, _rate, d, _d_rate = clamp_pose(control, s, t)
-        ghosts = model.ghost_nodes.shape[0] > 0
         if ghosts:  # the segments' energy with each held ghost where their forces saw it
-            place_ghosts(model, control, state, s, theta, d)
             ghosts_seen(model, state, s)
         stretch = zero
         for e in range(model.edge_nodes.shape[0]):
@@ -358,8 +359,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), scheme: str = "semi_implicit
                 energy = energy * model.compression
             stretch = stretch + energy
         if ghosts:
-            for held in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
-                state.position[model.ghost_nodes[held], s] = state.ghost_held[held, s]
+            ghosts_back(model, state, s)
         probes[k, wp.static(slot["clamp_angle"]), s] = theta
         probes[k, wp.static(slot["clamp_displacement"]), s] = d
         probes[k, wp.static(slot["kinetic"]), s] = kinetic

@@ -31,6 +31,7 @@ class SheetForces:
     cell_twist: Any
     shear_angle: Any
     ghosts_seen: Any
+    ghosts_back: Any
     weight_of: Any
 
 
@@ -314,10 +315,16 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         add(forces, m, s, (weight * out) * normal - r * (f - out * normal))
 
     @wp.func
+    def ghosts_back(model: SheetModel, state: SheetState, s: int):
+        # each held ghost back in the clamp, where ghosts_seen found it
+        for k in range(model.slaved_ghosts, model.ghost_nodes.shape[0]):
+            state.position[model.ghost_nodes[k], s] = state.ghost_held[k, s]
+
+    @wp.func
     def ghosts_held(model: SheetModel, state: SheetState, s: int):
-        # each held ghost back in the clamp; every ghost's forces in the elements on its
-        # master, and a slaved one's weight (its normal coordinate is its master's, its
-        # place in the plane its own: along the normal only)
+        # every ghost's forces in the elements on its master, and a slaved one's weight
+        # (its normal coordinate is its master's, its place in the plane its own: along the
+        # normal only); each held ghost back in the clamp
         normal = state.clamp_normal[s]
         for k in range(model.ghost_nodes.shape[0]):
             g = model.ghost_nodes[k]
@@ -329,11 +336,11 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
             if k < model.slaved_ghosts:
                 tensile = tensile + weight_of(model, s, g)
             else:
-                state.position[g, s] = state.ghost_held[k, s]
                 in_plane = r
             on_master(state.force_tensile, m, s, tensile, weight, normal, in_plane)
             on_master(state.force_elastic, m, s, state.force_elastic[g, s], weight, normal, in_plane)
             on_master(state.force_hysteretic, m, s, state.force_hysteretic[g, s], weight, normal, in_plane)
+        ghosts_back(model, state, s)
 
     @wp.func
     def accumulate_sheet_forces(model: SheetModel, stepping: SheetStepping, state: SheetState, s: int):
@@ -346,9 +353,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         if ghosts:
             ghosts_seen(model, state, s)
         code, index, value = segments(model, stepping, state, s)
-        if code != STATUS_OK:
-            return code, index, value
-        code, index, value = hinges(model, state, s)
+        if code == STATUS_OK:
+            code, index, value = hinges(model, state, s)
         if code == STATUS_OK:
             code, index, value = cells(model, stepping, state, s)
         if ghosts:
@@ -364,5 +370,6 @@ def build(scalar: Any, terms: tuple[Any, ...] = ()) -> SheetForces:
         cell_twist=cell_twist,
         shear_angle=shear_angle,
         ghosts_seen=ghosts_seen,
+        ghosts_back=ghosts_back,
         weight_of=weight_of,
     )

@@ -636,6 +636,25 @@ def test_a_ghosts_bending_work_is_its_masters_and_the_clamps():
     assert np.abs(budget - budget[0]).max() < 1e-3 * np.nanmax(run.probe("drive_work", 0))
 
 
+def test_a_force_pass_that_stops_at_a_segment_leaves_the_held_ghosts_in_the_clamp():
+    # The held ghosts are moved for the elements to see them (in the plane too, since the
+    # segments see them) and put back after: a pass that stops at an overstretched segment
+    # must put them back as well, or a stopped sheet's positions show a held node off its clamp
+    from warpcloth.sheet import bias_strip
+
+    geometry = bias_strip(0.04, 0.02, 0.005, 0.005, angle=math.radians(22.5))
+    model, solver = sheet_batch(geometry, [SheetMaterialSI(fabric(), fabric(), 20.0, ELASTIC)])
+    held = geometry.ghost_nodes[geometry.slaved_ghosts :]
+    master = geometry.ghost_masters[geometry.slaved_ghosts]
+    position = geometry.rest_positions.copy()
+    position[master, 1] -= 0.0025  # 2.5 mm down the plane: its segments past the divergence strain
+    state = model.state()
+    state.set_positions(position[:, None, :])
+    solver.internal_forces(state, model.control())
+    assert solver.health(state, 0) is not None  # the pass did stop
+    np.testing.assert_array_equal(state.positions()[held, 0], geometry.rest_positions[held])
+
+
 def test_a_ghost_closed_strip_on_a_turning_clamp_closes_its_budget():
     # The same 22.5° strip on a clamp turned 0.5 rad about the vertical through 2.8 mm above
     # its edge, under gravity: the sheet's normal turns with the clamp, and that turn moves
