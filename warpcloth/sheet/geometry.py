@@ -178,8 +178,8 @@ def grid_geometry(
     clamped = np.asarray(is_clamped(rest), dtype=bool)
     if clamped.all() or not clamped.any():
         raise ArgumentError("is_clamped", "the clamp must hold some of the sheet's nodes and leave some free")
-    node_area = shares.sum(axis=-1)[active] * (h_warp * h_weft / 4.0)
-    carried = shares.sum(axis=-1)  # the cells' parts around each node its elements' bending stands on
+    carried = shares.sum(axis=-1)  # the cells' parts around each node: its mass, and what its bending stands on
+    node_area = carried[active] * (h_warp * h_weft / 4.0)
     slaved = np.zeros(len(rest), dtype=bool)
     if clamp_edge is not None:
         point, inward = (np.asarray(v, dtype=float) for v in clamp_edge)
@@ -275,8 +275,8 @@ def grid_geometry(
     astride = (clamped[cells].sum(axis=1) == 3) & (edge_hinge == "second_order") & (clamp_edge is None)
     cell_weight = weight[ci_, cj_] * np.where(astride, 0.5, 1.0)
     cell_scale = np.where(astride, 2.0, 1.0)
-    # with ghosts, the twist of the quadratic they extrapolate over the cell's part below the edge
-    twist_area = cell_weight * cell_scale if clamp_edge is None else cell_below
+    # with ghosts, the shear and twist of the fields they extrapolate over the cell's part below the edge
+    cell_part = cell_weight if clamp_edge is None else cell_below
     widths = np.array(h_widths)[order]
     lengths = np.array(spacing)[np.array(h_families, dtype=np.int64)[order]]
     normal = np.cross(warp_direction, weft_direction)
@@ -309,9 +309,9 @@ def grid_geometry(
         hinge_pairs=pairs,
         hinge_coupling=_pair_coupling(widths * lengths, carried_area[hinges_a[order][:, 1]], pairs),
         cell_nodes=cells[c_keep],
-        cell_area=(cell_weight if clamp_edge is None else cell_below)[c_keep] * (h_warp * h_weft),
+        cell_area=cell_part[c_keep] * (h_warp * h_weft),
         cell_scale=cell_scale[c_keep],
-        twist_area=twist_area[c_keep] * (h_warp * h_weft),
+        twist_area=(cell_part * cell_scale)[c_keep] * (h_warp * h_weft),
         rest_normal=normal,
         ghost_nodes=ghost_nodes,
         ghost_masters=ghost_masters,
