@@ -26,10 +26,9 @@ and each block runs every substep while its state stays in cache. The hinge does
 divisions (a reciprocal length per segment, the chord) as warpcloth's does since issue 11
 item 5. The one transcendental per hinge and substep, the branch's exponential, is glibc's
 libmvec exp (8-wide AVX-512 or 4-wide AVX2, whichever the CPU has) called directly
-(Numba's LLVM from PyPI has no vector math library). Each law's rare work runs only in the
-lanes that need it, in a scalar loop of its own: tagawa2003's reversal (a logarithm for the
-new loop centre; the offset there is the previous substep's, same branch, centre and
-curvature: bitwise the value warpcloth recomputes, so it is kept); masing's reversal,
+(Numba's LLVM from PyPI has no vector math library). tagawa2003 has no rare work: its
+reversal keeps the offset by two selects (the gap to the asymptote, docs/model.md §4.3).
+masing's runs only in the lanes that need it, in a scalar loop of its own: its reversal,
 loop closure, full memory and first change, which is kernels/bending_masing.py's
 ``follow`` operation for operation on a per-lane stack of reversal points (capacity
 ``integrator.reversal_memory``; a reversal that finds it full is not stored, the hinge
@@ -101,8 +100,6 @@ from warpcloth.scene import build_batch
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from numpy_baseline import NumpyStrips, displaced_start  # noqa: E402
 
-HYSTERESIS_MARGIN = 1e-12  # float64 margin of docs/model.md §4.4 (kernels/bending_tagawa2003.py)
-
 
 @intrinsic
 def fma(typingctx, a, b, c):
@@ -164,29 +161,6 @@ def norm(x, y):
     return math.sqrt(fma(x, x, y * y))
 
 
-@njit(inline="always")
-def offset(u, branch, d1, alpha, k0, m0):
-    """Hysteretic offset h₊(u) or h₋(u) (docs/model.md §4.2); 0 without hysteresis.
-
-    Written without branches (selects) so the loop over strips stays a SIMD loop."""
-    w = k0 + u if branch > 0.0 else k0 - u
-    e = math.exp(-alpha * w)
-    h = m0 - d1 * e if branch > 0.0 else -m0 + d1 * e
-    return 0.0 if d1 == 0.0 else h
-
-
-@njit(inline="always")
-def centre_through(curvature, h_offset, branch, d1, alpha, k0, m0):
-    """Loop centre putting (curvature, offset) on ``branch`` (docs/model.md §4.3-4.4)."""
-    if d1 <= 0.0:
-        return curvature
-    limit = m0 * (1.0 - HYSTERESIS_MARGIN)
-    h = min(max(h_offset, -limit), limit)
-    if branch > 0.0:
-        return curvature + k0 + math.log((m0 - h) / d1) / alpha
-    return curvature - k0 - math.log((h + m0) / d1) / alpha
-
-
 @njit(error_model="numpy", cache=True)
 def fresh_hinges(px, py, nc, edge_scale, law, masing, hinges, points):
     """Every hinge fresh at its current curvature (§4.5): tagawa2003 on the rising branch
@@ -207,7 +181,7 @@ def fresh_hinges(px, py, nc, edge_scale, law, masing, hinges, points):
             )
             if j == 0:
                 k = k * edge_scale[s]
-            d1, alpha, k0, m0 = law[1, s], law[2, s], law[3, s], law[4, s]
+            d1, m0 = law[1, s], law[4, s]
             hinges[:, j, s] = 0.0
             hinges[HK - HB, j, s] = k
             if masing:
@@ -216,10 +190,8 @@ def fresh_hinges(px, py, nc, edge_scale, law, masing, hinges, points):
                 hinges[HB - HB, j, s], hinges[HC - HB, j, s] = 1.0, k
                 if d1 != 0.0:
                     points[s, j, 0, 0], points[s, j, 0, 1] = k, 0.0
-            else:
-                c = centre_through(k, 0.0, 1.0, d1, alpha, k0, m0)
-                hinges[HB - HB, j, s], hinges[HC - HB, j, s] = 1.0, c
-                hinges[HH - HB, j, s] = offset(k - c, 1.0, d1, alpha, k0, m0)
+            else:  # rising, no offset: its gap to the rising asymptote is M0
+                hinges[HB - HB, j, s], hinges[HC - HB, j, s] = 1.0, m0
 
 
 @njit(inline="always")
@@ -300,7 +272,7 @@ def masing_follow(k, W, h, lane, points, overflows, deepest, slot, d1, alpha):
 LANES = 16  # two AVX-512 registers of float64 (LLVM treats loops under 16 trips as tiny: scalar)
 NMAX = 64  # most nodes a strip may have (h = 2.5 mm has 49)
 X, Y, U, V, FTX, FTY, FEX, FEY, FHX, FHY = range(10)  # node planes
-# Hinge planes. tagawa2003: branch s, loop centre c, K_prev, H. masing: the signed depth
+# Hinge planes. tagawa2003: branch s, gap g = M0 − s H to its asymptote, K_prev, H. masing: the signed depth
 # d·(depth + 1) of warpcloth's memory vector, the top reversal point's curvature, K_prev, H,
 # then the branch this evaluation is on, H = TH + TA·(1 − exp(TR·(K − HC))) (the virgin
 # curve from the origin too), and what lets the next evaluation stay on it: the direction
@@ -487,29 +459,17 @@ def advance_block(
                 for lane in range(LANES):
                     W[T, EX, lane] = W[h, TR, lane] * (W[T, KK, lane] - W[h, HC, lane])
             else:
+                # A lane whose curvature turned against its branch flips it and keeps its
+                # offset: the gap to the new asymptote is 2 M0 − g (§4.3). No transcendental,
+                # so the reversal is selects in the SIMD loop, as the kernel's is.
                 for lane in range(LANES):
-                    rare |= 1 if (W[T, KK, lane] - W[h, HK, lane]) * W[h, HB, lane] < 0.0 else 0
-                # Scalar loop, rare: the lanes whose curvature turned against their branch
-                # flip it and move the loop centre through the offset they had (§4.3).
-                if rare:
-                    for lane in range(LANES):
-                        hb = W[h, HB, lane]
-                        if (W[T, KK, lane] - W[h, HK, lane]) * hb < 0.0:
-                            hb = -hb
-                            W[h, HB, lane] = hb
-                            W[h, HC, lane] = centre_through(
-                                W[h, HK, lane],
-                                W[h, HH, lane],
-                                hb,
-                                W[P, D1, lane],
-                                W[P, ALPHA, lane],
-                                W[P, K0, lane],
-                                W[P, M0, lane],
-                            )
-                for lane in range(LANES):
-                    u_ = W[T, KK, lane] - W[h, HC, lane]
-                    w = W[P, K0, lane] + u_ if W[h, HB, lane] > 0.0 else W[P, K0, lane] - u_
-                    W[T, EX, lane] = -W[P, ALPHA, lane] * w
+                    change = W[T, KK, lane] - W[h, HK, lane]
+                    hb = W[h, HB, lane]
+                    turn = change * hb < 0.0
+                    hb = -hb if turn else hb
+                    W[h, HB, lane] = hb
+                    W[h, HC, lane] = 2.0 * W[P, M0, lane] - W[h, HC, lane] if turn else W[h, HC, lane]
+                    W[T, EX, lane] = -W[P, ALPHA, lane] * hb * change
             # The branch's exponential (§4.2, §4.10), alone in its loop (see VECTOR_EXP).
             if VECTOR_EXP:
                 for j in range(0, LANES, VECTOR_EXP):
@@ -529,9 +489,11 @@ def advance_block(
                     W[h, HK, lane] = k
             else:
                 for lane in range(LANES):
-                    d1, m0, ex = W[P, D1, lane], W[P, M0, lane], W[T, EX, lane]
-                    ho = m0 - d1 * ex if W[h, HB, lane] > 0.0 else -m0 + d1 * ex
-                    W[h, HH, lane] = 0.0 if d1 == 0.0 else ho
+                    # the kernel skips the exponential without hysteresis or change: the
+                    # same bits (g = 0 there, or exp(0) = 1)
+                    gap = W[h, HC, lane] * W[T, EX, lane]
+                    W[h, HC, lane] = gap
+                    W[h, HH, lane] = W[h, HB, lane] * (W[P, M0, lane] - gap)
                     W[h, HK, lane] = W[T, KK, lane]
             # SIMD loop 2: the hinge's forces on nodes i−1, i, i+1 (§5.1).
             for lane in range(LANES):

@@ -8,7 +8,7 @@ the per-strip-step cost relative to batch 1 measured in the same run. The damped
 is carried to its hold in 0.1 s and released at once (no settling), so every substep
 moves the strip (carried, then swinging): a strip hanging at rest is not representative, because its
 curvature changes only by rounding noise and every hinge then reverses its hysteresis
-branch at every substep (an extra exp and log each). The impulsive rotation moves from
+branch at every substep (masing's scalar path each time). The impulsive rotation moves from
 its first step. The kernel is compiled (and cached) before timing.
 """
 

@@ -3,7 +3,12 @@
 Moment per width M = D K + h(K − c), where h is the hysteretic offset on the current
 branch (h₊ while curvature rises, h₋ while it falls) of a KES loop of amplitude D1,
 steepness α and closing curvature K0, and c is the loop centre. At every reversal the
-loop is translated along M = D K so that the moment stays continuous.
+loop is translated along M = D K so that the moment stays continuous. A hinge keeps its
+branch s, the gap g = M0 − s h to that branch's asymptote and its last curvature; the
+centre is implicit (docs/model.md §4.3): g decays as e^{−α s ΔK} along a branch, so each
+step integrates it exactly, and a reversal, which keeps h, is g ← 2 M0 − g. That is one
+exponential a step with no logarithm at a reversal, and no margin where a branch has
+saturated (g = 0).
 
 A law is one file ending with its description, ``LAW`` (kernels/law.py says what a law
 provides; kernels/laws.py lists them): its per-strip parameters packed in one vector, its
@@ -28,10 +33,6 @@ from .types import precision
 
 PACKED = ("bending_rigidity", "hysteresis_d1", "hysteresis_alpha", "hysteresis_k0", "hysteresis_m0")
 """Layout of the packed per-strip parameter vector: D (N·m), D1 (N), α (m), K0 (1/m), M0 (N)."""
-
-# Fraction of M0 kept between a hysteretic offset and its asymptote before the inverse
-# branch takes a logarithm (docs/model.md §4.4: H is clamped to (−M0, M0) strictly).
-HYSTERESIS_MARGIN = {wp.float64: 1e-12, wp.float32: 1e-6}
 
 wp.set_module_options({"enable_backward": False})
 
@@ -65,74 +66,46 @@ def build(scalar: Any) -> LawFunctions:
     Memory, Parameters, History = types.law_memory, types.law_parameters, types.reversal_memory  # 5 of 6 slots
     zero = scalar(0.0)
     one = scalar(1.0)
-    margin = scalar(HYSTERESIS_MARGIN[scalar])
-
-    @wp.func
-    def hysteretic_offset(u: scalar, branch: scalar, p: Parameters):
-        # h₊ / h₋ with u = K − c measured from the loop centre. Without hysteresis
-        # (D1 = 0, so M0 = 0) both branches are exactly 0: skip the exponential, the
-        # largest single cost of a hinge (elastic sweep variants run ~25 % faster).
-        d1 = p[1]
-        if d1 == zero:
-            return zero
-        alpha = p[2]
-        k0 = p[3]
-        m0 = p[4]
-        if branch > zero:
-            return m0 - d1 * wp.exp(-alpha * (k0 + u))
-        return -m0 + d1 * wp.exp(-alpha * (k0 - u))
-
-    @wp.func
-    def loop_centre_through(curvature: scalar, offset: scalar, branch: scalar, p: Parameters):
-        # Centre c that puts the point (curvature, offset) on the given branch, so the
-        # moment stays continuous when the branch is entered there.
-        d1 = p[1]
-        if d1 <= zero:
-            return curvature
-        alpha = p[2]
-        k0 = p[3]
-        m0 = p[4]
-        limit = m0 * (one - margin)
-        h = wp.clamp(offset, -limit, limit)
-        # c = K − u with u = h₊⁻¹(H) or h₋⁻¹(H)
-        if branch > zero:
-            return curvature + k0 + wp.log((m0 - h) / d1) / alpha
-        return curvature - k0 - wp.log((h + m0) / d1) / alpha
+    two = scalar(2.0)
 
     @wp.func
     def fresh_memory(curvature: scalar, p: Parameters, history: History, hinge: int, strip: int):
-        # A hinge that has never bent back: rising branch, no offset at its curvature.
-        return Memory(one, loop_centre_through(curvature, zero, one, p), curvature)
+        # A hinge that has never bent back: rising branch, no offset, so its gap to the
+        # rising asymptote is M0.
+        return Memory(one, p[4], curvature)
 
     @wp.func
     def follow(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
-        # A reversal happens at the previous curvature; the loop is translated along
-        # M = D K so that the offset there is unchanged on the new branch.
+        # The gap g = M0 − s h between the offset and its branch's asymptote decays as
+        # e^{−α s ΔK} along a branch (the branch equation, integrated exactly over the
+        # step); a reversal at the previous curvature keeps h, so the new branch's gap is
+        # 2 M0 − g: the loop translated along M = D K without a logarithm or a centre.
         b = memory[0]
-        c = memory[1]
-        previous = memory[2]
-        if (curvature - previous) * b < zero:
-            offset = hysteretic_offset(previous - c, b, p)
+        gap = memory[1]
+        change = curvature - memory[2]
+        if change * b < zero:
             b = -b
-            c = loop_centre_through(previous, offset, b, p)
-        return Memory(b, c, curvature)
+            gap = two * p[4] - gap
+        # without hysteresis (D1 = 0, so M0 = 0) the gap stays 0: skip the exponential,
+        # the largest single cost of a hinge (elastic sweep variants run ~25 % faster)
+        if p[1] != zero:
+            gap = gap * wp.exp(-p[2] * b * change)
+        return Memory(b, gap, curvature)
 
     @wp.func
     def hysteretic_moment(curvature: scalar, memory: Memory, p: Parameters):
-        return hysteretic_offset(curvature - memory[1], memory[0], p)
+        # h = s (M0 − g); at another curvature than the one follow left, the branch on to it
+        b = memory[0]
+        if curvature == memory[2] or p[1] == zero:
+            return b * (p[4] - memory[1])
+        return b * (p[4] - memory[1] * wp.exp(-p[2] * b * (curvature - memory[2])))
 
     @wp.func
     def tangent(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
-        # dM/dK on the current branch: D plus the slope of h, α D1 e^{−α(K0 ± u)} > 0.
-        d1 = p[1]
-        if d1 == zero:
-            return p[0]
-        alpha = p[2]
-        k0 = p[3]
-        u = curvature - memory[1]
-        if memory[0] > zero:
-            return p[0] + alpha * d1 * wp.exp(-alpha * (k0 + u))
-        return p[0] + alpha * d1 * wp.exp(-alpha * (k0 - u))
+        # dM/dK on the current branch: D plus the slope of h, α g > 0.
+        if curvature == memory[2] or p[1] == zero:
+            return p[0] + p[2] * memory[1]
+        return p[0] + p[2] * memory[1] * wp.exp(-p[2] * memory[0] * (curvature - memory[2]))
 
     return LawFunctions(fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment, tangent=tangent)
 
@@ -177,7 +150,7 @@ LAW = BendingLaw(
     summary="the paper's",
     parameters=LOOP_PARAMETERS,
     pack=packed_parameters,
-    memory=("branch", "loop_centre", "previous_curvature"),  # +1 rising / −1 falling, c (1/m), K (1/m)
+    memory=("branch", "gap_to_asymptote", "previous_curvature"),  # +1 rising / −1 falling, M0 − s h (N), K (1/m)
     build=build,
     fitter="warpcloth.calibrate.kes.bending_tagawa2003:TAGAWA2003",
     # the offset depends on the total variation of the curvature history (no return-point

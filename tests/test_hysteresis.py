@@ -94,6 +94,71 @@ def test_moment_continuous_at_every_reversal_and_offset_bounded(seed):
     assert reversals > 30
 
 
+def closed_form_offsets(m: MaterialSI, k: np.ndarray) -> np.ndarray:
+    """The offset M − D K along ``k`` by §4.2-4.3 as the paper writes it, independently of
+    the kernel: each branch is h_s(K − c) about a loop centre c, and a reversal moves c by
+    the inverse branch (a logarithm) so that h stays continuous."""
+    b = m.bending
+    d1, a, k0, m0 = b.hysteresis_d1, b.hysteresis_alpha, b.hysteresis_k0, loop_asymptote_of(m)
+
+    def h(u: float, s: float) -> float:
+        return s * (m0 - d1 * math.exp(-a * (k0 + s * u)))
+
+    s, c = 1.0, k[0] + k0 + math.log(m0 / d1) / a  # fresh: rising, h = 0 at k[0]
+    out = np.empty(len(k))
+    out[0] = 0.0
+    for n in range(1, len(k)):
+        if (k[n] - k[n - 1]) * s < 0:
+            held = h(k[n - 1] - c, s)
+            s = -s
+            c = k[n - 1] + s * k0 + s * math.log((m0 - s * held) / d1) / a
+        out[n] = h(k[n] - c, s)
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_kernels_step_by_step_branch_is_the_papers_closed_form(seed):
+    # The kernel carries each hinge's gap to its branch's asymptote, g = M0 − s h, and
+    # integrates the branch exactly over each step (g ← g e^{−α s ΔK}; at a reversal
+    # g ← 2 M0 − g): no logarithm, no loop centre. Over a walk of 10^4 steps with ~80
+    # reversals, inner loops down to a few steps and reversals by rounding alone (steps
+    # of 1e-13 K0 back and forth, as a hinge at rest sees), it must be the paper's closed
+    # form to rounding: the product of the steps' exponentials drifts by ~√n ulp.
+    rng = np.random.default_rng(seed)
+    m = DEFAULT
+    k0 = m.bending.hysteresis_k0
+    direction = np.where(rng.random(80) < 0.5, -1.0, 1.0)
+    lengths = rng.integers(2, 250, size=80)
+    walk = np.repeat(direction, lengths) * 2e-3 * k0
+    walk[rng.random(len(walk)) < 0.1] *= -1e-10  # rounding-sized steps back
+    k = np.concatenate([[0.0], np.cumsum(walk)])
+    moment, _ = moment_along_path(m, k)
+    offset = moment - m.bending_rigidity * k
+    reference = closed_form_offsets(m, k)
+    assert np.count_nonzero(np.diff(np.sign(np.diff(k)))) > 100
+    assert np.abs(offset - reference).max() < 1e-13 * loop_asymptote_of(m)
+
+
+def test_a_reversal_from_a_saturated_branch_is_exactly_continuous():
+    # Bent far past K0 the offset reaches its asymptote: g underflows to 0 and h = M0
+    # exactly. The loop centre of the closed form would be at infinity there (it used to
+    # take a margin of 1e-12 M0, a jump of that size at the reversal); the gap needs none:
+    # the falling branch starts at h = M0 with g = 2 M0, h = −M0 + 2 M0 e^{α (K − K_r)}.
+    # (D tiny, so that D K at α K = 800 does not round away the offset's last digits)
+    m = MaterialSI(0.2, (1e3, 0, 0, 0), 1e-12, paper_loop(4e-4, 0.005, 100.0))
+    k0, a, m0 = m.bending.hysteresis_k0, m.bending.hysteresis_alpha, loop_asymptote_of(m)
+    far = 800.0 / a  # α·(K − c) ≈ 800: e^{−800} underflows
+    k = np.concatenate([np.linspace(0.0, far, 4001), far - np.linspace(0.0, 2 * k0, 2001)[1:]])
+    moment, _ = moment_along_path(m, k)
+    offset = moment - m.bending_rigidity * k
+    assert offset[4000] == pytest.approx(m0, rel=1e-15)
+    falling = k[4001:]
+    expected = -m0 + 2 * m0 * np.exp(a * (falling - far))
+    assert abs(offset[4001] - expected[0]) < 1e-15 * m0  # the margin's jump was 1e-12 M0
+    # along the branch, the product of 2000 steps' exponentials: ~n/2 ulp at most
+    assert np.abs(offset[4001:] - expected).max() < 1e-13 * m0
+
+
 def test_zero_d1_is_linear_elastic():
     m = MaterialSI(0.2, (1e3, 0, 0, 0), to_si(MaterialSection()).bending_rigidity, paper_loop(0.0, 0.05, 250.0))
     k = np.sin(np.linspace(0, 20, 5001)) * 300.0
