@@ -787,12 +787,17 @@ def warpcloth_rate(
 ) -> float:
     """warpcloth's stepping rate (strip-steps/s) on ``b`` strips: the wall of a run of
     about ``steps`` steps less that of a one-sample run, so building the batch (about
-    0.1 ms a strip, in the sweep's wall below) is left out as it is for the others."""
+    0.1 ms a strip, in the sweep's wall below) is left out as it is for the others. The
+    long run is at least ten samples: with two (``--quick`` at 1024 strips) the
+    difference was one sample's steps against the batch's build, and its noise gave
+    negative rates. NaN (printed —) when the difference is still within the noise."""
     interval = free_runs(samples, 1.0, 1, extra)[0].output_interval
     long_wall, long_steps = warpcloth_wall(
-        free_runs(samples, max(2, round(steps * dt / interval)) * interval, b, extra), x0, threads
+        free_runs(samples, max(10, round(steps * dt / interval)) * interval, b, extra), x0, threads
     )
     short_wall, short_steps = warpcloth_wall(free_runs(samples, interval, b, extra), x0, threads)
+    if long_wall < 2.0 * short_wall:
+        return math.nan
     return (long_steps - short_steps) / (long_wall - short_wall)
 
 
@@ -1157,6 +1162,8 @@ def throughput_tables(
         for name, rate in results:
             if math.isnan(rate):
                 print(f"{b:>5} {name:<22} {'—':>14} {'—':>15} {'—':>16}")
+            elif math.isnan(base):
+                print(f"{b:>5} {name:<22} {rate:>14.3e} {b / (rate * dt):>13.3g} s {'—':>16}")
             else:
                 print(f"{b:>5} {name:<22} {rate:>14.3e} {b / (rate * dt):>13.3g} s {rate / base:>15.2f}×")
             rows.append((b, name, rate))

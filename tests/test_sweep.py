@@ -53,6 +53,25 @@ def test_expansion_is_grid_times_zip_times_random_and_deterministic():
     assert other.assignments != a.assignments
 
 
+def test_a_scenes_plain_dict_is_dataclasses_asdict_value_for_value_and_type_for_type():
+    # Scene.to_dict is taken several times a variant (batch keys, the fingerprint, the
+    # records), so it skips asdict's generic deep copy; what it gives must not differ,
+    # down to a tuple staying a tuple and an int an int (the fingerprint hashes its JSON).
+    import dataclasses
+
+    def typed(x):
+        if isinstance(x, dict):
+            return {k: typed(v) for k, v in x.items()}
+        if isinstance(x, (list, tuple)):
+            return [type(x).__name__, *(typed(v) for v in x)]
+        return type(x).__name__, repr(x)
+
+    scenes = [wc.load_scene(name) for name in ("damped_swing", "impulsive_rotation", "damped_swing_paper")]
+    scenes += list(load_sweep("damped_swing_sweep", ["sweep.random.samples=4"]).scenes)
+    for scene in scenes:
+        assert typed(scene.to_dict()) == typed(dataclasses.asdict(scene))
+
+
 def test_latin_hypercube_puts_one_sample_in_every_stratum():
     n = 50
     sweep = expand(

@@ -9,6 +9,7 @@ bundled material file ``wool90-nylon10``: its numbers live there only.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import importlib.resources
@@ -315,6 +316,31 @@ class OutputSection:
     )
 
 
+@functools.cache
+def _field_names(cls: type) -> tuple[str, ...]:
+    return tuple(f.name for f in dataclasses.fields(cls))
+
+
+_ATOMS = (str, int, float, bool, type(None))
+
+
+def plain(value: Any) -> Any:
+    """``value`` as :func:`dataclasses.asdict` gives it (dataclasses as dicts, containers
+    copied, the same values), without its generic deep copy of every number: a sweep
+    converts each variant's scene several times (batch keys, fingerprint, records)."""
+    if isinstance(value, _ATOMS):
+        return value
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {name: plain(getattr(value, name)) for name in _field_names(type(value))}
+    if isinstance(value, tuple) and hasattr(value, "_fields"):  # a named tuple
+        return type(value)(*(plain(v) for v in value))
+    if isinstance(value, (list, tuple)):
+        return type(value)(plain(v) for v in value)
+    if isinstance(value, dict):
+        return {plain(k): plain(v) for k, v in value.items()}
+    return copy.deepcopy(value)
+
+
 @dataclass(frozen=True)
 class Scene:
     """A complete, validated description of one strip experiment."""
@@ -366,7 +392,7 @@ class Scene:
 
     def to_dict(self) -> dict:
         """Plain nested dict (TOML-ready) of every field, defaults included."""
-        return dataclasses.asdict(self)
+        return plain(self)
 
 
 def batch_fields() -> list[str]:
