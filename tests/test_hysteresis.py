@@ -120,9 +120,9 @@ def closed_form_offsets(m: MaterialSI, k: np.ndarray) -> np.ndarray:
 def test_the_kernels_step_by_step_branch_is_the_papers_closed_form(seed):
     # The kernel carries each hinge's gap to its branch's asymptote, g = M0 − s h, and
     # integrates the branch exactly over each step (g ← g e^{−α s ΔK}; at a reversal
-    # g ← 2 M0 − g): no logarithm, no loop centre. Over a walk of 10^4 steps with ~80
-    # reversals, inner loops down to a few steps and reversals by rounding alone (steps
-    # of 1e-13 K0 back and forth, as a hinge at rest sees), it must be the paper's closed
+    # g ← 2 M0 − g): no logarithm, no loop centre. Over a walk of 10^4 steps with ~40
+    # changes of direction, inner loops down to a few steps and ~2000 reversals by rounding
+    # alone (steps of 1e-13 K0 back, as a hinge at rest sees), it must be the paper's closed
     # form to rounding: the product of the steps' exponentials drifts by ~√n ulp.
     rng = np.random.default_rng(seed)
     m = DEFAULT

@@ -2,8 +2,8 @@
 KES-FB2 loop (docs/model.md §13.3), by the machinery of :mod:`.bending_fit`.
 
 K0 is the loop's largest ``|K|`` (fixed by the data, not a free parameter). For a fixed α
-the hysteretic offset is proportional to D1 (the branch functions are, and the loop
-centre after a reversal depends on the offset only through (M0 ∓ H)/D1), so
+the hysteretic offset is proportional to D1 (the branch functions are, and a reversal
+maps the gap to the asymptote g = M0 − s H, which is proportional to D1, onto 2 M0 − g), so
 M = D K + D1 h₁(α; path) with h₁ the offset for D1 = 1 gf·cm/cm: for each α, (D, D1) is a
 linear least-squares problem (with D, D1 ≥ 0). α is searched on a logarithmic grid of
 α K0 in [0.05, 60] (all in one kernel launch), then refined by Nelder–Mead inside the
