@@ -93,19 +93,22 @@ def build(scalar: Any) -> LawFunctions:
         return Memory(b, gap, curvature)
 
     @wp.func
-    def hysteretic_moment(curvature: scalar, memory: Memory, p: Parameters):
-        # h = s (M0 − g); at another curvature than the one follow left, the branch on to it
-        b = memory[0]
+    def gap_at(curvature: scalar, memory: Memory, p: Parameters):
+        # g at ``curvature`` on the current branch: the stored one at the curvature follow
+        # left (and 0 without hysteresis), else the branch on to it
         if curvature == memory[2] or p[1] == zero:
-            return b * (p[4] - memory[1])
-        return b * (p[4] - memory[1] * wp.exp(-p[2] * b * (curvature - memory[2])))
+            return memory[1]
+        return memory[1] * wp.exp(-p[2] * memory[0] * (curvature - memory[2]))
+
+    @wp.func
+    def hysteretic_moment(curvature: scalar, memory: Memory, p: Parameters):
+        # h = s (M0 − g)
+        return memory[0] * (p[4] - gap_at(curvature, memory, p))
 
     @wp.func
     def tangent(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
-        # dM/dK on the current branch: D plus the slope of h, α g > 0.
-        if curvature == memory[2] or p[1] == zero:
-            return p[0] + p[2] * memory[1]
-        return p[0] + p[2] * memory[1] * wp.exp(-p[2] * memory[0] * (curvature - memory[2]))
+        # dM/dK on the current branch: D plus the slope of h, α g ≥ 0.
+        return p[0] + p[2] * gap_at(curvature, memory, p)
 
     return LawFunctions(fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment, tangent=tangent)
 
