@@ -5,7 +5,8 @@
 The Numba port (benchmarks/numba_peer.py) runs strips as SIMD lanes; warpcloth's CPU
 kernel gives each thread one strip. This measures the strip's own force pass
 (kernels/forces.py: tension, hinge geometry and bending law) with a node update, one strip
-per thread, against a kernel that calls the same ``segment_and_hinge`` for one group of L
+per thread (a hinge at a time), against a kernel that calls the same functions
+(``segment_and_curvature``, the law's ``follow``, ``hinge_couple``) for one group of L
 strips per thread, lanes innermost at each node (the layout a compiler can vectorise:
 [node, strip] arrays hold a group's strips side by side), each lane carrying its segment
 down the chain as the pass does. The strips are the variants of the bundled sweep (each
@@ -16,21 +17,20 @@ elastic limit), which tells what a lane rewrite of the fused kernel could gain a
 stands in its way. One CPU thread; results in benchmarks/RESULTS.md.
 
 Then ``exp`` itself: Warp's CPU compiler leaves it a scalar library call, but a kernel can
-call glibc's vector exp (libmvec: 8 float64 a call with AVX-512, 4 with AVX2) through
-``wp.func_native`` and a function pointer. The second table times one exp each way and
-gives their largest relative difference (libmvec promises 4 ulp).
+call glibc's vector exp (libmvec: 4 float64 a call with AVX2, 8 with AVX-512) through
+``wp.func_native``, as the force pass now does for the paper's law (kernels/exp_lanes.py).
+The last lines time one exp each way and give their largest difference (libmvec promises
+4 ulp).
 """
 
 import argparse
-import ctypes
 import logging
 import platform
 import time
-from pathlib import Path
 
 import numpy as np
 import warp as wp
-from warpcloth.kernels import forces, integrators, structs
+from warpcloth.kernels import exp_lanes, forces, integrators, structs
 from warpcloth.kernels.status import STATUS_OK
 
 import warpcloth as wc
@@ -47,8 +47,9 @@ def kernels(lanes: int) -> tuple:
     strip = structs.build(f64, ())
     StripModel, StripState = strip.StripModel, strip.StripState
     Stepping = integrators.build(f64).Stepping
-    pass_ = forces.build(f64)
-    accumulate_internal_forces, segment_and_hinge = pass_.accumulate_internal_forces, pass_.segment_and_hinge
+    pass_ = forces.build(f64)  # a hinge at a time (its exponentials one by one)
+    accumulate_internal_forces = pass_.accumulate_internal_forces
+    segment_and_curvature, hinge_couple, law = pass_.segment_and_curvature, pass_.hinge_couple, strip.law
     lane_vectors = wp.types.matrix(shape=(lanes, 2), dtype=f64)  # a vec2 per lane, carried down the chain
     lane_scalars = wp.types.vector(lanes, f64)
 
@@ -57,6 +58,32 @@ def kernels(lanes: int) -> tuple:
         state.force_tensile[i, s] = vec2()
         state.force_elastic[i, s] = vec2()
         state.force_hysteretic[i, s] = vec2()
+
+    @wp.func
+    def segment_and_hinge(
+        model: StripModel,
+        stepping: Stepping,
+        state: StripState,
+        s: int,
+        i: int,
+        node: vec2,
+        e1: vec2,
+        inverse_l1: f64,
+        width: f64,
+        a: wp.types.vector(4, f64),
+        p: law.Parameters,
+        edge_scale: f64,
+        inverse_l0: f64,
+    ):
+        # the force pass's body for one hinge (kernels/forces.py taking a hinge at a time)
+        code, value, following, e2, inverse_l2, curvature = segment_and_curvature(
+            model, stepping, state, s, i, node, e1, inverse_l1, width, a, edge_scale, inverse_l0
+        )
+        if code == STATUS_OK:
+            h = i - model.n_clamped + 1
+            memory = law.follow(curvature, state.hinge[h, s], p, state.history, h, s)
+            hinge_couple(model, state, s, i, curvature, memory, p, width, e1, inverse_l1, e2, inverse_l2)
+        return code, value, following, e2, inverse_l2
 
     @wp.func
     def update(model: StripModel, state: StripState, s: int, i: int, dt: f64):
@@ -130,35 +157,14 @@ def kernels(lanes: int) -> tuple:
     return per_strip, in_lanes
 
 
-def vector_exp(width: int) -> tuple:
-    """A Warp function calling libmvec's ``width``-wide exp (its address passed in), and the address."""
-    library = ctypes.CDLL("libmvec.so.1", mode=ctypes.RTLD_GLOBAL)
-    symbol = {8: "_ZGVeN8v_exp", 4: "_ZGVdN4v_exp"}[width]
-    address = ctypes.cast(getattr(library, symbol), ctypes.c_void_p).value
-    lanes = wp.types.vector(width, f64)
-    snippet = f"""
-    typedef double lanes_t __attribute__((vector_size({8 * width})));
-    lanes_t a;
-    for (int k = 0; k < {width}; ++k) a[k] = x.c[k];
-    lanes_t r = ((lanes_t(*)(lanes_t))function)(a);
-    wp::vec_t<{width}, double> out;
-    for (int k = 0; k < {width}; ++k) out.c[k] = r[k];
-    return out;
-    """
-
-    @wp.func_native(snippet)
-    def exp_lanes(x: lanes, function: wp.uint64) -> lanes: ...
-
-    return exp_lanes, lanes, address
-
-
 def exp_timing(width: int, reps: int = 20000, groups: int = 256, repeats: int = 3) -> None:
     """ns per exp of ``wp.exp`` and of libmvec's ``width``-wide exp (best of ``repeats``), and
     their largest difference on one call each, in units in the last place."""
-    exp_lanes, lanes, address = vector_exp(width)
+    exp_of_lanes = exp_lanes.build(f64, width)  # what the force pass calls (kernels/exp_lanes.py)
+    lanes = wp.types.vector(width, f64)
 
     @wp.kernel(module="unique", enable_backward=False)
-    def scalar_exp(x: wp.array2d(dtype=f64), out: wp.array2d(dtype=f64), reps: int, function: wp.uint64):
+    def scalar_exp(x: wp.array2d(dtype=f64), out: wp.array2d(dtype=f64), reps: int):
         g = wp.tid()
         for j in range(wp.static(width)):
             a = x[g, j]
@@ -169,27 +175,25 @@ def exp_timing(width: int, reps: int = 20000, groups: int = 256, repeats: int = 
             out[g, j] = total
 
     @wp.kernel(module="unique", enable_backward=False)
-    def one_call(
-        x: wp.array2d(dtype=f64), scalar: wp.array2d(dtype=f64), vector: wp.array2d(dtype=f64), function: wp.uint64
-    ):
+    def one_call(x: wp.array2d(dtype=f64), scalar: wp.array2d(dtype=f64), vector: wp.array2d(dtype=f64)):
         g = wp.tid()
         a = lanes()
         for j in range(wp.static(width)):
             a[j] = x[g, j]
             scalar[g, j] = wp.exp(x[g, j])
-        r = exp_lanes(a, function)
+        r = exp_of_lanes(a)
         for j in range(wp.static(width)):
             vector[g, j] = r[j]
 
     @wp.kernel(module="unique", enable_backward=False)
-    def lanes_exp(x: wp.array2d(dtype=f64), out: wp.array2d(dtype=f64), reps: int, function: wp.uint64):
+    def lanes_exp(x: wp.array2d(dtype=f64), out: wp.array2d(dtype=f64), reps: int):
         g = wp.tid()
         a = lanes()
         for j in range(wp.static(width)):
             a[j] = x[g, j]
         total = lanes()
         for _r in range(reps):
-            total = total + exp_lanes(a, function)
+            total = total + exp_of_lanes(a)
             a = a + lanes(f64(1e-9))
         for j in range(wp.static(width)):
             out[g, j] = total[j]
@@ -198,11 +202,11 @@ def exp_timing(width: int, reps: int = 20000, groups: int = 256, repeats: int = 
     ns = []
     for kernel in (scalar_exp, lanes_exp):
         out = wp.zeros((groups, width), dtype=f64, device="cpu")
-        wp.launch(kernel, groups, inputs=[x, out, 1, address], device="cpu")
+        wp.launch(kernel, groups, inputs=[x, out, 1], device="cpu")
         walls = []
         for _ in range(repeats):
             start = time.perf_counter()
-            wp.launch(kernel, groups, inputs=[x, out, reps, address], device="cpu")
+            wp.launch(kernel, groups, inputs=[x, out, reps], device="cpu")
             wp.synchronize()
             walls.append(time.perf_counter() - start)
         ns.append(min(walls) / (groups * width * reps) * 1e9)
@@ -211,7 +215,7 @@ def exp_timing(width: int, reps: int = 20000, groups: int = 256, repeats: int = 
     wide = wp.array(np.linspace(-700.0, 700.0, points * width).reshape(points, width), dtype=f64, device="cpu")
     scalar = wp.zeros((points, width), dtype=f64, device="cpu")
     vector = wp.zeros((points, width), dtype=f64, device="cpu")
-    wp.launch(one_call, points, inputs=[wide, scalar, vector, address], device="cpu")
+    wp.launch(one_call, points, inputs=[wide, scalar, vector], device="cpu")
     a, b = scalar.numpy(), vector.numpy()
     ulps = np.abs(a - b) / np.spacing(a)
     print(
@@ -281,12 +285,11 @@ def main() -> None:
                 for field in ("position", "velocity", "hinge")
             )
             print(f"{name:>9} {lanes:>5} {rates[0]:>25.3e} {rates[1]:>12.3e} {rates[1] / rates[0]:>5.2f}x  {same}")
-    cpuinfo = Path("/proc/cpuinfo")
-    flags = cpuinfo.read_text() if cpuinfo.is_file() else ""
-    if " avx512f" in flags or " avx2" in flags:
-        exp_timing(8 if " avx512f" in flags else 4)
+    if exp_lanes.libmvec_loaded():
+        for width in (4, 8):
+            exp_timing(width)
     else:
-        print("exp: no AVX2 or AVX-512 here (or not Linux): libmvec's vector exp not timed")
+        print("exp: no libmvec here (Linux x86-64 with glibc only): its vector exp not timed")
 
 
 if __name__ == "__main__":

@@ -75,22 +75,37 @@ def build(scalar: Any) -> LawFunctions:
         return Memory(one, p[4], curvature)
 
     @wp.func
-    def follow(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
+    def follow_before_decay(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
         # The gap g = M0 − s h between the offset and its branch's asymptote decays as
         # e^{−α s ΔK} along a branch (the branch equation, integrated exactly over the
         # step); a reversal at the previous curvature keeps h, so the new branch's gap is
         # 2 M0 − g: the loop translated along M = D K without a logarithm or a centre.
+        # Returns the memory with the gap before its decay, and the decay's exponent
+        # −α |ΔK| ≤ 0 (s has the sign of ΔK once a reversal has flipped it). Without
+        # hysteresis (D1 = 0, so M0 = 0) the gap stays 0 and the exponent is 0: no
+        # exponential, the largest single cost of a hinge (elastic sweep variants run
+        # ~25 % faster).
         b = memory[0]
         gap = memory[1]
         change = curvature - memory[2]
         if change * b < zero:
             b = -b
             gap = two * p[4] - gap
-        # without hysteresis (D1 = 0, so M0 = 0) the gap stays 0: skip the exponential,
-        # the largest single cost of a hinge (elastic sweep variants run ~25 % faster)
+        exponent = zero
         if p[1] != zero:
-            gap = gap * wp.exp(-p[2] * b * change)
-        return Memory(b, gap, curvature)
+            exponent = -p[2] * b * change
+        return Memory(b, gap, curvature), exponent
+
+    @wp.func
+    def decay(memory: Memory, factor: scalar, p: Parameters):
+        return Memory(memory[0], memory[1] * factor, memory[2])
+
+    @wp.func
+    def follow(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
+        followed, exponent = follow_before_decay(curvature, memory, p, history, hinge, strip)
+        if exponent != zero:  # e^0 = 1 exactly: no exponential without a change
+            followed = decay(followed, wp.exp(exponent), p)
+        return followed
 
     @wp.func
     def gap_at(curvature: scalar, memory: Memory, p: Parameters):
@@ -110,7 +125,14 @@ def build(scalar: Any) -> LawFunctions:
         # dM/dK on the current branch: D plus the slope of h, α g ≥ 0.
         return p[0] + p[2] * gap_at(curvature, memory, p)
 
-    return LawFunctions(fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment, tangent=tangent)
+    return LawFunctions(
+        fresh_memory=fresh_memory,
+        follow=follow,
+        hysteretic_moment=hysteretic_moment,
+        tangent=tangent,
+        follow_before_decay=follow_before_decay,
+        decay=decay,
+    )
 
 
 LOOP_PARAMETERS = (

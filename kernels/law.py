@@ -24,6 +24,18 @@ any branch of the dispatch:
 - ``hysteretic_moment(curvature, memory, p) -> M − D K`` (what ``follow`` left in the memory
   is all it may read, so probes can evaluate it without the reversal points).
 
+A law whose ``follow`` ends by multiplying its memory by one exponential may also give
+that ``follow`` in two parts, so that the CPU's force pass takes the exponentials of
+several hinges in one vector call (kernels/exp_lanes.py):
+
+- ``follow_before_decay(curvature, memory, p, history, hinge, strip) -> (memory, x)``: the
+  memory ``follow`` returns but for the factor e^x, and x;
+- ``decay(memory, factor, p) -> memory``: that memory with the factor applied,
+
+such that ``follow`` is ``decay(m, wp.exp(x), p)`` of ``(m, x) = follow_before_decay(…)``
+(tests/test_exp_lanes.py checks it bitwise); x ≤ 0 keeps the factor in (0, 1]. A law that
+gives neither is followed whole, with x = 0.
+
 Only Warp and the standard library are imported here, so units are not: a parameter's
 ``kind`` says what it measures, and :mod:`warpcloth.units` (``BENDING_UNITS``,
 ``SHEAR_UNITS``) what that is in KES units and SI; the fitter is named by the import path
@@ -86,6 +98,8 @@ class LawFunctions:
     follow: Any
     hysteretic_moment: Any
     tangent: Any
+    follow_before_decay: Any = None
+    decay: Any = None
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ sorted by law).
 """
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib.metadata import entry_points
 from types import SimpleNamespace
 from typing import Any
@@ -25,7 +25,7 @@ import warp as wp
 from warpcloth.errors import ArgumentError, InternalError
 
 from . import bending_dahl, bending_frictional_couple, bending_masing, bending_masing_growing, bending_tagawa2003
-from .law import BENDING_RIGIDITY, KINDS, BendingLaw, LawParameter, LawRegistryError
+from .law import BENDING_RIGIDITY, KINDS, BendingLaw, LawFunctions, LawParameter, LawRegistryError
 from .types import LAST_CURVATURE_SLOT, LAW_MEMORY_SLOTS, LAW_PARAMETER_SLOTS, precision
 
 ENTRY_POINT_GROUP = "warpcloth.bending_laws"
@@ -161,7 +161,42 @@ class LawDispatch:
     elastic_moment: Any
     hysteretic_moment: Any
     tangent: Any
+    follow_before_decay: Any
+    decay: Any
     moment_along_path: Any
+    law_of: Any
+    """``law_of(p)``: the index in :data:`LAWS` of the law whose parameters ``p`` are."""
+    own: tuple[LawFunctions, ...]
+    """Each law's own functions (their ``follow`` split, kernels/law.py), by index, for a
+    caller that takes the law's branch once for many hinges."""
+    decays: tuple[bool, ...]
+    """Whether each law's ``follow`` ends in an exponential decay of its own (a law that
+    gives none is split with x = 0)."""
+
+
+def split_follow(
+    law: BendingLaw, functions: LawFunctions, scalar: Any, Parameters: Any, Memory: Any, History: Any
+) -> LawFunctions:
+    """``law``'s ``functions`` with ``follow_before_decay`` and ``decay`` (kernels/law.py): the law's
+    own, or for a law that gives none its whole ``follow`` and no decay (x = 0)."""
+    if functions.follow_before_decay is not None and functions.decay is not None:
+        return functions
+    if (functions.follow_before_decay is None) != (functions.decay is None):
+        raise LawRegistryError(
+            f"the {law.name} law gives one of follow_before_decay and decay; a law gives both or neither"
+        )
+    follow = functions.follow
+    zero = scalar(0.0)
+
+    @wp.func
+    def follow_before_decay(curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int):
+        return follow(curvature, memory, p, history, hinge, strip), zero
+
+    @wp.func
+    def decay(memory: Memory, factor: scalar, p: Parameters):
+        return memory
+
+    return replace(functions, follow_before_decay=follow_before_decay, decay=decay)
 
 
 @functools.cache
@@ -169,8 +204,9 @@ def build(scalar: Any) -> LawDispatch:
     """The laws' Warp types, dispatching functions and path kernel for ``scalar``."""
     types = precision(scalar)
     Parameters, Memory, History = types.law_parameters, types.law_memory, types.reversal_memory
-    functions = tuple(law.build(scalar) for law in LAWS)
     zero = scalar(0.0)
+    functions = tuple(split_follow(law, law.build(scalar), scalar, Parameters, Memory, History) for law in LAWS)
+    decays = tuple(law.build(scalar).decay is not None for law in LAWS)
 
     @wp.func
     def law_of(p: Parameters):
@@ -187,6 +223,8 @@ def build(scalar: Any) -> LawDispatch:
         head_follow, rest_follow = head.follow, rest.follow
         head_hysteretic, rest_hysteretic = head.hysteretic_moment, rest.hysteretic_moment
         head_tangent, rest_tangent = head.tangent, rest.tangent
+        head_before_decay, rest_before_decay = head.follow_before_decay, rest.follow_before_decay
+        head_decay, rest_decay = head.decay, rest.decay
 
         @wp.func
         def fresh_memory(curvature: scalar, p: Parameters, history: History, hinge: int, strip: int):
@@ -212,13 +250,33 @@ def build(scalar: Any) -> LawDispatch:
                 return head_tangent(curvature, memory, p, history, hinge, strip)
             return rest_tangent(curvature, memory, p, history, hinge, strip)
 
+        @wp.func
+        def follow_before_decay(
+            curvature: scalar, memory: Memory, p: Parameters, history: History, hinge: int, strip: int
+        ):
+            if law_of(p) == wp.static(index):
+                return head_before_decay(curvature, memory, p, history, hinge, strip)
+            return rest_before_decay(curvature, memory, p, history, hinge, strip)
+
+        @wp.func
+        def decay(memory: Memory, factor: scalar, p: Parameters):
+            if law_of(p) == wp.static(index):
+                return head_decay(memory, factor, p)
+            return rest_decay(memory, factor, p)
+
         return SimpleNamespace(
-            fresh_memory=fresh_memory, follow=follow, hysteretic_moment=hysteretic_moment, tangent=tangent
+            fresh_memory=fresh_memory,
+            follow=follow,
+            hysteretic_moment=hysteretic_moment,
+            tangent=tangent,
+            follow_before_decay=follow_before_decay,
+            decay=decay,
         )
 
     chain = dispatch(0)
     fresh_memory, follow = chain.fresh_memory, chain.follow
     hysteretic_moment, tangent = chain.hysteretic_moment, chain.tangent
+    follow_before_decay, decay = chain.follow_before_decay, chain.decay
 
     @wp.func
     def elastic_moment(curvature: scalar, p: Parameters):
@@ -267,5 +325,10 @@ def build(scalar: Any) -> LawDispatch:
         elastic_moment=elastic_moment,
         hysteretic_moment=hysteretic_moment,
         tangent=tangent,
+        follow_before_decay=follow_before_decay,
+        decay=decay,
         moment_along_path=moment_along_path,
+        law_of=law_of,
+        own=functions,
+        decays=decays,
     )

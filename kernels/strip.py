@@ -48,9 +48,10 @@ class HingeKernels:
 
 
 @functools.cache
-def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels:
+def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = (), lanes: int = 1) -> StripKernels:
     """Types and the ``advance`` kernel of one configuration (a model's force ``terms``
-    included: kernels/force_terms.py)."""
+    included: kernels/force_terms.py), its force pass following ``lanes`` hinges together
+    (:func:`.exp_lanes.lane_width` of the device)."""
     types = precision(scalar)
     vec2, mat22 = types.vec2, types.mat22
     zero = scalar(0.0)
@@ -63,7 +64,7 @@ def build(scalar: Any, scheme: str, terms: tuple[Any, ...] = ()) -> StripKernels
     stepping_types = integrators.build(scalar)
     Stepping = stepping_types.Stepping
     update_node, kick_mass = stepping_types.schemes[scheme], stepping_types.kick_mass[scheme]
-    accumulate_internal_forces = forces.build(scalar, terms).accumulate_internal_forces
+    accumulate_internal_forces = forces.build(scalar, terms, lanes).accumulate_internal_forces
     recorder = probes.build(scalar, terms)
     ProbeSettings, record_probes = recorder.ProbeSettings, recorder.record_probes
     perp = geometry.build(scalar).perp

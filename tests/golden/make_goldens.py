@@ -149,7 +149,12 @@ def sweep_summary(out: Path) -> "object":
 
 
 if __name__ == "__main__":
+    import os
     import tempfile
+
+    from warpcloth.kernels.exp_lanes import ENVIRONMENT
+
+    os.environ[ENVIRONMENT] = "1"  # a hinge at a time, as every device can (tests/test_golden.py)
 
     chosen = sys.argv[1:] or [*CASES, *SHEET_CASES, "sweep"]
     for case in chosen:

@@ -16,6 +16,7 @@ from warpcloth.core.divergence import BUDGET_TOLERANCE
 from warpcloth.core.solver import FusedSolver
 from warpcloth.errors import ArgumentTypeError
 from warpcloth.kernels import STATUS_BUDGET, build_strip
+from warpcloth.kernels.exp_lanes import lane_width
 
 from .builder import Grip
 from .control import StripControl
@@ -66,7 +67,8 @@ class FusedStripSolver(FusedSolver):
             )
         super().__init__(model, dt)
         self.divergence_strain = divergence_strain
-        self.kernels = build_strip(model.scalar, self.scheme, model.terms)
+        lanes = lane_width(model.scalar, model.device.is_cpu)
+        self.kernels = build_strip(model.scalar, self.scheme, model.terms, lanes)
         self.kernel = self.kernels.advance
 
     @staticmethod
