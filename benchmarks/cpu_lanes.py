@@ -82,7 +82,7 @@ def kernels(lanes: int) -> tuple:
         if code == STATUS_OK:
             h = i - model.n_clamped + 1
             memory = law.follow(curvature, state.hinge[h, s], p, state.history, h, s)
-            hinge_couple(model, state, s, i, curvature, memory, p, width, e1, inverse_l1, e2, inverse_l2)
+            hinge_couple(model, state, s, i, h, curvature, memory, p, width, e1, inverse_l1, e2, inverse_l2)
         return code, value, following, e2, inverse_l2
 
     @wp.func

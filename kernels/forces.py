@@ -10,7 +10,7 @@ import warp as wp
 
 from . import exp_lanes, geometry, integrators, structs, tensile
 from .status import STATUS_FOLDED, STATUS_OK, STATUS_STRAIN
-from .types import precision
+from .types import LAW_MEMORY_SLOTS, precision
 
 
 @functools.cache
@@ -82,6 +82,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), lanes: int = 1) -> SimpleNam
             state: StripState,
             s: int,
             i: int,
+            h: int,
             curvature: scalar,
             memory: law.Memory,
             p: law.Parameters,
@@ -91,11 +92,10 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), lanes: int = 1) -> SimpleNam
             e2: vec2,
             inverse_l2: scalar,
         ):
-            # The hinge at node i, its law followed to ``curvature`` (``memory``): stores
-            # the memory and applies its couple to nodes i − 1, i, i + 1 (segments e1, e2
-            # above and below it). The grip scales the hinge's D and its hysteretic moment
+            # Hinge h at node i, its law followed to ``curvature`` (``memory``): stores the
+            # memory and applies its couple to nodes i − 1, i, i + 1 (segments e1, e2 above
+            # and below it). The grip scales the hinge's D and its hysteretic moment
             # (docs/model.md §5.4; factors 1 leave every bit as it was).
-            h = i - model.n_clamped + 1
             state.hinge[h, s] = memory
             grip = model.grip[h, s]
             # τ = M·W acts on the turning angle φ; F = -τ ∇φ with ∇φ as below.
@@ -123,6 +123,10 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), lanes: int = 1) -> SimpleNam
         exp_of_lanes = exp_lanes.build(scalar, group_size)
         Lanes = wp.types.vector(group_size, dtype=scalar)  # one value per hinge of a group
         Segments = wp.types.vector(group_size + 1, dtype=scalar)  # one per segment, the one above the group first
+        Memories = wp.types.matrix(shape=(group_size, LAW_MEMORY_SLOTS), dtype=scalar)  # a hinge's memory a row
+        no_decay = Lanes()
+        for j in range(group_size):
+            no_decay[j] = scalar(1.0)
 
         @wp.func
         def pass_down(
@@ -154,8 +158,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), lanes: int = 1) -> SimpleNam
                 segment_x = Segments()
                 segment_y = Segments()
                 segment_inverse = Segments()
-                kept_0 = Lanes()  # the slots of each hinge's memory before the last curvature
-                kept_1 = Lanes()
+                memories = Memories()  # each hinge's memory before its decay
                 curvatures = Lanes()
                 exponents = Lanes()
                 segment_x[0] = e1[0]
@@ -171,14 +174,15 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), lanes: int = 1) -> SimpleNam
                             return code, i, value
                         h = i - first - 1
                         memory, exponent = follow_before_decay(curvature, state.hinge[h, s], p, state.history, h, s)
-                        kept_0[j] = memory[0]
-                        kept_1[j] = memory[1]
+                        memories[j] = memory
                         curvatures[j] = curvature
                         exponents[j] = exponent
                         segment_x[j + 1] = e1[0]
                         segment_y[j + 1] = e1[1]
                         segment_inverse[j + 1] = inverse_l1
-                factors = exp_of_lanes(exponents)
+                factors = no_decay
+                if wp.dot(exponents, exponents) != zero:  # a group with nothing to decay makes no call
+                    factors = exp_of_lanes(exponents)
                 for j in range(wp.static(group_size)):
                     i = group + j
                     if i < n - 1:
@@ -187,8 +191,9 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), lanes: int = 1) -> SimpleNam
                             state,
                             s,
                             i,
+                            i - first - 1,
                             curvatures[j],
-                            decay(law.Memory(kept_0[j], kept_1[j], curvatures[j]), factors[j], p),
+                            decay(memories[j], factors[j], p),
                             p,
                             width,
                             vec2(segment_x[j], segment_y[j]),
@@ -205,8 +210,8 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), lanes: int = 1) -> SimpleNam
         # One pass per law, each function naming its own law's pass and the next's (Warp
         # hashes what a function names: kernels/laws.py); an index past the list falls
         # back to the first law, as the laws' own dispatch does.
-        head = pass_of(index)
-        rest = dispatch(index + 1) if index + 1 < len(law.own) else pass_of(0)
+        head = passes[index]
+        rest = dispatch(index + 1) if index + 1 < len(passes) else passes[0]
 
         @wp.func
         def pass_down(
@@ -225,6 +230,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), lanes: int = 1) -> SimpleNam
 
         return pass_down
 
+    passes = [pass_of(index) for index in range(len(law.own))]
     pass_down = dispatch(0)
 
     @wp.func

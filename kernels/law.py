@@ -33,7 +33,8 @@ several hinges in one vector call (kernels/exp_lanes.py):
 - ``decay(memory, factor, p) -> memory``: that memory with the factor applied,
 
 such that ``follow`` is ``decay(m, wp.exp(x), p)`` of ``(m, x) = follow_before_decay(…)``
-(tests/test_exp_lanes.py checks it bitwise); x ≤ 0 keeps the factor in (0, 1]. A law that
+(tests/test_exp_lanes.py checks it bitwise for every registered law); x ≤ 0 keeps the
+factor in [0, 1]. A law that
 gives neither is followed whole, with x = 0.
 
 Only Warp and the standard library are imported here, so units are not: a parameter's

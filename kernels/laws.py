@@ -205,8 +205,11 @@ def build(scalar: Any) -> LawDispatch:
     types = precision(scalar)
     Parameters, Memory, History = types.law_parameters, types.law_memory, types.reversal_memory
     zero = scalar(0.0)
-    functions = tuple(split_follow(law, law.build(scalar), scalar, Parameters, Memory, History) for law in LAWS)
-    decays = tuple(law.build(scalar).decay is not None for law in LAWS)
+    built = tuple(law.build(scalar) for law in LAWS)
+    functions = tuple(
+        split_follow(law, own, scalar, Parameters, Memory, History) for law, own in zip(LAWS, built, strict=True)
+    )
+    decays = tuple(f.decay is not None for f in built)
 
     @wp.func
     def law_of(p: Parameters):

@@ -45,7 +45,15 @@ def pytest_configure(config) -> None:
     from warpcloth.strip.model import init_warp_quietly
 
     init_warp_quietly()
-    for kernel in kernel_variants().values():
+    from warpcloth.kernels import build_strip
+    from warpcloth.kernels.exp_lanes import lane_width
+
+    from warpcloth.strip import SOLVERS
+
+    # and the strip's kernels as this CPU runs them: hinges in groups where it can
+    lanes = lane_width(wp.float64, True)
+    grouped = [build_strip(wp.float64, scheme, (), lanes).advance for scheme in SOLVERS] if lanes > 1 else []
+    for kernel in [*kernel_variants().values(), *grouped]:
         wp.load_module(kernel.module, device="cpu")
 
 

@@ -43,6 +43,16 @@ class ArgumentError(WarpclothError, ValueError):
         super().__init__(f"{argument}: {message}")
 
 
+class EnvironmentSettingError(WarpclothError, ValueError):
+    """An environment variable warpcloth reads has an unusable value: ``variable`` is its
+    name, ``message`` what is wrong with the value."""
+
+    def __init__(self, variable: str, message: str) -> None:
+        self.variable = variable
+        self.message = message
+        super().__init__(f"{variable}: {message}")
+
+
 class ArgumentTypeError(ArgumentError, TypeError):
     """An argument of a library function has an unusable type (a string where a list is
     expected, a float where an index is).

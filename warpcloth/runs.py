@@ -18,6 +18,7 @@ from .errors import ArgumentError, ArgumentTypeError
 from .io.recording import per_strip_parameters
 from .io.run_dir import RunWriter, check_output_directory
 from .io.sheet_run_dir import SHEET_COORDINATES
+from .kernels.exp_lanes import requested_width
 from .metrics import sheet_metrics, swing_summary
 from .scene import COORDINATES, Scene, build_batch, load_scene
 from .scene.overrides import Overrides, override_pairs
@@ -37,6 +38,7 @@ def simulate(scenes: Any, **options: Any) -> RunResult:
     batch = [scenes] if not isinstance(scenes, Sequence) else list(scenes)
     if not batch:
         raise ArgumentError("scenes", "simulate needs at least one scene")
+    requested_width()  # a bad WARPCLOTH_EXP_LANES is refused before anything runs, on any device
     return bodies.of_scenes(batch)("simulate", batch, **options)
 
 

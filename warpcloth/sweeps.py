@@ -32,6 +32,7 @@ from warpcloth.io import PROBE_RECORDS
 from warpcloth.io.sweep_dir import SweepDirectory
 from warpcloth.io.writing import claim_result
 from warpcloth.kernels import PROBE_FIELDS
+from warpcloth.kernels.exp_lanes import requested_width
 from warpcloth.kernels.sheet import SHEET_PROBE_FIELDS
 from warpcloth.runs import sheet_result_metrics, simulate
 from warpcloth.scene import Scene, Sweep, scene_from_dict
@@ -346,8 +347,10 @@ def run_sweep(
     The batches run in this process on ``workers`` threads (default: one per core; 0:
     one after another), each batch one launch sequence of its own (Warp releases the GIL
     during a CPU launch, so the threads fill the cores); with ``scheduler`` they are Dask
-    tasks on that running cluster instead. Results do not depend on either. A sweep of
-    sheet scenes runs the same way, each batch's sheets in one launch sequence.
+    tasks on that running cluster instead. Results do not depend on either (on a cluster
+    whose machines differ in whether they take the paper's law's exponentials in groups,
+    docs/model.md §9.4, by rounding). A sweep of sheet scenes runs the same way, each
+    batch's sheets in one launch sequence.
     """
     checked_instance("sweep", sweep, Sweep, "warpcloth.load_sweep(name_or_path)")
     if workers is not None:
@@ -367,6 +370,7 @@ def run_sweep(
         checked_count("max_batch", max_batch, 1)
     if probes not in PROBE_RECORDS:
         raise ArgumentError("probes", f"{probes!r} is not one of {', '.join(PROBE_RECORDS)}")
+    requested_width()  # a bad WARPCLOTH_EXP_LANES is refused before the directory is laid out
     out = Path(checked_path("out", out))
     if out.is_dir() and any(out.iterdir()) and not (out / "sweep.json").is_file():
         # resuming is for the same sweep only; a run or other files are never mixed into

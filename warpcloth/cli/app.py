@@ -21,6 +21,7 @@ from warpcloth.errors import (
     ArgumentError,
     DataFileError,
     DivergenceError,
+    EnvironmentSettingError,
     LongRunWarning,
     OptionError,
     PlausibilityWarning,
@@ -28,6 +29,7 @@ from warpcloth.errors import (
     SceneError,
     WarpclothError,
 )
+from warpcloth.kernels.exp_lanes import requested_width
 from warpcloth.kernels.law import LawRegistryError
 from warpcloth.strip.model import init_warp_quietly
 
@@ -42,6 +44,7 @@ WHAT = (
     (SceneError, "error in scene"),
     (DataFileError, "error in data file"),
     (OptionError, "error in option"),
+    (EnvironmentSettingError, "error in environment variable"),
     (ResourceError, "too large"),
 )
 EXIT_DIVERGED = 3
@@ -127,6 +130,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _run_handler(args: argparse.Namespace) -> int:
     # the command, its failures mapped to one line and an exit status each
     try:
+        requested_width()  # a bad WARPCLOTH_EXP_LANES is refused before any command starts
         return args.handler(args)
     except DivergenceError as exc:
         print(f"warpcloth {args.command}: {exc}", file=sys.stderr)
