@@ -33,7 +33,7 @@ import warp as wp
 from warpcloth.errors import EnvironmentSettingError, InternalError
 
 ENVIRONMENT = "WARPCLOTH_EXP_LANES"
-"""The environment variable that sets the width: ``auto`` (the default), 1, 4 or 8."""
+"""The environment variable that sets the width: ``auto`` (the default; also when empty), 1, 4 or 8."""
 
 WIDTHS = (1, 4, 8)
 """The group widths the force pass can take: one hinge, one AVX2 call, one AVX-512 call."""
@@ -71,11 +71,11 @@ def vector_exp_available() -> bool:
 
 
 def requested_width() -> int | None:
-    """The width ``WARPCLOTH_EXP_LANES`` asks for (None: ``auto`` or unset); an
+    """The width ``WARPCLOTH_EXP_LANES`` asks for (None: ``auto``, empty or unset); an
     EnvironmentSettingError naming the variable for any other value, or for 4 or 8 where libmvec
     cannot be loaded. Checked before a run starts, whatever its device or body."""
-    asked = os.environ.get(ENVIRONMENT, "auto").strip()
-    if asked == "auto":
+    asked = os.environ.get(ENVIRONMENT, "").strip()
+    if asked in ("", "auto"):
         return None
     if asked not in {str(w) for w in WIDTHS}:
         choices = ", ".join(map(str, WIDTHS))

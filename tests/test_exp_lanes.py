@@ -204,6 +204,13 @@ def test_an_unknown_group_width_is_refused_naming_the_variable(value, lanes, tmp
         assert not (tmp_path / command[0]).exists()
 
 
+@pytest.mark.parametrize("value", ["", " ", "auto"])
+def test_an_empty_setting_is_auto(value, lanes):
+    lanes(value)
+    assert exp_lanes.requested_width() is None
+    assert exp_lanes.lane_width(wp.float64, True) == (4 if exp_lanes.vector_exp_available() else 1)
+
+
 def test_a_gpu_and_float32_take_one_hinge_at_a_time(lanes):
     lanes(8 if exp_lanes.libmvec_loaded() else 1)
     assert exp_lanes.lane_width(wp.float64, False) == 1
