@@ -16,10 +16,10 @@ every hinge, bitwise the force pass of warpcloth before the groups (the golden o
 are checked that way) and in the order of operations a GPU takes.
 
 A GPU takes one hinge at a time (its ``exp`` is an instruction sequence, not a call), as
-do float32, sheets and any CPU without libmvec or AVX2 and FMA: a width of 1. The width is chosen here
-and the instruction set again when the kernel is compiled (``__AVX512F__``,
-``__AVX2__``), so a kernel built for a CPU without them falls back to scalar calls
-rather than to a wrong calling convention.
+do float32, sheets and any CPU without libmvec or AVX2 and FMA: a width of 1. The width
+is chosen here and the instruction set again when the kernel is compiled
+(``__AVX512F__``, ``__AVX2__``), so a kernel built for a CPU without them falls back to
+scalar calls rather than to a wrong calling convention.
 """
 
 import ctypes
@@ -72,8 +72,8 @@ def vector_exp_available() -> bool:
 
 def requested_width() -> int | None:
     """The width ``WARPCLOTH_EXP_LANES`` asks for (None: ``auto``, empty or unset); an
-    EnvironmentSettingError naming the variable for any other value, or for 4 or 8 where libmvec
-    cannot be loaded. Checked before a run starts, whatever its device or body."""
+    EnvironmentSettingError naming the variable for any other value, or for 4 or 8 where
+    libmvec cannot be loaded. Checked before a run starts, whatever its device or body."""
     asked = os.environ.get(ENVIRONMENT, "").strip()
     if asked in ("", "auto"):
         return None

@@ -124,9 +124,7 @@ def build(scalar: Any, terms: tuple[Any, ...] = (), lanes: int = 1) -> SimpleNam
         Lanes = wp.types.vector(group_size, dtype=scalar)  # one value per hinge of a group
         Segments = wp.types.vector(group_size + 1, dtype=scalar)  # one per segment, the one above the group first
         Memories = wp.types.matrix(shape=(group_size, LAW_MEMORY_SLOTS), dtype=scalar)  # a hinge's memory a row
-        no_decay = Lanes()
-        for j in range(group_size):
-            no_decay[j] = scalar(1.0)
+        no_decay = Lanes(scalar(1.0))
 
         @wp.func
         def pass_down(
